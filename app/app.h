@@ -1,0 +1,52 @@
+/* Shared pieces of the rtsim command-line program. Commands return an exit
+ * code: 0 success, 2 bad input (message already printed), 1 other failure. */
+#ifndef RTSIM_APP_APP_H
+#define RTSIM_APP_APP_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "renderer/kdtree.h"
+#include "renderer/scene.h"
+
+struct err;
+
+#define APP_EXIT_USAGE 2
+
+int cmd_render(int argc, char **argv);
+int cmd_export(int argc, char **argv);
+int cmd_hits(int argc, char **argv);
+int cmd_bench(int argc, char **argv);
+
+/* Print "rtsim: <formatted err>" once to stderr; returns APP_EXIT_USAGE. */
+int app_report(const struct err *e);
+/* Print "rtsim CMD: message" plus a hint to run --help; returns APP_EXIT_USAGE. */
+int app_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* Host wall clock in seconds (for reports only; the model never reads it). */
+double app_now(void);
+
+/* A loaded scene and its k-d tree, with the host times they took. */
+struct app_world {
+  struct scene scene;
+  struct kd_tree kd;
+  double load_s, build_s;
+};
+
+/* Load path and build the tree; on bad input prints and returns false. */
+bool app_world_load(struct app_world *w, const char *path);
+void app_world_fini(struct app_world *w);
+
+/* Print the scene and k-d tree summary lines ("key: value") on stdout. */
+void app_print_world(const struct app_world *w, const char *path);
+
+struct image;
+/* Write an sRGB PNG preview of im's R, G, B channels through gnuplot (temporary
+ * name + rename). On failure fills e (file = png) and returns false. */
+bool app_write_preview(const struct image *im, const char *png, struct err *e);
+
+/* Whole-number option value in [lo, hi]; on error prints and returns false. */
+bool app_parse_u64(const char *cmd, const char *opt, const char *text, uint64_t lo, uint64_t hi,
+                   uint64_t *out);
+
+#endif

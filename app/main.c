@@ -1,0 +1,102 @@
+/* rtsim: entry point. Parses the subcommand and hands over; only this layer
+ * prints errors and chooses exit codes. */
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "app/app.h"
+#include "renderer/scene_file.h"
+#include "sim/err.h"
+
+static const char USAGE[] =
+    "usage: rtsim COMMAND [options]\n"
+    "\n"
+    "commands:\n"
+    "  render SCENE.yaml -o IMAGE.exr   ray trace a scene to an OpenEXR image\n"
+    "  export SCENE.yaml -o SCENE.ply   write the scene's triangles (face i = primitive i)\n"
+    "  hits SCENE.yaml                  nearest hits for rays read as CSV on stdin\n"
+    "  bench SCENE.yaml...              primary-ray throughput (rays/s) per scene\n"
+    "\n"
+    "Run 'rtsim COMMAND --help' for a command's options.\n";
+
+int app_report(const struct err *e) {
+  char buf[ERR_FILE_MAX + ERR_MSG_MAX + 64];
+  err_format(e, buf, sizeof buf);
+  fprintf(stderr, "%s\n", buf);
+  return APP_EXIT_USAGE;
+}
+
+int app_usage_error(const char *cmd, const char *fmt, ...) {
+  char msg[1024];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(msg, sizeof msg, fmt, ap);
+  va_end(ap);
+  fprintf(stderr, "rtsim %s: error: %s (see 'rtsim %s --help')\n", cmd, msg, cmd);
+  return APP_EXIT_USAGE;
+}
+
+double app_now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+bool app_world_load(struct app_world *w, const char *path) {
+  memset(w, 0, sizeof *w);
+  struct err e;
+  memset(&e, 0, sizeof e);
+  double t0 = app_now();
+  if (!scene_load(&w->scene, path, &e)) {
+    app_report(&e);
+    return false;
+  }
+  double t1 = app_now();
+  struct kd_build_params p;
+  kd_build_params_default(&p);
+  kd_build(&w->kd, &w->scene, &p);
+  w->load_s = t1 - t0;
+  w->build_s = app_now() - t1;
+  return true;
+}
+
+void app_world_fini(struct app_world *w) {
+  kd_fini(&w->kd);
+  scene_fini(&w->scene);
+}
+
+bool app_parse_u64(const char *cmd, const char *opt, const char *text, uint64_t lo, uint64_t hi,
+                   uint64_t *out) {
+  char *end = NULL;
+  errno = 0;
+  unsigned long long v = (text[0] >= '0' && text[0] <= '9') ? strtoull(text, &end, 10) : 0;
+  if (!end || *end || errno || v < lo || v > hi) {
+    app_usage_error(cmd, "%s: got '%s', expected a whole number from %llu to %llu", opt, text,
+                    (unsigned long long)lo, (unsigned long long)hi);
+    return false;
+  }
+  *out = v;
+  return true;
+}
+
+int main(int argc, char **argv) {
+  if (argc < 2) {
+    fputs(USAGE, stderr);
+    return APP_EXIT_USAGE;
+  }
+  const char *cmd = argv[1];
+  if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
+    fputs(USAGE, stdout);
+    return 0;
+  }
+  if (!strcmp(cmd, "render")) return cmd_render(argc - 1, argv + 1);
+  if (!strcmp(cmd, "export")) return cmd_export(argc - 1, argv + 1);
+  if (!strcmp(cmd, "hits")) return cmd_hits(argc - 1, argv + 1);
+  if (!strcmp(cmd, "bench")) return cmd_bench(argc - 1, argv + 1);
+  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, bench)\n",
+          cmd);
+  return APP_EXIT_USAGE;
+}

@@ -1,0 +1,34 @@
+/* Mesh files in and out: import of any format assimp reads (OBJ, PLY, glTF, ...)
+ * through its C API, and export of the scene's triangles as a PLY file whose
+ * faces are in primitive-id order, so any other ray tracer loads exactly our
+ * geometry. */
+#ifndef RTSIM_RENDERER_MESHIO_H
+#define RTSIM_RENDERER_MESHIO_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "renderer/vec.h"
+
+struct scene;
+struct err;
+
+/* Placement applied to imported vertices: p' = p * scale + translate. */
+struct meshio_xform {
+  float scale;
+  vec3 translate;
+};
+
+/* Append every triangle of the mesh file at `path` (all meshes of the file,
+ * node transforms applied, polygons triangulated, points and lines dropped)
+ * with material id `material`. Vertex normals from the file are used when
+ * present. Fails (e->file = path) if the file cannot be read or holds no
+ * triangle; the scene is left unchanged then. */
+bool meshio_import(struct scene *s, const char *path, const struct meshio_xform *xf,
+                   uint32_t material, struct err *e);
+
+/* Write s's triangles as binary little-endian PLY: 3 vertices per face, not
+ * shared, face i = primitive i. Temporary name + rename. */
+bool meshio_export_ply(const struct scene *s, const char *path, struct err *e);
+
+#endif

@@ -1,0 +1,79 @@
+/* The scene: triangles, materials, point lights, camera, image size. The scene
+ * owns its arrays. Triangle index = primitive id = face index in `rtsim export`. */
+#ifndef RTSIM_RENDERER_SCENE_H
+#define RTSIM_RENDERER_SCENE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "renderer/vec.h"
+
+#define SCENE_NAME_MAX 64
+#define SCENE_MAX_LIGHTS 16
+
+struct scene_material {
+  char name[SCENE_NAME_MAX];
+  vec3 color;   /* base colour, linear RGB in [0,1] */
+  float diffuse; /* weight of the diffuse (Lambert) term, >= 0 */
+  float mirror;  /* specular mirror reflectance in [0,1] */
+};
+
+struct scene_light {
+  vec3 pos;
+  vec3 intensity; /* RGB radiant intensity; irradiance falls as 1/d^2 only if falloff */
+};
+
+struct scene_camera {
+  vec3 from, at, up;
+  float fov_deg; /* full vertical field of view, degrees */
+};
+
+/* A triangle: three vertices and three shading normals (equal to the geometric
+ * normal for flat faces). 76 bytes on the host; the simulated record size is a
+ * separate, configurable number. */
+struct scene_tri {
+  vec3 v[3];
+  vec3 n[3];
+  uint32_t material;
+};
+
+struct scene {
+  char name[SCENE_NAME_MAX];
+  struct scene_tri *tris;
+  uint32_t tri_count, tri_cap;
+  struct scene_material *mats;
+  uint32_t mat_count, mat_cap;
+  struct scene_light lights[SCENE_MAX_LIGHTS];
+  uint32_t light_count;
+  struct scene_camera camera;
+  uint32_t width, height; /* default image size in pixels */
+  vec3 background;        /* colour of rays that leave the scene */
+  float ambient;          /* ambient term weight (times material colour) */
+  uint64_t seed;          /* generator seed (also the default render seed) */
+};
+
+void scene_init(struct scene *s);
+void scene_fini(struct scene *s);
+
+/* Material id of `name`, or -1. */
+int scene_find_material(const struct scene *s, const char *name);
+/* Add a material (name must be new); returns its id. */
+uint32_t scene_add_material(struct scene *s, const struct scene_material *m);
+/* Id of material `name`; adds `dflt` under that name if the scene has none.
+ * Lets the scene file override a generator's built-in materials by name. */
+uint32_t scene_material_or_default(struct scene *s, const char *name, vec3 color, float diffuse,
+                                   float mirror);
+
+/* Append a triangle. Normals may be NULL: all three become the geometric normal
+ * (or +Z for a zero-area triangle). Returns the new primitive id. */
+uint32_t scene_add_tri(struct scene *s, vec3 a, vec3 b, vec3 c, const vec3 *normals,
+                       uint32_t material);
+
+/* Axis-aligned bounds of all triangles ({0,0,0} both when empty). */
+void scene_bounds(const struct scene *s, vec3 *lo, vec3 *hi);
+
+/* FNV-1a hash of all triangle, material, light and camera bytes: names a scene
+ * in metadata and lets tests compare two loads. */
+uint64_t scene_hash(const struct scene *s);
+
+#endif

@@ -1,0 +1,285 @@
+/* Scene files: YAML (through sim/cfg) to a struct scene. All reads happen
+ * here; every value is range-checked at its source position; unknown keys are
+ * errors that list what was expected. */
+#include "renderer/scene_file.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#include "renderer/gen.h"
+#include "renderer/meshio.h"
+#include "renderer/scene.h"
+#include "sim/cfg.h"
+#include "sim/err.h"
+
+/* Limits that keep a typo from asking for a machine-sized allocation. */
+#define SCENE_MAX_TRIANGLES 100000000ull
+#define SCENE_MAX_PIXELS 16384
+
+/* out = "path.key" (or "key" at the top level). */
+static void join_path(char *out, size_t cap, const char *path, const char *key) {
+  int n = snprintf(out, cap, "%s%s%s", path, path[0] ? "." : "", key);
+  if (n < 0 || (size_t)n >= cap) snprintf(out, cap, "%s", key);
+}
+
+static vec3 to_vec3(const double v[3]) { return v3((float)v[0], (float)v[1], (float)v[2]); }
+
+static bool opt_vec3(const struct cfg_doc *d, struct cfg_node *m, const char *key,
+                     const char *path, double lo, double hi, vec3 *out, struct err *e) {
+  struct cfg_node *n = cfg_get(m, key);
+  if (!n) return true;
+  char p[128];
+  join_path(p, sizeof p, path, key);
+  double v[3];
+  if (!cfg_f64_list(d, n, p, 3, lo, hi, v, e)) return false;
+  *out = to_vec3(v);
+  return true;
+}
+
+static bool req_vec3(const struct cfg_doc *d, struct cfg_node *m, const struct cfg_node *owner,
+                     const char *key, const char *path, double lo, double hi, vec3 *out,
+                     struct err *e) {
+  if (!cfg_get(m, key))
+    return cfg_fail(d, owner, path, e, "missing required key '%s'", key);
+  return opt_vec3(d, m, key, path, lo, hi, out, e);
+}
+
+static bool opt_f64(const struct cfg_doc *d, struct cfg_node *m, const char *key,
+                    const char *path, double lo, double hi, double *out, struct err *e) {
+  struct cfg_node *n = cfg_get(m, key);
+  if (!n) return true;
+  char p[128];
+  join_path(p, sizeof p, path, key);
+  return cfg_f64(d, n, p, lo, hi, out, e);
+}
+
+static bool opt_u64(const struct cfg_doc *d, struct cfg_node *m, const char *key,
+                    const char *path, uint64_t lo, uint64_t hi, uint64_t *out, struct err *e) {
+  struct cfg_node *n = cfg_get(m, key);
+  if (!n) return true;
+  char p[128];
+  join_path(p, sizeof p, path, key);
+  return cfg_u64(d, n, p, lo, hi, out, e);
+}
+
+static bool load_camera(const struct cfg_doc *d, struct cfg_node *n, struct scene *s,
+                        struct err *e) {
+  if (!cfg_expect_map(d, n, "camera", e)) return false;
+  struct scene_camera *c = &s->camera;
+  double fov = c->fov_deg;
+  if (!req_vec3(d, n, n, "from", "camera", -1e30, 1e30, &c->from, e) ||
+      !req_vec3(d, n, n, "at", "camera", -1e30, 1e30, &c->at, e) ||
+      !opt_vec3(d, n, "up", "camera", -1e30, 1e30, &c->up, e) ||
+      !opt_f64(d, n, "fov_deg", "camera", 0.01, 179.0, &fov, e) ||
+      !cfg_check_keys(d, n, "camera", "from, at, up, fov_deg", e))
+    return false;
+  c->fov_deg = (float)fov;
+  vec3 dir = v3_sub(c->at, c->from);
+  if (v3_len(dir) == 0.0f)
+    return cfg_fail(d, cfg_get(n, "at"), "camera.at", e, "equals camera.from (no view direction)");
+  if (v3_len(v3_cross(dir, c->up)) == 0.0f)
+    return cfg_fail(d, n, "camera", e, "up is zero or parallel to the view direction");
+  return true;
+}
+
+static bool load_image(const struct cfg_doc *d, struct cfg_node *n, struct scene *s,
+                       struct err *e) {
+  if (!cfg_expect_map(d, n, "image", e)) return false;
+  uint64_t w = s->width, h = s->height;
+  if (!opt_u64(d, n, "width", "image", 1, SCENE_MAX_PIXELS, &w, e) ||
+      !opt_u64(d, n, "height", "image", 1, SCENE_MAX_PIXELS, &h, e) ||
+      !cfg_check_keys(d, n, "image", "width, height", e))
+    return false;
+  s->width = (uint32_t)w;
+  s->height = (uint32_t)h;
+  return true;
+}
+
+static bool load_lights(const struct cfg_doc *d, struct cfg_node *n, struct scene *s,
+                        struct err *e) {
+  if (!cfg_expect_seq(d, n, "lights", e)) return false;
+  if (n->count > SCENE_MAX_LIGHTS)
+    return cfg_fail(d, n, "lights", e, "too many lights (got %u, expected at most %d)", n->count,
+                    SCENE_MAX_LIGHTS);
+  for (uint32_t i = 0; i < n->count; i++) {
+    struct cfg_node *l = &n->items[i];
+    char p[64];
+    snprintf(p, sizeof p, "lights[%u]", i);
+    if (!cfg_expect_map(d, l, p, e)) return false;
+    struct scene_light *L = &s->lights[i];
+    L->intensity = v3(1, 1, 1);
+    if (!req_vec3(d, l, l, "position", p, -1e30, 1e30, &L->pos, e) ||
+        !opt_vec3(d, l, "intensity", p, 0, 1e30, &L->intensity, e) ||
+        !cfg_check_keys(d, l, p, "position, intensity", e))
+      return false;
+  }
+  s->light_count = n->count;
+  return true;
+}
+
+static bool load_materials(const struct cfg_doc *d, struct cfg_node *n, struct scene *s,
+                           struct err *e) {
+  if (!cfg_expect_map(d, n, "materials", e)) return false;
+  for (uint32_t i = 0; i < n->count; i++) {
+    struct cfg_node *m = &n->items[i];
+    m->used = true;
+    char p[128];
+    snprintf(p, sizeof p, "materials.%s", m->key);
+    if (strlen(m->key) >= SCENE_NAME_MAX)
+      return err_set(e, d->file, m->key_line, m->key_col,
+                     "%s: name too long (expected at most %d characters)", p, SCENE_NAME_MAX - 1);
+    if (!cfg_expect_map(d, m, p, e)) return false;
+    struct scene_material mat;
+    memset(&mat, 0, sizeof mat);
+    snprintf(mat.name, sizeof mat.name, "%s", m->key);
+    mat.color = v3(0.8f, 0.8f, 0.8f);
+    double diffuse = 1.0, mirror = 0.0;
+    if (!opt_vec3(d, m, "color", p, 0, 1, &mat.color, e) ||
+        !opt_f64(d, m, "diffuse", p, 0, 1, &diffuse, e) ||
+        !opt_f64(d, m, "mirror", p, 0, 1, &mirror, e) ||
+        !cfg_check_keys(d, m, p, "color, diffuse, mirror", e))
+      return false;
+    mat.diffuse = (float)diffuse;
+    mat.mirror = (float)mirror;
+    scene_add_material(s, &mat);
+  }
+  return true;
+}
+
+/* Directory part of path (with trailing slash), "" if none. */
+static void dir_of(const char *path, char *out, size_t cap) {
+  const char *slash = strrchr(path, '/');
+  size_t n = slash ? (size_t)(slash - path + 1) : 0;
+  if (n >= cap) n = 0;
+  memcpy(out, path, n);
+  out[n] = '\0';
+}
+
+static const char *const GENERATORS[] = {"sphereflake", "grove", "room", NULL};
+
+static bool load_generator(const struct cfg_doc *d, struct cfg_node *g, const char *p,
+                           struct scene *s, struct err *e) {
+  int kind = 0;
+  char gp[96];
+  snprintf(gp, sizeof gp, "%s.generator", p);
+  if (!cfg_enum(d, cfg_get(g, "generator"), gp, GENERATORS, &kind, e)) return false;
+  uint64_t seed = s->seed;
+  if (!opt_u64(d, g, "seed", p, 0, UINT64_MAX, &seed, e)) return false;
+  uint64_t before = s->tri_count;
+  if (kind == 0) {
+    uint64_t levels = 4, tess = 3;
+    if (!opt_u64(d, g, "detail", p, 0, 6, &levels, e) ||
+        !opt_u64(d, g, "tessellation", p, 1, 64, &tess, e) ||
+        !cfg_check_keys(d, g, p, "generator, detail, tessellation, seed", e))
+      return false;
+    uint64_t n = gen_sphereflake_tri_count((uint32_t)levels, (uint32_t)tess);
+    if (before + n > SCENE_MAX_TRIANGLES)
+      return cfg_fail(d, g, p, e, "too many triangles (got %llu, expected at most %llu)",
+                      (unsigned long long)(before + n), SCENE_MAX_TRIANGLES);
+    gen_sphereflake(s, (uint32_t)levels, (uint32_t)tess);
+  } else {
+    double detail = 1.0;
+    if (!opt_f64(d, g, "detail", p, 1e-4, 200.0, &detail, e) ||
+        !cfg_check_keys(d, g, p, "generator, detail, seed", e))
+      return false;
+    if (kind == 1)
+      gen_grove(s, detail, seed);
+    else
+      gen_room(s, detail, seed);
+  }
+  return true;
+}
+
+static bool load_mesh(const struct cfg_doc *d, struct cfg_node *g, const char *p,
+                      const char *scene_path, struct scene *s, struct err *e) {
+  struct cfg_node *mn = cfg_get(g, "mesh");
+  char file[400], mat_name[SCENE_NAME_MAX] = "default", mp[96];
+  snprintf(mp, sizeof mp, "%s.mesh", p);
+  if (!cfg_str(d, mn, mp, file, sizeof file, e)) return false;
+  struct cfg_node *matn = cfg_get(g, "material");
+  snprintf(mp, sizeof mp, "%s.material", p);
+  if (matn && !cfg_str(d, matn, mp, mat_name, sizeof mat_name, e)) return false;
+  struct meshio_xform xf = {1.0f, v3(0, 0, 0)};
+  double scale = 1.0;
+  if (!opt_f64(d, g, "scale", p, 1e-30, 1e30, &scale, e) ||
+      !opt_vec3(d, g, "translate", p, -1e30, 1e30, &xf.translate, e) ||
+      !cfg_check_keys(d, g, p, "mesh, material, scale, translate", e))
+    return false;
+  xf.scale = (float)scale;
+  int mat = scene_find_material(s, mat_name);
+  if (mat < 0) {
+    if (matn) return cfg_fail(d, matn, mp, e, "no material named '%s' in materials", mat_name);
+    mat = (int)scene_material_or_default(s, "default", v3(0.8f, 0.8f, 0.8f), 1.0f, 0.0f);
+  }
+  char full[1024];
+  if (file[0] == '/')
+    snprintf(full, sizeof full, "%s", file);
+  else {
+    char dir[600];
+    dir_of(scene_path, dir, sizeof dir);
+    snprintf(full, sizeof full, "%s%s", dir, file);
+  }
+  struct err me;
+  memset(&me, 0, sizeof me);
+  if (!meshio_import(s, full, &xf, (uint32_t)mat, &me)) {
+    snprintf(mp, sizeof mp, "%s.mesh", p);
+    return cfg_fail(d, mn, mp, e, "%s: %s", me.file, me.msg);
+  }
+  return true;
+}
+
+static bool load_geometry(const struct cfg_doc *d, struct cfg_node *n, const char *scene_path,
+                          struct scene *s, struct err *e) {
+  if (!cfg_expect_seq(d, n, "geometry", e)) return false;
+  if (n->count == 0) return cfg_fail(d, n, "geometry", e, "empty list (expected at least one item)");
+  for (uint32_t i = 0; i < n->count; i++) {
+    struct cfg_node *g = &n->items[i];
+    char p[64];
+    snprintf(p, sizeof p, "geometry[%u]", i);
+    if (!cfg_expect_map(d, g, p, e)) return false;
+    bool is_gen = cfg_get(g, "generator") != NULL, is_mesh = cfg_get(g, "mesh") != NULL;
+    if (is_gen == is_mesh)
+      return cfg_fail(d, g, p, e, "expected exactly one of 'generator' or 'mesh'");
+    if (is_gen ? !load_generator(d, g, p, s, e) : !load_mesh(d, g, p, scene_path, s, e))
+      return false;
+  }
+  if (s->tri_count == 0) return cfg_fail(d, n, "geometry", e, "the scene has no triangles");
+  return true;
+}
+
+bool scene_load(struct scene *s, const char *path, struct err *e) {
+  scene_init(s);
+  struct cfg_doc d;
+  if (!cfg_load_file(&d, path, e)) return false;
+  bool ok = false;
+  struct cfg_node *r = &d.root, *n;
+  if (!cfg_expect_map(&d, r, "", e)) goto done;
+  if ((n = cfg_get(r, "name")) && !cfg_str(&d, n, "name", s->name, sizeof s->name, e)) goto done;
+  if ((n = cfg_get(r, "seed")) && !cfg_u64(&d, n, "seed", 0, UINT64_MAX, &s->seed, e)) goto done;
+  if ((n = cfg_get(r, "image")) && !load_image(&d, n, s, e)) goto done;
+  if (!(n = cfg_get(r, "camera"))) {
+    cfg_fail(&d, r, "", e, "missing required key 'camera'");
+    goto done;
+  }
+  if (!load_camera(&d, n, s, e)) goto done;
+  if (!opt_vec3(&d, r, "background", "", 0, 1e30, &s->background, e)) goto done;
+  double amb = s->ambient;
+  if (!opt_f64(&d, r, "ambient", "", 0, 1, &amb, e)) goto done;
+  s->ambient = (float)amb;
+  if ((n = cfg_get(r, "lights")) && !load_lights(&d, n, s, e)) goto done;
+  if ((n = cfg_get(r, "materials")) && !load_materials(&d, n, s, e)) goto done;
+  if (!(n = cfg_get(r, "geometry"))) {
+    cfg_fail(&d, r, "", e, "missing required key 'geometry'");
+    goto done;
+  }
+  /* Check the top level before generating geometry, which can take seconds. */
+  if (!cfg_check_keys(&d, r, "",
+                      "name, seed, image, camera, background, ambient, lights, materials, geometry",
+                      e))
+    goto done;
+  ok = load_geometry(&d, n, path, s, e);
+done:
+  cfg_free(&d);
+  if (!ok) scene_fini(s);
+  return ok;
+}

@@ -1,0 +1,86 @@
+/* Ray queries against the scene: the watertight ray/triangle test (Woop, Benthin
+ * and Wald 2013), k-d tree traversal with an explicit per-ray stack, and a brute
+ * force reference. Every access of nodes, leaf index lists and triangle records
+ * goes through the memory interface at its simulated address.
+ *
+ * Hit rule everywhere (tree and brute force): the smallest t in (tmin, tmax);
+ * among equal t the smallest primitive id; the ray's ignore_prim never hits. */
+#ifndef RTSIM_RENDERER_TRACE_H
+#define RTSIM_RENDERER_TRACE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "renderer/vec.h"
+#include "sim/mem.h"
+
+struct scene;
+struct kd_tree;
+struct ray;
+
+struct hit {
+  float t;
+  int32_t prim;   /* -1: miss */
+  float b1, b2;   /* barycentric weights of vertices 1 and 2 (vertex 0: 1-b1-b2) */
+};
+
+/* Per-ray precomputation of the watertight test. */
+struct isect_ray {
+  vec3 o;
+  int kx, ky, kz;
+  float sx, sy, sz;
+};
+
+void isect_prepare(struct isect_ray *r, vec3 o, vec3 d);
+
+/* Watertight test of one triangle. On a hit with tmin < t < tmax sets *t, *b1,
+ * *b2 and returns true. Zero-area and edge-on triangles never hit. */
+bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, float tmax,
+               float *t, float *b1, float *b2);
+
+/* Where the simulated memory image puts the tree and the triangle records. */
+struct trace_layout {
+  uint64_t node_base;     /* k-d node i at node_base + 8 i */
+  uint64_t prim_idx_base; /* leaf index entry j at prim_idx_base + 4 j */
+  uint64_t tri_base;      /* triangle p at tri_base + tri_bytes p */
+  uint32_t tri_bytes;     /* simulated triangle record size (default 128) */
+  uint32_t node_cycles;   /* compute cycles announced per traversal step */
+  uint32_t tri_cycles;    /* compute cycles announced per triangle test */
+};
+
+void trace_layout_default(struct trace_layout *l);
+
+struct trace_stats {
+  uint64_t node_visits, tri_tests;
+};
+
+struct tracer {
+  const struct scene *scene;
+  const struct kd_tree *kd;
+  struct mem_port mem;
+  struct trace_layout layout;
+  struct trace_stats stats;
+};
+
+void tracer_init(struct tracer *tr, const struct scene *s, const struct kd_tree *kd,
+                 struct mem_port mem, const struct trace_layout *layout);
+
+/* Nearest hit along r (rule above). Returns false (h->prim = -1) on a miss. */
+bool trace_closest(struct tracer *tr, const struct ray *r, struct hit *h);
+
+/* True if any triangle is hit in (tmin, tmax) (shadow rays). */
+bool trace_any(struct tracer *tr, const struct ray *r);
+
+/* Reference: test every triangle, same hit rule. No memory accesses. */
+bool trace_brute(const struct scene *s, const struct ray *r, struct hit *h);
+
+/* Point and geometric normal of a hit, plus a conservative bound on the point's
+ * rounding error (PBRT-v3 style), for spawning secondary rays that cannot hit
+ * their own surface: offset = trace_offset_origin(p, err, n, d). */
+vec3 trace_hit_point(const struct scene *s, const struct hit *h, vec3 *err);
+vec3 trace_offset_origin(vec3 p, vec3 err, vec3 n, vec3 d);
+/* Unit geometric normal of the hit triangle (cross(v1 - v0, v2 - v0), so its
+ * side follows the winding), or {0,0,0} for a zero-area triangle. */
+vec3 trace_geom_normal(const struct scene *s, const struct hit *h);
+
+#endif

@@ -1,0 +1,32 @@
+/* Small 3-vector helpers on float[3]-like structs. Header-only because they are
+ * tiny and sit on every hot path. */
+#ifndef RTSIM_RENDERER_VEC_H
+#define RTSIM_RENDERER_VEC_H
+
+#include <math.h>
+
+typedef struct { float x, y, z; } vec3;
+
+static inline vec3 v3(float x, float y, float z) { vec3 r = {x, y, z}; return r; }
+static inline vec3 v3_add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+static inline vec3 v3_sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+static inline vec3 v3_mul(vec3 a, vec3 b) { return v3(a.x * b.x, a.y * b.y, a.z * b.z); }
+static inline vec3 v3_scale(vec3 a, float s) { return v3(a.x * s, a.y * s, a.z * s); }
+static inline float v3_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline vec3 v3_cross(vec3 a, vec3 b) {
+  return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static inline float v3_len(vec3 a) { return sqrtf(v3_dot(a, a)); }
+static inline vec3 v3_norm(vec3 a) {
+  float l = v3_len(a);
+  return l > 0.0f ? v3_scale(a, 1.0f / l) : a;
+}
+static inline float v3_get(vec3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? a.y : a.z; }
+static inline vec3 v3_min(vec3 a, vec3 b) {
+  return v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z));
+}
+static inline vec3 v3_max(vec3 a, vec3 b) {
+  return v3(fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z));
+}
+
+#endif

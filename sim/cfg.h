@@ -1,0 +1,76 @@
+/* Configuration files: YAML read with libyaml into a plain tree that keeps
+ * every value's 1-based source position, plus typed getters that report
+ * "file:line:col: error: key.path: what (got X, expected Y)". No libyaml type
+ * leaves this module; the libyaml document is freed as soon as the tree exists.
+ * Every read marks the key used; cfg_check_keys turns unread keys into errors.
+ * Used for machine configs (sim) and scene files (renderer): it knows nothing
+ * of either. */
+#ifndef RTSIM_SIM_CFG_H
+#define RTSIM_SIM_CFG_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+struct err;
+
+enum cfg_kind { CFG_SCALAR, CFG_MAP, CFG_SEQ };
+
+struct cfg_node {
+  enum cfg_kind kind;
+  int line, col;            /* position of the value, 1-based */
+  char *text;               /* scalar text (owned); NULL for maps and sequences */
+  char *key;                /* key text when this node is a map value (owned) */
+  int key_line, key_col;    /* position of the key */
+  struct cfg_node *items;   /* map entries or sequence items (owned) */
+  uint32_t count;
+  bool used;                /* read by a getter (for unknown-key checks) */
+};
+
+struct cfg_doc {
+  char file[512];
+  struct cfg_node root;
+};
+
+/* Parse a YAML file (or text, named `name` in messages). An empty document is
+ * an error. On failure fills e and returns false (d is then empty, safe to
+ * cfg_free). */
+bool cfg_load_file(struct cfg_doc *d, const char *path, struct err *e);
+bool cfg_load_text(struct cfg_doc *d, const char *name, const char *text, struct err *e);
+void cfg_free(struct cfg_doc *d);
+
+/* Entry `key` of map node m (marked used), or NULL when absent. */
+struct cfg_node *cfg_get(struct cfg_node *m, const char *key);
+
+/* Fail with an error at node n: "<path>: <message>". Always returns false. */
+bool cfg_fail(const struct cfg_doc *d, const struct cfg_node *n, const char *path, struct err *e,
+              const char *fmt, ...) __attribute__((format(printf, 5, 6)));
+
+/* Require n to be a map / sequence / scalar; else an error naming path. */
+bool cfg_expect_map(const struct cfg_doc *d, const struct cfg_node *n, const char *path,
+                    struct err *e);
+bool cfg_expect_seq(const struct cfg_doc *d, const struct cfg_node *n, const char *path,
+                    struct err *e);
+
+/* Typed values of scalar node n, range-checked (inclusive). */
+bool cfg_f64(const struct cfg_doc *d, const struct cfg_node *n, const char *path, double lo,
+             double hi, double *out, struct err *e);
+bool cfg_u64(const struct cfg_doc *d, const struct cfg_node *n, const char *path, uint64_t lo,
+             uint64_t hi, uint64_t *out, struct err *e);
+bool cfg_bool(const struct cfg_doc *d, const struct cfg_node *n, const char *path, bool *out,
+              struct err *e);
+/* A string of at most cap-1 bytes, copied into out. */
+bool cfg_str(const struct cfg_doc *d, const struct cfg_node *n, const char *path, char *out,
+             unsigned cap, struct err *e);
+/* A sequence of exactly `count` numbers in [lo, hi]. */
+bool cfg_f64_list(const struct cfg_doc *d, const struct cfg_node *n, const char *path,
+                  unsigned count, double lo, double hi, double *out, struct err *e);
+/* One of `choices` (NULL-terminated); *out = its index. */
+bool cfg_enum(const struct cfg_doc *d, const struct cfg_node *n, const char *path,
+              const char *const *choices, int *out, struct err *e);
+
+/* Every key of map m must have been read; otherwise "unknown key 'k'
+ * (expected one of: <expected>)" at the first unread key. */
+bool cfg_check_keys(const struct cfg_doc *d, const struct cfg_node *m, const char *path,
+                    const char *expected, struct err *e);
+
+#endif

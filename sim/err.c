@@ -1,0 +1,56 @@
+/* User-error records and the fatal paths for broken invariants and allocation. */
+#include "sim/err.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+bool err_set(struct err *e, const char *file, int line, int col, const char *fmt, ...) {
+  if (!e || e->set) return false;
+  e->set = true;
+  snprintf(e->file, sizeof e->file, "%s", file ? file : "");
+  e->line = line;
+  e->col = col;
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(e->msg, sizeof e->msg, fmt, ap);
+  va_end(ap);
+  return false;
+}
+
+void err_format(const struct err *e, char *buf, unsigned buf_size) {
+  if (!e->file[0])
+    snprintf(buf, buf_size, "error: %s", e->msg);
+  else if (e->line <= 0)
+    snprintf(buf, buf_size, "%s: error: %s", e->file, e->msg);
+  else if (e->col <= 0)
+    snprintf(buf, buf_size, "%s:%d: error: %s", e->file, e->line, e->msg);
+  else
+    snprintf(buf, buf_size, "%s:%d:%d: error: %s", e->file, e->line, e->col, e->msg);
+}
+
+void err_check_failed(const char *file, int line, const char *expr) {
+  fprintf(stderr, "%s:%d: internal error: CHECK(%s) failed\n", file, line, expr);
+  abort();
+}
+
+static void *oom(unsigned long long size) {
+  fprintf(stderr, "rtsim: out of memory allocating %llu bytes\n", size);
+  abort();
+}
+
+void *xmalloc(unsigned long long size) {
+  void *p = malloc(size ? size : 1);
+  return p ? p : oom(size);
+}
+
+void *xcalloc(unsigned long long n, unsigned long long size) {
+  void *p = calloc(n ? n : 1, size ? size : 1);
+  return p ? p : oom(n * size);
+}
+
+void *xrealloc(void *p, unsigned long long size) {
+  void *q = realloc(p, size ? size : 1);
+  return q ? q : oom(size);
+}

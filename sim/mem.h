@@ -1,0 +1,58 @@
+/* The memory interface: the only door between the renderer and the simulator.
+ * The renderer announces every access of scene data (address, size, data class)
+ * and every block of computation; a backend behind the door decides what that
+ * costs. Integers and function pointers only: no ray, triangle or cache type. */
+#ifndef RTSIM_SIM_MEM_H
+#define RTSIM_SIM_MEM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* Data classes: small integers to the simulator; the renderer names them. */
+enum mem_class {
+  MEM_CLASS_GEOMETRY = 0, /* triangle records */
+  MEM_CLASS_NODE = 1,     /* acceleration structure: k-d nodes, leaf index lists */
+  MEM_CLASS_RAY = 2,      /* 64-byte ray records in buffers */
+  MEM_CLASS_QUEUE = 3,    /* ray queues and the queue-point table */
+  MEM_CLASS_OTHER = 4,    /* framebuffer and everything else */
+  MEM_CLASS_COUNT = 5
+};
+
+/* Backend operations. addr is a simulated byte address, size_bytes > 0.
+ * compute announces work in core cycles. Any pointer may be NULL (ignored). */
+struct mem_ops {
+  void (*load)(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls);
+  void (*store)(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls);
+  void (*compute)(void *ctx, uint64_t cycles);
+};
+
+/* A port: a backend's operations plus its context. ops == NULL is the native
+ * backend, which does nothing: the renderer's own speed, the baseline. */
+struct mem_port {
+  const struct mem_ops *ops;
+  void *ctx;
+};
+
+/* The native backend's port (does nothing). */
+static inline struct mem_port mem_port_native(void) {
+  struct mem_port p = {NULL, NULL};
+  return p;
+}
+
+/* NOTE: the native case is one well-predicted branch per access; an empty
+ * function behind a pointer would cost an indirect call on every access. */
+static inline void mem_load(const struct mem_port *p, uint64_t addr, uint32_t size_bytes,
+                            unsigned cls) {
+  if (p->ops && p->ops->load) p->ops->load(p->ctx, addr, size_bytes, cls);
+}
+
+static inline void mem_store(const struct mem_port *p, uint64_t addr, uint32_t size_bytes,
+                             unsigned cls) {
+  if (p->ops && p->ops->store) p->ops->store(p->ctx, addr, size_bytes, cls);
+}
+
+static inline void mem_compute(const struct mem_port *p, uint64_t cycles) {
+  if (p->ops && p->ops->compute) p->ops->compute(p->ctx, cycles);
+}
+
+#endif

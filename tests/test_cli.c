@@ -1,0 +1,120 @@
+/* User-error paths of the command-line program: every bad scene file and bad
+ * command line gets one line naming file:line:col (where there is one), exit
+ * code 2, and no output file. Fixtures live in tests/data/scenes. */
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "testing.h"
+
+#define SCN RTSIM_TEST_DATA "/scenes/"
+
+static int count_lines(const char *s) {
+  int n = 0;
+  for (; *s; s++) n += *s == '\n';
+  return n;
+}
+
+int main(void) {
+  static const struct {
+    const char *file, *want;
+  } bad[] = {
+      {"bad_syntax.yaml", "bad_syntax.yaml:2:1: error: YAML syntax: did not find expected ',' or '}'"},
+      {"bad_unknown_key.yaml", "bad_unknown_key.yaml:2:1: error: lites: unknown key 'lites' (expected one of: name, seed, image, camera"},
+      {"bad_type.yaml", "bad_type.yaml:4:12: error: camera.fov_deg: wrong type (got a list, expected a number)"},
+      {"bad_range.yaml", "bad_range.yaml:4:12: error: camera.fov_deg: out of range (got 200, expected 0.01 to 179)"},
+      {"bad_missing_camera.yaml", "bad_missing_camera.yaml:1:1: error: missing required key 'camera'"},
+      {"bad_generator.yaml", "bad_generator.yaml:3:16: error: geometry[0].generator: unknown value (got 'teapot', expected one of: sphereflake, grove, room)"},
+      {"bad_detail.yaml", "bad_detail.yaml:4:13: error: geometry[0].detail: out of range (got -1, expected 0.0001 to 200)"},
+      {"bad_material_ref.yaml", "bad_material_ref.yaml:4:15: error: geometry[0].material: no material named 'gold'"},
+      {"bad_mesh_missing.yaml", "bad_mesh_missing.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/no_such_mesh.obj: cannot import mesh: Unable to open file"},
+      {"bad_mesh_broken.yaml", "bad_mesh_broken.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/broken.ply: cannot import mesh: "},
+      {"bad_light_key.yaml", "bad_light_key.yaml:3:5: error: lights[0]: missing required key 'position'"},
+      {"bad_camera_degenerate.yaml", "bad_camera_degenerate.yaml:1:31: error: camera.at: equals camera.from"},
+      {"bad_color.yaml", "bad_color.yaml:3:20: error: materials.red.color[1]: out of range (got 2, expected 0 to 1)"},
+      {"bad_empty.yaml", "bad_empty.yaml: error: empty file"},
+      {"bad_width.yaml", "bad_width.yaml:2:16: error: image.width: out of range (got 0, expected 1 to 16384)"},
+      {"bad_generator_key.yaml", "bad_generator_key.yaml:5:5: error: geometry[0].tesselation: unknown key 'tesselation' (expected one of: generator, detail, tessellation, seed)"},
+      {"bad_both.yaml", "bad_both.yaml:3:5: error: geometry[0]: expected exactly one of 'generator' or 'mesh'"},
+      {"no_such_scene.yaml", "no_such_scene.yaml: error: cannot open: No such file or directory"},
+  };
+  char cmd[2048], out[8192];
+  const char *img = RTSIM_TMP "/cli_out.exr";
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    for (int which = 0; which < 2; which++) {
+      unlink(img);
+      if (which == 0)
+        snprintf(cmd, sizeof cmd, "%s render %s%s -o %s --width 8 --height 8", RTSIM_BINARY, SCN,
+                 bad[i].file, img);
+      else
+        snprintf(cmd, sizeof cmd, "%s export %s%s -o %s", RTSIM_BINARY, SCN, bad[i].file, img);
+      int rc = testing_run(cmd, out, sizeof out);
+      EXPECTF(rc == 2, "%s: exit %d, output: %s", bad[i].file, rc, out);
+      EXPECTF(strstr(out, bad[i].want) != NULL, "%s: got '%s', want '%s'", bad[i].file, out,
+              bad[i].want);
+      EXPECTF(count_lines(out) == 1, "%s: expected one line, got: %s", bad[i].file, out);
+      EXPECTF(access(img, F_OK) != 0, "%s: output file left behind", bad[i].file);
+    }
+  }
+
+  /* Command-line mistakes: exit 2 and a message naming the problem. */
+  static const struct {
+    const char *args, *want;
+  } usage[] = {
+      {"", "usage: rtsim COMMAND"},
+      {"frobnicate", "unknown command 'frobnicate'"},
+      {"render", "missing SCENE.yaml"},
+      {"render " SCN "good_room_tiny.yaml", "missing -o IMAGE.exr"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --width 0", "--width: got '0', expected a whole number from 1 to 16384"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --width 12abc", "--width: got '12abc'"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --rays primary,glossy", "--rays: got 'primary,glossy'"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --bogus", "unknown option '--bogus'"},
+      {"render " SCN "good_room_tiny.yaml -o", "option -o needs a value"},
+      {"render " SCN "good_room_tiny.yaml -o /nonexistent/dir/x.exr --width 4 --height 4", "/nonexistent/dir/x.exr"},
+      {"export", "missing SCENE.yaml"},
+      {"hits", "missing SCENE.yaml"},
+      {"bench --repeat 0 " SCN "good_room_tiny.yaml", "--repeat: got '0'"},
+  };
+  for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {
+    snprintf(cmd, sizeof cmd, "cd %s && %s %s", RTSIM_TMP, RTSIM_BINARY, usage[i].args);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 2, "'%s': exit %d, output: %s", usage[i].args, rc, out);
+    EXPECTF(strstr(out, usage[i].want) != NULL, "'%s': got '%s', want '%s'", usage[i].args, out,
+            usage[i].want);
+  }
+
+  /* --help of every command succeeds and documents its options. */
+  static const char *const helps[] = {"render", "export", "hits", "bench"};
+  for (size_t i = 0; i < 4; i++) {
+    snprintf(cmd, sizeof cmd, "%s %s --help", RTSIM_BINARY, helps[i]);
+    EXPECT(testing_run(cmd, out, sizeof out) == 0 && strstr(out, "usage: rtsim") != NULL);
+  }
+
+  /* hits: malformed CSV is reported at <stdin>:line:col. */
+  static const struct {
+    const char *input, *want;
+  } csv[] = {
+      {"id,ox,oy\\n", "<stdin>:1:1: error: header: got 'id,ox,oy'"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0\\n", "<stdin>:2:"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,x,1,0,0,0,inf\\n", "<stdin>:2:7: error: field 4: not a number"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n7,0,0,0,0,0,0,0,inf\\n", "<stdin>:2:1: error: ray 7: direction is zero"},
+      {"", "<stdin>: error: no input"},
+  };
+  for (size_t i = 0; i < sizeof csv / sizeof csv[0]; i++) {
+    snprintf(cmd, sizeof cmd, "printf '%s' | %s hits %sgood_room_tiny.yaml", csv[i].input,
+             RTSIM_BINARY, SCN);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 2, "csv %zu: exit %d: %s", i, rc, out);
+    EXPECTF(strstr(out, csv[i].want) != NULL, "csv %zu: got '%s', want '%s'", i, out, csv[i].want);
+  }
+
+  /* hits on a one-triangle mesh: exact, hand-computed answers. The mesh is the
+   * triangle (0,0,0) (1,0,0) (0,1,0) scaled by 2. */
+  snprintf(cmd, sizeof cmd,
+           "printf 'id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0.5,0.5,3,0,0,-1,0,inf\\n2,5,5,3,0,0,-1,0,inf\\n"
+           "3,0.5,0.5,3,0,0,-2,0,1\\n4,0.5,0.5,-1,0,0,1,0,inf\\n' | %s hits %sgood_mesh.yaml",
+           RTSIM_BINARY, SCN);
+  EXPECT(testing_run(cmd, out, sizeof out) == 0);
+  EXPECTF(strcmp(out, "id,t,prim\n1,3,0\n2,inf,-1\n3,inf,-1\n4,1,0\n") == 0, "got: %s", out);
+  return testing_done("test_cli");
+}

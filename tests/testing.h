@@ -1,0 +1,37 @@
+/* Minimal test harness: each test program counts failures and returns them. */
+#ifndef RTSIM_TESTS_TESTING_H
+#define RTSIM_TESTS_TESTING_H
+
+#include <stdio.h>
+
+extern int testing_failures;
+extern int testing_checks;
+
+#define EXPECT(cond)                                                               \
+  do {                                                                             \
+    testing_checks++;                                                              \
+    if (!(cond)) {                                                                 \
+      testing_failures++;                                                          \
+      fprintf(stderr, "%s:%d: FAILED: %s\n", __FILE__, __LINE__, #cond);           \
+    }                                                                              \
+  } while (0)
+
+#define EXPECTF(cond, ...)                                                         \
+  do {                                                                             \
+    testing_checks++;                                                              \
+    if (!(cond)) {                                                                 \
+      testing_failures++;                                                          \
+      fprintf(stderr, "%s:%d: FAILED: %s: ", __FILE__, __LINE__, #cond);           \
+      fprintf(stderr, __VA_ARGS__);                                                \
+      fputc('\n', stderr);                                                         \
+    }                                                                              \
+  } while (0)
+
+/* Print a summary line and return the failure count (use as main's return). */
+int testing_done(const char *name);
+
+/* Run a shell command, capture its stderr+stdout into buf; return exit code
+ * (or -1 if it did not exit normally). */
+int testing_run(const char *cmd, char *buf, unsigned buf_size);
+
+#endif
