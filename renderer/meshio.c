@@ -1,0 +1,276 @@
+/* Mesh import through assimp's C API and PLY export of the scene's triangles.
+ * Import is two passes over the assimp scene: the first counts triangles and
+ * validates every vertex, the second appends, so a bad file never leaves half
+ * a mesh in the scene. Export writes 3 unshared vertices per face so face i is
+ * primitive i with its vertices in stored order, byte for byte. */
+#include "renderer/meshio.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <assimp/cimport.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include "renderer/scene.h"
+#include "sim/err.h"
+
+/* Import in two stages. The file is read with validation only (indices in
+ * range), then checked for what assimp's own post-processing would trip on,
+ * then triangulated and flattened: PreTransformVertices bakes node transforms
+ * into the vertices (instanced meshes are duplicated), so the meshes list is
+ * all the geometry there is. SortByPType and JoinIdenticalVertices are left
+ * out: faces are filtered by index count here and copied per triangle, so
+ * they would only cost time and add code paths that can assert.
+ * NOTE: Debian's assimp 5.2 keeps ai_assert on, and a truncated ASCII PLY
+ * yields faces with zero indices in a mesh flagged POLYGON, which makes
+ * TriangulateProcess abort() the whole program; meshio_check_raw refuses
+ * such meshes first. */
+#define MESHIO_READ_FLAGS (aiProcess_ValidateDataStructure)
+#define MESHIO_POST_FLAGS (aiProcess_Triangulate | aiProcess_PreTransformVertices)
+
+static vec3 meshio_place(const struct aiVector3D *p, const struct meshio_xform *xf) {
+  return v3_add(v3_scale(v3(p->x, p->y, p->z), xf->scale), xf->translate);
+}
+
+static bool meshio_finite(vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+
+/* Shading normals of one face from the file, or false to use the flat one
+ * (no normals, or a zero / non-finite normal that would poison shading). */
+static bool meshio_face_normals(const struct aiMesh *m, const struct aiFace *f, vec3 out[3]) {
+  if (!m->mNormals) return false;
+  for (int k = 0; k < 3; k++) {
+    const struct aiVector3D *n = &m->mNormals[f->mIndices[k]];
+    vec3 v = v3(n->x, n->y, n->z);
+    float l = v3_len(v);
+    if (!(l > 0.0f) || !isfinite(l)) return false;
+    out[k] = v3_scale(v, 1.0f / l);
+  }
+  return true;
+}
+
+/* NOTE: assimp 5.2's PLY header parser loops forever when a file starts with
+ * "ply" but has no "end_header" (it ignores the end-of-file signal while
+ * skipping unknown header lines), so a truncated PLY would hang the run. Any
+ * file assimp's PLY loader would accept (first line starting "ply", any case)
+ * must contain "end_header" somewhere; the scan costs one read of the file at
+ * worst, which assimp does anyway. Drop this when assimp is fixed. */
+static bool meshio_ply_guard(const char *path, struct err *e) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return true; /* let assimp report it in its own words */
+  static const char token[] = "end_header";
+  const size_t tlen = sizeof token - 1;
+  char buf[65536];
+  size_t keep = 0, got;
+  bool is_ply = false, found = false, first = true;
+  while (!found && (got = fread(buf + keep, 1, sizeof buf - keep, f)) > 0) {
+    size_t have = keep + got;
+    if (first) {
+      first = false;
+      is_ply = have >= 3 && (buf[0] == 'p' || buf[0] == 'P') && (buf[1] == 'l' || buf[1] == 'L') &&
+               (buf[2] == 'y' || buf[2] == 'Y');
+      if (!is_ply) break;
+    }
+    for (size_t i = 0; !found && i + tlen <= have; i++)
+      found = memcmp(buf + i, token, tlen) == 0;
+    /* Carry the tail over so a token split across reads is still seen. */
+    keep = have < tlen - 1 ? have : tlen - 1;
+    memmove(buf, buf + have - keep, keep);
+  }
+  fclose(f);
+  if (is_ply && !found)
+    return err_set(e, path, 0, 0, "cannot import mesh: PLY header is not terminated (no "
+                   "end_header line; truncated file?)");
+  return true;
+}
+
+/* Refuse what the post-processing steps would assert on or misread: faces
+ * without vertices, indices past the vertex array, and meshes flagged as
+ * holding polygons that hold none. */
+static bool meshio_check_raw(const struct aiScene *as, const char *path, struct err *e) {
+  for (unsigned mi = 0; mi < as->mNumMeshes; mi++) {
+    const struct aiMesh *m = as->mMeshes[mi];
+    bool has_polygon = false;
+    for (unsigned fi = 0; fi < m->mNumFaces; fi++) {
+      const struct aiFace *f = &m->mFaces[fi];
+      if (f->mNumIndices == 0)
+        return err_set(e, path, 0, 0, "cannot import mesh: mesh %u face %u has no vertices "
+                       "(truncated file?)", mi, fi);
+      for (unsigned k = 0; k < f->mNumIndices; k++)
+        if (f->mIndices[k] >= m->mNumVertices)
+          return err_set(e, path, 0, 0, "cannot import mesh: mesh %u face %u: vertex index %u "
+                         "out of range (mesh has %u vertices)", mi, fi, f->mIndices[k],
+                         m->mNumVertices);
+      if (f->mNumIndices > 3) has_polygon = true;
+    }
+    if ((m->mPrimitiveTypes & aiPrimitiveType_POLYGON) && !has_polygon)
+      return err_set(e, path, 0, 0, "cannot import mesh: mesh %u is flagged as holding polygons "
+                     "but has none (truncated or malformed file?)", mi);
+  }
+  return true;
+}
+
+bool meshio_import(struct scene *s, const char *path, const struct meshio_xform *xf,
+                   uint32_t material, struct err *e) {
+  if (!meshio_ply_guard(path, e)) return false;
+  const struct aiScene *as = aiImportFile(path, MESHIO_READ_FLAGS);
+  if (!as) {
+    const char *why = aiGetErrorString();
+    return err_set(e, path, 0, 0, "cannot import mesh: %s",
+                   why && why[0] ? why : "unknown assimp error");
+  }
+  bool ok = false;
+  if (!meshio_check_raw(as, path, e)) goto done;
+  /* On failure assimp has already released the scene; its error text belongs
+   * to the deleted importer and is not reachable from the C API. */
+  as = aiApplyPostProcessing(as, MESHIO_POST_FLAGS);
+  if (!as)
+    return err_set(e, path, 0, 0, "cannot import mesh: assimp post-processing "
+                   "(triangulation, node transforms) failed");
+
+  /* Pass 1: count triangles and check every placed vertex is finite. */
+  uint64_t count = 0;
+  for (unsigned mi = 0; mi < as->mNumMeshes; mi++) {
+    const struct aiMesh *m = as->mMeshes[mi];
+    for (unsigned fi = 0; fi < m->mNumFaces; fi++) {
+      const struct aiFace *f = &m->mFaces[fi];
+      if (f->mNumIndices != 3) continue; /* points and lines */
+      for (int k = 0; k < 3; k++) {
+        /* Checked before post-processing; keep the read safe regardless. */
+        if (f->mIndices[k] >= m->mNumVertices) {
+          err_set(e, path, 0, 0, "cannot import mesh: mesh %u face %u: vertex index %u out "
+                  "of range (mesh has %u vertices)", mi, fi, f->mIndices[k], m->mNumVertices);
+          goto done;
+        }
+        vec3 p = meshio_place(&m->mVertices[f->mIndices[k]], xf);
+        if (!meshio_finite(p)) {
+          err_set(e, path, 0, 0, "cannot import mesh: mesh %u face %u has a non-finite vertex "
+                  "after placement (got %g %g %g)", mi, fi, (double)p.x, (double)p.y,
+                  (double)p.z);
+          goto done;
+        }
+      }
+      count++;
+    }
+  }
+  if (count == 0) {
+    err_set(e, path, 0, 0, "cannot import mesh: file holds no triangles (%u meshes)",
+            as->mNumMeshes);
+    goto done;
+  }
+  if (count > (uint64_t)UINT32_MAX - s->tri_count) {
+    err_set(e, path, 0, 0, "cannot import mesh: too many triangles (got %llu, scene has %u)",
+            (unsigned long long)count, s->tri_count);
+    goto done;
+  }
+
+  /* Pass 2: append, in mesh then face order. */
+  for (unsigned mi = 0; mi < as->mNumMeshes; mi++) {
+    const struct aiMesh *m = as->mMeshes[mi];
+    for (unsigned fi = 0; fi < m->mNumFaces; fi++) {
+      const struct aiFace *f = &m->mFaces[fi];
+      if (f->mNumIndices != 3) continue;
+      vec3 n[3];
+      bool has_n = meshio_face_normals(m, f, n);
+      scene_add_tri(s, meshio_place(&m->mVertices[f->mIndices[0]], xf),
+                    meshio_place(&m->mVertices[f->mIndices[1]], xf),
+                    meshio_place(&m->mVertices[f->mIndices[2]], xf), has_n ? n : NULL,
+                    material);
+    }
+  }
+  ok = true;
+
+done:
+  aiReleaseImport(as);
+  return ok;
+}
+
+static void meshio_put_u32(unsigned char *p, uint32_t v) {
+  for (int k = 0; k < 4; k++) p[k] = (unsigned char)(v >> (8 * k));
+}
+
+static void meshio_put_f32(unsigned char *p, float f) {
+  uint32_t u;
+  memcpy(&u, &f, sizeof u);
+  meshio_put_u32(p, u);
+}
+
+bool meshio_export_ply(const struct scene *s, const char *path, struct err *e) {
+  size_t tmp_len = strlen(path) + 5;
+  char *tmp = xmalloc(tmp_len);
+  snprintf(tmp, tmp_len, "%s.tmp", path);
+  bool ok = false;
+  unsigned char *buf = NULL;
+
+  /* PLY vertex indices are signed 32-bit: 3n - 1 must fit. */
+  uint64_t n = s->tri_count;
+  if (3 * n > (uint64_t)INT32_MAX + 1) {
+    err_set(e, path, 0, 0, "cannot write PLY: too many triangles for int indices (got %llu, "
+            "max %lld)", (unsigned long long)n, ((long long)INT32_MAX + 1) / 3);
+    goto done;
+  }
+  FILE *f = fopen(tmp, "wb");
+  if (!f) {
+    err_set(e, path, 0, 0, "cannot write PLY: cannot create %s: %s", tmp, strerror(errno));
+    goto done;
+  }
+  int hw = fprintf(f,
+                   "ply\n"
+                   "format binary_little_endian 1.0\n"
+                   "comment rtsim export: face i = primitive i, vertices 3i..3i+2\n"
+                   "element vertex %llu\n"
+                   "property float x\n"
+                   "property float y\n"
+                   "property float z\n"
+                   "element face %llu\n"
+                   "property list uchar int vertex_indices\n"
+                   "end_header\n",
+                   (unsigned long long)(3 * n), (unsigned long long)n);
+  bool io_ok = hw > 0;
+
+  /* Vertex block then face block, written in batches to keep fwrite calls few. */
+  enum { MESHIO_BATCH = 4096 };
+  buf = xmalloc(MESHIO_BATCH * 36);
+  for (uint64_t i = 0; io_ok && i < n;) {
+    size_t used = 0;
+    for (; i < n && used < MESHIO_BATCH * 36; i++)
+      for (int k = 0; k < 3; k++, used += 12) {
+        vec3 v = s->tris[i].v[k];
+        meshio_put_f32(buf + used, v.x);
+        meshio_put_f32(buf + used + 4, v.y);
+        meshio_put_f32(buf + used + 8, v.z);
+      }
+    io_ok = fwrite(buf, 1, used, f) == used;
+  }
+  for (uint64_t i = 0; io_ok && i < n;) {
+    size_t used = 0;
+    for (; i < n && used < MESHIO_BATCH * 13; i++, used += 13) {
+      buf[used] = 3;
+      for (int k = 0; k < 3; k++) meshio_put_u32(buf + used + 1 + 4 * k, (uint32_t)(3 * i + k));
+    }
+    io_ok = fwrite(buf, 1, used, f) == used;
+  }
+  int saved = errno;
+  if (fclose(f) != 0 && io_ok) {
+    io_ok = false;
+    saved = errno;
+  }
+  if (!io_ok) {
+    err_set(e, path, 0, 0, "cannot write PLY: write to %s failed: %s", tmp, strerror(saved));
+    goto done;
+  }
+  if (rename(tmp, path) != 0) {
+    err_set(e, path, 0, 0, "cannot write PLY: rename from %s failed: %s", tmp, strerror(errno));
+    goto done;
+  }
+  ok = true;
+
+done:
+  if (!ok) remove(tmp);
+  free(buf);
+  free(tmp);
+  return ok;
+}
