@@ -37,6 +37,8 @@ void isect_prepare(struct isect_ray *r, vec3 o, vec3 d);
  * *b2 and returns true. Zero-area and edge-on triangles never hit. */
 bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, float tmax,
                float *t, float *b1, float *b2);
+/* NOTE: like PBRT-v3, isect_tri also rejects a hit whose t is within its own
+ * rounding-error bound of 0 (cannot be sure it lies in front of the origin). */
 
 /* Where the simulated memory image puts the tree and the triangle records. */
 struct trace_layout {
@@ -48,6 +50,8 @@ struct trace_layout {
   uint32_t tri_cycles;    /* compute cycles announced per triangle test */
 };
 
+/* Defaults: nodes at 0x10000000, leaf index lists at 0x20000000, triangles at
+ * 0x40000000 with 128-byte records; 7 cycles a node step, 30 a triangle test. */
 void trace_layout_default(struct trace_layout *l);
 
 struct trace_stats {

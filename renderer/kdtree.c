@@ -1,0 +1,412 @@
+/* SAH k-d tree builder with PBRT-v3 KdTreeAccel's cost model and leaf rules,
+ * over presorted bound events: each axis's events are radix-sorted once and
+ * split stably at every node, so a build is O(N log N) instead of PBRT's
+ * per-node sort. Split positions are trimmed to an even mantissa BEFORE the
+ * triangles are classified, so the stored split is exactly the plane they were
+ * classified against (conservative: no ray can miss a triangle because the
+ * split moved). Children and their lists are indices and arena offsets. */
+#include "renderer/kdtree.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "renderer/scene.h"
+#include "sim/err.h"
+
+/* Bound events of one axis. A triangle flat in that axis has one PLANAR event,
+ * any other one START (at its lower bound) and one END (at its upper bound). */
+enum { KD_EV_END = 0, KD_EV_PLANAR = 1, KD_EV_START = 2 };
+
+struct kd_ev {
+  float t;
+  uint32_t pt; /* prim << 2 | type */
+};
+
+struct kd_box {
+  float lo[3], hi[3];
+};
+
+/* One node's event lists: axis a's list is arena[off + pos[a] .. + len[a]). */
+struct kd_lists {
+  size_t off;
+  uint32_t len[3];
+};
+
+struct kd_builder {
+  const struct kd_build_params *p;
+  struct kd_tree *t;
+  struct kd_box *tb;  /* triangle bounds */
+  uint8_t *side;      /* classification scratch: bit 0 below, bit 1 above */
+  struct kd_ev *arena; /* LIFO store of event lists, see build_node */
+  size_t arena_top, arena_cap;
+  uint32_t node_cap, prim_cap;
+  uint32_t *leaf_scratch;
+};
+
+float kd_trim_split(float s) {
+  uint32_t u;
+  memcpy(&u, &s, sizeof u);
+  u &= ~1u;
+  memcpy(&s, &u, sizeof s);
+  return s;
+}
+
+static bool mantissa_odd(float s) {
+  uint32_t u;
+  memcpy(&u, &s, sizeof u);
+  return (u & 1u) != 0;
+}
+
+/* The float next to an odd-mantissa (hence finite, nonzero) s, toward +inf if
+ * up, else toward -inf: nextafterf without the call. May give +-inf for
+ * +-FLT_MAX; callers keep only values strictly inside a finite box. */
+static float odd_step(float s, bool up) {
+  uint32_t u;
+  memcpy(&u, &s, sizeof u);
+  bool neg = (u & 0x80000000u) != 0;
+  u = (up != neg) ? u + 1 : u - 1;
+  memcpy(&s, &u, sizeof s);
+  return s;
+}
+
+void kd_build_params_default(struct kd_build_params *p) {
+  p->cost_traversal = 1.0f;
+  p->cost_isect = 80.0f;
+  p->empty_bonus = 0.5f;
+  p->max_prims = 1;
+  p->max_depth = -1;
+}
+
+void kd_fini(struct kd_tree *t) {
+  if (!t) return;
+  free(t->nodes);
+  free(t->prims);
+  memset(t, 0, sizeof *t);
+}
+
+/* Order-preserving map of a float to an unsigned key (-0 sorts just below +0). */
+static uint32_t float_key(float f) {
+  uint32_t u;
+  memcpy(&u, &f, sizeof u);
+  return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+
+/* Stable LSD radix sort by t; equal keys keep their input order (prim order). */
+static void sort_events(struct kd_ev *ev, size_t n) {
+  struct kd_ev *tmp = xmalloc(n * sizeof *tmp);
+  struct kd_ev *src = ev, *dst = tmp;
+  for (int pass = 0; pass < 4; pass++) {
+    size_t count[257] = {0};
+    int shift = 8 * pass;
+    for (size_t i = 0; i < n; i++) count[((float_key(src[i].t) >> shift) & 255u) + 1]++;
+    for (int b = 0; b < 256; b++) count[b + 1] += count[b];
+    for (size_t i = 0; i < n; i++) dst[count[(float_key(src[i].t) >> shift) & 255u]++] = src[i];
+    struct kd_ev *sw = src;
+    src = dst;
+    dst = sw;
+  }
+  /* Four passes: the sorted data is back in ev. */
+  free(tmp);
+}
+
+static uint32_t new_node(struct kd_builder *b) {
+  struct kd_tree *t = b->t;
+  if (t->node_count == b->node_cap) {
+    CHECK(b->node_cap < (1u << 30));
+    b->node_cap = b->node_cap ? 2 * b->node_cap : 1024;
+    t->nodes = xrealloc(t->nodes, (unsigned long long)b->node_cap * sizeof *t->nodes);
+  }
+  t->stats.nodes++;
+  return t->node_count++;
+}
+
+static void arena_reserve(struct kd_builder *b, size_t extra) {
+  if (b->arena_top + extra <= b->arena_cap) return;
+  size_t cap = b->arena_cap ? b->arena_cap : 4096;
+  while (cap < b->arena_top + extra) cap *= 2;
+  b->arena = xrealloc(b->arena, cap * sizeof *b->arena);
+  b->arena_cap = cap;
+}
+
+static int cmp_u32(const void *a, const void *b) {
+  uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+  return (x > y) - (x < y);
+}
+
+/* Make node i a leaf over the n triangles named by axis 0's START/PLANAR events
+ * (ascending prim ids, so leaf contents do not depend on event order). */
+static void make_leaf(struct kd_builder *b, uint32_t i, const struct kd_lists *l, uint32_t n,
+                      int depth) {
+  struct kd_tree *t = b->t;
+  const struct kd_ev *ev = b->arena + l->off;
+  uint32_t k = 0;
+  for (uint32_t j = 0; j < l->len[0]; j++)
+    if ((ev[j].pt & 3u) != KD_EV_END) b->leaf_scratch[k++] = ev[j].pt >> 2;
+  CHECK(k == n);
+  if (n > 16) {
+    qsort(b->leaf_scratch, n, sizeof *b->leaf_scratch, cmp_u32);
+  } else {
+    for (uint32_t x = 1; x < n; x++) {
+      uint32_t v = b->leaf_scratch[x], y = x;
+      for (; y > 0 && b->leaf_scratch[y - 1] > v; y--) b->leaf_scratch[y] = b->leaf_scratch[y - 1];
+      b->leaf_scratch[y] = v;
+    }
+  }
+  if (t->prim_ref_count + n > b->prim_cap) {
+    uint64_t cap = b->prim_cap ? b->prim_cap : 1024;
+    while (cap < (uint64_t)t->prim_ref_count + n) cap *= 2;
+    CHECK(cap <= UINT32_MAX);
+    b->prim_cap = (uint32_t)cap;
+    t->prims = xrealloc(t->prims, cap * sizeof *t->prims);
+  }
+  if (n) memcpy(t->prims + t->prim_ref_count, b->leaf_scratch, n * sizeof *t->prims);
+  CHECK(n < (1u << 29));
+  t->nodes[i].w0 = t->prim_ref_count;
+  t->nodes[i].w1 = (n << 3) | 3u;
+  t->prim_ref_count += n;
+  t->stats.leaves++;
+  if (n == 0) t->stats.empty_leaves++;
+  if (n > t->stats.max_leaf_prims) t->stats.max_leaf_prims = n;
+  if ((uint32_t)depth > t->stats.max_depth) t->stats.max_depth = (uint32_t)depth;
+  t->stats.leaf_prim_refs += n;
+}
+
+struct kd_split {
+  double cost;
+  float s;
+  int axis;
+};
+
+static double box_area(const struct kd_box *bx) {
+  double d0 = (double)bx->hi[0] - bx->lo[0], d1 = (double)bx->hi[1] - bx->lo[1],
+         d2 = (double)bx->hi[2] - bx->lo[2];
+  return 2.0 * (d0 * d1 + d0 * d2 + d1 * d2);
+}
+
+/* SAH cost of splitting bx at s on axis a with nb triangles below, na above
+ * (PBRT-v3's formula, evaluated in double). */
+static inline void consider(const struct kd_builder *b, const struct kd_box *bx, double inv_area, int a,
+                     float s, uint32_t nb, uint32_t na, struct kd_split *best) {
+  if (!(s > bx->lo[a] && s < bx->hi[a])) return;
+  int o0 = (a + 1) % 3, o1 = (a + 2) % 3;
+  double d0 = (double)bx->hi[o0] - bx->lo[o0], d1 = (double)bx->hi[o1] - bx->lo[o1];
+  double below = 2.0 * (d0 * d1 + ((double)s - bx->lo[a]) * (d0 + d1));
+  double above = 2.0 * (d0 * d1 + ((double)bx->hi[a] - s) * (d0 + d1));
+  double eb = (na == 0 || nb == 0) ? b->p->empty_bonus : 0.0;
+  double cost = b->p->cost_traversal +
+                b->p->cost_isect * (1.0 - eb) * (below * inv_area * nb + above * inv_area * na);
+  if (cost < best->cost) {
+    best->cost = cost;
+    best->s = s;
+    best->axis = a;
+  }
+}
+
+/* Sweep axis a's sorted events. Candidates are the event values trimmed to an
+ * even mantissa in both directions (for an odd value v: the floats just below
+ * and just above v), and the counts are exact for the trimmed plane s:
+ *   below = #(lower bound < s) + #(flat at s),  above = #(upper bound > s) + #(flat at s). */
+static void sweep_axis(const struct kd_builder *b, const struct kd_lists *l, const struct kd_box *bx,
+                       double inv_area, int a, struct kd_split *best) {
+  const struct kd_ev *ev = b->arena + l->off;
+  size_t base = 0;
+  for (int k = 0; k < a; k++) base += l->len[k];
+  ev += base;
+  uint32_t m = l->len[a];
+  uint32_t n_end = 0, n_planar = 0;
+  for (uint32_t j = 0; j < m; j++) {
+    uint32_t ty = ev[j].pt & 3u;
+    n_end += ty == KD_EV_END;
+    n_planar += ty == KD_EV_PLANAR;
+  }
+  /* Counts of events strictly before the current group. */
+  uint32_t lt_s = 0, lt_e = 0, lt_p = 0;
+  uint32_t j = 0;
+  while (j < m) {
+    float v = ev[j].t;
+    uint32_t g_s = 0, g_e = 0, g_p = 0, k = j;
+    while (k < m && ev[k].t == v) {
+      uint32_t ty = ev[k].pt & 3u;
+      g_s += ty == KD_EV_START;
+      g_e += ty == KD_EV_END;
+      g_p += ty == KD_EV_PLANAR;
+      k++;
+    }
+    if (!mantissa_odd(v)) {
+      consider(b, bx, inv_area, a, v, lt_s + lt_p + g_p, (n_end - lt_e - g_e) + (n_planar - lt_p),
+               best);
+    } else {
+      float dn = odd_step(v, false), up = odd_step(v, true);
+      /* dn equal to the previous group's value was evaluated there, with its events. */
+      if (j == 0 || dn != ev[j - 1].t)
+        consider(b, bx, inv_area, a, dn, lt_s + lt_p, (n_end - lt_e) + (n_planar - lt_p), best);
+      /* up equal to the next group's value is evaluated there. */
+      if (k == m || up != ev[k].t)
+        consider(b, bx, inv_area, a, up, lt_s + g_s + lt_p + g_p,
+                 (n_end - lt_e - g_e) + (n_planar - lt_p - g_p), best);
+    }
+    lt_s += g_s;
+    lt_e += g_e;
+    lt_p += g_p;
+    j = k;
+  }
+}
+
+/* Build node over the n triangles whose event lists are l (at the arena's top
+ * region starting at l->off). On return the arena is popped back to l->off. */
+static void build_node(struct kd_builder *b, const struct kd_box *bx, const struct kd_lists *l,
+                       uint32_t n, int depth, int depth_left, int bad_refines) {
+  struct kd_tree *t = b->t;
+  uint32_t i = new_node(b);
+  if (n <= b->p->max_prims || depth_left == 0) {
+    make_leaf(b, i, l, n, depth);
+    b->arena_top = l->off;
+    return;
+  }
+
+  /* Choose the split: the box's longest axis first, the others if it has no candidate. */
+  struct kd_split best = {INFINITY, 0.0f, -1};
+  double area = box_area(bx);
+  if (area > 0.0) {
+    double inv_area = 1.0 / area;
+    float d[3] = {bx->hi[0] - bx->lo[0], bx->hi[1] - bx->lo[1], bx->hi[2] - bx->lo[2]};
+    int axis = (d[0] > d[1] && d[0] > d[2]) ? 0 : (d[1] > d[2] ? 1 : 2);
+    for (int retries = 0; retries < 3 && best.axis < 0; retries++, axis = (axis + 1) % 3)
+      sweep_axis(b, l, bx, inv_area, axis, &best);
+  }
+  double old_cost = (double)b->p->cost_isect * n;
+  if (best.axis >= 0 && best.cost > old_cost) bad_refines++;
+  if (best.axis < 0 || (best.cost > 4.0 * old_cost && n < 16) || bad_refines == 3) {
+    make_leaf(b, i, l, n, depth);
+    b->arena_top = l->off;
+    return;
+  }
+
+  /* Classify against the trimmed plane (best.s has an even mantissa already). */
+  int a = best.axis;
+  float s = best.s;
+  CHECK(!mantissa_odd(s) && kd_trim_split(s) == s);
+  const struct kd_ev *ev0 = b->arena + l->off;
+  uint32_t nb = 0, na = 0;
+  for (uint32_t j = 0; j < l->len[0]; j++) {
+    if ((ev0[j].pt & 3u) == KD_EV_END) continue;
+    uint32_t p = ev0[j].pt >> 2;
+    float lo = b->tb[p].lo[a], hi = b->tb[p].hi[a];
+    bool flat_at = lo == hi && lo == s;
+    uint8_t sd = (uint8_t)(((lo < s || flat_at) ? 1u : 0u) | ((hi > s || flat_at) ? 2u : 0u));
+    CHECK(sd != 0);
+    b->side[p] = sd;
+    nb += sd & 1u;
+    na += sd >> 1;
+  }
+
+  /* Split the lists in one stable pass: above events to the top, below events
+   * after room for all; then close the gap and move both down over this
+   * node's lists, which are dead now: [above lists][below lists]. */
+  size_t total = (size_t)l->len[0] + l->len[1] + l->len[2];
+  arena_reserve(b, total * 2);
+  const struct kd_ev *e = b->arena + l->off;
+  struct kd_ev *da = b->arena + b->arena_top, *db = da + total;
+  struct kd_lists la = {l->off, {0, 0, 0}}, lb = {0, {0, 0, 0}};
+  size_t wa = 0, wb = 0;
+  for (int k = 0; k < 3; k++) {
+    size_t a0 = wa, b0 = wb;
+    for (uint32_t j = 0; j < l->len[k]; j++) {
+      uint8_t sd = b->side[e[j].pt >> 2];
+      da[wa] = e[j];
+      wa += sd >> 1;
+      db[wb] = e[j];
+      wb += sd & 1u;
+    }
+    la.len[k] = (uint32_t)(wa - a0);
+    lb.len[k] = (uint32_t)(wb - b0);
+    e += l->len[k];
+  }
+  memmove(da + wa, db, wb * sizeof *db);
+  memmove(b->arena + l->off, da, (wa + wb) * sizeof *da);
+  lb.off = l->off + wa;
+  b->arena_top = l->off + wa + wb;
+
+  struct kd_box below = *bx, above = *bx;
+  below.hi[a] = s;
+  above.lo[a] = s;
+  build_node(b, &below, &lb, nb, depth + 1, depth_left - 1, bad_refines);
+  uint32_t above_idx = t->node_count;
+  CHECK(above_idx < (1u << 30));
+  build_node(b, &above, &la, na, depth + 1, depth_left - 1, bad_refines);
+  uint32_t bits;
+  memcpy(&bits, &s, sizeof bits);
+  t->nodes[i].w0 = bits;
+  t->nodes[i].w1 = (above_idx << 2) | (uint32_t)a;
+  b->arena_top = l->off;
+}
+
+void kd_build(struct kd_tree *t, const struct scene *s, const struct kd_build_params *p) {
+  memset(t, 0, sizeof *t);
+  struct kd_builder b;
+  memset(&b, 0, sizeof b);
+  b.p = p;
+  b.t = t;
+  uint32_t n = s->tri_count;
+  CHECK(n < (1u << 29));
+  scene_bounds(s, &t->lo, &t->hi);
+
+  int max_depth = p->max_depth;
+  if (max_depth < 0) {
+    int lg = 0;
+    while (n >> (lg + 1)) lg++;
+    max_depth = (int)lroundf(8.0f + 1.3f * (float)lg);
+  }
+  if (max_depth > KD_DEPTH_LIMIT) max_depth = KD_DEPTH_LIMIT;
+
+  b.tb = xmalloc((n ? n : 1) * sizeof *b.tb);
+  b.side = xcalloc(n ? n : 1, 1);
+  b.leaf_scratch = xmalloc((n ? n : 1) * sizeof *b.leaf_scratch);
+  for (uint32_t i = 0; i < n; i++) {
+    const struct scene_tri *tr = &s->tris[i];
+    for (int a = 0; a < 3; a++) {
+      float x = v3_get(tr->v[0], a), y = v3_get(tr->v[1], a), z = v3_get(tr->v[2], a);
+      CHECK(isfinite(x) && isfinite(y) && isfinite(z));
+      b.tb[i].lo[a] = fminf(x, fminf(y, z));
+      b.tb[i].hi[a] = fmaxf(x, fmaxf(y, z));
+    }
+  }
+
+  /* Root event lists, one sorted list per axis, laid out back to back. */
+  struct kd_lists root = {0, {0, 0, 0}};
+  /* Room for the root lists and the pending children below them (the peak is
+   * about three times the root's lists for typical scenes; it grows if not). */
+  arena_reserve(&b, (size_t)18 * n + 1);
+  for (int a = 0; a < 3; a++) {
+    struct kd_ev *ev = b.arena + b.arena_top;
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < n; i++) {
+      float lo = b.tb[i].lo[a], hi = b.tb[i].hi[a];
+      if (lo == hi) {
+        ev[m].t = lo;
+        ev[m++].pt = (i << 2) | KD_EV_PLANAR;
+      } else {
+        ev[m].t = lo;
+        ev[m++].pt = (i << 2) | KD_EV_START;
+        ev[m].t = hi;
+        ev[m++].pt = (i << 2) | KD_EV_END;
+      }
+    }
+    sort_events(ev, m);
+    root.len[a] = m;
+    b.arena_top += m;
+  }
+  struct kd_box bx = {{t->lo.x, t->lo.y, t->lo.z}, {t->hi.x, t->hi.y, t->hi.z}};
+  build_node(&b, &bx, &root, n, 0, max_depth, 0);
+  CHECK(b.arena_top == 0);
+
+  /* Trim the arrays to size: the tree lives as long as the scene. */
+  t->nodes = xrealloc(t->nodes, (unsigned long long)t->node_count * sizeof *t->nodes);
+  if (t->prim_ref_count)
+    t->prims = xrealloc(t->prims, (unsigned long long)t->prim_ref_count * sizeof *t->prims);
+  free(b.tb);
+  free(b.side);
+  free(b.leaf_scratch);
+  free(b.arena);
+}

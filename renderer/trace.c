@@ -1,0 +1,432 @@
+/* Ray queries: the watertight ray/triangle test (Woop, Benthin, Wald 2013, as in
+ * PBRT-v3), front-to-back k-d traversal with an explicit fixed-size stack (plain
+ * loops, no recursion: kernels later run as stackful coroutines), and a brute
+ * force reference with the same hit rule. Traversal is conservative: split and
+ * box planes are thickened by a slack proportional to the ray's distance to the
+ * scene, which covers the rounding of both the traversal and the triangle
+ * test, so the tree returns exactly what brute force does. */
+#include "renderer/trace.h"
+
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#include "renderer/kdtree.h"
+#include "renderer/ray.h"
+#include "renderer/scene.h"
+#include "sim/err.h"
+
+/* Relative slack of traversal planes, in units of R = the ray origin's largest
+ * per-axis distance to the root box. The triangle test decides hits from
+ * coordinates relative to the origin with a few roundings of magnitude R, so
+ * its hit points lie within ~8 eps R of the triangle; 64 FLT_EPSILON (7.6e-6 R)
+ * leaves a wide margin. Cost: rays within this distance of a split plane visit
+ * both children, which is negligible. */
+#define TRACE_SLACK (64.0f * FLT_EPSILON)
+
+/* Rays whose direction is shorter than this (largest component) miss
+ * everything: below it 1/d overflows and the test's shear is meaningless. */
+#define TRACE_MIN_DIR 1e-30f
+
+static float gamma_f(int n) {
+  float e = 0.5f * FLT_EPSILON;
+  return ((float)n * e) / (1.0f - (float)n * e);
+}
+
+static float comp(vec3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
+_Static_assert(sizeof(vec3) == 3 * sizeof(float), "vec3 is three packed floats");
+
+void isect_prepare(struct isect_ray *r, vec3 o, vec3 d) {
+  float ax = fabsf(d.x), ay = fabsf(d.y), az = fabsf(d.z);
+  int kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
+  int kx = kz + 1 == 3 ? 0 : kz + 1;
+  int ky = kx + 1 == 3 ? 0 : kx + 1;
+  float dz = comp(d, kz);
+  /* Swap to keep the winding when looking down -kz (only matters for culling). */
+  if (dz < 0.0f) {
+    int tmp = kx;
+    kx = ky;
+    ky = tmp;
+  }
+  r->o = o;
+  r->kx = kx;
+  r->ky = ky;
+  r->kz = kz;
+  r->sx = comp(d, kx) / dz;
+  r->sy = comp(d, ky) / dz;
+  r->sz = 1.0f / dz;
+}
+
+/* True when the triangle's area is zero. Float differences and their products
+ * are exact in double for coordinates within a 2^26 range of each other, so
+ * this is an exact test for ordinary scenes. Only called for candidate hits. */
+static bool tri_degenerate(vec3 a, vec3 b, vec3 c) {
+  double e1x = (double)b.x - a.x, e1y = (double)b.y - a.y, e1z = (double)b.z - a.z;
+  double e2x = (double)c.x - a.x, e2y = (double)c.y - a.y, e2z = (double)c.z - a.z;
+  double nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
+  return nx == 0.0 && ny == 0.0 && nz == 0.0;
+}
+
+bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, float tmax,
+               float *t, float *b1, float *b2) {
+  /* Translate to the ray origin, permute so that kz is the ray's main axis, shear. */
+  vec3 v[3] = {v3_sub(a, r->o), v3_sub(b, r->o), v3_sub(c, r->o)};
+  float pa[3], pb[3], pc[3];
+  memcpy(pa, &v[0], sizeof pa);
+  memcpy(pb, &v[1], sizeof pb);
+  memcpy(pc, &v[2], sizeof pc);
+  float az = pa[r->kz], bz = pb[r->kz], cz = pc[r->kz];
+  float ax = pa[r->kx] - r->sx * az, ay = pa[r->ky] - r->sy * az;
+  float bx = pb[r->kx] - r->sx * bz, by = pb[r->ky] - r->sy * bz;
+  float cx = pc[r->kx] - r->sx * cz, cy = pc[r->ky] - r->sy * cz;
+
+  /* Edge functions; e0 is the weight of a. A shared edge gives exactly negated
+   * values in its two triangles (same products), hence watertightness. */
+  float e0 = bx * cy - by * cx;
+  float e1 = cx * ay - cy * ax;
+  float e2 = ax * by - ay * bx;
+  if (e0 == 0.0f || e1 == 0.0f || e2 == 0.0f) {
+    /* On an edge in float: decide in double, where these products are exact. */
+    e0 = (float)((double)bx * cy - (double)by * cx);
+    e1 = (float)((double)cx * ay - (double)cy * ax);
+    e2 = (float)((double)ax * by - (double)ay * bx);
+  }
+  if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f))
+    return false;
+  float det = e0 + e1 + e2;
+  if (det == 0.0f || isnan(det)) return false;
+
+  /* Scaled distance; compare against the range times det before dividing. The
+   * scaled test is loosened by a few ulps so it never rejects a t that the
+   * exact test on the divided value below would accept. */
+  az *= r->sz;
+  bz *= r->sz;
+  cz *= r->sz;
+  float tsc = e0 * az + e1 * bz + e2 * cz;
+  float sdet = det, stsc = tsc;
+  if (sdet < 0.0f) {
+    sdet = -sdet;
+    stsc = -stsc;
+  }
+  float lo = tmin * sdet, hi = tmax * sdet, loose = 8.0f * FLT_EPSILON;
+  if (!(stsc > lo - fabsf(lo) * loose && stsc < hi + fabsf(hi) * loose)) return false;
+  float tt = tsc / det;
+  if (!(tt > tmin && tt < tmax)) return false;
+
+  /* PBRT-v3: reject hits too close to the origin to be surely in front of it. */
+  float max_zt = fmaxf(fabsf(az), fmaxf(fabsf(bz), fabsf(cz)));
+  float max_xt = fmaxf(fabsf(ax), fmaxf(fabsf(bx), fabsf(cx)));
+  float max_yt = fmaxf(fabsf(ay), fmaxf(fabsf(by), fabsf(cy)));
+  float delta_z = gamma_f(3) * max_zt;
+  float delta_x = gamma_f(5) * (max_xt + max_zt);
+  float delta_y = gamma_f(5) * (max_yt + max_zt);
+  float delta_e = 2.0f * (gamma_f(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+  float max_e = fmaxf(fabsf(e0), fmaxf(fabsf(e1), fabsf(e2)));
+  float delta_t =
+      3.0f * (gamma_f(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / fabsf(det);
+  if (tt <= delta_t) return false;
+
+  if (tri_degenerate(a, b, c)) return false;
+  *t = tt;
+  *b1 = e1 / det;
+  *b2 = e2 / det;
+  return true;
+}
+
+void trace_layout_default(struct trace_layout *l) {
+  /* Disjoint 256 MB+ regions: nodes, leaf index lists, triangle records. */
+  l->node_base = 0x10000000u;
+  l->prim_idx_base = 0x20000000u;
+  l->tri_base = 0x40000000u;
+  l->tri_bytes = 128; /* 3 vertices, 3 normals, material: 76 bytes, padded to two lines */
+  l->node_cycles = 7; /* the paper's ray/plane test: multiply, add, compare */
+  l->tri_cycles = 30; /* watertight test: ~25 flops plus compares */
+}
+
+void tracer_init(struct tracer *tr, const struct scene *s, const struct kd_tree *kd,
+                 struct mem_port mem, const struct trace_layout *layout) {
+  memset(tr, 0, sizeof *tr);
+  tr->scene = s;
+  tr->kd = kd;
+  tr->mem = mem;
+  if (layout)
+    tr->layout = *layout;
+  else
+    trace_layout_default(&tr->layout);
+}
+
+/* Per-ray traversal constants. flat[a]: d[a] is too small for 1/d[a]; the ray
+ * is then treated as not moving along a (it moves < 1e-8 R inside the box). */
+struct trav_ray {
+  float o[3], inv[3], tol[3];
+  bool flat[3];
+  float delta; /* slack in scene units */
+  float t0, t1; /* clipped to the slack-thickened root box */
+};
+
+static bool ray_valid(const struct ray *r) {
+  if (!isfinite(r->o.x) || !isfinite(r->o.y) || !isfinite(r->o.z)) return false;
+  if (!isfinite(r->d.x) || !isfinite(r->d.y) || !isfinite(r->d.z)) return false;
+  if (isnan(r->tmin) || isnan(r->tmax) || !(r->tmin < r->tmax)) return false;
+  float m = fmaxf(fabsf(r->d.x), fmaxf(fabsf(r->d.y), fabsf(r->d.z)));
+  return m >= TRACE_MIN_DIR;
+}
+
+/* Set up tr and clip the ray to the thickened root box; false if it misses. */
+static bool trav_setup(struct trav_ray *tr, const struct kd_tree *kd, const struct ray *r) {
+  float lo[3] = {kd->lo.x, kd->lo.y, kd->lo.z}, hi[3] = {kd->hi.x, kd->hi.y, kd->hi.z};
+  float d[3] = {r->d.x, r->d.y, r->d.z};
+  tr->o[0] = r->o.x;
+  tr->o[1] = r->o.y;
+  tr->o[2] = r->o.z;
+  float reach = 0.0f;
+  for (int a = 0; a < 3; a++)
+    reach = fmaxf(reach, fmaxf(fabsf(lo[a] - tr->o[a]), fabsf(hi[a] - tr->o[a])));
+  tr->delta = reach * TRACE_SLACK + FLT_MIN;
+  float t0 = r->tmin, t1 = r->tmax;
+  for (int a = 0; a < 3; a++) {
+    float inv = 1.0f / d[a];
+    tr->flat[a] = !isfinite(inv);
+    if (tr->flat[a]) {
+      tr->inv[a] = 0.0f;
+      tr->tol[a] = 0.0f;
+      if (tr->o[a] - lo[a] < -tr->delta || tr->o[a] - hi[a] > tr->delta) return false;
+      continue;
+    }
+    tr->inv[a] = inv;
+    tr->tol[a] = tr->delta * fabsf(inv);
+    float tn = ((lo[a] - tr->o[a]) - tr->delta) * inv;
+    float tf = ((hi[a] - tr->o[a]) + tr->delta) * inv;
+    if (inv < 0.0f) {
+      float tmp = tn;
+      tn = tf;
+      tf = tmp;
+    }
+    /* NaN-safe: a NaN bound leaves the interval as it is. */
+    if (tn > t0) t0 = tn;
+    if (tf < t1) t1 = tf;
+  }
+  tr->t0 = t0;
+  tr->t1 = t1;
+  return t0 <= t1;
+}
+
+struct trav_entry {
+  uint32_t node;
+  float t0, t1;
+};
+
+/* One traversal step at interior node nd (index ni) over [t0, t1]: picks the
+ * child to visit next (*next, its interval in *t0, *t1) and pushes the other one if
+ * both need a visit. Returns false when neither child needs one. */
+static bool trav_interior(const struct trav_ray *tr, struct kd_node nd, uint32_t ni, float *t0,
+                          float *t1, uint32_t *next, struct trav_entry *stack, int *sp) {
+  int a = kd_axis(nd);
+  float s = kd_split(nd);
+  uint32_t below = ni + 1, above = kd_above(nd);
+  uint32_t near_c, far_c;
+  float n0 = *t0, n1 = *t1, f0 = *t0, f1 = *t1;
+  bool vnear, vfar;
+  if (tr->flat[a]) {
+    /* Parallel to the plane: the side(s) within the slack; a ray lying in the
+     * plane sees both children. */
+    bool vb = tr->o[a] - s <= tr->delta, va = s - tr->o[a] <= tr->delta;
+    bool below_first = tr->o[a] <= s;
+    near_c = below_first ? below : above;
+    far_c = below_first ? above : below;
+    vnear = below_first ? vb : va;
+    vfar = below_first ? va : vb;
+  } else {
+    float ts = (s - tr->o[a]) * tr->inv[a];
+    float lo_t = ts - tr->tol[a], hi_t = ts + tr->tol[a];
+    near_c = tr->inv[a] > 0.0f ? below : above;
+    far_c = tr->inv[a] > 0.0f ? above : below;
+    if (isnan(lo_t) || isnan(hi_t)) {
+      vnear = vfar = true;
+    } else {
+      if (hi_t < n1) n1 = hi_t;
+      if (lo_t > f0) f0 = lo_t;
+      vnear = *t0 <= hi_t;
+      vfar = lo_t <= *t1;
+    }
+  }
+  if (vnear && vfar) {
+    CHECK(*sp < KD_DEPTH_LIMIT);
+    stack[*sp].node = far_c;
+    stack[*sp].t0 = f0;
+    stack[*sp].t1 = f1;
+    (*sp)++;
+  }
+  if (vnear) {
+    *next = near_c;
+    *t0 = n0;
+    *t1 = n1;
+    return true;
+  }
+  if (vfar) {
+    *next = far_c;
+    *t0 = f0;
+    *t1 = f1;
+    return true;
+  }
+  return false;
+}
+
+static void announce_node(struct tracer *tr, uint32_t ni) {
+  mem_load(&tr->mem, tr->layout.node_base + 8ull * ni, 8, MEM_CLASS_NODE);
+  mem_compute(&tr->mem, tr->layout.node_cycles);
+  tr->stats.node_visits++;
+}
+
+static void announce_tri(struct tracer *tr, uint32_t p) {
+  mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p,
+           tr->layout.tri_bytes, MEM_CLASS_GEOMETRY);
+  mem_compute(&tr->mem, tr->layout.tri_cycles);
+  tr->stats.tri_tests++;
+}
+
+/* Shared loop of trace_closest (any_hit false) and trace_any (true). Hits are
+ * accepted against the ray's whole (tmin, best t) range, not the node's
+ * interval; a node is skipped when the best hit lies before its interval. */
+static bool traverse(struct tracer *tr, const struct ray *r, bool any_hit, struct hit *h) {
+  h->t = r->tmax;
+  h->prim = -1;
+  h->b1 = h->b2 = 0.0f;
+  const struct kd_tree *kd = tr->kd;
+  const struct scene *s = tr->scene;
+  if (!ray_valid(r) || kd->node_count == 0) return false;
+  struct trav_ray tv;
+  if (!trav_setup(&tv, kd, r)) return false;
+  struct isect_ray ir;
+  isect_prepare(&ir, r->o, r->d);
+
+  struct trav_entry stack[KD_DEPTH_LIMIT];
+  int sp = 0;
+  uint32_t ni = 0;
+  float t0 = tv.t0, t1 = tv.t1;
+  bool found = false;
+  float upper = r->tmax; /* nextafter(best_t) once a hit is found */
+  float best_t = upper;
+  uint32_t best_p = 0;
+  for (;;) {
+    announce_node(tr, ni);
+    struct kd_node nd = kd->nodes[ni];
+    if (!kd_is_leaf(nd)) {
+      if (trav_interior(&tv, nd, ni, &t0, &t1, &ni, stack, &sp)) continue;
+    } else {
+      uint32_t off = kd_leaf_offset(nd), cnt = kd_leaf_count(nd);
+      for (uint32_t j = 0; j < cnt; j++) {
+        mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * (off + j), 4, MEM_CLASS_NODE);
+        uint32_t p = kd->prims[off + j];
+        if ((int64_t)p == (int64_t)r->ignore_prim) continue;
+        announce_tri(tr, p);
+        const struct scene_tri *tri = &s->tris[p];
+        float t, b1, b2;
+        if (!isect_tri(&ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, upper, &t, &b1, &b2))
+          continue;
+        if (any_hit) {
+          h->t = t;
+          h->prim = (int32_t)p;
+          h->b1 = b1;
+          h->b2 = b2;
+          return true;
+        }
+        if (!found || t < best_t || (t == best_t && p < best_p)) {
+          found = true;
+          best_t = t;
+          upper = nextafterf(t, INFINITY); /* equal t still competes on prim id */
+          best_p = p;
+          h->t = t;
+          h->prim = (int32_t)p;
+          h->b1 = b1;
+          h->b2 = b2;
+        }
+      }
+    }
+    /* Next node from the stack, skipping those entirely beyond the best hit. */
+    for (;;) {
+      if (sp == 0) return found;
+      sp--;
+      if (found && best_t < stack[sp].t0) continue;
+      ni = stack[sp].node;
+      t0 = stack[sp].t0;
+      t1 = stack[sp].t1;
+      break;
+    }
+  }
+}
+
+bool trace_closest(struct tracer *tr, const struct ray *r, struct hit *h) {
+  return traverse(tr, r, false, h);
+}
+
+bool trace_any(struct tracer *tr, const struct ray *r) {
+  struct hit h;
+  return traverse(tr, r, true, &h);
+}
+
+bool trace_brute(const struct scene *s, const struct ray *r, struct hit *h) {
+  h->t = r->tmax;
+  h->prim = -1;
+  h->b1 = h->b2 = 0.0f;
+  if (!ray_valid(r)) return false;
+  struct isect_ray ir;
+  isect_prepare(&ir, r->o, r->d);
+  bool found = false;
+  float upper = r->tmax;
+  for (uint32_t p = 0; p < s->tri_count; p++) {
+    if ((int64_t)p == (int64_t)r->ignore_prim) continue;
+    const struct scene_tri *tri = &s->tris[p];
+    float t, b1, b2;
+    if (!isect_tri(&ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, upper, &t, &b1, &b2)) continue;
+    if (!found || t < h->t || (t == h->t && (int32_t)p < h->prim)) {
+      found = true;
+      h->t = t;
+      upper = nextafterf(t, INFINITY);
+      h->prim = (int32_t)p;
+      h->b1 = b1;
+      h->b2 = b2;
+    }
+  }
+  return found;
+}
+
+vec3 trace_hit_point(const struct scene *s, const struct hit *h, vec3 *err) {
+  CHECK(h->prim >= 0 && (uint32_t)h->prim < s->tri_count);
+  const struct scene_tri *tri = &s->tris[h->prim];
+  float b0 = 1.0f - h->b1 - h->b2;
+  vec3 p0 = v3_scale(tri->v[0], b0), p1 = v3_scale(tri->v[1], h->b1),
+       p2 = v3_scale(tri->v[2], h->b2);
+  vec3 p = v3_add(v3_add(p0, p1), p2);
+  if (err) {
+    float g = gamma_f(7);
+    *err = v3(g * (fabsf(p0.x) + fabsf(p1.x) + fabsf(p2.x)),
+              g * (fabsf(p0.y) + fabsf(p1.y) + fabsf(p2.y)),
+              g * (fabsf(p0.z) + fabsf(p1.z) + fabsf(p2.z)));
+  }
+  return p;
+}
+
+vec3 trace_geom_normal(const struct scene *s, const struct hit *h) {
+  CHECK(h->prim >= 0 && (uint32_t)h->prim < s->tri_count);
+  const struct scene_tri *tri = &s->tris[h->prim];
+  vec3 n = v3_cross(v3_sub(tri->v[1], tri->v[0]), v3_sub(tri->v[2], tri->v[0]));
+  float l = v3_len(n);
+  return l > 0.0f ? v3_scale(n, 1.0f / l) : v3(0, 0, 0);
+}
+
+vec3 trace_offset_origin(vec3 p, vec3 err, vec3 n, vec3 d) {
+  float dist = fabsf(n.x) * err.x + fabsf(n.y) * err.y + fabsf(n.z) * err.z;
+  vec3 off = v3_scale(n, dist);
+  if (v3_dot(d, n) < 0.0f) off = v3_scale(off, -1.0f);
+  vec3 po = v3_add(p, off);
+  /* Round away from p so the offset survives the addition's rounding. */
+  float pc[3] = {po.x, po.y, po.z}, oc[3] = {off.x, off.y, off.z};
+  for (int i = 0; i < 3; i++) {
+    if (oc[i] > 0.0f)
+      pc[i] = nextafterf(pc[i], INFINITY);
+    else if (oc[i] < 0.0f)
+      pc[i] = nextafterf(pc[i], -INFINITY);
+  }
+  return v3(pc[0], pc[1], pc[2]);
+}
