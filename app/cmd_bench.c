@@ -5,7 +5,7 @@
 
 #include "app/app.h"
 #include "renderer/framebuffer.h"
-#include "renderer/render.h"
+#include "renderer/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 
@@ -61,7 +61,10 @@ int cmd_bench(int argc, char **argv) {
       struct render_stats st;
       memset(&st, 0, sizeof st);
       double t0 = app_now();
-      render_recursive(&tr, &sc, &fb, &st, NULL, NULL);
+      struct policy_env env = {&tr, &sc, &fb, &st, NULL, NULL};
+      struct policy_params pp;
+      policy_params_default(&pp);
+      policy_run(POLICY_RECURSIVE, &env, &pp);
       double s = app_now() - t0;
       fb_fini(&fb);
       rays = st.rays[RAY_PRIMARY];

@@ -38,7 +38,7 @@ void camera_primary(const struct camera_frame *cf, uint32_t x, uint32_t y, uint6
   r->type = RAY_PRIMARY;
   r->light = 0;
   r->flags = 0;
-  r->sample = 0;
+  r->hit_prim = -1;
 }
 
 /* Classic Hilbert index -> (x, y) on an n x n grid, n a power of two. */

@@ -24,7 +24,7 @@ struct ray {
   uint8_t type;        /* enum ray_type */
   uint8_t light;       /* shadow rays: light index */
   uint8_t flags;
-  uint32_t sample;     /* index among siblings (diffuse grid cell, light) */
+  int32_t hit_prim;    /* scheduling state: best hit so far when a ray is deferred, or -1 */
 };
 
 _Static_assert(sizeof(struct ray) == 64, "a ray is one 64-byte line");

@@ -24,7 +24,7 @@ static void child_of(const struct ray *r, struct ray *c, uint8_t type, uint32_t 
   c->type = type;
   c->light = 0;
   c->flags = 0;
-  c->sample = slot;
+  c->hit_prim = -1;
   c->tmin = 0.0f;
   c->tmax = INFINITY;
 }

@@ -134,10 +134,13 @@ bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, fl
 }
 
 void trace_layout_default(struct trace_layout *l) {
-  /* Disjoint 256 MB+ regions: nodes, leaf index lists, triangle records. */
-  l->node_base = 0x10000000u;
-  l->prim_idx_base = 0x20000000u;
-  l->tri_base = 0x40000000u;
+  l->tri_base = 1ull << TRACE_REGION_SHIFT;
+  l->node_base = 2ull << TRACE_REGION_SHIFT;
+  l->prim_idx_base = 3ull << TRACE_REGION_SHIFT;
+  l->qtable_base = 4ull << TRACE_REGION_SHIFT;
+  l->queue_base = 5ull << TRACE_REGION_SHIFT;
+  l->ray_base = 6ull << TRACE_REGION_SHIFT;
+  l->fb_base = 7ull << TRACE_REGION_SHIFT;
   l->tri_bytes = 128; /* 3 vertices, 3 normals, material: 76 bytes, padded to two lines */
   l->node_cycles = 7; /* the paper's ray/plane test: multiply, add, compare */
   l->tri_cycles = 30; /* watertight test: ~25 flops plus compares */
@@ -283,6 +286,7 @@ static void announce_tri(struct tracer *tr, uint32_t p) {
            tr->layout.tri_bytes, MEM_CLASS_GEOMETRY);
   mem_compute(&tr->mem, tr->layout.tri_cycles);
   tr->stats.tri_tests++;
+  if (tr->tested) tr->tested[p >> 6] |= 1ull << (p & 63);
 }
 
 /* Shared loop of trace_closest (any_hit false) and trace_any (true). Hits are

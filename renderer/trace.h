@@ -40,18 +40,23 @@ bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, fl
 /* NOTE: like PBRT-v3, isect_tri also rejects a hit whose t is within its own
  * rounding-error bound of 0 (cannot be sure it lies in front of the origin). */
 
-/* Where the simulated memory image puts the tree and the triangle records. */
+/* The simulated memory image: where every piece of scene and workload data
+ * lives. Regions are 2^40 bytes apart, so none can overlap whatever the scene
+ * size; only what is touched exists (the analysers are sparse). */
+#define TRACE_REGION_SHIFT 40
 struct trace_layout {
+  uint64_t tri_base;      /* triangle p at tri_base + tri_bytes p */
   uint64_t node_base;     /* k-d node i at node_base + 8 i */
   uint64_t prim_idx_base; /* leaf index entry j at prim_idx_base + 4 j */
-  uint64_t tri_base;      /* triangle p at tri_base + tri_bytes p */
+  uint64_t qtable_base;   /* queue-point table: entry q at qtable_base + 8 q */
+  uint64_t queue_base;    /* ray queues (64-byte rays) */
+  uint64_t ray_base;      /* ray stacks and packet buffers (64-byte rays) */
+  uint64_t fb_base;       /* framebuffer: pixel i at fb_base + FB_PIXEL_BYTES i */
   uint32_t tri_bytes;     /* simulated triangle record size (default 128) */
   uint32_t node_cycles;   /* compute cycles announced per traversal step */
   uint32_t tri_cycles;    /* compute cycles announced per triangle test */
 };
 
-/* Defaults: nodes at 0x10000000, leaf index lists at 0x20000000, triangles at
- * 0x40000000 with 128-byte records; 7 cycles a node step, 30 a triangle test. */
 void trace_layout_default(struct trace_layout *l);
 
 struct trace_stats {
@@ -64,6 +69,9 @@ struct tracer {
   struct mem_port mem;
   struct trace_layout layout;
   struct trace_stats stats;
+  /* Optional bit set, one bit a triangle (set when tested against any ray):
+   * the potentially visible geometry. NULL: not tracked. Owned by the caller. */
+  uint64_t *tested;
 };
 
 void tracer_init(struct tracer *tr, const struct scene *s, const struct kd_tree *kd,

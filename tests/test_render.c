@@ -7,7 +7,7 @@
 #include "renderer/framebuffer.h"
 #include "renderer/image.h"
 #include "renderer/kdtree.h"
-#include "renderer/render.h"
+#include "renderer/policy.h"
 #include "renderer/scene.h"
 #include "renderer/scene_file.h"
 #include "renderer/shade.h"
@@ -66,7 +66,10 @@ static void render(struct world *w, uint32_t mask, uint32_t size, struct framebu
   struct shade_ctx sc = {&w->s, mask, 7};
   fb_init(fb, size, size, 0);
   memset(st, 0, sizeof *st);
-  render_recursive(&tr, &sc, fb, st, NULL, NULL);
+  struct policy_env env = {&tr, &sc, fb, st, NULL, NULL};
+  struct policy_params pp;
+  policy_params_default(&pp);
+  policy_run(POLICY_RECURSIVE, &env, &pp);
 }
 
 int main(void) {

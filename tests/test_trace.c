@@ -404,15 +404,18 @@ struct count_ctx {
   struct trace_layout l;
 };
 
+static bool in_region(uint64_t addr, uint64_t base) {
+  return addr >= base && addr - base < (1ull << TRACE_REGION_SHIFT);
+}
+
 static void count_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct count_ctx *c = ctx;
-  if (cls == MEM_CLASS_NODE && size == 8 && addr >= c->l.node_base && addr < c->l.prim_idx_base &&
+  if (cls == MEM_CLASS_NODE && size == 8 && in_region(addr, c->l.node_base) &&
       (addr - c->l.node_base) % 8 == 0)
     c->node_loads++;
-  else if (cls == MEM_CLASS_NODE && size == 4 && addr >= c->l.prim_idx_base &&
-           addr < c->l.tri_base)
+  else if (cls == MEM_CLASS_NODE && size == 4 && in_region(addr, c->l.prim_idx_base))
     c->idx_loads++;
-  else if (cls == MEM_CLASS_GEOMETRY && size == c->l.tri_bytes && addr >= c->l.tri_base &&
+  else if (cls == MEM_CLASS_GEOMETRY && size == c->l.tri_bytes && in_region(addr, c->l.tri_base) &&
            (addr - c->l.tri_base) % c->l.tri_bytes == 0)
     c->tri_loads++;
   else

@@ -1,0 +1,51 @@
+/* Ray scheduling policies (the paper's sections 2 and 3), each its own module
+ * behind this one interface. A policy decides only the order in which rays are
+ * traced and where they wait in memory; tracing and shading are the shared
+ * kernels, so every policy produces the same hits and the same image, bit for
+ * bit (the framebuffer sums in fixed point). */
+#ifndef RTSIM_RENDERER_POLICY_H
+#define RTSIM_RENDERER_POLICY_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "renderer/render.h"
+
+struct tracer;
+struct shade_ctx;
+struct framebuffer;
+
+enum policy_kind { POLICY_RECURSIVE = 0, POLICY_PACKET = 1, POLICY_DYNAMIC = 2, POLICY_COUNT = 3 };
+
+struct policy_params {
+  uint32_t packet_dim;   /* packet: packets are packet_dim x packet_dim pixels (8) */
+  uint64_t cache_bytes;  /* dynamic: the cache size the schedule is made for */
+};
+
+void policy_params_default(struct policy_params *p);
+
+/* What a policy runs with. The tracer carries the memory port and layout
+ * (where rays, queues and the framebuffer live in the simulated image). */
+struct policy_env {
+  struct tracer *tr;
+  const struct shade_ctx *sc;
+  struct framebuffer *fb; /* its size is the image size */
+  struct render_stats *st;
+  render_progress_fn progress;
+  void *progress_ctx;
+};
+
+/* Render the whole image with policy k. Checks ray conservation at the end. */
+void policy_run(enum policy_kind k, const struct policy_env *env, const struct policy_params *p);
+
+/* "recursive", "packet", "dynamic". */
+const char *policy_name(enum policy_kind k);
+/* Parse a name; false if unknown. */
+bool policy_parse(const char *name, enum policy_kind *k);
+
+/* The modules (policy_recursive.c, policy_packet.c, policy_dynamic.c). */
+void policy_recursive_run(const struct policy_env *env, const struct policy_params *p);
+void policy_packet_run(const struct policy_env *env, const struct policy_params *p);
+void policy_dynamic_run(const struct policy_env *env, const struct policy_params *p);
+
+#endif
