@@ -1,0 +1,39 @@
+/* The functional backend: a struct mem_ops behind the memory door that splits
+ * each access into the cache lines it touches and feeds every line to the
+ * one-pass LRU stack analyser (all cache sizes at once) and, if given, to a din
+ * trace writer. No time: compute announcements are ignored. */
+#ifndef RTSIM_SIM_MEM_FUNCTIONAL_H
+#define RTSIM_SIM_MEM_FUNCTIONAL_H
+
+#include <stdint.h>
+
+#include "sim/lru_stack.h"
+#include "sim/mem.h"
+
+struct din_writer;
+
+/* What the renderer asked for, by data class (requests, not lines). */
+struct fn_backend_stats {
+  uint64_t loads[MEM_CLASS_COUNT], stores[MEM_CLASS_COUNT]; /* requests */
+  uint64_t bytes_loaded[MEM_CLASS_COUNT], bytes_stored[MEM_CLASS_COUNT];
+  uint64_t line_accesses[MEM_CLASS_COUNT]; /* lines touched, = analyser accesses */
+};
+
+struct fn_backend;
+
+/* Create a backend with a fresh analyser of geometry p (must pass
+ * lru_stack_params_problem; CHECKed). din is borrowed and may be NULL: the
+ * caller closes it after the run; records go one per line of p->lg2_line.
+ * Caller destroys. */
+struct fn_backend *fn_backend_create(const struct lru_stack_params *p, struct din_writer *din);
+void fn_backend_destroy(struct fn_backend *b); /* NULL ok; does not touch din */
+
+/* The port the renderer calls through; valid while b lives. */
+struct mem_port fn_backend_port(struct fn_backend *b);
+
+/* The analyser (borrowed): call lru_stack_finish and read results after the run. */
+struct lru_stack *fn_backend_stack(struct fn_backend *b);
+
+const struct fn_backend_stats *fn_backend_stats(const struct fn_backend *b);
+
+#endif
