@@ -17,6 +17,8 @@ int cmd_render(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 int cmd_hits(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
+int cmd_traffic(int argc, char **argv);
+int cmd_trace(int argc, char **argv);
 
 /* Print "rtsim: <formatted err>" once to stderr; returns APP_EXIT_USAGE. */
 int app_report(const struct err *e);

@@ -1,4 +1,6 @@
-/* rtsim bench: primary-ray throughput per scene (a benchmark, not a test). */
+/* rtsim bench: host speed figures (a benchmark, not a test): native render
+ * throughput per scene, the functional backend's slowdown against it on the
+ * same workload, and the one-pass analyser's own speed. */
 #include <getopt.h>
 #include <stdio.h>
 #include <string.h>
@@ -8,26 +10,63 @@
 #include "renderer/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
+#include "sim/lru_stack.h"
+#include "sim/mem_functional.h"
 
 static const char HELP[] =
     "usage: rtsim bench [options] SCENE.yaml...\n"
     "\n"
-    "For each scene: load, build the k-d tree, and render primary rays only (native\n"
-    "backend, single thread) several times; report the best time. Prints CSV on\n"
-    "stdout: scene,triangles,kd_nodes,kd_build_s,width,height,rays,best_s,rays_per_s.\n"
+    "For each scene: load, build the k-d tree and render with the recursive policy\n"
+    "(single thread) several times under the native backend (which does nothing per\n"
+    "access), keeping the best time; with --functional, also once under the\n"
+    "functional backend (every access analysed for all 13 cache sizes) and report\n"
+    "the slowdown. Prints CSV on stdout: scene, triangles, kd_nodes, kd_build_s,\n"
+    "width, height, rays, native_s, rays_per_s[, functional_s, slowdown,\n"
+    "line_accesses, accesses_per_s].\n"
     "\n"
     "options:\n"
     "  --width W --height H   image size (default: each scene's)\n"
-    "  --repeat N             renders per scene, best kept (default 3)\n"
+    "  --rays LIST            ray types (default primary)\n"
+    "  --repeat N             native renders per scene, best kept (default 3)\n"
+    "  --functional           also time the functional backend on the same work\n"
+    "  --analyser N           only time the analyser alone on N synthetic line\n"
+    "                         accesses and print accesses per second\n"
     "  -h, --help             this text\n";
+
+static double render_once(const struct app_world *w, uint32_t mask, uint32_t W, uint32_t H,
+                          struct mem_port port, uint64_t *rays) {
+  struct trace_layout layout;
+  trace_layout_default(&layout);
+  struct tracer tr;
+  tracer_init(&tr, &w->scene, &w->kd, port, &layout);
+  struct shade_ctx sc = {&w->scene, mask, w->scene.seed};
+  struct framebuffer fb;
+  fb_init(&fb, W, H, layout.fb_base);
+  struct render_stats st;
+  memset(&st, 0, sizeof st);
+  struct policy_env env = {&tr, &sc, &fb, &st, NULL, NULL};
+  struct policy_params pp;
+  policy_params_default(&pp);
+  double t0 = app_now();
+  policy_run(POLICY_RECURSIVE, &env, &pp);
+  double s = app_now() - t0;
+  fb_fini(&fb);
+  *rays = render_stats_total(&st);
+  return s;
+}
 
 int cmd_bench(int argc, char **argv) {
   static const struct option opts[] = {{"width", required_argument, 0, 'W'},
                                        {"height", required_argument, 0, 'H'},
                                        {"repeat", required_argument, 0, 'n'},
+                                       {"rays", required_argument, 0, 'r'},
+                                       {"functional", no_argument, 0, 'f'},
+                                       {"analyser", required_argument, 0, 'a'},
                                        {"help", no_argument, 0, 'h'},
                                        {0, 0, 0, 0}};
-  uint64_t width = 0, height = 0, repeat = 3;
+  uint64_t width = 0, height = 0, repeat = 3, analyser = 0;
+  const char *rays = "primary";
+  bool functional = false;
   int c;
   opterr = 0;
   optind = 1;
@@ -36,43 +75,50 @@ int cmd_bench(int argc, char **argv) {
     case 'W': if (!app_parse_u64("bench", "--width", optarg, 1, 16384, &width)) return 2; break;
     case 'H': if (!app_parse_u64("bench", "--height", optarg, 1, 16384, &height)) return 2; break;
     case 'n': if (!app_parse_u64("bench", "--repeat", optarg, 1, 1000, &repeat)) return 2; break;
+    case 'a': if (!app_parse_u64("bench", "--analyser", optarg, 1, 1ull << 40, &analyser)) return 2; break;
+    case 'r': rays = optarg; break;
+    case 'f': functional = true; break;
     case 'h': fputs(HELP, stdout); return 0;
     case ':': return app_usage_error("bench", "option %s needs a value", argv[optind - 1]);
     default: return app_usage_error("bench", "unknown option '%s'", argv[optind - 1]);
     }
   }
+  if (analyser) {
+    printf("line_accesses,accesses_per_s\n%llu,%.0f\n", (unsigned long long)analyser,
+           lru_stack_bench(analyser, 1));
+    return 0;
+  }
+  uint32_t mask;
+  if (!shade_parse_rays(rays, &mask))
+    return app_usage_error("bench", "--rays: got '%s', expected a comma-separated list of primary, shadow, specular, diffuse", rays);
   if (optind >= argc) return app_usage_error("bench", "missing SCENE.yaml");
-  printf("scene,triangles,kd_nodes,kd_build_s,width,height,rays,best_s,rays_per_s\n");
+  printf("scene,triangles,kd_nodes,kd_build_s,width,height,rays,native_s,rays_per_s%s\n",
+         functional ? ",functional_s,slowdown,line_accesses,accesses_per_s" : "");
   for (int i = optind; i < argc; i++) {
     struct app_world w;
     if (!app_world_load(&w, argv[i])) return 2;
     uint32_t W = width ? (uint32_t)width : w.scene.width;
     uint32_t H = height ? (uint32_t)height : w.scene.height;
-    struct trace_layout layout;
-    trace_layout_default(&layout);
-    struct shade_ctx sc = {&w.scene, RAY_MASK(RAY_PRIMARY), w.scene.seed};
     double best = 0;
-    uint64_t rays = 0;
+    uint64_t nrays = 0;
     for (uint64_t k = 0; k < repeat; k++) {
-      struct tracer tr;
-      tracer_init(&tr, &w.scene, &w.kd, mem_port_native(), &layout);
-      struct framebuffer fb;
-      fb_init(&fb, W, H, 0);
-      struct render_stats st;
-      memset(&st, 0, sizeof st);
-      double t0 = app_now();
-      struct policy_env env = {&tr, &sc, &fb, &st, NULL, NULL};
-      struct policy_params pp;
-      policy_params_default(&pp);
-      policy_run(POLICY_RECURSIVE, &env, &pp);
-      double s = app_now() - t0;
-      fb_fini(&fb);
-      rays = st.rays[RAY_PRIMARY];
+      double s = render_once(&w, mask, W, H, mem_port_native(), &nrays);
       if (k == 0 || s < best) best = s;
     }
-    printf("%s,%u,%u,%.3f,%u,%u,%llu,%.4f,%.0f\n", w.scene.name[0] ? w.scene.name : argv[i],
-           w.scene.tri_count, w.kd.stats.nodes, w.build_s, W, H, (unsigned long long)rays, best,
-           best > 0 ? (double)rays / best : 0.0);
+    printf("%s,%u,%u,%.3f,%u,%u,%llu,%.4f,%.0f", w.scene.name[0] ? w.scene.name : argv[i],
+           w.scene.tri_count, w.kd.stats.nodes, w.build_s, W, H, (unsigned long long)nrays, best,
+           best > 0 ? (double)nrays / best : 0.0);
+    if (functional) {
+      struct lru_stack_params lp = lru_stack_params_default();
+      struct fn_backend *b = fn_backend_create(&lp, NULL);
+      double fs = render_once(&w, mask, W, H, fn_backend_port(b), &nrays);
+      uint64_t acc = 0;
+      for (unsigned cl = 0; cl < MEM_CLASS_COUNT; cl++) acc += fn_backend_stats(b)->line_accesses[cl];
+      fn_backend_destroy(b);
+      printf(",%.4f,%.2f,%llu,%.0f", fs, best > 0 ? fs / best : 0.0, (unsigned long long)acc,
+             fs > 0 ? (double)acc / fs : 0.0);
+    }
+    printf("\n");
     fflush(stdout);
     app_world_fini(&w);
   }

@@ -18,6 +18,9 @@ static const char USAGE[] =
     "  render SCENE.yaml -o IMAGE.exr   ray trace a scene to an OpenEXR image\n"
     "  export SCENE.yaml -o SCENE.ply   write the scene's triangles (face i = primitive i)\n"
     "  hits SCENE.yaml                  nearest hits for rays read as CSV on stdin\n"
+    "  traffic SCENE.yaml --rays R -o T.csv  DRAM-to-L2 traffic of the scheduling\n"
+    "                                   policies for every cache size, 1 KB to 4 MB\n"
+    "  trace SCENE.yaml --din FILE ...  the access stream as a Dinero IV din trace\n"
     "  bench SCENE.yaml...              primary-ray throughput (rays/s) per scene\n"
     "\n"
     "Run 'rtsim COMMAND --help' for a command's options.\n";
@@ -96,7 +99,9 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "export")) return cmd_export(argc - 1, argv + 1);
   if (!strcmp(cmd, "hits")) return cmd_hits(argc - 1, argv + 1);
   if (!strcmp(cmd, "bench")) return cmd_bench(argc - 1, argv + 1);
-  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, bench)\n",
+  if (!strcmp(cmd, "traffic")) return cmd_traffic(argc - 1, argv + 1);
+  if (!strcmp(cmd, "trace")) return cmd_trace(argc - 1, argv + 1);
+  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, traffic, trace, bench)\n",
           cmd);
   return APP_EXIT_USAGE;
 }

@@ -1,0 +1,340 @@
+/* rtsim traffic and rtsim trace: DRAM-to-L2 traffic of the scheduling policies
+ * for every cache size at once (functional backend, one-pass LRU analysis), and
+ * the raw access stream as a Dinero IV din trace. */
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "app/app.h"
+#include "renderer/framebuffer.h"
+#include "renderer/policy.h"
+#include "renderer/shade.h"
+#include "renderer/trace.h"
+#include "sim/din.h"
+#include "sim/err.h"
+#include "sim/lru_stack.h"
+#include "sim/mem_functional.h"
+
+#define MIB (1024.0 * 1024.0)
+
+static const char TRAFFIC_HELP[] =
+    "usage: rtsim traffic SCENE.yaml --rays CONFIG [options] -o TABLE.csv\n"
+    "\n"
+    "Measure the traffic from DRAM into a fully associative LRU L2 with 64-byte lines\n"
+    "for every size from 1 KB to 4 MB (powers of two) in one pass over the access\n"
+    "stream, for each scheduling policy, as the paper's Figures 5-7. The recursive and\n"
+    "packet schedules do not depend on the cache size and run once; the dynamic one\n"
+    "is made for a cache size, so it runs once per size.\n"
+    "\n"
+    "options:\n"
+    "  --rays CONFIG       the paper's configurations: primary; shadow (primary + hard\n"
+    "                      shadows); specular (+ shadows + specular); diffuse (+ shadows\n"
+    "                      + diffuse); or an explicit list such as primary,diffuse\n"
+    "  --policy P          recursive, packet, dynamic or all (default all); relative\n"
+    "                      columns need recursive, which then runs too\n"
+    "  --width W --height H  image size (default: the scene's)\n"
+    "  -o, --output FILE   CSV to write (required), one row per policy and cache size\n"
+    "  -h, --help          this text\n"
+    "\n"
+    "Columns: scene, rays, width, height, policy, cache_bytes; frac_pot_vis (cache size\n"
+    "over the potentially visible geometry's bytes); geometry_mb (triangles + k-d nodes\n"
+    "and leaf lists) and total_mb fetched from DRAM (MB = 2^20 bytes); rel_geometry and\n"
+    "rel_total (over recursive at the same size); then fetched bytes by data class\n"
+    "(fetch_geometry ... fetch_other), dirty write-back bytes (writeback_bytes), line\n"
+    "accesses, and the potentially visible triangles and their bytes.\n";
+
+/* The paper's ray configurations by name, or an explicit list. */
+static bool parse_config(const char *s, uint32_t *mask) {
+  const uint32_t P = RAY_MASK(RAY_PRIMARY), S = RAY_MASK(RAY_SHADOW);
+  if (!strcmp(s, "primary")) *mask = P;
+  else if (!strcmp(s, "shadow")) *mask = P | S;
+  else if (!strcmp(s, "specular")) *mask = P | S | RAY_MASK(RAY_SPECULAR);
+  else if (!strcmp(s, "diffuse")) *mask = P | S | RAY_MASK(RAY_DIFFUSE);
+  else return shade_parse_rays(s, mask);
+  return true;
+}
+
+/* One functional run of policy k; analyser results, and the potentially
+ * visible triangles counted. din may be NULL. */
+struct fn_run {
+  struct lru_stack_results res;
+  struct render_stats st;
+  uint64_t pot_vis_tris;
+};
+
+static void run_functional(const struct app_world *w, enum policy_kind k, uint32_t mask,
+                           uint32_t width, uint32_t height, uint64_t cache_bytes,
+                           struct din_writer *din, struct fn_run *out) {
+  struct lru_stack_params lp = lru_stack_params_default();
+  struct fn_backend *b = fn_backend_create(&lp, din);
+  struct trace_layout layout;
+  trace_layout_default(&layout);
+  struct tracer tr;
+  tracer_init(&tr, &w->scene, &w->kd, fn_backend_port(b), &layout);
+  uint64_t words = ((uint64_t)w->scene.tri_count + 63) / 64;
+  tr.tested = xcalloc(words, sizeof *tr.tested);
+  struct shade_ctx sc = {&w->scene, mask, w->scene.seed};
+  struct framebuffer fb;
+  fb_init(&fb, width, height, layout.fb_base);
+  memset(&out->st, 0, sizeof out->st);
+  struct policy_env env = {&tr, &sc, &fb, &out->st, NULL, NULL};
+  struct policy_params pp;
+  policy_params_default(&pp);
+  pp.cache_bytes = cache_bytes;
+  policy_run(k, &env, &pp);
+  lru_stack_finish(fn_backend_stack(b));
+  lru_stack_get_results(fn_backend_stack(b), &out->res);
+  out->pot_vis_tris = 0;
+  for (uint64_t i = 0; i < words; i++) out->pot_vis_tris += (uint64_t)__builtin_popcountll(tr.tested[i]);
+  free(tr.tested);
+  fb_fini(&fb);
+  fn_backend_destroy(b);
+}
+
+static uint64_t fetched(const struct lru_stack_size_stats *s, unsigned cls, unsigned lg2_line) {
+  return s->misses[cls] << lg2_line;
+}
+
+struct row {
+  enum policy_kind policy;
+  struct lru_stack_size_stats s;
+  uint64_t pot_vis_tris;
+};
+
+static double geometry_bytes(const struct row *r, unsigned lg2) {
+  return (double)(fetched(&r->s, MEM_CLASS_GEOMETRY, lg2) + fetched(&r->s, MEM_CLASS_NODE, lg2));
+}
+
+static double total_bytes(const struct row *r, unsigned lg2) {
+  uint64_t t = 0;
+  for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) t += fetched(&r->s, c, lg2);
+  return (double)t;
+}
+
+static void progress_line(const char *what, unsigned done, unsigned total) {
+  if (!isatty(2)) return;
+  fprintf(stderr, "\rtraffic: %-28s %3u/%u", what, done, total);
+  if (done == total) fputc('\n', stderr);
+  fflush(stderr);
+}
+
+int cmd_traffic(int argc, char **argv) {
+  static const struct option opts[] = {
+      {"output", required_argument, 0, 'o'}, {"width", required_argument, 0, 'W'},
+      {"height", required_argument, 0, 'H'}, {"rays", required_argument, 0, 'r'},
+      {"policy", required_argument, 0, 'P'}, {"help", no_argument, 0, 'h'},
+      {0, 0, 0, 0}};
+  const char *out = NULL, *rays = NULL, *policy = "all";
+  uint64_t width = 0, height = 0;
+  int c;
+  opterr = 0;
+  optind = 1;
+  while ((c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
+    switch (c) {
+    case 'o': out = optarg; break;
+    case 'W': if (!app_parse_u64("traffic", "--width", optarg, 1, 16384, &width)) return 2; break;
+    case 'H': if (!app_parse_u64("traffic", "--height", optarg, 1, 16384, &height)) return 2; break;
+    case 'r': rays = optarg; break;
+    case 'P': policy = optarg; break;
+    case 'h': fputs(TRAFFIC_HELP, stdout); return 0;
+    case ':': return app_usage_error("traffic", "option %s needs a value", argv[optind - 1]);
+    default: return app_usage_error("traffic", "unknown option '%s'", argv[optind - 1]);
+    }
+  }
+  if (optind != argc - 1)
+    return app_usage_error("traffic", optind >= argc ? "missing SCENE.yaml" : "expected one scene file, got %d", argc - optind);
+  if (!out) return app_usage_error("traffic", "missing -o TABLE.csv");
+  if (!rays) return app_usage_error("traffic", "missing --rays (primary, shadow, specular or diffuse)");
+  uint32_t mask;
+  if (!parse_config(rays, &mask))
+    return app_usage_error("traffic", "--rays: got '%s', expected primary, shadow, specular, diffuse or a comma-separated list of ray types", rays);
+  bool want[POLICY_COUNT] = {false, false, false};
+  enum policy_kind pk;
+  if (!strcmp(policy, "all"))
+    want[0] = want[1] = want[2] = true;
+  else if (policy_parse(policy, &pk))
+    want[pk] = want[POLICY_RECURSIVE] = true;
+  else
+    return app_usage_error("traffic", "--policy: got '%s', expected one of: recursive, packet, dynamic, all", policy);
+
+  struct app_world w;
+  if (!app_world_load(&w, argv[optind])) return 2;
+  uint32_t W = width ? (uint32_t)width : w.scene.width;
+  uint32_t H = height ? (uint32_t)height : w.scene.height;
+  struct lru_stack_params lp = lru_stack_params_default();
+  const unsigned nsizes = lp.lg2_max - lp.lg2_min + 1;
+  struct row *rows = xcalloc((uint64_t)POLICY_COUNT * nsizes, sizeof *rows);
+  unsigned nrows = 0, runs = (want[0] ? 1 : 0) + (want[1] ? 1 : 0) + (want[2] ? nsizes : 0), done = 0;
+  struct fn_run fr;
+  for (int p = 0; p < POLICY_COUNT; p++) {
+    if (!want[p]) continue;
+    if (p != POLICY_DYNAMIC) {
+      progress_line(policy_name((enum policy_kind)p), done, runs);
+      run_functional(&w, (enum policy_kind)p, mask, W, H, 0, NULL, &fr);
+      done++;
+      for (unsigned k = 0; k < nsizes; k++)
+        rows[nrows++] = (struct row){(enum policy_kind)p, fr.res.size[k], fr.pot_vis_tris};
+    } else {
+      for (unsigned k = 0; k < nsizes; k++) {
+        char what[64];
+        snprintf(what, sizeof what, "dynamic %llu KB", (unsigned long long)(1ull << (lp.lg2_min + k)) / 1024);
+        progress_line(what, done, runs);
+        run_functional(&w, POLICY_DYNAMIC, mask, W, H, 1ull << (lp.lg2_min + k), NULL, &fr);
+        done++;
+        rows[nrows++] = (struct row){POLICY_DYNAMIC, fr.res.size[k], fr.pot_vis_tris};
+      }
+    }
+  }
+  progress_line("done", runs, runs);
+
+  char tmp[1100];
+  snprintf(tmp, sizeof tmp, "%s.tmp", out);
+  FILE *f = fopen(tmp, "w");
+  struct err e;
+  memset(&e, 0, sizeof e);
+  if (!f) {
+    err_set(&e, out, 0, 0, "cannot write the table");
+    free(rows);
+    app_world_fini(&w);
+    return app_report(&e);
+  }
+  char names[64];
+  shade_rays_name(mask, names, sizeof names);
+  for (char *q = names; *q; q++)
+    if (*q == ',') *q = '+'; /* a CSV field */
+  const char *scene_name = w.scene.name[0] ? w.scene.name : argv[optind];
+  fprintf(f, "scene,rays,width,height,policy,cache_bytes,frac_pot_vis,geometry_mb,total_mb,"
+             "rel_geometry,rel_total,fetch_geometry,fetch_node,fetch_ray,fetch_queue,fetch_other,"
+             "writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes\n");
+  const unsigned lg2 = lp.lg2_line;
+  struct trace_layout layout;
+  trace_layout_default(&layout);
+  const uint64_t tri_bytes = layout.tri_bytes;
+  for (unsigned i = 0; i < nrows; i++) {
+    const struct row *r = &rows[i];
+    const struct row *base = NULL;
+    for (unsigned j = 0; j < nrows; j++)
+      if (rows[j].policy == POLICY_RECURSIVE && rows[j].s.capacity_bytes == r->s.capacity_bytes)
+        base = &rows[j];
+    uint64_t pv_bytes = r->pot_vis_tris * tri_bytes, wb = 0, acc = 0;
+    for (unsigned cl = 0; cl < MEM_CLASS_COUNT; cl++) {
+      wb += r->s.writebacks[cl] << lg2;
+      acc += r->s.accesses[cl];
+    }
+    double g = geometry_bytes(r, lg2), t = total_bytes(r, lg2);
+    double bg = base ? geometry_bytes(base, lg2) : 0, bt = base ? total_bytes(base, lg2) : 0;
+    fprintf(f, "%s,%s,%u,%u,%s,%llu,%.6f,%.4f,%.4f,%.4f,%.4f", scene_name, names, W, H,
+            policy_name(r->policy), (unsigned long long)r->s.capacity_bytes,
+            pv_bytes ? (double)r->s.capacity_bytes / (double)pv_bytes : 0.0, g / MIB, t / MIB,
+            bg > 0 ? g / bg : 0.0, bt > 0 ? t / bt : 0.0);
+    for (unsigned cl = 0; cl < MEM_CLASS_COUNT; cl++)
+      fprintf(f, ",%llu", (unsigned long long)fetched(&r->s, cl, lg2));
+    fprintf(f, ",%llu,%llu,%llu,%llu\n", (unsigned long long)wb, (unsigned long long)acc,
+            (unsigned long long)r->pot_vis_tris, (unsigned long long)pv_bytes);
+  }
+  bool ok = !ferror(f);
+  ok = (fclose(f) == 0) && ok;
+  if (!ok || rename(tmp, out) != 0) {
+    unlink(tmp);
+    err_set(&e, out, 0, 0, "cannot write the table");
+    free(rows);
+    app_world_fini(&w);
+    return app_report(&e);
+  }
+  printf("scene: %s\nrays: %s\nimage: %ux%u\nruns: %u\noutput: %s\n", scene_name, names, W, H,
+         runs, out);
+  free(rows);
+  app_world_fini(&w);
+  return 0;
+}
+
+static const char TRACE_HELP[] =
+    "usage: rtsim trace SCENE.yaml --policy P --rays CONFIG --din FILE [options]\n"
+    "\n"
+    "Write the access stream of one run as a Dinero IV din trace: one record\n"
+    "'LABEL ADDRESS' per 64-byte line touched (label 0 read, 1 write; address in\n"
+    "hex), so a fully associative LRU with 64-byte lines replaying it sees exactly\n"
+    "our accesses. Prints on stdout, as CSV, the misses our one-pass analyser\n"
+    "counted for each cache size, to check a replay against.\n"
+    "\n"
+    "options:\n"
+    "  --policy P          recursive, packet or dynamic (required)\n"
+    "  --rays CONFIG       primary, shadow, specular, diffuse or a list (required)\n"
+    "  --din FILE          trace to write (required); written whole or not at all\n"
+    "  --cache BYTES       dynamic: the cache size the schedule is made for (default\n"
+    "                      524288); a power of two from 1024 to 4194304\n"
+    "  --width W --height H  image size (default: the scene's)\n"
+    "  -h, --help          this text\n";
+
+int cmd_trace(int argc, char **argv) {
+  static const struct option opts[] = {
+      {"din", required_argument, 0, 'd'},    {"width", required_argument, 0, 'W'},
+      {"height", required_argument, 0, 'H'}, {"rays", required_argument, 0, 'r'},
+      {"policy", required_argument, 0, 'P'}, {"cache", required_argument, 0, 'c'},
+      {"help", no_argument, 0, 'h'},         {0, 0, 0, 0}};
+  const char *din_path = NULL, *rays = NULL, *policy = NULL;
+  uint64_t width = 0, height = 0, cache = 512 * 1024;
+  int c;
+  opterr = 0;
+  optind = 1;
+  while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
+    switch (c) {
+    case 'd': din_path = optarg; break;
+    case 'W': if (!app_parse_u64("trace", "--width", optarg, 1, 16384, &width)) return 2; break;
+    case 'H': if (!app_parse_u64("trace", "--height", optarg, 1, 16384, &height)) return 2; break;
+    case 'r': rays = optarg; break;
+    case 'P': policy = optarg; break;
+    case 'c':
+      if (!app_parse_u64("trace", "--cache", optarg, 1024, 4194304, &cache)) return 2;
+      if (cache & (cache - 1))
+        return app_usage_error("trace", "--cache: got '%s', expected a power of two", optarg);
+      break;
+    case 'h': fputs(TRACE_HELP, stdout); return 0;
+    case ':': return app_usage_error("trace", "option %s needs a value", argv[optind - 1]);
+    default: return app_usage_error("trace", "unknown option '%s'", argv[optind - 1]);
+    }
+  }
+  if (optind != argc - 1)
+    return app_usage_error("trace", optind >= argc ? "missing SCENE.yaml" : "expected one scene file, got %d", argc - optind);
+  if (!din_path) return app_usage_error("trace", "missing --din FILE");
+  if (!policy) return app_usage_error("trace", "missing --policy (recursive, packet or dynamic)");
+  if (!rays) return app_usage_error("trace", "missing --rays (primary, shadow, specular or diffuse)");
+  enum policy_kind pk;
+  if (!policy_parse(policy, &pk))
+    return app_usage_error("trace", "--policy: got '%s', expected one of: recursive, packet, dynamic", policy);
+  uint32_t mask;
+  if (!parse_config(rays, &mask))
+    return app_usage_error("trace", "--rays: got '%s', expected primary, shadow, specular, diffuse or a comma-separated list of ray types", rays);
+  struct app_world w;
+  if (!app_world_load(&w, argv[optind])) return 2;
+  uint32_t W = width ? (uint32_t)width : w.scene.width;
+  uint32_t H = height ? (uint32_t)height : w.scene.height;
+  struct lru_stack_params lp = lru_stack_params_default();
+  struct err e;
+  memset(&e, 0, sizeof e);
+  struct din_writer *din = din_writer_open(din_path, lp.lg2_line, &e);
+  if (!din) {
+    app_world_fini(&w);
+    return app_report(&e);
+  }
+  struct fn_run fr;
+  run_functional(&w, pk, mask, W, H, cache, din, &fr);
+  uint64_t records = din_writer_records(din);
+  bool ok = din_writer_close(din, &e);
+  app_world_fini(&w);
+  if (!ok) return app_report(&e);
+  printf("cache_bytes,misses,writebacks\n");
+  for (unsigned k = 0; k < fr.res.size_count; k++) {
+    uint64_t m = 0, wb = 0;
+    for (unsigned cl = 0; cl < MEM_CLASS_COUNT; cl++) {
+      m += fr.res.size[k].misses[cl];
+      wb += fr.res.size[k].writebacks[cl];
+    }
+    printf("%llu,%llu,%llu\n", (unsigned long long)fr.res.size[k].capacity_bytes,
+           (unsigned long long)m, (unsigned long long)wb);
+  }
+  fprintf(stderr, "trace: %llu records written to %s\n", (unsigned long long)records, din_path);
+  return 0;
+}

@@ -1,0 +1,160 @@
+/* End to end: `rtsim trace` writes a din trace of a small run; replaying it
+ * through a plain LRU simulation per cache size (an oracle independent of the
+ * one-pass analyser) gives exactly the misses and write-backs the analyser
+ * reported. Also: `rtsim traffic` writes a table whose recursive rows are the
+ * baseline (relative columns 1) and whose bytes match the trace's counts. */
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "sim/din.h"
+#include "sim/err.h"
+#include "testing.h"
+
+#define SIZES 13
+#define MAX_LINES 65536
+
+/* Naive fully associative LRU of `cap` lines: timestamps, linear search for
+ * the victim, an open hash table from line to slot. */
+struct naive {
+  uint64_t cap, used, clock, misses, writebacks;
+  uint64_t line[MAX_LINES], stamp[MAX_LINES];
+  unsigned char dirty[MAX_LINES];
+  int64_t *table; /* slot+1, 0 empty; size 4*MAX_LINES, rebuilt on eviction */
+  uint64_t tsize;
+};
+
+static uint64_t hsh(uint64_t x) {
+  x ^= x >> 33;
+  x *= 0xff51afd7ed558ccdull;
+  x ^= x >> 33;
+  return x;
+}
+
+static int64_t find(struct naive *n, uint64_t line) {
+  for (uint64_t i = hsh(line) & (n->tsize - 1);; i = (i + 1) & (n->tsize - 1)) {
+    if (n->table[i] == 0) return -1;
+    if (n->table[i] > 0 && n->line[n->table[i] - 1] == line) return n->table[i] - 1;
+  }
+}
+
+static void put(struct naive *n, uint64_t line, int64_t slot) {
+  uint64_t i = hsh(line) & (n->tsize - 1);
+  while (n->table[i] > 0) i = (i + 1) & (n->tsize - 1);
+  n->table[i] = slot + 1;
+}
+
+static void drop(struct naive *n, uint64_t line) {
+  for (uint64_t i = hsh(line) & (n->tsize - 1);; i = (i + 1) & (n->tsize - 1))
+    if (n->table[i] > 0 && n->line[n->table[i] - 1] == line) {
+      n->table[i] = -1; /* tombstone */
+      return;
+    }
+}
+
+static void naive_access(struct naive *n, uint64_t line, int store) {
+  n->clock++;
+  int64_t s = find(n, line);
+  if (s < 0) {
+    n->misses++;
+    if (n->used < n->cap) {
+      s = (int64_t)n->used++;
+    } else {
+      s = 0;
+      for (uint64_t i = 1; i < n->cap; i++)
+        if (n->stamp[i] < n->stamp[s]) s = (int64_t)i;
+      n->writebacks += n->dirty[s];
+      drop(n, n->line[s]);
+    }
+    n->line[s] = line;
+    n->dirty[s] = 0;
+    put(n, line, s);
+  }
+  n->stamp[s] = n->clock;
+  if (store) n->dirty[s] = 1;
+}
+
+struct replay {
+  struct naive *caches[SIZES];
+};
+
+static void on_record(void *ctx, unsigned label, uint64_t addr) {
+  struct replay *r = ctx;
+  for (int k = 0; k < SIZES; k++) naive_access(r->caches[k], addr >> 6, label == 1);
+}
+
+int main(void) {
+  char cmd[2048], out[16384];
+  const char *din = RTSIM_TMP "/traffic_test.din";
+  static const char *const policies[] = {"recursive"};
+  for (size_t p = 0; p < sizeof policies / sizeof policies[0]; p++) {
+    unlink(din);
+    snprintf(cmd, sizeof cmd,
+             "%s trace %s/scenes/small/room.yaml --policy %s --rays shadow --width 24 --height 24 --din %s",
+             RTSIM_BINARY, RTSIM_SOURCE_DIR, policies[p], din);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 0, "%s", out);
+    if (rc != 0) continue;
+    struct replay r;
+    for (int k = 0; k < SIZES; k++) {
+      r.caches[k] = calloc(1, sizeof(struct naive));
+      r.caches[k]->cap = (1024u << k) / 64;
+      r.caches[k]->tsize = 4 * MAX_LINES;
+      r.caches[k]->table = calloc(r.caches[k]->tsize, sizeof(int64_t));
+    }
+    struct err e;
+    memset(&e, 0, sizeof e);
+    uint64_t records = 0;
+    EXPECTF(din_read_file(din, on_record, &r, &records, &e), "%s", e.msg);
+    EXPECT(records > 10000);
+    /* The analyser's counts, as `rtsim trace` printed them. */
+    const char *head = strstr(out, "cache_bytes,misses,writebacks\n");
+    const char *line = head ? strchr(head, '\n') : NULL;
+    EXPECTF(line != NULL, "%s", out);
+    for (int k = 0; k < SIZES && line; k++) {
+      unsigned long long cb = 0, m = 0, wb = 0;
+      EXPECT(sscanf(line + 1, "%llu,%llu,%llu", &cb, &m, &wb) == 3);
+      EXPECTF(cb == 1024ull << k, "size %d: %llu", k, cb);
+      EXPECTF(m == r.caches[k]->misses, "%s %llu B: analyser %llu misses, replay %llu", policies[p],
+              cb, m, (unsigned long long)r.caches[k]->misses);
+      EXPECTF(wb == r.caches[k]->writebacks, "%s %llu B: analyser %llu write-backs, replay %llu",
+              policies[p], cb, wb, (unsigned long long)r.caches[k]->writebacks);
+      line = strchr(line + 1, '\n');
+    }
+    for (int k = 0; k < SIZES; k++) {
+      free(r.caches[k]->table);
+      free(r.caches[k]);
+    }
+  }
+
+  /* The traffic table: header, 13 recursive rows with relative columns 1. */
+  const char *csv = RTSIM_TMP "/traffic_test.csv";
+  unlink(csv);
+  snprintf(cmd, sizeof cmd,
+           "%s traffic %s/scenes/small/room.yaml --policy recursive --rays shadow --width 24 --height 24 -o %s && cat %s",
+           RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
+  EXPECT(testing_run(cmd, out, sizeof out) == 0);
+  const char *row = strstr(out, "scene,rays,width,height,policy,cache_bytes,frac_pot_vis,geometry_mb,total_mb,rel_geometry,rel_total");
+  EXPECT(row != NULL);
+  int rows = 0;
+  for (const char *q = row ? strchr(row, '\n') : NULL; q && q[1]; q = strchr(q + 1, '\n')) {
+    EXPECTF(strstr(q, ",recursive,") && strstr(q, ",1.0000,1.0000,"), "row: %.120s", q + 1);
+    rows++;
+  }
+  EXPECT(rows == SIZES);
+
+  /* Bad command lines: exit 2. */
+  snprintf(cmd, sizeof cmd, "%s traffic %s/scenes/small/room.yaml --rays glossy -o %s", RTSIM_BINARY,
+           RTSIM_SOURCE_DIR, csv);
+  EXPECT(testing_run(cmd, out, sizeof out) == 2 && strstr(out, "--rays: got 'glossy'"));
+  snprintf(cmd, sizeof cmd, "%s trace %s/scenes/small/room.yaml --rays primary --policy fifo --din %s",
+           RTSIM_BINARY, RTSIM_SOURCE_DIR, din);
+  EXPECT(testing_run(cmd, out, sizeof out) == 2 && strstr(out, "--policy: got 'fifo'"));
+  snprintf(cmd, sizeof cmd, "%s trace %s/scenes/small/room.yaml --rays primary --policy dynamic --cache 3000 --din %s",
+           RTSIM_BINARY, RTSIM_SOURCE_DIR, din);
+  EXPECT(testing_run(cmd, out, sizeof out) == 2 && strstr(out, "--cache: got '3000', expected a power of two"));
+  snprintf(cmd, sizeof cmd, "%s trace %s/scenes/small/room.yaml --rays primary --policy recursive --din /nonexistent/x.din",
+           RTSIM_BINARY, RTSIM_SOURCE_DIR);
+  EXPECT(testing_run(cmd, out, sizeof out) == 2 && strstr(out, "/nonexistent/x.din"));
+  return testing_done("test_traffic");
+}
