@@ -11,6 +11,10 @@ void policy_params_default(struct policy_params *p) {
   memset(p, 0, sizeof *p);
   p->packet_dim = 8;
   p->cache_bytes = 512u * 1024u;
+  p->dyn_node_share = 4;
+  p->dyn_table_share = 16;
+  p->dyn_ray_share = 16;
+  p->dyn_ray_buffer_bytes = 4096;
 }
 
 const char *policy_name(enum policy_kind k) { return (unsigned)k < POLICY_COUNT ? NAMES[k] : "?"; }

@@ -20,6 +20,14 @@ enum policy_kind { POLICY_RECURSIVE = 0, POLICY_PACKET = 1, POLICY_DYNAMIC = 2, 
 struct policy_params {
   uint32_t packet_dim;   /* packet: packets are packet_dim x packet_dim pixels (8) */
   uint64_t cache_bytes;  /* dynamic: the cache size the schedule is made for */
+  /* dynamic: what the cache holds besides geometry (section 2.2), each capped
+   * by a share of cache_bytes: k-d nodes up to 1/dyn_node_share (4: the paper's
+   * 1 MB of 4 MB), the queue table (8 bytes a queue point) up to
+   * 1/dyn_table_share (16: 256 KB of 4 MB), a ray buffer of
+   * dyn_ray_buffer_bytes (4096: 64 rays) up to 1/dyn_ray_share (16). The rest
+   * is g_max, the geometry a queue point's subtree may hold (qpoint.h). */
+  uint32_t dyn_node_share, dyn_table_share, dyn_ray_share;
+  uint64_t dyn_ray_buffer_bytes;
 };
 
 void policy_params_default(struct policy_params *p);

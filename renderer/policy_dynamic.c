@@ -1,9 +1,773 @@
-/* The dynamic policy: rays queued at queue points (stub until built). */
+/* The dynamic policy (the paper's section 2): rays wait in queues at queue
+ * points, nodes whose subtree geometry fits the cache (qpoint.h), and a queue
+ * is processed as a whole so that its subtree's geometry is loaded once for
+ * all its rays. Rays are traced in generations (section 2.1.2): the closest
+ * hits of a generation, then its shadow rays (traced from the light toward the
+ * points), then the next generation's reflection rays, until none are left.
+ *
+ * Same image as the recursive policy, bit for bit:
+ * - A closest-hit ray makes exactly the traversal trace_closest makes, only
+ *   cut into pieces at queue points. A k-d traversal's pending stack is a
+ *   function of the path from the root to the current node (the far children
+ *   of the ancestors where it went near), so a dequeued ray rebuilds it by
+ *   re-descending from the root to its queue point with the same arithmetic;
+ *   its best hit so far travels in the record (hit_prim). So every ray tests
+ *   the same triangles in the same order as under trace_closest.
+ * - A shadow ray's record keeps the canonical ray that shade_hit made; the
+ *   schedule and the memory accesses follow the same segment reversed (from
+ *   its end at the light back to the point, widened like trace.c), but every
+ *   triangle is tested with the canonical ray. Occlusion is whether any
+ *   triangle crossing the segment is hit, and the reversed traversal visits
+ *   every leaf the segment crosses, so the answer is trace_any's.
+ *
+ * Simulated memory (besides nodes, leaf lists and triangles, as trace.c):
+ * - queue table at qtable_base: entry q (8 bytes: its buffer's tail) is loaded
+ *   and stored on each enqueue, and when the queue is drained;
+ * - queue buffers at queue_base: chunks of DYN_CHUNK_RAYS 64-byte rays,
+ *   chunk c at queue_base + 4096 c; a queue is a list of chunks, drained
+ *   chunks go to a last-in-first-out free list, new chunks come from it first
+ *   (so the arena stays as small as the most rays ever queued at once);
+ * - the generation's hits (rays awaiting shading) at ray_base + 64 i, the
+ *   next generation's rays at ray_base + DYN_NEXT_OFFSET + 64 j. */
 #include "renderer/policy.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "renderer/camera.h"
+#include "renderer/framebuffer.h"
+#include "renderer/kdtree.h"
+#include "renderer/qpoint.h"
+#include "renderer/scene.h"
+#include "renderer/shade.h"
+#include "renderer/trace.h"
 #include "sim/err.h"
 
+#define DYN_CHUNK_RAYS 64u
+#define DYN_CHUNK_BYTES (DYN_CHUNK_RAYS * sizeof(struct ray))
+#define DYN_NEXT_OFFSET (1ull << 38)
+#define DYN_NONE UINT32_MAX
+/* Host-only mark of a ray that ended during a blocked pass (never simulated). */
+#define DYN_FLAG_DEAD 0x80u
+
+/* ---- traversal ------------------------------------------------------------
+ * NOTE: TRACE_SLACK, TRACE_MIN_DIR, ray_valid, trav_setup and trav_interior
+ * below are copies of trace.c's (static there, and the bit-identical hits rest
+ * on doing the same arithmetic). If trace.c changes them, change these too;
+ * tests/test_policy_dynamic.c catches a difference (equal triangle tests and
+ * images against the recursive policy). */
+
+#define TRACE_SLACK (64.0f * FLT_EPSILON)
+#define TRACE_MIN_DIR 1e-30f
+
+struct trav_ray {
+  float o[3], inv[3], tol[3];
+  bool flat[3];
+  float delta;
+  float t0, t1;
+};
+
+struct trav_entry {
+  uint32_t node;
+  float t0, t1;
+};
+
+static bool ray_valid(const struct ray *r) {
+  if (!isfinite(r->o.x) || !isfinite(r->o.y) || !isfinite(r->o.z)) return false;
+  if (!isfinite(r->d.x) || !isfinite(r->d.y) || !isfinite(r->d.z)) return false;
+  if (isnan(r->tmin) || isnan(r->tmax) || !(r->tmin < r->tmax)) return false;
+  float m = fmaxf(fabsf(r->d.x), fmaxf(fabsf(r->d.y), fabsf(r->d.z)));
+  return m >= TRACE_MIN_DIR;
+}
+
+static bool trav_setup(struct trav_ray *tr, const struct kd_tree *kd, const struct ray *r) {
+  float lo[3] = {kd->lo.x, kd->lo.y, kd->lo.z}, hi[3] = {kd->hi.x, kd->hi.y, kd->hi.z};
+  float d[3] = {r->d.x, r->d.y, r->d.z};
+  tr->o[0] = r->o.x;
+  tr->o[1] = r->o.y;
+  tr->o[2] = r->o.z;
+  float reach = 0.0f;
+  for (int a = 0; a < 3; a++)
+    reach = fmaxf(reach, fmaxf(fabsf(lo[a] - tr->o[a]), fabsf(hi[a] - tr->o[a])));
+  tr->delta = reach * TRACE_SLACK + FLT_MIN;
+  float t0 = r->tmin, t1 = r->tmax;
+  for (int a = 0; a < 3; a++) {
+    float inv = 1.0f / d[a];
+    tr->flat[a] = !isfinite(inv);
+    if (tr->flat[a]) {
+      tr->inv[a] = 0.0f;
+      tr->tol[a] = 0.0f;
+      if (tr->o[a] - lo[a] < -tr->delta || tr->o[a] - hi[a] > tr->delta) return false;
+      continue;
+    }
+    tr->inv[a] = inv;
+    tr->tol[a] = tr->delta * fabsf(inv);
+    float tn = ((lo[a] - tr->o[a]) - tr->delta) * inv;
+    float tf = ((hi[a] - tr->o[a]) + tr->delta) * inv;
+    if (inv < 0.0f) {
+      float tmp = tn;
+      tn = tf;
+      tf = tmp;
+    }
+    if (tn > t0) t0 = tn;
+    if (tf < t1) t1 = tf;
+  }
+  tr->t0 = t0;
+  tr->t1 = t1;
+  return t0 <= t1;
+}
+
+static bool trav_interior(const struct trav_ray *tr, struct kd_node nd, uint32_t ni, float *t0,
+                          float *t1, uint32_t *next, struct trav_entry *stack, int *sp) {
+  int a = kd_axis(nd);
+  float s = kd_split(nd);
+  uint32_t below = ni + 1, above = kd_above(nd);
+  uint32_t near_c, far_c;
+  float n0 = *t0, n1 = *t1, f0 = *t0, f1 = *t1;
+  bool vnear, vfar;
+  if (tr->flat[a]) {
+    bool vb = tr->o[a] - s <= tr->delta, va = s - tr->o[a] <= tr->delta;
+    bool below_first = tr->o[a] <= s;
+    near_c = below_first ? below : above;
+    far_c = below_first ? above : below;
+    vnear = below_first ? vb : va;
+    vfar = below_first ? va : vb;
+  } else {
+    float ts = (s - tr->o[a]) * tr->inv[a];
+    float lo_t = ts - tr->tol[a], hi_t = ts + tr->tol[a];
+    near_c = tr->inv[a] > 0.0f ? below : above;
+    far_c = tr->inv[a] > 0.0f ? above : below;
+    if (isnan(lo_t) || isnan(hi_t)) {
+      vnear = vfar = true;
+    } else {
+      if (hi_t < n1) n1 = hi_t;
+      if (lo_t > f0) f0 = lo_t;
+      vnear = *t0 <= hi_t;
+      vfar = lo_t <= *t1;
+    }
+  }
+  if (vnear && vfar) {
+    CHECK(*sp < KD_DEPTH_LIMIT);
+    stack[*sp].node = far_c;
+    stack[*sp].t0 = f0;
+    stack[*sp].t1 = f1;
+    (*sp)++;
+  }
+  if (vnear) {
+    *next = near_c;
+    *t0 = n0;
+    *t1 = n1;
+    return true;
+  }
+  if (vfar) {
+    *next = far_c;
+    *t0 = f0;
+    *t1 = f1;
+    return true;
+  }
+  return false;
+}
+
+static void announce_node(struct tracer *tr, uint32_t ni) {
+  mem_load(&tr->mem, tr->layout.node_base + 8ull * ni, 8, MEM_CLASS_NODE);
+  mem_compute(&tr->mem, tr->layout.node_cycles);
+  tr->stats.node_visits++;
+}
+
+static void announce_tri(struct tracer *tr, uint32_t p) {
+  mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p,
+           tr->layout.tri_bytes, MEM_CLASS_GEOMETRY);
+  mem_compute(&tr->mem, tr->layout.tri_cycles);
+  tr->stats.tri_tests++;
+  if (tr->tested) tr->tested[p >> 6] |= 1ull << (p & 63);
+}
+
+/* ---- policy state ---------------------------------------------------------- */
+
+struct dyn_queue {
+  uint32_t head, tail;  /* chunks, DYN_NONE when empty */
+  uint32_t tail_fill;   /* rays in the tail chunk */
+  uint32_t count;       /* rays queued */
+  int64_t heap_pos;     /* position in the heap, -1 when not in it */
+};
+
+struct ray_buf {
+  struct ray *r;
+  uint64_t n, cap;
+};
+
+struct dyn {
+  struct tracer *tr;
+  const struct shade_ctx *sc;
+  struct framebuffer *fb;
+  struct render_stats *st;
+  const struct policy_env *env;
+  const struct kd_tree *kd;
+  const struct scene *s;
+  struct qpoint_set qs;
+  uint32_t block_tris; /* triangles of an oversized leaf processed at once */
+  uint32_t ray_block;  /* rays streamed at once against such a block */
+  /* Queues and their chunk arena. */
+  struct dyn_queue *q;
+  struct ray *pool;      /* chunk c: pool[c * DYN_CHUNK_RAYS ...] */
+  uint32_t *chunk_next;  /* next chunk of the same queue, or of the free list */
+  uint32_t chunks, chunk_cap, free_head;
+  /* Non-empty queues: a max-heap on (count, -index). */
+  uint32_t *heap;
+  uint32_t heap_n;
+  /* Generation buffers. */
+  struct ray_buf hits, next;
+  uint64_t progress_at;
+};
+
+/* One ray's traversal state: the scheduling traversal (for a shadow ray the
+ * reversed segment), the canonical ray's test, the best hit so far. */
+struct walk {
+  struct trav_ray tv;
+  struct isect_ray ir;
+  float tmin, tmax;
+  int32_t ignore;
+  bool any;
+  bool found;
+  float best_t, upper;
+  uint32_t best_p;
+  uint32_t ni;
+  float t0, t1;
+  int sp;
+  struct trav_entry stack[KD_DEPTH_LIMIT];
+};
+
+enum walk_end { WALK_DONE, WALK_QUEUED, WALK_HIT };
+
+static void buf_push(struct ray_buf *b, const struct ray *r) {
+  if (b->n == b->cap) {
+    b->cap = b->cap ? 2 * b->cap : 4096;
+    b->r = xrealloc(b->r, b->cap * sizeof *b->r);
+  }
+  b->r[b->n++] = *r;
+}
+
+/* The segment of shadow ray r reversed: from its end (at the light) back to
+ * its origin, stretched by a relative 2^-16 at both ends to absorb the
+ * rounding of the end point. False when that is not a valid ray (an infinite
+ * segment): the canonical direction is used then. */
+static bool reversed(const struct ray *r, struct ray *rv) {
+  *rv = *r;
+  rv->o = v3_add(r->o, v3_scale(r->d, r->tmax));
+  rv->d = v3_scale(r->d, -1.0f);
+  float m = r->tmax * (1.0f / 65536.0f);
+  rv->tmin = -m;
+  rv->tmax = r->tmax + m;
+  return isfinite(m) && ray_valid(rv);
+}
+
+/* Recompute the hit a record carries (hit_prim) with its canonical ray: the
+ * test is deterministic and its t does not depend on the range it is given,
+ * so this is the very hit found earlier (t, b1, b2 bit for bit).
+ * NOTE: not announced as a load: the host record has no room for t, where a
+ * real one would carry it (the paper's rays have spare bytes). */
+static void restore_hit(const struct dyn *d, const struct isect_ray *ir, const struct ray *r,
+                        struct hit *h) {
+  CHECK(r->hit_prim >= 0 && (uint32_t)r->hit_prim < d->s->tri_count);
+  const struct scene_tri *tri = &d->s->tris[r->hit_prim];
+  bool ok = isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, r->tmax, &h->t, &h->b1, &h->b2);
+  CHECK(ok);
+  h->prim = r->hit_prim;
+}
+
+/* Prepare r's traversal at the root. False when r ends without one, exactly
+ * when trace.c's would (invalid ray, empty tree, root box missed). */
+static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) {
+  const struct kd_tree *kd = d->kd;
+  w->any = r->type == RAY_SHADOW;
+  w->found = false;
+  w->best_t = w->upper = r->tmax;
+  w->best_p = 0;
+  w->tmin = r->tmin;
+  w->tmax = r->tmax;
+  w->ignore = r->ignore_prim;
+  if (!ray_valid(r) || kd->node_count == 0) return false;
+  if (!trav_setup(&w->tv, kd, r)) return false;
+  isect_prepare(&w->ir, r->o, r->d);
+  if (w->any) {
+    struct ray rv;
+    if (reversed(r, &rv) && !trav_setup(&w->tv, kd, &rv)) return false;
+  } else if (r->hit_prim >= 0) {
+    struct hit h;
+    restore_hit(d, &w->ir, r, &h);
+    w->found = true;
+    w->best_t = h.t;
+    w->best_p = (uint32_t)h.prim;
+    w->upper = nextafterf(h.t, INFINITY);
+  }
+  w->ni = 0;
+  w->t0 = w->tv.t0;
+  w->t1 = w->tv.t1;
+  w->sp = 0;
+  return true;
+}
+
+/* Test entries [j0, j1) of leaf nd as trace.c does. True: a shadow ray is
+ * occluded. */
+static bool walk_leaf(const struct dyn *d, struct walk *w, struct kd_node nd, uint32_t j0,
+                      uint32_t j1) {
+  struct tracer *tr = d->tr;
+  uint32_t off = kd_leaf_offset(nd);
+  for (uint32_t j = j0; j < j1; j++) {
+    mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * (off + j), 4, MEM_CLASS_NODE);
+    uint32_t p = d->kd->prims[off + j];
+    if ((int64_t)p == (int64_t)w->ignore) continue;
+    announce_tri(tr, p);
+    const struct scene_tri *tri = &d->s->tris[p];
+    float t, b1, b2;
+    if (!isect_tri(&w->ir, tri->v[0], tri->v[1], tri->v[2], w->tmin, w->upper, &t, &b1, &b2))
+      continue;
+    if (w->any) return true;
+    if (!w->found || t < w->best_t || (t == w->best_t && p < w->best_p)) {
+      w->found = true;
+      w->best_t = t;
+      w->upper = nextafterf(t, INFINITY);
+      w->best_p = p;
+    }
+  }
+  return false;
+}
+
+/* Pop the next pending node above stack depth floor, skipping those entirely
+ * beyond the best hit (trace.c's rule). False when none is left. */
+static bool walk_pop(struct walk *w, int floor) {
+  while (w->sp > floor) {
+    w->sp--;
+    if (w->found && w->best_t < w->stack[w->sp].t0) continue;
+    w->ni = w->stack[w->sp].node;
+    w->t0 = w->stack[w->sp].t0;
+    w->t1 = w->stack[w->sp].t1;
+    return true;
+  }
+  return false;
+}
+
+/* Traverse from the current node. In a queue point's subtree (to_queue false)
+ * run until its pending nodes (those above floor) are done; above the queue
+ * points (to_queue true) stop at the first queue point reached. */
+static enum walk_end walk_run(const struct dyn *d, struct walk *w, int floor, bool to_queue) {
+  for (;;) {
+    announce_node(d->tr, w->ni);
+    struct kd_node nd = d->qs.nodes[w->ni];
+    if (to_queue && kd_is_queue_point(nd)) return WALK_QUEUED;
+    if (!kd_is_leaf(nd)) {
+      if (trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &w->ni, w->stack, &w->sp)) continue;
+    } else {
+      CHECK(!to_queue || kd_leaf_count(nd) == 0); /* geometry is below queue points */
+      if (walk_leaf(d, w, nd, 0, kd_leaf_count(nd))) return WALK_HIT;
+    }
+    if (!walk_pop(w, floor)) return WALK_DONE;
+  }
+}
+
+/* Rebuild the traversal state at queue point q: descend from the root along
+ * the path to q, pushing what the original traversal pushed there. Where the
+ * path goes to the far child, the traversal had pushed it, finished the near
+ * side, and popped it: so pop it here. */
+static void walk_to(const struct dyn *d, struct walk *w, uint32_t q) {
+  while (w->ni != q) {
+    announce_node(d->tr, w->ni);
+    struct kd_node nd = d->qs.nodes[w->ni];
+    CHECK(!kd_is_leaf(nd));
+    uint32_t c = q >= kd_above(nd) ? kd_above(nd) : w->ni + 1, next;
+    bool ok = trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &next, w->stack, &w->sp);
+    CHECK(ok);
+    if (next != c) {
+      CHECK(w->sp > 0 && w->stack[w->sp - 1].node == c);
+      w->sp--;
+      w->t0 = w->stack[w->sp].t0;
+      w->t1 = w->stack[w->sp].t1;
+    }
+    w->ni = c;
+  }
+}
+
+/* After a queue point's subtree: on to the next queue point, or the end. */
+static enum walk_end walk_leave(const struct dyn *d, struct walk *w) {
+  if (!walk_pop(w, 0)) return WALK_DONE;
+  return walk_run(d, w, 0, true);
+}
+
+/* ---- queues ---------------------------------------------------------------- */
+
+static bool heap_above(const struct dyn *d, uint32_t a, uint32_t b) {
+  uint32_t ca = d->q[a].count, cb = d->q[b].count;
+  return ca > cb || (ca == cb && a < b);
+}
+
+static void heap_set(struct dyn *d, uint32_t pos, uint32_t qi) {
+  d->heap[pos] = qi;
+  d->q[qi].heap_pos = pos;
+}
+
+static void heap_up(struct dyn *d, uint32_t pos) {
+  uint32_t qi = d->heap[pos];
+  while (pos > 0) {
+    uint32_t parent = (pos - 1) / 2;
+    if (!heap_above(d, qi, d->heap[parent])) break;
+    heap_set(d, pos, d->heap[parent]);
+    pos = parent;
+  }
+  heap_set(d, pos, qi);
+}
+
+static uint32_t heap_pop(struct dyn *d) {
+  uint32_t top = d->heap[0];
+  d->q[top].heap_pos = -1;
+  uint32_t last = d->heap[--d->heap_n];
+  if (d->heap_n > 0) {
+    uint32_t pos = 0;
+    for (;;) {
+      uint32_t c = 2 * pos + 1;
+      if (c >= d->heap_n) break;
+      if (c + 1 < d->heap_n && heap_above(d, d->heap[c + 1], d->heap[c])) c++;
+      if (!heap_above(d, d->heap[c], last)) break;
+      heap_set(d, pos, d->heap[c]);
+      pos = c;
+    }
+    heap_set(d, pos, last);
+  }
+  return top;
+}
+
+static uint32_t chunk_alloc(struct dyn *d) {
+  uint32_t c;
+  if (d->free_head != DYN_NONE) {
+    c = d->free_head;
+    d->free_head = d->chunk_next[c];
+  } else {
+    if (d->chunks == d->chunk_cap) {
+      d->chunk_cap = d->chunk_cap ? 2 * d->chunk_cap : 256;
+      d->pool = xrealloc(d->pool, (uint64_t)d->chunk_cap * DYN_CHUNK_RAYS * sizeof *d->pool);
+      d->chunk_next = xrealloc(d->chunk_next, (uint64_t)d->chunk_cap * sizeof *d->chunk_next);
+    }
+    c = d->chunks++;
+  }
+  d->chunk_next[c] = DYN_NONE;
+  return c;
+}
+
+static void chunk_free(struct dyn *d, uint32_t c) {
+  d->chunk_next[c] = d->free_head;
+  d->free_head = c;
+}
+
+static uint64_t slot_addr(const struct dyn *d, uint32_t c, uint32_t i) {
+  return d->tr->layout.queue_base + (uint64_t)c * DYN_CHUNK_BYTES + (uint64_t)i * sizeof(struct ray);
+}
+
+static uint64_t table_addr(const struct dyn *d, uint32_t qi) {
+  return d->tr->layout.qtable_base + 8ull * qi;
+}
+
+static void enqueue(struct dyn *d, uint32_t qi, const struct ray *r) {
+  const struct mem_port *mem = &d->tr->mem;
+  struct dyn_queue *q = &d->q[qi];
+  CHECK(!(r->flags & DYN_FLAG_DEAD));
+  mem_load(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
+  if (q->tail == DYN_NONE || q->tail_fill == DYN_CHUNK_RAYS) {
+    uint32_t c = chunk_alloc(d);
+    q = &d->q[qi];
+    if (q->tail == DYN_NONE)
+      q->head = c;
+    else
+      d->chunk_next[q->tail] = c;
+    q->tail = c;
+    q->tail_fill = 0;
+  }
+  mem_store(mem, slot_addr(d, q->tail, q->tail_fill), sizeof *r, MEM_CLASS_RAY);
+  d->pool[(uint64_t)q->tail * DYN_CHUNK_RAYS + q->tail_fill] = *r;
+  q->tail_fill++;
+  q->count++;
+  mem_store(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
+  if (q->heap_pos < 0) {
+    d->heap[d->heap_n] = qi;
+    q->heap_pos = d->heap_n++;
+  }
+  heap_up(d, (uint32_t)q->heap_pos);
+}
+
+/* ---- ray ends ---------------------------------------------------------------- */
+
+static void progress(struct dyn *d) {
+  if (d->env->progress && d->st->terminated >= d->progress_at && d->st->terminated < d->st->spawned) {
+    d->env->progress(d->env->progress_ctx, d->st->terminated, d->st->spawned);
+    d->progress_at = d->st->terminated + (1u << 16);
+  }
+}
+
+static void terminate(struct dyn *d, struct ray *r, const struct walk *w, enum walk_end e) {
+  d->st->rays[r->type]++;
+  d->st->terminated++;
+  if (r->type == RAY_SHADOW) {
+    shade_shadow(r, e == WALK_HIT, d->fb, &d->tr->mem);
+  } else {
+    r->hit_prim = w->found ? (int32_t)w->best_p : -1;
+    mem_store(&d->tr->mem, d->tr->layout.ray_base + d->hits.n * sizeof *r, sizeof *r, MEM_CLASS_RAY);
+    buf_push(&d->hits, r);
+  }
+  progress(d);
+}
+
+/* Where a ray goes after a walk: a queue, or its end. */
+static void route(struct dyn *d, struct ray *r, const struct walk *w, enum walk_end e) {
+  if (e == WALK_QUEUED) {
+    int64_t qi = qpoint_index(&d->qs, w->ni);
+    CHECK(qi >= 0);
+    r->hit_prim = w->found ? (int32_t)w->best_p : -1;
+    enqueue(d, (uint32_t)qi, r);
+  } else {
+    terminate(d, r, w, e);
+  }
+}
+
+/* Per-pixel cost: the work done for a ray since the marks. */
+static void cost_add(const struct dyn *d, uint32_t pixel, uint64_t nodes0, uint64_t tris0) {
+  d->fb->cost_nodes[pixel] += (uint32_t)(d->tr->stats.node_visits - nodes0);
+  d->fb->cost_tris[pixel] += (uint32_t)(d->tr->stats.tri_tests - tris0);
+}
+
+/* A new ray: from the root down to its first queue point (the one holding its
+ * origin, for a ray that starts inside the scene), or its end. */
+static void start(struct dyn *d, struct ray *r) {
+  uint64_t n0 = d->tr->stats.node_visits, t0 = d->tr->stats.tri_tests;
+  struct walk w;
+  if (!walk_init(d, &w, r))
+    terminate(d, r, &w, WALK_DONE);
+  else
+    route(d, r, &w, walk_run(d, &w, 0, true));
+  cost_add(d, r->pixel, n0, t0);
+}
+
+/* ---- draining a queue ---------------------------------------------------------- */
+
+/* A ray of interior queue point node: its subtree, then onward. */
+static void process_subtree(struct dyn *d, struct ray *r, uint32_t node) {
+  uint64_t n0 = d->tr->stats.node_visits, t0 = d->tr->stats.tri_tests;
+  struct walk w;
+  CHECK(walk_init(d, &w, r));
+  walk_to(d, &w, node);
+  enum walk_end e = walk_run(d, &w, w.sp, false);
+  if (e == WALK_DONE) e = walk_leave(d, &w);
+  route(d, r, &w, e);
+  cost_add(d, r->pixel, n0, t0);
+}
+
+/* Load (announce) entries [j0, j1) of a leaf's geometry, as the paper does on
+ * opening a queue at a leaf: it will all be tested. */
+static void preload_leaf(const struct dyn *d, struct kd_node nd, uint32_t j0, uint32_t j1) {
+  const struct tracer *tr = d->tr;
+  uint32_t off = kd_leaf_offset(nd);
+  for (uint32_t j = j0; j < j1; j++) {
+    mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * (off + j), 4, MEM_CLASS_NODE);
+    uint32_t p = d->kd->prims[off + j];
+    mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p, tr->layout.tri_bytes,
+             MEM_CLASS_GEOMETRY);
+  }
+}
+
+/* Step a cursor over a detached queue's slots: full chunks, then the tail. */
+struct slot_cur {
+  uint32_t c, i;
+  uint64_t left; /* slots from here to the end of the queue */
+};
+
+static uint64_t cur_index(const struct slot_cur *k) { return (uint64_t)k->c * DYN_CHUNK_RAYS + k->i; }
+
+/* Advance; with release, a chunk is freed once the cursor leaves it (its rays
+ * may go on to other queues meanwhile, which may reuse it). */
+static void cur_next(struct dyn *d, struct slot_cur *k, bool release) {
+  k->left--;
+  if (++k->i == DYN_CHUNK_RAYS || k->left == 0) {
+    uint32_t nc = d->chunk_next[k->c];
+    if (release) chunk_free(d, k->c);
+    k->c = nc;
+    k->i = 0;
+  }
+}
+
+/* A queue at a leaf. Its geometry is loaded in blocks of block_tris triangles
+ * (one block unless the leaf exceeds g_max: the paper's "separate scheduling
+ * problem"); each block is tested against all the queue's rays, streamed
+ * ray_block at a time (loaded, tested, stored back with their best hit). After
+ * the last block each ray goes on. Every ray still tests the leaf's triangles
+ * in the leaf's order, so its hit is the one a single traversal finds. */
+static void drain_leaf(struct dyn *d, uint32_t node, uint32_t head, uint64_t count) {
+  const struct mem_port *mem = &d->tr->mem;
+  struct kd_node nd = d->qs.nodes[node];
+  uint32_t cnt = kd_leaf_count(nd), bt = d->block_tris;
+  uint32_t blocks = cnt == 0 ? 1 : (cnt + bt - 1) / bt;
+  for (uint32_t b = 0; b < blocks; b++) {
+    uint32_t j0 = b * bt, j1 = cnt - j0 > bt ? j0 + bt : cnt;
+    bool last = b + 1 == blocks;
+    preload_leaf(d, nd, j0, j1);
+    struct slot_cur k = {head, 0, count};
+    while (k.left > 0) {
+      struct slot_cur blk = k;
+      uint64_t n = k.left < d->ray_block ? k.left : d->ray_block;
+      for (uint64_t t = 0; t < n; t++, cur_next(d, &k, last)) {
+        struct ray r = d->pool[cur_index(&k)];
+        if (r.flags & DYN_FLAG_DEAD) continue;
+        uint64_t n0 = d->tr->stats.node_visits, t0 = d->tr->stats.tri_tests;
+        mem_load(mem, slot_addr(d, k.c, k.i), sizeof r, MEM_CLASS_RAY);
+        struct walk w;
+        CHECK(walk_init(d, &w, &r));
+        if (walk_leaf(d, &w, nd, j0, j1)) {
+          terminate(d, &r, &w, WALK_HIT);
+          d->pool[cur_index(&k)].flags |= DYN_FLAG_DEAD;
+        } else if (!last) {
+          d->pool[cur_index(&k)].hit_prim = w.found ? (int32_t)w.best_p : -1;
+        } else {
+          walk_to(d, &w, node);
+          route(d, &r, &w, walk_leave(d, &w));
+        }
+        cost_add(d, r.pixel, n0, t0);
+      }
+      /* Store the block back with its best hits (the last pass moved them on). */
+      for (uint64_t t = 0; !last && t < n; t++, cur_next(d, &blk, false))
+        if (!(d->pool[cur_index(&blk)].flags & DYN_FLAG_DEAD))
+          mem_store(mem, slot_addr(d, blk.c, blk.i), sizeof(struct ray), MEM_CLASS_RAY);
+    }
+  }
+}
+
+static void drain(struct dyn *d, uint32_t qi) {
+  const struct mem_port *mem = &d->tr->mem;
+  struct dyn_queue *q = &d->q[qi];
+  uint32_t node = d->qs.qnode[qi], head = q->head;
+  uint64_t count = q->count;
+  /* Detach the list: no ray comes back to a queue point it has left (a
+   * traversal visits a node once), so nothing joins it while it drains. */
+  q->head = q->tail = DYN_NONE;
+  q->tail_fill = q->count = 0;
+  mem_load(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
+  mem_store(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
+  if (kd_is_leaf(d->qs.nodes[node])) {
+    drain_leaf(d, node, head, count);
+    return;
+  }
+  for (struct slot_cur k = {head, 0, count}; k.left > 0; cur_next(d, &k, true)) {
+    struct ray r = d->pool[cur_index(&k)];
+    mem_load(mem, slot_addr(d, k.c, k.i), sizeof r, MEM_CLASS_RAY);
+    process_subtree(d, &r, node);
+  }
+}
+
+/* Process queues until all are empty, the fullest first (ties: the lower
+ * index). The fullest queue amortises its subtree's geometry over the most
+ * rays, and meanwhile the others fill up. */
+static void drain_all(struct dyn *d) {
+  while (d->heap_n > 0) drain(d, heap_pop(d));
+}
+
+/* ---- generations ----------------------------------------------------------- */
+
+/* Shade the generation's hits: their shadow rays start at once (the queues are
+ * empty now, and shadow rays go first), other rays wait for the next generation. */
+static void shade_hits(struct dyn *d) {
+  const struct mem_port *mem = &d->tr->mem;
+  struct ray spawn[SHADE_MAX_SPAWN];
+  for (uint64_t i = 0; i < d->hits.n; i++) {
+    struct ray r = d->hits.r[i];
+    mem_load(mem, d->tr->layout.ray_base + i * sizeof r, sizeof r, MEM_CLASS_RAY);
+    struct hit h = {r.tmax, -1, 0.0f, 0.0f}; /* a miss, as trace_closest gives it */
+    if (r.hit_prim >= 0) {
+      struct isect_ray ir;
+      isect_prepare(&ir, r.o, r.d);
+      restore_hit(d, &ir, &r, &h);
+    }
+    r.hit_prim = -1;
+    uint32_t n = shade_hit(d->sc, &r, &h, d->fb, mem, spawn);
+    d->st->spawned += n;
+    for (uint32_t k = 0; k < n; k++) {
+      if (spawn[k].type == RAY_SHADOW) {
+        start(d, &spawn[k]);
+      } else {
+        mem_store(mem, d->tr->layout.ray_base + DYN_NEXT_OFFSET + d->next.n * sizeof spawn[k],
+                  sizeof spawn[k], MEM_CLASS_RAY);
+        buf_push(&d->next, &spawn[k]);
+      }
+    }
+  }
+  d->hits.n = 0;
+}
+
 void policy_dynamic_run(const struct policy_env *env, const struct policy_params *p) {
-  (void)env;
-  (void)p;
-  CHECK(!"dynamic policy not built yet");
+  struct tracer *tr = env->tr;
+  struct dyn d;
+  memset(&d, 0, sizeof d);
+  d.tr = tr;
+  d.sc = env->sc;
+  d.fb = env->fb;
+  d.st = env->st;
+  d.env = env;
+  d.kd = tr->kd;
+  d.s = tr->scene;
+  d.free_head = DYN_NONE;
+
+  /* Queue points for the cache. */
+  uint32_t *tris = xmalloc((uint64_t)d.kd->node_count * sizeof *tris + 1);
+  qpoint_subtree_tris(d.kd, tris);
+  struct qpoint_reserve res = {p->cache_bytes, p->dyn_node_share, p->dyn_table_share,
+                               p->dyn_ray_share, p->dyn_ray_buffer_bytes};
+  struct qpoint_budget bud;
+  qpoint_plan(&d.qs, &bud, d.kd, tris, tr->layout.tri_bytes, &res);
+  free(tris);
+  uint64_t bt = bud.gmax_bytes / tr->layout.tri_bytes;
+  d.block_tris = bt == 0 ? 1 : (bt > UINT32_MAX ? UINT32_MAX : (uint32_t)bt);
+  uint64_t rb = bud.ray_bytes / sizeof(struct ray);
+  d.ray_block = rb == 0 ? 1 : (rb > UINT32_MAX ? UINT32_MAX : (uint32_t)rb);
+  d.q = xmalloc((uint64_t)d.qs.count * sizeof *d.q + 1);
+  for (uint32_t i = 0; i < d.qs.count; i++) {
+    d.q[i].head = d.q[i].tail = DYN_NONE;
+    d.q[i].tail_fill = d.q[i].count = 0;
+    d.q[i].heap_pos = -1;
+  }
+  d.heap = xmalloc((uint64_t)d.qs.count * sizeof *d.heap + 1);
+
+  /* Generation 0: every primary ray, in Hilbert order, to its first queue. */
+  const uint32_t w = env->fb->width, h = env->fb->height;
+  const uint64_t npix = (uint64_t)w * h;
+  uint32_t *order = xmalloc(npix * sizeof *order + 1);
+  camera_hilbert_order(w, h, order);
+  struct camera_frame cf;
+  camera_frame_init(&cf, &env->sc->scene->camera, w, h);
+  for (uint64_t k = 0; k < npix; k++) {
+    struct ray r;
+    camera_primary(&cf, order[k] % w, order[k] / w, env->sc->seed, &r);
+    env->st->spawned++;
+    start(&d, &r);
+  }
+  free(order);
+
+  for (;;) {
+    drain_all(&d); /* closest hits of the generation */
+    shade_hits(&d);
+    drain_all(&d); /* its shadow rays */
+    if (d.next.n == 0) break;
+    /* The next generation, from the buffer to their first queues. */
+    for (uint64_t j = 0; j < d.next.n; j++) {
+      mem_load(&tr->mem, tr->layout.ray_base + DYN_NEXT_OFFSET + j * sizeof(struct ray),
+               sizeof(struct ray), MEM_CLASS_RAY);
+      struct ray r = d.next.r[j];
+      start(&d, &r);
+    }
+    d.next.n = 0;
+  }
+  if (env->progress) env->progress(env->progress_ctx, env->st->terminated, env->st->terminated);
+
+  free(d.hits.r);
+  free(d.next.r);
+  free(d.heap);
+  free(d.q);
+  free(d.pool);
+  free(d.chunk_next);
+  qpoint_fini(&d.qs);
 }

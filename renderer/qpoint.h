@@ -1,0 +1,70 @@
+/* Queue-point selection for the dynamic policy (the paper's section 2.1.1 and
+ * Figure 1): a queue point is the first node on a root-to-leaf branch whose
+ * subtree geometry fits g_max, the cache left for geometry once nodes, the queue
+ * table and a ray buffer have their share (section 2.2). A leaf reached without
+ * finding one is a queue point whatever its size (its rays are then processed
+ * in cache-sized blocks). Subtrees without geometry (empty leaves) hold no
+ * queue point: there is nothing to load there, so rays just pass through. */
+#ifndef RTSIM_RENDERER_QPOINT_H
+#define RTSIM_RENDERER_QPOINT_H
+
+#include <stdint.h>
+
+struct kd_tree;
+struct kd_node;
+
+/* Distinct triangles in each node's subtree: out[n] for n < kd->node_count; a
+ * triangle referenced by several leaves of the subtree counts once. Linear in
+ * the leaf references (the "distinct colours in a subtree" count: +1 at each
+ * leaf holding a triangle, -1 at the lowest common ancestor of consecutive such
+ * leaves in depth-first order, then subtree sums). out is caller-owned. */
+void qpoint_subtree_tris(const struct kd_tree *kd, uint32_t *out);
+
+/* The cache split of section 2.2. Each reservation is capped by a share of the
+ * cache so that a small cache still leaves room for geometry:
+ *   node_bytes  = min(8 * nodes,             cache / node_share)
+ *   table_bytes = min(8 * queue points,      cache / table_share)
+ *   ray_bytes   = min(ray_buffer_bytes,      cache / ray_share)
+ *   gmax_bytes  = cache - node_bytes - table_bytes - ray_bytes (0 if negative)
+ * The paper's 4 MB example: 1 MB of nodes (share 4), a 256 KB table (share 16). */
+struct qpoint_reserve {
+  uint64_t cache_bytes;
+  uint32_t node_share, table_share, ray_share; /* > 0 */
+  uint64_t ray_buffer_bytes;
+};
+
+struct qpoint_budget {
+  uint64_t node_bytes, table_bytes, ray_bytes, gmax_bytes;
+};
+
+/* The selection: a copy of the tree's nodes with the queue-point bits set
+ * (kd_is_queue_point), and the queue points in node order. The index of a queue
+ * point in qnode[] is its queue-table index. Owns its arrays (qpoint_fini). */
+struct qpoint_set {
+  struct kd_node *nodes; /* node_count entries; the tree's own nodes are not modified */
+  uint32_t node_count;
+  uint32_t *qnode;       /* node index of queue point q, increasing */
+  uint32_t count;        /* number of queue points */
+  uint64_t gmax_bytes;   /* the bound it was made for */
+};
+
+/* Select for a given bound: node n qualifies when tris[n] * tri_bytes <=
+ * gmax_bytes (tris from qpoint_subtree_tris). */
+void qpoint_select(struct qpoint_set *qs, const struct kd_tree *kd, const uint32_t *tris,
+                   uint32_t tri_bytes, uint64_t gmax_bytes);
+
+/* Select for a cache: computes the budget. The table's reservation needs the
+ * number of queue points, which needs g_max: a first selection with the full
+ * table share counts them; if their table is smaller, a second selection uses
+ * the freed bytes (queue points only move up then, so their table still fits
+ * the reservation). With more queue points than the share holds (tiny caches)
+ * only the share is reserved, as the paper reserves 256 KB for 32K entries. */
+void qpoint_plan(struct qpoint_set *qs, struct qpoint_budget *b, const struct kd_tree *kd,
+                 const uint32_t *tris, uint32_t tri_bytes, const struct qpoint_reserve *r);
+
+/* Queue index of node n, or -1 when n is not a queue point (binary search). */
+int64_t qpoint_index(const struct qpoint_set *qs, uint32_t n);
+
+void qpoint_fini(struct qpoint_set *qs);
+
+#endif

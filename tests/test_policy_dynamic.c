@@ -1,0 +1,252 @@
+/* The dynamic policy against the recursive one (the oracle): bit-identical
+ * framebuffers and equal per-type ray counts on the small scenes, every ray
+ * type, caches from 1 KB (leaf queue points, oversized leaves in blocks) to
+ * 64 MB (the root alone: Whitted). Without shadow rays the closest-hit
+ * traversals are the same ones cut at queue points, so the triangle tests and
+ * the set of tested triangles are equal too. A counting memory port checks the
+ * queue discipline: every ray stored into a queue slot is loaded back exactly
+ * once before the slot is reused, table entries stay in the table, and the
+ * generation buffers balance. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "renderer/framebuffer.h"
+#include "renderer/kdtree.h"
+#include "renderer/policy.h"
+#include "renderer/qpoint.h"
+#include "renderer/scene.h"
+#include "renderer/scene_file.h"
+#include "renderer/shade.h"
+#include "renderer/trace.h"
+#include "sim/err.h"
+#include "testing.h"
+
+struct world {
+  struct scene s;
+  struct kd_tree kd;
+};
+
+static int load(struct world *w, const char *path) {
+  struct err e;
+  memset(&e, 0, sizeof e);
+  if (!scene_load(&w->s, path, &e)) {
+    fprintf(stderr, "%s: %s\n", path, e.msg);
+    return 0;
+  }
+  struct kd_build_params p;
+  kd_build_params_default(&p);
+  kd_build(&w->kd, &w->s, &p);
+  return 1;
+}
+
+/* A memory port that checks the queue and buffer discipline. */
+struct counter {
+  struct trace_layout l;
+  uint64_t table_loads, table_stores, table_bad, max_table;
+  uint64_t slot_loads, slot_stores, slot_bad, class_bad;
+  uint64_t buf_loads, buf_stores;
+  uint8_t *pending; /* per queue slot: stored and not yet loaded */
+  uint64_t slots;
+};
+
+static uint8_t *slot_of(struct counter *c, uint64_t addr) {
+  uint64_t k = (addr - c->l.queue_base) / 64;
+  if (k >= c->slots) {
+    uint64_t n = 2 * k + 1024;
+    c->pending = realloc(c->pending, n);
+    memset(c->pending + c->slots, 0, n - c->slots);
+    c->slots = n;
+  }
+  return &c->pending[k];
+}
+
+static void on_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls, int store) {
+  struct counter *c = ctx;
+  if (addr >= c->l.qtable_base && addr < c->l.queue_base) {
+    c->class_bad += cls != MEM_CLASS_QUEUE || size != 8;
+    uint64_t e = (addr - c->l.qtable_base) / 8;
+    if (e + 1 > c->max_table) c->max_table = e + 1;
+    c->table_bad += (addr - c->l.qtable_base) % 8 != 0;
+    if (store)
+      c->table_stores++;
+    else
+      c->table_loads++;
+  } else if (addr >= c->l.queue_base && addr < c->l.ray_base) {
+    c->class_bad += cls != MEM_CLASS_RAY || size != 64 || (addr - c->l.queue_base) % 64 != 0;
+    uint8_t *p = slot_of(c, addr);
+    if (store) {
+      c->slot_stores++;
+      c->slot_bad += *p != 0; /* a queued ray overwritten before being read */
+      *p = 1;
+    } else {
+      c->slot_loads++;
+      c->slot_bad += *p != 1; /* a load of a slot holding no queued ray */
+      *p = 0;
+    }
+  } else if (addr >= c->l.ray_base && addr < c->l.fb_base) {
+    c->class_bad += cls != MEM_CLASS_RAY || size != 64;
+    if (store)
+      c->buf_stores++;
+    else
+      c->buf_loads++;
+  }
+}
+
+static void on_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) { on_access(ctx, addr, size, cls, 0); }
+static void on_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) { on_access(ctx, addr, size, cls, 1); }
+
+static const struct mem_ops COUNTER_OPS = {on_load, on_store, NULL};
+
+struct result {
+  struct framebuffer fb;
+  struct render_stats st;
+  struct trace_stats ts;
+  uint64_t *tested;
+};
+
+static void render(struct world *w, enum policy_kind k, uint32_t mask, uint32_t size,
+                   uint64_t cache, struct counter *cnt, struct result *res) {
+  struct trace_layout l;
+  trace_layout_default(&l);
+  struct tracer tr;
+  struct mem_port port = mem_port_native();
+  if (cnt) {
+    memset(cnt, 0, sizeof *cnt);
+    cnt->l = l;
+    port.ops = &COUNTER_OPS;
+    port.ctx = cnt;
+  }
+  tracer_init(&tr, &w->s, &w->kd, port, &l);
+  res->tested = calloc(w->s.tri_count / 64 + 1, sizeof *res->tested);
+  tr.tested = res->tested;
+  struct shade_ctx sc = {&w->s, mask, 7};
+  fb_init(&res->fb, size, size, l.fb_base);
+  memset(&res->st, 0, sizeof res->st);
+  struct policy_env env = {&tr, &sc, &res->fb, &res->st, NULL, NULL};
+  struct policy_params pp;
+  policy_params_default(&pp);
+  pp.cache_bytes = cache;
+  policy_run(k, &env, &pp);
+  res->ts = tr.stats;
+}
+
+static void result_fini(struct result *r) {
+  fb_fini(&r->fb);
+  free(r->tested);
+}
+
+/* The schedule's shape at a cache size (what the policy computes). */
+static void plan(const struct world *w, uint64_t cache, struct qpoint_set *qs, struct qpoint_budget *b) {
+  uint32_t *tris = malloc(w->kd.node_count * sizeof *tris);
+  qpoint_subtree_tris(&w->kd, tris);
+  struct policy_params pp;
+  policy_params_default(&pp);
+  struct qpoint_reserve r = {cache, pp.dyn_node_share, pp.dyn_table_share, pp.dyn_ray_share,
+                             pp.dyn_ray_buffer_bytes};
+  qpoint_plan(qs, b, &w->kd, tris, 128, &r);
+  free(tris);
+}
+
+static void check_scene(const char *name) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, name);
+  struct world w;
+  if (!load(&w, path)) {
+    EXPECTF(0, "cannot load %s", path);
+    return;
+  }
+  const uint32_t all = RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) |
+                       RAY_MASK(RAY_DIFFUSE);
+  const uint32_t noshadow = all & ~RAY_MASK(RAY_SHADOW);
+  const uint32_t size = 40;
+  const uint64_t caches[] = {1024, 16384, 256 * 1024, 64u << 20};
+  struct result ref, ref_ns;
+  render(&w, POLICY_RECURSIVE, all, size, 0, NULL, &ref);
+  render(&w, POLICY_RECURSIVE, noshadow, size, 0, NULL, &ref_ns);
+  const size_t fb_bytes = 3 * sizeof(int64_t) * size * size;
+  const size_t tested_bytes = (w.s.tri_count / 64 + 1) * sizeof(uint64_t);
+
+  for (size_t c = 0; c < sizeof caches / sizeof caches[0]; c++) {
+    const unsigned kb = (unsigned)(caches[c] / 1024);
+    struct qpoint_set qs;
+    struct qpoint_budget b;
+    plan(&w, caches[c], &qs, &b);
+    if (caches[c] == 1024) {
+      /* Queue points down at the leaves, some leaves over g_max (blocked). */
+      uint32_t leaves = 0, oversized = 0;
+      for (uint32_t k = 0; k < qs.count; k++) {
+        struct kd_node nd = qs.nodes[qs.qnode[k]];
+        if (!kd_is_leaf(nd)) continue;
+        leaves++;
+        oversized += (uint64_t)kd_leaf_count(nd) * 128 > b.gmax_bytes;
+      }
+      EXPECTF(leaves > 0 && oversized > 0, "%s 1 KB: %u queue points, %u leaves, %u oversized",
+              name, qs.count, leaves, oversized);
+    }
+    if (caches[c] == 64u << 20) EXPECTF(qs.count == 1 && qs.qnode[0] == 0, "%s 64 MB: %u queue points", name, qs.count);
+    const uint32_t queues = qs.count;
+    qpoint_fini(&qs);
+
+    struct counter cnt;
+    struct result dy;
+    render(&w, POLICY_DYNAMIC, all, size, caches[c], &cnt, &dy);
+    EXPECTF(memcmp(dy.fb.acc, ref.fb.acc, fb_bytes) == 0, "%s %u KB: image differs from recursive", name, kb);
+    EXPECTF(memcmp(dy.st.rays, ref.st.rays, sizeof ref.st.rays) == 0,
+            "%s %u KB: rays %llu/%llu/%llu/%llu, recursive %llu/%llu/%llu/%llu", name, kb,
+            (unsigned long long)dy.st.rays[0], (unsigned long long)dy.st.rays[1],
+            (unsigned long long)dy.st.rays[2], (unsigned long long)dy.st.rays[3],
+            (unsigned long long)ref.st.rays[0], (unsigned long long)ref.st.rays[1],
+            (unsigned long long)ref.st.rays[2], (unsigned long long)ref.st.rays[3]);
+    EXPECT(dy.st.spawned == ref.st.spawned && dy.st.terminated == ref.st.terminated);
+    /* Queue discipline. */
+    bool leftover = false;
+    for (uint64_t k = 0; k < cnt.slots; k++) leftover |= cnt.pending[k] != 0;
+    EXPECTF(!leftover && cnt.slot_bad == 0 && cnt.slot_loads == cnt.slot_stores && cnt.slot_stores > 0,
+            "%s %u KB: queue slots: %llu stores, %llu loads, %llu bad, leftover %d", name, kb,
+            (unsigned long long)cnt.slot_stores, (unsigned long long)cnt.slot_loads,
+            (unsigned long long)cnt.slot_bad, (int)leftover);
+    /* Each enqueue reads and writes its table entry; so does each drain. */
+    EXPECT(cnt.table_loads == cnt.table_stores && cnt.table_bad == 0 && cnt.class_bad == 0);
+    EXPECT(cnt.table_loads >= ref.st.rays[RAY_PRIMARY] / 2);
+    EXPECTF(cnt.max_table <= queues, "%s %u KB: table entries %llu of %u",
+            name, kb, (unsigned long long)cnt.max_table, queues);
+    if (caches[c] == 64u << 20) EXPECT(cnt.max_table == 1);
+    /* Hits and next-generation rays: each stored once, loaded once. */
+    EXPECT(cnt.buf_loads == cnt.buf_stores && cnt.buf_stores > 0);
+    free(cnt.pending);
+    result_fini(&dy);
+
+    /* No shadow rays: the very same closest-hit work as recursive. */
+    struct result dn;
+    render(&w, POLICY_DYNAMIC, noshadow, size, caches[c], NULL, &dn);
+    EXPECTF(memcmp(dn.fb.acc, ref_ns.fb.acc, fb_bytes) == 0, "%s %u KB (no shadows): image differs", name, kb);
+    EXPECTF(dn.ts.tri_tests == ref_ns.ts.tri_tests, "%s %u KB: %llu triangle tests, recursive %llu", name, kb,
+            (unsigned long long)dn.ts.tri_tests, (unsigned long long)ref_ns.ts.tri_tests);
+    EXPECT(memcmp(dn.tested, ref_ns.tested, tested_bytes) == 0);
+    EXPECT(dn.ts.node_visits >= ref_ns.ts.node_visits);
+    /* Per-pixel triangle tests are the recursive ones too. */
+    EXPECT(memcmp(dn.fb.cost_tris, ref_ns.fb.cost_tris, sizeof(uint32_t) * size * size) == 0);
+    result_fini(&dn);
+  }
+  result_fini(&ref);
+  result_fini(&ref_ns);
+
+  /* Deterministic: two runs, same image and same counts. */
+  struct result a, b2;
+  render(&w, POLICY_DYNAMIC, all, size, 16384, NULL, &a);
+  render(&w, POLICY_DYNAMIC, all, size, 16384, NULL, &b2);
+  EXPECT(memcmp(a.fb.acc, b2.fb.acc, fb_bytes) == 0);
+  EXPECT(memcmp(a.fb.cost_nodes, b2.fb.cost_nodes, sizeof(uint32_t) * size * size) == 0);
+  EXPECT(a.ts.node_visits == b2.ts.node_visits && a.ts.tri_tests == b2.ts.tri_tests);
+  result_fini(&a);
+  result_fini(&b2);
+  kd_fini(&w.kd);
+  scene_fini(&w.s);
+}
+
+int main(void) {
+  check_scene("sphereflake");
+  check_scene("grove");
+  check_scene("room");
+  return testing_done("test_policy_dynamic");
+}
