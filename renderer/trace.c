@@ -9,6 +9,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "renderer/kdtree.h"
@@ -175,8 +176,9 @@ static bool ray_valid(const struct ray *r) {
   return m >= TRACE_MIN_DIR;
 }
 
-/* Set up tr and clip the ray to the thickened root box; false if it misses. */
-static bool trav_setup(struct trav_ray *tr, const struct kd_tree *kd, const struct ray *r) {
+/* Set up tr and clip the ray to the thickened root box; false if it misses.
+ * NOTE: inline keeps it inlined in traverse() now that packets call it too. */
+static inline bool trav_setup(struct trav_ray *tr, const struct kd_tree *kd, const struct ray *r) {
   float lo[3] = {kd->lo.x, kd->lo.y, kd->lo.z}, hi[3] = {kd->hi.x, kd->hi.y, kd->hi.z};
   float d[3] = {r->d.x, r->d.y, r->d.z};
   tr->o[0] = r->o.x;
@@ -367,6 +369,294 @@ bool trace_closest(struct tracer *tr, const struct ray *r, struct hit *h) {
 bool trace_any(struct tracer *tr, const struct ray *r) {
   struct hit h;
   return traverse(tr, r, true, &h);
+}
+
+/* Packet traversal. The per-ray arithmetic (setup, split distances, interval
+ * updates, triangle test, hit rule) is that of traverse() above, so each ray
+ * meets every node with the interval its own traversal would give it. Only the
+ * order differs: the packet goes first to the near side of the majority of the
+ * rays in the node, so a ray whose direction disagrees may test triangles its
+ * own traversal would have skipped after an earlier hit. Such extra tests
+ * cannot change the result: the hit rule is a total order over true hits, and
+ * the node holding a ray's winning hit is never skipped (its interval starts at
+ * or before the winning t, the property that makes traverse() agree with brute
+ * force), so the minimum over a superset of triangles is the same hit. */
+
+/* What one traversal step of a ray reads and writes: one cache line, as rays
+ * active in a node are often few and scattered over the packet. */
+struct pk_ray {
+  float o[3], inv[3], tol[3]; /* struct trav_ray */
+  float delta;
+  float t0, t1;               /* interval in the current node */
+  float tmin, upper, best_t;  /* closest hit: upper = nextafter(best_t) once found */
+  uint32_t nodes;             /* nodes the ray was active in */
+};
+_Static_assert(sizeof(struct pk_ray) == 64, "a packet ray's traversal state is one line");
+
+struct pk_entry {
+  uint32_t node;
+  uint32_t base; /* first (t0, t1) pair of its rays in the pool */
+  uint64_t mask; /* rays that need the node */
+};
+
+struct trace_packet {
+  struct pk_ray ray[TRACE_PACKET_MAX];
+  struct isect_ray ir[TRACE_PACKET_MAX];
+  uint32_t best_p[TRACE_PACKET_MAX], tris[TRACE_PACKET_MAX];
+  int32_t ignore[TRACE_PACKET_MAX];
+  uint64_t flat[3], pos[3], neg[3]; /* bit i: ray i does not move / moves up / down the axis */
+  /* Deferred nodes; their rays' intervals packed in ascending ray order in a
+   * LIFO pool (dense, so a deferred node of two rays touches one line). */
+  struct pk_entry stack[KD_DEPTH_LIMIT];
+  float pool[KD_DEPTH_LIMIT * TRACE_PACKET_MAX * 2];
+  void *alloc; /* what to free */
+};
+
+struct trace_packet *trace_packet_create(void) {
+  char *p = xcalloc(1, sizeof(struct trace_packet) + 63);
+  struct trace_packet *pk = (struct trace_packet *)(p + ((64 - (uintptr_t)p % 64) % 64));
+  pk->alloc = p;
+  return pk;
+}
+
+void trace_packet_destroy(struct trace_packet *pk) {
+  if (pk) free(pk->alloc);
+}
+
+static inline int pk_first(uint64_t m) { return __builtin_ctzll(m); }
+/* NOTE: written out; __builtin_popcountll is a libgcc call without -mpopcnt. */
+static inline uint32_t pk_count(uint64_t m) {
+  m = m - ((m >> 1) & 0x5555555555555555ull);
+  m = (m & 0x3333333333333333ull) + ((m >> 2) & 0x3333333333333333ull);
+  m = (m + (m >> 4)) & 0x0f0f0f0f0f0f0f0full;
+  return (uint32_t)((m * 0x0101010101010101ull) >> 56);
+}
+
+/* Shared loop of trace_packet_closest (any_hit false: hits) and
+ * trace_packet_any (true: occ). */
+static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
+                                   const struct ray *rays, uint32_t n, bool any_hit,
+                                   struct hit *hits, bool *occ, struct trace_packet_cost *cost) {
+  CHECK(n <= TRACE_PACKET_MAX);
+  const struct kd_tree *kd = tr->kd;
+  const struct scene *s = tr->scene;
+  uint64_t live = 0, ign = 0, found = 0;
+  for (int a = 0; a < 3; a++) pk->flat[a] = pk->pos[a] = pk->neg[a] = 0;
+  for (uint32_t i = 0; i < n; i++) {
+    const struct ray *r = &rays[i];
+    if (any_hit) {
+      occ[i] = false;
+    } else {
+      hits[i].t = r->tmax;
+      hits[i].prim = -1;
+      hits[i].b1 = hits[i].b2 = 0.0f;
+    }
+    struct pk_ray *q = &pk->ray[i];
+    q->nodes = 0;
+    pk->tris[i] = 0;
+    struct trav_ray tv;
+    if (!ray_valid(r) || kd->node_count == 0 || !trav_setup(&tv, kd, r)) continue;
+    uint64_t bit = 1ull << i;
+    live |= bit;
+    for (int a = 0; a < 3; a++) {
+      q->o[a] = tv.o[a];
+      q->inv[a] = tv.inv[a];
+      q->tol[a] = tv.tol[a];
+      if (tv.flat[a])
+        pk->flat[a] |= bit;
+      else if (tv.inv[a] > 0.0f)
+        pk->pos[a] |= bit;
+      else
+        pk->neg[a] |= bit;
+    }
+    q->delta = tv.delta;
+    q->t0 = tv.t0;
+    q->t1 = tv.t1;
+    q->tmin = r->tmin;
+    q->upper = r->tmax;
+    q->best_t = r->tmax;
+    isect_prepare(&pk->ir[i], r->o, r->d);
+    pk->best_p[i] = 0;
+    pk->ignore[i] = r->ignore_prim;
+    if (r->ignore_prim >= 0) ign |= bit;
+  }
+
+  int sp = 0;
+  uint32_t ptop = 0; /* pool in use */
+  uint32_t ni = 0;
+  uint64_t act = live;
+  while (live) {
+    /* One fetch of the node for the packet; the work of every ray needing it. */
+    mem_load(&tr->mem, tr->layout.node_base + 8ull * ni, 8, MEM_CLASS_NODE);
+    mem_compute(&tr->mem, (uint64_t)tr->layout.node_cycles * pk_count(act));
+    tr->stats.node_visits++;
+    struct kd_node nd = kd->nodes[ni];
+    if (!kd_is_leaf(nd)) {
+      const int a = kd_axis(nd);
+      const float split = kd_split(nd);
+      const uint32_t below = ni + 1, above = kd_above(nd);
+      /* Near side of the majority of the rays here (fewest out-of-order rays). */
+      const uint64_t up = act & pk->pos[a], down = act & pk->neg[a];
+      const bool bf = !down || (up && pk_count(up) >= pk_count(down));
+      const uint64_t flat = pk->flat[a];
+      CHECK(sp < KD_DEPTH_LIMIT);
+      float *restrict pool = pk->pool + ptop; /* the second child's intervals */
+      uint32_t k = 0;
+      uint64_t mf = 0, ms = 0;
+      for (uint64_t m = act; m; m &= m - 1) {
+        const int i = pk_first(m);
+        struct pk_ray *restrict q = &pk->ray[i];
+        q->nodes++;
+        const float r0 = q->t0, r1 = q->t1;
+        float x0, x1, y0, y1; /* intervals in the first and second child */
+        bool vx, vy;
+        const float ts = (split - q->o[a]) * q->inv[a];
+        const float lo_t = ts - q->tol[a], hi_t = ts + q->tol[a];
+        if (!((flat >> i) & 1u) && !isnan(lo_t) && !isnan(hi_t)) {
+          /* Written as selects: incoherent rays make these branches a coin toss. */
+          const float n1 = hi_t < r1 ? hi_t : r1, f0 = lo_t > r0 ? lo_t : r0;
+          const bool vn = r0 <= hi_t, vf = lo_t <= r1;
+          const bool near_first = (q->inv[a] > 0.0f) == bf; /* below is near if inv > 0 */
+          x0 = near_first ? r0 : f0;
+          x1 = near_first ? n1 : r1;
+          vx = near_first ? vn : vf;
+          y0 = near_first ? f0 : r0;
+          y1 = near_first ? r1 : n1;
+          vy = near_first ? vf : vn;
+        } else {
+          /* Parallel to the plane (the side(s) within the slack) or NaN (both). */
+          bool vb = true, va = true;
+          if ((flat >> i) & 1u) {
+            vb = q->o[a] - split <= q->delta;
+            va = split - q->o[a] <= q->delta;
+          }
+          x0 = y0 = r0;
+          x1 = y1 = r1;
+          vx = bf ? vb : va;
+          vy = bf ? va : vb;
+        }
+        /* Skip a side entirely beyond the ray's best hit, as traverse() does
+         * (best_t is tmax, beyond every interval, until a hit is found). */
+        vx = vx && !(q->best_t < x0);
+        vy = vy && !(q->best_t < y0);
+        /* Unconditional stores: a ray's current interval is dead after this
+         * node, and pool slots past k are free. */
+        q->t0 = x0;
+        q->t1 = x1;
+        pool[k] = y0;
+        pool[k + 1] = y1;
+        k += vy ? 2u : 0u;
+        mf |= (uint64_t)vx << i;
+        ms |= (uint64_t)vy << i;
+      }
+      const uint32_t first = bf ? below : above, second = bf ? above : below;
+      if (mf) {
+        if (ms) {
+          pk->stack[sp].node = second;
+          pk->stack[sp].base = ptop;
+          pk->stack[sp].mask = ms;
+          sp++;
+          ptop += k;
+        }
+        ni = first;
+        act = mf;
+        continue;
+      }
+      if (ms) {
+        k = 0;
+        for (uint64_t m = ms; m; m &= m - 1, k += 2) {
+          struct pk_ray *q = &pk->ray[pk_first(m)];
+          q->t0 = pool[k];
+          q->t1 = pool[k + 1];
+        }
+        ni = second;
+        act = ms;
+        continue;
+      }
+    } else {
+      uint32_t off = kd_leaf_offset(nd), cnt = kd_leaf_count(nd);
+      uint64_t m_leaf = act;
+      for (uint64_t m = act; m; m &= m - 1) pk->ray[pk_first(m)].nodes++;
+      for (uint32_t j = 0; j < cnt && m_leaf; j++) {
+        mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * (off + j), 4, MEM_CLASS_NODE);
+        const uint32_t p = kd->prims[off + j];
+        uint64_t tm = m_leaf;
+        for (uint64_t m = tm & ign; m; m &= m - 1) {
+          int i = pk_first(m);
+          if ((int64_t)p == (int64_t)pk->ignore[i]) tm &= ~(1ull << i);
+        }
+        if (!tm) continue;
+        /* One fetch of the triangle for the packet; a test per ray. */
+        const uint32_t k = pk_count(tm);
+        mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p,
+                 tr->layout.tri_bytes, MEM_CLASS_GEOMETRY);
+        mem_compute(&tr->mem, (uint64_t)tr->layout.tri_cycles * k);
+        tr->stats.tri_tests += k;
+        if (tr->tested) tr->tested[p >> 6] |= 1ull << (p & 63);
+        const struct scene_tri *tri = &s->tris[p];
+        const vec3 v0 = tri->v[0], v1 = tri->v[1], v2 = tri->v[2];
+        for (uint64_t m = tm; m; m &= m - 1) {
+          const int i = pk_first(m);
+          const uint64_t bit = 1ull << i;
+          struct pk_ray *q = &pk->ray[i];
+          pk->tris[i]++;
+          float t, b1, b2;
+          if (!isect_tri(&pk->ir[i], v0, v1, v2, q->tmin, q->upper, &t, &b1, &b2)) continue;
+          if (any_hit) {
+            occ[i] = true;
+            live &= ~bit;
+            m_leaf &= ~bit;
+            continue;
+          }
+          if (!(found & bit) || t < q->best_t || (t == q->best_t && p < pk->best_p[i])) {
+            found |= bit;
+            q->best_t = t;
+            q->upper = nextafterf(t, INFINITY); /* equal t still competes on prim id */
+            pk->best_p[i] = p;
+            hits[i].t = t;
+            hits[i].prim = (int32_t)p;
+            hits[i].b1 = b1;
+            hits[i].b2 = b2;
+          }
+        }
+      }
+    }
+    /* Next node from the stack, without the rays that are done with it. */
+    act = 0;
+    while (sp > 0 && !act) {
+      sp--;
+      const struct pk_entry *e = &pk->stack[sp];
+      const float *pool = pk->pool + e->base;
+      ptop = e->base;
+      uint32_t k = 0;
+      for (uint64_t m = e->mask; m; m &= m - 1, k += 2) {
+        const int i = pk_first(m);
+        const uint64_t bit = 1ull << i;
+        struct pk_ray *q = &pk->ray[i];
+        if (!(live & bit) || q->best_t < pool[k]) continue;
+        act |= bit;
+        q->t0 = pool[k];
+        q->t1 = pool[k + 1];
+      }
+      ni = e->node;
+    }
+    if (!act) break;
+  }
+  if (cost)
+    for (uint32_t i = 0; i < n; i++) {
+      cost->nodes[i] = pk->ray[i].nodes;
+      cost->tris[i] = pk->tris[i];
+    }
+}
+
+void trace_packet_closest(struct tracer *tr, struct trace_packet *pk, const struct ray *rays,
+                          uint32_t n, struct hit *hits, struct trace_packet_cost *cost) {
+  packet_traverse(tr, pk, rays, n, false, hits, NULL, cost);
+}
+
+void trace_packet_any(struct tracer *tr, struct trace_packet *pk, const struct ray *rays,
+                      uint32_t n, bool *occluded, struct trace_packet_cost *cost) {
+  packet_traverse(tr, pk, rays, n, true, NULL, occluded, cost);
 }
 
 bool trace_brute(const struct scene *s, const struct ray *r, struct hit *h) {

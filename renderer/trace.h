@@ -83,6 +83,38 @@ bool trace_closest(struct tracer *tr, const struct ray *r, struct hit *h);
 /* True if any triangle is hit in (tmin, tmax) (shadow rays). */
 bool trace_any(struct tracer *tr, const struct ray *r);
 
+/* Packet queries: up to TRACE_PACKET_MAX rays descend the tree together (the
+ * classic packet k-d traversal). Each ray keeps its own interval, widened exactly
+ * as in the single-ray queries, and a node is visited when any ray still needs
+ * it; each ray's result is bit-identical to trace_closest / trace_any of that
+ * ray alone. Memory: a node, a leaf index entry and a triangle record are loaded
+ * once per packet visit; compute is announced once per step for all the rays it
+ * covers (node_cycles or tri_cycles times the rays). tr->stats.node_visits
+ * counts packet node visits, tr->stats.tri_tests ray/triangle tests. */
+#define TRACE_PACKET_MAX 64
+
+/* Scratch of packet queries (about 41 KB; on the heap so that kernels fit small
+ * coroutine stacks). One per concurrent caller. */
+struct trace_packet;
+struct trace_packet *trace_packet_create(void); /* fatal on allocation failure */
+void trace_packet_destroy(struct trace_packet *pk); /* NULL ok */
+
+/* Optional per-ray work of a packet query: nodes the ray was active in (needed
+ * by that ray) and triangles tested against it. */
+struct trace_packet_cost {
+  uint32_t nodes[TRACE_PACKET_MAX], tris[TRACE_PACKET_MAX];
+};
+
+/* hits[i] = what trace_closest(tr, &rays[i]) returns in its hit, for i < n
+ * (n <= TRACE_PACKET_MAX). cost may be NULL; if not, its first n entries are
+ * overwritten. */
+void trace_packet_closest(struct tracer *tr, struct trace_packet *pk, const struct ray *rays,
+                          uint32_t n, struct hit *hits, struct trace_packet_cost *cost);
+
+/* occluded[i] = trace_any(tr, &rays[i]), for i < n. cost as above. */
+void trace_packet_any(struct tracer *tr, struct trace_packet *pk, const struct ray *rays,
+                      uint32_t n, bool *occluded, struct trace_packet_cost *cost);
+
 /* Reference: test every triangle, same hit rule. No memory accesses. */
 bool trace_brute(const struct scene *s, const struct ray *r, struct hit *h);
 
