@@ -43,6 +43,7 @@
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
+#include "renderer/trav.h"
 #include "sim/err.h"
 
 #define DYN_CHUNK_RAYS 64u
@@ -52,137 +53,8 @@
 /* Host-only mark of a ray that ended during a blocked pass (never simulated). */
 #define DYN_FLAG_DEAD 0x80u
 
-/* ---- traversal ------------------------------------------------------------
- * NOTE: TRACE_SLACK, TRACE_MIN_DIR, ray_valid, trav_setup and trav_interior
- * below are copies of trace.c's (static there, and the bit-identical hits rest
- * on doing the same arithmetic). If trace.c changes them, change these too;
- * tests/test_policy_dynamic.c catches a difference (equal triangle tests and
- * images against the recursive policy). */
-
-#define TRACE_SLACK (64.0f * FLT_EPSILON)
-#define TRACE_MIN_DIR 1e-30f
-
-struct trav_ray {
-  float o[3], inv[3], tol[3];
-  bool flat[3];
-  float delta;
-  float t0, t1;
-};
-
-struct trav_entry {
-  uint32_t node;
-  float t0, t1;
-};
-
-static bool ray_valid(const struct ray *r) {
-  if (!isfinite(r->o.x) || !isfinite(r->o.y) || !isfinite(r->o.z)) return false;
-  if (!isfinite(r->d.x) || !isfinite(r->d.y) || !isfinite(r->d.z)) return false;
-  if (isnan(r->tmin) || isnan(r->tmax) || !(r->tmin < r->tmax)) return false;
-  float m = fmaxf(fabsf(r->d.x), fmaxf(fabsf(r->d.y), fabsf(r->d.z)));
-  return m >= TRACE_MIN_DIR;
-}
-
-static bool trav_setup(struct trav_ray *tr, const struct kd_tree *kd, const struct ray *r) {
-  float lo[3] = {kd->lo.x, kd->lo.y, kd->lo.z}, hi[3] = {kd->hi.x, kd->hi.y, kd->hi.z};
-  float d[3] = {r->d.x, r->d.y, r->d.z};
-  tr->o[0] = r->o.x;
-  tr->o[1] = r->o.y;
-  tr->o[2] = r->o.z;
-  float reach = 0.0f;
-  for (int a = 0; a < 3; a++)
-    reach = fmaxf(reach, fmaxf(fabsf(lo[a] - tr->o[a]), fabsf(hi[a] - tr->o[a])));
-  tr->delta = reach * TRACE_SLACK + FLT_MIN;
-  float t0 = r->tmin, t1 = r->tmax;
-  for (int a = 0; a < 3; a++) {
-    float inv = 1.0f / d[a];
-    tr->flat[a] = !isfinite(inv);
-    if (tr->flat[a]) {
-      tr->inv[a] = 0.0f;
-      tr->tol[a] = 0.0f;
-      if (tr->o[a] - lo[a] < -tr->delta || tr->o[a] - hi[a] > tr->delta) return false;
-      continue;
-    }
-    tr->inv[a] = inv;
-    tr->tol[a] = tr->delta * fabsf(inv);
-    float tn = ((lo[a] - tr->o[a]) - tr->delta) * inv;
-    float tf = ((hi[a] - tr->o[a]) + tr->delta) * inv;
-    if (inv < 0.0f) {
-      float tmp = tn;
-      tn = tf;
-      tf = tmp;
-    }
-    if (tn > t0) t0 = tn;
-    if (tf < t1) t1 = tf;
-  }
-  tr->t0 = t0;
-  tr->t1 = t1;
-  return t0 <= t1;
-}
-
-static bool trav_interior(const struct trav_ray *tr, struct kd_node nd, uint32_t ni, float *t0,
-                          float *t1, uint32_t *next, struct trav_entry *stack, int *sp) {
-  int a = kd_axis(nd);
-  float s = kd_split(nd);
-  uint32_t below = ni + 1, above = kd_above(nd);
-  uint32_t near_c, far_c;
-  float n0 = *t0, n1 = *t1, f0 = *t0, f1 = *t1;
-  bool vnear, vfar;
-  if (tr->flat[a]) {
-    bool vb = tr->o[a] - s <= tr->delta, va = s - tr->o[a] <= tr->delta;
-    bool below_first = tr->o[a] <= s;
-    near_c = below_first ? below : above;
-    far_c = below_first ? above : below;
-    vnear = below_first ? vb : va;
-    vfar = below_first ? va : vb;
-  } else {
-    float ts = (s - tr->o[a]) * tr->inv[a];
-    float lo_t = ts - tr->tol[a], hi_t = ts + tr->tol[a];
-    near_c = tr->inv[a] > 0.0f ? below : above;
-    far_c = tr->inv[a] > 0.0f ? above : below;
-    if (isnan(lo_t) || isnan(hi_t)) {
-      vnear = vfar = true;
-    } else {
-      if (hi_t < n1) n1 = hi_t;
-      if (lo_t > f0) f0 = lo_t;
-      vnear = *t0 <= hi_t;
-      vfar = lo_t <= *t1;
-    }
-  }
-  if (vnear && vfar) {
-    CHECK(*sp < KD_DEPTH_LIMIT);
-    stack[*sp].node = far_c;
-    stack[*sp].t0 = f0;
-    stack[*sp].t1 = f1;
-    (*sp)++;
-  }
-  if (vnear) {
-    *next = near_c;
-    *t0 = n0;
-    *t1 = n1;
-    return true;
-  }
-  if (vfar) {
-    *next = far_c;
-    *t0 = f0;
-    *t1 = f1;
-    return true;
-  }
-  return false;
-}
-
-static void announce_node(struct tracer *tr, uint32_t ni) {
-  mem_load(&tr->mem, tr->layout.node_base + 8ull * ni, 8, MEM_CLASS_NODE);
-  mem_compute(&tr->mem, tr->layout.node_cycles);
-  tr->stats.node_visits++;
-}
-
-static void announce_tri(struct tracer *tr, uint32_t p) {
-  mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p,
-           tr->layout.tri_bytes, MEM_CLASS_GEOMETRY);
-  mem_compute(&tr->mem, tr->layout.tri_cycles);
-  tr->stats.tri_tests++;
-  if (tr->tested) tr->tested[p >> 6] |= 1ull << (p & 63);
-}
+/* Traversal steps (trav_setup, trav_interior, announce_*) come from
+ * renderer/trav.h, shared with trace.c: the same arithmetic gives the same hits. */
 
 /* ---- policy state ---------------------------------------------------------- */
 
