@@ -34,17 +34,8 @@ struct world {
 static int load(struct world *w, const char *name) {
   char path[1024];
   snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, name);
-  struct err e;
-  memset(&e, 0, sizeof e);
   w->name = name;
-  if (!scene_load(&w->s, path, &e)) {
-    fprintf(stderr, "%s: %s\n", path, e.msg);
-    return 0;
-  }
-  struct kd_build_params p;
-  kd_build_params_default(&p);
-  kd_build(&w->kd, &w->s, &p);
-  return 1;
+  return testing_load_world(&w->s, &w->kd, path);
 }
 
 /* A memory port that counts loads and stores by class, and checks that ray

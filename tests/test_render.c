@@ -45,16 +45,7 @@ struct world {
 };
 
 static int load(struct world *w, const char *path) {
-  struct err e;
-  memset(&e, 0, sizeof e);
-  if (!scene_load(&w->s, path, &e)) {
-    fprintf(stderr, "%s: %s\n", path, e.msg);
-    return 0;
-  }
-  struct kd_build_params p;
-  kd_build_params_default(&p);
-  kd_build(&w->kd, &w->s, &p);
-  return 1;
+  return testing_load_world(&w->s, &w->kd, path);
 }
 
 static void render(struct world *w, uint32_t mask, uint32_t size, struct framebuffer *fb,

@@ -3,6 +3,11 @@
 #include <string.h>
 #include <sys/wait.h>
 
+#include "renderer/kdtree.h"
+#include "renderer/scene.h"
+#include "renderer/scene_file.h"
+#include "sim/err.h"
+
 int testing_failures = 0;
 int testing_checks = 0;
 
@@ -23,4 +28,17 @@ int testing_run(const char *cmd, char *buf, unsigned buf_size) {
   }
   int st = pclose(p);
   return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+int testing_load_world(struct scene *s, struct kd_tree *kd, const char *path) {
+  struct err e;
+  memset(&e, 0, sizeof e);
+  if (!scene_load(s, path, &e)) {
+    fprintf(stderr, "%s:%d:%d: %s\n", e.file, e.line, e.col, e.msg);
+    return 0;
+  }
+  struct kd_build_params p;
+  kd_build_params_default(&p);
+  kd_build(kd, s, &p);
+  return 1;
 }

@@ -30,6 +30,12 @@ extern int testing_checks;
 /* Print a summary line and return the failure count (use as main's return). */
 int testing_done(const char *name);
 
+struct scene;
+struct kd_tree;
+/* Load a scene file and build its k-d tree with default parameters; on
+ * failure print the error and return 0. */
+int testing_load_world(struct scene *s, struct kd_tree *kd, const char *path);
+
 /* Run a shell command, capture its stderr+stdout into buf; return exit code
  * (or -1 if it did not exit normally). */
 int testing_run(const char *cmd, char *buf, unsigned buf_size);
