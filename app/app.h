@@ -25,6 +25,13 @@ int app_report(const struct err *e);
 /* Print "rtsim CMD: message" plus a hint to run --help; returns APP_EXIT_USAGE. */
 int app_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
+/* getopt_long's ':' (missing value) or '?' (unknown option) for command cmd:
+ * prints the usage error and returns APP_EXIT_USAGE. */
+int app_option_error(const char *cmd, int c, char **argv);
+/* Exactly one positional SCENE.yaml after the options: NULL (error printed)
+ * otherwise. */
+const char *app_one_scene(const char *cmd, int argc, char **argv);
+
 /* Host wall clock in seconds (for reports only; the model never reads it). */
 double app_now(void);
 

@@ -79,8 +79,7 @@ int cmd_bench(int argc, char **argv) {
     case 'r': rays = optarg; break;
     case 'f': functional = true; break;
     case 'h': fputs(HELP, stdout); return 0;
-    case ':': return app_usage_error("bench", "option %s needs a value", argv[optind - 1]);
-    default: return app_usage_error("bench", "unknown option '%s'", argv[optind - 1]);
+    default: return app_option_error("bench", c, argv);
     }
   }
   if (analyser) {

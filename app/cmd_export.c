@@ -30,17 +30,16 @@ int cmd_export(int argc, char **argv) {
     switch (c) {
     case 'o': out = optarg; break;
     case 'h': fputs(HELP, stdout); return 0;
-    case ':': return app_usage_error("export", "option %s needs a value", argv[optind - 1]);
-    default: return app_usage_error("export", "unknown option '%s'", argv[optind - 1]);
+    default: return app_option_error("export", c, argv);
     }
   }
-  if (optind != argc - 1)
-    return app_usage_error("export", optind >= argc ? "missing SCENE.yaml" : "expected one scene file, got %d", argc - optind);
+  const char *scene_path = app_one_scene("export", argc, argv);
+  if (!scene_path) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("export", "missing -o SCENE.ply");
   struct scene s;
   struct err e;
   memset(&e, 0, sizeof e);
-  if (!scene_load(&s, argv[optind], &e)) return app_report(&e);
+  if (!scene_load(&s, scene_path, &e)) return app_report(&e);
   bool ok = meshio_export_ply(&s, out, &e);
   if (ok) printf("triangles: %u\noutput: %s\n", s.tri_count, out);
   scene_fini(&s);

@@ -63,12 +63,12 @@ int cmd_hits(int argc, char **argv) {
       fputs(HELP, stdout);
       return 0;
     }
-    return app_usage_error("hits", "unknown option '%s'", argv[optind - 1]);
+    return app_option_error("hits", c, argv);
   }
-  if (optind != argc - 1)
-    return app_usage_error("hits", optind >= argc ? "missing SCENE.yaml" : "expected one scene file, got %d", argc - optind);
+  const char *scene_path = app_one_scene("hits", argc, argv);
+  if (!scene_path) return APP_EXIT_USAGE;
   struct app_world w;
-  if (!app_world_load(&w, argv[optind])) return 2;
+  if (!app_world_load(&w, scene_path)) return 2;
   struct tracer tr;
   struct trace_layout layout;
   trace_layout_default(&layout);

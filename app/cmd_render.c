@@ -85,17 +85,16 @@ int cmd_render(int argc, char **argv) {
         return app_usage_error("render", "--policy: got '%s', expected one of: recursive, packet, dynamic", optarg);
       break;
     case 'h': fputs(HELP, stdout); return 0;
-    case ':': return app_usage_error("render", "option %s needs a value", argv[optind - 1]);
-    default: return app_usage_error("render", "unknown option '%s'", argv[optind - 1]);
+    default: return app_option_error("render", c, argv);
     }
   }
-  if (optind != argc - 1)
-    return app_usage_error("render", optind >= argc ? "missing SCENE.yaml" : "expected one scene file, got %d", argc - optind);
+  const char *scene_path = app_one_scene("render", argc, argv);
+  if (!scene_path) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("render", "missing -o IMAGE.exr");
   uint32_t mask;
   if (!shade_parse_rays(rays, &mask))
     return app_usage_error("render", "--rays: got '%s', expected a comma-separated list of primary, shadow, specular, diffuse", rays);
-  const char *path = argv[optind];
+  const char *path = scene_path;
 
   struct app_world w;
   if (!app_world_load(&w, path)) return 2;

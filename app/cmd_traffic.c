@@ -139,12 +139,11 @@ int cmd_traffic(int argc, char **argv) {
     case 'r': rays = optarg; break;
     case 'P': policy = optarg; break;
     case 'h': fputs(TRAFFIC_HELP, stdout); return 0;
-    case ':': return app_usage_error("traffic", "option %s needs a value", argv[optind - 1]);
-    default: return app_usage_error("traffic", "unknown option '%s'", argv[optind - 1]);
+    default: return app_option_error("traffic", c, argv);
     }
   }
-  if (optind != argc - 1)
-    return app_usage_error("traffic", optind >= argc ? "missing SCENE.yaml" : "expected one scene file, got %d", argc - optind);
+  const char *scene_path = app_one_scene("traffic", argc, argv);
+  if (!scene_path) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("traffic", "missing -o TABLE.csv");
   if (!rays) return app_usage_error("traffic", "missing --rays (primary, shadow, specular or diffuse)");
   uint32_t mask;
@@ -160,7 +159,7 @@ int cmd_traffic(int argc, char **argv) {
     return app_usage_error("traffic", "--policy: got '%s', expected one of: recursive, packet, dynamic, all", policy);
 
   struct app_world w;
-  if (!app_world_load(&w, argv[optind])) return 2;
+  if (!app_world_load(&w, scene_path)) return 2;
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   struct lru_stack_params lp = lru_stack_params_default();
@@ -204,7 +203,7 @@ int cmd_traffic(int argc, char **argv) {
   shade_rays_name(mask, names, sizeof names);
   for (char *q = names; *q; q++)
     if (*q == ',') *q = '+'; /* a CSV field */
-  const char *scene_name = w.scene.name[0] ? w.scene.name : argv[optind];
+  const char *scene_name = w.scene.name[0] ? w.scene.name : scene_path;
   fprintf(f, "scene,rays,width,height,policy,cache_bytes,frac_pot_vis,geometry_mb,total_mb,"
              "rel_geometry,rel_total,fetch_geometry,fetch_node,fetch_ray,fetch_queue,fetch_other,"
              "writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes\n");
@@ -292,12 +291,11 @@ int cmd_trace(int argc, char **argv) {
         return app_usage_error("trace", "--cache: got '%s', expected a power of two", optarg);
       break;
     case 'h': fputs(TRACE_HELP, stdout); return 0;
-    case ':': return app_usage_error("trace", "option %s needs a value", argv[optind - 1]);
-    default: return app_usage_error("trace", "unknown option '%s'", argv[optind - 1]);
+    default: return app_option_error("trace", c, argv);
     }
   }
-  if (optind != argc - 1)
-    return app_usage_error("trace", optind >= argc ? "missing SCENE.yaml" : "expected one scene file, got %d", argc - optind);
+  const char *scene_path = app_one_scene("trace", argc, argv);
+  if (!scene_path) return APP_EXIT_USAGE;
   if (!din_path) return app_usage_error("trace", "missing --din FILE");
   if (!policy) return app_usage_error("trace", "missing --policy (recursive, packet or dynamic)");
   if (!rays) return app_usage_error("trace", "missing --rays (primary, shadow, specular or diffuse)");
@@ -308,7 +306,7 @@ int cmd_trace(int argc, char **argv) {
   if (!parse_config(rays, &mask))
     return app_usage_error("trace", "--rays: got '%s', expected primary, shadow, specular, diffuse or a comma-separated list of ray types", rays);
   struct app_world w;
-  if (!app_world_load(&w, argv[optind])) return 2;
+  if (!app_world_load(&w, scene_path)) return 2;
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   struct lru_stack_params lp = lru_stack_params_default();

@@ -1,6 +1,7 @@
 /* rtsim: entry point. Parses the subcommand and hands over; only this layer
  * prints errors and chooses exit codes. */
 #include <errno.h>
+#include <getopt.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -40,6 +41,20 @@ int app_usage_error(const char *cmd, const char *fmt, ...) {
   va_end(ap);
   fprintf(stderr, "rtsim %s: error: %s (see 'rtsim %s --help')\n", cmd, msg, cmd);
   return APP_EXIT_USAGE;
+}
+
+int app_option_error(const char *cmd, int c, char **argv) {
+  if (c == ':') return app_usage_error(cmd, "option %s needs a value", argv[optind - 1]);
+  return app_usage_error(cmd, "unknown option '%s'", argv[optind - 1]);
+}
+
+const char *app_one_scene(const char *cmd, int argc, char **argv) {
+  if (optind == argc - 1) return argv[optind];
+  if (optind >= argc)
+    app_usage_error(cmd, "missing SCENE.yaml");
+  else
+    app_usage_error(cmd, "expected one scene file, got %d", argc - optind);
+  return NULL;
 }
 
 double app_now(void) {
