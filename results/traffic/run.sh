@@ -15,8 +15,9 @@ OUT=${1:-results/traffic}
 DIV=${2:-1}
 JOBS=${3:-$(nproc)}
 mkdir -p "$OUT"
-for s in grove sphereflake room; do
-  for c in diffuse specular shadow primary; do
+# Longest jobs first (diffuse, room before grove), so no core idles at the end.
+for c in diffuse specular shadow primary; do
+  for s in room grove sphereflake; do
     size=1024
     [ "$c" = diffuse ] && size=512
     echo "$s $c $((size / DIV))"
