@@ -74,6 +74,14 @@ int main(void) {
       {"export", "missing SCENE.yaml"},
       {"hits", "missing SCENE.yaml"},
       {"bench --repeat 0 " SCN "good_room_tiny.yaml", "--repeat: got '0'"},
+      {"bench --analyser 0", "--analyser: got '0'"},
+      {"bench --rays primary,glossy " SCN "good_room_tiny.yaml", "--rays: got 'primary,glossy'"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --policy fifo", "--policy: got 'fifo', expected one of: recursive, packet, dynamic"},
+      {"traffic " SCN "good_room_tiny.yaml -o x.csv", "missing --rays"},
+      {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --policy fifo", "--policy: got 'fifo'"},
+      {"traffic " SCN "good_room_tiny.yaml --rays primary", "missing -o TABLE.csv"},
+      {"trace " SCN "good_room_tiny.yaml --rays primary --policy packet", "missing --din FILE"},
+      {"trace " SCN "good_room_tiny.yaml --din x.din --policy packet", "missing --rays"},
   };
   for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {
     snprintf(cmd, sizeof cmd, "cd %s && %s %s", RTSIM_TMP, RTSIM_BINARY, usage[i].args);
@@ -84,8 +92,8 @@ int main(void) {
   }
 
   /* --help of every command succeeds and documents its options. */
-  static const char *const helps[] = {"render", "export", "hits", "bench"};
-  for (size_t i = 0; i < 4; i++) {
+  static const char *const helps[] = {"render", "export", "hits", "bench", "traffic", "trace"};
+  for (size_t i = 0; i < 6; i++) {
     snprintf(cmd, sizeof cmd, "%s %s --help", RTSIM_BINARY, helps[i]);
     EXPECT(testing_run(cmd, out, sizeof out) == 0 && strstr(out, "usage: rtsim") != NULL);
   }

@@ -104,15 +104,7 @@ static void compare_packet(struct tracer *tr, struct trace_packet *pk, const str
 }
 
 static struct ray make_ray(vec3 o, vec3 d, float tmin, float tmax) {
-  struct ray r;
-  memset(&r, 0, sizeof r);
-  r.o = o;
-  r.d = d;
-  r.tmin = tmin;
-  r.tmax = tmax;
-  r.ignore_prim = -1;
-  r.hit_prim = -1;
-  return r;
+  return testing_make_ray(o.x, o.y, o.z, d.x, d.y, d.z, tmin, tmax);
 }
 
 static float rnd(struct rng *g, float lo, float hi) { return lo + (hi - lo) * rng_f32(g); }

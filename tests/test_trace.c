@@ -27,14 +27,7 @@ static bool tri_hit(vec3 a, vec3 b, vec3 c, vec3 o, vec3 d, float tmin, float tm
 }
 
 static struct ray make_ray(vec3 o, vec3 d, float tmin, float tmax) {
-  struct ray r;
-  memset(&r, 0, sizeof r);
-  r.o = o;
-  r.d = d;
-  r.tmin = tmin;
-  r.tmax = tmax;
-  r.ignore_prim = -1;
-  return r;
+  return testing_make_ray(o.x, o.y, o.z, d.x, d.y, d.z, tmin, tmax);
 }
 
 static float rnd(struct rng *g, float lo, float hi) { return lo + (hi - lo) * rng_f32(g); }

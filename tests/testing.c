@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include "renderer/kdtree.h"
+#include "renderer/ray.h"
 #include "renderer/scene.h"
 #include "renderer/scene_file.h"
 #include "sim/err.h"
@@ -41,4 +42,17 @@ int testing_load_world(struct scene *s, struct kd_tree *kd, const char *path) {
   kd_build_params_default(&p);
   kd_build(kd, s, &p);
   return 1;
+}
+
+struct ray testing_make_ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmin,
+                            float tmax) {
+  struct ray r;
+  memset(&r, 0, sizeof r);
+  r.o = v3(ox, oy, oz);
+  r.d = v3(dx, dy, dz);
+  r.tmin = tmin;
+  r.tmax = tmax;
+  r.ignore_prim = -1;
+  r.hit_prim = -1;
+  return r;
 }

@@ -36,6 +36,12 @@ struct kd_tree;
  * failure print the error and return 0. */
 int testing_load_world(struct scene *s, struct kd_tree *kd, const char *path);
 
+struct ray;
+/* A ray with origin o, direction d, extent (tmin, tmax), no ignored
+ * primitive and no pending hit. */
+struct ray testing_make_ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmin,
+                            float tmax);
+
 /* Run a shell command, capture its stderr+stdout into buf; return exit code
  * (or -1 if it did not exit normally). */
 int testing_run(const char *cmd, char *buf, unsigned buf_size);
