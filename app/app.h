@@ -46,9 +46,6 @@ struct app_world {
 bool app_world_load(struct app_world *w, const char *path);
 void app_world_fini(struct app_world *w);
 
-/* Print the scene and k-d tree summary lines ("key: value") on stdout. */
-void app_print_world(const struct app_world *w, const char *path);
-
 struct image;
 /* Write an sRGB PNG preview of im's R, G, B channels through gnuplot (temporary
  * name + rename). On failure fills e (file = png) and returns false. */

@@ -40,7 +40,8 @@ static void progress(void *ctx, uint64_t done, uint64_t total) {
   fflush(stderr);
 }
 
-void app_print_world(const struct app_world *w, const char *path) {
+/* Print the scene and k-d tree summary lines ("key: value") on stdout. */
+static void print_world(const struct app_world *w, const char *path) {
   const struct kd_stats *k = &w->kd.stats;
   printf("scene: %s (%s)\n", w->scene.name[0] ? w->scene.name : "unnamed", path);
   printf("triangles: %u\n", w->scene.tri_count);
@@ -129,7 +130,7 @@ int cmd_render(int argc, char **argv) {
   }
   char names[64];
   shade_rays_name(mask, names, sizeof names);
-  app_print_world(&w, path);
+  print_world(&w, path);
   printf("image: %ux%u\n", W, H);
   printf("policy: %s\n", policy_name(policy));
   printf("ray_types: %s\n", names);
