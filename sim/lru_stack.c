@@ -43,8 +43,8 @@ struct lru_stack {
   struct lru_slot *slot;               /* [mask + 1] */
   uint64_t mask;
   unsigned shift; /* 64 - log2(slots) */
-  /* hist[s][c]: accesses of class c whose line was in segment s (s == n: not
-   * held at all). Size i misses exactly when s > i, so misses are suffix sums:
+  /* hist[s][c]: fetching accesses of class c whose line was in segment s
+   * (s == n: not held at all). Size i misses exactly when s > i, so misses are suffix sums:
    * one increment per access instead of one per missing size. */
   uint64_t hist[LRU_STACK_MAX_SIZES + 1][MEM_CLASS_COUNT];
   /* Writebacks, counted when the line is next seen (its next access, its fall
@@ -164,8 +164,11 @@ static inline void count_evictions(struct lru_stack *ls, unsigned d, unsigned s,
   }
 }
 
-void lru_stack_access(struct lru_stack *ls, uint64_t line, bool is_store, unsigned cls) {
-  CHECK(cls < MEM_CLASS_COUNT);
+void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsigned cls) {
+  CHECK(cls < MEM_CLASS_COUNT && op <= LRU_WRITE_LINE);
+  const bool is_store = op != LRU_READ;
+  /* Misses are counted in hist: a whole-line store never fetches. */
+  const unsigned fetch = op != LRU_WRITE_LINE;
   ls->accesses[cls]++;
   ls->stores[cls] += is_store;
   ls->total++;
@@ -188,7 +191,7 @@ void lru_stack_access(struct lru_stack *ls, uint64_t line, bool is_store, unsign
       uint32_t p = t[h].node;
       struct lru_node *v = &nd[p];
       unsigned s = v->seg;
-      ls->hist[s][cls]++;
+      ls->hist[s][cls] += fetch;
       count_evictions(ls, v->dfrom, s, v->cls);
       v->dfrom = is_store ? 0 : (uint8_t)(v->dfrom > s ? v->dfrom : s);
       v->cls = (uint8_t)cls;
@@ -205,7 +208,7 @@ void lru_stack_access(struct lru_stack *ls, uint64_t line, bool is_store, unsign
 
   /* Miss in every size. */
   unsigned n = ls->nsz;
-  ls->hist[n][cls]++;
+  ls->hist[n][cls] += fetch;
   uint32_t p;
   if (ls->count == ls->max_lines) {
     /* The bottom line leaves every cache. Reuse its node. */
@@ -370,7 +373,7 @@ double lru_stack_bench(uint64_t accesses, uint64_t seed) {
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     for (uint64_t k = 0; k < n; k++)
-      lru_stack_access(ls, buf[k] >> 4, (buf[k] >> 3) & 1, (unsigned)(buf[k] & 7));
+      lru_stack_access(ls, buf[k] >> 4, (enum lru_op)((buf[k] >> 3) & 1), (unsigned)(buf[k] & 7));
     clock_gettime(CLOCK_MONOTONIC, &t1);
     seconds += (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     done += n;

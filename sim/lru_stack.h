@@ -4,7 +4,11 @@
  * Works because LRU has the inclusion property (Mattson et al. 1970): a cache of
  * C lines holds exactly the C most recently used lines, so one recency stack
  * with a boundary marker at each capacity answers for all sizes at once.
- * Write-back, write-allocate caches: a store miss fetches the line (a miss). */
+ * Write-back, write-allocate caches. A store that writes part of a line fetches
+ * it on a miss (a miss); a store that writes the whole line allocates it without
+ * fetching (nothing of the old line survives, so nothing is read): it is not a
+ * miss, though the line now takes its place in every cache, dirty. Allocation
+ * still happens in every size, so the stack (inclusion) property holds. */
 #ifndef RTSIM_SIM_LRU_STACK_H
 #define RTSIM_SIM_LRU_STACK_H
 
@@ -32,6 +36,13 @@ struct lru_stack_params lru_stack_params_default(void);
  * (for the config reader to wrap in a struct err with the value's position). */
 const char *lru_stack_params_problem(const struct lru_stack_params *p);
 
+/* What an access does to its line. */
+enum lru_op {
+  LRU_READ = 0,       /* load: a miss fetches the line */
+  LRU_WRITE = 1,      /* store to part of the line: a miss fetches it first */
+  LRU_WRITE_LINE = 2  /* store of the whole line: a miss allocates, no fetch */
+};
+
 struct lru_stack;
 
 /* Create an empty analyser (all caches cold). p must pass
@@ -43,7 +54,7 @@ void lru_stack_destroy(struct lru_stack *ls); /* NULL ok */
  * 64-bit value; the caller splits multi-line requests (mem_functional does).
  * cls < MEM_CLASS_COUNT (CHECKed). Cost: O(1) for a repeat of the most recent
  * line; else one hash probe, a list move and one step per size that misses. */
-void lru_stack_access(struct lru_stack *ls, uint64_t line, bool is_store, unsigned cls);
+void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsigned cls);
 
 /* End of trace: walk the lines held (O(lines)) to count the lines still dirty
  * in each cache (dirty_at_end) and the writebacks not yet counted (evictions are
@@ -57,7 +68,8 @@ struct lru_stack_size_stats {
   uint64_t capacity_bytes;
   uint64_t accesses[MEM_CLASS_COUNT]; /* line accesses, by class of the access */
   uint64_t stores[MEM_CLASS_COUNT];   /* of which stores */
-  /* Lines fetched from DRAM, by class of the access that missed. */
+  /* Lines fetched from DRAM, by class of the access that missed (LRU_READ or
+   * LRU_WRITE; an LRU_WRITE_LINE miss fetches nothing and is not counted). */
   uint64_t misses[MEM_CLASS_COUNT];
   /* Dirty lines evicted (written back), by class of the line's last access. */
   uint64_t writebacks[MEM_CLASS_COUNT];

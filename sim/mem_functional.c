@@ -17,7 +17,20 @@ struct fn_backend {
   struct fn_backend_stats st;
 };
 
-/* Feed every line of [addr, addr + size) to the analyser (and the trace). */
+/* Feed every line of [addr, addr + size) to the analyser (and the trace). A
+ * store covering a line whole allocates it without a fetch (LRU_WRITE_LINE);
+ * a store to part of a line fetches it first (LRU_WRITE). In the din trace the
+ * latter is a read record then a write record, so Dinero IV replays both kinds
+ * exactly with its write-allocate policy "nofetch" (-lN-Twalloc f). */
+static inline void fn_line(struct fn_backend *b, uint64_t line, enum lru_op op, unsigned cls) {
+  if (b->din) {
+    uint64_t a = line << b->lg2_line;
+    if (op != LRU_WRITE_LINE) din_writer_record(b->din, a, false);
+    if (op != LRU_READ) din_writer_record(b->din, a, true);
+  }
+  lru_stack_access(b->ls, line, op, cls);
+}
+
 static inline void fn_access(struct fn_backend *b, uint64_t addr, uint32_t size, bool is_store,
                              unsigned cls) {
   CHECK(size > 0 && cls < MEM_CLASS_COUNT);
@@ -25,13 +38,21 @@ static inline void fn_access(struct fn_backend *b, uint64_t addr, uint32_t size,
   CHECK(last >= addr); /* an access may not wrap past 2^64 */
   uint64_t line = addr >> b->lg2_line, end = last >> b->lg2_line;
   b->st.line_accesses[cls] += end - line + 1;
-  if (b->din) {
-    din_writer_record(b->din, addr, is_store);
-    for (uint64_t l = line + 1; l <= end; l++)
-      din_writer_record(b->din, l << b->lg2_line, is_store);
+  if (!is_store) {
+    for (;;) {
+      fn_line(b, line, LRU_READ, cls);
+      if (line == end) break;
+      line++;
+    }
+    return;
   }
+  const uint64_t lmask = (UINT64_C(1) << b->lg2_line) - 1;
+  /* Lines first..final are covered whole; the ends may be partial. */
+  uint64_t first = (addr & lmask) ? line + 1 : line;
+  bool last_whole = (last & lmask) == lmask;
   for (;;) {
-    lru_stack_access(b->ls, line, is_store, cls);
+    bool whole = line >= first && (line < end || last_whole);
+    fn_line(b, line, whole ? LRU_WRITE_LINE : LRU_WRITE, cls);
     if (line == end) break;
     line++;
   }

@@ -33,6 +33,8 @@ static void nv_init(struct nv *n) {
   for (unsigned i = 0; i < NV_SIZES; i++) n->c[i].cap = 1u << i;
 }
 
+/* Replays as Dinero IV with write-allocate "nofetch" (-walloc f), the policy
+ * rtsim's traces are written for: a write record allocates without a fetch. */
 static void nv_access(struct nv *n, uint64_t line, int store) {
   n->clock++;
   for (unsigned i = 0; i < NV_SIZES; i++) {
@@ -40,7 +42,7 @@ static void nv_access(struct nv *n, uint64_t line, int store) {
     unsigned k = 0;
     while (k < c->count && c->line[k] != line) k++;
     if (k == c->count) {
-      c->misses++;
+      c->misses += !store;
       if (c->count == c->cap) {
         k = 0;
         for (unsigned j = 1; j < c->count; j++)
@@ -73,7 +75,7 @@ static void sink_init(struct sink *s) {
 
 static void sink_line(struct sink *s, uint64_t addr, int store) {
   nv_access(&s->nv, addr >> 6, store);
-  lru_stack_access(s->ls, addr >> 6, store, 0);
+  lru_stack_access(s->ls, addr >> 6, store ? LRU_WRITE_LINE : LRU_READ, 0);
 }
 
 static void on_record(void *ctx, unsigned label, uint64_t addr) {
@@ -211,14 +213,17 @@ static void test_backend_trace(void) {
       mem_load(&port, addr, size, cls);
     mem_compute(&port, 10);
   }
-  uint64_t lines = 0;
+  /* A line access is one record, or two (read, write) for a store to part of
+   * a line. */
+  uint64_t lines = 0, records = din_writer_records(w);
   for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) lines += fn_backend_stats(b)->line_accesses[c];
-  EXPECT(din_writer_records(w) == lines);
+  EXPECTF(records > lines && records < 2 * lines, "%llu records for %llu line accesses",
+          (unsigned long long)records, (unsigned long long)lines);
   EXPECT(din_writer_close(w, &e));
   struct sink replay;
   sink_init(&replay);
   EXPECT(din_read_file(path, on_record, &replay, NULL, &e));
-  EXPECT(replay.records == lines);
+  EXPECT(replay.records == records);
   struct lru_stack *ls = fn_backend_stack(b);
   struct lru_stack_results r;
   lru_stack_get_results(ls, &r);

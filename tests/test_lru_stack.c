@@ -72,15 +72,18 @@ static void nc_push_front(struct naive_cache *c, int32_t x) {
   c->head = x;
 }
 
-static void naive_access(struct naive *nv, uint32_t id, int store, unsigned cls) {
+/* op as enum lru_op: 0 load, 1 store (fetch on miss), 2 whole-line store
+ * (allocate on miss without fetching: not a miss). */
+static void naive_access(struct naive *nv, uint32_t id, int op, unsigned cls) {
+  const uint8_t store = op != LRU_READ;
   for (unsigned i = 0; i < nv->n; i++) {
     struct naive_cache *c = &nv->c[i];
     int32_t x = (int32_t)id;
     if (c->in[id]) {
       nc_unlink(c, x);
-      c->dirty[id] |= (uint8_t)store;
+      c->dirty[id] |= store;
     } else {
-      c->misses[cls]++;
+      if (op != LRU_WRITE_LINE) c->misses[cls]++;
       if (c->count == c->cap) {
         int32_t v = c->tail;
         nc_unlink(c, v);
@@ -89,7 +92,7 @@ static void naive_access(struct naive *nv, uint32_t id, int store, unsigned cls)
         c->count--;
       }
       c->in[id] = 1;
-      c->dirty[id] = (uint8_t)store;
+      c->dirty[id] = store;
       c->count++;
     }
     c->cls[id] = (uint8_t)cls;
@@ -167,7 +170,7 @@ static int compare_run(const char *name, const struct trace *t, const struct lru
   struct lru_stack *ls = lru_stack_create(p);
   for (size_t k = 0; k < t->n; k++) {
     naive_access(&nv, t->a[k].id, t->a[k].store, t->a[k].cls);
-    lru_stack_access(ls, map_line(m, t->a[k].id), t->a[k].store, t->a[k].cls);
+    lru_stack_access(ls, map_line(m, t->a[k].id), (enum lru_op)t->a[k].store, t->a[k].cls);
     if (check_every && k % check_every == 0) lru_stack_check_invariants(ls);
   }
   lru_stack_check_invariants(ls);
@@ -226,7 +229,7 @@ static void test_hand_computed(void) {
     unsigned cls;
   } tr[] = {{0, 0, 0}, {1, 1, 2}, {0, 0, 0}, {2, 0, 1}, {1, 0, 3}, {3, 1, 2}, {0, 0, 0}, {1, 0, 4}};
   for (size_t k = 0; k < sizeof tr / sizeof tr[0]; k++) {
-    lru_stack_access(ls, tr[k].line, tr[k].store, tr[k].cls);
+    lru_stack_access(ls, tr[k].line, tr[k].store ? LRU_WRITE : LRU_READ, tr[k].cls);
     lru_stack_check_invariants(ls);
   }
   lru_stack_finish(ls);
@@ -263,7 +266,9 @@ static void test_random(void) {
     struct trace t = {0};
     for (int k = 0; k < 60000; k++) {
       uint64_t r = rng_next(&rng);
-      tr_add(&t, (uint32_t)(r % universes[u]), (r >> 32) % 10 < 3, (unsigned)((r >> 40) % 5));
+      unsigned roll = (unsigned)((r >> 32) % 10); /* 70% loads, 20% stores, 10% whole-line stores */
+      tr_add(&t, (uint32_t)(r % universes[u]), roll < 7 ? LRU_READ : roll < 9 ? LRU_WRITE : LRU_WRITE_LINE,
+             (unsigned)((r >> 40) % 5));
     }
     char name[64];
     snprintf(name, sizeof name, "random N=%u", universes[u]);
@@ -276,7 +281,7 @@ static void test_random(void) {
     struct trace t = {0};
     for (int k = 0; k < 40000; k++) {
       uint64_t r = rng_next(&rng);
-      tr_add(&t, (uint32_t)(r % 150), (r >> 32) % 4 == 0, (unsigned)((r >> 40) % 5));
+      tr_add(&t, (uint32_t)(r % 150), (int)((r >> 32) % 3), (unsigned)((r >> 40) % 5));
     }
     compare_all_maps("random, other geometry", &t, &q[g]);
     free(t.a);
@@ -291,14 +296,14 @@ static void test_loops(void) {
       if (len == 0) continue;
       struct trace t = {0};
       for (int round = 0; round < 40; round++)
-        for (uint32_t i = 0; i < len; i++) tr_add(&t, i, (i + (uint32_t)round) % 3 == 0, i % 5);
+        for (uint32_t i = 0; i < len; i++) tr_add(&t, i, (int)((i + (uint32_t)round) % 3), i % 5);
       char name[64];
       snprintf(name, sizeof name, "loop L=%u (size %u lines)", len, cap);
       compare_all_maps(name, &t, &p);
       /* The LRU pathology, exactly: a sweep of cap+1 lines misses every time in
        * the cache of cap lines; a sweep of cap lines misses only the first round. */
       struct lru_stack *ls = lru_stack_create(&p);
-      for (size_t k = 0; k < t.n; k++) lru_stack_access(ls, t.a[k].id, 0, 0);
+      for (size_t k = 0; k < t.n; k++) lru_stack_access(ls, t.a[k].id, LRU_READ, 0);
       unsigned idx = (unsigned)__builtin_ctz(cap);
       uint64_t want = len > cap ? t.n : len;
       EXPECTF(lru_stack_misses(ls, idx, 0) == want, "loop %u in %u lines: %llu misses, want %llu",
@@ -362,7 +367,7 @@ static void test_adversarial(void) {
     for (int k = 0; k < 40000; k++) {
       uint32_t span = 1 + (uint32_t)(k / 500 % 20) * 7;
       uint64_t r = rng_next(&rng);
-      tr_add(&t, (uint32_t)(r % span), (r >> 33) % 3 == 0, (unsigned)(r >> 50) % 5);
+      tr_add(&t, (uint32_t)(r % span), (int)((r >> 33) % 3), (unsigned)(r >> 50) % 5);
     }
     compare_all_maps("breathing working set", &t, &p);
     free(t.a);
@@ -384,7 +389,7 @@ static void test_default_sizes(void) {
                          : (uint32_t)((r >> 16) % 20000);
       tr_add(&t, hot, (r >> 40) % 4 == 0, (unsigned)(r >> 44) % 5);
     } else {
-      tr_add(&t, stream++, (r >> 40) % 4 == 0, 2);
+      tr_add(&t, stream++, (r >> 40) % 4 == 0 ? LRU_WRITE_LINE : LRU_READ, 2);
       if (stream == 130000) stream = 30000; /* stream revisits: deep reuse */
     }
   }
@@ -428,14 +433,34 @@ static void test_backend(void) {
   struct lru_stack_results r;
   lru_stack_get_results(ls, &r);
   for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) EXPECT(r.accesses[c] == st->line_accesses[c]);
-  /* 8-line cache: distinct lines 0..5 and the last line: 7 misses; the repeat of
-   * line 1 (ray) and line 2 (node) and the last line hit. */
+  /* 8-line cache: distinct lines 0..5 miss (6); the repeat of line 1 (ray) and
+   * line 2 (node) hit; the last line is stored whole first, so it is allocated
+   * without a fetch, and the load after it hits. */
   uint64_t m = 0;
   for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) m += r.size[3].misses[c];
-  EXPECTF(m == 7, "8-line cache misses %llu", (unsigned long long)m);
+  EXPECTF(m == 6, "8-line cache misses %llu", (unsigned long long)m);
   EXPECT(r.size[3].misses[MEM_CLASS_RAY] == 2 && r.size[3].misses[MEM_CLASS_NODE] == 3);
+  EXPECT(r.size[3].misses[MEM_CLASS_OTHER] == 0);
   EXPECT(r.size[3].dirty_at_end[MEM_CLASS_RAY] == 1 &&
          r.size[3].dirty_at_end[MEM_CLASS_OTHER] == 1);
+  fn_backend_destroy(b);
+
+  /* Whole-line stores are found line by line: [1000, 1128) covers line 16 whole
+   * and lines 15 and 17 in part, so 2 fetches; a 64-byte store across a line
+   * boundary covers neither line whole (2 more); a 128-byte aligned store none. */
+  b = fn_backend_create(&p, NULL);
+  port = fn_backend_port(b);
+  mem_store(&port, 1000, 128, MEM_CLASS_QUEUE);
+  mem_store(&port, 32, 64, MEM_CLASS_RAY);
+  mem_store(&port, 4096, 128, MEM_CLASS_GEOMETRY);
+  ls = fn_backend_stack(b);
+  lru_stack_get_results(ls, &r);
+  for (unsigned i = 0; i < r.size_count; i++) {
+    EXPECTF(r.size[i].misses[MEM_CLASS_QUEUE] == 2, "size %u: %llu queue fetches", i,
+            (unsigned long long)r.size[i].misses[MEM_CLASS_QUEUE]);
+    EXPECT(r.size[i].misses[MEM_CLASS_RAY] == 2 && r.size[i].misses[MEM_CLASS_GEOMETRY] == 0);
+  }
+  EXPECT(r.size[3].dirty_at_end[MEM_CLASS_QUEUE] == 3 && r.size[3].dirty_at_end[MEM_CLASS_GEOMETRY] == 2);
   fn_backend_destroy(b);
   fn_backend_destroy(NULL);
   lru_stack_destroy(NULL);
