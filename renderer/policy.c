@@ -3,6 +3,10 @@
 
 #include <string.h>
 
+#include "renderer/camera.h"
+#include "renderer/framebuffer.h"
+#include "renderer/shade.h"
+#include "renderer/trace.h"
 #include "sim/err.h"
 
 static const char *const NAMES[POLICY_COUNT] = {"recursive", "packet", "dynamic"};
@@ -15,6 +19,14 @@ void policy_params_default(struct policy_params *p) {
   p->dyn_table_share = 16;
   p->dyn_ray_share = 16;
   p->dyn_ray_buffer_bytes = 4096;
+}
+
+void policy_primary(const struct policy_env *env, const struct camera_frame *cf, uint32_t x,
+                    uint32_t y, struct ray *r) {
+  const struct tracer *tr = env->tr;
+  uint64_t pix = (uint64_t)y * env->fb->width + x;
+  mem_load(&tr->mem, tr->layout.camera_base + pix * sizeof *r, sizeof *r, MEM_CLASS_RAY);
+  camera_primary(cf, x, y, env->sc->seed, r);
 }
 
 const char *policy_name(enum policy_kind k) { return (unsigned)k < POLICY_COUNT ? NAMES[k] : "?"; }

@@ -14,6 +14,8 @@
 struct tracer;
 struct shade_ctx;
 struct framebuffer;
+struct camera_frame;
+struct ray;
 
 enum policy_kind { POLICY_RECURSIVE = 0, POLICY_PACKET = 1, POLICY_DYNAMIC = 2, POLICY_COUNT = 3 };
 
@@ -45,6 +47,13 @@ struct policy_env {
 
 /* Render the whole image with policy k. Checks ray conservation at the end. */
 void policy_run(enum policy_kind k, const struct policy_env *env, const struct policy_params *p);
+
+/* Pixel (x, y)'s primary ray. Every policy reads it from the camera's ray
+ * array in the memory image (one 64-byte load; trace_layout.camera_base), as a
+ * ray-generation stage would have left it: the same input traffic for all
+ * policies, and the 64 bytes per primary ray the paper's baselines carry. */
+void policy_primary(const struct policy_env *env, const struct camera_frame *cf, uint32_t x,
+                    uint32_t y, struct ray *r);
 
 /* "recursive", "packet", "dynamic". */
 const char *policy_name(enum policy_kind k);

@@ -20,15 +20,22 @@
  *   triangle crossing the segment is hit, and the reversed traversal visits
  *   every leaf the segment crosses, so the answer is trace_any's.
  *
+ * A ray that ends is shaded at once (section 2.1.1: "shade the intersection
+ * point immediately"): its shadow rays join this generation's queues, its
+ * reflection rays go straight to the next generation's queues (each queue
+ * point has one queue per generation). So a ray waits in memory only in a
+ * queue, and the picture is still the recursive policy's: shading is linear
+ * and the framebuffer sums in fixed point, so order does not matter.
+ *
  * Simulated memory (besides nodes, leaf lists and triangles, as trace.c):
+ * - primary rays are read from the camera's array (policy_primary);
  * - queue table at qtable_base: entry q (8 bytes: its buffer's tail) is loaded
  *   and stored on each enqueue, and when the queue is drained;
  * - queue buffers at queue_base: chunks of DYN_CHUNK_RAYS 64-byte rays,
  *   chunk c at queue_base + 4096 c; a queue is a list of chunks, drained
  *   chunks go to a last-in-first-out free list, new chunks come from it first
- *   (so the arena stays as small as the most rays ever queued at once);
- * - the generation's hits (rays awaiting shading) at ray_base + 64 i, the
- *   next generation's rays at ray_base + DYN_NEXT_OFFSET + 64 j. */
+ *   (so the arena stays as small as the most rays ever queued at once). An
+ *   enqueue writes a whole line, which the cache allocates without a fetch. */
 #include "renderer/policy.h"
 
 #include <float.h>
@@ -48,7 +55,6 @@
 
 #define DYN_CHUNK_RAYS 64u
 #define DYN_CHUNK_BYTES (DYN_CHUNK_RAYS * sizeof(struct ray))
-#define DYN_NEXT_OFFSET (1ull << 38)
 #define DYN_NONE UINT32_MAX
 /* Host-only mark of a ray that ended during a blocked pass (never simulated). */
 #define DYN_FLAG_DEAD 0x80u
@@ -81,16 +87,18 @@ struct dyn {
   struct qpoint_set qs;
   uint32_t block_tris; /* triangles of an oversized leaf processed at once */
   uint32_t ray_block;  /* rays streamed at once against such a block */
-  /* Queues and their chunk arena. */
-  struct dyn_queue *q;
+  /* Queues (this generation's, the next one's) and their chunk arena. */
+  struct dyn_queue *q, *qn;
   struct ray *pool;      /* chunk c: pool[c * DYN_CHUNK_RAYS ...] */
   uint32_t *chunk_next;  /* next chunk of the same queue, or of the free list */
   uint32_t chunks, chunk_cap, free_head;
   /* Non-empty queues: a max-heap on (count, -index). */
   uint32_t *heap;
   uint32_t heap_n;
-  /* Generation buffers. */
-  struct ray_buf hits, next;
+  /* Rays spawned by shading, started once the ray that spawned them is done
+   * (so each ray's cost is its own). */
+  struct ray_buf pend;
+  bool flushing;
   uint64_t progress_at;
 };
 
@@ -103,7 +111,7 @@ struct walk {
   int32_t ignore;
   bool any;
   bool found;
-  float best_t, upper;
+  float best_t, best_b1, best_b2, upper;
   uint32_t best_p;
   uint32_t ni;
   float t0, t1;
@@ -171,6 +179,8 @@ static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) 
     restore_hit(d, &w->ir, r, &h);
     w->found = true;
     w->best_t = h.t;
+    w->best_b1 = h.b1;
+    w->best_b2 = h.b2;
     w->best_p = (uint32_t)h.prim;
     w->upper = nextafterf(h.t, INFINITY);
   }
@@ -200,6 +210,8 @@ static bool walk_leaf(const struct dyn *d, struct walk *w, struct kd_node nd, ui
     if (!w->found || t < w->best_t || (t == w->best_t && p < w->best_p)) {
       w->found = true;
       w->best_t = t;
+      w->best_b1 = b1;
+      w->best_b2 = b2;
       w->upper = nextafterf(t, INFINITY);
       w->best_p = p;
     }
@@ -339,14 +351,15 @@ static uint64_t table_addr(const struct dyn *d, uint32_t qi) {
   return d->tr->layout.qtable_base + 8ull * qi;
 }
 
-static void enqueue(struct dyn *d, uint32_t qi, const struct ray *r) {
+/* Append r to queue qi of this generation, or of the next one. */
+static void enqueue(struct dyn *d, uint32_t qi, const struct ray *r, bool next_gen) {
   const struct mem_port *mem = &d->tr->mem;
-  struct dyn_queue *q = &d->q[qi];
+  struct dyn_queue *const qset = next_gen ? d->qn : d->q;
+  struct dyn_queue *q = &qset[qi];
   CHECK(!(r->flags & DYN_FLAG_DEAD));
   mem_load(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
   if (q->tail == DYN_NONE || q->tail_fill == DYN_CHUNK_RAYS) {
     uint32_t c = chunk_alloc(d);
-    q = &d->q[qi];
     if (q->tail == DYN_NONE)
       q->head = c;
     else
@@ -359,6 +372,7 @@ static void enqueue(struct dyn *d, uint32_t qi, const struct ray *r) {
   q->tail_fill++;
   q->count++;
   mem_store(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
+  if (next_gen) return; /* the heap orders this generation's queues only */
   if (q->heap_pos < 0) {
     d->heap[d->heap_n] = qi;
     q->heap_pos = d->heap_n++;
@@ -375,26 +389,40 @@ static void progress(struct dyn *d) {
   }
 }
 
+/* A ray ends: a shadow ray adds its light, any other is shaded now (its hit
+ * is the walk's best; a miss has t = tmax, as trace_closest gives it) and its
+ * children wait in pend until this ray's work is counted. */
 static void terminate(struct dyn *d, struct ray *r, const struct walk *w, enum walk_end e) {
   d->st->rays[r->type]++;
   d->st->terminated++;
   if (r->type == RAY_SHADOW) {
     shade_shadow(r, e == WALK_HIT, d->fb, &d->tr->mem);
   } else {
-    r->hit_prim = w->found ? (int32_t)w->best_p : -1;
-    mem_store(&d->tr->mem, d->tr->layout.ray_base + d->hits.n * sizeof *r, sizeof *r, MEM_CLASS_RAY);
-    buf_push(&d->hits, r);
+    struct hit h = {r->tmax, -1, 0.0f, 0.0f};
+    if (w->found) {
+      h.t = w->best_t;
+      h.prim = (int32_t)w->best_p;
+      h.b1 = w->best_b1;
+      h.b2 = w->best_b2;
+    }
+    r->hit_prim = -1;
+    struct ray spawn[SHADE_MAX_SPAWN];
+    uint32_t n = shade_hit(d->sc, r, &h, d->fb, &d->tr->mem, spawn);
+    d->st->spawned += n;
+    for (uint32_t k = 0; k < n; k++) buf_push(&d->pend, &spawn[k]);
   }
   progress(d);
 }
 
-/* Where a ray goes after a walk: a queue, or its end. */
-static void route(struct dyn *d, struct ray *r, const struct walk *w, enum walk_end e) {
+/* Where a ray goes after a walk: a queue (of the next generation for a new
+ * non-shadow ray still on its way to its first queue point), or its end. */
+static void route(struct dyn *d, struct ray *r, const struct walk *w, enum walk_end e,
+                  bool next_gen) {
   if (e == WALK_QUEUED) {
     int64_t qi = qpoint_index(&d->qs, w->ni);
     CHECK(qi >= 0);
     r->hit_prim = w->found ? (int32_t)w->best_p : -1;
-    enqueue(d, (uint32_t)qi, r);
+    enqueue(d, (uint32_t)qi, r, next_gen);
   } else {
     terminate(d, r, w, e);
   }
@@ -407,15 +435,29 @@ static void cost_add(const struct dyn *d, uint32_t pixel, uint64_t nodes0, uint6
 }
 
 /* A new ray: from the root down to its first queue point (the one holding its
- * origin, for a ray that starts inside the scene), or its end. */
+ * origin, for a ray that starts inside the scene), or its end. Primary and
+ * shadow rays join this generation's queues, reflection rays the next's. */
 static void start(struct dyn *d, struct ray *r) {
   uint64_t n0 = d->tr->stats.node_visits, t0 = d->tr->stats.tri_tests;
   struct walk w;
+  bool next_gen = r->type != RAY_PRIMARY && r->type != RAY_SHADOW;
   if (!walk_init(d, &w, r))
     terminate(d, r, &w, WALK_DONE);
   else
-    route(d, r, &w, walk_run(d, &w, 0, true));
+    route(d, r, &w, walk_run(d, &w, 0, true), next_gen);
   cost_add(d, r->pixel, n0, t0);
+}
+
+/* Start the rays that shading spawned (and any they spawn in turn). */
+static void flush(struct dyn *d) {
+  if (d->flushing) return;
+  d->flushing = true;
+  for (uint64_t i = 0; i < d->pend.n; i++) {
+    struct ray r = d->pend.r[i];
+    start(d, &r);
+  }
+  d->pend.n = 0;
+  d->flushing = false;
 }
 
 /* ---- draining a queue ---------------------------------------------------------- */
@@ -428,8 +470,9 @@ static void process_subtree(struct dyn *d, struct ray *r, uint32_t node) {
   walk_to(d, &w, node);
   enum walk_end e = walk_run(d, &w, w.sp, false);
   if (e == WALK_DONE) e = walk_leave(d, &w);
-  route(d, r, &w, e);
+  route(d, r, &w, e, false);
   cost_add(d, r->pixel, n0, t0);
+  flush(d);
 }
 
 /* Load (announce) entries [j0, j1) of a leaf's geometry, as the paper does on
@@ -498,9 +541,10 @@ static void drain_leaf(struct dyn *d, uint32_t node, uint32_t head, uint64_t cou
           d->pool[cur_index(&k)].hit_prim = w.found ? (int32_t)w.best_p : -1;
         } else {
           walk_to(d, &w, node);
-          route(d, &r, &w, walk_leave(d, &w));
+          route(d, &r, &w, walk_leave(d, &w), false);
         }
         cost_add(d, r.pixel, n0, t0);
+        flush(d);
       }
       /* Store the block back with its best hits (the last pass moved them on). */
       for (uint64_t t = 0; !last && t < n; t++, cur_next(d, &blk, false))
@@ -541,36 +585,6 @@ static void drain_all(struct dyn *d) {
 
 /* ---- generations ----------------------------------------------------------- */
 
-/* Shade the generation's hits: their shadow rays start at once (the queues are
- * empty now, and shadow rays go first), other rays wait for the next generation. */
-static void shade_hits(struct dyn *d) {
-  const struct mem_port *mem = &d->tr->mem;
-  struct ray spawn[SHADE_MAX_SPAWN];
-  for (uint64_t i = 0; i < d->hits.n; i++) {
-    struct ray r = d->hits.r[i];
-    mem_load(mem, d->tr->layout.ray_base + i * sizeof r, sizeof r, MEM_CLASS_RAY);
-    struct hit h = {r.tmax, -1, 0.0f, 0.0f}; /* a miss, as trace_closest gives it */
-    if (r.hit_prim >= 0) {
-      struct isect_ray ir;
-      isect_prepare(&ir, r.o, r.d);
-      restore_hit(d, &ir, &r, &h);
-    }
-    r.hit_prim = -1;
-    uint32_t n = shade_hit(d->sc, &r, &h, d->fb, mem, spawn);
-    d->st->spawned += n;
-    for (uint32_t k = 0; k < n; k++) {
-      if (spawn[k].type == RAY_SHADOW) {
-        start(d, &spawn[k]);
-      } else {
-        mem_store(mem, d->tr->layout.ray_base + DYN_NEXT_OFFSET + d->next.n * sizeof spawn[k],
-                  sizeof spawn[k], MEM_CLASS_RAY);
-        buf_push(&d->next, &spawn[k]);
-      }
-    }
-  }
-  d->hits.n = 0;
-}
-
 void policy_dynamic_run(const struct policy_env *env, const struct policy_params *p) {
   struct tracer *tr = env->tr;
   struct dyn d;
@@ -597,10 +611,12 @@ void policy_dynamic_run(const struct policy_env *env, const struct policy_params
   uint64_t rb = bud.ray_bytes / sizeof(struct ray);
   d.ray_block = rb == 0 ? 1 : (rb > UINT32_MAX ? UINT32_MAX : (uint32_t)rb);
   d.q = xmalloc((uint64_t)d.qs.count * sizeof *d.q + 1);
+  d.qn = xmalloc((uint64_t)d.qs.count * sizeof *d.qn + 1);
   for (uint32_t i = 0; i < d.qs.count; i++) {
     d.q[i].head = d.q[i].tail = DYN_NONE;
     d.q[i].tail_fill = d.q[i].count = 0;
     d.q[i].heap_pos = -1;
+    d.qn[i] = d.q[i];
   }
   d.heap = xmalloc((uint64_t)d.qs.count * sizeof *d.heap + 1);
 
@@ -613,32 +629,34 @@ void policy_dynamic_run(const struct policy_env *env, const struct policy_params
   camera_frame_init(&cf, &env->sc->scene->camera, w, h);
   for (uint64_t k = 0; k < npix; k++) {
     struct ray r;
-    camera_primary(&cf, order[k] % w, order[k] / w, env->sc->seed, &r);
+    policy_primary(env, &cf, order[k] % w, order[k] / w, &r);
     env->st->spawned++;
     start(&d, &r);
+    flush(&d);
   }
   free(order);
 
   for (;;) {
-    drain_all(&d); /* closest hits of the generation */
-    shade_hits(&d);
-    drain_all(&d); /* its shadow rays */
-    if (d.next.n == 0) break;
-    /* The next generation, from the buffer to their first queues. */
-    for (uint64_t j = 0; j < d.next.n; j++) {
-      mem_load(&tr->mem, tr->layout.ray_base + DYN_NEXT_OFFSET + j * sizeof(struct ray),
-               sizeof(struct ray), MEM_CLASS_RAY);
-      struct ray r = d.next.r[j];
-      start(&d, &r);
-    }
-    d.next.n = 0;
+    /* This generation's rays and the shadow rays of its hits. */
+    drain_all(&d);
+    /* The next generation's queues become this one's. */
+    struct dyn_queue *t = d.q;
+    d.q = d.qn;
+    d.qn = t;
+    for (uint32_t i = 0; i < d.qs.count; i++)
+      if (d.q[i].count > 0) {
+        d.heap[d.heap_n] = i;
+        d.q[i].heap_pos = d.heap_n++;
+        heap_up(&d, (uint32_t)d.q[i].heap_pos);
+      }
+    if (d.heap_n == 0) break;
   }
   if (env->progress) env->progress(env->progress_ctx, env->st->terminated, env->st->terminated);
 
-  free(d.hits.r);
-  free(d.next.r);
+  free(d.pend.r);
   free(d.heap);
   free(d.q);
+  free(d.qn);
   free(d.pool);
   free(d.chunk_next);
   qpoint_fini(&d.qs);

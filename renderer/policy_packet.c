@@ -105,7 +105,7 @@ void policy_packet_run(const struct policy_env *env, const struct policy_params 
     pr->n = 0;
     for (uint32_t y = y0; y < y1; y++)
       for (uint32_t x = x0; x < x1; x++) {
-        camera_primary(&cf, x, y, sc->seed, &pr->r[pr->n]);
+        policy_primary(env, &cf, x, y, &pr->r[pr->n]);
         mem_store(mem, buf_addr(base, top, pr->n), sizeof(struct ray), MEM_CLASS_RAY);
         pr->n++;
       }

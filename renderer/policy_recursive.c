@@ -37,7 +37,7 @@ void policy_recursive_run(const struct policy_env *env, const struct policy_para
     uint32_t pix = order[k];
     uint64_t nodes0 = tr->stats.node_visits, tris0 = tr->stats.tri_tests;
     uint32_t top = 0;
-    camera_primary(&cf, pix % w, pix / w, sc->seed, &stack[top]);
+    policy_primary(env, &cf, pix % w, pix / w, &stack[top]);
     mem_store(mem, stack_addr, sizeof(struct ray), MEM_CLASS_RAY);
     top++;
     st->spawned++;

@@ -132,6 +132,7 @@ void trace_layout_default(struct trace_layout *l) {
   l->queue_base = 5ull << TRACE_REGION_SHIFT;
   l->ray_base = 6ull << TRACE_REGION_SHIFT;
   l->fb_base = 7ull << TRACE_REGION_SHIFT;
+  l->camera_base = 8ull << TRACE_REGION_SHIFT;
   l->tri_bytes = 128; /* 3 vertices, 3 normals, material: 76 bytes, padded to two lines */
   l->node_cycles = 7; /* the paper's ray/plane test: multiply, add, compare */
   l->tri_cycles = 30; /* watertight test: ~25 flops plus compares */

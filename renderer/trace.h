@@ -52,6 +52,8 @@ struct trace_layout {
   uint64_t queue_base;    /* ray queues (64-byte rays) */
   uint64_t ray_base;      /* ray stacks and packet buffers (64-byte rays) */
   uint64_t fb_base;       /* framebuffer: pixel i at fb_base + FB_PIXEL_BYTES i */
+  uint64_t camera_base;   /* primary rays as the camera wrote them: pixel i's at
+                             camera_base + 64 i, read once by every policy */
   uint32_t tri_bytes;     /* simulated triangle record size (default 128) */
   uint32_t node_cycles;   /* compute cycles announced per traversal step */
   uint32_t tri_cycles;    /* compute cycles announced per triangle test */

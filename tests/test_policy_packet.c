@@ -43,14 +43,19 @@ static int load(struct world *w, const char *name) {
 struct counts {
   uint64_t loads[MEM_CLASS_COUNT], load_bytes[MEM_CLASS_COUNT];
   uint64_t stores[MEM_CLASS_COUNT];
-  uint64_t ray_lo, ray_hi; /* allowed ray addresses */
-  uint64_t ray_outside;
+  uint64_t ray_lo, ray_hi; /* allowed ray addresses (packet buffers) */
+  uint64_t cam_lo, cam_hi; /* the camera's primary rays: loads only */
+  uint64_t cam_loads, ray_outside;
 };
 
 static void count_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct counts *c = ctx;
   c->loads[cls]++;
   c->load_bytes[cls] += size;
+  if (cls == MEM_CLASS_RAY && addr >= c->cam_lo && addr + size <= c->cam_hi && size == 64) {
+    c->cam_loads++;
+    return;
+  }
   if (cls == MEM_CLASS_RAY && (addr < c->ray_lo || addr + size > c->ray_hi)) c->ray_outside++;
 }
 
@@ -291,6 +296,8 @@ static void render(struct world *w, enum policy_kind k, uint32_t mask, uint32_t 
   trace_layout_default(&l);
   out->cnt.ray_lo = l.ray_base;
   out->cnt.ray_hi = l.ray_base + (1ull << 24);
+  out->cnt.cam_lo = l.camera_base;
+  out->cnt.cam_hi = l.camera_base + 64ull * width * height;
   struct mem_port port = {&COUNT_OPS, &out->cnt};
   struct tracer tr;
   tracer_init(&tr, &w->s, &w->kd, port, &l);
@@ -316,9 +323,11 @@ static void test_policy(struct world *w, uint32_t width, uint32_t height) {
             width, height, (int)pkt.st.rays[t], t, (unsigned long long)rec.st.rays[t]);
   EXPECT(pkt.st.spawned == pkt.st.terminated && pkt.st.spawned == rec.st.spawned);
   EXPECT(pkt.st.rays[RAY_PRIMARY] == npix);
-  /* Every ray written to a packet buffer is read back once, inside the region. */
+  /* Every primary ray is read from the camera's array once; every ray written
+   * to a packet buffer is read back once, inside the region. */
   uint64_t total = render_stats_total(&pkt.st);
-  EXPECTF(pkt.cnt.stores[MEM_CLASS_RAY] == total && pkt.cnt.loads[MEM_CLASS_RAY] == total,
+  EXPECT(pkt.cnt.cam_loads == npix && rec.cnt.cam_loads == npix);
+  EXPECTF(pkt.cnt.stores[MEM_CLASS_RAY] == total && pkt.cnt.loads[MEM_CLASS_RAY] == total + npix,
           "%s: ray stores %llu loads %llu rays %llu", w->name,
           (unsigned long long)pkt.cnt.stores[MEM_CLASS_RAY],
           (unsigned long long)pkt.cnt.loads[MEM_CLASS_RAY], (unsigned long long)total);
