@@ -140,6 +140,8 @@ int cmd_render(int argc, char **argv) {
     printf("rays_%s: %llu\n", tn[t], (unsigned long long)st.rays[t]);
   uint64_t total = render_stats_total(&st);
   printf("rays_total: %llu\n", (unsigned long long)total);
+  printf("ray_slots_max: %llu (%.1f MB of 64-byte rays held at once)\n",
+         (unsigned long long)st.ray_slots_max, (double)st.ray_slots_max * 64 / 1048576.0);
   printf("kd_node_visits: %llu\n", (unsigned long long)tr.stats.node_visits);
   printf("triangle_tests: %llu\n", (unsigned long long)tr.stats.tri_tests);
   printf("render_s: %.3f\n", secs);

@@ -652,6 +652,7 @@ void policy_dynamic_run(const struct policy_env *env, const struct policy_params
     if (d.heap_n == 0) break;
   }
   if (env->progress) env->progress(env->progress_ctx, env->st->terminated, env->st->terminated);
+  env->st->ray_slots_max = (uint64_t)d.chunks * DYN_CHUNK_RAYS;
 
   free(d.pend.r);
   free(d.heap);

@@ -151,6 +151,8 @@ void policy_packet_run(const struct policy_env *env, const struct policy_params 
           }
           top++;
         }
+        uint64_t slots = (uint64_t)top * PACKET_MAX;
+        if (slots > st->ray_slots_max) st->ray_slots_max = slots;
       }
       for (uint32_t i = 0; i < n; i++) {
         fb->cost_nodes[cur->r[i].pixel] += cost.nodes[i];

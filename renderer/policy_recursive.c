@@ -40,6 +40,7 @@ void policy_recursive_run(const struct policy_env *env, const struct policy_para
     policy_primary(env, &cf, pix % w, pix / w, &stack[top]);
     mem_store(mem, stack_addr, sizeof(struct ray), MEM_CLASS_RAY);
     top++;
+    if (st->ray_slots_max == 0) st->ray_slots_max = 1;
     st->spawned++;
     while (top > 0) {
       struct ray r = stack[--top];
@@ -59,6 +60,7 @@ void policy_recursive_run(const struct policy_env *env, const struct policy_para
         mem_store(mem, stack_addr + (uint64_t)top * sizeof r, sizeof r, MEM_CLASS_RAY);
         stack[top++] = spawn[i];
       }
+      if (top > st->ray_slots_max) st->ray_slots_max = top;
       st->spawned += n;
     }
     fb->cost_nodes[pix] += (uint32_t)(tr->stats.node_visits - nodes0);

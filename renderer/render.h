@@ -9,6 +9,9 @@
 struct render_stats {
   uint64_t rays[RAY_TYPE_COUNT]; /* rays traced, by type */
   uint64_t spawned, terminated;  /* conservation: equal at the end (checked) */
+  /* The most 64-byte ray slots the policy's buffers (stack, packet buffers,
+   * queue chunks) held at once: the rays in flight, for the memory budget. */
+  uint64_t ray_slots_max;
 };
 
 /* Called now and then with (work done, total work); may be NULL. */
