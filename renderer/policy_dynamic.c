@@ -21,9 +21,11 @@
  *   every leaf the segment crosses, so the answer is trace_any's.
  *
  * A ray that ends is shaded at once (section 2.1.1: "shade the intersection
- * point immediately"): its shadow rays join this generation's queues, its
- * reflection rays go straight to the next generation's queues (each queue
- * point has one queue per generation). So a ray waits in memory only in a
+ * point immediately"), and the rays it spawns are taken down to their first
+ * queue point and queued for their phase: each queue point has a queue for
+ * this generation's closest-hit rays, one for its shadow rays (drained once
+ * all closest-hit rays are done, so they queue up in full before any is
+ * traced) and one for the next generation. So a ray waits in memory only in a
  * queue, and the picture is still the recursive policy's: shading is linear
  * and the framebuffer sums in fixed point, so order does not matter.
  *
@@ -87,8 +89,10 @@ struct dyn {
   struct qpoint_set qs;
   uint32_t block_tris; /* triangles of an oversized leaf processed at once */
   uint32_t ray_block;  /* rays streamed at once against such a block */
-  /* Queues (this generation's, the next one's) and their chunk arena. */
-  struct dyn_queue *q, *qn;
+  /* Queues: the phase being drained (q, ordered by the heap), this
+   * generation's shadow rays (qsh), the next generation (qn); and their chunk
+   * arena. */
+  struct dyn_queue *q, *qsh, *qn;
   struct ray *pool;      /* chunk c: pool[c * DYN_CHUNK_RAYS ...] */
   uint32_t *chunk_next;  /* next chunk of the same queue, or of the free list */
   uint32_t chunks, chunk_cap, free_head;
@@ -351,10 +355,9 @@ static uint64_t table_addr(const struct dyn *d, uint32_t qi) {
   return d->tr->layout.qtable_base + 8ull * qi;
 }
 
-/* Append r to queue qi of this generation, or of the next one. */
-static void enqueue(struct dyn *d, uint32_t qi, const struct ray *r, bool next_gen) {
+/* Append r to queue qi of queue set qset (d->q, d->qsh or d->qn). */
+static void enqueue(struct dyn *d, uint32_t qi, const struct ray *r, struct dyn_queue *qset) {
   const struct mem_port *mem = &d->tr->mem;
-  struct dyn_queue *const qset = next_gen ? d->qn : d->q;
   struct dyn_queue *q = &qset[qi];
   CHECK(!(r->flags & DYN_FLAG_DEAD));
   mem_load(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
@@ -372,7 +375,7 @@ static void enqueue(struct dyn *d, uint32_t qi, const struct ray *r, bool next_g
   q->tail_fill++;
   q->count++;
   mem_store(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
-  if (next_gen) return; /* the heap orders this generation's queues only */
+  if (qset != d->q) return; /* the heap orders the phase being drained only */
   if (q->heap_pos < 0) {
     d->heap[d->heap_n] = qi;
     q->heap_pos = d->heap_n++;
@@ -414,15 +417,14 @@ static void terminate(struct dyn *d, struct ray *r, const struct walk *w, enum w
   progress(d);
 }
 
-/* Where a ray goes after a walk: a queue (of the next generation for a new
- * non-shadow ray still on its way to its first queue point), or its end. */
+/* Where a ray goes after a walk: a queue of set qset, or its end. */
 static void route(struct dyn *d, struct ray *r, const struct walk *w, enum walk_end e,
-                  bool next_gen) {
+                  struct dyn_queue *qset) {
   if (e == WALK_QUEUED) {
     int64_t qi = qpoint_index(&d->qs, w->ni);
     CHECK(qi >= 0);
     r->hit_prim = w->found ? (int32_t)w->best_p : -1;
-    enqueue(d, (uint32_t)qi, r, next_gen);
+    enqueue(d, (uint32_t)qi, r, qset);
   } else {
     terminate(d, r, w, e);
   }
@@ -434,17 +436,27 @@ static void cost_add(const struct dyn *d, uint32_t pixel, uint64_t nodes0, uint6
   d->fb->cost_tris[pixel] += (uint32_t)(d->tr->stats.tri_tests - tris0);
 }
 
-/* A new ray: from the root down to its first queue point (the one holding its
- * origin, for a ray that starts inside the scene), or its end. Primary and
- * shadow rays join this generation's queues, reflection rays the next's. */
+/* A new ray: found its first queue point (the one holding its origin, for a
+ * ray that starts inside the scene) and queue it there, or end it. Primary
+ * rays join the queues being filled for generation 0, shadow rays this
+ * generation's shadow queues, reflection rays the next generation's.
+ * The walk that finds the queue point is not charged to memory: it follows
+ * the path from the root to that queue point, which the ray loads when it is
+ * dequeued there (walk_to), so charging it here would count the path twice.
+ * (The paper starts a new ray at the queue point holding its origin.) */
 static void start(struct dyn *d, struct ray *r) {
   uint64_t n0 = d->tr->stats.node_visits, t0 = d->tr->stats.tri_tests;
   struct walk w;
-  bool next_gen = r->type != RAY_PRIMARY && r->type != RAY_SHADOW;
-  if (!walk_init(d, &w, r))
+  struct dyn_queue *qset = r->type == RAY_PRIMARY ? d->q : r->type == RAY_SHADOW ? d->qsh : d->qn;
+  if (!walk_init(d, &w, r)) {
     terminate(d, r, &w, WALK_DONE);
-  else
-    route(d, r, &w, walk_run(d, &w, 0, true), next_gen);
+  } else {
+    struct mem_port charged = d->tr->mem;
+    d->tr->mem = mem_port_native();
+    enum walk_end e = walk_run(d, &w, 0, true);
+    d->tr->mem = charged;
+    route(d, r, &w, e, qset);
+  }
   cost_add(d, r->pixel, n0, t0);
 }
 
@@ -470,7 +482,7 @@ static void process_subtree(struct dyn *d, struct ray *r, uint32_t node) {
   walk_to(d, &w, node);
   enum walk_end e = walk_run(d, &w, w.sp, false);
   if (e == WALK_DONE) e = walk_leave(d, &w);
-  route(d, r, &w, e, false);
+  route(d, r, &w, e, d->q);
   cost_add(d, r->pixel, n0, t0);
   flush(d);
 }
@@ -541,7 +553,7 @@ static void drain_leaf(struct dyn *d, uint32_t node, uint32_t head, uint64_t cou
           d->pool[cur_index(&k)].hit_prim = w.found ? (int32_t)w.best_p : -1;
         } else {
           walk_to(d, &w, node);
-          route(d, &r, &w, walk_leave(d, &w), false);
+          route(d, &r, &w, walk_leave(d, &w), d->q);
         }
         cost_add(d, r.pixel, n0, t0);
         flush(d);
@@ -585,6 +597,21 @@ static void drain_all(struct dyn *d) {
 
 /* ---- generations ----------------------------------------------------------- */
 
+/* Make queue set *other the one being drained (the drained set, empty now,
+ * takes its place) and order its non-empty queues in the heap. */
+static void activate(struct dyn *d, struct dyn_queue **other) {
+  CHECK(d->heap_n == 0);
+  struct dyn_queue *t = d->q;
+  d->q = *other;
+  *other = t;
+  for (uint32_t i = 0; i < d->qs.count; i++)
+    if (d->q[i].count > 0) {
+      d->heap[d->heap_n] = i;
+      d->q[i].heap_pos = d->heap_n++;
+      heap_up(d, (uint32_t)d->q[i].heap_pos);
+    }
+}
+
 void policy_dynamic_run(const struct policy_env *env, const struct policy_params *p) {
   struct tracer *tr = env->tr;
   struct dyn d;
@@ -611,12 +638,13 @@ void policy_dynamic_run(const struct policy_env *env, const struct policy_params
   uint64_t rb = bud.ray_bytes / sizeof(struct ray);
   d.ray_block = rb == 0 ? 1 : (rb > UINT32_MAX ? UINT32_MAX : (uint32_t)rb);
   d.q = xmalloc((uint64_t)d.qs.count * sizeof *d.q + 1);
+  d.qsh = xmalloc((uint64_t)d.qs.count * sizeof *d.qsh + 1);
   d.qn = xmalloc((uint64_t)d.qs.count * sizeof *d.qn + 1);
   for (uint32_t i = 0; i < d.qs.count; i++) {
     d.q[i].head = d.q[i].tail = DYN_NONE;
     d.q[i].tail_fill = d.q[i].count = 0;
     d.q[i].heap_pos = -1;
-    d.qn[i] = d.q[i];
+    d.qsh[i] = d.qn[i] = d.q[i];
   }
   d.heap = xmalloc((uint64_t)d.qs.count * sizeof *d.heap + 1);
 
@@ -637,19 +665,11 @@ void policy_dynamic_run(const struct policy_env *env, const struct policy_params
   free(order);
 
   for (;;) {
-    /* This generation's rays and the shadow rays of its hits. */
-    drain_all(&d);
-    /* The next generation's queues become this one's. */
-    struct dyn_queue *t = d.q;
-    d.q = d.qn;
-    d.qn = t;
-    for (uint32_t i = 0; i < d.qs.count; i++)
-      if (d.q[i].count > 0) {
-        d.heap[d.heap_n] = i;
-        d.q[i].heap_pos = d.heap_n++;
-        heap_up(&d, (uint32_t)d.q[i].heap_pos);
-      }
-    if (d.heap_n == 0) break;
+    drain_all(&d); /* this generation's closest-hit rays */
+    activate(&d, &d.qsh);
+    drain_all(&d); /* their shadow rays (which spawn nothing) */
+    activate(&d, &d.qn);
+    if (d.heap_n == 0) break; /* no next generation */
   }
   if (env->progress) env->progress(env->progress_ctx, env->st->terminated, env->st->terminated);
   env->st->ray_slots_max = (uint64_t)d.chunks * DYN_CHUNK_RAYS;
@@ -657,6 +677,7 @@ void policy_dynamic_run(const struct policy_env *env, const struct policy_params
   free(d.pend.r);
   free(d.heap);
   free(d.q);
+  free(d.qsh);
   free(d.qn);
   free(d.pool);
   free(d.chunk_next);
