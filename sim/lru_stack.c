@@ -12,24 +12,21 @@
 
 #include "sim/err.h"
 
-/* 16 bytes, so nodes never straddle host cache lines. Node 0 is the list
- * sentinel: node[0].next is the top, node[0].prev the bottom.
+/* 24 bytes, the line key included, so the hash table holds 4-byte node
+ * indices only (a smaller table misses the host cache less; the node is read
+ * anyway). Node 0 is the list sentinel: node[0].next is the top, node[0].prev
+ * the bottom.
  * Dirty state: a line is dirty in size i iff it was stored to after it last
  * entered size i. Loads at segment s re-fetch it clean into sizes < s, so the
  * dirty sizes are always a suffix [dfrom, n): one byte holds the whole mask. */
 struct lru_node {
+  uint64_t line;
   uint32_t prev, next;
-  uint32_t slot; /* index of this line's hash slot (the key lives there) */
+  uint32_t slot; /* index of this line's hash slot */
   uint8_t seg;   /* smallest size index holding the line */
   uint8_t dfrom; /* dirty in sizes >= dfrom as of its last access; n = clean */
   uint8_t cls;   /* class of the line's last access */
   uint8_t unused;
-};
-
-/* Open-addressing slot; node == 0 marks an empty slot. */
-struct lru_slot {
-  uint64_t line;
-  uint32_t node;
 };
 
 struct lru_stack {
@@ -40,7 +37,7 @@ struct lru_stack {
   uint32_t count, max_lines;           /* lines held; cap[n - 1] */
   uint64_t top_line;                   /* line of node[0].next when count > 0 */
   struct lru_node *node;               /* [max_lines + 1] */
-  struct lru_slot *slot;               /* [mask + 1] */
+  uint32_t *slot;                      /* [mask + 1]: node index, 0 = empty (open addressing) */
   uint64_t mask;
   unsigned shift; /* 64 - log2(slots) */
   /* hist[s][c]: fetching accesses of class c whose line was in segment s
@@ -94,10 +91,11 @@ struct lru_stack *lru_stack_create(const struct lru_stack_params *p) {
   for (unsigned i = 0; i < ls->nsz; i++) ls->cap[i] = UINT32_C(1) << (p->lg2_min + i - p->lg2_line);
   ls->max_lines = ls->cap[ls->nsz - 1];
   ls->node = xcalloc((unsigned long long)ls->max_lines + 1, sizeof *ls->node);
-  /* Load factor at most 1/2 (the table never holds more than max_lines keys:
-   * the bottom line leaves before a new one enters). */
+  /* Load factor at most 1/4 (the table never holds more than max_lines keys:
+   * the bottom line leaves before a new one enters): short probe runs, and at
+   * 4 bytes a slot the table is still only 1 MB for 4 MB of cache. */
   unsigned bits = 1;
-  while ((UINT64_C(1) << bits) < 2 * (uint64_t)ls->max_lines) bits++;
+  while ((UINT64_C(1) << bits) < 4 * (uint64_t)ls->max_lines) bits++;
   ls->mask = (UINT64_C(1) << bits) - 1;
   ls->shift = 64 - bits;
   ls->slot = xcalloc(ls->mask + 1, sizeof *ls->slot);
@@ -114,20 +112,20 @@ void lru_stack_destroy(struct lru_stack *ls) {
 /* Empty slot i; backward-shift deletion keeps every probe chain unbroken
  * without tombstones (linear probing). Moved keys tell their nodes. */
 static void table_delete(struct lru_stack *ls, uint64_t i) {
-  struct lru_slot *t = ls->slot;
+  uint32_t *t = ls->slot;
   uint64_t j = i;
   for (;;) {
     j = (j + 1) & ls->mask;
-    if (t[j].node == 0) break;
-    uint64_t home = slot_of(ls, t[j].line);
+    if (t[j] == 0) break;
+    uint64_t home = slot_of(ls, ls->node[t[j]].line);
     /* Move j back into the hole at i unless its home lies cyclically in (i, j]. */
     if (((j - home) & ls->mask) >= ((j - i) & ls->mask)) {
       t[i] = t[j];
-      ls->node[t[i].node].slot = (uint32_t)i;
+      ls->node[t[i]].slot = (uint32_t)i;
       i = j;
     }
   }
-  t[i].node = 0;
+  t[i] = 0;
 }
 
 static inline void list_unlink(struct lru_node *nd, uint32_t p) {
@@ -183,13 +181,13 @@ void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsig
     return;
   }
   ls->top_line = line;
-  struct lru_slot *t = ls->slot;
+  uint32_t *t = ls->slot;
   uint64_t h = slot_of(ls, line);
-  while (t[h].node != 0) {
-    if (t[h].line == line) {
+  while (t[h] != 0) {
+    uint32_t p = t[h];
+    struct lru_node *v = &nd[p];
+    if (v->line == line) {
       /* Hit in every size from its segment s up; miss in sizes below s. */
-      uint32_t p = t[h].node;
-      struct lru_node *v = &nd[p];
       unsigned s = v->seg;
       ls->hist[s][cls] += fetch;
       count_evictions(ls, v->dfrom, s, v->cls);
@@ -220,13 +218,13 @@ void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsig
     ls->bound[n - 1] = 0;
     /* Deletion may have shifted slots: find the insertion point again. */
     h = slot_of(ls, line);
-    while (t[h].node != 0) h = (h + 1) & ls->mask;
+    while (t[h] != 0) h = (h + 1) & ls->mask;
     __builtin_prefetch(&nd[nd[0].prev]); /* the next bottom */
   } else {
     p = ls->count + 1;
   }
-  t[h].line = line;
-  t[h].node = p;
+  t[h] = p;
+  nd[p].line = line;
   nd[p].slot = (uint32_t)h;
   nd[p].dfrom = is_store ? 0 : (uint8_t)n;
   nd[p].seg = 0;
@@ -318,11 +316,11 @@ void lru_stack_check_invariants(const struct lru_stack *ls) {
     CHECK(nd[p].cls < MEM_CLASS_COUNT);
     if (depth == ls->cap[s]) CHECK(ls->bound[s] == p);
     /* The slot names this node and is reachable from the line's home slot. */
-    CHECK(nd[p].slot <= ls->mask && ls->slot[nd[p].slot].node == p);
-    uint64_t line = ls->slot[nd[p].slot].line;
+    CHECK(nd[p].slot <= ls->mask && ls->slot[nd[p].slot] == p);
+    uint64_t line = nd[p].line;
     if (depth == 1) CHECK(line == ls->top_line);
     for (uint64_t h = slot_of(ls, line); h != nd[p].slot; h = (h + 1) & ls->mask)
-      CHECK(ls->slot[h].node != 0 && ls->slot[h].line != line);
+      CHECK(ls->slot[h] != 0 && nd[ls->slot[h]].line != line);
     prev = p;
   }
   CHECK(depth == ls->count);
@@ -330,7 +328,7 @@ void lru_stack_check_invariants(const struct lru_stack *ls) {
   for (unsigned i = 0; i < ls->nsz; i++)
     if (ls->cap[i] > ls->count) CHECK(ls->bound[i] == 0);
   uint64_t used = 0;
-  for (uint64_t h = 0; h <= ls->mask; h++) used += ls->slot[h].node != 0;
+  for (uint64_t h = 0; h <= ls->mask; h++) used += ls->slot[h] != 0;
   CHECK(used == ls->count);
 }
 
