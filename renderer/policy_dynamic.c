@@ -500,7 +500,10 @@ static void preload_leaf(const struct dyn *d, struct kd_node nd, uint32_t j0, ui
   }
 }
 
-/* Step a cursor over a detached queue's slots: full chunks, then the tail. */
+/* Step a cursor over a detached queue's slots, newest first: the tail chunk
+ * from its last ray down, then each earlier chunk from its last slot down. The
+ * newest rays are the likeliest to be still in the cache, so they are read
+ * before the queue's own work evicts them. */
 struct slot_cur {
   uint32_t c, i;
   uint64_t left; /* slots from here to the end of the queue */
@@ -508,15 +511,31 @@ struct slot_cur {
 
 static uint64_t cur_index(const struct slot_cur *k) { return (uint64_t)k->c * DYN_CHUNK_RAYS + k->i; }
 
+/* Reverse a detached queue's chunk list (host bookkeeping only) and return a
+ * cursor at its newest ray. */
+static struct slot_cur cur_newest(struct dyn *d, uint32_t head, uint32_t tail_fill, uint64_t count) {
+  uint32_t prev = DYN_NONE;
+  for (uint32_t c = head; c != DYN_NONE;) {
+    uint32_t nc = d->chunk_next[c];
+    d->chunk_next[c] = prev;
+    prev = c;
+    c = nc;
+  }
+  struct slot_cur k = {prev, tail_fill - 1, count};
+  return k;
+}
+
 /* Advance; with release, a chunk is freed once the cursor leaves it (its rays
  * may go on to other queues meanwhile, which may reuse it). */
 static void cur_next(struct dyn *d, struct slot_cur *k, bool release) {
   k->left--;
-  if (++k->i == DYN_CHUNK_RAYS || k->left == 0) {
+  if (k->i == 0 || k->left == 0) {
     uint32_t nc = d->chunk_next[k->c];
     if (release) chunk_free(d, k->c);
     k->c = nc;
-    k->i = 0;
+    k->i = DYN_CHUNK_RAYS - 1;
+  } else {
+    k->i--;
   }
 }
 
@@ -526,7 +545,7 @@ static void cur_next(struct dyn *d, struct slot_cur *k, bool release) {
  * ray_block at a time (loaded, tested, stored back with their best hit). After
  * the last block each ray goes on. Every ray still tests the leaf's triangles
  * in the leaf's order, so its hit is the one a single traversal finds. */
-static void drain_leaf(struct dyn *d, uint32_t node, uint32_t head, uint64_t count) {
+static void drain_leaf(struct dyn *d, uint32_t node, struct slot_cur first) {
   const struct mem_port *mem = &d->tr->mem;
   struct kd_node nd = d->qs.nodes[node];
   uint32_t cnt = kd_leaf_count(nd), bt = d->block_tris;
@@ -535,7 +554,7 @@ static void drain_leaf(struct dyn *d, uint32_t node, uint32_t head, uint64_t cou
     uint32_t j0 = b * bt, j1 = cnt - j0 > bt ? j0 + bt : cnt;
     bool last = b + 1 == blocks;
     preload_leaf(d, nd, j0, j1);
-    struct slot_cur k = {head, 0, count};
+    struct slot_cur k = first;
     while (k.left > 0) {
       struct slot_cur blk = k;
       uint64_t n = k.left < d->ray_block ? k.left : d->ray_block;
@@ -569,8 +588,8 @@ static void drain_leaf(struct dyn *d, uint32_t node, uint32_t head, uint64_t cou
 static void drain(struct dyn *d, uint32_t qi) {
   const struct mem_port *mem = &d->tr->mem;
   struct dyn_queue *q = &d->q[qi];
-  uint32_t node = d->qs.qnode[qi], head = q->head;
-  uint64_t count = q->count;
+  uint32_t node = d->qs.qnode[qi];
+  struct slot_cur first = cur_newest(d, q->head, q->tail_fill, q->count);
   /* Detach the list: no ray comes back to a queue point it has left (a
    * traversal visits a node once), so nothing joins it while it drains. */
   q->head = q->tail = DYN_NONE;
@@ -578,10 +597,10 @@ static void drain(struct dyn *d, uint32_t qi) {
   mem_load(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
   mem_store(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
   if (kd_is_leaf(d->qs.nodes[node])) {
-    drain_leaf(d, node, head, count);
+    drain_leaf(d, node, first);
     return;
   }
-  for (struct slot_cur k = {head, 0, count}; k.left > 0; cur_next(d, &k, true)) {
+  for (struct slot_cur k = first; k.left > 0; cur_next(d, &k, true)) {
     struct ray r = d->pool[cur_index(&k)];
     mem_load(mem, slot_addr(d, k.c, k.i), sizeof r, MEM_CLASS_RAY);
     process_subtree(d, &r, node);
