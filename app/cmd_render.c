@@ -2,6 +2,7 @@
 #include <getopt.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include "app/app.h"
@@ -119,6 +120,10 @@ int cmd_render(int argc, char **argv) {
 
   struct image im;
   fb_to_image(&fb, &im);
+  /* Bytes of the image, for the memory line of the summary. */
+  const double image_bytes = (double)W * H *
+                             (3 * sizeof *fb.acc + sizeof *fb.cost_nodes + sizeof *fb.cost_tris +
+                              im.channel_count * sizeof(float));
   struct err e;
   memset(&e, 0, sizeof e);
   bool ok = image_write_exr(&im, out, half, &e) && (!preview || app_write_preview(&im, preview, &e));
@@ -144,6 +149,25 @@ int cmd_render(int argc, char **argv) {
          (unsigned long long)st.ray_slots_max, (double)st.ray_slots_max * 64 / 1048576.0);
   printf("kd_node_visits: %llu\n", (unsigned long long)tr.stats.node_visits);
   printf("triangle_tests: %llu\n", (unsigned long long)tr.stats.tri_tests);
+  /* Peak memory against what the run must hold: the scene, the tree and the
+   * rays in flight (the target is at most twice that), and apart the image
+   * (the framebuffer's sums and costs, and the output planes). */
+  const double mb = 1048576.0;
+  double scene_mb = (double)w.scene.tri_count * sizeof *w.scene.tris / mb;
+  double tree_mb = ((double)w.kd.node_count * sizeof *w.kd.nodes +
+                    (double)w.kd.prim_ref_count * sizeof *w.kd.prims) / mb;
+  double rays_mb = (double)st.ray_slots_max * sizeof(struct ray) / mb;
+  double data_mb = scene_mb + tree_mb + rays_mb;
+  double image_mb = image_bytes / mb;
+  printf("data_mb: %.1f (scene %.1f + k-d tree %.1f + rays %.1f)\n", data_mb, scene_mb, tree_mb,
+         rays_mb);
+  printf("image_mb: %.1f (framebuffer and output planes)\n", image_mb);
+  struct rusage ru;
+  if (getrusage(RUSAGE_SELF, &ru) == 0) {
+    double peak = (double)ru.ru_maxrss / 1024.0;
+    printf("peak_rss_mb: %.1f (%.2f x data_mb; %.2f x data_mb + image_mb)\n", peak, peak / data_mb,
+           peak / (data_mb + image_mb));
+  }
   printf("render_s: %.3f\n", secs);
   printf("rays_per_s: %.0f\n", secs > 0 ? (double)total / secs : 0.0);
   printf("output: %s\n", out);
