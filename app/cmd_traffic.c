@@ -35,6 +35,8 @@ static const char TRAFFIC_HELP[] =
     "  --policy P          recursive, packet, dynamic or all (default all); relative\n"
     "                      columns need recursive, which then runs too\n"
     "  --width W --height H  image size (default: the scene's)\n"
+    "  --dyn-batch N       dynamic: admit N primary rays at a time, each batch traced\n"
+    "                      through all its generations (default 0: all at once)\n"
     "  -o, --output FILE   CSV to write (required), one row per policy and cache size\n"
     "  -h, --help          this text\n"
     "\n"
@@ -65,7 +67,7 @@ struct fn_run {
 };
 
 static void run_functional(const struct app_world *w, enum policy_kind k, uint32_t mask,
-                           uint32_t width, uint32_t height, uint64_t cache_bytes,
+                           uint32_t width, uint32_t height, const struct policy_params *pp,
                            const struct lru_stack_params *lp, struct din_writer *din,
                            struct fn_run *out) {
   struct fn_backend *b = fn_backend_create(lp, din);
@@ -80,10 +82,7 @@ static void run_functional(const struct app_world *w, enum policy_kind k, uint32
   fb_init(&fb, width, height, layout.fb_base);
   memset(&out->st, 0, sizeof out->st);
   struct policy_env env = {&tr, &sc, &fb, &out->st, NULL, NULL};
-  struct policy_params pp;
-  policy_params_default(&pp);
-  pp.cache_bytes = cache_bytes;
-  policy_run(k, &env, &pp);
+  policy_run(k, &env, pp);
   lru_stack_finish(fn_backend_stack(b));
   lru_stack_get_results(fn_backend_stack(b), &out->res);
   out->pot_vis_tris = 0;
@@ -124,10 +123,12 @@ int cmd_traffic(int argc, char **argv) {
   static const struct option opts[] = {
       {"output", required_argument, 0, 'o'}, {"width", required_argument, 0, 'W'},
       {"height", required_argument, 0, 'H'}, {"rays", required_argument, 0, 'r'},
-      {"policy", required_argument, 0, 'P'}, {"help", no_argument, 0, 'h'},
-      {0, 0, 0, 0}};
+      {"policy", required_argument, 0, 'P'}, {"dyn-batch", required_argument, 0, 'B'},
+      {"help", no_argument, 0, 'h'},         {0, 0, 0, 0}};
   const char *out = NULL, *rays = NULL, *policy = "all";
   uint64_t width = 0, height = 0;
+  struct policy_params pp;
+  policy_params_default(&pp);
   int c;
   opterr = 0;
   optind = 1;
@@ -138,6 +139,9 @@ int cmd_traffic(int argc, char **argv) {
     case 'H': if (!app_parse_u64("traffic", "--height", optarg, 1, 16384, &height)) return 2; break;
     case 'r': rays = optarg; break;
     case 'P': policy = optarg; break;
+    case 'B':
+      if (!app_parse_u64("traffic", "--dyn-batch", optarg, 0, UINT32_MAX, &pp.dyn_batch_rays)) return 2;
+      break;
     case 'h': fputs(TRAFFIC_HELP, stdout); return 0;
     default: return app_option_error("traffic", c, argv);
     }
@@ -171,7 +175,7 @@ int cmd_traffic(int argc, char **argv) {
     if (!want[p]) continue;
     if (p != POLICY_DYNAMIC) {
       progress_line(policy_name((enum policy_kind)p), done, runs);
-      run_functional(&w, (enum policy_kind)p, mask, W, H, 0, &lp, NULL, &fr);
+      run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &lp, NULL, &fr);
       done++;
       for (unsigned k = 0; k < nsizes; k++)
         rows[nrows++] = (struct row){(enum policy_kind)p, fr.res.size[k], fr.pot_vis_tris};
@@ -185,7 +189,8 @@ int cmd_traffic(int argc, char **argv) {
          * cost for small caches, whose stacks fit in the host's L1. */
         struct lru_stack_params one = lp;
         one.lg2_min = one.lg2_max = lp.lg2_min + k;
-        run_functional(&w, POLICY_DYNAMIC, mask, W, H, 1ull << (lp.lg2_min + k), &one, NULL, &fr);
+        pp.cache_bytes = 1ull << (lp.lg2_min + k);
+        run_functional(&w, POLICY_DYNAMIC, mask, W, H, &pp, &one, NULL, &fr);
         done++;
         rows[nrows++] = (struct row){POLICY_DYNAMIC, fr.res.size[0], fr.pot_vis_tris};
       }
@@ -247,8 +252,11 @@ int cmd_traffic(int argc, char **argv) {
     app_world_fini(&w);
     return app_report(&e);
   }
-  printf("scene: %s\nrays: %s\nimage: %ux%u\nruns: %u\noutput: %s\n", scene_name, names, W, H,
-         runs, out);
+  printf("scene: %s\nrays: %s\nimage: %ux%u\nruns: %u\n", scene_name, names, W, H, runs);
+  if (want[POLICY_DYNAMIC])
+    printf("dyn_batch: %llu%s\n", (unsigned long long)pp.dyn_batch_rays,
+           pp.dyn_batch_rays ? " primary rays at a time" : " (all primary rays at once)");
+  printf("output: %s\n", out);
   free(rows);
   app_world_fini(&w);
   return 0;
@@ -273,6 +281,7 @@ static const char TRACE_HELP[] =
     "  --din FILE          trace to write (required); written whole or not at all\n"
     "  --cache BYTES       dynamic: the cache size the schedule is made for (default\n"
     "                      524288); a power of two from 1024 to 4194304\n"
+    "  --dyn-batch N       dynamic: admit N primary rays at a time (default 0: all)\n"
     "  --width W --height H  image size (default: the scene's)\n"
     "  -h, --help          this text\n";
 
@@ -281,9 +290,12 @@ int cmd_trace(int argc, char **argv) {
       {"din", required_argument, 0, 'd'},    {"width", required_argument, 0, 'W'},
       {"height", required_argument, 0, 'H'}, {"rays", required_argument, 0, 'r'},
       {"policy", required_argument, 0, 'P'}, {"cache", required_argument, 0, 'c'},
-      {"help", no_argument, 0, 'h'},         {0, 0, 0, 0}};
+      {"dyn-batch", required_argument, 0, 'B'}, {"help", no_argument, 0, 'h'},
+      {0, 0, 0, 0}};
   const char *din_path = NULL, *rays = NULL, *policy = NULL;
   uint64_t width = 0, height = 0, cache = 512 * 1024;
+  struct policy_params pp;
+  policy_params_default(&pp);
   int c;
   opterr = 0;
   optind = 1;
@@ -298,6 +310,9 @@ int cmd_trace(int argc, char **argv) {
       if (!app_parse_u64("trace", "--cache", optarg, 1024, 4194304, &cache)) return 2;
       if (cache & (cache - 1))
         return app_usage_error("trace", "--cache: got '%s', expected a power of two", optarg);
+      break;
+    case 'B':
+      if (!app_parse_u64("trace", "--dyn-batch", optarg, 0, UINT32_MAX, &pp.dyn_batch_rays)) return 2;
       break;
     case 'h': fputs(TRACE_HELP, stdout); return 0;
     default: return app_option_error("trace", c, argv);
@@ -327,7 +342,8 @@ int cmd_trace(int argc, char **argv) {
     return app_report(&e);
   }
   struct fn_run fr;
-  run_functional(&w, pk, mask, W, H, cache, &lp, din, &fr);
+  pp.cache_bytes = cache;
+  run_functional(&w, pk, mask, W, H, &pp, &lp, din, &fr);
   uint64_t records = din_writer_records(din);
   bool ok = din_writer_close(din, &e);
   app_world_fini(&w);

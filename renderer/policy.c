@@ -19,6 +19,7 @@ void policy_params_default(struct policy_params *p) {
   p->dyn_table_share = 16;
   p->dyn_ray_share = 16;
   p->dyn_ray_buffer_bytes = 4096;
+  p->dyn_batch_rays = 0;
 }
 
 void policy_primary(const struct policy_env *env, const struct camera_frame *cf, uint32_t x,

@@ -30,6 +30,11 @@ struct policy_params {
    * is g_max, the geometry a queue point's subtree may hold (qpoint.h). */
   uint32_t dyn_node_share, dyn_table_share, dyn_ray_share;
   uint64_t dyn_ray_buffer_bytes;
+  /* dynamic: primary rays admitted at a time, each batch traced through all
+   * its generations before the next is admitted; this bounds the rays active at
+   * once (the paper's continuum between recursive and fully deferred tracing).
+   * 0 (default): every primary ray at once, as the paper's section 2 reads. */
+  uint64_t dyn_batch_rays;
 };
 
 void policy_params_default(struct policy_params *p);

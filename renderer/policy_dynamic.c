@@ -674,22 +674,24 @@ void policy_dynamic_run(const struct policy_env *env, const struct policy_params
   camera_hilbert_order(w, h, order);
   struct camera_frame cf;
   camera_frame_init(&cf, &env->sc->scene->camera, w, h);
-  for (uint64_t k = 0; k < npix; k++) {
-    struct ray r;
-    policy_primary(env, &cf, order[k] % w, order[k] / w, &r);
-    env->st->spawned++;
-    start(&d, &r);
-    flush(&d);
+  const uint64_t batch = p->dyn_batch_rays ? p->dyn_batch_rays : npix;
+  for (uint64_t k0 = 0; k0 < npix; k0 += batch) {
+    for (uint64_t k = k0; k < npix && k - k0 < batch; k++) {
+      struct ray r;
+      policy_primary(env, &cf, order[k] % w, order[k] / w, &r);
+      env->st->spawned++;
+      start(&d, &r);
+      flush(&d);
+    }
+    for (;;) {
+      drain_all(&d); /* this generation's closest-hit rays */
+      activate(&d, &d.qsh);
+      drain_all(&d); /* their shadow rays (which spawn nothing) */
+      activate(&d, &d.qn);
+      if (d.heap_n == 0) break; /* no next generation */
+    }
   }
   free(order);
-
-  for (;;) {
-    drain_all(&d); /* this generation's closest-hit rays */
-    activate(&d, &d.qsh);
-    drain_all(&d); /* their shadow rays (which spawn nothing) */
-    activate(&d, &d.qn);
-    if (d.heap_n == 0) break; /* no next generation */
-  }
   if (env->progress) env->progress(env->progress_ctx, env->st->terminated, env->st->terminated);
   env->st->ray_slots_max = (uint64_t)d.chunks * DYN_CHUNK_RAYS;
 

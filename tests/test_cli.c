@@ -82,6 +82,8 @@ int main(void) {
       {"traffic " SCN "good_room_tiny.yaml --rays primary", "missing -o TABLE.csv"},
       {"trace " SCN "good_room_tiny.yaml --rays primary --policy packet", "missing --din FILE"},
       {"trace " SCN "good_room_tiny.yaml --din x.din --policy packet", "missing --rays"},
+      {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --dyn-batch many", "--dyn-batch: got 'many', expected a whole number from 0 to 4294967295"},
+      {"trace " SCN "good_room_tiny.yaml --din x.din --policy dynamic --rays primary --dyn-batch -3", "--dyn-batch: got '-3'"},
   };
   for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {
     snprintf(cmd, sizeof cmd, "cd %s && %s %s", RTSIM_TMP, RTSIM_BINARY, usage[i].args);
@@ -89,6 +91,13 @@ int main(void) {
     EXPECTF(rc == 2, "'%s': exit %d, output: %s", usage[i].args, rc, out);
     EXPECTF(strstr(out, usage[i].want) != NULL, "'%s': got '%s', want '%s'", usage[i].args, out,
             usage[i].want);
+    /* Nothing written: no partial image, table or trace. */
+    static const char *const outs[] = {"x.exr", "x.csv", "x.din"};
+    for (size_t k = 0; k < sizeof outs / sizeof outs[0]; k++) {
+      char f[512];
+      snprintf(f, sizeof f, "%s/%s", RTSIM_TMP, outs[k]);
+      EXPECTF(access(f, F_OK) != 0, "'%s': %s left behind", usage[i].args, outs[k]);
+    }
   }
 
   /* --help of every command succeeds and documents its options. */
