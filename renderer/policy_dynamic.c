@@ -4,6 +4,9 @@
  * all its rays. Rays are traced in generations (section 2.1.2): the closest
  * hits of a generation, then its shadow rays (traced from the light toward the
  * points), then the next generation's reflection rays, until none are left.
+ * Primary rays are admitted all at once, or dyn_batch_rays at a time with each
+ * batch traced through all its generations (policy.h); a queue is read newest
+ * ray first (cur_newest).
  *
  * Same image as the recursive policy, bit for bit:
  * - A closest-hit ray makes exactly the traversal trace_closest makes, only
