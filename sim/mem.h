@@ -8,6 +8,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* Data classes are small integers below MEM_CLASS_MAX: the simulator keeps
+ * statistics per class without knowing what a class holds. */
+#define MEM_CLASS_MAX 8
+
 /* Data classes: small integers to the simulator; the renderer names them. */
 enum mem_class {
   MEM_CLASS_GEOMETRY = 0, /* triangle records */
