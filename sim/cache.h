@@ -1,0 +1,51 @@
+/* One cache: set-associative or fully associative, LRU within a set, lines of
+ * 2^lg2_line bytes. Tags and state only (values live on the host). A line may
+ * be pending (allocated, its fill not yet back): it is never chosen as a
+ * victim. The caller decides what a hit, a miss or an eviction costs; this
+ * module only keeps the contents. Used for the L1s and the L2. */
+#ifndef RTSIM_SIM_CACHE_H
+#define RTSIM_SIM_CACHE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+struct cache_params {
+  uint64_t size_bytes; /* a multiple of the line; >= one line */
+  uint32_t ways;       /* 0: fully associative; else divides the line count */
+  unsigned lg2_line;
+};
+
+/* NULL if p is usable, else a one-line description of what is wrong. */
+const char *cache_params_problem(const struct cache_params *p);
+
+struct cache;
+
+/* p must pass cache_params_problem (CHECKed). Caller destroys. */
+struct cache *cache_create(const struct cache_params *p);
+void cache_destroy(struct cache *c); /* NULL ok */
+
+#define CACHE_NONE UINT32_MAX
+
+/* The slot holding line (valid or pending), or CACHE_NONE. Changes nothing. */
+uint32_t cache_find(const struct cache *c, uint64_t line);
+/* Make slot the most recently used of its set. */
+void cache_touch(struct cache *c, uint32_t slot);
+
+/* The slot line would replace: the least recently used slot of its set that is
+ * not pending (an invalid slot first), or CACHE_NONE if every slot is pending. */
+uint32_t cache_victim(const struct cache *c, uint64_t line);
+/* What a slot holds: valid (a line), its number, dirty, pending. */
+bool cache_valid(const struct cache *c, uint32_t slot);
+uint64_t cache_line(const struct cache *c, uint32_t slot);
+bool cache_dirty(const struct cache *c, uint32_t slot);
+bool cache_pending(const struct cache *c, uint32_t slot);
+/* Put line into slot (from cache_victim; its old line is dropped: write it back
+ * first if dirty) as the most recently used, with the given state. */
+void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bool pending);
+void cache_set_dirty(struct cache *c, uint32_t slot);
+void cache_set_pending(struct cache *c, uint32_t slot, bool pending);
+
+/* Lines the cache holds at most. */
+uint64_t cache_lines(const struct cache *c);
+
+#endif

@@ -1,0 +1,199 @@
+/* Coroutines on Boost.Context's fcontext. The two entry points are declared
+ * here with their C linkage (boost/context/detail/fcontext.hpp is C++). */
+#define _DEFAULT_SOURCE /* MAP_ANONYMOUS */
+#include "sim/coro.h"
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "sim/err.h"
+
+#if defined(__SANITIZE_ADDRESS__)
+#include <sanitizer/common_interface_defs.h>
+#define CORO_ASAN 1
+#else
+#define CORO_ASAN 0
+#endif
+
+typedef void *fcontext_t;
+typedef struct {
+  fcontext_t fctx;
+  void *data;
+} transfer_t;
+extern transfer_t jump_fcontext(fcontext_t const to, void *vp);
+extern fcontext_t make_fcontext(void *sp, size_t size, void (*fn)(transfer_t));
+
+#define PAINT 0xA5u
+
+struct stack {
+  struct stack *next; /* free list */
+  unsigned char *base; /* mapping: guard page, then the stack */
+  size_t usable;
+};
+
+struct coro_pool {
+  size_t stack_bytes, page;
+  bool paint;
+  struct stack *free;
+};
+
+struct coro {
+  struct coro_pool *pool;
+  struct stack *st;
+  fcontext_t ctx;    /* where to jump to enter the coroutine */
+  fcontext_t caller; /* where to jump to leave it */
+  coro_fn fn;
+  void *arg;
+  bool started, finished;
+#if CORO_ASAN
+  void *fake;                /* ASan's fake stack of the side switched away from */
+  const void *caller_bottom; /* the resumer's stack, as ASan reported it */
+  size_t caller_size;
+#endif
+};
+
+size_t coro_default_stack_bytes(void) {
+  /* Measured (tests/test_coro.c paints a stack and runs every policy's worker
+   * on a scene): the recursive worker peaks near 12 KB, the packet worker near
+   * 8 KB. 64 KB leaves five times that; the sanitizers' instrumented frames
+   * are several times larger, hence 1 MB there. Only touched pages cost memory. */
+  return CORO_ASAN ? (size_t)1 << 20 : (size_t)64 << 10;
+}
+
+struct coro_pool *coro_pool_create(size_t stack_bytes, bool paint) {
+  struct coro_pool *p = xcalloc(1, sizeof *p);
+  p->page = (size_t)sysconf(_SC_PAGESIZE);
+  p->stack_bytes = (stack_bytes + p->page - 1) / p->page * p->page;
+  p->paint = paint;
+  return p;
+}
+
+void coro_pool_destroy(struct coro_pool *p) {
+  if (!p) return;
+  while (p->free) {
+    struct stack *s = p->free;
+    p->free = s->next;
+    munmap(s->base, s->usable + p->page);
+    free(s);
+  }
+  free(p);
+}
+
+static struct stack *stack_get(struct coro_pool *p) {
+  if (p->free) {
+    struct stack *s = p->free;
+    p->free = s->next;
+    return s;
+  }
+  struct stack *s = xcalloc(1, sizeof *s);
+  s->usable = p->stack_bytes;
+  void *m = mmap(NULL, s->usable + p->page, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS,
+                 -1, 0);
+  if (m == MAP_FAILED) err_check_failed(__FILE__, __LINE__, "mmap of a coroutine stack");
+  s->base = m;
+  /* The lowest page faults on touch: stacks grow down into it on overflow. */
+  CHECK(mprotect(s->base, p->page, PROT_NONE) == 0);
+  if (p->paint) memset(s->base + p->page, PAINT, s->usable);
+  return s;
+}
+
+struct coro *coro_create(struct coro_pool *p, coro_fn fn, void *arg) {
+  struct coro *c = xcalloc(1, sizeof *c);
+  c->pool = p;
+  c->fn = fn;
+  c->arg = arg;
+  c->st = stack_get(p);
+  return c;
+}
+
+void coro_destroy(struct coro *c) {
+  if (!c) return;
+  CHECK(!c->started || c->finished);
+  c->st->next = c->pool->free;
+  c->pool->free = c->st;
+  free(c);
+}
+
+bool coro_finished(const struct coro *c) { return c->finished; }
+
+static inline void *stack_lo(const struct coro *c) { return c->st->base + c->pool->page; }
+
+static void entry(transfer_t t) {
+  struct coro *c = t.data;
+  c->caller = t.fctx;
+#if CORO_ASAN
+  __sanitizer_finish_switch_fiber(NULL, &c->caller_bottom, &c->caller_size);
+#endif
+  c->fn(c->arg);
+  c->finished = true;
+#if CORO_ASAN
+  /* NULL: this fiber's fake stack is never coming back. */
+  __sanitizer_start_switch_fiber(NULL, c->caller_bottom, c->caller_size);
+#endif
+  jump_fcontext(c->caller, NULL);
+  CHECK(!"a finished coroutine was resumed");
+}
+
+void coro_resume(struct coro *c) {
+  CHECK(!c->finished);
+  if (!c->started) {
+    c->started = true;
+    c->ctx = make_fcontext(stack_lo(c) + c->st->usable, c->st->usable, entry);
+  }
+#if CORO_ASAN
+  void *fake = NULL;
+  __sanitizer_start_switch_fiber(&fake, stack_lo(c), c->st->usable);
+#endif
+  transfer_t t = jump_fcontext(c->ctx, c);
+#if CORO_ASAN
+  __sanitizer_finish_switch_fiber(fake, NULL, NULL);
+#endif
+  c->ctx = t.fctx;
+}
+
+void coro_suspend(struct coro *c) {
+#if CORO_ASAN
+  __sanitizer_start_switch_fiber(&c->fake, c->caller_bottom, c->caller_size);
+#endif
+  transfer_t t = jump_fcontext(c->caller, NULL);
+#if CORO_ASAN
+  __sanitizer_finish_switch_fiber(c->fake, &c->caller_bottom, &c->caller_size);
+#endif
+  c->caller = t.fctx;
+}
+
+size_t coro_stack_used(const struct coro *c) {
+  if (!c->pool->paint) return 0;
+  const unsigned char *lo = stack_lo(c);
+  size_t i = 0;
+  while (i < c->st->usable && lo[i] == PAINT) i++;
+  return c->st->usable - i;
+}
+
+struct bench_arg {
+  struct coro *self;
+  unsigned long n;
+};
+
+static void bench_body(void *arg) {
+  struct bench_arg *b = arg;
+  for (unsigned long i = 0; i < b->n; i++) coro_suspend(b->self);
+}
+
+double coro_bench_switch_ns(unsigned long switches) {
+  struct coro_pool *p = coro_pool_create(coro_default_stack_bytes(), false);
+  struct bench_arg b = {NULL, switches};
+  b.self = coro_create(p, bench_body, &b);
+  struct timespec t0, t1;
+  clock_gettime(CLOCK_MONOTONIC, &t0);
+  while (!coro_finished(b.self)) coro_resume(b.self);
+  clock_gettime(CLOCK_MONOTONIC, &t1);
+  coro_destroy(b.self);
+  coro_pool_destroy(p);
+  double s = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+  return s * 1e9 / (2.0 * (double)(switches + 1));
+}

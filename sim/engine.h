@@ -1,0 +1,35 @@
+/* The event engine: simulated time in 64-bit cycles and a queue of events
+ * ordered by (cycle, insertion sequence), so ties break by the order events
+ * were scheduled and a run never depends on the host. A binary heap of small
+ * records; an event is a function, a context pointer and one 64-bit argument. */
+#ifndef RTSIM_SIM_ENGINE_H
+#define RTSIM_SIM_ENGINE_H
+
+#include <stdint.h>
+
+typedef void (*engine_fn)(void *ctx, uint64_t arg);
+
+struct engine;
+
+struct engine *engine_create(void); /* fatal on allocation failure; caller destroys */
+void engine_destroy(struct engine *e); /* NULL ok */
+
+/* The cycle of the event being handled (or of the last one handled). */
+uint64_t engine_now(const struct engine *e);
+
+/* Schedule fn(ctx, arg) at cycle `at` (>= engine_now, CHECKed). */
+void engine_at(struct engine *e, uint64_t at, engine_fn fn, void *ctx, uint64_t arg);
+
+/* Handle events in order until none is left. Returns the events handled. */
+uint64_t engine_run(struct engine *e);
+
+/* Events handled so far, and events still queued. */
+uint64_t engine_events(const struct engine *e);
+uint64_t engine_pending(const struct engine *e);
+
+/* Host micro-benchmark for `rtsim bench`: `events` events through a heap kept
+ * `depth` events deep (each handled event schedules one more at a pseudo-random
+ * later cycle). Returns events per second of wall time. Never part of a result. */
+double engine_bench(uint64_t events, uint32_t depth);
+
+#endif

@@ -1,0 +1,135 @@
+/* The timed many-core machine: C cores x T hardware threads x R ray contexts,
+ * optional private L1s, a shared banked L2 with MSHRs, and one DRAM channel.
+ * Each ray context is a stackful coroutine running a worker function the
+ * caller supplies; the memory port it is handed suspends it inside a load
+ * until the cycle the load completes. Knows nothing of rays: a worker is any
+ * function that talks to memory through sim/mem.h.
+ *
+ * The model, in one place (README "The timed machine" says the same in prose):
+ * - A core issues one operation per cycle: compute(n) takes n issue slots, a
+ *   load or store one. Threads get the issue port round robin, one block at a
+ *   time: a block is what a ray runs between two waits (its compute, L1 hits
+ *   and posted stores), and holds the port for its slots. L1 hit latencies
+ *   delay the thread, not the port.
+ * - A load that leaves the L1 suspends its ray; the thread switches to another
+ *   ready ray of its own, paying costs.ray_switch cycles (thread busy, port
+ *   free); with none ready it idles. Resuming the ray it last ran is free.
+ * - Stores are posted: they take their slot and go on to the L1 (write-through,
+ *   no allocation) and the L2; the ray does not wait.
+ * - L2: LRU sets (or fully associative), 64-byte lines, write-back, write-
+ *   allocate, a store covering a whole line allocates it without a fetch. One
+ *   access per bank per cycle (line-interleaved). A miss allocates its line at
+ *   once (pending until the fill) and takes an MSHR; later accesses to a
+ *   pending line merge. A miss that finds the MSHRs full, or a set whose ways
+ *   are all pending, stalls the L2's input in order until a fill frees one.
+ *   Misses go to DRAM l2.latency cycles after their bank takes them; dirty
+ *   victims are written back through the same channel.
+ * - DRAM: sim/dram.h. */
+#ifndef RTSIM_SIM_MACHINE_H
+#define RTSIM_SIM_MACHINE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "sim/mem.h"
+#include "sim/stats.h"
+
+#define MACHINE_LG2_LINE 6 /* 64-byte lines everywhere */
+
+struct machine_params {
+  double clock_ghz;
+  uint32_t cores, threads_per_core, rays_per_thread;
+  uint64_t l1_size_bytes; /* 0: no L1 */
+  uint32_t l1_ways;       /* 0: fully associative */
+  uint32_t l1_latency_cycles;
+  uint64_t l2_size_bytes;
+  uint32_t l2_ways; /* 0: fully associative */
+  uint32_t l2_latency_cycles, l2_banks, l2_mshrs;
+  uint64_t dram_latency_cycles;
+  double dram_bytes_per_cycle;
+  uint32_t dram_queue_depth;
+  /* Compute the renderer announces (the machine charges what it is told). */
+  uint32_t cost_node_cycles, cost_triangle_cycles, cost_shade_cycles;
+  uint32_t cost_ray_switch_cycles;
+  uint64_t timeline_window_cycles;
+};
+
+/* Columns of a timeline row (values are per window; see machine.c). */
+enum machine_tl_col {
+  MTL_DRAM_READ_BYTES,
+  MTL_DRAM_WRITE_BYTES,
+  MTL_READ_CLASS0, /* MEM_CLASS_MAX columns: read bytes by class */
+  MTL_L2_ACCESSES = MTL_READ_CLASS0 + MEM_CLASS_MAX,
+  MTL_L2_MISSES,
+  MTL_ISSUED_OPS,
+  MTL_BUSY_THREAD_CYCLES,
+  MTL_COLS
+};
+#define MACHINE_TL_MAX_ROWS 65536u
+
+struct machine_stats {
+  uint64_t cycles;              /* last ray done and the channel drained */
+  uint64_t contexts, threads;
+  uint64_t issue_slots;         /* used, of cores x cycles */
+  uint64_t thread_busy_cycles;  /* a ray ready, running or being switched to */
+  uint64_t thread_wait_cycles;  /* live rays, all waiting on memory */
+  uint64_t thread_done_cycles;  /* no work left */
+  uint64_t ray_switches, switch_cycles;
+  uint64_t blocks;              /* runs of a ray between waits */
+  uint64_t loads, stores, computes;
+  uint64_t l1_accesses, l1_hits;
+  uint64_t l2_accesses, l2_hits, l2_misses, l2_mshr_merges, l2_whole_line_allocs;
+  uint64_t l2_bank_wait_cycles, l2_stalls;
+  uint64_t l2_accesses_by_class[MEM_CLASS_MAX];
+  uint64_t l2_fetch_bytes, l2_writeback_bytes;
+  uint64_t fetch_bytes_by_class[MEM_CLASS_MAX];
+  uint64_t dram_reads, dram_writes, dram_read_bytes, dram_write_bytes;
+  uint64_t dram_busy_ticks, dram_wait_ticks_sum;
+  double dram_fifo_wait_cycles_sum, dram_fifo_area; /* Little's law (sim/dram.h) */
+  uint32_t dram_fifo_max;
+  struct hist load_latency; /* cycles from a load's issue to its data (L1 hits too) */
+  struct hist queue_delay;  /* cycles a DRAM request waits for the channel */
+  uint64_t events;
+  uint64_t stacks_max;      /* coroutine stacks alive at once */
+};
+
+/* NULL if p is usable, else a description naming the key (for config errors
+ * without a position; the config reader checks each value where it is). */
+const char *machine_params_problem(const struct machine_params *p);
+
+struct machine;
+
+/* What a worker is told about where it runs. */
+struct machine_worker_info {
+  uint32_t id; /* 0 .. contexts-1: core-major, then thread, then ray */
+  uint32_t core, thread, ray;
+};
+typedef void (*machine_worker_fn)(void *arg, const struct machine_worker_info *info,
+                                  struct mem_port port);
+/* Called now and then (about every 2^16 blocks) with the current cycle. */
+typedef void (*machine_progress_fn)(void *ctx, uint64_t cycle);
+
+/* p must pass machine_params_problem (CHECKed). stack_bytes: coroutine stack
+ * size (0: coro_default_stack_bytes). Caller destroys. */
+struct machine *machine_create(const struct machine_params *p, uint64_t stack_bytes);
+void machine_destroy(struct machine *m); /* NULL ok */
+
+/* Run fn on every ray context until all have returned and memory is quiet.
+ * Once per machine. */
+void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_progress_fn progress,
+                 void *progress_ctx);
+
+const struct machine_stats *machine_get_stats(const struct machine *m);
+
+/* The timeline: rows of window_cycles each (the last may be shorter; windows
+ * double when a run would need more than MACHINE_TL_MAX_ROWS). */
+uint64_t machine_timeline_window(const struct machine *m);
+uint64_t machine_timeline_rows(const struct machine *m);
+const double *machine_timeline_row(const struct machine *m, uint64_t i); /* MTL_COLS values */
+
+/* The deepest coroutine stack use seen, in bytes (painted stacks only: set
+ * paint with machine_create_painted; else 0). */
+struct machine *machine_create_painted(const struct machine_params *p, uint64_t stack_bytes);
+uint64_t machine_stack_used_max(const struct machine *m);
+
+#endif

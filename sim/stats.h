@@ -1,0 +1,63 @@
+/* Numbers a run reports: log-linear histograms of cycle counts, and a table of
+ * named scalars written as one tidy CSV row or as JSON members. Names carry
+ * their units (_cycles, _bytes, _fraction); counters are integers, ratios are
+ * computed once at the end. */
+#ifndef RTSIM_SIM_STATS_H
+#define RTSIM_SIM_STATS_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+
+/* Exact below 64; above, 8 buckets an octave (each at most 12.5% wide). */
+#define HIST_EXACT 64u
+#define HIST_BUCKETS (HIST_EXACT + 58u * 8u)
+
+struct hist {
+  uint64_t count, sum, max;
+  uint64_t bucket[HIST_BUCKETS];
+};
+
+void hist_add(struct hist *h, uint64_t v);
+/* Bucket i covers [lo, hi] (inclusive). */
+void hist_bucket_range(unsigned i, uint64_t *lo, uint64_t *hi);
+/* The upper edge of the bucket holding the q-quantile (0 < q <= 1) of the
+ * values: exact below 64, at most 12.5% above the true quantile beyond. 0 when
+ * empty. */
+uint64_t hist_quantile(const struct hist *h, double q);
+double hist_mean(const struct hist *h);
+/* JSON array of the non-empty buckets: [{"lo":L,"hi":H,"count":N},...]. */
+void hist_write_json(const struct hist *h, FILE *f);
+
+/* A table of scalars in insertion order. */
+enum stats_kind { STATS_U64, STATS_F64, STATS_STR };
+struct stats_entry {
+  char name[64];
+  enum stats_kind kind;
+  uint64_t u;
+  double f;
+  char s[256];
+};
+struct stats_table {
+  struct stats_entry *e;
+  unsigned n, cap;
+};
+
+void stats_u64(struct stats_table *t, const char *name, uint64_t v);
+void stats_f64(struct stats_table *t, const char *name, double v); /* non-finite: CHECK */
+void stats_str(struct stats_table *t, const char *name, const char *v);
+void stats_fini(struct stats_table *t);
+
+/* "name,name,...\n" and "value,value,...\n" (strings quoted when needed). */
+void stats_write_csv_header(const struct stats_table *t, FILE *f);
+void stats_write_csv_row(const struct stats_table *t, FILE *f);
+/* Members `"name": value` separated by ",\n" + indent (no braces), for the
+ * caller to place inside an object. */
+void stats_write_json_members(const struct stats_table *t, FILE *f, const char *indent);
+
+/* A JSON string literal of s. */
+void json_write_str(FILE *f, const char *s);
+/* A double as JSON (shortest form that reads back the same bits). */
+void json_write_f64(FILE *f, double v);
+
+#endif
