@@ -1,0 +1,323 @@
+/* One table of keys drives reading, --set, checking and writing. */
+#include "sim/machine_cfg.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim/cfg.h"
+#include "sim/err.h"
+#include "sim/stats.h"
+
+enum kind { K_U32, K_U64, K_F64, K_SIZE, K_WAYS };
+
+struct key {
+  const char *name; /* "section.key" or "key" */
+  enum kind kind;
+  double lo, hi;
+  size_t off;
+};
+
+#define OFF(f) offsetof(struct machine_params, f)
+static const struct key KEYS[MACHINE_CFG_KEYS] = {
+    {"clock_ghz", K_F64, 1e-3, 1e3, OFF(clock_ghz)},
+    {"cores", K_U32, 1, 4096, OFF(cores)},
+    {"threads_per_core", K_U32, 1, 256, OFF(threads_per_core)},
+    {"rays_per_thread", K_U32, 1, 256, OFF(rays_per_thread)},
+    {"l1.size", K_SIZE, 0, 1ull << 30, OFF(l1_size_bytes)},
+    {"l1.ways", K_WAYS, 1, 1u << 24, OFF(l1_ways)},
+    {"l1.latency", K_U32, 0, 1e6, OFF(l1_latency_cycles)},
+    {"l2.size", K_SIZE, 1, 1ull << 34, OFF(l2_size_bytes)},
+    {"l2.ways", K_WAYS, 1, 1u << 28, OFF(l2_ways)},
+    {"l2.latency", K_U32, 0, 1e6, OFF(l2_latency_cycles)},
+    {"l2.banks", K_U32, 1, 4096, OFF(l2_banks)},
+    {"l2.mshrs", K_U32, 1, 1u << 20, OFF(l2_mshrs)},
+    {"dram.latency", K_U64, 0, 1e9, OFF(dram_latency_cycles)},
+    {"dram.bytes_per_cycle", K_F64, 1e-6, 1e6, OFF(dram_bytes_per_cycle)},
+    {"dram.queue_depth", K_U32, 1, 1u << 20, OFF(dram_queue_depth)},
+    {"costs.node", K_U32, 0, 1e6, OFF(cost_node_cycles)},
+    {"costs.triangle", K_U32, 0, 1e6, OFF(cost_triangle_cycles)},
+    {"costs.shade", K_U32, 0, 1e6, OFF(cost_shade_cycles)},
+    {"costs.ray_switch", K_U32, 0, 1e6, OFF(cost_ray_switch_cycles)},
+    {"timeline.window", K_U64, 1, 1e12, OFF(timeline_window_cycles)},
+};
+
+static const char *const SECTIONS[] = {"l1", "l2", "dram", "costs", "timeline"};
+#define NSECTIONS (sizeof SECTIONS / sizeof SECTIONS[0])
+
+const char *machine_cfg_key(unsigned i) { return i < MACHINE_CFG_KEYS ? KEYS[i].name : NULL; }
+
+const char *machine_cfg_key_list(void) {
+  return "clock_ghz, cores, threads_per_core, rays_per_thread, l1.size, l1.ways, l1.latency, "
+         "l2.size, l2.ways, l2.latency, l2.banks, l2.mshrs, dram.latency, "
+         "dram.bytes_per_cycle, dram.queue_depth, costs.node, costs.triangle, costs.shade, "
+         "costs.ray_switch, timeline.window";
+}
+
+void machine_cfg_defaults(struct machine_cfg *c) {
+  memset(c, 0, sizeof *c);
+  struct machine_params *p = &c->p;
+  /* configs/default.yaml documents each figure and its source. */
+  p->clock_ghz = 1.4;
+  p->cores = 16;
+  p->threads_per_core = 4;
+  p->rays_per_thread = 2;
+  p->l1_size_bytes = 8u << 10;
+  p->l1_ways = 4;
+  p->l1_latency_cycles = 3;
+  p->l2_size_bytes = 4u << 20;
+  p->l2_ways = 16;
+  p->l2_latency_cycles = 20;
+  p->l2_banks = 8;
+  p->l2_mshrs = 64;
+  p->dram_latency_cycles = 200;
+  p->dram_bytes_per_cycle = 16;
+  p->dram_queue_depth = 32;
+  p->cost_node_cycles = 7;
+  p->cost_triangle_cycles = 20;
+  p->cost_shade_cycles = 50;
+  p->cost_ray_switch_cycles = 2;
+  p->timeline_window_cycles = 10000;
+}
+
+/* "512KiB", "4MiB", "1GiB", "64B" or a plain number of bytes. */
+static bool parse_size(const char *s, uint64_t *out) {
+  if (!(s[0] >= '0' && s[0] <= '9')) return false;
+  char *end = NULL;
+  errno = 0;
+  unsigned long long v = strtoull(s, &end, 10);
+  if (errno == ERANGE || end == s) return false;
+  unsigned shift = 0;
+  if (*end == '\0' || strcmp(end, "B") == 0) shift = 0;
+  else if (strcmp(end, "KiB") == 0) shift = 10;
+  else if (strcmp(end, "MiB") == 0) shift = 20;
+  else if (strcmp(end, "GiB") == 0) shift = 30;
+  else return false;
+  if (shift && v > (UINT64_MAX >> shift)) return false;
+  *out = (uint64_t)v << shift;
+  return true;
+}
+
+/* Read node n (a scalar) as key k into p. */
+static bool read_value(const struct cfg_doc *d, const struct cfg_node *n, const struct key *k,
+                       struct machine_params *p, struct err *e) {
+  char *dst = (char *)p + k->off;
+  switch (k->kind) {
+  case K_F64: {
+    double v;
+    if (!cfg_f64(d, n, k->name, k->lo, k->hi, &v, e)) return false;
+    memcpy(dst, &v, sizeof v);
+    return true;
+  }
+  case K_U32:
+  case K_U64: {
+    uint64_t v;
+    if (!cfg_u64(d, n, k->name, (uint64_t)k->lo, (uint64_t)k->hi, &v, e)) return false;
+    if (k->kind == K_U32) {
+      uint32_t v32 = (uint32_t)v;
+      memcpy(dst, &v32, sizeof v32);
+    } else {
+      memcpy(dst, &v, sizeof v);
+    }
+    return true;
+  }
+  case K_SIZE: {
+    uint64_t v = 0;
+    if (n->kind != CFG_SCALAR || !parse_size(n->text, &v))
+      return cfg_fail(d, n, k->name, e,
+                      "not a size (got '%s', expected bytes such as 4096, 512KiB, 4MiB or 1GiB)",
+                      n->kind == CFG_SCALAR ? n->text : "a list or map");
+    if ((double)v < k->lo || (double)v > k->hi)
+      return cfg_fail(d, n, k->name, e, "out of range (got %s, expected %.0f to %.0f bytes)",
+                      n->text, k->lo, k->hi);
+    memcpy(dst, &v, sizeof v);
+    return true;
+  }
+  case K_WAYS: {
+    uint32_t v = 0;
+    if (n->kind == CFG_SCALAR && strcmp(n->text, "full") == 0) {
+      memcpy(dst, &v, sizeof v);
+      return true;
+    }
+    uint64_t w;
+    if (n->kind != CFG_SCALAR || !(n->text[0] >= '0' && n->text[0] <= '9'))
+      return cfg_fail(d, n, k->name, e, "not a number of ways (got '%s', expected 1 to %.0f or full)",
+                      n->kind == CFG_SCALAR ? n->text : "a list or map", k->hi);
+    if (!cfg_u64(d, n, k->name, (uint64_t)k->lo, (uint64_t)k->hi, &w, e)) return false;
+    v = (uint32_t)w;
+    memcpy(dst, &v, sizeof v);
+    return true;
+  }
+  }
+  return false;
+}
+
+static void set_origin(struct machine_cfg *c, unsigned i, const char *file, int line, int col) {
+  snprintf(c->at[i].file, sizeof c->at[i].file, "%s", file);
+  c->at[i].line = line;
+  c->at[i].col = col;
+}
+
+bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e) {
+  struct cfg_doc d;
+  memset(&d, 0, sizeof d);
+  bool ok = cfg_load_file(&d, path, e) && cfg_expect_map(&d, &d.root, "(top level)", e);
+  for (unsigned s = 0; ok && s < NSECTIONS; s++) {
+    struct cfg_node *sec = cfg_get(&d.root, SECTIONS[s]);
+    if (sec && !cfg_expect_map(&d, sec, SECTIONS[s], e)) ok = false;
+  }
+  for (unsigned i = 0; ok && i < MACHINE_CFG_KEYS; i++) {
+    const char *name = KEYS[i].name, *dot = strchr(name, '.');
+    struct cfg_node *n;
+    if (dot) {
+      char sec[32];
+      snprintf(sec, sizeof sec, "%.*s", (int)(dot - name), name);
+      struct cfg_node *m = cfg_get(&d.root, sec);
+      n = m ? cfg_get(m, dot + 1) : NULL;
+    } else {
+      n = cfg_get(&d.root, name);
+    }
+    if (!n) continue;
+    if (!read_value(&d, n, &KEYS[i], &c->p, e)) ok = false;
+    else set_origin(c, i, path, n->line, n->col);
+  }
+  static const char *const expected[NSECTIONS] = {
+      "size, ways, latency", "size, ways, latency, banks, mshrs",
+      "latency, bytes_per_cycle, queue_depth", "node, triangle, shade, ray_switch", "window"};
+  for (unsigned s = 0; ok && s < NSECTIONS; s++) {
+    struct cfg_node *sec = cfg_get(&d.root, SECTIONS[s]);
+    if (sec && !cfg_check_keys(&d, sec, SECTIONS[s], expected[s], e)) ok = false;
+  }
+  if (ok)
+    ok = cfg_check_keys(&d, &d.root, "(top level)",
+                        "clock_ghz, cores, threads_per_core, rays_per_thread, l1, l2, dram, "
+                        "costs, timeline",
+                        e);
+  cfg_free(&d);
+  return ok;
+}
+
+bool machine_cfg_set(struct machine_cfg *c, const char *assignment, struct err *e) {
+  char where[300];
+  snprintf(where, sizeof where, "--set %s", assignment);
+  const char *eq = strchr(assignment, '=');
+  if (!eq)
+    return err_set(e, where, 0, 0, "expected KEY=VALUE (keys: %s)", machine_cfg_key_list());
+  size_t klen = (size_t)(eq - assignment);
+  unsigned i = 0;
+  while (i < MACHINE_CFG_KEYS && !(strlen(KEYS[i].name) == klen && !strncmp(KEYS[i].name, assignment, klen)))
+    i++;
+  if (i == MACHINE_CFG_KEYS)
+    return err_set(e, where, 0, 0, "unknown key '%.*s' (expected one of: %s)", (int)klen,
+                   assignment, machine_cfg_key_list());
+  /* The value goes through the same typed reader as a file's. */
+  struct cfg_doc d;
+  memset(&d, 0, sizeof d);
+  snprintf(d.file, sizeof d.file, "%s", where);
+  struct cfg_node n;
+  memset(&n, 0, sizeof n);
+  n.kind = CFG_SCALAR;
+  n.text = (char *)(eq + 1);
+  if (!read_value(&d, &n, &KEYS[i], &c->p, e)) return false;
+  set_origin(c, i, where, 0, 0);
+  return true;
+}
+
+static unsigned key_index(const char *name) {
+  for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++)
+    if (!strcmp(KEYS[i].name, name)) return i;
+  CHECK(!"no such key");
+}
+
+/* An error at key `name`, where its value came from. */
+static bool fail_at(const struct machine_cfg *c, const char *name, struct err *e, const char *msg,
+                    const char *got) {
+  const struct machine_cfg_origin *o = &c->at[key_index(name)];
+  return err_set(e, o->file[0] ? o->file : NULL, o->line, o->col, "%s: %s (got %s)%s", name, msg,
+                 got, o->file[0] ? "" : " [the default]");
+}
+
+static bool check_cache(const struct machine_cfg *c, const char *lvl, uint64_t size, uint32_t ways,
+                        struct err *e) {
+  char sk[16], wk[16], got[64];
+  snprintf(sk, sizeof sk, "%s.size", lvl);
+  snprintf(wk, sizeof wk, "%s.ways", lvl);
+  snprintf(got, sizeof got, "%llu bytes", (unsigned long long)size);
+  if (size < 64) return fail_at(c, sk, e, "smaller than one 64-byte line", got);
+  if (size % 64) return fail_at(c, sk, e, "not a whole number of 64-byte lines", got);
+  uint64_t lines = size / 64;
+  snprintf(got, sizeof got, "%u ways for %llu lines", ways, (unsigned long long)lines);
+  if (ways && ways > lines) return fail_at(c, wk, e, "more ways than the cache has lines", got);
+  if (ways && lines % ways) return fail_at(c, wk, e, "the ways must divide the number of lines", got);
+  return true;
+}
+
+bool machine_cfg_check(const struct machine_cfg *c, struct err *e) {
+  const struct machine_params *p = &c->p;
+  if (p->l1_size_bytes && !check_cache(c, "l1", p->l1_size_bytes, p->l1_ways, e)) return false;
+  if (!check_cache(c, "l2", p->l2_size_bytes, p->l2_ways, e)) return false;
+  uint64_t n = (uint64_t)p->cores * p->threads_per_core * p->rays_per_thread;
+  if (n > (1u << 20)) {
+    char got[64];
+    snprintf(got, sizeof got, "%llu ray contexts", (unsigned long long)n);
+    return fail_at(c, "rays_per_thread", e,
+                   "cores x threads_per_core x rays_per_thread must be at most 1048576", got);
+  }
+  const char *why = machine_params_problem(p);
+  return why ? err_set(e, NULL, 0, 0, "machine config: %s", why) : true;
+}
+
+void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsigned cap) {
+  const struct key *k = &KEYS[i];
+  const char *src = (const char *)&c->p + k->off;
+  switch (k->kind) {
+  case K_F64: {
+    double v;
+    memcpy(&v, src, sizeof v);
+    snprintf(buf, cap, "%.17g", v);
+    /* The shortest text that reads back the same. */
+    for (int prec = 1; prec <= 17; prec++) {
+      snprintf(buf, cap, "%.*g", prec, v);
+      if (strtod(buf, NULL) == v) break;
+    }
+    break;
+  }
+  case K_U32:
+  case K_WAYS: {
+    uint32_t v;
+    memcpy(&v, src, sizeof v);
+    if (k->kind == K_WAYS && v == 0) snprintf(buf, cap, "full");
+    else snprintf(buf, cap, "%u", v);
+    break;
+  }
+  case K_U64:
+  case K_SIZE: {
+    uint64_t v;
+    memcpy(&v, src, sizeof v);
+    snprintf(buf, cap, "%llu", (unsigned long long)v);
+    break;
+  }
+  }
+}
+
+void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *indent) {
+  for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++) {
+    char v[64];
+    machine_cfg_value(c, i, v, sizeof v);
+    fprintf(f, "%s%s", i ? ",\n" : "", indent);
+    json_write_str(f, KEYS[i].name);
+    fputs(": ", f);
+    if (!strcmp(v, "full")) json_write_str(f, v);
+    else fputs(v, f);
+  }
+}
+
+void machine_cfg_to_stats(const struct machine_cfg *c, struct stats_table *t) {
+  for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++) {
+    char v[64];
+    machine_cfg_value(c, i, v, sizeof v);
+    stats_str(t, KEYS[i].name, v);
+  }
+}

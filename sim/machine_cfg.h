@@ -1,0 +1,52 @@
+/* Machine configs: YAML files (through cfg) and --set KEY=VALUE overrides into
+ * struct machine_params, every key checked where it was written (file:line:col
+ * or the --set that gave it). The key names are a stable interface: they are
+ * the YAML keys, the --set names, and the config columns of stats files.
+ * Every key has a default (configs/default.yaml states the same values and
+ * where each comes from); a file or --set changes only what it names. */
+#ifndef RTSIM_SIM_MACHINE_CFG_H
+#define RTSIM_SIM_MACHINE_CFG_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "sim/machine.h"
+
+struct err;
+struct stats_table;
+
+#define MACHINE_CFG_KEYS 20
+
+/* Where each key's value came from, for errors found after reading. */
+struct machine_cfg_origin {
+  char file[320]; /* "" : the default */
+  int line, col;
+};
+
+struct machine_cfg {
+  struct machine_params p;
+  struct machine_cfg_origin at[MACHINE_CFG_KEYS];
+};
+
+/* The default machine (configs/default.yaml). */
+void machine_cfg_defaults(struct machine_cfg *c);
+/* Read a YAML machine config over the values c holds. On bad input fills e
+ * (file:line:col) and returns false. */
+bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e);
+/* Apply one "key=value" (the value as it would be written in YAML). */
+bool machine_cfg_set(struct machine_cfg *c, const char *assignment, struct err *e);
+/* Check relations between keys (a cache that holds whole lines, ways that
+ * divide them, ...), naming the key at fault where it was written. */
+bool machine_cfg_check(const struct machine_cfg *c, struct err *e);
+
+/* Key i's name (dotted) and its value as text ("4194304", "full", "0.5"). */
+const char *machine_cfg_key(unsigned i);
+void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsigned cap);
+/* "key, key, ...": every key, for messages. */
+const char *machine_cfg_key_list(void);
+/* Every key as a JSON member `"key": value` (numbers, or "full"). */
+void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *indent);
+/* Every key as a column of t (numbers as numbers, "full" as text). */
+void machine_cfg_to_stats(const struct machine_cfg *c, struct stats_table *t);
+
+#endif
