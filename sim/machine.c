@@ -355,6 +355,7 @@ static bool l2_try(struct machine *m, const struct req *r, uint64_t t) {
   if (c) {
     uint32_t w = req_new(m);
     m->reqs[w] = *r;
+    m->reqs[w].next = NONE;
     m->waiters[victim] = w;
   }
   engine_at(m->eng, ready, ev_dram_read, m, victim);

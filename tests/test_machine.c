@@ -173,10 +173,107 @@ static void test_md1(void) {
   }
 }
 
+/* Every number a run reports is finite; the timeline covers the run. */
+static void expect_sane(const struct machine *m, const char *what) {
+  const struct machine_stats *st = machine_get_stats(m);
+  EXPECTF(st->cycles > 0, "%s: no cycles", what);
+  uint64_t rows = machine_timeline_rows(m), w = machine_timeline_window(m);
+  EXPECTF(rows <= MACHINE_TL_MAX_ROWS && rows * w >= st->cycles, "%s: %llu rows of %llu", what,
+          (unsigned long long)rows, (unsigned long long)w);
+  double busy = 0;
+  int finite = 1;
+  for (uint64_t i = 0; i < rows; i++) {
+    const double *r = machine_timeline_row(m, i);
+    for (unsigned c = 0; c < MTL_COLS; c++) finite &= isfinite(r[c]) && r[c] >= 0;
+    busy += r[MTL_BUSY_THREAD_CYCLES];
+  }
+  EXPECTF(finite, "%s: a timeline value is not finite", what);
+  EXPECTF(fabs(busy - (double)st->thread_busy_cycles) <= 1e-6 * busy + 1, "%s: busy %.0f vs %llu",
+          what, busy, (unsigned long long)st->thread_busy_cycles);
+  double util = (double)st->issue_slots / ((double)st->cycles * (double)machine_timeline_rows(m) / (double)rows);
+  EXPECTF(isfinite(util) && util >= 0, "%s: utilization", what);
+}
+
+static void run_extreme(struct machine_params p, uint64_t iters, uint64_t c, const char *what) {
+  struct miss_kernel k = {iters, c};
+  struct machine *m = machine_create(&p, 0);
+  machine_run(m, miss_worker, &k, NULL, NULL);
+  expect_sane(m, what);
+  const struct machine_stats *st = machine_get_stats(m);
+  EXPECTF(st->l2_misses + st->l2_hits + st->l2_mshr_merges == st->l2_accesses, "%s: L2 counts", what);
+  EXPECTF(st->loads == (uint64_t)p.cores * p.threads_per_core * p.rays_per_thread * iters,
+          "%s: loads", what);
+  machine_destroy(m);
+}
+
+static void test_extremes(void) {
+  struct machine_params p = base();
+  run_extreme(p, 100, 5, "1x1x1");
+  p.cores = 256;
+  p.threads_per_core = 8;
+  p.rays_per_thread = 8;
+  run_extreme(p, 3, 5, "256x8x8");
+  p = base();
+  p.dram_latency_cycles = 0;
+  run_extreme(p, 1000, 3, "latency 0");
+  p.dram_latency_cycles = 1000000;
+  run_extreme(p, 5000, 3, "latency 10^6");
+  {
+    struct miss_kernel k = {5000, 3};
+    struct machine *m = machine_create(&p, 0);
+    machine_run(m, miss_worker, &k, NULL, NULL);
+    EXPECTF(machine_get_stats(m)->cycles > (1ull << 32), "a run past 2^32 cycles: %llu",
+            (unsigned long long)machine_get_stats(m)->cycles);
+    machine_destroy(m);
+  }
+  p = base();
+  p.threads_per_core = 4;
+  p.dram_bytes_per_cycle = 0.01;
+  run_extreme(p, 50, 3, "bandwidth 0.01");
+  p.dram_bytes_per_cycle = 1e4;
+  run_extreme(p, 1000, 3, "bandwidth 10^4");
+  p = base();
+  p.threads_per_core = 4;
+  p.l2_size_bytes = 64; /* one line: every miss waits for the previous fill */
+  p.l2_mshrs = 1;
+  p.dram_queue_depth = 1;
+  run_extreme(p, 200, 3, "L2 of one line");
+  p = base();
+  p.l1_size_bytes = 64;
+  p.l1_ways = 1;
+  p.l1_latency_cycles = 1;
+  run_extreme(p, 200, 3, "L1 of one line");
+}
+
+/* Same inputs, same numbers, whatever else ran before in the process. */
+static void test_determinism(void) {
+  struct machine_params p = base();
+  p.threads_per_core = 4;
+  p.rays_per_thread = 3;
+  p.cores = 3;
+  p.dram_bytes_per_cycle = 3.3;
+  p.l2_size_bytes = 8192;
+  p.l2_ways = 4;
+  p.l2_mshrs = 5;
+  p.dram_queue_depth = 4;
+  struct machine_stats a, b;
+  for (int i = 0; i < 2; i++) {
+    struct poisson_kernel k = {3000, 99, 20.0};
+    struct machine *m = machine_create(&p, 0);
+    machine_run(m, poisson_worker, &k, NULL, NULL);
+    memcpy(i ? &b : &a, machine_get_stats(m), sizeof a);
+    machine_destroy(m);
+  }
+  EXPECT(memcmp(&a, &b, sizeof a) == 0);
+  EXPECT(a.l2_stalls > 0 && a.dram_writes > 0);
+}
+
 int main(void) {
   test_utilization();
   test_switch_cost();
   test_saturation();
   test_md1();
+  test_extremes();
+  test_determinism();
   return testing_done("test_machine");
 }

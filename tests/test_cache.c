@@ -1,0 +1,112 @@
+/* The cache module against a brute-force LRU (a timestamp per way, the oldest
+ * replaced), for set-associative and fully associative geometries, including
+ * pending lines that may not be evicted. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim/cache.h"
+#include "testing.h"
+
+struct ref {
+  uint64_t sets, ways, clock;
+  uint64_t *line, *stamp;
+  unsigned char *valid;
+};
+
+static void ref_init(struct ref *r, uint64_t lines, uint64_t ways) {
+  r->ways = ways;
+  r->sets = lines / ways;
+  r->clock = 0;
+  r->line = calloc(lines, sizeof *r->line);
+  r->stamp = calloc(lines, sizeof *r->stamp);
+  r->valid = calloc(lines, 1);
+}
+
+/* Access line: true on a hit. A miss replaces the invalid or oldest way. */
+static int ref_access(struct ref *r, uint64_t line) {
+  uint64_t s = line % r->sets, *L = r->line + s * r->ways, *S = r->stamp + s * r->ways;
+  unsigned char *V = r->valid + s * r->ways;
+  r->clock++;
+  for (uint64_t w = 0; w < r->ways; w++)
+    if (V[w] && L[w] == line) {
+      S[w] = r->clock;
+      return 1;
+    }
+  uint64_t victim = 0;
+  for (uint64_t w = 0; w < r->ways; w++) {
+    if (!V[w]) {
+      victim = w;
+      break;
+    }
+    if (S[w] < S[victim]) victim = w;
+  }
+  V[victim] = 1;
+  L[victim] = line;
+  S[victim] = r->clock;
+  return 0;
+}
+
+static void run_geometry(uint64_t size, uint32_t ways, uint64_t span, uint64_t n) {
+  struct cache_params p = {size, ways, 6};
+  EXPECT(cache_params_problem(&p) == NULL);
+  struct cache *c = cache_create(&p);
+  struct ref r;
+  ref_init(&r, size / 64, ways ? ways : size / 64);
+  uint64_t x = 7, hits = 0, mism = 0;
+  for (uint64_t i = 0; i < n; i++) {
+    x = x * 6364136223846793005ull + 1442695040888963407ull;
+    uint64_t line = (x >> 33) % span;
+    int want = ref_access(&r, line);
+    uint32_t s = cache_find(c, line);
+    int got = s != CACHE_NONE;
+    if (got) {
+      cache_touch(c, s);
+    } else {
+      uint32_t v = cache_victim(c, line);
+      cache_install(c, v, line, false, false);
+    }
+    hits += (uint64_t)got;
+    mism += (uint64_t)(got != want);
+  }
+  EXPECTF(mism == 0, "size %llu ways %u: %llu disagreements", (unsigned long long)size, ways,
+          (unsigned long long)mism);
+  EXPECT(hits > 0 && hits < n);
+  cache_destroy(c);
+  free(r.line);
+  free(r.stamp);
+  free(r.valid);
+}
+
+static void test_pending(void) {
+  /* Two lines, fully associative: a pending line is never the victim, and
+   * with every way pending there is none. */
+  struct cache_params p = {128, 0, 6};
+  struct cache *c = cache_create(&p);
+  cache_install(c, cache_victim(c, 10), 10, false, true);
+  cache_install(c, cache_victim(c, 11), 11, true, false);
+  uint32_t v = cache_victim(c, 12);
+  EXPECT(v != CACHE_NONE && cache_line(c, v) == 11 && cache_dirty(c, v));
+  cache_set_pending(c, cache_find(c, 11), true);
+  EXPECT(cache_victim(c, 12) == CACHE_NONE);
+  cache_set_pending(c, cache_find(c, 10), false);
+  v = cache_victim(c, 12);
+  EXPECT(v != CACHE_NONE && cache_line(c, v) == 10);
+  cache_destroy(c);
+}
+
+static void test_params(void) {
+  struct cache_params bad[] = {{32, 0, 6}, {100, 0, 6}, {64 * 12, 5, 6}};
+  for (unsigned i = 0; i < 3; i++) EXPECT(cache_params_problem(&bad[i]) != NULL);
+}
+
+int main(void) {
+  run_geometry(64, 0, 4, 20000);
+  run_geometry(4096, 0, 200, 200000);
+  run_geometry(4096, 4, 300, 200000);
+  run_geometry(64 * 96, 3, 500, 200000);
+  run_geometry(32768, 8, 1 << 12, 300000);
+  run_geometry(1 << 16, 0, 2048, 200000);
+  test_pending();
+  test_params();
+  return testing_done("test_cache");
+}
