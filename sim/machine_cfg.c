@@ -191,7 +191,7 @@ bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e) {
     if (sec && !cfg_check_keys(&d, sec, SECTIONS[s], expected[s], e)) ok = false;
   }
   if (ok)
-    ok = cfg_check_keys(&d, &d.root, "(top level)",
+    ok = cfg_check_keys(&d, &d.root, "",
                         "clock_ghz, cores, threads_per_core, rays_per_thread, l1, l2, dram, "
                         "costs, timeline",
                         e);

@@ -1,0 +1,107 @@
+/* Machine configs: the shipped files load, default.yaml states the built-in
+ * defaults, --set goes through the same checks, and every bad value is one
+ * message naming file:line:col. */
+#include <string.h>
+
+#include "sim/err.h"
+#include "sim/machine_cfg.h"
+#include "testing.h"
+
+static void load_err(const char *file, char *out, unsigned cap) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/configs/%s", RTSIM_TEST_DATA, file);
+  struct machine_cfg c;
+  machine_cfg_defaults(&c);
+  struct err e;
+  memset(&e, 0, sizeof e);
+  out[0] = '\0';
+  if (machine_cfg_load(&c, path, &e)) machine_cfg_check(&c, &e);
+  if (e.set) err_format(&e, out, cap);
+}
+
+static void set_err(const char *assignment, char *out, unsigned cap) {
+  struct machine_cfg c;
+  machine_cfg_defaults(&c);
+  struct err e;
+  memset(&e, 0, sizeof e);
+  out[0] = '\0';
+  if (machine_cfg_set(&c, assignment, &e)) machine_cfg_check(&c, &e);
+  if (e.set) err_format(&e, out, cap);
+}
+
+int main(void) {
+  static const struct {
+    const char *file, *want;
+  } bad[] = {
+      {"bad_unknown_key.yaml", "bad_unknown_key.yaml:3:3: error: l2.sise: unknown key 'sise' (expected one of: size, ways, latency, banks, mshrs)"},
+      {"bad_top_key.yaml", "bad_top_key.yaml:1:1: error: core: unknown key 'core' (expected one of: clock_ghz,"},
+      {"bad_size_unit.yaml", "bad_size_unit.yaml:2:9: error: l2.size: not a size (got '4MB'"},
+      {"bad_cores_zero.yaml", "bad_cores_zero.yaml:2:8: error: cores: out of range (got 0, expected 1 to 4096)"},
+      {"bad_bandwidth_zero.yaml", "bad_bandwidth_zero.yaml:3:20: error: dram.bytes_per_cycle: out of range"},
+      {"bad_l2_below_line.yaml", "bad_l2_below_line.yaml:2:9: error: l2.size: smaller than one 64-byte line (got 32 bytes)"},
+      {"bad_ways_divide.yaml", "bad_ways_divide.yaml:3:9: error: l2.ways: the ways must divide the number of lines (got 3 ways for 64 lines)"},
+      {"bad_section_type.yaml", "bad_section_type.yaml:1:5: error: l1: wrong type"},
+      {"bad_ways_word.yaml", "bad_ways_word.yaml:2:9: error: l2.ways: not a number of ways (got 'all'"},
+      {"bad_fraction.yaml", "bad_fraction.yaml:1:18: error: rays_per_thread: not a whole number (got '2.5'"},
+      {"missing.yaml", "missing.yaml"},
+  };
+  char buf[2048];
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    load_err(bad[i].file, buf, sizeof buf);
+    EXPECTF(strstr(buf, bad[i].want) != NULL, "%s: got '%s'", bad[i].file, buf);
+  }
+
+  static const struct {
+    const char *set, *want;
+  } sets[] = {
+      {"cores=0", "--set cores=0: error: cores: out of range (got 0, expected 1 to 4096)"},
+      {"l2.size=32", "--set l2.size=32: error: l2.size: smaller than one 64-byte line"},
+      {"dram.bytes_per_cycle=0", "--set dram.bytes_per_cycle=0: error: dram.bytes_per_cycle: out of range"},
+      {"l2.sise=1", "unknown key 'l2.sise' (expected one of: clock_ghz,"},
+      {"cores", "expected KEY=VALUE"},
+      {"l2.ways=full", ""},
+      {"l2.size=1MiB", ""},
+      {"dram.bytes_per_cycle=0.01", ""},
+      {"l1.size=0", ""},
+      {"l2.ways=7", "--set l2.ways=7: error: l2.ways: the ways must divide the number of lines (got 7 ways for 65536 lines)"},
+      {"l2.size=4000", "l2.size: not a whole number of 64-byte lines (got 4000 bytes)"},
+  };
+  for (size_t i = 0; i < sizeof sets / sizeof sets[0]; i++) {
+    set_err(sets[i].set, buf, sizeof buf);
+    if (!sets[i].want[0]) EXPECTF(buf[0] == '\0', "%s: unexpected '%s'", sets[i].set, buf);
+    else EXPECTF(strstr(buf, sets[i].want) != NULL, "%s: got '%s'", sets[i].set, buf);
+  }
+
+  /* The shipped configs load; default.yaml is the built-in default. */
+  const char *shipped[] = {"default.yaml", "paper-2007.yaml", "tiny.yaml"};
+  for (int i = 0; i < 3; i++) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/configs/%s", RTSIM_SOURCE_DIR, shipped[i]);
+    struct machine_cfg c;
+    machine_cfg_defaults(&c);
+    struct err e;
+    memset(&e, 0, sizeof e);
+    EXPECTF(machine_cfg_load(&c, path, &e) && machine_cfg_check(&c, &e), "%s: %s", shipped[i], e.msg);
+    if (i == 0) {
+      struct machine_cfg d;
+      machine_cfg_defaults(&d);
+      for (unsigned k = 0; k < MACHINE_CFG_KEYS; k++) {
+        char a[64], b[64];
+        machine_cfg_value(&c, k, a, sizeof a);
+        machine_cfg_value(&d, k, b, sizeof b);
+        EXPECTF(!strcmp(a, b), "default.yaml %s = %s, built-in %s", machine_cfg_key(k), a, b);
+      }
+    }
+  }
+  /* A --set after the file wins, and is reported as the value. */
+  struct machine_cfg c;
+  machine_cfg_defaults(&c);
+  struct err e;
+  memset(&e, 0, sizeof e);
+  EXPECT(machine_cfg_set(&c, "l2.size=512KiB", &e) && c.p.l2_size_bytes == 512u * 1024u);
+  EXPECT(machine_cfg_set(&c, "clock_ghz=2.5", &e) && c.p.clock_ghz == 2.5);
+  char v[64];
+  machine_cfg_value(&c, 0, v, sizeof v);
+  EXPECT(!strcmp(v, "2.5"));
+  return testing_done("test_machine_cfg");
+}
