@@ -1,0 +1,243 @@
+/* The run's numbers: scalars computed once from the machine's counters, then
+ * written as stats.json members and one stats.csv row in the same order. */
+#include "app/run_output.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "app/app.h"
+#include "renderer/framebuffer.h"
+#include "renderer/image.h"
+#include "renderer/render.h"
+#include "renderer/shade.h"
+#include "renderer/trace.h"
+#include "sim/dram.h"
+#include "sim/err.h"
+#include "sim/machine.h"
+#include "sim/machine_cfg.h"
+#include "sim/stats.h"
+
+void run_output_invalidate(const char *dir) {
+  char p[4200];
+  snprintf(p, sizeof p, "%s/stats.json", dir);
+  unlink(p);
+}
+
+static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
+
+/* The workload's identity (first columns) and the resolved config. */
+static void identity(const struct run_report *r, struct stats_table *t) {
+  char rays[64];
+  shade_rays_name(r->mask, rays, sizeof rays);
+  stats_str(t, "scene", r->scene_name);
+  stats_str(t, "policy", r->policy);
+  stats_str(t, "rays", rays);
+  stats_u64(t, "width", r->width);
+  stats_u64(t, "height", r->height);
+  stats_u64(t, "seed", r->seed);
+}
+
+/* Every measured scalar, units in the names. */
+static void measured(const struct run_report *r, struct stats_table *t) {
+  const struct machine_stats *s = machine_get_stats(r->machine);
+  const struct machine_params *p = &r->cfg->p;
+  const double cyc = (double)s->cycles, tick = (double)(1ull << DRAM_TICK_BITS);
+  const uint64_t rays = render_stats_total(r->rstats);
+  const double seconds = cyc / (p->clock_ghz * 1e9);
+  stats_u64(t, "cycles", s->cycles);
+  stats_f64(t, "seconds", seconds);
+  stats_u64(t, "rays", rays);
+  stats_f64(t, "rays_per_second", ratio((double)rays, seconds));
+  stats_u64(t, "kd_node_visits", r->tstats->node_visits);
+  stats_u64(t, "triangle_tests", r->tstats->tri_tests);
+  stats_u64(t, "ray_contexts", s->contexts);
+  stats_u64(t, "threads", s->threads);
+  stats_u64(t, "issue_slots", s->issue_slots);
+  stats_f64(t, "core_utilization", ratio((double)s->issue_slots, (double)p->cores * cyc));
+  double tc = (double)s->threads * cyc;
+  stats_f64(t, "thread_idle_fraction",
+            ratio((double)(s->thread_wait_cycles + s->thread_done_cycles), tc));
+  stats_f64(t, "thread_wait_fraction", ratio((double)s->thread_wait_cycles, tc));
+  stats_f64(t, "thread_done_fraction", ratio((double)s->thread_done_cycles, tc));
+  stats_u64(t, "ray_switches", s->ray_switches);
+  stats_u64(t, "ray_switch_cycles", s->switch_cycles);
+  stats_u64(t, "loads", s->loads);
+  stats_u64(t, "stores", s->stores);
+  stats_u64(t, "l1_accesses", s->l1_accesses);
+  stats_u64(t, "l1_hits", s->l1_hits);
+  stats_u64(t, "l2_accesses", s->l2_accesses);
+  stats_u64(t, "l2_hits", s->l2_hits);
+  stats_u64(t, "l2_misses", s->l2_misses);
+  stats_f64(t, "l2_miss_rate", ratio((double)s->l2_misses, (double)s->l2_accesses));
+  stats_u64(t, "l2_mshr_merges", s->l2_mshr_merges);
+  stats_u64(t, "l2_whole_line_allocs", s->l2_whole_line_allocs);
+  stats_u64(t, "l2_stalls", s->l2_stalls);
+  stats_u64(t, "l2_bank_wait_cycles", s->l2_bank_wait_cycles);
+  stats_u64(t, "l2_fetch_bytes", s->l2_fetch_bytes);
+  stats_u64(t, "l2_writeback_bytes", s->l2_writeback_bytes);
+  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) {
+    char name[64];
+    snprintf(name, sizeof name, "fetch_%s_bytes", trace_class_names[c]);
+    stats_u64(t, name, s->fetch_bytes_by_class[c]);
+  }
+  stats_u64(t, "dram_read_bytes", s->dram_read_bytes);
+  stats_u64(t, "dram_write_bytes", s->dram_write_bytes);
+  stats_f64(t, "dram_bytes_per_cycle", ratio((double)(s->dram_read_bytes + s->dram_write_bytes), cyc));
+  stats_f64(t, "dram_utilization", ratio((double)s->dram_busy_ticks / tick, cyc));
+  uint64_t reqs = s->dram_reads + s->dram_writes;
+  stats_f64(t, "queue_delay_mean", ratio((double)s->dram_wait_ticks_sum / tick, (double)reqs));
+  stats_u64(t, "queue_delay_p95", hist_quantile(&s->queue_delay, 0.95));
+  stats_f64(t, "dram_queue_length_mean", ratio(s->dram_fifo_area, cyc));
+  stats_u64(t, "dram_queue_length_max", s->dram_fifo_max);
+  stats_f64(t, "load_latency_mean", hist_mean(&s->load_latency));
+  stats_u64(t, "load_latency_p95", hist_quantile(&s->load_latency, 0.95));
+  stats_u64(t, "load_latency_max", s->load_latency.max);
+  stats_u64(t, "events", s->events);
+  stats_u64(t, "coroutine_stacks_max", s->stacks_max);
+}
+
+/* Open dir/name.tmp for writing; the caller renames it with finish(). */
+static FILE *open_tmp(const struct run_report *r, const char *name, char *tmp, char *final,
+                      size_t cap) {
+  snprintf(final, cap, "%s/%s", r->out_dir, name);
+  snprintf(tmp, cap, "%s/.%s.tmp", r->out_dir, name);
+  return fopen(tmp, "w");
+}
+
+static bool finish(FILE *f, const char *tmp, const char *final, struct err *e) {
+  bool ok = f && !ferror(f);
+  if (f && fclose(f) != 0) ok = false;
+  if (ok && rename(tmp, final) == 0) return true;
+  unlink(tmp);
+  return err_set(e, final, 0, 0, "cannot write the file");
+}
+
+static bool write_csv(const struct run_report *r, struct err *e) {
+  char tmp[4200], final[4200];
+  FILE *f = open_tmp(r, "stats.csv", tmp, final, sizeof tmp);
+  struct stats_table t = {0};
+  identity(r, &t);
+  machine_cfg_to_stats(r->cfg, &t);
+  measured(r, &t);
+  if (f) {
+    stats_write_csv_header(&t, f);
+    stats_write_csv_row(&t, f);
+  }
+  stats_fini(&t);
+  return finish(f, tmp, final, e);
+}
+
+static bool write_timeline(const struct run_report *r, struct err *e) {
+  char tmp[4200], final[4200];
+  FILE *f = open_tmp(r, "timeline.csv", tmp, final, sizeof tmp);
+  if (!f) return finish(f, tmp, final, e);
+  const struct machine *m = r->machine;
+  const uint64_t rows = machine_timeline_rows(m), win = machine_timeline_window(m);
+  const uint64_t end = machine_get_stats(m)->cycles;
+  fputs("cycle,cycles,dram_read_bytes,dram_write_bytes", f);
+  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) fprintf(f, ",read_%s_bytes", trace_class_names[c]);
+  fputs(",l2_accesses,l2_misses,issued_ops,busy_threads\n", f);
+  for (uint64_t i = 0; i < rows; i++) {
+    const double *v = machine_timeline_row(m, i);
+    uint64_t start = i * win, len = start + win <= end ? win : (end > start ? end - start : 0);
+    if (len == 0) break;
+    fprintf(f, "%llu,%llu,%.2f,%.2f", (unsigned long long)start, (unsigned long long)len,
+            v[MTL_DRAM_READ_BYTES], v[MTL_DRAM_WRITE_BYTES]);
+    for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) fprintf(f, ",%.2f", v[MTL_READ_CLASS0 + c]);
+    fprintf(f, ",%.0f,%.0f,%.0f,%.4f\n", v[MTL_L2_ACCESSES], v[MTL_L2_MISSES], v[MTL_ISSUED_OPS],
+            v[MTL_BUSY_THREAD_CYCLES] / (double)len);
+  }
+  return finish(f, tmp, final, e);
+}
+
+/* DRAM bytes per cycle over the run by data class, read from timeline.csv. */
+static bool write_plot(const struct run_report *r, struct err *e) {
+  char csv[4200], tmp[4200], final[4200], cmd[8192];
+  snprintf(csv, sizeof csv, "%s/timeline.csv", r->out_dir);
+  snprintf(final, sizeof final, "%s/traffic.png", r->out_dir);
+  snprintf(tmp, sizeof tmp, "%s/.traffic.png.tmp", r->out_dir);
+  FILE *gp = popen("gnuplot >/dev/null 2>&1", "w");
+  if (!gp) return err_set(e, final, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
+  int n = snprintf(cmd, sizeof cmd,
+                   "set terminal pngcairo size 1000,560 noenhanced\nset output '%s'\n"
+                   "set datafile separator ','\nset key outside right top\n"
+                   "set title 'DRAM traffic per cycle: %s, %s policy, %ux%u (window %llu cycles)'\n"
+                   "set xlabel 'simulated time (million cycles)'\n"
+                   "set ylabel 'DRAM bytes per cycle'\nset grid\nset yrange [0:*]\n"
+                   "plot '%s' using (($1+$2/2)/1e6):(($3+$4)/$2) with steps lw 2 lc rgb 'black' title 'all (read + write)'",
+                   tmp, r->scene_name, r->policy, r->width, r->height,
+                   (unsigned long long)machine_timeline_window(r->machine), csv);
+  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++)
+    n += snprintf(cmd + n, sizeof cmd - (size_t)n,
+                  ", '' using (($1+$2/2)/1e6):($%u/$2) with steps title 'read: %s'", 5 + c,
+                  trace_class_names[c]);
+  snprintf(cmd + n, sizeof cmd - (size_t)n,
+           ", '' using (($1+$2/2)/1e6):($4/$2) with steps dt 2 title 'write-backs'\n");
+  fputs(cmd, gp);
+  int rc = pclose(gp);
+  if (rc != 0 || rename(tmp, final) != 0) {
+    unlink(tmp);
+    return err_set(e, final, 0, 0, "gnuplot could not draw the plot (is gnuplot-nox installed?)");
+  }
+  return true;
+}
+
+static bool write_json(const struct run_report *r, struct err *e) {
+  char tmp[4200], final[4200];
+  FILE *f = open_tmp(r, "stats.json", tmp, final, sizeof tmp);
+  if (!f) return finish(f, tmp, final, e);
+  const struct machine_stats *s = machine_get_stats(r->machine);
+  struct stats_table t = {0};
+  identity(r, &t);
+  fputs("{\n  \"tool\": \"rtsim run\",\n  \"machine_file\": ", f);
+  json_write_str(f, r->machine_path);
+  fputs(",\n  \"scene_file\": ", f);
+  json_write_str(f, r->scene_path);
+  fputs(",\n", f);
+  stats_write_json_members(&t, f, "  ");
+  stats_fini(&t);
+  fputs(",\n  \"config\": {\n", f);
+  machine_cfg_write_json(r->cfg, f, "    ");
+  fputs("\n  },\n", f);
+  measured(r, &t);
+  stats_write_json_members(&t, f, "  ");
+  stats_fini(&t);
+  fprintf(f, ",\n  \"timeline_window_cycles\": %llu",
+          (unsigned long long)machine_timeline_window(r->machine));
+  fputs(",\n  \"load_latency_histogram_cycles\": ", f);
+  hist_write_json(&s->load_latency, f);
+  fputs(",\n  \"queue_delay_histogram_cycles\": ", f);
+  hist_write_json(&s->queue_delay, f);
+  fputs(",\n  \"wall_s\": ", f);
+  json_write_f64(f, r->wall_s);
+  fputs("\n}\n", f);
+  return finish(f, tmp, final, e);
+}
+
+bool run_output_write(const struct run_report *r, struct err *e) {
+  char path[4200];
+  snprintf(path, sizeof path, "%s/image.exr", r->out_dir);
+  struct image im;
+  fb_to_image(r->fb, &im);
+  bool ok = image_write_exr(&im, path, false, e);
+  image_fini(&im);
+  /* stats.json last: it marks the directory complete. */
+  return ok && write_csv(r, e) && write_timeline(r, e) && write_plot(r, e) && write_json(r, e);
+}
+
+void run_output_summary(const struct run_report *r, FILE *f) {
+  struct stats_table t = {0};
+  measured(r, &t);
+  static const char *const show[] = {"cycles", "rays", "rays_per_second", "core_utilization",
+                                     "thread_idle_fraction", "l2_miss_rate", "dram_utilization",
+                                     "queue_delay_mean", "load_latency_mean", "events"};
+  for (unsigned i = 0; i < sizeof show / sizeof show[0]; i++)
+    for (unsigned j = 0; j < t.n; j++)
+      if (!strcmp(t.e[j].name, show[i])) {
+        if (t.e[j].kind == STATS_F64) fprintf(f, "%s: %.6g\n", show[i], t.e[j].f);
+        else fprintf(f, "%s: %llu\n", show[i], (unsigned long long)t.e[j].u);
+      }
+  fprintf(f, "wall_s: %.3f\noutput: %s\n", r->wall_s, r->out_dir);
+  stats_fini(&t);
+}

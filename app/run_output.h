@@ -1,0 +1,37 @@
+/* What rtsim run writes: image.exr, stats.csv, timeline.csv, traffic.png and,
+ * last, stats.json (its presence marks the directory complete). Each file is
+ * written under a temporary name and renamed when whole. */
+#ifndef RTSIM_APP_RUN_OUTPUT_H
+#define RTSIM_APP_RUN_OUTPUT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+
+struct err;
+struct machine;
+struct machine_cfg;
+struct render_stats;
+struct trace_stats;
+struct framebuffer;
+
+struct run_report {
+  const char *out_dir, *machine_path, *scene_path, *scene_name, *policy;
+  uint32_t mask, width, height;
+  uint64_t seed;
+  const struct machine_cfg *cfg;
+  const struct machine *machine;
+  const struct render_stats *rstats;
+  const struct trace_stats *tstats;
+  const struct framebuffer *fb;
+  double wall_s;
+};
+
+/* Remove a previous run's stats.json from dir (ignore its absence). */
+void run_output_invalidate(const char *dir);
+/* Write every output; on failure fills e (file = the one that failed). */
+bool run_output_write(const struct run_report *r, struct err *e);
+/* A few "key: value" lines for a person. */
+void run_output_summary(const struct run_report *r, FILE *f);
+
+#endif
