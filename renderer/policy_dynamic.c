@@ -114,12 +114,10 @@ struct dyn {
 struct walk {
   struct trav_ray tv;
   struct isect_ray ir;
-  float tmin, tmax;
+  float tmin;
   int32_t ignore;
   bool any;
-  bool found;
-  float best_t, best_b1, best_b2, upper;
-  uint32_t best_p;
+  struct trav_best best;
   uint32_t ni;
   float t0, t1;
   int sp;
@@ -169,11 +167,8 @@ static void restore_hit(const struct dyn *d, const struct isect_ray *ir, const s
 static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) {
   const struct kd_tree *kd = d->kd;
   w->any = r->type == RAY_SHADOW;
-  w->found = false;
-  w->best_t = w->upper = r->tmax;
-  w->best_p = 0;
+  trav_best_init(&w->best, r->tmax);
   w->tmin = r->tmin;
-  w->tmax = r->tmax;
   w->ignore = r->ignore_prim;
   if (!ray_valid(r) || kd->node_count == 0) return false;
   if (!trav_setup(&w->tv, kd, r)) return false;
@@ -184,12 +179,7 @@ static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) 
   } else if (r->hit_prim >= 0) {
     struct hit h;
     restore_hit(d, &w->ir, r, &h);
-    w->found = true;
-    w->best_t = h.t;
-    w->best_b1 = h.b1;
-    w->best_b2 = h.b2;
-    w->best_p = (uint32_t)h.prim;
-    w->upper = nextafterf(h.t, INFINITY);
+    trav_best_offer(&w->best, h.t, (uint32_t)h.prim, h.b1, h.b2);
   }
   w->ni = 0;
   w->t0 = w->tv.t0;
@@ -202,42 +192,13 @@ static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) 
  * occluded. */
 static bool walk_leaf(const struct dyn *d, struct walk *w, struct kd_node nd, uint32_t j0,
                       uint32_t j1) {
-  struct tracer *tr = d->tr;
-  uint32_t off = kd_leaf_offset(nd);
-  for (uint32_t j = j0; j < j1; j++) {
-    mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * (off + j), 4, MEM_CLASS_NODE);
-    uint32_t p = d->kd->prims[off + j];
-    if ((int64_t)p == (int64_t)w->ignore) continue;
-    announce_tri(tr, p);
-    const struct scene_tri *tri = &d->s->tris[p];
-    float t, b1, b2;
-    if (!isect_tri(&w->ir, tri->v[0], tri->v[1], tri->v[2], w->tmin, w->upper, &t, &b1, &b2))
-      continue;
-    if (w->any) return true;
-    if (!w->found || t < w->best_t || (t == w->best_t && p < w->best_p)) {
-      w->found = true;
-      w->best_t = t;
-      w->best_b1 = b1;
-      w->best_b2 = b2;
-      w->upper = nextafterf(t, INFINITY);
-      w->best_p = p;
-    }
-  }
-  return false;
+  return trav_leaf(d->tr, &w->ir, w->tmin, w->ignore, w->any, nd, j0, j1, &w->best);
 }
 
 /* Pop the next pending node above stack depth floor, skipping those entirely
  * beyond the best hit (trace.c's rule). False when none is left. */
 static bool walk_pop(struct walk *w, int floor) {
-  while (w->sp > floor) {
-    w->sp--;
-    if (w->found && w->best_t < w->stack[w->sp].t0) continue;
-    w->ni = w->stack[w->sp].node;
-    w->t0 = w->stack[w->sp].t0;
-    w->t1 = w->stack[w->sp].t1;
-    return true;
-  }
-  return false;
+  return trav_pop(w->stack, &w->sp, floor, &w->best, &w->ni, &w->t0, &w->t1);
 }
 
 /* Traverse from the current node. In a queue point's subtree (to_queue false)
@@ -245,7 +206,7 @@ static bool walk_pop(struct walk *w, int floor) {
  * points (to_queue true) stop at the first queue point reached. */
 static enum walk_end walk_run(const struct dyn *d, struct walk *w, int floor, bool to_queue) {
   for (;;) {
-    announce_node(d->tr, w->ni);
+    announce_node(d->tr, w->ni, 1);
     struct kd_node nd = d->qs.nodes[w->ni];
     if (to_queue && kd_is_queue_point(nd)) return WALK_QUEUED;
     if (!kd_is_leaf(nd)) {
@@ -264,7 +225,7 @@ static enum walk_end walk_run(const struct dyn *d, struct walk *w, int floor, bo
  * side, and popped it: so pop it here. */
 static void walk_to(const struct dyn *d, struct walk *w, uint32_t q) {
   while (w->ni != q) {
-    announce_node(d->tr, w->ni);
+    announce_node(d->tr, w->ni, 1);
     struct kd_node nd = d->qs.nodes[w->ni];
     CHECK(!kd_is_leaf(nd));
     uint32_t c = q >= kd_above(nd) ? kd_above(nd) : w->ni + 1, next;
@@ -404,13 +365,8 @@ static void terminate(struct dyn *d, struct ray *r, const struct walk *w, enum w
   if (r->type == RAY_SHADOW) {
     shade_shadow(r, e == WALK_HIT, d->fb, &d->tr->mem);
   } else {
-    struct hit h = {r->tmax, -1, 0.0f, 0.0f};
-    if (w->found) {
-      h.t = w->best_t;
-      h.prim = (int32_t)w->best_p;
-      h.b1 = w->best_b1;
-      h.b2 = w->best_b2;
-    }
+    struct hit h;
+    trav_best_hit(&w->best, &h);
     r->hit_prim = -1;
     struct ray spawn[SHADE_MAX_SPAWN];
     uint32_t n = shade_hit(d->sc, r, &h, d->fb, &d->tr->mem, spawn);
@@ -426,7 +382,7 @@ static void route(struct dyn *d, struct ray *r, const struct walk *w, enum walk_
   if (e == WALK_QUEUED) {
     int64_t qi = qpoint_index(&d->qs, w->ni);
     CHECK(qi >= 0);
-    r->hit_prim = w->found ? (int32_t)w->best_p : -1;
+    r->hit_prim = w->best.found ? (int32_t)w->best.p : -1;
     enqueue(d, (uint32_t)qi, r, qset);
   } else {
     terminate(d, r, w, e);
@@ -493,11 +449,10 @@ static void process_subtree(struct dyn *d, struct ray *r, uint32_t node) {
 /* Load (announce) entries [j0, j1) of a leaf's geometry, as the paper does on
  * opening a queue at a leaf: it will all be tested. */
 static void preload_leaf(const struct dyn *d, struct kd_node nd, uint32_t j0, uint32_t j1) {
-  const struct tracer *tr = d->tr;
+  struct tracer *tr = d->tr;
   uint32_t off = kd_leaf_offset(nd);
   for (uint32_t j = j0; j < j1; j++) {
-    mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * (off + j), 4, MEM_CLASS_NODE);
-    uint32_t p = d->kd->prims[off + j];
+    uint32_t p = trav_leaf_prim(tr, off + j);
     mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p, tr->layout.tri_bytes,
              MEM_CLASS_GEOMETRY);
   }
@@ -572,7 +527,7 @@ static void drain_leaf(struct dyn *d, uint32_t node, struct slot_cur first) {
           terminate(d, &r, &w, WALK_HIT);
           d->pool[cur_index(&k)].flags |= DYN_FLAG_DEAD;
         } else if (!last) {
-          d->pool[cur_index(&k)].hit_prim = w.found ? (int32_t)w.best_p : -1;
+          d->pool[cur_index(&k)].hit_prim = w.best.found ? (int32_t)w.best.p : -1;
         } else {
           walk_to(d, &w, node);
           route(d, &r, &w, walk_leave(d, &w), d->q);
