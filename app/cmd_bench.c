@@ -112,7 +112,7 @@ int cmd_bench(int argc, char **argv) {
       double fs = render_once(&w, mask, W, H, fn_backend_port(b), &nrays);
       if (k == 0 || fs < fbest) fbest = fs;
       acc = 0;
-      for (unsigned cl = 0; cl < MEM_CLASS_COUNT; cl++) acc += fn_backend_stats(b)->line_accesses[cl];
+      for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++) acc += fn_backend_stats(b)->line_accesses[cl];
       fn_backend_destroy(b);
     }
     printf("%s,%u,%u,%.3f,%u,%u,%llu,%.4f,%.0f", w.scene.name[0] ? w.scene.name : argv[i],

@@ -26,7 +26,7 @@ void policy_primary(const struct policy_env *env, const struct camera_frame *cf,
                     uint32_t y, struct ray *r) {
   const struct tracer *tr = env->tr;
   uint64_t pix = (uint64_t)y * env->fb->width + x;
-  mem_load(&tr->mem, tr->layout.camera_base + pix * sizeof *r, sizeof *r, MEM_CLASS_RAY);
+  mem_load(&tr->mem, tr->layout.camera_base + pix * sizeof *r, sizeof *r, TRACE_CLASS_RAY);
   camera_primary(cf, x, y, env->sc->seed, r);
 }
 

@@ -324,7 +324,7 @@ static void enqueue(struct dyn *d, uint32_t qi, const struct ray *r, struct dyn_
   const struct mem_port *mem = &d->tr->mem;
   struct dyn_queue *q = &qset[qi];
   CHECK(!(r->flags & DYN_FLAG_DEAD));
-  mem_load(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
+  mem_load(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
   if (q->tail == DYN_NONE || q->tail_fill == DYN_CHUNK_RAYS) {
     uint32_t c = chunk_alloc(d);
     if (q->tail == DYN_NONE)
@@ -334,11 +334,11 @@ static void enqueue(struct dyn *d, uint32_t qi, const struct ray *r, struct dyn_
     q->tail = c;
     q->tail_fill = 0;
   }
-  mem_store(mem, slot_addr(d, q->tail, q->tail_fill), sizeof *r, MEM_CLASS_RAY);
+  mem_store(mem, slot_addr(d, q->tail, q->tail_fill), sizeof *r, TRACE_CLASS_RAY);
   d->pool[(uint64_t)q->tail * DYN_CHUNK_RAYS + q->tail_fill] = *r;
   q->tail_fill++;
   q->count++;
-  mem_store(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
+  mem_store(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
   if (qset != d->q) return; /* the heap orders the phase being drained only */
   if (q->heap_pos < 0) {
     d->heap[d->heap_n] = qi;
@@ -454,7 +454,7 @@ static void preload_leaf(const struct dyn *d, struct kd_node nd, uint32_t j0, ui
   for (uint32_t j = j0; j < j1; j++) {
     uint32_t p = trav_leaf_prim(tr, off + j);
     mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p, tr->layout.tri_bytes,
-             MEM_CLASS_GEOMETRY);
+             TRACE_CLASS_GEOMETRY);
   }
 }
 
@@ -520,7 +520,7 @@ static void drain_leaf(struct dyn *d, uint32_t node, struct slot_cur first) {
         struct ray r = d->pool[cur_index(&k)];
         if (r.flags & DYN_FLAG_DEAD) continue;
         uint64_t n0 = d->tr->stats.node_visits, t0 = d->tr->stats.tri_tests;
-        mem_load(mem, slot_addr(d, k.c, k.i), sizeof r, MEM_CLASS_RAY);
+        mem_load(mem, slot_addr(d, k.c, k.i), sizeof r, TRACE_CLASS_RAY);
         struct walk w;
         CHECK(walk_init(d, &w, &r));
         if (walk_leaf(d, &w, nd, j0, j1)) {
@@ -538,7 +538,7 @@ static void drain_leaf(struct dyn *d, uint32_t node, struct slot_cur first) {
       /* Store the block back with its best hits (the last pass moved them on). */
       for (uint64_t t = 0; !last && t < n; t++, cur_next(d, &blk, false))
         if (!(d->pool[cur_index(&blk)].flags & DYN_FLAG_DEAD))
-          mem_store(mem, slot_addr(d, blk.c, blk.i), sizeof(struct ray), MEM_CLASS_RAY);
+          mem_store(mem, slot_addr(d, blk.c, blk.i), sizeof(struct ray), TRACE_CLASS_RAY);
     }
   }
 }
@@ -552,15 +552,15 @@ static void drain(struct dyn *d, uint32_t qi) {
    * traversal visits a node once), so nothing joins it while it drains. */
   q->head = q->tail = DYN_NONE;
   q->tail_fill = q->count = 0;
-  mem_load(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
-  mem_store(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
+  mem_load(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
+  mem_store(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
   if (kd_is_leaf(d->qs.nodes[node])) {
     drain_leaf(d, node, first);
     return;
   }
   for (struct slot_cur k = first; k.left > 0; cur_next(d, &k, true)) {
     struct ray r = d->pool[cur_index(&k)];
-    mem_load(mem, slot_addr(d, k.c, k.i), sizeof r, MEM_CLASS_RAY);
+    mem_load(mem, slot_addr(d, k.c, k.i), sizeof r, TRACE_CLASS_RAY);
     process_subtree(d, &r, node);
   }
 }

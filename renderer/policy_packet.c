@@ -106,7 +106,7 @@ void policy_packet_run(const struct policy_env *env, const struct policy_params 
     for (uint32_t y = y0; y < y1; y++)
       for (uint32_t x = x0; x < x1; x++) {
         policy_primary(env, &cf, x, y, &pr->r[pr->n]);
-        mem_store(mem, buf_addr(base, top, pr->n), sizeof(struct ray), MEM_CLASS_RAY);
+        mem_store(mem, buf_addr(base, top, pr->n), sizeof(struct ray), TRACE_CLASS_RAY);
         pr->n++;
       }
     top++;
@@ -117,7 +117,7 @@ void policy_packet_run(const struct policy_env *env, const struct policy_params 
       const uint32_t n = stack[top].n;
       cur->n = n;
       for (uint32_t i = 0; i < n; i++) {
-        mem_load(mem, buf_addr(base, top, i), sizeof(struct ray), MEM_CLASS_RAY);
+        mem_load(mem, buf_addr(base, top, i), sizeof(struct ray), TRACE_CLASS_RAY);
         cur->r[i] = stack[top].r[i];
       }
       const uint8_t type = cur->r[0].type;
@@ -146,7 +146,7 @@ void policy_packet_run(const struct policy_env *env, const struct policy_params 
           struct packet *dst = &stack[top];
           dst->n = group[g].n;
           for (uint32_t i = 0; i < dst->n; i++) {
-            mem_store(mem, buf_addr(base, top, i), sizeof(struct ray), MEM_CLASS_RAY);
+            mem_store(mem, buf_addr(base, top, i), sizeof(struct ray), TRACE_CLASS_RAY);
             dst->r[i] = group[g].r[i];
           }
           top++;

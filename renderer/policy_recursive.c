@@ -38,13 +38,13 @@ void policy_recursive_run(const struct policy_env *env, const struct policy_para
     uint64_t nodes0 = tr->stats.node_visits, tris0 = tr->stats.tri_tests;
     uint32_t top = 0;
     policy_primary(env, &cf, pix % w, pix / w, &stack[top]);
-    mem_store(mem, stack_addr, sizeof(struct ray), MEM_CLASS_RAY);
+    mem_store(mem, stack_addr, sizeof(struct ray), TRACE_CLASS_RAY);
     top++;
     if (st->ray_slots_max == 0) st->ray_slots_max = 1;
     st->spawned++;
     while (top > 0) {
       struct ray r = stack[--top];
-      mem_load(mem, stack_addr + (uint64_t)top * sizeof r, sizeof r, MEM_CLASS_RAY);
+      mem_load(mem, stack_addr + (uint64_t)top * sizeof r, sizeof r, TRACE_CLASS_RAY);
       st->rays[r.type]++;
       st->terminated++;
       if (r.type == RAY_SHADOW) {
@@ -57,7 +57,7 @@ void policy_recursive_run(const struct policy_env *env, const struct policy_para
       CHECK(top + n <= RECURSIVE_STACK);
       /* Push in reverse so the first spawned (shadow rays) are traced first. */
       for (uint32_t i = n; i-- > 0;) {
-        mem_store(mem, stack_addr + (uint64_t)top * sizeof r, sizeof r, MEM_CLASS_RAY);
+        mem_store(mem, stack_addr + (uint64_t)top * sizeof r, sizeof r, TRACE_CLASS_RAY);
         stack[top++] = spawn[i];
       }
       if (top > st->ray_slots_max) st->ray_slots_max = top;

@@ -124,6 +124,11 @@ bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, fl
   return true;
 }
 
+_Static_assert(TRACE_CLASS_COUNT <= MEM_CLASS_MAX, "the simulator keeps every class apart");
+
+const char *const trace_class_names[TRACE_CLASS_COUNT] = {"geometry", "node", "ray", "queue",
+                                                          "other"};
+
 void trace_layout_default(struct trace_layout *l) {
   l->tri_base = 1ull << TRACE_REGION_SHIFT;
   l->node_base = 2ull << TRACE_REGION_SHIFT;

@@ -152,7 +152,7 @@ static inline bool trav_interior(const struct trav_ray *tr, struct kd_node nd, u
 /* Announce a visit of node ni by `rays` rays at once (1, or a packet's active
  * rays): one node load, node_cycles of compute per ray. */
 static inline void announce_node(struct tracer *tr, uint32_t ni, uint32_t rays) {
-  mem_load(&tr->mem, tr->layout.node_base + 8ull * ni, 8, MEM_CLASS_NODE);
+  mem_load(&tr->mem, tr->layout.node_base + 8ull * ni, 8, TRACE_CLASS_NODE);
   mem_compute(&tr->mem, (uint64_t)tr->layout.node_cycles * rays);
   tr->stats.node_visits++;
 }
@@ -161,7 +161,7 @@ static inline void announce_node(struct tracer *tr, uint32_t ni, uint32_t rays) 
  * tri_cycles of compute and one test per ray. */
 static inline void announce_tri(struct tracer *tr, uint32_t p, uint32_t rays) {
   mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p,
-           tr->layout.tri_bytes, MEM_CLASS_GEOMETRY);
+           tr->layout.tri_bytes, TRACE_CLASS_GEOMETRY);
   mem_compute(&tr->mem, (uint64_t)tr->layout.tri_cycles * rays);
   tr->stats.tri_tests += rays;
   if (tr->tested) tr->tested[p >> 6] |= 1ull << (p & 63);
@@ -169,7 +169,7 @@ static inline void announce_tri(struct tracer *tr, uint32_t p, uint32_t rays) {
 
 /* Entry j of the leaf index lists: its 4-byte load, then the primitive. */
 static inline uint32_t trav_leaf_prim(struct tracer *tr, uint32_t j) {
-  mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * j, 4, MEM_CLASS_NODE);
+  mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * j, 4, TRACE_CLASS_NODE);
   return tr->kd->prims[j];
 }
 

@@ -56,7 +56,7 @@ static uint8_t *slot_of(struct counter *c, uint64_t addr) {
 static void on_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls, int store) {
   struct counter *c = ctx;
   if (addr >= c->l.qtable_base && addr < c->l.queue_base) {
-    c->class_bad += cls != MEM_CLASS_QUEUE || size != 8;
+    c->class_bad += cls != TRACE_CLASS_QUEUE || size != 8;
     uint64_t e = (addr - c->l.qtable_base) / 8;
     if (e + 1 > c->max_table) c->max_table = e + 1;
     c->table_bad += (addr - c->l.qtable_base) % 8 != 0;
@@ -65,7 +65,7 @@ static void on_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls, int
     else
       c->table_loads++;
   } else if (addr >= c->l.queue_base && addr < c->l.ray_base) {
-    c->class_bad += cls != MEM_CLASS_RAY || size != 64 || (addr - c->l.queue_base) % 64 != 0;
+    c->class_bad += cls != TRACE_CLASS_RAY || size != 64 || (addr - c->l.queue_base) % 64 != 0;
     uint8_t *p = slot_of(c, addr);
     if (store) {
       c->slot_stores++;
@@ -78,10 +78,10 @@ static void on_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls, int
     }
   } else if (addr >= c->l.camera_base) {
     uint64_t k = (addr - c->l.camera_base) / 64;
-    c->cam_bad += store || cls != MEM_CLASS_RAY || size != 64 || (addr - c->l.camera_base) % 64 != 0 ||
+    c->cam_bad += store || cls != TRACE_CLASS_RAY || size != 64 || (addr - c->l.camera_base) % 64 != 0 ||
                   k >= c->npix;
     if (k < c->npix) c->cam[k]++;
-  } else if (cls == MEM_CLASS_RAY) {
+  } else if (cls == TRACE_CLASS_RAY) {
     c->other_ray++;
   }
 }
