@@ -38,18 +38,15 @@ static double render_once(const struct app_world *w, uint32_t mask, uint32_t W, 
                           struct mem_port port, uint64_t *rays) {
   struct trace_layout layout;
   trace_layout_default(&layout);
-  struct tracer tr;
-  tracer_init(&tr, &w->scene, &w->kd, port, &layout);
   struct shade_ctx sc = {&w->scene, mask, w->scene.seed};
   struct framebuffer fb;
   fb_init(&fb, W, H, layout.fb_base);
+  struct policy_setup ps = {&w->scene, &w->kd, layout, &sc, &fb, NULL, NULL, NULL};
   struct render_stats st;
-  memset(&st, 0, sizeof st);
-  struct policy_env env = {&tr, &sc, &fb, &st, NULL, NULL};
   struct policy_params pp;
   policy_params_default(&pp);
   double t0 = app_now();
-  policy_run(POLICY_RECURSIVE, &env, &pp);
+  policy_run(POLICY_RECURSIVE, &ps, &pp, port, &st, NULL);
   double s = app_now() - t0;
   fb_fini(&fb);
   *rays = render_stats_total(&st);

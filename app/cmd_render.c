@@ -102,20 +102,23 @@ int cmd_render(int argc, char **argv) {
   if (!app_world_load(&w, path)) return 2;
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
-  struct tracer tr;
-  struct trace_layout layout;
-  trace_layout_default(&layout);
-  tracer_init(&tr, &w.scene, &w.kd, mem_port_native(), &layout);
   struct shade_ctx sc = {&w.scene, mask, have_seed ? seed : w.scene.seed};
   struct framebuffer fb;
   fb_init(&fb, W, H, 0);
+  struct policy_setup ps;
+  memset(&ps, 0, sizeof ps);
+  ps.scene = &w.scene;
+  ps.kd = &w.kd;
+  trace_layout_default(&ps.layout);
+  ps.sc = &sc;
+  ps.fb = &fb;
+  ps.progress = isatty(2) ? progress : NULL;
   struct render_stats st;
-  memset(&st, 0, sizeof st);
+  struct trace_stats ts;
   double t0 = app_now();
-  struct policy_env env = {&tr, &sc, &fb, &st, isatty(2) ? progress : NULL, NULL};
   struct policy_params pp;
   policy_params_default(&pp);
-  policy_run(policy, &env, &pp);
+  policy_run(policy, &ps, &pp, mem_port_native(), &st, &ts);
   double secs = app_now() - t0;
 
   struct image im;
@@ -147,8 +150,8 @@ int cmd_render(int argc, char **argv) {
   printf("rays_total: %llu\n", (unsigned long long)total);
   printf("ray_slots_max: %llu (%.1f MB of 64-byte rays held at once)\n",
          (unsigned long long)st.ray_slots_max, (double)st.ray_slots_max * 64 / 1048576.0);
-  printf("kd_node_visits: %llu\n", (unsigned long long)tr.stats.node_visits);
-  printf("triangle_tests: %llu\n", (unsigned long long)tr.stats.tri_tests);
+  printf("kd_node_visits: %llu\n", (unsigned long long)ts.node_visits);
+  printf("triangle_tests: %llu\n", (unsigned long long)ts.tri_tests);
   /* Peak memory against what the run must hold: the scene, the tree and the
    * rays in flight (the target is at most twice that), and apart the image
    * (the framebuffer's sums and costs, and the output planes). */

@@ -73,21 +73,18 @@ static void run_functional(const struct app_world *w, enum policy_kind k, uint32
   struct fn_backend *b = fn_backend_create(lp, din);
   struct trace_layout layout;
   trace_layout_default(&layout);
-  struct tracer tr;
-  tracer_init(&tr, &w->scene, &w->kd, fn_backend_port(b), &layout);
   uint64_t words = ((uint64_t)w->scene.tri_count + 63) / 64;
-  tr.tested = xcalloc(words, sizeof *tr.tested);
+  uint64_t *tested = xcalloc(words, sizeof *tested);
   struct shade_ctx sc = {&w->scene, mask, w->scene.seed};
   struct framebuffer fb;
   fb_init(&fb, width, height, layout.fb_base);
-  memset(&out->st, 0, sizeof out->st);
-  struct policy_env env = {&tr, &sc, &fb, &out->st, NULL, NULL};
-  policy_run(k, &env, pp);
+  struct policy_setup ps = {&w->scene, &w->kd, layout, &sc, &fb, tested, NULL, NULL};
+  policy_run(k, &ps, pp, fn_backend_port(b), &out->st, NULL);
   lru_stack_finish(fn_backend_stack(b));
   lru_stack_get_results(fn_backend_stack(b), &out->res);
   out->pot_vis_tris = 0;
-  for (uint64_t i = 0; i < words; i++) out->pot_vis_tris += (uint64_t)__builtin_popcountll(tr.tested[i]);
-  free(tr.tested);
+  for (uint64_t i = 0; i < words; i++) out->pot_vis_tris += (uint64_t)__builtin_popcountll(tested[i]);
+  free(tested);
   fb_fini(&fb);
   fn_backend_destroy(b);
 }

@@ -101,9 +101,10 @@ struct result {
 /* A render; batch: the dynamic policy's primary rays admitted at a time (0: all). */
 static void render_batch(struct world *w, enum policy_kind k, uint32_t mask, uint32_t size,
                          uint64_t cache, uint64_t batch, struct counter *cnt, struct result *res) {
-  struct trace_layout l;
-  trace_layout_default(&l);
-  struct tracer tr;
+  struct shade_ctx sc = {&w->s, mask, 7};
+  struct policy_setup ps;
+  testing_policy_setup(&ps, &w->s, &w->kd, &sc, &res->fb);
+  const struct trace_layout l = ps.layout;
   struct mem_port port = mem_port_native();
   if (cnt) {
     memset(cnt, 0, sizeof *cnt);
@@ -113,19 +114,14 @@ static void render_batch(struct world *w, enum policy_kind k, uint32_t mask, uin
     port.ops = &COUNTER_OPS;
     port.ctx = cnt;
   }
-  tracer_init(&tr, &w->s, &w->kd, port, &l);
   res->tested = calloc(w->s.tri_count / 64 + 1, sizeof *res->tested);
-  tr.tested = res->tested;
-  struct shade_ctx sc = {&w->s, mask, 7};
+  ps.tested = res->tested;
   fb_init(&res->fb, size, size, l.fb_base);
-  memset(&res->st, 0, sizeof res->st);
-  struct policy_env env = {&tr, &sc, &res->fb, &res->st, NULL, NULL};
   struct policy_params pp;
   policy_params_default(&pp);
   pp.cache_bytes = cache;
   pp.dyn_batch_rays = batch;
-  policy_run(k, &env, &pp);
-  res->ts = tr.stats;
+  policy_run(k, &ps, &pp, port, &res->st, &res->ts);
 }
 
 static void render(struct world *w, enum policy_kind k, uint32_t mask, uint32_t size,

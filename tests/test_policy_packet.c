@@ -299,15 +299,13 @@ static void render(struct world *w, enum policy_kind k, uint32_t mask, uint32_t 
   out->cnt.cam_lo = l.camera_base;
   out->cnt.cam_hi = l.camera_base + 64ull * width * height;
   struct mem_port port = {&COUNT_OPS, &out->cnt};
-  struct tracer tr;
-  tracer_init(&tr, &w->s, &w->kd, port, &l);
   struct shade_ctx sc = {&w->s, mask, 7};
   fb_init(&out->fb, width, height, l.fb_base);
-  struct policy_env env = {&tr, &sc, &out->fb, &out->st, NULL, NULL};
+  struct policy_setup ps;
+  testing_policy_setup(&ps, &w->s, &w->kd, &sc, &out->fb);
   struct policy_params pp;
   policy_params_default(&pp);
-  policy_run(k, &env, &pp);
-  out->ts = tr.stats;
+  policy_run(k, &ps, &pp, port, &out->st, &out->ts);
 }
 
 /* The packet policy's picture and ray counts equal the recursive policy's. */
