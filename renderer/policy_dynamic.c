@@ -421,7 +421,9 @@ static void cost_add(const struct dyn_worker *x, uint32_t pixel, uint64_t nodes0
  * The walk that finds the queue point is not charged to memory: it follows
  * the path from the root to that queue point, which the ray loads when it is
  * dequeued there (walk_to), so charging it here would count the path twice.
- * (The paper starts a new ray at the queue point holding its origin.) */
+ * It runs on a native copy of the worker's tracer (its counts are kept), so
+ * the worker's port is never changed. (The paper starts a new ray at the
+ * queue point holding its origin.) */
 static void start(struct dyn_worker *x, struct ray *r) {
   struct dyn *d = x->d;
   struct tracer *tr = x->tr;
@@ -431,10 +433,10 @@ static void start(struct dyn_worker *x, struct ray *r) {
   if (!walk_init(d, &w, r)) {
     terminate(x, r, &w, WALK_DONE);
   } else {
-    struct mem_port charged = tr->mem;
-    tr->mem = mem_port_native();
-    enum walk_end e = walk_run(d, tr, &w, 0, true);
-    tr->mem = charged;
+    struct tracer quiet = *tr;
+    quiet.mem = mem_port_native();
+    enum walk_end e = walk_run(d, &quiet, &w, 0, true);
+    tr->stats = quiet.stats;
     route(x, r, &w, e, qset);
   }
   cost_add(x, r->pixel, n0, t0);
