@@ -330,14 +330,16 @@ static uint64_t table_addr(const struct dyn *d, uint32_t qi) {
   return d->l->qtable_base + 8ull * qi;
 }
 
-/* Append r to queue qi of queue set qset (d->q, d->qsh or d->qn). */
+/* Append r to queue qi of queue set qset (d->q, d->qsh or d->qn): the table
+ * entry is loaded, the ray stored in its slot, the entry stored. The slot is
+ * claimed (counts, host copy, heap) before the first access, as any of them
+ * may suspend this worker and the next enqueue must find the slot taken. */
 static void enqueue(struct dyn_worker *x, uint32_t qi, const struct ray *r,
                     struct dyn_queue *qset) {
   struct dyn *d = x->d;
   const struct mem_port *mem = &x->tr->mem;
   struct dyn_queue *q = &qset[qi];
   CHECK(!(r->flags & DYN_FLAG_DEAD));
-  mem_load(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
   if (q->tail == DYN_NONE || q->tail_fill == DYN_CHUNK_RAYS) {
     uint32_t c = chunk_alloc(d);
     if (q->tail == DYN_NONE)
@@ -347,17 +349,20 @@ static void enqueue(struct dyn_worker *x, uint32_t qi, const struct ray *r,
     q->tail = c;
     q->tail_fill = 0;
   }
-  mem_store(mem, slot_addr(d, q->tail, q->tail_fill), sizeof *r, TRACE_CLASS_RAY);
-  d->pool[(uint64_t)q->tail * DYN_CHUNK_RAYS + q->tail_fill] = *r;
+  const uint32_t c = q->tail, i = q->tail_fill;
+  d->pool[(uint64_t)c * DYN_CHUNK_RAYS + i] = *r;
   q->tail_fill++;
   q->count++;
-  mem_store(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
-  if (qset != d->q) return; /* the heap orders the phase being drained only */
-  if (q->heap_pos < 0) {
-    d->heap[d->heap_n] = qi;
-    q->heap_pos = d->heap_n++;
+  if (qset == d->q) { /* the heap orders the phase being drained only */
+    if (q->heap_pos < 0) {
+      d->heap[d->heap_n] = qi;
+      q->heap_pos = d->heap_n++;
+    }
+    heap_up(d, (uint32_t)q->heap_pos);
   }
-  heap_up(d, (uint32_t)q->heap_pos);
+  mem_load(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
+  mem_store(mem, slot_addr(d, c, i), sizeof *r, TRACE_CLASS_RAY);
+  mem_store(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
 }
 
 /* ---- ray ends ---------------------------------------------------------------- */
