@@ -3,10 +3,8 @@
  * same workload, and the one-pass analyser's own speed. */
 #include <getopt.h>
 #include <stdio.h>
-#include <string.h>
 
 #include "app/app.h"
-#include "renderer/framebuffer.h"
 #include "renderer/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
@@ -36,19 +34,15 @@ static const char HELP[] =
 
 static double render_once(const struct app_world *w, uint32_t mask, uint32_t W, uint32_t H,
                           struct mem_port port, uint64_t *rays) {
-  struct trace_layout layout;
-  trace_layout_default(&layout);
-  struct shade_ctx sc = {&w->scene, mask, w->scene.seed};
-  struct framebuffer fb;
-  fb_init(&fb, W, H, layout.fb_base);
-  struct policy_setup ps = {&w->scene, &w->kd, layout, &sc, &fb, NULL, NULL, NULL};
+  struct app_render ar;
+  app_render_init(&ar, w, mask, w->scene.seed, W, H);
   struct render_stats st;
   struct policy_params pp;
   policy_params_default(&pp);
   double t0 = app_now();
-  policy_run(POLICY_RECURSIVE, &ps, &pp, port, &st, NULL);
+  policy_run(POLICY_RECURSIVE, &ar.setup, &pp, port, &st, NULL);
   double s = app_now() - t0;
-  fb_fini(&fb);
+  app_render_fini(&ar);
   *rays = render_stats_total(&st);
   return s;
 }

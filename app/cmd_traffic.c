@@ -71,21 +71,18 @@ static void run_functional(const struct app_world *w, enum policy_kind k, uint32
                            const struct lru_stack_params *lp, struct din_writer *din,
                            struct fn_run *out) {
   struct fn_backend *b = fn_backend_create(lp, din);
-  struct trace_layout layout;
-  trace_layout_default(&layout);
+  struct app_render ar;
+  app_render_init(&ar, w, mask, w->scene.seed, width, height);
   uint64_t words = ((uint64_t)w->scene.tri_count + 63) / 64;
   uint64_t *tested = xcalloc(words, sizeof *tested);
-  struct shade_ctx sc = {&w->scene, mask, w->scene.seed};
-  struct framebuffer fb;
-  fb_init(&fb, width, height, layout.fb_base);
-  struct policy_setup ps = {&w->scene, &w->kd, layout, &sc, &fb, tested, NULL, NULL};
-  policy_run(k, &ps, pp, fn_backend_port(b), &out->st, NULL);
+  ar.setup.tested = tested;
+  policy_run(k, &ar.setup, pp, fn_backend_port(b), &out->st, NULL);
   lru_stack_finish(fn_backend_stack(b));
   lru_stack_get_results(fn_backend_stack(b), &out->res);
   out->pot_vis_tris = 0;
   for (uint64_t i = 0; i < words; i++) out->pot_vis_tris += (uint64_t)__builtin_popcountll(tested[i]);
   free(tested);
-  fb_fini(&fb);
+  app_render_fini(&ar);
   fn_backend_destroy(b);
 }
 
