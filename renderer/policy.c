@@ -133,7 +133,9 @@ void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_
   job->live++;
 }
 
-bool policy_job_step(struct policy_job *job, struct policy_worker *w) { return job->mod->step(job, w); }
+bool policy_job_step(struct policy_job *job, struct policy_worker *w) {
+  return job->mod->step(job, w);
+}
 
 void policy_job_work(struct policy_job *job, struct policy_worker *w) {
   while (policy_job_step(job, w)) {
