@@ -195,10 +195,9 @@ static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
 
 const struct policy_module policy_packet_module = {
     .region_bytes = (uint64_t)PACKET_STACK * PACKET_MAX * sizeof(struct ray),
-    .max_workers = 0,
+    .max_workers = 0, /* as many as the ray regions allow */
     .create = pkt_create,
     .destroy = pkt_destroy,
     .step = pkt_step,
     .scratch_free = pkt_scratch_free,
-    .finish = NULL,
 };

@@ -93,10 +93,9 @@ static bool rec_step(struct policy_job *job, struct policy_worker *wk) {
 
 const struct policy_module policy_recursive_module = {
     .region_bytes = RECURSIVE_STACK * sizeof(struct ray),
-    .max_workers = 0,
+    .max_workers = 0, /* as many as the ray regions allow */
     .create = rec_create,
     .destroy = rec_destroy,
     .step = rec_step,
     .scratch_free = rec_scratch_free,
-    .finish = NULL,
 };
