@@ -6,8 +6,11 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
+#include "renderer/policy.h"
 #include "renderer/scene.h"
+#include "renderer/shade.h"
 
 struct err;
 
@@ -45,6 +48,24 @@ struct app_world {
 /* Load path and build the tree; on bad input prints and returns false. */
 bool app_world_load(struct app_world *w, const char *path);
 void app_world_fini(struct app_world *w);
+
+/* What a render of a world needs besides the policy and the memory port: the
+ * shading context, the framebuffer and the policy setup that points at them
+ * (so it must not move once set up). One setup for render, traffic, bench and
+ * run, so that they all render the same memory image. */
+struct app_render {
+  struct shade_ctx sc;
+  struct framebuffer fb;
+  struct policy_setup setup;
+};
+
+/* Set up a width x height render of w: the default layout, the ray types in
+ * mask shaded with seed, the framebuffer at layout.fb_base. No progress
+ * callback and no tested set: set them in r->setup if wanted (a tested set
+ * stays the caller's). w must outlive r. */
+void app_render_init(struct app_render *r, const struct app_world *w, uint32_t mask, uint64_t seed,
+                     uint32_t width, uint32_t height);
+void app_render_fini(struct app_render *r);
 
 struct image;
 /* Write an sRGB PNG preview of im's R, G, B channels through gnuplot (temporary

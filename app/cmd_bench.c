@@ -3,10 +3,8 @@
  * same workload, and the one-pass analyser's own speed. */
 #include <getopt.h>
 #include <stdio.h>
-#include <string.h>
 
 #include "app/app.h"
-#include "renderer/framebuffer.h"
 #include "renderer/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
@@ -36,22 +34,15 @@ static const char HELP[] =
 
 static double render_once(const struct app_world *w, uint32_t mask, uint32_t W, uint32_t H,
                           struct mem_port port, uint64_t *rays) {
-  struct trace_layout layout;
-  trace_layout_default(&layout);
-  struct tracer tr;
-  tracer_init(&tr, &w->scene, &w->kd, port, &layout);
-  struct shade_ctx sc = {&w->scene, mask, w->scene.seed};
-  struct framebuffer fb;
-  fb_init(&fb, W, H, layout.fb_base);
+  struct app_render ar;
+  app_render_init(&ar, w, mask, w->scene.seed, W, H);
   struct render_stats st;
-  memset(&st, 0, sizeof st);
-  struct policy_env env = {&tr, &sc, &fb, &st, NULL, NULL};
   struct policy_params pp;
   policy_params_default(&pp);
   double t0 = app_now();
-  policy_run(POLICY_RECURSIVE, &env, &pp);
+  policy_run(POLICY_RECURSIVE, &ar.setup, &pp, port, &st, NULL);
   double s = app_now() - t0;
-  fb_fini(&fb);
+  app_render_fini(&ar);
   *rays = render_stats_total(&st);
   return s;
 }
@@ -112,7 +103,7 @@ int cmd_bench(int argc, char **argv) {
       double fs = render_once(&w, mask, W, H, fn_backend_port(b), &nrays);
       if (k == 0 || fs < fbest) fbest = fs;
       acc = 0;
-      for (unsigned cl = 0; cl < MEM_CLASS_COUNT; cl++) acc += fn_backend_stats(b)->line_accesses[cl];
+      for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++) acc += fn_backend_stats(b)->line_accesses[cl];
       fn_backend_destroy(b);
     }
     printf("%s,%u,%u,%.3f,%u,%u,%llu,%.4f,%.0f", w.scene.name[0] ? w.scene.name : argv[i],

@@ -102,33 +102,30 @@ int cmd_render(int argc, char **argv) {
   if (!app_world_load(&w, path)) return 2;
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
-  struct tracer tr;
-  struct trace_layout layout;
-  trace_layout_default(&layout);
-  tracer_init(&tr, &w.scene, &w.kd, mem_port_native(), &layout);
-  struct shade_ctx sc = {&w.scene, mask, have_seed ? seed : w.scene.seed};
-  struct framebuffer fb;
-  fb_init(&fb, W, H, 0);
+  struct app_render ar;
+  app_render_init(&ar, &w, mask, have_seed ? seed : w.scene.seed, W, H);
+  ar.setup.progress = isatty(2) ? progress : NULL;
   struct render_stats st;
-  memset(&st, 0, sizeof st);
+  struct trace_stats ts;
   double t0 = app_now();
-  struct policy_env env = {&tr, &sc, &fb, &st, isatty(2) ? progress : NULL, NULL};
   struct policy_params pp;
   policy_params_default(&pp);
-  policy_run(policy, &env, &pp);
+  policy_run(policy, &ar.setup, &pp, mem_port_native(), &st, &ts);
   double secs = app_now() - t0;
 
   struct image im;
-  fb_to_image(&fb, &im);
+  const struct framebuffer *fb = &ar.fb;
+  fb_to_image(fb, &im);
   /* Bytes of the image, for the memory line of the summary. */
   const double image_bytes = (double)W * H *
-                             (3 * sizeof *fb.acc + sizeof *fb.cost_nodes + sizeof *fb.cost_tris +
-                              im.channel_count * sizeof(float));
+                             (3 * sizeof *fb->acc + sizeof *fb->cost_nodes +
+                              sizeof *fb->cost_tris + im.channel_count * sizeof(float));
   struct err e;
   memset(&e, 0, sizeof e);
   bool ok = image_write_exr(&im, out, half, &e) && (!preview || app_write_preview(&im, preview, &e));
   image_fini(&im);
-  fb_fini(&fb);
+  const uint64_t seed_used = ar.sc.seed;
+  app_render_fini(&ar);
   if (!ok) {
     app_world_fini(&w);
     return app_report(&e);
@@ -139,7 +136,7 @@ int cmd_render(int argc, char **argv) {
   printf("image: %ux%u\n", W, H);
   printf("policy: %s\n", policy_name(policy));
   printf("ray_types: %s\n", names);
-  printf("seed: %llu\n", (unsigned long long)sc.seed);
+  printf("seed: %llu\n", (unsigned long long)seed_used);
   static const char *const tn[] = {"primary", "shadow", "specular", "diffuse"};
   for (int t = 0; t < RAY_TYPE_COUNT; t++)
     printf("rays_%s: %llu\n", tn[t], (unsigned long long)st.rays[t]);
@@ -147,8 +144,8 @@ int cmd_render(int argc, char **argv) {
   printf("rays_total: %llu\n", (unsigned long long)total);
   printf("ray_slots_max: %llu (%.1f MB of 64-byte rays held at once)\n",
          (unsigned long long)st.ray_slots_max, (double)st.ray_slots_max * 64 / 1048576.0);
-  printf("kd_node_visits: %llu\n", (unsigned long long)tr.stats.node_visits);
-  printf("triangle_tests: %llu\n", (unsigned long long)tr.stats.tri_tests);
+  printf("kd_node_visits: %llu\n", (unsigned long long)ts.node_visits);
+  printf("triangle_tests: %llu\n", (unsigned long long)ts.tri_tests);
   /* Peak memory against what the run must hold: the scene, the tree and the
    * rays in flight (the target is at most twice that), and apart the image
    * (the framebuffer's sums and costs, and the output planes). */

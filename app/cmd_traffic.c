@@ -71,24 +71,18 @@ static void run_functional(const struct app_world *w, enum policy_kind k, uint32
                            const struct lru_stack_params *lp, struct din_writer *din,
                            struct fn_run *out) {
   struct fn_backend *b = fn_backend_create(lp, din);
-  struct trace_layout layout;
-  trace_layout_default(&layout);
-  struct tracer tr;
-  tracer_init(&tr, &w->scene, &w->kd, fn_backend_port(b), &layout);
+  struct app_render ar;
+  app_render_init(&ar, w, mask, w->scene.seed, width, height);
   uint64_t words = ((uint64_t)w->scene.tri_count + 63) / 64;
-  tr.tested = xcalloc(words, sizeof *tr.tested);
-  struct shade_ctx sc = {&w->scene, mask, w->scene.seed};
-  struct framebuffer fb;
-  fb_init(&fb, width, height, layout.fb_base);
-  memset(&out->st, 0, sizeof out->st);
-  struct policy_env env = {&tr, &sc, &fb, &out->st, NULL, NULL};
-  policy_run(k, &env, pp);
+  uint64_t *tested = xcalloc(words, sizeof *tested);
+  ar.setup.tested = tested;
+  policy_run(k, &ar.setup, pp, fn_backend_port(b), &out->st, NULL);
   lru_stack_finish(fn_backend_stack(b));
   lru_stack_get_results(fn_backend_stack(b), &out->res);
   out->pot_vis_tris = 0;
-  for (uint64_t i = 0; i < words; i++) out->pot_vis_tris += (uint64_t)__builtin_popcountll(tr.tested[i]);
-  free(tr.tested);
-  fb_fini(&fb);
+  for (uint64_t i = 0; i < words; i++) out->pot_vis_tris += (uint64_t)__builtin_popcountll(tested[i]);
+  free(tested);
+  app_render_fini(&ar);
   fn_backend_destroy(b);
 }
 
@@ -103,12 +97,13 @@ struct row {
 };
 
 static double geometry_bytes(const struct row *r, unsigned lg2) {
-  return (double)(fetched(&r->s, MEM_CLASS_GEOMETRY, lg2) + fetched(&r->s, MEM_CLASS_NODE, lg2));
+  return (double)(fetched(&r->s, TRACE_CLASS_GEOMETRY, lg2) +
+                  fetched(&r->s, TRACE_CLASS_NODE, lg2));
 }
 
 static double total_bytes(const struct row *r, unsigned lg2) {
   uint64_t t = 0;
-  for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) t += fetched(&r->s, c, lg2);
+  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) t += fetched(&r->s, c, lg2);
   return (double)t;
 }
 
@@ -215,8 +210,10 @@ int cmd_traffic(int argc, char **argv) {
     if (*q == ',') *q = '+'; /* a CSV field */
   const char *scene_name = w.scene.name[0] ? w.scene.name : scene_path;
   fprintf(f, "scene,rays,width,height,policy,cache_bytes,frac_pot_vis,geometry_mb,total_mb,"
-             "rel_geometry,rel_total,fetch_geometry,fetch_node,fetch_ray,fetch_queue,fetch_other,"
-             "writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes\n");
+             "rel_geometry,rel_total");
+  for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
+    fprintf(f, ",fetch_%s", trace_class_names[cl]);
+  fprintf(f, ",writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes\n");
   const unsigned lg2 = lp.lg2_line;
   struct trace_layout layout;
   trace_layout_default(&layout);
@@ -228,7 +225,7 @@ int cmd_traffic(int argc, char **argv) {
       if (rows[j].policy == POLICY_RECURSIVE && rows[j].s.capacity_bytes == r->s.capacity_bytes)
         base = &rows[j];
     uint64_t pv_bytes = r->pot_vis_tris * tri_bytes, wb = 0, acc = 0;
-    for (unsigned cl = 0; cl < MEM_CLASS_COUNT; cl++) {
+    for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++) {
       wb += r->s.writebacks[cl] << lg2;
       acc += r->s.accesses[cl];
     }
@@ -238,7 +235,7 @@ int cmd_traffic(int argc, char **argv) {
             policy_name(r->policy), (unsigned long long)r->s.capacity_bytes,
             pv_bytes ? (double)r->s.capacity_bytes / (double)pv_bytes : 0.0, g / MIB, t / MIB,
             bg > 0 ? g / bg : 0.0, bt > 0 ? t / bt : 0.0);
-    for (unsigned cl = 0; cl < MEM_CLASS_COUNT; cl++)
+    for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
       fprintf(f, ",%llu", (unsigned long long)fetched(&r->s, cl, lg2));
     fprintf(f, ",%llu,%llu,%llu,%llu\n", (unsigned long long)wb, (unsigned long long)acc,
             (unsigned long long)r->pot_vis_tris, (unsigned long long)pv_bytes);
@@ -351,7 +348,7 @@ int cmd_trace(int argc, char **argv) {
   printf("cache_bytes,misses,writebacks\n");
   for (unsigned k = 0; k < fr.res.size_count; k++) {
     uint64_t m = 0, wb = 0;
-    for (unsigned cl = 0; cl < MEM_CLASS_COUNT; cl++) {
+    for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++) {
       m += fr.res.size[k].misses[cl];
       wb += fr.res.size[k].writebacks[cl];
     }

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 
 #include "renderer/image.h"
+#include "renderer/trace.h"
 #include "sim/err.h"
 
 #define FB_ONE 4294967296.0 /* 2^32: fixed-point unit */
@@ -39,12 +40,12 @@ static int64_t to_fixed(float v) {
 
 void fb_add(struct framebuffer *fb, uint32_t pixel, vec3 c, const struct mem_port *mem) {
   uint64_t addr = fb->base_addr + (uint64_t)pixel * FB_PIXEL_BYTES;
-  mem_load(mem, addr, FB_PIXEL_BYTES, MEM_CLASS_OTHER);
+  mem_load(mem, addr, FB_PIXEL_BYTES, TRACE_CLASS_OTHER);
   int64_t *a = &fb->acc[3 * (uint64_t)pixel];
   a[0] += to_fixed(c.x);
   a[1] += to_fixed(c.y);
   a[2] += to_fixed(c.z);
-  mem_store(mem, addr, FB_PIXEL_BYTES, MEM_CLASS_OTHER);
+  mem_store(mem, addr, FB_PIXEL_BYTES, TRACE_CLASS_OTHER);
 }
 
 void fb_to_image(const struct framebuffer *fb, struct image *im) {

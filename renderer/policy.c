@@ -1,15 +1,21 @@
-/* Policy dispatch, names and defaults. */
+/* Policy dispatch, the shared work list, workers, names and defaults. */
 #include "renderer/policy.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 #include "renderer/camera.h"
 #include "renderer/framebuffer.h"
+#include "renderer/policy_impl.h"
+#include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/err.h"
 
 static const char *const NAMES[POLICY_COUNT] = {"recursive", "packet", "dynamic"};
+
+static const struct policy_module *const MODULES[POLICY_COUNT] = {
+    &policy_recursive_module, &policy_packet_module, &policy_dynamic_module};
 
 void policy_params_default(struct policy_params *p) {
   memset(p, 0, sizeof *p);
@@ -20,14 +26,6 @@ void policy_params_default(struct policy_params *p) {
   p->dyn_ray_share = 16;
   p->dyn_ray_buffer_bytes = 4096;
   p->dyn_batch_rays = 0;
-}
-
-void policy_primary(const struct policy_env *env, const struct camera_frame *cf, uint32_t x,
-                    uint32_t y, struct ray *r) {
-  const struct tracer *tr = env->tr;
-  uint64_t pix = (uint64_t)y * env->fb->width + x;
-  mem_load(&tr->mem, tr->layout.camera_base + pix * sizeof *r, sizeof *r, MEM_CLASS_RAY);
-  camera_primary(cf, x, y, env->sc->seed, r);
 }
 
 const char *policy_name(enum policy_kind k) { return (unsigned)k < POLICY_COUNT ? NAMES[k] : "?"; }
@@ -47,12 +45,129 @@ uint64_t render_stats_total(const struct render_stats *st) {
   return n;
 }
 
-void policy_run(enum policy_kind k, const struct policy_env *env, const struct policy_params *p) {
-  switch (k) {
-  case POLICY_RECURSIVE: policy_recursive_run(env, p); break;
-  case POLICY_PACKET: policy_packet_run(env, p); break;
-  case POLICY_DYNAMIC: policy_dynamic_run(env, p); break;
-  default: CHECK(!"unknown policy");
+void render_stats_add(struct render_stats *sum, const struct render_stats *st) {
+  for (int t = 0; t < RAY_TYPE_COUNT; t++) sum->rays[t] += st->rays[t];
+  sum->spawned += st->spawned;
+  sum->terminated += st->terminated;
+  sum->ray_slots_max += st->ray_slots_max;
+}
+
+/* ---- the work list ----------------------------------------------------------- */
+
+uint64_t policy_job_claim(struct policy_job *job, uint64_t n, uint64_t *first) {
+  uint64_t left = job->total - job->next;
+  if (n > left) n = left;
+  *first = job->next;
+  job->next += n;
+  return n;
+}
+
+void policy_job_done(struct policy_job *job, uint64_t n) {
+  uint64_t before = job->done;
+  job->done += n;
+  CHECK(job->done <= job->total);
+  const struct policy_setup *s = &job->setup;
+  if (!s->progress || job->progress_every == 0) return;
+  if (job->done / job->progress_every != before / job->progress_every || job->done == job->total)
+    s->progress(s->progress_ctx, job->done, job->total);
+}
+
+void policy_primary(const struct policy_job *job, struct policy_worker *w, uint32_t x, uint32_t y,
+                    struct ray *r) {
+  const struct tracer *tr = &w->tr;
+  uint64_t pix = (uint64_t)y * job->setup.fb->width + x;
+  mem_load(&tr->mem, tr->layout.camera_base + pix * sizeof *r, sizeof *r, TRACE_CLASS_RAY);
+  camera_primary(&job->cf, x, y, job->setup.sc->seed, r);
+}
+
+/* ---- jobs and workers --------------------------------------------------------- */
+
+uint64_t policy_ray_region_bytes(enum policy_kind k) {
+  CHECK((unsigned)k < POLICY_COUNT);
+  return MODULES[k]->region_bytes;
+}
+
+bool policy_workers_supported(enum policy_kind k, uint32_t workers) {
+  if ((unsigned)k >= POLICY_COUNT || workers == 0) return false;
+  const struct policy_module *m = MODULES[k];
+  if (m->max_workers && workers > m->max_workers) return false;
+  /* Every worker's region must end before the next region of the layout. */
+  return (uint64_t)workers * m->region_bytes <= 1ull << TRACE_REGION_SHIFT;
+}
+
+struct policy_job *policy_job_create(enum policy_kind k, const struct policy_setup *s,
+                                     const struct policy_params *p, uint32_t workers,
+                                     uint32_t cores) {
+  CHECK(policy_workers_supported(k, workers) && cores >= 1);
+  CHECK(s->sc->scene == s->scene);
+  struct policy_job *job = xcalloc(1, sizeof *job);
+  job->mod = MODULES[k];
+  job->setup = *s;
+  job->params = *p;
+  job->workers = workers;
+  job->cores = cores;
+  camera_frame_init(&job->cf, &s->scene->camera, s->fb->width, s->fb->height);
+  job->mod->create(job);
+  return job;
+}
+
+void policy_job_destroy(struct policy_job *job) {
+  if (!job) return;
+  job->mod->destroy(job);
+  free(job);
+}
+
+uint64_t policy_job_total(const struct policy_job *job) { return job->total; }
+
+void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_t id,
+                        uint32_t core, uint32_t thread, struct mem_port port) {
+  CHECK(id < job->workers && core < job->cores);
+  const struct policy_setup *s = &job->setup;
+  memset(w, 0, sizeof *w);
+  tracer_init(&w->tr, s->scene, s->kd, port, &s->layout);
+  w->tr.tested = s->tested;
+  w->tr.layout.ray_base += (uint64_t)id * job->mod->region_bytes;
+  w->id = id;
+  w->core = core;
+  w->thread = thread;
+  job->live++;
+}
+
+bool policy_job_step(struct policy_job *job, struct policy_worker *w) {
+  return job->mod->step(job, w);
+}
+
+void policy_job_work(struct policy_job *job, struct policy_worker *w) {
+  while (policy_job_step(job, w)) {
   }
-  CHECK(env->st->spawned == env->st->terminated);
+}
+
+void policy_worker_fini(struct policy_job *job, struct policy_worker *w) {
+  CHECK(job->live > 0);
+  job->mod->scratch_free(w->scratch);
+  w->scratch = NULL;
+  render_stats_add(&job->st, &w->st);
+  job->ts.node_visits += w->tr.stats.node_visits;
+  job->ts.tri_tests += w->tr.stats.tri_tests;
+  job->live--;
+}
+
+void policy_job_finish(struct policy_job *job, struct render_stats *st, struct trace_stats *ts) {
+  CHECK(job->live == 0);
+  CHECK(job->next == job->total && job->done == job->total);
+  *st = job->st;
+  if (job->mod->finish) job->mod->finish(job, st);
+  CHECK(st->spawned == st->terminated);
+  if (ts) *ts = job->ts;
+}
+
+void policy_run(enum policy_kind k, const struct policy_setup *s, const struct policy_params *p,
+                struct mem_port port, struct render_stats *st, struct trace_stats *ts) {
+  struct policy_job *job = policy_job_create(k, s, p, 1, 1);
+  struct policy_worker w;
+  policy_worker_init(&w, job, 0, 0, 0, port);
+  policy_job_work(job, &w);
+  policy_worker_fini(job, &w);
+  policy_job_finish(job, st, ts);
+  policy_job_destroy(job);
 }

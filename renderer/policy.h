@@ -2,7 +2,22 @@
  * behind this one interface. A policy decides only the order in which rays are
  * traced and where they wait in memory; tracing and shading are the shared
  * kernels, so every policy produces the same hits and the same image, bit for
- * bit (the framebuffer sums in fixed point). */
+ * bit (the framebuffer sums in fixed point).
+ *
+ * A render is a job that many workers share: each worker is one simulated ray
+ * context with its own memory port, tracer and counters, and takes work items
+ * (pixels or tiles) from the job's shared work list until none is left. On the
+ * timed machine a worker is a coroutine and any load, store or compute through
+ * its port may suspend it while other workers of the same job run; on the
+ * native and functional backends nothing suspends and one worker (policy_run)
+ * renders the whole image. Rules that keep interleaved workers honest:
+ * - a worker claims a work item from the shared list before its first memory
+ *   access for that item (an access may let another worker claim meanwhile);
+ * - a worker reads and writes shared host state only between two accesses,
+ *   never across one (cooperative switching needs no locks then);
+ * - each worker keeps its rays in its own region of the memory image and
+ *   counts its own work (per-pixel costs are differences of its own counters).
+ * With one worker every policy makes exactly the accesses it always made. */
 #ifndef RTSIM_RENDERER_POLICY_H
 #define RTSIM_RENDERER_POLICY_H
 
@@ -10,12 +25,12 @@
 #include <stdint.h>
 
 #include "renderer/render.h"
+#include "renderer/trace.h"
 
-struct tracer;
+struct scene;
+struct kd_tree;
 struct shade_ctx;
 struct framebuffer;
-struct camera_frame;
-struct ray;
 
 enum policy_kind { POLICY_RECURSIVE = 0, POLICY_PACKET = 1, POLICY_DYNAMIC = 2, POLICY_COUNT = 3 };
 
@@ -39,35 +54,102 @@ struct policy_params {
 
 void policy_params_default(struct policy_params *p);
 
-/* What a policy runs with. The tracer carries the memory port and layout
- * (where rays, queues and the framebuffer live in the simulated image). */
-struct policy_env {
-  struct tracer *tr;
+/* What every worker of one render shares, read-only during the render except
+ * for the framebuffer (contributions are sums, so their order does not
+ * matter) and the tested set (bits are only ever set). Borrowed: everything
+ * pointed to must outlive the job. */
+struct policy_setup {
+  const struct scene *scene;
+  const struct kd_tree *kd;
+  struct trace_layout layout;     /* simulated addresses of every region */
   const struct shade_ctx *sc;
-  struct framebuffer *fb; /* its size is the image size */
-  struct render_stats *st;
+  struct framebuffer *fb;         /* its size is the image size */
+  /* Optional bit set, one bit a triangle, set when any worker tests it against
+   * a ray (the potentially visible geometry). NULL: not tracked. */
+  uint64_t *tested;
+  /* Called now and then with (work done, total), may be NULL: work items for
+   * recursive and packet, rays terminated of rays spawned so far for dynamic. */
   render_progress_fn progress;
   void *progress_ctx;
 };
 
-/* Render the whole image with policy k. Checks ray conservation at the end. */
-void policy_run(enum policy_kind k, const struct policy_env *env, const struct policy_params *p);
+/* One render's shared work list and whatever the policy shares between its
+ * workers (opaque). State that belongs to one core of the machine (the
+ * dynamic policy's queue points, later) is kept in the job, indexed by the
+ * worker's core. */
+struct policy_job;
 
-/* Pixel (x, y)'s primary ray. Every policy reads it from the camera's ray
- * array in the memory image (one 64-byte load; trace_layout.camera_base), as a
- * ray-generation stage would have left it: the same input traffic for all
- * policies, and the 64 bytes per primary ray the paper's baselines carry. */
-void policy_primary(const struct policy_env *env, const struct camera_frame *cf, uint32_t x,
-                    uint32_t y, struct ray *r);
+/* One worker: a simulated ray context. Caller-provided storage; set up by
+ * policy_worker_init, released by policy_worker_fini. */
+struct policy_worker {
+  /* Its own tracer: its memory port, its trace_stats, and its layout, whose
+   * ray_base is its own ray region: setup ray_base + id x
+   * policy_ray_region_bytes (worker 0 keeps the setup's ray_base). */
+  struct tracer tr;
+  struct render_stats st;         /* its own counters */
+  uint32_t id;                    /* 0 .. workers-1: selects its ray region */
+  uint32_t core, thread;          /* where it runs (plain integers; core < cores) */
+  void *scratch;                  /* the policy's, allocated on its first work item */
+};
+
+/* Create a render of policy k for up to `workers` workers on `cores` cores.
+ * s and p are copied (what s points to is borrowed). CHECKs
+ * policy_workers_supported(k, workers) and cores >= 1. Caller destroys. */
+struct policy_job *policy_job_create(enum policy_kind k, const struct policy_setup *s,
+                                     const struct policy_params *p, uint32_t workers,
+                                     uint32_t cores);
+
+/* Whether policy k can render with this many workers: recursive and packet
+ * with any number whose ray regions fit the ray region of the layout; dynamic
+ * with one only, for now. */
+bool policy_workers_supported(enum policy_kind k, uint32_t workers);
+
+/* Bytes of the memory image one worker's rays occupy (its ray stack or packet
+ * buffers at their bound): worker i's region starts at ray_base + i x this.
+ * 0 for dynamic, whose rays wait in the queues at queue_base. */
+uint64_t policy_ray_region_bytes(enum policy_kind k);
+
+/* Set up worker w of job: id < workers (each id once), core < cores; its
+ * accesses go through port. Allocates nothing (scratch comes with its first
+ * work item, so idle workers cost nothing). */
+void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_t id,
+                        uint32_t core, uint32_t thread, struct mem_port port);
+
+/* Take the next work item and do all of it: claim it from the job (before any
+ * access), trace, shade, trace what it spawns. False, with no access made,
+ * when no work was left. Recursive: one pixel, in Hilbert order, its ray tree
+ * depth first; packet: one tile; dynamic: one batch of primary rays
+ * (dyn_batch_rays, by default all) through all its generations. Any access
+ * through w's port may suspend w. */
+bool policy_job_step(struct policy_job *job, struct policy_worker *w);
+
+/* The worker loop: policy_job_step until no work is left. */
+void policy_job_work(struct policy_job *job, struct policy_worker *w);
+
+/* Release w's scratch and add its counters to the job. Every initialised
+ * worker must be finished before policy_job_finish. */
+void policy_worker_fini(struct policy_job *job, struct policy_worker *w);
+
+/* After all work is done and all workers are finished: the counters summed
+ * over the workers (st->ray_slots_max is the sum of their maxima, as each has
+ * its own region). CHECKs that every work item was taken and rays spawned ==
+ * rays terminated. ts may be NULL. */
+void policy_job_finish(struct policy_job *job, struct render_stats *st, struct trace_stats *ts);
+
+void policy_job_destroy(struct policy_job *job); /* NULL ok */
+
+/* Work items of the render: pixels (recursive, dynamic) or tiles (packet). */
+uint64_t policy_job_total(const struct policy_job *job);
+
+/* Render the whole image with policy k and one worker (id 0, core 0, thread 0)
+ * whose accesses go through port; st and ts (ts may be NULL) receive the
+ * totals. Checks ray conservation at the end. */
+void policy_run(enum policy_kind k, const struct policy_setup *s, const struct policy_params *p,
+                struct mem_port port, struct render_stats *st, struct trace_stats *ts);
 
 /* "recursive", "packet", "dynamic". */
 const char *policy_name(enum policy_kind k);
 /* Parse a name; false if unknown. */
 bool policy_parse(const char *name, enum policy_kind *k);
-
-/* The modules (policy_recursive.c, policy_packet.c, policy_dynamic.c). */
-void policy_recursive_run(const struct policy_env *env, const struct policy_params *p);
-void policy_packet_run(const struct policy_env *env, const struct policy_params *p);
-void policy_dynamic_run(const struct policy_env *env, const struct policy_params *p);
 
 #endif

@@ -5,8 +5,10 @@
  * hits of a generation, then its shadow rays (traced from the light toward the
  * points), then the next generation's reflection rays, until none are left.
  * Primary rays are admitted all at once, or dyn_batch_rays at a time with each
- * batch traced through all its generations (policy.h); a queue is read newest
- * ray first (cur_newest).
+ * batch traced through all its generations (policy.h); a batch is a work
+ * item. A queue is read newest ray first (cur_newest). One worker for now:
+ * the queues are the job's (struct dyn), the pending spawned rays and the
+ * counters the worker's (struct dyn_worker).
  *
  * Same image as the recursive policy, bit for bit:
  * - A closest-hit ray makes exactly the traversal trace_closest makes, only
@@ -41,8 +43,6 @@
  *   chunks go to a last-in-first-out free list, new chunks come from it first
  *   (so the arena stays as small as the most rays ever queued at once). An
  *   enqueue writes a whole line, which the cache allocates without a fetch. */
-#include "renderer/policy.h"
-
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -51,6 +51,8 @@
 #include "renderer/camera.h"
 #include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
+#include "renderer/policy.h"
+#include "renderer/policy_impl.h"
 #include "renderer/qpoint.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
@@ -81,12 +83,11 @@ struct ray_buf {
   uint64_t n, cap;
 };
 
+/* The job's shared state: queue points, queues and their arena, the heap,
+ * the primary rays' order. (When several workers share it, the queues will
+ * belong to cores: a core owns a queue point and its threads drain it.) */
 struct dyn {
-  struct tracer *tr;
-  const struct shade_ctx *sc;
-  struct framebuffer *fb;
-  struct render_stats *st;
-  const struct policy_env *env;
+  const struct trace_layout *l; /* the job's layout (queue and table addresses) */
   const struct kd_tree *kd;
   const struct scene *s;
   struct qpoint_set qs;
@@ -102,10 +103,19 @@ struct dyn {
   /* Non-empty queues: a max-heap on (count, -index). */
   uint32_t *heap;
   uint32_t heap_n;
-  /* Rays spawned by shading, started once the ray that spawned them is done
-   * (so each ray's cost is its own). */
+  uint32_t *order;  /* primary rays (work items) in Hilbert order */
+  uint64_t batch;   /* primary rays a work item admits */
+};
+
+/* A worker's own (its scratch): where its accesses and counts go, and the
+ * rays its shading spawned, started once the ray that spawned them is done
+ * (so each ray's cost is its own). Set up afresh by each step. */
+struct dyn_worker {
+  struct dyn *d;
+  struct policy_job *job;
+  struct tracer *tr;
+  struct render_stats *st;
   struct ray_buf pend;
-  bool flushing;
   uint64_t progress_at;
 };
 
@@ -114,12 +124,10 @@ struct dyn {
 struct walk {
   struct trav_ray tv;
   struct isect_ray ir;
-  float tmin, tmax;
+  float tmin;
   int32_t ignore;
   bool any;
-  bool found;
-  float best_t, best_b1, best_b2, upper;
-  uint32_t best_p;
+  struct trav_best best;
   uint32_t ni;
   float t0, t1;
   int sp;
@@ -169,11 +177,8 @@ static void restore_hit(const struct dyn *d, const struct isect_ray *ir, const s
 static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) {
   const struct kd_tree *kd = d->kd;
   w->any = r->type == RAY_SHADOW;
-  w->found = false;
-  w->best_t = w->upper = r->tmax;
-  w->best_p = 0;
+  trav_best_init(&w->best, r->tmax);
   w->tmin = r->tmin;
-  w->tmax = r->tmax;
   w->ignore = r->ignore_prim;
   if (!ray_valid(r) || kd->node_count == 0) return false;
   if (!trav_setup(&w->tv, kd, r)) return false;
@@ -184,12 +189,7 @@ static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) 
   } else if (r->hit_prim >= 0) {
     struct hit h;
     restore_hit(d, &w->ir, r, &h);
-    w->found = true;
-    w->best_t = h.t;
-    w->best_b1 = h.b1;
-    w->best_b2 = h.b2;
-    w->best_p = (uint32_t)h.prim;
-    w->upper = nextafterf(h.t, INFINITY);
+    trav_best_offer(&w->best, h.t, (uint32_t)h.prim, h.b1, h.b2);
   }
   w->ni = 0;
   w->t0 = w->tv.t0;
@@ -200,59 +200,31 @@ static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) 
 
 /* Test entries [j0, j1) of leaf nd as trace.c does. True: a shadow ray is
  * occluded. */
-static bool walk_leaf(const struct dyn *d, struct walk *w, struct kd_node nd, uint32_t j0,
+static bool walk_leaf(struct tracer *tr, struct walk *w, struct kd_node nd, uint32_t j0,
                       uint32_t j1) {
-  struct tracer *tr = d->tr;
-  uint32_t off = kd_leaf_offset(nd);
-  for (uint32_t j = j0; j < j1; j++) {
-    mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * (off + j), 4, MEM_CLASS_NODE);
-    uint32_t p = d->kd->prims[off + j];
-    if ((int64_t)p == (int64_t)w->ignore) continue;
-    announce_tri(tr, p);
-    const struct scene_tri *tri = &d->s->tris[p];
-    float t, b1, b2;
-    if (!isect_tri(&w->ir, tri->v[0], tri->v[1], tri->v[2], w->tmin, w->upper, &t, &b1, &b2))
-      continue;
-    if (w->any) return true;
-    if (!w->found || t < w->best_t || (t == w->best_t && p < w->best_p)) {
-      w->found = true;
-      w->best_t = t;
-      w->best_b1 = b1;
-      w->best_b2 = b2;
-      w->upper = nextafterf(t, INFINITY);
-      w->best_p = p;
-    }
-  }
-  return false;
+  return trav_leaf(tr, &w->ir, w->tmin, w->ignore, w->any, nd, j0, j1, &w->best);
 }
 
 /* Pop the next pending node above stack depth floor, skipping those entirely
  * beyond the best hit (trace.c's rule). False when none is left. */
 static bool walk_pop(struct walk *w, int floor) {
-  while (w->sp > floor) {
-    w->sp--;
-    if (w->found && w->best_t < w->stack[w->sp].t0) continue;
-    w->ni = w->stack[w->sp].node;
-    w->t0 = w->stack[w->sp].t0;
-    w->t1 = w->stack[w->sp].t1;
-    return true;
-  }
-  return false;
+  return trav_pop(w->stack, &w->sp, floor, &w->best, &w->ni, &w->t0, &w->t1);
 }
 
 /* Traverse from the current node. In a queue point's subtree (to_queue false)
  * run until its pending nodes (those above floor) are done; above the queue
  * points (to_queue true) stop at the first queue point reached. */
-static enum walk_end walk_run(const struct dyn *d, struct walk *w, int floor, bool to_queue) {
+static enum walk_end walk_run(const struct dyn *d, struct tracer *tr, struct walk *w, int floor,
+                              bool to_queue) {
   for (;;) {
-    announce_node(d->tr, w->ni);
+    announce_node(tr, w->ni, 1);
     struct kd_node nd = d->qs.nodes[w->ni];
     if (to_queue && kd_is_queue_point(nd)) return WALK_QUEUED;
     if (!kd_is_leaf(nd)) {
       if (trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &w->ni, w->stack, &w->sp)) continue;
     } else {
       CHECK(!to_queue || kd_leaf_count(nd) == 0); /* geometry is below queue points */
-      if (walk_leaf(d, w, nd, 0, kd_leaf_count(nd))) return WALK_HIT;
+      if (walk_leaf(tr, w, nd, 0, kd_leaf_count(nd))) return WALK_HIT;
     }
     if (!walk_pop(w, floor)) return WALK_DONE;
   }
@@ -262,9 +234,9 @@ static enum walk_end walk_run(const struct dyn *d, struct walk *w, int floor, bo
  * the path to q, pushing what the original traversal pushed there. Where the
  * path goes to the far child, the traversal had pushed it, finished the near
  * side, and popped it: so pop it here. */
-static void walk_to(const struct dyn *d, struct walk *w, uint32_t q) {
+static void walk_to(const struct dyn *d, struct tracer *tr, struct walk *w, uint32_t q) {
   while (w->ni != q) {
-    announce_node(d->tr, w->ni);
+    announce_node(tr, w->ni, 1);
     struct kd_node nd = d->qs.nodes[w->ni];
     CHECK(!kd_is_leaf(nd));
     uint32_t c = q >= kd_above(nd) ? kd_above(nd) : w->ni + 1, next;
@@ -281,9 +253,9 @@ static void walk_to(const struct dyn *d, struct walk *w, uint32_t q) {
 }
 
 /* After a queue point's subtree: on to the next queue point, or the end. */
-static enum walk_end walk_leave(const struct dyn *d, struct walk *w) {
+static enum walk_end walk_leave(const struct dyn *d, struct tracer *tr, struct walk *w) {
   if (!walk_pop(w, 0)) return WALK_DONE;
-  return walk_run(d, w, 0, true);
+  return walk_run(d, tr, w, 0, true);
 }
 
 /* ---- queues ---------------------------------------------------------------- */
@@ -351,19 +323,23 @@ static void chunk_free(struct dyn *d, uint32_t c) {
 }
 
 static uint64_t slot_addr(const struct dyn *d, uint32_t c, uint32_t i) {
-  return d->tr->layout.queue_base + (uint64_t)c * DYN_CHUNK_BYTES + (uint64_t)i * sizeof(struct ray);
+  return d->l->queue_base + (uint64_t)c * DYN_CHUNK_BYTES + (uint64_t)i * sizeof(struct ray);
 }
 
 static uint64_t table_addr(const struct dyn *d, uint32_t qi) {
-  return d->tr->layout.qtable_base + 8ull * qi;
+  return d->l->qtable_base + 8ull * qi;
 }
 
-/* Append r to queue qi of queue set qset (d->q, d->qsh or d->qn). */
-static void enqueue(struct dyn *d, uint32_t qi, const struct ray *r, struct dyn_queue *qset) {
-  const struct mem_port *mem = &d->tr->mem;
+/* Append r to queue qi of queue set qset (d->q, d->qsh or d->qn): the table
+ * entry is loaded, the ray stored in its slot, the entry stored. The slot is
+ * claimed (counts, host copy, heap) before the first access, as any of them
+ * may suspend this worker and the next enqueue must find the slot taken. */
+static void enqueue(struct dyn_worker *x, uint32_t qi, const struct ray *r,
+                    struct dyn_queue *qset) {
+  struct dyn *d = x->d;
+  const struct mem_port *mem = &x->tr->mem;
   struct dyn_queue *q = &qset[qi];
   CHECK(!(r->flags & DYN_FLAG_DEAD));
-  mem_load(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
   if (q->tail == DYN_NONE || q->tail_fill == DYN_CHUNK_RAYS) {
     uint32_t c = chunk_alloc(d);
     if (q->tail == DYN_NONE)
@@ -373,70 +349,74 @@ static void enqueue(struct dyn *d, uint32_t qi, const struct ray *r, struct dyn_
     q->tail = c;
     q->tail_fill = 0;
   }
-  mem_store(mem, slot_addr(d, q->tail, q->tail_fill), sizeof *r, MEM_CLASS_RAY);
-  d->pool[(uint64_t)q->tail * DYN_CHUNK_RAYS + q->tail_fill] = *r;
+  const uint32_t c = q->tail, i = q->tail_fill;
+  d->pool[(uint64_t)c * DYN_CHUNK_RAYS + i] = *r;
   q->tail_fill++;
   q->count++;
-  mem_store(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
-  if (qset != d->q) return; /* the heap orders the phase being drained only */
-  if (q->heap_pos < 0) {
-    d->heap[d->heap_n] = qi;
-    q->heap_pos = d->heap_n++;
+  if (qset == d->q) { /* the heap orders the phase being drained only */
+    if (q->heap_pos < 0) {
+      d->heap[d->heap_n] = qi;
+      q->heap_pos = d->heap_n++;
+    }
+    heap_up(d, (uint32_t)q->heap_pos);
   }
-  heap_up(d, (uint32_t)q->heap_pos);
+  mem_load(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
+  mem_store(mem, slot_addr(d, c, i), sizeof *r, TRACE_CLASS_RAY);
+  mem_store(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
 }
 
 /* ---- ray ends ---------------------------------------------------------------- */
 
-static void progress(struct dyn *d) {
-  if (d->env->progress && d->st->terminated >= d->progress_at && d->st->terminated < d->st->spawned) {
-    d->env->progress(d->env->progress_ctx, d->st->terminated, d->st->spawned);
-    d->progress_at = d->st->terminated + (1u << 16);
+static void progress(struct dyn_worker *x) {
+  const struct policy_setup *s = &x->job->setup;
+  const struct render_stats *st = x->st;
+  if (s->progress && st->terminated >= x->progress_at && st->terminated < st->spawned) {
+    s->progress(s->progress_ctx, st->terminated, st->spawned);
+    x->progress_at = st->terminated + (1u << 16);
   }
 }
 
 /* A ray ends: a shadow ray adds its light, any other is shaded now (its hit
  * is the walk's best; a miss has t = tmax, as trace_closest gives it) and its
  * children wait in pend until this ray's work is counted. */
-static void terminate(struct dyn *d, struct ray *r, const struct walk *w, enum walk_end e) {
-  d->st->rays[r->type]++;
-  d->st->terminated++;
+static void terminate(struct dyn_worker *x, struct ray *r, const struct walk *w, enum walk_end e) {
+  const struct policy_setup *s = &x->job->setup;
+  x->st->rays[r->type]++;
+  x->st->terminated++;
   if (r->type == RAY_SHADOW) {
-    shade_shadow(r, e == WALK_HIT, d->fb, &d->tr->mem);
+    shade_shadow(r, e == WALK_HIT, s->fb, &x->tr->mem);
   } else {
-    struct hit h = {r->tmax, -1, 0.0f, 0.0f};
-    if (w->found) {
-      h.t = w->best_t;
-      h.prim = (int32_t)w->best_p;
-      h.b1 = w->best_b1;
-      h.b2 = w->best_b2;
-    }
+    struct hit h;
+    trav_best_hit(&w->best, &h);
     r->hit_prim = -1;
     struct ray spawn[SHADE_MAX_SPAWN];
-    uint32_t n = shade_hit(d->sc, r, &h, d->fb, &d->tr->mem, spawn);
-    d->st->spawned += n;
-    for (uint32_t k = 0; k < n; k++) buf_push(&d->pend, &spawn[k]);
+    uint32_t n = shade_hit(s->sc, r, &h, s->fb, &x->tr->mem, spawn);
+    x->st->spawned += n;
+    for (uint32_t k = 0; k < n; k++) buf_push(&x->pend, &spawn[k]);
   }
-  progress(d);
+  progress(x);
 }
 
 /* Where a ray goes after a walk: a queue of set qset, or its end. */
-static void route(struct dyn *d, struct ray *r, const struct walk *w, enum walk_end e,
+static void route(struct dyn_worker *x, struct ray *r, const struct walk *w, enum walk_end e,
                   struct dyn_queue *qset) {
   if (e == WALK_QUEUED) {
-    int64_t qi = qpoint_index(&d->qs, w->ni);
+    int64_t qi = qpoint_index(&x->d->qs, w->ni);
     CHECK(qi >= 0);
-    r->hit_prim = w->found ? (int32_t)w->best_p : -1;
-    enqueue(d, (uint32_t)qi, r, qset);
+    r->hit_prim = w->best.found ? (int32_t)w->best.p : -1;
+    enqueue(x, (uint32_t)qi, r, qset);
   } else {
-    terminate(d, r, w, e);
+    terminate(x, r, w, e);
   }
 }
 
-/* Per-pixel cost: the work done for a ray since the marks. */
-static void cost_add(const struct dyn *d, uint32_t pixel, uint64_t nodes0, uint64_t tris0) {
-  d->fb->cost_nodes[pixel] += (uint32_t)(d->tr->stats.node_visits - nodes0);
-  d->fb->cost_tris[pixel] += (uint32_t)(d->tr->stats.tri_tests - tris0);
+/* Per-pixel cost: the work this worker's tracer counted for a ray since the
+ * marks (its own counters: others' work never lands in them). */
+static void cost_add(const struct dyn_worker *x, uint32_t pixel, uint64_t nodes0,
+                     uint64_t tris0) {
+  struct framebuffer *fb = x->job->setup.fb;
+  fb->cost_nodes[pixel] += (uint32_t)(x->tr->stats.node_visits - nodes0);
+  fb->cost_tris[pixel] += (uint32_t)(x->tr->stats.tri_tests - tris0);
 }
 
 /* A new ray: found its first queue point (the one holding its origin, for a
@@ -446,60 +426,62 @@ static void cost_add(const struct dyn *d, uint32_t pixel, uint64_t nodes0, uint6
  * The walk that finds the queue point is not charged to memory: it follows
  * the path from the root to that queue point, which the ray loads when it is
  * dequeued there (walk_to), so charging it here would count the path twice.
- * (The paper starts a new ray at the queue point holding its origin.) */
-static void start(struct dyn *d, struct ray *r) {
-  uint64_t n0 = d->tr->stats.node_visits, t0 = d->tr->stats.tri_tests;
+ * It runs on a native copy of the worker's tracer (its counts are kept), so
+ * the worker's port is never changed. (The paper starts a new ray at the
+ * queue point holding its origin.) */
+static void start(struct dyn_worker *x, struct ray *r) {
+  struct dyn *d = x->d;
+  struct tracer *tr = x->tr;
+  uint64_t n0 = tr->stats.node_visits, t0 = tr->stats.tri_tests;
   struct walk w;
   struct dyn_queue *qset = r->type == RAY_PRIMARY ? d->q : r->type == RAY_SHADOW ? d->qsh : d->qn;
   if (!walk_init(d, &w, r)) {
-    terminate(d, r, &w, WALK_DONE);
+    terminate(x, r, &w, WALK_DONE);
   } else {
-    struct mem_port charged = d->tr->mem;
-    d->tr->mem = mem_port_native();
-    enum walk_end e = walk_run(d, &w, 0, true);
-    d->tr->mem = charged;
-    route(d, r, &w, e, qset);
+    struct tracer quiet = *tr;
+    quiet.mem = mem_port_native();
+    enum walk_end e = walk_run(d, &quiet, &w, 0, true);
+    tr->stats = quiet.stats;
+    route(x, r, &w, e, qset);
   }
-  cost_add(d, r->pixel, n0, t0);
+  cost_add(x, r->pixel, n0, t0);
 }
 
-/* Start the rays that shading spawned (and any they spawn in turn). */
-static void flush(struct dyn *d) {
-  if (d->flushing) return;
-  d->flushing = true;
-  for (uint64_t i = 0; i < d->pend.n; i++) {
-    struct ray r = d->pend.r[i];
-    start(d, &r);
+/* Start the rays that this worker's shading spawned, and any that they spawn
+ * in turn when they end at once (pend grows meanwhile: n is re-read). */
+static void flush(struct dyn_worker *x) {
+  for (uint64_t i = 0; i < x->pend.n; i++) {
+    struct ray r = x->pend.r[i];
+    start(x, &r);
   }
-  d->pend.n = 0;
-  d->flushing = false;
+  x->pend.n = 0;
 }
 
 /* ---- draining a queue ---------------------------------------------------------- */
 
 /* A ray of interior queue point node: its subtree, then onward. */
-static void process_subtree(struct dyn *d, struct ray *r, uint32_t node) {
-  uint64_t n0 = d->tr->stats.node_visits, t0 = d->tr->stats.tri_tests;
+static void process_subtree(struct dyn_worker *x, struct ray *r, uint32_t node) {
+  struct dyn *d = x->d;
+  struct tracer *tr = x->tr;
+  uint64_t n0 = tr->stats.node_visits, t0 = tr->stats.tri_tests;
   struct walk w;
   CHECK(walk_init(d, &w, r));
-  walk_to(d, &w, node);
-  enum walk_end e = walk_run(d, &w, w.sp, false);
-  if (e == WALK_DONE) e = walk_leave(d, &w);
-  route(d, r, &w, e, d->q);
-  cost_add(d, r->pixel, n0, t0);
-  flush(d);
+  walk_to(d, tr, &w, node);
+  enum walk_end e = walk_run(d, tr, &w, w.sp, false);
+  if (e == WALK_DONE) e = walk_leave(d, tr, &w);
+  route(x, r, &w, e, d->q);
+  cost_add(x, r->pixel, n0, t0);
+  flush(x);
 }
 
 /* Load (announce) entries [j0, j1) of a leaf's geometry, as the paper does on
  * opening a queue at a leaf: it will all be tested. */
-static void preload_leaf(const struct dyn *d, struct kd_node nd, uint32_t j0, uint32_t j1) {
-  const struct tracer *tr = d->tr;
+static void preload_leaf(struct tracer *tr, struct kd_node nd, uint32_t j0, uint32_t j1) {
   uint32_t off = kd_leaf_offset(nd);
   for (uint32_t j = j0; j < j1; j++) {
-    mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * (off + j), 4, MEM_CLASS_NODE);
-    uint32_t p = d->kd->prims[off + j];
+    uint32_t p = trav_leaf_prim(tr, off + j);
     mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p, tr->layout.tri_bytes,
-             MEM_CLASS_GEOMETRY);
+             TRACE_CLASS_GEOMETRY);
   }
 }
 
@@ -548,15 +530,17 @@ static void cur_next(struct dyn *d, struct slot_cur *k, bool release) {
  * ray_block at a time (loaded, tested, stored back with their best hit). After
  * the last block each ray goes on. Every ray still tests the leaf's triangles
  * in the leaf's order, so its hit is the one a single traversal finds. */
-static void drain_leaf(struct dyn *d, uint32_t node, struct slot_cur first) {
-  const struct mem_port *mem = &d->tr->mem;
+static void drain_leaf(struct dyn_worker *x, uint32_t node, struct slot_cur first) {
+  struct dyn *d = x->d;
+  struct tracer *tr = x->tr;
+  const struct mem_port *mem = &tr->mem;
   struct kd_node nd = d->qs.nodes[node];
   uint32_t cnt = kd_leaf_count(nd), bt = d->block_tris;
   uint32_t blocks = cnt == 0 ? 1 : (cnt + bt - 1) / bt;
   for (uint32_t b = 0; b < blocks; b++) {
     uint32_t j0 = b * bt, j1 = cnt - j0 > bt ? j0 + bt : cnt;
     bool last = b + 1 == blocks;
-    preload_leaf(d, nd, j0, j1);
+    preload_leaf(tr, nd, j0, j1);
     struct slot_cur k = first;
     while (k.left > 0) {
       struct slot_cur blk = k;
@@ -564,32 +548,33 @@ static void drain_leaf(struct dyn *d, uint32_t node, struct slot_cur first) {
       for (uint64_t t = 0; t < n; t++, cur_next(d, &k, last)) {
         struct ray r = d->pool[cur_index(&k)];
         if (r.flags & DYN_FLAG_DEAD) continue;
-        uint64_t n0 = d->tr->stats.node_visits, t0 = d->tr->stats.tri_tests;
-        mem_load(mem, slot_addr(d, k.c, k.i), sizeof r, MEM_CLASS_RAY);
+        uint64_t n0 = tr->stats.node_visits, t0 = tr->stats.tri_tests;
+        mem_load(mem, slot_addr(d, k.c, k.i), sizeof r, TRACE_CLASS_RAY);
         struct walk w;
         CHECK(walk_init(d, &w, &r));
-        if (walk_leaf(d, &w, nd, j0, j1)) {
-          terminate(d, &r, &w, WALK_HIT);
+        if (walk_leaf(tr, &w, nd, j0, j1)) {
+          terminate(x, &r, &w, WALK_HIT);
           d->pool[cur_index(&k)].flags |= DYN_FLAG_DEAD;
         } else if (!last) {
-          d->pool[cur_index(&k)].hit_prim = w.found ? (int32_t)w.best_p : -1;
+          d->pool[cur_index(&k)].hit_prim = w.best.found ? (int32_t)w.best.p : -1;
         } else {
-          walk_to(d, &w, node);
-          route(d, &r, &w, walk_leave(d, &w), d->q);
+          walk_to(d, tr, &w, node);
+          route(x, &r, &w, walk_leave(d, tr, &w), d->q);
         }
-        cost_add(d, r.pixel, n0, t0);
-        flush(d);
+        cost_add(x, r.pixel, n0, t0);
+        flush(x);
       }
       /* Store the block back with its best hits (the last pass moved them on). */
       for (uint64_t t = 0; !last && t < n; t++, cur_next(d, &blk, false))
         if (!(d->pool[cur_index(&blk)].flags & DYN_FLAG_DEAD))
-          mem_store(mem, slot_addr(d, blk.c, blk.i), sizeof(struct ray), MEM_CLASS_RAY);
+          mem_store(mem, slot_addr(d, blk.c, blk.i), sizeof(struct ray), TRACE_CLASS_RAY);
     }
   }
 }
 
-static void drain(struct dyn *d, uint32_t qi) {
-  const struct mem_port *mem = &d->tr->mem;
+static void drain(struct dyn_worker *x, uint32_t qi) {
+  struct dyn *d = x->d;
+  const struct mem_port *mem = &x->tr->mem;
   struct dyn_queue *q = &d->q[qi];
   uint32_t node = d->qs.qnode[qi];
   struct slot_cur first = cur_newest(d, q->head, q->tail_fill, q->count);
@@ -597,24 +582,24 @@ static void drain(struct dyn *d, uint32_t qi) {
    * traversal visits a node once), so nothing joins it while it drains. */
   q->head = q->tail = DYN_NONE;
   q->tail_fill = q->count = 0;
-  mem_load(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
-  mem_store(mem, table_addr(d, qi), 8, MEM_CLASS_QUEUE);
+  mem_load(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
+  mem_store(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
   if (kd_is_leaf(d->qs.nodes[node])) {
-    drain_leaf(d, node, first);
+    drain_leaf(x, node, first);
     return;
   }
   for (struct slot_cur k = first; k.left > 0; cur_next(d, &k, true)) {
     struct ray r = d->pool[cur_index(&k)];
-    mem_load(mem, slot_addr(d, k.c, k.i), sizeof r, MEM_CLASS_RAY);
-    process_subtree(d, &r, node);
+    mem_load(mem, slot_addr(d, k.c, k.i), sizeof r, TRACE_CLASS_RAY);
+    process_subtree(x, &r, node);
   }
 }
 
 /* Process queues until all are empty, the fullest first (ties: the lower
  * index). The fullest queue amortises its subtree's geometry over the most
  * rays, and meanwhile the others fill up. */
-static void drain_all(struct dyn *d) {
-  while (d->heap_n > 0) drain(d, heap_pop(d));
+static void drain_all(struct dyn_worker *x) {
+  while (x->d->heap_n > 0) drain(x, heap_pop(x->d));
 }
 
 /* ---- generations ----------------------------------------------------------- */
@@ -634,76 +619,117 @@ static void activate(struct dyn *d, struct dyn_queue **other) {
     }
 }
 
-void policy_dynamic_run(const struct policy_env *env, const struct policy_params *p) {
-  struct tracer *tr = env->tr;
-  struct dyn d;
-  memset(&d, 0, sizeof d);
-  d.tr = tr;
-  d.sc = env->sc;
-  d.fb = env->fb;
-  d.st = env->st;
-  d.env = env;
-  d.kd = tr->kd;
-  d.s = tr->scene;
-  d.free_head = DYN_NONE;
+/* ---- the module --------------------------------------------------------------- */
+
+static void dyn_create(struct policy_job *job) {
+  const struct policy_params *p = &job->params;
+  struct dyn *d = xcalloc(1, sizeof *d);
+  d->l = &job->setup.layout;
+  d->kd = job->setup.kd;
+  d->s = job->setup.scene;
+  d->free_head = DYN_NONE;
 
   /* Queue points for the cache. */
-  uint32_t *tris = xmalloc((uint64_t)d.kd->node_count * sizeof *tris + 1);
-  qpoint_subtree_tris(d.kd, tris);
+  const uint32_t tri_bytes = d->l->tri_bytes;
+  uint32_t *tris = xmalloc((uint64_t)d->kd->node_count * sizeof *tris + 1);
+  qpoint_subtree_tris(d->kd, tris);
   struct qpoint_reserve res = {p->cache_bytes, p->dyn_node_share, p->dyn_table_share,
                                p->dyn_ray_share, p->dyn_ray_buffer_bytes};
   struct qpoint_budget bud;
-  qpoint_plan(&d.qs, &bud, d.kd, tris, tr->layout.tri_bytes, &res);
+  qpoint_plan(&d->qs, &bud, d->kd, tris, tri_bytes, &res);
   free(tris);
-  uint64_t bt = bud.gmax_bytes / tr->layout.tri_bytes;
-  d.block_tris = bt == 0 ? 1 : (bt > UINT32_MAX ? UINT32_MAX : (uint32_t)bt);
+  uint64_t bt = bud.gmax_bytes / tri_bytes;
+  d->block_tris = bt == 0 ? 1 : (bt > UINT32_MAX ? UINT32_MAX : (uint32_t)bt);
   uint64_t rb = bud.ray_bytes / sizeof(struct ray);
-  d.ray_block = rb == 0 ? 1 : (rb > UINT32_MAX ? UINT32_MAX : (uint32_t)rb);
-  d.q = xmalloc((uint64_t)d.qs.count * sizeof *d.q + 1);
-  d.qsh = xmalloc((uint64_t)d.qs.count * sizeof *d.qsh + 1);
-  d.qn = xmalloc((uint64_t)d.qs.count * sizeof *d.qn + 1);
-  for (uint32_t i = 0; i < d.qs.count; i++) {
-    d.q[i].head = d.q[i].tail = DYN_NONE;
-    d.q[i].tail_fill = d.q[i].count = 0;
-    d.q[i].heap_pos = -1;
-    d.qsh[i] = d.qn[i] = d.q[i];
+  d->ray_block = rb == 0 ? 1 : (rb > UINT32_MAX ? UINT32_MAX : (uint32_t)rb);
+  d->q = xmalloc((uint64_t)d->qs.count * sizeof *d->q + 1);
+  d->qsh = xmalloc((uint64_t)d->qs.count * sizeof *d->qsh + 1);
+  d->qn = xmalloc((uint64_t)d->qs.count * sizeof *d->qn + 1);
+  for (uint32_t i = 0; i < d->qs.count; i++) {
+    d->q[i].head = d->q[i].tail = DYN_NONE;
+    d->q[i].tail_fill = d->q[i].count = 0;
+    d->q[i].heap_pos = -1;
+    d->qsh[i] = d->qn[i] = d->q[i];
   }
-  d.heap = xmalloc((uint64_t)d.qs.count * sizeof *d.heap + 1);
+  d->heap = xmalloc((uint64_t)d->qs.count * sizeof *d->heap + 1);
 
-  /* Generation 0: every primary ray, in Hilbert order, to its first queue. */
-  const uint32_t w = env->fb->width, h = env->fb->height;
-  const uint64_t npix = (uint64_t)w * h;
-  uint32_t *order = xmalloc(npix * sizeof *order + 1);
-  camera_hilbert_order(w, h, order);
-  struct camera_frame cf;
-  camera_frame_init(&cf, &env->sc->scene->camera, w, h);
-  const uint64_t batch = p->dyn_batch_rays ? p->dyn_batch_rays : npix;
-  for (uint64_t k0 = 0; k0 < npix; k0 += batch) {
-    for (uint64_t k = k0; k < npix && k - k0 < batch; k++) {
-      struct ray r;
-      policy_primary(env, &cf, order[k] % w, order[k] / w, &r);
-      env->st->spawned++;
-      start(&d, &r);
-      flush(&d);
-    }
-    for (;;) {
-      drain_all(&d); /* this generation's closest-hit rays */
-      activate(&d, &d.qsh);
-      drain_all(&d); /* their shadow rays (which spawn nothing) */
-      activate(&d, &d.qn);
-      if (d.heap_n == 0) break; /* no next generation */
-    }
-  }
-  free(order);
-  if (env->progress) env->progress(env->progress_ctx, env->st->terminated, env->st->terminated);
-  env->st->ray_slots_max = (uint64_t)d.chunks * DYN_CHUNK_RAYS;
-
-  free(d.pend.r);
-  free(d.heap);
-  free(d.q);
-  free(d.qsh);
-  free(d.qn);
-  free(d.pool);
-  free(d.chunk_next);
-  qpoint_fini(&d.qs);
+  /* The work items: primary rays in Hilbert order, admitted a batch at a time. */
+  const uint32_t w = job->setup.fb->width, h = job->setup.fb->height;
+  job->total = (uint64_t)w * h;
+  job->progress_every = 0; /* progress counts rays (progress()) */
+  d->order = xmalloc(job->total * sizeof *d->order + 1);
+  camera_hilbert_order(w, h, d->order);
+  d->batch = p->dyn_batch_rays ? p->dyn_batch_rays : job->total;
+  job->shared = d;
 }
+
+static void dyn_destroy(struct policy_job *job) {
+  struct dyn *d = job->shared;
+  if (!d) return;
+  free(d->order);
+  free(d->heap);
+  free(d->q);
+  free(d->qsh);
+  free(d->qn);
+  free(d->pool);
+  free(d->chunk_next);
+  qpoint_fini(&d->qs);
+  free(d);
+}
+
+static void dyn_scratch_free(void *scratch) {
+  struct dyn_worker *x = scratch;
+  if (!x) return;
+  free(x->pend.r);
+  free(x);
+}
+
+/* One batch of primary rays, each to its first queue, then all their
+ * generations: closest-hit rays, their shadow rays, the next generation. */
+static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
+  struct dyn *d = job->shared;
+  uint64_t k0, n = policy_job_claim(job, d->batch, &k0);
+  if (n == 0) return false;
+  if (!wk->scratch) wk->scratch = xcalloc(1, sizeof(struct dyn_worker));
+  struct dyn_worker *x = wk->scratch;
+  x->d = d;
+  x->job = job;
+  x->tr = &wk->tr;
+  x->st = &wk->st;
+  const uint32_t w = job->setup.fb->width;
+  for (uint64_t k = k0; k < k0 + n; k++) {
+    struct ray r;
+    policy_primary(job, wk, d->order[k] % w, d->order[k] / w, &r);
+    x->st->spawned++;
+    start(x, &r);
+    flush(x);
+  }
+  for (;;) {
+    drain_all(x); /* this generation's closest-hit rays */
+    activate(d, &d->qsh);
+    drain_all(x); /* their shadow rays (which spawn nothing) */
+    activate(d, &d->qn);
+    if (d->heap_n == 0) break; /* no next generation */
+  }
+  policy_job_done(job, n);
+  const struct policy_setup *s = &job->setup;
+  if (job->done == job->total && s->progress)
+    s->progress(s->progress_ctx, x->st->terminated, x->st->terminated);
+  return true;
+}
+
+/* The queue arena at its largest: the rays in flight. */
+static void dyn_finish(struct policy_job *job, struct render_stats *st) {
+  const struct dyn *d = job->shared;
+  st->ray_slots_max += (uint64_t)d->chunks * DYN_CHUNK_RAYS;
+}
+
+const struct policy_module policy_dynamic_module = {
+    .region_bytes = 0, /* its rays wait in the queues, at queue_base */
+    .max_workers = 1,  /* the queues are not yet shared between workers */
+    .create = dyn_create,
+    .destroy = dyn_destroy,
+    .step = dyn_step,
+    .scratch_free = dyn_scratch_free,
+    .finish = dyn_finish,
+};

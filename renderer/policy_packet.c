@@ -10,6 +10,9 @@
  * A ray written to a buffer is a 64-byte store, read back before tracing a
  * 64-byte load.
  *
+ * A work item is a tile: workers take the next one from the job's shared
+ * counter, each with its own packet buffers in its own ray region.
+ *
  * Per-pixel cost channels: each ray's own share of the packet's work (nodes it
  * was active in, triangles tested against it) goes to its pixel, so they read
  * like the recursive policy's. tr->stats.node_visits counts packet node visits
@@ -20,6 +23,7 @@
 #include "renderer/camera.h"
 #include "renderer/framebuffer.h"
 #include "renderer/policy.h"
+#include "renderer/policy_impl.h"
 #include "renderer/rng.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
@@ -74,96 +78,126 @@ static uint64_t buf_addr(uint64_t base, uint32_t k, uint32_t i) {
   return base + ((uint64_t)k * PACKET_MAX + i) * sizeof(struct ray);
 }
 
-void policy_packet_run(const struct policy_env *env, const struct policy_params *p) {
-  struct tracer *tr = env->tr;
-  const struct shade_ctx *sc = env->sc;
-  struct framebuffer *fb = env->fb;
-  struct render_stats *st = env->st;
-  const struct mem_port *mem = &tr->mem;
-  const uint64_t base = tr->layout.ray_base;
-  const uint32_t w = fb->width, h = fb->height, dim = p->packet_dim;
-  CHECK(dim >= 1 && dim * dim <= PACKET_MAX);
-  const uint32_t tiles_x = (w + dim - 1) / dim, tiles_y = (h + dim - 1) / dim;
-  const uint64_t ntiles = (uint64_t)tiles_x * tiles_y;
-  struct camera_frame cf;
-  camera_frame_init(&cf, &sc->scene->camera, w, h);
-
-  struct packet *stack = xmalloc(PACKET_STACK * sizeof *stack);
-  struct packet *group = xmalloc(GROUP_COUNT * sizeof *group);
-  struct packet *cur = xmalloc(sizeof *cur);
-  struct trace_packet *pk = trace_packet_create();
+/* A worker's own: the host copies of its packet buffers, the packet query's
+ * scratch, and the results of one packet (kept off the C stack, so that the
+ * worker fits a small coroutine stack). */
+struct pkt_scratch {
+  struct packet stack[PACKET_STACK];
+  struct packet group[GROUP_COUNT];
+  struct packet cur;
+  struct trace_packet *pk;
   struct trace_packet_cost cost;
   struct hit hits[PACKET_MAX];
   bool occ[PACKET_MAX];
   struct ray spawn[SHADE_MAX_SPAWN];
+};
 
-  for (uint64_t k = 0; k < ntiles; k++) {
-    const uint32_t x0 = (uint32_t)(k % tiles_x) * dim, y0 = (uint32_t)(k / tiles_x) * dim;
-    const uint32_t x1 = x0 + dim < w ? x0 + dim : w, y1 = y0 + dim < h ? y0 + dim : h;
-    uint32_t top = 0;
-    struct packet *pr = &stack[top];
-    pr->n = 0;
-    for (uint32_t y = y0; y < y1; y++)
-      for (uint32_t x = x0; x < x1; x++) {
-        policy_primary(env, &cf, x, y, &pr->r[pr->n]);
-        mem_store(mem, buf_addr(base, top, pr->n), sizeof(struct ray), MEM_CLASS_RAY);
-        pr->n++;
-      }
-    top++;
-    st->spawned += pr->n;
-    while (top > 0) {
-      top--;
-      /* Read the packet back; its buffer is free for its children from here. */
-      const uint32_t n = stack[top].n;
-      cur->n = n;
-      for (uint32_t i = 0; i < n; i++) {
-        mem_load(mem, buf_addr(base, top, i), sizeof(struct ray), MEM_CLASS_RAY);
-        cur->r[i] = stack[top].r[i];
-      }
-      const uint8_t type = cur->r[0].type;
-      st->rays[type] += n;
-      st->terminated += n;
-      if (type == RAY_SHADOW) {
-        trace_packet_any(tr, pk, cur->r, n, occ, &cost);
-        for (uint32_t i = 0; i < n; i++) shade_shadow(&cur->r[i], occ[i], fb, mem);
-      } else {
-        trace_packet_closest(tr, pk, cur->r, n, hits, &cost);
-        for (uint32_t g = 0; g < GROUP_COUNT; g++) group[g].n = 0;
-        for (uint32_t i = 0; i < n; i++) {
-          uint32_t ns = shade_hit(sc, &cur->r[i], &hits[i], fb, mem, spawn);
-          uint64_t used = 0;
-          for (uint32_t j = 0; j < ns; j++) {
-            struct packet *gp = &group[child_group(&cur->r[i], &spawn[j], &used)];
-            CHECK(gp->n < PACKET_MAX);
-            gp->r[gp->n++] = spawn[j];
-          }
-          st->spawned += ns;
-        }
-        /* Push in reverse so the shadow packets (light order) are traced first. */
-        for (uint32_t g = GROUP_COUNT; g-- > 0;) {
-          if (group[g].n == 0) continue;
-          CHECK(top < PACKET_STACK);
-          struct packet *dst = &stack[top];
-          dst->n = group[g].n;
-          for (uint32_t i = 0; i < dst->n; i++) {
-            mem_store(mem, buf_addr(base, top, i), sizeof(struct ray), MEM_CLASS_RAY);
-            dst->r[i] = group[g].r[i];
-          }
-          top++;
-        }
-        uint64_t slots = (uint64_t)top * PACKET_MAX;
-        if (slots > st->ray_slots_max) st->ray_slots_max = slots;
-      }
-      for (uint32_t i = 0; i < n; i++) {
-        fb->cost_nodes[cur->r[i].pixel] += cost.nodes[i];
-        fb->cost_tris[cur->r[i].pixel] += cost.tris[i];
-      }
-    }
-    if (env->progress && (k & 63) == 63) env->progress(env->progress_ctx, k + 1, ntiles);
-  }
-  if (env->progress) env->progress(env->progress_ctx, ntiles, ntiles);
-  trace_packet_destroy(pk);
-  free(cur);
-  free(group);
-  free(stack);
+static void pkt_create(struct policy_job *job) {
+  const uint32_t w = job->setup.fb->width, h = job->setup.fb->height, dim = job->params.packet_dim;
+  CHECK(dim >= 1 && dim * dim <= PACKET_MAX);
+  job->total = (uint64_t)((w + dim - 1) / dim) * ((h + dim - 1) / dim);
+  job->progress_every = 64;
+  job->shared = NULL;
 }
+
+static void pkt_destroy(struct policy_job *job) { (void)job; }
+
+static void pkt_scratch_free(void *scratch) {
+  struct pkt_scratch *x = scratch;
+  if (!x) return;
+  trace_packet_destroy(x->pk);
+  free(x);
+}
+
+static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
+  uint64_t k;
+  if (policy_job_claim(job, 1, &k) == 0) return false;
+  if (!wk->scratch) {
+    struct pkt_scratch *n = xmalloc(sizeof *n);
+    n->pk = trace_packet_create();
+    wk->scratch = n;
+  }
+  struct pkt_scratch *x = wk->scratch;
+  struct packet *stack = x->stack, *group = x->group, *cur = &x->cur;
+  struct tracer *tr = &wk->tr;
+  const struct shade_ctx *sc = job->setup.sc;
+  struct framebuffer *fb = job->setup.fb;
+  struct render_stats *st = &wk->st;
+  const struct mem_port *mem = &tr->mem;
+  const uint64_t base = tr->layout.ray_base;
+  const uint32_t w = fb->width, h = fb->height, dim = job->params.packet_dim;
+  const uint32_t tiles_x = (w + dim - 1) / dim;
+
+  const uint32_t x0 = (uint32_t)(k % tiles_x) * dim, y0 = (uint32_t)(k / tiles_x) * dim;
+  const uint32_t x1 = x0 + dim < w ? x0 + dim : w, y1 = y0 + dim < h ? y0 + dim : h;
+  uint32_t top = 0;
+  struct packet *pr = &stack[top];
+  pr->n = 0;
+  for (uint32_t y = y0; y < y1; y++)
+    for (uint32_t xx = x0; xx < x1; xx++) {
+      policy_primary(job, wk, xx, y, &pr->r[pr->n]);
+      mem_store(mem, buf_addr(base, top, pr->n), sizeof(struct ray), TRACE_CLASS_RAY);
+      pr->n++;
+    }
+  top++;
+  st->spawned += pr->n;
+  while (top > 0) {
+    top--;
+    /* Read the packet back; its buffer is free for its children from here. */
+    const uint32_t n = stack[top].n;
+    cur->n = n;
+    for (uint32_t i = 0; i < n; i++) {
+      mem_load(mem, buf_addr(base, top, i), sizeof(struct ray), TRACE_CLASS_RAY);
+      cur->r[i] = stack[top].r[i];
+    }
+    const uint8_t type = cur->r[0].type;
+    st->rays[type] += n;
+    st->terminated += n;
+    if (type == RAY_SHADOW) {
+      trace_packet_any(tr, x->pk, cur->r, n, x->occ, &x->cost);
+      for (uint32_t i = 0; i < n; i++) shade_shadow(&cur->r[i], x->occ[i], fb, mem);
+    } else {
+      trace_packet_closest(tr, x->pk, cur->r, n, x->hits, &x->cost);
+      for (uint32_t g = 0; g < GROUP_COUNT; g++) group[g].n = 0;
+      for (uint32_t i = 0; i < n; i++) {
+        uint32_t ns = shade_hit(sc, &cur->r[i], &x->hits[i], fb, mem, x->spawn);
+        uint64_t used = 0;
+        for (uint32_t j = 0; j < ns; j++) {
+          struct packet *gp = &group[child_group(&cur->r[i], &x->spawn[j], &used)];
+          CHECK(gp->n < PACKET_MAX);
+          gp->r[gp->n++] = x->spawn[j];
+        }
+        st->spawned += ns;
+      }
+      /* Push in reverse so the shadow packets (light order) are traced first. */
+      for (uint32_t g = GROUP_COUNT; g-- > 0;) {
+        if (group[g].n == 0) continue;
+        CHECK(top < PACKET_STACK);
+        struct packet *dst = &stack[top];
+        dst->n = group[g].n;
+        for (uint32_t i = 0; i < dst->n; i++) {
+          mem_store(mem, buf_addr(base, top, i), sizeof(struct ray), TRACE_CLASS_RAY);
+          dst->r[i] = group[g].r[i];
+        }
+        top++;
+      }
+      uint64_t slots = (uint64_t)top * PACKET_MAX;
+      if (slots > st->ray_slots_max) st->ray_slots_max = slots;
+    }
+    for (uint32_t i = 0; i < n; i++) {
+      fb->cost_nodes[cur->r[i].pixel] += x->cost.nodes[i];
+      fb->cost_tris[cur->r[i].pixel] += x->cost.tris[i];
+    }
+  }
+  policy_job_done(job, 1);
+  return true;
+}
+
+const struct policy_module policy_packet_module = {
+    .region_bytes = (uint64_t)PACKET_STACK * PACKET_MAX * sizeof(struct ray),
+    .max_workers = 0, /* as many as the ray regions allow */
+    .create = pkt_create,
+    .destroy = pkt_destroy,
+    .step = pkt_step,
+    .scratch_free = pkt_scratch_free,
+};

@@ -19,4 +19,7 @@ typedef void (*render_progress_fn)(void *ctx, uint64_t done, uint64_t total);
 
 uint64_t render_stats_total(const struct render_stats *st);
 
+/* Add st's counters to sum (ray_slots_max too: separate buffers add up). */
+void render_stats_add(struct render_stats *sum, const struct render_stats *st);
+
 #endif

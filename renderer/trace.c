@@ -124,6 +124,11 @@ bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, fl
   return true;
 }
 
+_Static_assert(TRACE_CLASS_COUNT <= MEM_CLASS_MAX, "the simulator keeps every class apart");
+
+const char *const trace_class_names[TRACE_CLASS_COUNT] = {"geometry", "node", "ray", "queue",
+                                                          "other"};
+
 void trace_layout_default(struct trace_layout *l) {
   l->tri_base = 1ull << TRACE_REGION_SHIFT;
   l->node_base = 2ull << TRACE_REGION_SHIFT;
@@ -158,7 +163,6 @@ static bool traverse(struct tracer *tr, const struct ray *r, bool any_hit, struc
   h->prim = -1;
   h->b1 = h->b2 = 0.0f;
   const struct kd_tree *kd = tr->kd;
-  const struct scene *s = tr->scene;
   if (!ray_valid(r) || kd->node_count == 0) return false;
   struct trav_ray tv;
   if (!trav_setup(&tv, kd, r)) return false;
@@ -169,56 +173,22 @@ static bool traverse(struct tracer *tr, const struct ray *r, bool any_hit, struc
   int sp = 0;
   uint32_t ni = 0;
   float t0 = tv.t0, t1 = tv.t1;
-  bool found = false;
-  float upper = r->tmax; /* nextafter(best_t) once a hit is found */
-  float best_t = upper;
-  uint32_t best_p = 0;
+  struct trav_best best;
+  trav_best_init(&best, r->tmax);
   for (;;) {
-    announce_node(tr, ni);
+    announce_node(tr, ni, 1);
     struct kd_node nd = kd->nodes[ni];
     if (!kd_is_leaf(nd)) {
       if (trav_interior(&tv, nd, ni, &t0, &t1, &ni, stack, &sp)) continue;
-    } else {
-      uint32_t off = kd_leaf_offset(nd), cnt = kd_leaf_count(nd);
-      for (uint32_t j = 0; j < cnt; j++) {
-        mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * (off + j), 4, MEM_CLASS_NODE);
-        uint32_t p = kd->prims[off + j];
-        if ((int64_t)p == (int64_t)r->ignore_prim) continue;
-        announce_tri(tr, p);
-        const struct scene_tri *tri = &s->tris[p];
-        float t, b1, b2;
-        if (!isect_tri(&ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, upper, &t, &b1, &b2))
-          continue;
-        if (any_hit) {
-          h->t = t;
-          h->prim = (int32_t)p;
-          h->b1 = b1;
-          h->b2 = b2;
-          return true;
-        }
-        if (!found || t < best_t || (t == best_t && p < best_p)) {
-          found = true;
-          best_t = t;
-          upper = nextafterf(t, INFINITY); /* equal t still competes on prim id */
-          best_p = p;
-          h->t = t;
-          h->prim = (int32_t)p;
-          h->b1 = b1;
-          h->b2 = b2;
-        }
-      }
+    } else if (trav_leaf(tr, &ir, r->tmin, r->ignore_prim, any_hit, nd, 0, kd_leaf_count(nd),
+                         &best)) {
+      break; /* any_hit: the first hit */
     }
     /* Next node from the stack, skipping those entirely beyond the best hit. */
-    for (;;) {
-      if (sp == 0) return found;
-      sp--;
-      if (found && best_t < stack[sp].t0) continue;
-      ni = stack[sp].node;
-      t0 = stack[sp].t0;
-      t1 = stack[sp].t1;
-      break;
-    }
+    if (!trav_pop(stack, &sp, 0, &best, &ni, &t0, &t1)) break;
   }
+  trav_best_hit(&best, h);
+  return best.found;
 }
 
 bool trace_closest(struct tracer *tr, const struct ray *r, struct hit *h) {
@@ -346,9 +316,7 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
   uint64_t act = live;
   while (live) {
     /* One fetch of the node for the packet; the work of every ray needing it. */
-    mem_load(&tr->mem, tr->layout.node_base + 8ull * ni, 8, MEM_CLASS_NODE);
-    mem_compute(&tr->mem, (uint64_t)tr->layout.node_cycles * pk_count(act));
-    tr->stats.node_visits++;
+    announce_node(tr, ni, pk_count(act));
     struct kd_node nd = kd->nodes[ni];
     if (!kd_is_leaf(nd)) {
       const int a = kd_axis(nd);
@@ -437,8 +405,7 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
       uint64_t m_leaf = act;
       for (uint64_t m = act; m; m &= m - 1) pk->ray[pk_first(m)].nodes++;
       for (uint32_t j = 0; j < cnt && m_leaf; j++) {
-        mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * (off + j), 4, MEM_CLASS_NODE);
-        const uint32_t p = kd->prims[off + j];
+        const uint32_t p = trav_leaf_prim(tr, off + j);
         uint64_t tm = m_leaf;
         for (uint64_t m = tm & ign; m; m &= m - 1) {
           int i = pk_first(m);
@@ -447,11 +414,7 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
         if (!tm) continue;
         /* One fetch of the triangle for the packet; a test per ray. */
         const uint32_t k = pk_count(tm);
-        mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p,
-                 tr->layout.tri_bytes, MEM_CLASS_GEOMETRY);
-        mem_compute(&tr->mem, (uint64_t)tr->layout.tri_cycles * k);
-        tr->stats.tri_tests += k;
-        if (tr->tested) tr->tested[p >> 6] |= 1ull << (p & 63);
+        announce_tri(tr, p, k);
         const struct scene_tri *tri = &s->tris[p];
         const vec3 v0 = tri->v[0], v1 = tri->v[1], v2 = tri->v[2];
         for (uint64_t m = tm; m; m &= m - 1) {
@@ -467,7 +430,7 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
             m_leaf &= ~bit;
             continue;
           }
-          if (!(found & bit) || t < q->best_t || (t == q->best_t && p < pk->best_p[i])) {
+          if (trav_hit_wins((found & bit) != 0, t, p, q->best_t, pk->best_p[i])) {
             found |= bit;
             q->best_t = t;
             q->upper = nextafterf(t, INFINITY); /* equal t still competes on prim id */
@@ -525,23 +488,17 @@ bool trace_brute(const struct scene *s, const struct ray *r, struct hit *h) {
   if (!ray_valid(r)) return false;
   struct isect_ray ir;
   isect_prepare(&ir, r->o, r->d);
-  bool found = false;
-  float upper = r->tmax;
+  struct trav_best best;
+  trav_best_init(&best, r->tmax);
   for (uint32_t p = 0; p < s->tri_count; p++) {
     if ((int64_t)p == (int64_t)r->ignore_prim) continue;
     const struct scene_tri *tri = &s->tris[p];
     float t, b1, b2;
-    if (!isect_tri(&ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, upper, &t, &b1, &b2)) continue;
-    if (!found || t < h->t || (t == h->t && (int32_t)p < h->prim)) {
-      found = true;
-      h->t = t;
-      upper = nextafterf(t, INFINITY);
-      h->prim = (int32_t)p;
-      h->b1 = b1;
-      h->b2 = b2;
-    }
+    if (isect_tri(&ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, best.upper, &t, &b1, &b2))
+      trav_best_offer(&best, t, p, b1, b2);
   }
-  return found;
+  trav_best_hit(&best, h);
+  return best.found;
 }
 
 vec3 trace_hit_point(const struct scene *s, const struct hit *h, vec3 *err) {

@@ -40,6 +40,20 @@ bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, fl
 /* NOTE: like PBRT-v3, isect_tri also rejects a hit whose t is within its own
  * rounding-error bound of 0 (cannot be sure it lies in front of the origin). */
 
+/* Data classes of the renderer's accesses (small integers to the simulator,
+ * below MEM_CLASS_MAX), named in trace_class_names for statistics. */
+enum trace_class {
+  TRACE_CLASS_GEOMETRY = 0, /* triangle records */
+  TRACE_CLASS_NODE = 1,     /* acceleration structure: k-d nodes, leaf index lists */
+  TRACE_CLASS_RAY = 2,      /* 64-byte ray records in buffers */
+  TRACE_CLASS_QUEUE = 3,    /* ray queues and the queue-point table */
+  TRACE_CLASS_OTHER = 4,    /* framebuffer and everything else */
+  TRACE_CLASS_COUNT = 5
+};
+
+/* "geometry", "node", "ray", "queue", "other". */
+extern const char *const trace_class_names[TRACE_CLASS_COUNT];
+
 /* The simulated memory image: where every piece of scene and workload data
  * lives. Regions are 2^40 bytes apart, so none can overlap whatever the scene
  * size; only what is touched exists (the analysers are sparse). */

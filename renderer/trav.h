@@ -1,7 +1,9 @@
-/* k-d traversal steps shared by the single-ray and packet queries (trace.c)
- * and the dynamic policy, which pauses the same traversal at queue points:
- * one copy, so every policy visits nodes with exactly the same arithmetic and
- * therefore finds exactly the same hits. Private to renderer/. */
+/* k-d traversal steps shared by the single-ray and packet queries (trace.c),
+ * the brute-force reference and the dynamic policy, which pauses the same
+ * traversal at queue points: one copy of the node step, the leaf test and the
+ * hit rule, so every policy visits nodes and tests triangles with exactly the
+ * same arithmetic and therefore finds exactly the same hits. Private to
+ * renderer/. */
 #ifndef RTSIM_RENDERER_TRAV_H
 #define RTSIM_RENDERER_TRAV_H
 
@@ -12,6 +14,7 @@
 
 #include "renderer/kdtree.h"
 #include "renderer/ray.h"
+#include "renderer/scene.h"
 #include "renderer/trace.h"
 #include "sim/err.h"
 #include "sim/mem.h"
@@ -146,18 +149,106 @@ static inline bool trav_interior(const struct trav_ray *tr, struct kd_node nd, u
   return false;
 }
 
-static inline void announce_node(struct tracer *tr, uint32_t ni) {
-  mem_load(&tr->mem, tr->layout.node_base + 8ull * ni, 8, MEM_CLASS_NODE);
-  mem_compute(&tr->mem, tr->layout.node_cycles);
+/* Announce a visit of node ni by `rays` rays at once (1, or a packet's active
+ * rays): one node load, node_cycles of compute per ray. */
+static inline void announce_node(struct tracer *tr, uint32_t ni, uint32_t rays) {
+  mem_load(&tr->mem, tr->layout.node_base + 8ull * ni, 8, TRACE_CLASS_NODE);
+  mem_compute(&tr->mem, (uint64_t)tr->layout.node_cycles * rays);
   tr->stats.node_visits++;
 }
 
-static inline void announce_tri(struct tracer *tr, uint32_t p) {
+/* Announce triangle p tested against `rays` rays at once: one record load,
+ * tri_cycles of compute and one test per ray. */
+static inline void announce_tri(struct tracer *tr, uint32_t p, uint32_t rays) {
   mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p,
-           tr->layout.tri_bytes, MEM_CLASS_GEOMETRY);
-  mem_compute(&tr->mem, tr->layout.tri_cycles);
-  tr->stats.tri_tests++;
+           tr->layout.tri_bytes, TRACE_CLASS_GEOMETRY);
+  mem_compute(&tr->mem, (uint64_t)tr->layout.tri_cycles * rays);
+  tr->stats.tri_tests += rays;
   if (tr->tested) tr->tested[p >> 6] |= 1ull << (p & 63);
+}
+
+/* Entry j of the leaf index lists: its 4-byte load, then the primitive. */
+static inline uint32_t trav_leaf_prim(struct tracer *tr, uint32_t j) {
+  mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * j, 4, TRACE_CLASS_NODE);
+  return tr->kd->prims[j];
+}
+
+/* The hit rule: a hit (t, p) beats the best so far (best_t, best_p) when
+ * there is none yet, when it is nearer, or when it is as near and its
+ * primitive id is smaller. */
+static inline bool trav_hit_wins(bool found, float t, uint32_t p, float best_t, uint32_t best_p) {
+  return !found || t < best_t || (t == best_t && p < best_p);
+}
+
+/* One ray's best hit so far. upper is the bound handed to the triangle test:
+ * tmax until a hit is found, then nextafter(t), so that a hit at equal t still
+ * competes on its primitive id. */
+struct trav_best {
+  bool found;
+  float t, b1, b2, upper;
+  uint32_t p;
+};
+
+static inline void trav_best_init(struct trav_best *b, float tmax) {
+  b->found = false;
+  b->t = b->upper = tmax;
+  b->b1 = b->b2 = 0.0f;
+  b->p = 0;
+}
+
+/* Keep hit (t, p, b1, b2) if it wins under the hit rule. */
+static inline void trav_best_offer(struct trav_best *b, float t, uint32_t p, float b1, float b2) {
+  if (!trav_hit_wins(b->found, t, p, b->t, b->p)) return;
+  b->found = true;
+  b->t = t;
+  b->b1 = b1;
+  b->b2 = b2;
+  b->upper = nextafterf(t, INFINITY);
+  b->p = p;
+}
+
+/* The query result of b: its hit, or a miss (prim -1) at t = tmax. */
+static inline void trav_best_hit(const struct trav_best *b, struct hit *h) {
+  h->t = b->t;
+  h->prim = b->found ? (int32_t)b->p : -1;
+  h->b1 = b->b1;
+  h->b2 = b->b2;
+}
+
+/* The leaf test of one ray: entries [j0, j1) of leaf nd in leaf order, each a
+ * leaf-list load, then (unless it is the ray's ignore primitive) a triangle
+ * load and test in (tmin, b->upper); hits go to b. With any, stop at the first
+ * hit and return true; otherwise return false. */
+static inline bool trav_leaf(struct tracer *tr, const struct isect_ray *ir, float tmin,
+                             int32_t ignore, bool any, struct kd_node nd, uint32_t j0,
+                             uint32_t j1, struct trav_best *b) {
+  uint32_t off = kd_leaf_offset(nd);
+  for (uint32_t j = j0; j < j1; j++) {
+    uint32_t p = trav_leaf_prim(tr, off + j);
+    if ((int64_t)p == (int64_t)ignore) continue;
+    announce_tri(tr, p, 1);
+    const struct scene_tri *tri = &tr->scene->tris[p];
+    float t, b1, b2;
+    if (!isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], tmin, b->upper, &t, &b1, &b2)) continue;
+    trav_best_offer(b, t, p, b1, b2);
+    if (any) return true;
+  }
+  return false;
+}
+
+/* Pop the next pending node above stack depth floor into (*ni, *t0, *t1),
+ * skipping those that begin beyond the best hit. False when none is left. */
+static inline bool trav_pop(const struct trav_entry *stack, int *sp, int floor,
+                            const struct trav_best *b, uint32_t *ni, float *t0, float *t1) {
+  while (*sp > floor) {
+    (*sp)--;
+    if (b->found && b->t < stack[*sp].t0) continue;
+    *ni = stack[*sp].node;
+    *t0 = stack[*sp].t0;
+    *t1 = stack[*sp].t1;
+    return true;
+  }
+  return false;
 }
 
 #endif

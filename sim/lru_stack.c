@@ -43,19 +43,19 @@ struct lru_stack {
   /* hist[s][c]: fetching accesses of class c whose line was in segment s
    * (s == n: not held at all). Size i misses exactly when s > i, so misses are suffix sums:
    * one increment per access instead of one per missing size. */
-  uint64_t hist[LRU_STACK_MAX_SIZES + 1][MEM_CLASS_COUNT];
+  uint64_t hist[LRU_STACK_MAX_SIZES + 1][MEM_CLASS_MAX];
   /* Writebacks, counted when the line is next seen (its next access, its fall
    * off the bottom, or the results walk): a line dirty in sizes >= d that is
    * found in segment s was evicted dirty from sizes d..s-1 meanwhile. Ranges go
    * into a difference array: wbdiff[d]++, wbdiff[s]--; prefix sums at the end. */
-  int64_t wbdiff[LRU_STACK_MAX_SIZES + 1][MEM_CLASS_COUNT];
-  uint64_t accesses[MEM_CLASS_COUNT], stores[MEM_CLASS_COUNT];
+  int64_t wbdiff[LRU_STACK_MAX_SIZES + 1][MEM_CLASS_MAX];
+  uint64_t accesses[MEM_CLASS_MAX], stores[MEM_CLASS_MAX];
   uint64_t total; /* accesses, for the snapshot below */
   /* Snapshot of the lines held, taken by lru_stack_finish at total == snap_at. */
   bool snap_valid;
   uint64_t snap_at;
-  uint64_t pending_wb[LRU_STACK_MAX_SIZES][MEM_CLASS_COUNT];
-  uint64_t dirty_end[LRU_STACK_MAX_SIZES][MEM_CLASS_COUNT];
+  uint64_t pending_wb[LRU_STACK_MAX_SIZES][MEM_CLASS_MAX];
+  uint64_t dirty_end[LRU_STACK_MAX_SIZES][MEM_CLASS_MAX];
 };
 
 struct lru_stack_params lru_stack_params_default(void) {
@@ -163,7 +163,7 @@ static inline void count_evictions(struct lru_stack *ls, unsigned d, unsigned s,
 }
 
 void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsigned cls) {
-  CHECK(cls < MEM_CLASS_COUNT && op <= LRU_WRITE_LINE);
+  CHECK(cls < MEM_CLASS_MAX && op <= LRU_WRITE_LINE);
   const bool is_store = op != LRU_READ;
   /* Misses are counted in hist: a whole-line store never fetches. */
   const unsigned fetch = op != LRU_WRITE_LINE;
@@ -265,14 +265,14 @@ static void refresh_snapshot(struct lru_stack *ls) {
 unsigned lru_stack_size_count(const struct lru_stack *ls) { return ls->nsz; }
 
 uint64_t lru_stack_misses(const struct lru_stack *ls, unsigned size_index, unsigned cls) {
-  CHECK(size_index < ls->nsz && cls < MEM_CLASS_COUNT);
+  CHECK(size_index < ls->nsz && cls < MEM_CLASS_MAX);
   uint64_t m = 0;
   for (unsigned s = size_index + 1; s <= ls->nsz; s++) m += ls->hist[s][cls];
   return m;
 }
 
 uint64_t lru_stack_writebacks(struct lru_stack *ls, unsigned size_index, unsigned cls) {
-  CHECK(size_index < ls->nsz && cls < MEM_CLASS_COUNT);
+  CHECK(size_index < ls->nsz && cls < MEM_CLASS_MAX);
   refresh_snapshot(ls);
   int64_t w = 0;
   for (unsigned i = 0; i <= size_index; i++) w += ls->wbdiff[i][cls];
@@ -292,7 +292,7 @@ void lru_stack_get_results(struct lru_stack *ls, struct lru_stack_results *out) 
   for (unsigned i = 0; i < ls->nsz; i++) {
     struct lru_stack_size_stats *z = &out->size[i];
     z->capacity_bytes = UINT64_C(1) << (ls->p.lg2_min + i);
-    for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) {
+    for (unsigned c = 0; c < MEM_CLASS_MAX; c++) {
       z->accesses[c] = ls->accesses[c];
       z->stores[c] = ls->stores[c];
       z->misses[c] = lru_stack_misses(ls, i, c);
@@ -313,7 +313,7 @@ void lru_stack_check_invariants(const struct lru_stack *ls) {
     while (ls->cap[s] < depth) s++;
     CHECK(nd[p].seg == s);
     CHECK(nd[p].dfrom <= ls->nsz);
-    CHECK(nd[p].cls < MEM_CLASS_COUNT);
+    CHECK(nd[p].cls < MEM_CLASS_MAX);
     if (depth == ls->cap[s]) CHECK(ls->bound[s] == p);
     /* The slot names this node and is reachable from the line's home slot. */
     CHECK(nd[p].slot <= ls->mask && ls->slot[nd[p].slot] == p);
@@ -340,6 +340,8 @@ static uint64_t bench_next(uint64_t *s) {
   return z ^ (z >> 31);
 }
 
+_Static_assert(MEM_CLASS_MAX <= 8, "the bench packs a class in 3 bits");
+
 double lru_stack_bench(uint64_t accesses, uint64_t seed) {
   enum { CHUNK = 1 << 16, HOT_LINES = 20000 };
   struct lru_stack_params p = lru_stack_params_default();
@@ -365,7 +367,7 @@ double lru_stack_bench(uint64_t accesses, uint64_t seed) {
         line = stream++;
       }
       uint64_t store = (r >> 40) % 4 == 0;
-      uint64_t cls = (r >> 44) % MEM_CLASS_COUNT;
+      uint64_t cls = (r >> 44) % MEM_CLASS_MAX;
       buf[k] = line << 4 | store << 3 | cls;
     }
     struct timespec t0, t1;

@@ -52,7 +52,7 @@ void lru_stack_destroy(struct lru_stack *ls); /* NULL ok */
 
 /* One access to one line. line is a LINE NUMBER (byte address >> lg2_line), any
  * 64-bit value; the caller splits multi-line requests (mem_functional does).
- * cls < MEM_CLASS_COUNT (CHECKed). Cost: O(1) for a repeat of the most recent
+ * cls < MEM_CLASS_MAX (CHECKed). Cost: O(1) for a repeat of the most recent
  * line; else one hash probe, a list move and one step per size that misses. */
 void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsigned cls);
 
@@ -66,22 +66,22 @@ void lru_stack_finish(struct lru_stack *ls);
  * stores equal the analyser totals; they are repeated here for tidy output. */
 struct lru_stack_size_stats {
   uint64_t capacity_bytes;
-  uint64_t accesses[MEM_CLASS_COUNT]; /* line accesses, by class of the access */
-  uint64_t stores[MEM_CLASS_COUNT];   /* of which stores */
+  uint64_t accesses[MEM_CLASS_MAX]; /* line accesses, by class of the access */
+  uint64_t stores[MEM_CLASS_MAX];   /* of which stores */
   /* Lines fetched from DRAM, by class of the access that missed (LRU_READ or
    * LRU_WRITE; an LRU_WRITE_LINE miss fetches nothing and is not counted). */
-  uint64_t misses[MEM_CLASS_COUNT];
+  uint64_t misses[MEM_CLASS_MAX];
   /* Dirty lines evicted (written back), by class of the line's last access. */
-  uint64_t writebacks[MEM_CLASS_COUNT];
+  uint64_t writebacks[MEM_CLASS_MAX];
   /* Lines still dirty in this cache at the results snapshot, same attribution. */
-  uint64_t dirty_at_end[MEM_CLASS_COUNT];
+  uint64_t dirty_at_end[MEM_CLASS_MAX];
 };
 
 struct lru_stack_results {
   struct lru_stack_params params;
-  unsigned size_count;                /* lg2_max - lg2_min + 1 */
-  uint64_t accesses[MEM_CLASS_COUNT]; /* line accesses by class */
-  uint64_t stores[MEM_CLASS_COUNT];
+  unsigned size_count;              /* lg2_max - lg2_min + 1 */
+  uint64_t accesses[MEM_CLASS_MAX]; /* line accesses by class */
+  uint64_t stores[MEM_CLASS_MAX];
   struct lru_stack_size_stats size[LRU_STACK_MAX_SIZES]; /* [k - lg2_min] */
 };
 

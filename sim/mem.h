@@ -9,21 +9,13 @@
 #include <stdint.h>
 
 /* Data classes are small integers below MEM_CLASS_MAX: the simulator keeps
- * statistics per class without knowing what a class holds. */
+ * statistics per class without knowing what a class holds; the renderer names
+ * them (renderer/trace.h). */
 #define MEM_CLASS_MAX 8
 
-/* Data classes: small integers to the simulator; the renderer names them. */
-enum mem_class {
-  MEM_CLASS_GEOMETRY = 0, /* triangle records */
-  MEM_CLASS_NODE = 1,     /* acceleration structure: k-d nodes, leaf index lists */
-  MEM_CLASS_RAY = 2,      /* 64-byte ray records in buffers */
-  MEM_CLASS_QUEUE = 3,    /* ray queues and the queue-point table */
-  MEM_CLASS_OTHER = 4,    /* framebuffer and everything else */
-  MEM_CLASS_COUNT = 5
-};
-
-/* Backend operations. addr is a simulated byte address, size_bytes > 0.
- * compute announces work in core cycles. Any pointer may be NULL (ignored). */
+/* Backend operations. addr is a simulated byte address, size_bytes > 0,
+ * cls < MEM_CLASS_MAX. compute announces work in core cycles. Any pointer may
+ * be NULL (ignored). */
 struct mem_ops {
   void (*load)(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls);
   void (*store)(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls);

@@ -14,9 +14,9 @@ struct din_writer;
 
 /* What the renderer asked for, by data class (requests, not lines). */
 struct fn_backend_stats {
-  uint64_t loads[MEM_CLASS_COUNT], stores[MEM_CLASS_COUNT]; /* requests */
-  uint64_t bytes_loaded[MEM_CLASS_COUNT], bytes_stored[MEM_CLASS_COUNT];
-  uint64_t line_accesses[MEM_CLASS_COUNT]; /* lines touched, = analyser accesses */
+  uint64_t loads[MEM_CLASS_MAX], stores[MEM_CLASS_MAX]; /* requests */
+  uint64_t bytes_loaded[MEM_CLASS_MAX], bytes_stored[MEM_CLASS_MAX];
+  uint64_t line_accesses[MEM_CLASS_MAX]; /* lines touched, = analyser accesses */
 };
 
 struct fn_backend;

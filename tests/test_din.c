@@ -206,7 +206,7 @@ static void test_backend_trace(void) {
     uint64_t r = rng_next(&rng);
     uint64_t addr = 4096 + (r % (120 * 64));
     uint32_t size = (r >> 20) % 3 == 0 ? 64 : (r >> 20) % 3 == 1 ? 8 : 128;
-    unsigned cls = (unsigned)((r >> 40) % MEM_CLASS_COUNT);
+    unsigned cls = (unsigned)((r >> 40) % MEM_CLASS_MAX);
     if ((r >> 50) % 4 == 0)
       mem_store(&port, addr, size, cls);
     else
@@ -216,7 +216,7 @@ static void test_backend_trace(void) {
   /* A line access is one record, or two (read, write) for a store to part of
    * a line. */
   uint64_t lines = 0, records = din_writer_records(w);
-  for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) lines += fn_backend_stats(b)->line_accesses[c];
+  for (unsigned c = 0; c < MEM_CLASS_MAX; c++) lines += fn_backend_stats(b)->line_accesses[c];
   EXPECTF(records > lines && records < 2 * lines, "%llu records for %llu line accesses",
           (unsigned long long)records, (unsigned long long)lines);
   EXPECT(din_writer_close(w, &e));
@@ -229,7 +229,7 @@ static void test_backend_trace(void) {
   lru_stack_get_results(ls, &r);
   for (unsigned i = 0; i < NV_SIZES; i++) {
     uint64_t m = 0, wb = 0;
-    for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) {
+    for (unsigned c = 0; c < MEM_CLASS_MAX; c++) {
       m += r.size[i].misses[c];
       wb += r.size[i].writebacks[c];
     }

@@ -18,7 +18,7 @@ struct naive_cache {
   int32_t head, tail;
   int32_t *prev, *next;
   uint8_t *in, *dirty, *cls;
-  uint64_t misses[MEM_CLASS_COUNT], wb[MEM_CLASS_COUNT], dirty_end[MEM_CLASS_COUNT];
+  uint64_t misses[MEM_CLASS_MAX], wb[MEM_CLASS_MAX], dirty_end[MEM_CLASS_MAX];
 };
 
 struct naive {
@@ -181,11 +181,11 @@ static int compare_run(const char *name, const struct trace *t, const struct lru
   int bad = 0;
   EXPECT(r.size_count == nv.n);
   uint64_t total = 0;
-  for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) total += r.accesses[c];
+  for (unsigned c = 0; c < MEM_CLASS_MAX; c++) total += r.accesses[c];
   EXPECTF(total == t->n, "%s: %llu accesses counted, %zu fed", name, (unsigned long long)total,
           t->n);
   for (unsigned i = 0; i < nv.n; i++) {
-    for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) {
+    for (unsigned c = 0; c < MEM_CLASS_MAX; c++) {
       const struct lru_stack_size_stats *z = &r.size[i];
       const struct naive_cache *o = &nv.c[i];
       if (z->misses[c] != o->misses[c] || z->writebacks[c] != o->wb[c] ||
@@ -268,7 +268,7 @@ static void test_random(void) {
       uint64_t r = rng_next(&rng);
       unsigned roll = (unsigned)((r >> 32) % 10); /* 70% loads, 20% stores, 10% whole-line stores */
       tr_add(&t, (uint32_t)(r % universes[u]), roll < 7 ? LRU_READ : roll < 9 ? LRU_WRITE : LRU_WRITE_LINE,
-             (unsigned)((r >> 40) % 5));
+             (unsigned)((r >> 40) % MEM_CLASS_MAX));
     }
     char name[64];
     snprintf(name, sizeof name, "random N=%u", universes[u]);
@@ -281,7 +281,8 @@ static void test_random(void) {
     struct trace t = {0};
     for (int k = 0; k < 40000; k++) {
       uint64_t r = rng_next(&rng);
-      tr_add(&t, (uint32_t)(r % 150), (int)((r >> 32) % 3), (unsigned)((r >> 40) % 5));
+      tr_add(&t, (uint32_t)(r % 150), (int)((r >> 32) % 3),
+             (unsigned)((r >> 40) % MEM_CLASS_MAX));
     }
     compare_all_maps("random, other geometry", &t, &q[g]);
     free(t.a);
@@ -296,7 +297,8 @@ static void test_loops(void) {
       if (len == 0) continue;
       struct trace t = {0};
       for (int round = 0; round < 40; round++)
-        for (uint32_t i = 0; i < len; i++) tr_add(&t, i, (int)((i + (uint32_t)round) % 3), i % 5);
+        for (uint32_t i = 0; i < len; i++)
+          tr_add(&t, i, (int)((i + (uint32_t)round) % 3), i % MEM_CLASS_MAX);
       char name[64];
       snprintf(name, sizeof name, "loop L=%u (size %u lines)", len, cap);
       compare_all_maps(name, &t, &p);
@@ -319,7 +321,7 @@ static void test_adversarial(void) {
   uint64_t rng = 7;
   {
     struct trace t = {0}; /* the same line, over and over, stores and loads */
-    for (int k = 0; k < 5000; k++) tr_add(&t, 0, k % 7 == 3, (unsigned)k % 5);
+    for (int k = 0; k < 5000; k++) tr_add(&t, 0, k % 7 == 3, (unsigned)k % MEM_CLASS_MAX);
     compare_all_maps("same line", &t, &p);
     free(t.a);
   }
@@ -347,14 +349,14 @@ static void test_adversarial(void) {
     struct trace t = {0}; /* stores only, then loads only */
     for (int k = 0; k < 20000; k++) {
       uint64_t r = rng_next(&rng);
-      tr_add(&t, (uint32_t)(r % 90), k < 10000, (unsigned)(r >> 50) % 5);
+      tr_add(&t, (uint32_t)(r % 90), k < 10000, (unsigned)(r >> 50) % MEM_CLASS_MAX);
     }
     compare_all_maps("stores then loads", &t, &p);
     free(t.a);
   }
   {
     struct trace t = {0}; /* lines fall off the bottom of the largest cache and come back */
-    for (uint32_t i = 0; i < 200; i++) tr_add(&t, i, i % 2, i % 5);
+    for (uint32_t i = 0; i < 200; i++) tr_add(&t, i, i % 2, i % MEM_CLASS_MAX);
     for (uint32_t i = 0; i < 200; i++) tr_add(&t, i, 0, 1);
     for (int k = 0; k < 3000; k++) tr_add(&t, (uint32_t)(rng_next(&rng) % 31), k % 5 == 0, 2);
     for (uint32_t i = 150; i < 200; i++) tr_add(&t, i, 1, 4);
@@ -367,7 +369,7 @@ static void test_adversarial(void) {
     for (int k = 0; k < 40000; k++) {
       uint32_t span = 1 + (uint32_t)(k / 500 % 20) * 7;
       uint64_t r = rng_next(&rng);
-      tr_add(&t, (uint32_t)(r % span), (int)((r >> 33) % 3), (unsigned)(r >> 50) % 5);
+      tr_add(&t, (uint32_t)(r % span), (int)((r >> 33) % 3), (unsigned)(r >> 50) % MEM_CLASS_MAX);
     }
     compare_all_maps("breathing working set", &t, &p);
     free(t.a);
@@ -387,7 +389,7 @@ static void test_default_sizes(void) {
     if (r % 10 < 7) {
       hot = (r >> 8) % 8 ? (hot + 20000 + (uint32_t)((r >> 16) % 33) - 16) % 20000
                          : (uint32_t)((r >> 16) % 20000);
-      tr_add(&t, hot, (r >> 40) % 4 == 0, (unsigned)(r >> 44) % 5);
+      tr_add(&t, hot, (r >> 40) % 4 == 0, (unsigned)(r >> 44) % MEM_CLASS_MAX);
     } else {
       tr_add(&t, stream++, (r >> 40) % 4 == 0 ? LRU_WRITE_LINE : LRU_READ, 2);
       if (stream == 130000) stream = 30000; /* stream revisits: deep reuse */
@@ -408,41 +410,43 @@ static void test_params(void) {
             lru_stack_params_problem(&ok[i]));
 }
 
-/* Functional backend: line splitting and request counters. */
+/* Functional backend: line splitting and request counters. Classes are plain
+ * integers to sim (the renderer names them); C_LAST shows the whole range works. */
+enum { C0 = 0, C1 = 1, C2 = 2, C3 = 3, C_LAST = MEM_CLASS_MAX - 1 };
+
 static void test_backend(void) {
   struct lru_stack_params p = {6, 6, 9}; /* 1 .. 8 lines */
   struct fn_backend *b = fn_backend_create(&p, NULL);
   struct mem_port port = fn_backend_port(b);
-  mem_load(&port, 60, 8, MEM_CLASS_RAY);                  /* lines 0 and 1 */
-  mem_store(&port, 64, 64, MEM_CLASS_RAY);                /* line 1 */
-  mem_load(&port, 128, 1, MEM_CLASS_GEOMETRY);            /* line 2 */
-  mem_load(&port, 130, 200, MEM_CLASS_NODE);              /* lines 2..5 */
-  mem_compute(&port, 1000);                               /* ignored */
-  mem_store(&port, UINT64_MAX - 63, 64, MEM_CLASS_OTHER); /* the very last line */
-  mem_load(&port, UINT64_MAX, 1, MEM_CLASS_OTHER);
+  mem_load(&port, 60, 8, C2);                    /* lines 0 and 1 */
+  mem_store(&port, 64, 64, C2);                  /* line 1 */
+  mem_load(&port, 128, 1, C0);                   /* line 2 */
+  mem_load(&port, 130, 200, C1);                 /* lines 2..5 */
+  mem_compute(&port, 1000);                      /* ignored */
+  mem_store(&port, UINT64_MAX - 63, 64, C_LAST); /* the very last line */
+  mem_load(&port, UINT64_MAX, 1, C_LAST);
   const struct fn_backend_stats *st = fn_backend_stats(b);
-  EXPECT(st->loads[MEM_CLASS_RAY] == 1 && st->stores[MEM_CLASS_RAY] == 1);
-  EXPECT(st->bytes_loaded[MEM_CLASS_RAY] == 8 && st->bytes_stored[MEM_CLASS_RAY] == 64);
-  EXPECT(st->line_accesses[MEM_CLASS_RAY] == 3);
-  EXPECT(st->line_accesses[MEM_CLASS_GEOMETRY] == 1 && st->line_accesses[MEM_CLASS_NODE] == 4);
-  EXPECT(st->bytes_loaded[MEM_CLASS_NODE] == 200);
-  EXPECT(st->line_accesses[MEM_CLASS_OTHER] == 2 && st->bytes_stored[MEM_CLASS_OTHER] == 64);
+  EXPECT(st->loads[C2] == 1 && st->stores[C2] == 1);
+  EXPECT(st->bytes_loaded[C2] == 8 && st->bytes_stored[C2] == 64);
+  EXPECT(st->line_accesses[C2] == 3);
+  EXPECT(st->line_accesses[C0] == 1 && st->line_accesses[C1] == 4);
+  EXPECT(st->bytes_loaded[C1] == 200);
+  EXPECT(st->line_accesses[C_LAST] == 2 && st->bytes_stored[C_LAST] == 64);
   struct lru_stack *ls = fn_backend_stack(b);
   lru_stack_check_invariants(ls);
   lru_stack_finish(ls);
   struct lru_stack_results r;
   lru_stack_get_results(ls, &r);
-  for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) EXPECT(r.accesses[c] == st->line_accesses[c]);
-  /* 8-line cache: distinct lines 0..5 miss (6); the repeat of line 1 (ray) and
-   * line 2 (node) hit; the last line is stored whole first, so it is allocated
+  for (unsigned c = 0; c < MEM_CLASS_MAX; c++) EXPECT(r.accesses[c] == st->line_accesses[c]);
+  /* 8-line cache: distinct lines 0..5 miss (6); the repeat of line 1 (class 2) and
+   * line 2 (class 1) hit; the last line is stored whole first, so it is allocated
    * without a fetch, and the load after it hits. */
   uint64_t m = 0;
-  for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) m += r.size[3].misses[c];
+  for (unsigned c = 0; c < MEM_CLASS_MAX; c++) m += r.size[3].misses[c];
   EXPECTF(m == 6, "8-line cache misses %llu", (unsigned long long)m);
-  EXPECT(r.size[3].misses[MEM_CLASS_RAY] == 2 && r.size[3].misses[MEM_CLASS_NODE] == 3);
-  EXPECT(r.size[3].misses[MEM_CLASS_OTHER] == 0);
-  EXPECT(r.size[3].dirty_at_end[MEM_CLASS_RAY] == 1 &&
-         r.size[3].dirty_at_end[MEM_CLASS_OTHER] == 1);
+  EXPECT(r.size[3].misses[C2] == 2 && r.size[3].misses[C1] == 3);
+  EXPECT(r.size[3].misses[C_LAST] == 0);
+  EXPECT(r.size[3].dirty_at_end[C2] == 1 && r.size[3].dirty_at_end[C_LAST] == 1);
   fn_backend_destroy(b);
 
   /* Whole-line stores are found line by line: [1000, 1128) covers line 16 whole
@@ -450,17 +454,17 @@ static void test_backend(void) {
    * boundary covers neither line whole (2 more); a 128-byte aligned store none. */
   b = fn_backend_create(&p, NULL);
   port = fn_backend_port(b);
-  mem_store(&port, 1000, 128, MEM_CLASS_QUEUE);
-  mem_store(&port, 32, 64, MEM_CLASS_RAY);
-  mem_store(&port, 4096, 128, MEM_CLASS_GEOMETRY);
+  mem_store(&port, 1000, 128, C3);
+  mem_store(&port, 32, 64, C2);
+  mem_store(&port, 4096, 128, C0);
   ls = fn_backend_stack(b);
   lru_stack_get_results(ls, &r);
   for (unsigned i = 0; i < r.size_count; i++) {
-    EXPECTF(r.size[i].misses[MEM_CLASS_QUEUE] == 2, "size %u: %llu queue fetches", i,
-            (unsigned long long)r.size[i].misses[MEM_CLASS_QUEUE]);
-    EXPECT(r.size[i].misses[MEM_CLASS_RAY] == 2 && r.size[i].misses[MEM_CLASS_GEOMETRY] == 0);
+    EXPECTF(r.size[i].misses[C3] == 2, "size %u: %llu class-3 fetches", i,
+            (unsigned long long)r.size[i].misses[C3]);
+    EXPECT(r.size[i].misses[C2] == 2 && r.size[i].misses[C0] == 0);
   }
-  EXPECT(r.size[3].dirty_at_end[MEM_CLASS_QUEUE] == 3 && r.size[3].dirty_at_end[MEM_CLASS_GEOMETRY] == 2);
+  EXPECT(r.size[3].dirty_at_end[C3] == 3 && r.size[3].dirty_at_end[C0] == 2);
   fn_backend_destroy(b);
   fn_backend_destroy(NULL);
   lru_stack_destroy(NULL);

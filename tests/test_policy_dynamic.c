@@ -56,7 +56,7 @@ static uint8_t *slot_of(struct counter *c, uint64_t addr) {
 static void on_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls, int store) {
   struct counter *c = ctx;
   if (addr >= c->l.qtable_base && addr < c->l.queue_base) {
-    c->class_bad += cls != MEM_CLASS_QUEUE || size != 8;
+    c->class_bad += cls != TRACE_CLASS_QUEUE || size != 8;
     uint64_t e = (addr - c->l.qtable_base) / 8;
     if (e + 1 > c->max_table) c->max_table = e + 1;
     c->table_bad += (addr - c->l.qtable_base) % 8 != 0;
@@ -65,7 +65,7 @@ static void on_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls, int
     else
       c->table_loads++;
   } else if (addr >= c->l.queue_base && addr < c->l.ray_base) {
-    c->class_bad += cls != MEM_CLASS_RAY || size != 64 || (addr - c->l.queue_base) % 64 != 0;
+    c->class_bad += cls != TRACE_CLASS_RAY || size != 64 || (addr - c->l.queue_base) % 64 != 0;
     uint8_t *p = slot_of(c, addr);
     if (store) {
       c->slot_stores++;
@@ -78,10 +78,10 @@ static void on_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls, int
     }
   } else if (addr >= c->l.camera_base) {
     uint64_t k = (addr - c->l.camera_base) / 64;
-    c->cam_bad += store || cls != MEM_CLASS_RAY || size != 64 || (addr - c->l.camera_base) % 64 != 0 ||
+    c->cam_bad += store || cls != TRACE_CLASS_RAY || size != 64 || (addr - c->l.camera_base) % 64 != 0 ||
                   k >= c->npix;
     if (k < c->npix) c->cam[k]++;
-  } else if (cls == MEM_CLASS_RAY) {
+  } else if (cls == TRACE_CLASS_RAY) {
     c->other_ray++;
   }
 }
@@ -101,9 +101,10 @@ struct result {
 /* A render; batch: the dynamic policy's primary rays admitted at a time (0: all). */
 static void render_batch(struct world *w, enum policy_kind k, uint32_t mask, uint32_t size,
                          uint64_t cache, uint64_t batch, struct counter *cnt, struct result *res) {
-  struct trace_layout l;
-  trace_layout_default(&l);
-  struct tracer tr;
+  struct shade_ctx sc = {&w->s, mask, 7};
+  struct policy_setup ps;
+  testing_policy_setup(&ps, &w->s, &w->kd, &sc, &res->fb);
+  const struct trace_layout l = ps.layout;
   struct mem_port port = mem_port_native();
   if (cnt) {
     memset(cnt, 0, sizeof *cnt);
@@ -113,19 +114,14 @@ static void render_batch(struct world *w, enum policy_kind k, uint32_t mask, uin
     port.ops = &COUNTER_OPS;
     port.ctx = cnt;
   }
-  tracer_init(&tr, &w->s, &w->kd, port, &l);
   res->tested = calloc(w->s.tri_count / 64 + 1, sizeof *res->tested);
-  tr.tested = res->tested;
-  struct shade_ctx sc = {&w->s, mask, 7};
+  ps.tested = res->tested;
   fb_init(&res->fb, size, size, l.fb_base);
-  memset(&res->st, 0, sizeof res->st);
-  struct policy_env env = {&tr, &sc, &res->fb, &res->st, NULL, NULL};
   struct policy_params pp;
   policy_params_default(&pp);
   pp.cache_bytes = cache;
   pp.dyn_batch_rays = batch;
-  policy_run(k, &env, &pp);
-  res->ts = tr.stats;
+  policy_run(k, &ps, &pp, port, &res->st, &res->ts);
 }
 
 static void render(struct world *w, enum policy_kind k, uint32_t mask, uint32_t size,

@@ -41,8 +41,8 @@ static int load(struct world *w, const char *name) {
 /* A memory port that counts loads and stores by class, and checks that ray
  * traffic stays in the ray region. */
 struct counts {
-  uint64_t loads[MEM_CLASS_COUNT], load_bytes[MEM_CLASS_COUNT];
-  uint64_t stores[MEM_CLASS_COUNT];
+  uint64_t loads[TRACE_CLASS_COUNT], load_bytes[TRACE_CLASS_COUNT];
+  uint64_t stores[TRACE_CLASS_COUNT];
   uint64_t ray_lo, ray_hi; /* allowed ray addresses (packet buffers) */
   uint64_t cam_lo, cam_hi; /* the camera's primary rays: loads only */
   uint64_t cam_loads, ray_outside;
@@ -52,17 +52,17 @@ static void count_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct counts *c = ctx;
   c->loads[cls]++;
   c->load_bytes[cls] += size;
-  if (cls == MEM_CLASS_RAY && addr >= c->cam_lo && addr + size <= c->cam_hi && size == 64) {
+  if (cls == TRACE_CLASS_RAY && addr >= c->cam_lo && addr + size <= c->cam_hi && size == 64) {
     c->cam_loads++;
     return;
   }
-  if (cls == MEM_CLASS_RAY && (addr < c->ray_lo || addr + size > c->ray_hi)) c->ray_outside++;
+  if (cls == TRACE_CLASS_RAY && (addr < c->ray_lo || addr + size > c->ray_hi)) c->ray_outside++;
 }
 
 static void count_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct counts *c = ctx;
   c->stores[cls]++;
-  if (cls == MEM_CLASS_RAY && (addr < c->ray_lo || addr + size > c->ray_hi)) c->ray_outside++;
+  if (cls == TRACE_CLASS_RAY && (addr < c->ray_lo || addr + size > c->ray_hi)) c->ray_outside++;
 }
 
 static const struct mem_ops COUNT_OPS = {count_load, count_store, NULL};
@@ -171,14 +171,14 @@ static void test_traversal(struct world *w) {
     for (uint32_t k = 0; k < n; k += 64) {
       struct hit hits[64];
       struct hit h;
-      uint64_t n0 = cnt.loads[MEM_CLASS_NODE];
+      uint64_t n0 = cnt.loads[TRACE_CLASS_NODE];
       trace_packet_closest(&tr, pk, set + k, 64, hits, NULL);
-      uint64_t packet_loads = cnt.loads[MEM_CLASS_NODE] - n0;
-      n0 = cnt.loads[MEM_CLASS_NODE];
+      uint64_t packet_loads = cnt.loads[TRACE_CLASS_NODE] - n0;
+      n0 = cnt.loads[TRACE_CLASS_NODE];
       for (uint32_t i = 0; i < 64; i++) trace_closest(&tr, &set[k + i], &h);
-      fewer += packet_loads <= cnt.loads[MEM_CLASS_NODE] - n0;
+      fewer += packet_loads <= cnt.loads[TRACE_CLASS_NODE] - n0;
       packet_total += packet_loads;
-      single_total += cnt.loads[MEM_CLASS_NODE] - n0;
+      single_total += cnt.loads[TRACE_CLASS_NODE] - n0;
     }
     EXPECTF(fewer == n / 64 && packet_total < single_total,
             "%s: %llu of %u camera packets fetch no more nodes than their rays; %llu vs %llu",
@@ -299,15 +299,13 @@ static void render(struct world *w, enum policy_kind k, uint32_t mask, uint32_t 
   out->cnt.cam_lo = l.camera_base;
   out->cnt.cam_hi = l.camera_base + 64ull * width * height;
   struct mem_port port = {&COUNT_OPS, &out->cnt};
-  struct tracer tr;
-  tracer_init(&tr, &w->s, &w->kd, port, &l);
   struct shade_ctx sc = {&w->s, mask, 7};
   fb_init(&out->fb, width, height, l.fb_base);
-  struct policy_env env = {&tr, &sc, &out->fb, &out->st, NULL, NULL};
+  struct policy_setup ps;
+  testing_policy_setup(&ps, &w->s, &w->kd, &sc, &out->fb);
   struct policy_params pp;
   policy_params_default(&pp);
-  policy_run(k, &env, &pp);
-  out->ts = tr.stats;
+  policy_run(k, &ps, &pp, port, &out->st, &out->ts);
 }
 
 /* The packet policy's picture and ray counts equal the recursive policy's. */
@@ -327,10 +325,10 @@ static void test_policy(struct world *w, uint32_t width, uint32_t height) {
    * to a packet buffer is read back once, inside the region. */
   uint64_t total = render_stats_total(&pkt.st);
   EXPECT(pkt.cnt.cam_loads == npix && rec.cnt.cam_loads == npix);
-  EXPECTF(pkt.cnt.stores[MEM_CLASS_RAY] == total && pkt.cnt.loads[MEM_CLASS_RAY] == total + npix,
+  EXPECTF(pkt.cnt.stores[TRACE_CLASS_RAY] == total && pkt.cnt.loads[TRACE_CLASS_RAY] == total + npix,
           "%s: ray stores %llu loads %llu rays %llu", w->name,
-          (unsigned long long)pkt.cnt.stores[MEM_CLASS_RAY],
-          (unsigned long long)pkt.cnt.loads[MEM_CLASS_RAY], (unsigned long long)total);
+          (unsigned long long)pkt.cnt.stores[TRACE_CLASS_RAY],
+          (unsigned long long)pkt.cnt.loads[TRACE_CLASS_RAY], (unsigned long long)total);
   EXPECT(pkt.cnt.ray_outside == 0);
   /* The per-pixel costs account for all of the packet's ray/triangle tests. */
   uint64_t tris = 0, nodes = 0;
@@ -357,19 +355,19 @@ static void test_coherence(struct world *w) {
   render(w, POLICY_RECURSIVE, RAY_MASK(RAY_PRIMARY), 64, 64, &rec);
   render(w, POLICY_PACKET, RAY_MASK(RAY_PRIMARY), 64, 64, &pkt);
   EXPECT(memcmp(rec.fb.acc, pkt.fb.acc, 3 * 64 * 64 * sizeof *rec.fb.acc) == 0);
-  EXPECTF(pkt.cnt.loads[MEM_CLASS_GEOMETRY] < rec.cnt.loads[MEM_CLASS_GEOMETRY],
+  EXPECTF(pkt.cnt.loads[TRACE_CLASS_GEOMETRY] < rec.cnt.loads[TRACE_CLASS_GEOMETRY],
           "%s: packet loads %llu triangle records, recursive %llu", w->name,
-          (unsigned long long)pkt.cnt.loads[MEM_CLASS_GEOMETRY],
-          (unsigned long long)rec.cnt.loads[MEM_CLASS_GEOMETRY]);
-  EXPECT(pkt.cnt.loads[MEM_CLASS_NODE] < rec.cnt.loads[MEM_CLASS_NODE]);
+          (unsigned long long)pkt.cnt.loads[TRACE_CLASS_GEOMETRY],
+          (unsigned long long)rec.cnt.loads[TRACE_CLASS_GEOMETRY]);
+  EXPECT(pkt.cnt.loads[TRACE_CLASS_NODE] < rec.cnt.loads[TRACE_CLASS_NODE]);
   /* Primary rays mostly visit nodes in their own order: about the same tests. */
   EXPECTF(pkt.ts.tri_tests <= rec.ts.tri_tests + rec.ts.tri_tests / 10, "%s: %llu tests, recursive %llu", w->name,
           (unsigned long long)pkt.ts.tri_tests, (unsigned long long)rec.ts.tri_tests);
   fprintf(stderr, "%s primary 64x64: triangle loads %llu (recursive %llu), node loads %llu (%llu)\n",
-          w->name, (unsigned long long)pkt.cnt.loads[MEM_CLASS_GEOMETRY],
-          (unsigned long long)rec.cnt.loads[MEM_CLASS_GEOMETRY],
-          (unsigned long long)pkt.cnt.loads[MEM_CLASS_NODE],
-          (unsigned long long)rec.cnt.loads[MEM_CLASS_NODE]);
+          w->name, (unsigned long long)pkt.cnt.loads[TRACE_CLASS_GEOMETRY],
+          (unsigned long long)rec.cnt.loads[TRACE_CLASS_GEOMETRY],
+          (unsigned long long)pkt.cnt.loads[TRACE_CLASS_NODE],
+          (unsigned long long)rec.cnt.loads[TRACE_CLASS_NODE]);
   fb_fini(&rec.fb);
   fb_fini(&pkt.fb);
 }

@@ -50,17 +50,13 @@ static int load(struct world *w, const char *path) {
 
 static void render(struct world *w, uint32_t mask, uint32_t size, struct framebuffer *fb,
                    struct render_stats *st) {
-  struct trace_layout l;
-  trace_layout_default(&l);
-  struct tracer tr;
-  tracer_init(&tr, &w->s, &w->kd, mem_port_native(), &l);
   struct shade_ctx sc = {&w->s, mask, 7};
-  fb_init(fb, size, size, 0);
-  memset(st, 0, sizeof *st);
-  struct policy_env env = {&tr, &sc, fb, st, NULL, NULL};
+  struct policy_setup ps;
+  testing_policy_setup(&ps, &w->s, &w->kd, &sc, fb);
+  fb_init(fb, size, size, ps.layout.fb_base);
   struct policy_params pp;
   policy_params_default(&pp);
-  policy_run(POLICY_RECURSIVE, &env, &pp);
+  policy_run(POLICY_RECURSIVE, &ps, &pp, mem_port_native(), st, NULL);
 }
 
 int main(void) {

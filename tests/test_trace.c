@@ -403,12 +403,12 @@ static bool in_region(uint64_t addr, uint64_t base) {
 
 static void count_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct count_ctx *c = ctx;
-  if (cls == MEM_CLASS_NODE && size == 8 && in_region(addr, c->l.node_base) &&
+  if (cls == TRACE_CLASS_NODE && size == 8 && in_region(addr, c->l.node_base) &&
       (addr - c->l.node_base) % 8 == 0)
     c->node_loads++;
-  else if (cls == MEM_CLASS_NODE && size == 4 && in_region(addr, c->l.prim_idx_base))
+  else if (cls == TRACE_CLASS_NODE && size == 4 && in_region(addr, c->l.prim_idx_base))
     c->idx_loads++;
-  else if (cls == MEM_CLASS_GEOMETRY && size == c->l.tri_bytes && in_region(addr, c->l.tri_base) &&
+  else if (cls == TRACE_CLASS_GEOMETRY && size == c->l.tri_bytes && in_region(addr, c->l.tri_base) &&
            (addr - c->l.tri_base) % c->l.tri_bytes == 0)
     c->tri_loads++;
   else

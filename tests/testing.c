@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include "renderer/kdtree.h"
+#include "renderer/policy.h"
 #include "renderer/ray.h"
 #include "renderer/scene.h"
 #include "renderer/scene_file.h"
@@ -42,6 +43,16 @@ int testing_load_world(struct scene *s, struct kd_tree *kd, const char *path) {
   kd_build_params_default(&p);
   kd_build(kd, s, &p);
   return 1;
+}
+
+void testing_policy_setup(struct policy_setup *ps, const struct scene *s, const struct kd_tree *kd,
+                          const struct shade_ctx *sc, struct framebuffer *fb) {
+  memset(ps, 0, sizeof *ps);
+  ps->scene = s;
+  ps->kd = kd;
+  trace_layout_default(&ps->layout);
+  ps->sc = sc;
+  ps->fb = fb;
 }
 
 struct ray testing_make_ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmin,

@@ -36,6 +36,14 @@ struct kd_tree;
  * failure print the error and return 0. */
 int testing_load_world(struct scene *s, struct kd_tree *kd, const char *path);
 
+struct policy_setup;
+struct shade_ctx;
+struct framebuffer;
+/* A policy setup of the world (s, kd): the default layout, sc and fb
+ * (borrowed), no tested set, no progress. */
+void testing_policy_setup(struct policy_setup *ps, const struct scene *s, const struct kd_tree *kd,
+                          const struct shade_ctx *sc, struct framebuffer *fb);
+
 struct ray;
 /* A ray with origin o, direction d, extent (tmin, tmax), no ignored
  * primitive and no pending hit. */
