@@ -22,6 +22,7 @@ int cmd_hits(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
 int cmd_traffic(int argc, char **argv);
 int cmd_trace(int argc, char **argv);
+int cmd_run(int argc, char **argv);
 
 /* Print "rtsim: <formatted err>" once to stderr; returns APP_EXIT_USAGE. */
 int app_report(const struct err *e);

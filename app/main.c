@@ -22,6 +22,8 @@ static const char USAGE[] =
     "  traffic SCENE.yaml --rays R -o T.csv  DRAM-to-L2 traffic of the scheduling\n"
     "                                   policies for every cache size, 1 KB to 4 MB\n"
     "  trace SCENE.yaml --din FILE ...  the access stream as a Dinero IV din trace\n"
+    "  run MACHINE.yaml SCENE.yaml -o DIR  render on the timed many-core machine:\n"
+    "                                   cycles, utilization, L2 and DRAM statistics\n"
     "  bench SCENE.yaml...              primary-ray throughput (rays/s) per scene\n"
     "\n"
     "Run 'rtsim COMMAND --help' for a command's options.\n";
@@ -116,7 +118,8 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "bench")) return cmd_bench(argc - 1, argv + 1);
   if (!strcmp(cmd, "traffic")) return cmd_traffic(argc - 1, argv + 1);
   if (!strcmp(cmd, "trace")) return cmd_trace(argc - 1, argv + 1);
-  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, traffic, trace, bench)\n",
+  if (!strcmp(cmd, "run")) return cmd_run(argc - 1, argv + 1);
+  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, traffic, trace, run, bench)\n",
           cmd);
   return APP_EXIT_USAGE;
 }

@@ -45,6 +45,7 @@ uint32_t shade_hit(const struct shade_ctx *c, const struct ray *r, const struct 
     fb_add(fb, r->pixel, v3_mul(r->w, s->background), mem);
     return 0;
   }
+  mem_compute(mem, c->shade_cycles);
   const struct scene_tri *t = &s->tris[h->prim];
   const struct scene_material *m = &s->mats[t->material];
   vec3 err;

@@ -32,10 +32,11 @@ struct shade_ctx {
   const struct scene *scene;
   uint32_t ray_mask; /* RAY_MASK(RAY_SHADOW) | ...; primary rays are always traced */
   uint64_t seed;
+  uint32_t shade_cycles; /* compute announced per shaded hit (0: none) */
 };
 
-/* Shade the result of a non-shadow ray r (h->prim < 0: a miss). Adds direct
- * contributions to fb and writes the rays it spawns to out[] (at most
+/* Shade the result of a non-shadow ray r (h->prim < 0: a miss). A hit
+ * announces c->shade_cycles of compute. Adds direct contributions to fb and writes the rays it spawns to out[] (at most
  * SHADE_MAX_SPAWN), shadow rays first. Returns how many it spawned. */
 uint32_t shade_hit(const struct shade_ctx *c, const struct ray *r, const struct hit *h,
                    struct framebuffer *fb, const struct mem_port *mem, struct ray *out);

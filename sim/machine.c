@@ -242,7 +242,10 @@ static void ray_ready(struct machine *m, struct mctx *c, uint64_t t) {
   struct mthread *th = &m->th[c->thread];
   uint32_t id = (uint32_t)(c - m->ctx);
   if (th->cur == NONE) {
-    th_take(m, th, id, t);
+    /* NOTE: a block runs ahead of the engine (its ray's clock passes the
+     * current event's cycle), so the thread may still be busy until its last
+     * block's end, th->since: it cannot take the ray before that. */
+    th_take(m, th, id, t > th->since ? t : th->since);
   } else {
     c->next = NONE;
     if (th->q_tail == NONE) th->q_head = id;

@@ -65,7 +65,7 @@ enum machine_tl_col {
   MTL_BUSY_THREAD_CYCLES,
   MTL_COLS
 };
-#define MACHINE_TL_MAX_ROWS 65536u
+#define MACHINE_TL_MAX_ROWS 16384u
 
 struct machine_stats {
   uint64_t cycles;              /* last ray done and the channel drained */

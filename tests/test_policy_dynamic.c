@@ -101,7 +101,7 @@ struct result {
 /* A render; batch: the dynamic policy's primary rays admitted at a time (0: all). */
 static void render_batch(struct world *w, enum policy_kind k, uint32_t mask, uint32_t size,
                          uint64_t cache, uint64_t batch, struct counter *cnt, struct result *res) {
-  struct shade_ctx sc = {&w->s, mask, 7};
+  struct shade_ctx sc = {&w->s, mask, 7, 0};
   struct policy_setup ps;
   testing_policy_setup(&ps, &w->s, &w->kd, &sc, &res->fb);
   const struct trace_layout l = ps.layout;

@@ -233,7 +233,7 @@ static void test_traversal(struct world *w) {
   {
     struct framebuffer fb;
     fb_init(&fb, 64, 64, 0);
-    struct shade_ctx sc = {&w->s, ALL_RAYS, 5};
+    struct shade_ctx sc = {&w->s, ALL_RAYS, 5, 0};
     struct camera_frame cf;
     camera_frame_init(&cf, &w->s.camera, 64, 64);
     struct ray spawn[SHADE_MAX_SPAWN];
@@ -299,7 +299,7 @@ static void render(struct world *w, enum policy_kind k, uint32_t mask, uint32_t 
   out->cnt.cam_lo = l.camera_base;
   out->cnt.cam_hi = l.camera_base + 64ull * width * height;
   struct mem_port port = {&COUNT_OPS, &out->cnt};
-  struct shade_ctx sc = {&w->s, mask, 7};
+  struct shade_ctx sc = {&w->s, mask, 7, 0};
   fb_init(&out->fb, width, height, l.fb_base);
   struct policy_setup ps;
   testing_policy_setup(&ps, &w->s, &w->kd, &sc, &out->fb);

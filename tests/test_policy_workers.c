@@ -89,7 +89,7 @@ static void render_init(struct render *r, struct world *w, uint32_t width, uint3
   r->sc = (struct shade_ctx){&w->s,
                              RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) |
                                  RAY_MASK(RAY_SPECULAR) | RAY_MASK(RAY_DIFFUSE),
-                             7};
+                             7, 0};
   testing_policy_setup(&r->ps, &w->s, &w->kd, &r->sc, &r->res.fb);
   fb_init(&r->res.fb, width, height, r->ps.layout.fb_base);
   r->res.tested = xcalloc(w->s.tri_count / 64 + 1, sizeof *r->res.tested);

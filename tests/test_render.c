@@ -50,7 +50,7 @@ static int load(struct world *w, const char *path) {
 
 static void render(struct world *w, uint32_t mask, uint32_t size, struct framebuffer *fb,
                    struct render_stats *st) {
-  struct shade_ctx sc = {&w->s, mask, 7};
+  struct shade_ctx sc = {&w->s, mask, 7, 0};
   struct policy_setup ps;
   testing_policy_setup(&ps, &w->s, &w->kd, &sc, fb);
   fb_init(fb, size, size, ps.layout.fb_base);

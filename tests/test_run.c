@@ -6,7 +6,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "renderer/framebuffer.h"
+#include "renderer/image.h"
 #include "renderer/kdtree.h"
 #include "renderer/policy.h"
 #include "renderer/scene.h"
@@ -14,12 +18,13 @@
 #include "renderer/trace.h"
 #include "sim/lru_stack.h"
 #include "sim/machine.h"
+#include "sim/err.h"
 #include "sim/machine_cfg.h"
 #include "sim/mem_functional.h"
 #include "testing.h"
 
-#define W 48
-#define H 32
+#define W 32
+#define H 24
 
 struct world {
   struct scene s;
@@ -176,11 +181,130 @@ static void test_many_workers(struct world *w) {
   fb_fini(&ref.fb);
 }
 
+/* RGB planes of two EXR files are equal, bit for bit. */
+static int same_rgb(const char *a, const char *b) {
+  struct image x, y;
+  struct err e;
+  memset(&e, 0, sizeof e);
+  if (!image_read_exr(&x, a, &e)) return 0;
+  if (!image_read_exr(&y, b, &e)) {
+    image_fini(&x);
+    return 0;
+  }
+  int same = x.width == y.width && x.height == y.height;
+  const char *ch[] = {"R", "G", "B"};
+  for (int i = 0; i < 3 && same; i++) {
+    int cx = image_channel(&x, ch[i]), cy = image_channel(&y, ch[i]);
+    same = cx >= 0 && cy >= 0 &&
+           !memcmp(x.planes[cx], y.planes[cy], (size_t)x.width * x.height * sizeof(float));
+  }
+  image_fini(&x);
+  image_fini(&y);
+  return same;
+}
+
+static int same_file(const char *a, const char *b, int skip_wall) {
+  FILE *fa = fopen(a, "rb"), *fb = fopen(b, "rb");
+  int same = fa && fb;
+  char la[4096], lb[4096];
+  while (same) {
+    char *ra = fgets(la, sizeof la, fa), *rb = fgets(lb, sizeof lb, fb);
+    if (!ra || !rb) {
+      same = !ra && !rb;
+      break;
+    }
+    if (skip_wall && strstr(la, "\"wall_s\"") && strstr(lb, "\"wall_s\"")) continue;
+    same = !strcmp(la, lb);
+  }
+  if (fa) fclose(fa);
+  if (fb) fclose(fb);
+  return same;
+}
+
+static int exists(const char *dir, const char *name) {
+  char p[2048];
+  snprintf(p, sizeof p, "%s/%s", dir, name);
+  struct stat sb;
+  return stat(p, &sb) == 0;
+}
+
+/* rtsim run through the command line: the image of rtsim render, the same
+ * bytes twice, every output present; bad input refused with exit 2. */
+static void test_command(void) {
+  char cmd[4096], out[8192];
+  const char *scene = RTSIM_SOURCE_DIR "/scenes/small/grove.yaml";
+  const char *tiny = RTSIM_SOURCE_DIR "/configs/tiny.yaml";
+  const char *ref = RTSIM_TMP "/run_ref.exr";
+  snprintf(cmd, sizeof cmd, "%s render %s --width 24 --height 16 -o %s", RTSIM_BINARY, scene, ref);
+  EXPECT(testing_run(cmd, out, sizeof out) == 0);
+  const char *dirs[] = {RTSIM_TMP "/run_a", RTSIM_TMP "/run_b", RTSIM_TMP "/run_p"};
+  for (int i = 0; i < 3; i++) {
+    snprintf(cmd, sizeof cmd, "%s run %s %s --width 24 --height 16 %s -o %s", RTSIM_BINARY, tiny,
+             scene, i == 2 ? "--policy packet --set cores=3 --set l2.size=8KiB" : "", dirs[i]);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 0, "%s: exit %d: %s", cmd, rc, out);
+    const char *files[] = {"image.exr", "stats.json", "stats.csv", "timeline.csv", "traffic.png"};
+    for (int f = 0; f < 5; f++) EXPECTF(exists(dirs[i], files[f]), "%s/%s missing", dirs[i], files[f]);
+    char img[2048];
+    snprintf(img, sizeof img, "%s/image.exr", dirs[i]);
+    EXPECTF(same_rgb(ref, img), "%s: RGB differs from rtsim render's", dirs[i]);
+  }
+  const char *names[] = {"stats.csv", "timeline.csv", "image.exr", "stats.json"};
+  for (int f = 0; f < 4; f++) {
+    char a[2048], b[2048];
+    snprintf(a, sizeof a, "%s/%s", dirs[0], names[f]);
+    snprintf(b, sizeof b, "%s/%s", dirs[1], names[f]);
+    EXPECTF(same_file(a, b, f == 3), "%s differs between two runs", names[f]);
+  }
+  /* The override is in the resolved config. */
+  char js[2048];
+  snprintf(js, sizeof js, "%s/stats.json", dirs[2]);
+  FILE *f = fopen(js, "r");
+  size_t n = f ? fread(out, 1, sizeof out - 1, f) : 0;
+  out[n] = '\0';
+  if (f) fclose(f);
+  EXPECT(strstr(out, "\"cores\": 3,") && strstr(out, "\"l2.size\": 8192,") &&
+         strstr(out, "\"policy\": \"packet\""));
+
+  static const struct {
+    const char *args, *want;
+  } bad[] = {
+      {"run CFG SCN -o DIR --set cores=0", "--set cores=0: error: cores: out of range (got 0"},
+      {"run CFG SCN -o DIR --set l2.size=32", "l2.size: smaller than one 64-byte line"},
+      {"run CFG SCN -o DIR --set dram.bytes_per_cycle=0", "dram.bytes_per_cycle: out of range"},
+      {"run CFG SCN -o DIR --set l3.size=1", "unknown key 'l3.size'"},
+      {"run " RTSIM_TEST_DATA "/configs/bad_size_unit.yaml SCN -o DIR", "bad_size_unit.yaml:2:9: error: l2.size"},
+      {"run CFG SCN -o DIR --policy dynamic", "does not run on the machine yet"},
+      {"run CFG SCN -o DIR --policy fastest", "--policy: got 'fastest'"},
+      {"run CFG -o DIR", "expected MACHINE.yaml SCENE.yaml, got 1 file"},
+      {"run CFG SCN", "missing -o OUTDIR"},
+      {"run CFG SCN -o DIR --width 0", "--width: got '0'"},
+      {"run CFG " RTSIM_TEST_DATA "/scenes/bad_color.yaml -o DIR", "bad_color.yaml:"},
+  };
+  const char *bad_dir = RTSIM_TMP "/run_bad";
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    char args[2048] = "", *o = args;
+    for (const char *p = bad[i].args; *p;) {
+      if (!strncmp(p, "CFG", 3)) o += sprintf(o, "%s", tiny), p += 3;
+      else if (!strncmp(p, "SCN", 3)) o += sprintf(o, "%s", scene), p += 3;
+      else if (!strncmp(p, "DIR", 3)) o += sprintf(o, "%s", bad_dir), p += 3;
+      else *o++ = *p++;
+    }
+    *o = '\0';
+    snprintf(cmd, sizeof cmd, "%s %s --width 8 --height 8", RTSIM_BINARY, args);
+    if (strstr(bad[i].args, "--width")) snprintf(cmd, sizeof cmd, "%s %s", RTSIM_BINARY, args);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 2 && strstr(out, bad[i].want), "%s: exit %d, '%s'", bad[i].args, rc, out);
+    EXPECTF(!exists(bad_dir, "stats.json"), "%s left a stats.json", bad[i].args);
+  }
+}
+
 int main(void) {
   struct world w;
   if (!testing_load_world(&w.s, &w.kd, RTSIM_SOURCE_DIR "/scenes/small/room.yaml")) return 1;
   test_cross_check(&w);
   test_many_workers(&w);
+  test_command();
   kd_fini(&w.kd);
   scene_fini(&w.s);
   return testing_done("test_run");
