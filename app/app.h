@@ -68,6 +68,25 @@ void app_render_init(struct app_render *r, const struct app_world *w, uint32_t m
                      uint32_t width, uint32_t height);
 void app_render_fini(struct app_render *r);
 
+struct machine;
+struct machine_params;
+/* One render on the timed machine: the machine (its statistics and timeline),
+ * the framebuffer in ar, the render's counters and the host seconds it took. */
+struct app_timed {
+  struct app_render ar;
+  struct machine *m;
+  struct render_stats st;
+  struct trace_stats ts;
+  double wall_s;
+};
+/* Render a width x height image of w with policy k on machine mp (which must
+ * pass machine_params_problem), one worker per ray context; costs come from
+ * mp. progress: a progress line on stderr. */
+void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask, uint64_t seed,
+                   uint32_t width, uint32_t height, enum policy_kind k,
+                   const struct machine_params *mp, bool progress);
+void app_timed_fini(struct app_timed *t);
+
 struct image;
 /* Write an sRGB PNG preview of im's R, G, B channels through gnuplot (temporary
  * name + rename). On failure fills e (file = png) and returns false. */

@@ -8,7 +8,12 @@
 #include "renderer/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
+#include "sim/coro.h"
+#include "sim/engine.h"
+#include "sim/err.h"
 #include "sim/lru_stack.h"
+#include "sim/machine.h"
+#include "sim/machine_cfg.h"
 #include "sim/mem_functional.h"
 
 static const char HELP[] =
@@ -30,6 +35,18 @@ static const char HELP[] =
     "  --functional           also time the functional backend on the same work\n"
     "  --analyser N           only time the analyser alone on N synthetic line\n"
     "                         accesses and print accesses per second\n"
+    "  --engine               only time the event engine (events per second: 20M\n"
+    "                         events, 1024 pending, each scheduling the next 1 to\n"
+    "                         1024 cycles ahead as most of the machine's do; and\n"
+    "                         1 to 2^20 cycles ahead, mostly past the calendar) and\n"
+    "                         the coroutine switch (ns, best of 5 x 10M switches)\n"
+    "  --timed MACHINE.yaml   instead of the functional backend, time rtsim run's\n"
+    "                         timed machine on the same image: once with the\n"
+    "                         machine as configured and once with 1 core x 1 thread\n"
+    "                         x 1 ray of it, each against the best native render;\n"
+    "                         prints scene, width, height, rays, machine, contexts,\n"
+    "                         native_s, timed_s, slowdown, cycles, events,\n"
+    "                         events_per_s, core_utilization, dram_utilization\n"
     "  -h, --help             this text\n";
 
 static double render_once(const struct app_world *w, uint32_t mask, uint32_t W, uint32_t H,
@@ -47,6 +64,47 @@ static double render_once(const struct app_world *w, uint32_t mask, uint32_t W, 
   return s;
 }
 
+/* The timed machine against the native render of the same image. */
+static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint64_t height,
+                       uint64_t repeat, int argc, char **argv) {
+  struct machine_cfg mc;
+  machine_cfg_defaults(&mc);
+  struct err e = {0};
+  if (!machine_cfg_load(&mc, cfg_path, &e) || !machine_cfg_check(&mc, &e)) return app_report(&e);
+  printf("scene,width,height,rays,machine,contexts,native_s,timed_s,slowdown,cycles,events,"
+         "events_per_s,core_utilization,dram_utilization\n");
+  for (int i = optind; i < argc; i++) {
+    struct app_world w;
+    if (!app_world_load(&w, argv[i])) return 2;
+    uint32_t W = width ? (uint32_t)width : w.scene.width;
+    uint32_t H = height ? (uint32_t)height : w.scene.height;
+    double best = 0;
+    uint64_t nrays = 0;
+    for (uint64_t k = 0; k < repeat; k++) {
+      double s = render_once(&w, mask, W, H, mem_port_native(), &nrays);
+      if (k == 0 || s < best) best = s;
+    }
+    for (int one = 1; one >= 0; one--) {
+      struct machine_params p = mc.p;
+      if (one) p.cores = p.threads_per_core = p.rays_per_thread = 1;
+      struct app_timed t;
+      app_timed_run(&t, &w, mask, w.scene.seed, W, H, POLICY_RECURSIVE, &p, false);
+      const struct machine_stats *st = machine_get_stats(t.m);
+      printf("%s,%u,%u,%llu,%s%s,%llu,%.4f,%.4f,%.2f,%llu,%llu,%.0f,%.4f,%.4f\n",
+             w.scene.name[0] ? w.scene.name : argv[i], W, H, (unsigned long long)nrays, cfg_path,
+             one ? " at 1x1x1" : "", (unsigned long long)st->contexts, best, t.wall_s,
+             best > 0 ? t.wall_s / best : 0.0, (unsigned long long)st->cycles,
+             (unsigned long long)st->events, t.wall_s > 0 ? (double)st->events / t.wall_s : 0.0,
+             (double)st->issue_slots / ((double)p.cores * (double)st->cycles),
+             (double)st->dram_busy_ticks / (double)(1ull << 20) / (double)st->cycles);
+      fflush(stdout);
+      app_timed_fini(&t);
+    }
+    app_world_fini(&w);
+  }
+  return 0;
+}
+
 int cmd_bench(int argc, char **argv) {
   static const struct option opts[] = {{"width", required_argument, 0, 'W'},
                                        {"height", required_argument, 0, 'H'},
@@ -54,11 +112,14 @@ int cmd_bench(int argc, char **argv) {
                                        {"rays", required_argument, 0, 'r'},
                                        {"functional", no_argument, 0, 'f'},
                                        {"analyser", required_argument, 0, 'a'},
+                                       {"engine", no_argument, 0, 'e'},
+                                       {"timed", required_argument, 0, 't'},
                                        {"help", no_argument, 0, 'h'},
                                        {0, 0, 0, 0}};
   uint64_t width = 0, height = 0, repeat = 3, analyser = 0;
   const char *rays = "primary";
-  bool functional = false;
+  bool functional = false, engine = false;
+  const char *timed = NULL;
   int c;
   opterr = 0;
   optind = 1;
@@ -70,6 +131,8 @@ int cmd_bench(int argc, char **argv) {
     case 'a': if (!app_parse_u64("bench", "--analyser", optarg, 1, 1ull << 40, &analyser)) return 2; break;
     case 'r': rays = optarg; break;
     case 'f': functional = true; break;
+    case 'e': engine = true; break;
+    case 't': timed = optarg; break;
     case 'h': fputs(HELP, stdout); return 0;
     default: return app_option_error("bench", c, argv);
     }
@@ -79,10 +142,22 @@ int cmd_bench(int argc, char **argv) {
            lru_stack_bench(analyser, 1));
     return 0;
   }
+  if (engine) {
+    double near = engine_bench(20000000, 1024, 1024), far = engine_bench(20000000, 1024, 1u << 20);
+    double ns = 0;
+    for (int k = 0; k < 5; k++) {
+      double x = coro_bench_switch_ns(10000000);
+      if (k == 0 || x < ns) ns = x;
+    }
+    printf("engine_events_per_s,engine_far_events_per_s,coroutine_switch_ns\n%.0f,%.0f,%.2f\n",
+           near, far, ns);
+    return 0;
+  }
   uint32_t mask;
   if (!shade_parse_rays(rays, &mask))
     return app_usage_error("bench", "--rays: got '%s', expected a comma-separated list of primary, shadow, specular, diffuse", rays);
   if (optind >= argc) return app_usage_error("bench", "missing SCENE.yaml");
+  if (timed) return bench_timed(timed, mask, width, height, repeat, argc, argv);
   printf("scene,triangles,kd_nodes,kd_build_s,width,height,rays,native_s,rays_per_s%s\n",
          functional ? ",functional_s,slowdown,line_accesses,accesses_per_s" : "");
   for (int i = optind; i < argc; i++) {

@@ -50,38 +50,6 @@ static const char HELP[] =
     "                      costs.ray_switch timeline.window\n"
     "  -h, --help          this text\n";
 
-struct run_ctx {
-  struct policy_job *job;
-  struct policy_worker *workers;
-  uint64_t total;
-  double t0;
-  bool tty;
-};
-
-static void run_worker(void *arg, const struct machine_worker_info *info, struct mem_port port) {
-  struct run_ctx *r = arg;
-  struct policy_worker *w = &r->workers[info->id];
-  policy_worker_init(w, r->job, info->id, info->core, info->thread, port);
-  policy_job_work(r->job, w);
-  policy_worker_fini(r->job, w);
-}
-
-static void work_progress(void *ctx, uint64_t done, uint64_t total) {
-  struct run_ctx *r = ctx;
-  (void)total;
-  r->total = done;
-}
-
-static void cycle_progress(void *ctx, uint64_t cycle) {
-  struct run_ctx *r = ctx;
-  double el = app_now() - r->t0, total = (double)policy_job_total(r->job);
-  double frac = total > 0 ? (double)r->total / total : 0;
-  fprintf(stderr, "\rrun: %.3g Mcycles, work %5.1f%%, %.2f Mcycles/s, ETA %.0f s   ",
-          (double)cycle / 1e6, 100 * frac, el > 0 ? (double)cycle / el / 1e6 : 0.0,
-          frac > 0 ? el * (1 - frac) / frac : 0.0);
-  fflush(stderr);
-}
-
 int cmd_run(int argc, char **argv) {
   static const struct option opts[] = {
       {"output", required_argument, 0, 'o'}, {"width", required_argument, 0, 'W'},
@@ -164,32 +132,10 @@ int cmd_run(int argc, char **argv) {
 
   struct app_world w;
   if (!app_world_load(&w, scene_path)) goto done;
-  const struct machine_params *mp = &mc.p;
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
-  struct app_render ar;
-  app_render_init(&ar, &w, mask, have_seed ? seed : w.scene.seed, W, H);
-  ar.setup.layout.node_cycles = mp->cost_node_cycles;
-  ar.setup.layout.tri_cycles = mp->cost_triangle_cycles;
-  ar.sc.shade_cycles = mp->cost_shade_cycles;
-  struct policy_params pp;
-  policy_params_default(&pp);
-  const uint32_t nctx = mp->cores * mp->threads_per_core * mp->rays_per_thread;
-  struct run_ctx r = {0};
-  r.tty = isatty(2);
-  ar.setup.progress = work_progress;
-  ar.setup.progress_ctx = &r;
-  r.job = policy_job_create(policy, &ar.setup, &pp, nctx, mp->cores);
-  r.workers = xcalloc(nctx, sizeof *r.workers);
-  struct machine *m = machine_create(mp, 0);
-  r.t0 = app_now();
-  machine_run(m, run_worker, &r, r.tty ? cycle_progress : NULL, &r);
-  double wall = app_now() - r.t0;
-  if (r.tty) fputc('\n', stderr);
-  struct render_stats st;
-  struct trace_stats ts;
-  policy_job_finish(r.job, &st, &ts);
-
+  struct app_timed t;
+  app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, isatty(2));
   struct run_report rep = {
       .out_dir = out,
       .machine_path = machine_path,
@@ -199,20 +145,17 @@ int cmd_run(int argc, char **argv) {
       .mask = mask,
       .width = W,
       .height = H,
-      .seed = ar.sc.seed,
+      .seed = t.ar.sc.seed,
       .cfg = &mc,
-      .machine = m,
-      .rstats = &st,
-      .tstats = &ts,
-      .fb = &ar.fb,
-      .wall_s = wall,
+      .machine = t.m,
+      .rstats = &t.st,
+      .tstats = &t.ts,
+      .fb = &t.ar.fb,
+      .wall_s = t.wall_s,
   };
   rc = run_output_write(&rep, &e) ? 0 : app_report(&e);
   if (rc == 0) run_output_summary(&rep, stdout);
-  machine_destroy(m);
-  free(r.workers);
-  policy_job_destroy(r.job);
-  app_render_fini(&ar);
+  app_timed_fini(&t);
   app_world_fini(&w);
 done:
   free(sets);
