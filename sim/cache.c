@@ -4,6 +4,7 @@
  * associative L2 of 64K lines costs what a 4-way L1 does. */
 #include "sim/cache.h"
 
+#include <stdbool.h>
 #include <stdlib.h>
 
 #include "sim/err.h"
@@ -22,10 +23,20 @@ struct cache {
   struct slot *slots;
   uint32_t *head, *tail; /* per set: most / least recently used slot */
   uint64_t lines, sets, ways;
-  uint32_t *table;       /* slot index + 1; 0 empty */
+  uint64_t set_mask;     /* sets - 1 when a power of two, else 0 (use %) */
+  bool scan;             /* few ways: find a line by scanning its set */
+  uint32_t *table;       /* otherwise: slot index + 1; 0 empty */
   uint64_t table_mask;
   unsigned table_shift;
 };
+
+/* Up to this many ways a set is scanned (its tags sit in a few host lines);
+ * beyond, the hash table finds the line. */
+#define SCAN_WAYS 16
+
+static inline uint64_t set_of_line(const struct cache *c, uint64_t line) {
+  return c->set_mask ? (line & c->set_mask) : line % c->sets;
+}
 
 const char *cache_params_problem(const struct cache_params *p) {
   if (p->lg2_line < 2 || p->lg2_line > 16) return "the line size must be 4 bytes to 64 KiB";
@@ -75,6 +86,9 @@ struct cache *cache_create(const struct cache_params *p) {
   c->lines = p->size_bytes >> p->lg2_line;
   c->ways = p->ways ? p->ways : c->lines;
   c->sets = c->lines / c->ways;
+  c->set_mask = (c->sets & (c->sets - 1)) == 0 ? c->sets - 1 : 0;
+  if (c->sets == 1) c->set_mask = 0;
+  c->scan = c->ways <= SCAN_WAYS;
   c->slots = xmalloc(c->lines * sizeof *c->slots);
   c->head = xmalloc(c->sets * sizeof *c->head);
   c->tail = xmalloc(c->sets * sizeof *c->tail);
@@ -89,6 +103,7 @@ struct cache *cache_create(const struct cache_params *p) {
       c->slots[i].next = i == last ? CACHE_NONE : (uint32_t)(i + 1);
     }
   }
+  if (c->scan) return c;
   uint64_t tsize = 16;
   unsigned bits = 4;
   while (tsize < 2 * c->lines) {
@@ -113,6 +128,12 @@ void cache_destroy(struct cache *c) {
 uint64_t cache_lines(const struct cache *c) { return c->lines; }
 
 uint32_t cache_find(const struct cache *c, uint64_t line) {
+  if (c->scan) {
+    const uint64_t first = set_of_line(c, line) * c->ways;
+    for (uint64_t i = first; i < first + c->ways; i++)
+      if (c->slots[i].line == line && (c->slots[i].flags & F_VALID)) return (uint32_t)i;
+    return CACHE_NONE;
+  }
   uint64_t i = hash_of(c, line);
   for (;;) {
     uint32_t v = c->table[i];
@@ -139,7 +160,7 @@ void cache_touch(struct cache *c, uint32_t slot) {
 }
 
 uint32_t cache_victim(const struct cache *c, uint64_t line) {
-  uint64_t s = line % c->sets;
+  uint64_t s = set_of_line(c, line);
   for (uint32_t i = c->tail[s]; i != CACHE_NONE; i = c->slots[i].prev)
     if (!(c->slots[i].flags & F_PENDING)) return i;
   return CACHE_NONE;
@@ -158,10 +179,10 @@ void cache_set_pending(struct cache *c, uint32_t slot, bool pending) {
 
 void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bool pending) {
   struct slot *x = &c->slots[slot];
-  CHECK(set_of_slot(c, slot) == line % c->sets && !(x->flags & F_PENDING));
-  if (x->flags & F_VALID) table_del(c, x->line);
+  CHECK(set_of_slot(c, slot) == set_of_line(c, line) && !(x->flags & F_PENDING));
+  if (!c->scan && (x->flags & F_VALID)) table_del(c, x->line);
   x->line = line;
   x->flags = F_VALID | (dirty ? F_DIRTY : 0) | (pending ? F_PENDING : 0);
-  table_put(c, line, slot);
+  if (!c->scan) table_put(c, line, slot);
   cache_touch(c, slot);
 }

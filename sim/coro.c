@@ -57,10 +57,13 @@ struct coro {
 };
 
 size_t coro_default_stack_bytes(void) {
-  /* Measured (tests/test_coro.c paints a stack and runs every policy's worker
-   * on a scene): the recursive worker peaks near 12 KB, the packet worker near
-   * 8 KB. 64 KB leaves five times that; the sanitizers' instrumented frames
-   * are several times larger, hence 1 MB there. Only touched pages cost memory. */
+  /* Measured by tests/test_run.c on painted stacks (recursive and packet
+   * workers, every ray type): the deepest use is under 2 KB, since the
+   * workers keep their ray buffers on the heap. 64 KB leaves a wide margin
+   * for deeper trees and future kernels (the test requires 4x); the
+   * sanitizers' instrumented frames are several times larger, hence 1 MB
+   * there. Only touched pages cost memory, and the guard page turns an
+   * overflow into a fault. */
   return CORO_ASAN ? (size_t)1 << 20 : (size_t)64 << 10;
 }
 

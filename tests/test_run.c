@@ -18,6 +18,7 @@
 #include "renderer/trace.h"
 #include "sim/lru_stack.h"
 #include "sim/machine.h"
+#include "sim/coro.h"
 #include "sim/err.h"
 #include "sim/machine_cfg.h"
 #include "sim/mem_functional.h"
@@ -73,6 +74,9 @@ static void functional(struct world *w, enum policy_kind k, uint32_t mask, unsig
   fn_backend_destroy(b);
 }
 
+/* The deepest coroutine stack any run of this test used (painted stacks). */
+static uint64_t stack_used_max;
+
 struct timed_ctx {
   struct policy_job *job;
   struct policy_worker *workers;
@@ -99,8 +103,9 @@ static void timed(struct world *w, enum policy_kind k, uint32_t mask, const stru
   uint32_t n = p->cores * p->threads_per_core * p->rays_per_thread;
   struct timed_ctx t = {policy_job_create(k, &r->setup, &pp, n, p->cores), NULL};
   t.workers = calloc(n, sizeof *t.workers);
-  struct machine *m = machine_create(p, 0);
+  struct machine *m = machine_create_painted(p, 0);
   machine_run(m, timed_worker, &t, NULL, NULL);
+  if (machine_stack_used_max(m) > stack_used_max) stack_used_max = machine_stack_used_max(m);
   struct render_stats st;
   policy_job_finish(t.job, &st, NULL);
   *out = *machine_get_stats(m);
@@ -305,6 +310,11 @@ int main(void) {
   test_cross_check(&w);
   test_many_workers(&w);
   test_command();
+  /* The kernels' deepest stack, against the size the machine gives them: the
+   * margin coro.c states (at least 4x) must hold. */
+  printf("deepest coroutine stack: %llu bytes of %zu\n", (unsigned long long)stack_used_max,
+         coro_default_stack_bytes());
+  EXPECT(stack_used_max > 0 && 4 * stack_used_max <= coro_default_stack_bytes());
   kd_fini(&w.kd);
   scene_fini(&w.s);
   return testing_done("test_run");
