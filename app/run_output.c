@@ -4,6 +4,7 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include "app/app.h"
@@ -211,6 +212,9 @@ static bool write_json(const struct run_report *r, struct err *e) {
   hist_write_json(&s->queue_delay, f);
   fputs(",\n  \"wall_s\": ", f);
   json_write_f64(f, r->wall_s);
+  struct rusage ru;
+  if (getrusage(RUSAGE_SELF, &ru) == 0)
+    fprintf(f, ",\n  \"peak_rss_mb\": %.1f", (double)ru.ru_maxrss / 1024.0);
   fputs("\n}\n", f);
   return finish(f, tmp, final, e);
 }

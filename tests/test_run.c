@@ -218,7 +218,9 @@ static int same_file(const char *a, const char *b, int skip_wall) {
       same = !ra && !rb;
       break;
     }
-    if (skip_wall && strstr(la, "\"wall_s\"") && strstr(lb, "\"wall_s\"")) continue;
+    if (skip_wall && ((strstr(la, "\"wall_s\"") && strstr(lb, "\"wall_s\"")) ||
+                      (strstr(la, "\"peak_rss_mb\"") && strstr(lb, "\"peak_rss_mb\""))))
+      continue;
     same = !strcmp(la, lb);
   }
   if (fa) fclose(fa);
