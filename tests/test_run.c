@@ -306,12 +306,41 @@ static void test_command(void) {
   }
 }
 
+/* Whole runs at the machine's extremes: every output written, no nan or inf. */
+static void test_command_extremes(void) {
+  static const char *const sets[] = {
+      "--set cores=1 --set threads_per_core=1 --set rays_per_thread=1",
+      "--set cores=256 --set threads_per_core=8 --set rays_per_thread=8",
+      "--set dram.latency=0 --set dram.bytes_per_cycle=10000",
+      "--set dram.latency=1000000 --set timeline.window=1",
+      "--set dram.bytes_per_cycle=0.01 --set l2.size=64 --set l2.ways=full --set l2.mshrs=1",
+  };
+  char cmd[4096], out[8192];
+  const char *dir = RTSIM_TMP "/run_extreme";
+  for (unsigned i = 0; i < sizeof sets / sizeof sets[0]; i++) {
+    snprintf(cmd, sizeof cmd, "%s run %s/configs/tiny.yaml %s/scenes/small/room.yaml --width 6 --height 4 %s -o %s",
+             RTSIM_BINARY, RTSIM_SOURCE_DIR, RTSIM_SOURCE_DIR, sets[i], dir);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 0, "%s: exit %d: %s", sets[i], rc, out);
+    const char *files[] = {"stats.json", "stats.csv", "timeline.csv"};
+    for (int f = 0; f < 3; f++) {
+      char p[2048];
+      snprintf(p, sizeof p, "cat %s/%s", dir, files[f]);
+      static char text[1 << 20];
+      testing_run(p, text, sizeof text);
+      EXPECTF(!strstr(text, "nan") && !strstr(text, "inf") && strlen(text) > 10, "%s: %s: nan or inf",
+              sets[i], files[f]);
+    }
+  }
+}
+
 int main(void) {
   struct world w;
   if (!testing_load_world(&w.s, &w.kd, RTSIM_SOURCE_DIR "/scenes/small/room.yaml")) return 1;
   test_cross_check(&w);
   test_many_workers(&w);
   test_command();
+  test_command_extremes();
   /* The kernels' deepest stack, against the size the machine gives them: the
    * margin coro.c states (at least 4x) must hold. */
   printf("deepest coroutine stack: %llu bytes of %zu\n", (unsigned long long)stack_used_max,
