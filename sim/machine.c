@@ -599,7 +599,25 @@ static void t_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   }
 }
 
-static const struct mem_ops timed_ops = {t_load, t_store, t_compute};
+static void ev_wake(void *ctx, uint64_t arg) {
+  struct mctx *c = ctx;
+  (void)arg;
+  ray_ready(c->m, c, engine_now(c->m->eng));
+}
+
+/* The ray has nothing to do for `cycles`: it waits like a load that touches
+ * no memory (its thread may switch to another ray), and takes no issue slot. */
+static void t_wait(void *ctx, uint64_t cycles) {
+  struct mctx *c = ctx;
+  struct machine *m = c->m;
+  m->st.waits++;
+  m->st.wait_cycles += cycles;
+  c->state = CTX_WAIT;
+  engine_at(m->eng, c->t + cycles, ev_wake, c, 0);
+  coro_suspend(c->co);
+}
+
+static const struct mem_ops timed_ops = {t_load, t_store, t_compute, t_wait};
 
 /* ---- machine ---- */
 
@@ -706,9 +724,13 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   CHECK(m->loads_out == m->loads_back);
   dram_finish(m->dram);
   const struct dram_stats *ds = dram_get_stats(m->dram);
+  /* The end: the last event, the last block's last cycle (blocks run ahead
+   * of the engine), the channel drained. */
   uint64_t end = engine_now(m->eng);
   uint64_t drained = dram_ticks_to_cycles_ceil(ds->last_end_ticks);
   if (drained > end) end = drained;
+  for (uint32_t t = 0; t < m->nth; t++)
+    if (m->th[t].since > end) end = m->th[t].since;
   for (uint32_t t = 0; t < m->nth; t++) {
     CHECK(m->th[t].state == TH_DONE);
     th_account(m, &m->th[t], end);

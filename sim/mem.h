@@ -14,12 +14,17 @@
 #define MEM_CLASS_MAX 8
 
 /* Backend operations. addr is a simulated byte address, size_bytes > 0,
- * cls < MEM_CLASS_MAX. compute announces work in core cycles. Any pointer may
- * be NULL (ignored). */
+ * cls < MEM_CLASS_MAX. compute announces work in core cycles (it takes issue
+ * slots). wait: the caller has nothing to do for `cycles` cycles (a worker
+ * waiting for work other workers will make): it takes no issue slot, and on
+ * the timed machine its thread may run other rays meanwhile; with a single
+ * worker (native, functional) it is never needed. Any pointer may be NULL
+ * (ignored). */
 struct mem_ops {
   void (*load)(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls);
   void (*store)(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls);
   void (*compute)(void *ctx, uint64_t cycles);
+  void (*wait)(void *ctx, uint64_t cycles);
 };
 
 /* A port: a backend's operations plus its context. ops == NULL is the native
@@ -49,6 +54,10 @@ static inline void mem_store(const struct mem_port *p, uint64_t addr, uint32_t s
 
 static inline void mem_compute(const struct mem_port *p, uint64_t cycles) {
   if (p->ops && p->ops->compute) p->ops->compute(p->ctx, cycles);
+}
+
+static inline void mem_wait(const struct mem_port *p, uint64_t cycles) {
+  if (p->ops && p->ops->wait) p->ops->wait(p->ctx, cycles);
 }
 
 #endif

@@ -72,8 +72,8 @@ static void fn_store(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls
   b->st.bytes_stored[cls] += size_bytes;
 }
 
-/* compute is NULL: mem_compute skips it without an indirect call. */
-static const struct mem_ops fn_ops = {fn_load, fn_store, NULL};
+/* compute and wait are NULL: skipped without an indirect call. */
+static const struct mem_ops fn_ops = {fn_load, fn_store, NULL, NULL};
 
 struct fn_backend *fn_backend_create(const struct lru_stack_params *p, struct din_writer *din) {
   struct fn_backend *b = xcalloc(1, sizeof *b);

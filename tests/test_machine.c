@@ -268,6 +268,26 @@ static void test_determinism(void) {
   EXPECT(a.l2_stalls > 0 && a.dram_writes > 0);
 }
 
+/* mem_wait: a ray that waits takes no issue slot and comes back after exactly
+ * the cycles it asked for (one ray: the wait is the whole run). */
+static void wait_worker(void *arg, const struct machine_worker_info *info, struct mem_port port) {
+  (void)arg;
+  (void)info;
+  mem_compute(&port, 10);
+  mem_wait(&port, 1000);
+  mem_compute(&port, 10);
+}
+
+static void test_wait(void) {
+  struct machine_params p = base();
+  struct machine *m = machine_create(&p, 0);
+  machine_run(m, wait_worker, NULL, NULL, NULL);
+  const struct machine_stats *st = machine_get_stats(m);
+  EXPECTF(st->cycles == 1020 && st->issue_slots == 20 && st->waits == 1, "cycles %llu slots %llu",
+          (unsigned long long)st->cycles, (unsigned long long)st->issue_slots);
+  machine_destroy(m);
+}
+
 int main(void) {
   test_utilization();
   test_switch_cost();
@@ -275,5 +295,6 @@ int main(void) {
   test_md1();
   test_extremes();
   test_determinism();
+  test_wait();
   return testing_done("test_machine");
 }
