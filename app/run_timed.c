@@ -32,9 +32,10 @@ static void cycle_progress(void *ctx, uint64_t cycle) {
   struct timed_ctx *r = ctx;
   double el = app_now() - r->t0, total = (double)policy_job_total(r->job);
   double frac = total > 0 ? (double)r->done / total : 0;
-  fprintf(stderr, "\rrun: %.4g Mcycles simulated, work %5.1f%%, %.3g Mcycles/s, ETA %.0f s   ",
-          (double)cycle / 1e6, 100 * frac, el > 0 ? (double)cycle / el / 1e6 : 0.0,
-          frac > 0 ? el * (1 - frac) / frac : 0.0);
+  char eta[32] = "ETA ?";
+  if (frac > 0) snprintf(eta, sizeof eta, "ETA %.0f s", el * (1 - frac) / frac);
+  fprintf(stderr, "\rrun: %.4g Mcycles simulated, work %5.1f%%, %.3g Mcycles/s, %s   ",
+          (double)cycle / 1e6, 100 * frac, el > 0 ? (double)cycle / el / 1e6 : 0.0, eta);
   fflush(stderr);
 }
 
