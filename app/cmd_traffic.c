@@ -266,21 +266,40 @@ static const char TRACE_HELP[] =
     "'LABEL ADDRESS' (label 0 read, 1 write; address in hex), one per 64-byte line\n"
     "touched. A store that covers a line whole is one write record (the line is\n"
     "allocated without a fetch); a store to part of a line is a read record, then\n"
-    "a write record. So Dinero IV with 64-byte blocks, full associativity, LRU,\n"
-    "write-back and write-allocate without fetch (-l1-ubsize 64 -l1-uassoc 0\n"
-    "-l1-urepl l -l1-uwback a -l1-uwalloc f) counts exactly our fetches and\n"
-    "write-backs. Prints on stdout, as CSV, what our one-pass analyser counted for\n"
-    "each cache size, to check a replay against.\n"
+    "a write record. So Dinero IV 7 with 64-byte blocks, full associativity, LRU,\n"
+    "write-back and write-allocate without fetch counts exactly our fetches and\n"
+    "write-backs. Dinero takes associativity as a number of ways (0 means its\n"
+    "default, direct-mapped), so full associativity is one way per line: for a\n"
+    "512 KB cache,\n"
+    "  dineroIV -informat d -l1-ubsize 64 -l1-usize 512k -l1-uassoc 8192\n"
+    "           -l1-urepl l -l1-uwback a -l1-uwalloc f < FILE\n"
+    "and the exact command for the --cache size is printed on stderr. Prints on\n"
+    "stdout, as CSV, what our one-pass analyser counted for each cache size, to\n"
+    "check a replay against.\n"
     "\n"
     "options:\n"
     "  --policy P          recursive, packet or dynamic (required)\n"
     "  --rays CONFIG       primary, shadow, specular, diffuse or a list (required)\n"
     "  --din FILE          trace to write (required); written whole or not at all\n"
-    "  --cache BYTES       dynamic: the cache size the schedule is made for (default\n"
+    "  --cache BYTES       the cache size of the printed replay command and, for\n"
+    "                      dynamic, the size the schedule is made for (default\n"
     "                      524288); a power of two from 1024 to 4194304\n"
     "  --dyn-batch N       dynamic: admit N primary rays at a time (default 0: all)\n"
     "  --width W --height H  image size (default: the scene's)\n"
     "  -h, --help          this text\n";
+
+/* The Dinero IV 7 command that replays a din trace of lines of 2^lg2_line
+ * bytes as the analyser's fully associative LRU cache of `bytes` (a multiple of
+ * 1024). NOTE: Dinero takes associativity as a number of ways and treats 0 as
+ * its default of 1 (direct-mapped): full associativity is bytes / line ways. */
+static void dinero_command(uint64_t bytes, unsigned lg2_line, const char *din, char *out,
+                           size_t cap) {
+  snprintf(out, cap,
+           "dineroIV -informat d -l1-ubsize %llu -l1-usize %lluk -l1-uassoc %llu -l1-urepl l "
+           "-l1-uwback a -l1-uwalloc f < %s",
+           1ull << lg2_line, (unsigned long long)(bytes >> 10),
+           (unsigned long long)(bytes >> lg2_line), din);
+}
 
 int cmd_trace(int argc, char **argv) {
   static const struct option opts[] = {
@@ -356,5 +375,8 @@ int cmd_trace(int argc, char **argv) {
            (unsigned long long)m, (unsigned long long)wb);
   }
   fprintf(stderr, "trace: %llu records written to %s\n", (unsigned long long)records, din_path);
+  char replay[1400];
+  dinero_command(cache, lp.lg2_line, din_path, replay, sizeof replay);
+  fprintf(stderr, "replay (%llu-byte cache): %s\n", (unsigned long long)cache, replay);
   return 0;
 }

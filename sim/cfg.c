@@ -1,4 +1,9 @@
-/* YAML to a positioned tree (libyaml's document API), and typed getters. */
+/* YAML to a positioned tree, and typed getters. Loading takes two passes: the
+ * first reads libyaml's events into a pool where an alias only refers to its
+ * anchor's node, whose expanded size and height are known by then, so an alias
+ * that would pass a limit of cfg.h is refused at the alias, before anything
+ * grows; the second copies the pool into the tree, expanding aliases. NOTE:
+ * libyaml's document API finds anchors by linear search: quadratic time. */
 #include "sim/cfg.h"
 
 #include <errno.h>
@@ -11,100 +16,374 @@
 
 #include "sim/err.h"
 
-/* Aliases may make the node graph deep or cyclic; no sane config nests this far. */
-#define CFG_MAX_DEPTH 64
+#define PN_ALIAS 3 /* pool node kind besides enum cfg_kind */
+#define PN_NONE UINT32_MAX
+_Static_assert(CFG_SCALAR < PN_ALIAS && CFG_MAP < PN_ALIAS && CFG_SEQ < PN_ALIAS,
+               "PN_ALIAS must differ from every enum cfg_kind");
 
-static char *dup_str(const char *s) {
-  size_t n = strlen(s) + 1;
-  char *p = xmalloc(n);
-  memcpy(p, s, n);
-  return p;
+/* A node as written in the file. Pool index 0 is unused: 0 means "none". */
+struct pnode {
+  uint64_t size;              /* nodes of the expanded subtree, itself included */
+  uint32_t first, last, next; /* children in order, then the next sibling */
+  uint32_t count;             /* children (a map: keys and values alternate) */
+  uint32_t target;            /* PN_ALIAS: the anchored node (never an alias) */
+  uint32_t text;              /* scalar: offset of its text in the string arena */
+  uint32_t anchor;            /* offset of its anchor's name, or PN_NONE */
+  int line, col;              /* 1-based */
+  uint32_t height;            /* levels of the expanded subtree (a scalar: 1) */
+  uint8_t kind;               /* enum cfg_kind or PN_ALIAS */
+  bool open;                  /* a list or map whose end has not come */
+};
+
+struct loader {
+  struct cfg_doc *d;
+  struct err *e;
+  struct pnode *pool;
+  uint32_t npool, cap, root;
+  char *str; /* arena of scalar texts and anchor names, NUL-terminated */
+  size_t str_len, str_cap;
+  uint32_t stack[CFG_MAX_DEPTH + 1]; /* open lists and maps, outermost first */
+  unsigned depth;
+  uint32_t *anchors; /* open-addressing table of anchored pool nodes, 0 = empty */
+  uint32_t anchor_mask, anchor_count;
+  uint64_t nodes, alias_nodes; /* after expansion; of which through aliases */
+};
+
+static uint32_t str_add(struct loader *L, const char *s, size_t len) {
+  /* Bounded by the file size (each scalar and anchor is stored once). */
+  CHECK(L->str_len + len + 1 < PN_NONE);
+  if (L->str_len + len + 1 > L->str_cap) {
+    while (L->str_len + len + 1 > L->str_cap) L->str_cap = L->str_cap ? 2 * L->str_cap : 4096;
+    L->str = xrealloc(L->str, L->str_cap);
+  }
+  uint32_t at = (uint32_t)L->str_len;
+  memcpy(L->str + at, s, len);
+  L->str[at + len] = '\0';
+  L->str_len += len + 1;
+  return at;
+}
+
+static uint64_t name_hash(const char *s) {
+  uint64_t h = 0xcbf29ce484222325ull; /* FNV-1a */
+  for (; *s; s++) h = (h ^ (unsigned char)*s) * 0x100000001b3ull;
+  return h;
+}
+
+/* The slot of anchor `name`: where it is, or the empty slot it would go in. */
+static uint32_t *anchor_slot(struct loader *L, const char *name) {
+  for (uint64_t h = name_hash(name);; h++) {
+    uint32_t *t = &L->anchors[h & L->anchor_mask];
+    if (*t == 0 || strcmp(L->str + L->pool[*t].anchor, name) == 0) return t;
+  }
+}
+
+/* Anchor pool node i (its name already stored); a later anchor of the same
+ * name replaces the earlier one, as YAML says. */
+static void anchor_add(struct loader *L, uint32_t i) {
+  if (2 * (L->anchor_count + 1) > L->anchor_mask + 1) {
+    uint32_t *old = L->anchors, old_size = L->anchors ? L->anchor_mask + 1 : 0;
+    uint32_t size = old_size ? 2 * old_size : 64;
+    L->anchors = xcalloc(size, sizeof *L->anchors);
+    L->anchor_mask = size - 1;
+    for (uint32_t k = 0; k < old_size; k++)
+      if (old[k]) *anchor_slot(L, L->str + L->pool[old[k]].anchor) = old[k];
+    free(old);
+  }
+  uint32_t *t = anchor_slot(L, L->str + L->pool[i].anchor);
+  if (*t == 0) L->anchor_count++;
+  *t = i;
+}
+
+static uint64_t sat_add(uint64_t a, uint64_t b) { return a + b < a ? UINT64_MAX : a + b; }
+
+/* Node `child` is complete: it counts in its parent's size and height. */
+static void child_done(struct loader *L, uint32_t child) {
+  if (L->depth == 0) return;
+  struct pnode *c = &L->pool[child], *p = &L->pool[L->stack[L->depth - 1]];
+  p->size = sat_add(p->size, c->size);
+  if (c->height + 1 > p->height) p->height = c->height + 1;
+}
+
+/* Is the next child of the innermost open node a map key? */
+static bool at_key(const struct loader *L) {
+  if (L->depth == 0) return false;
+  const struct pnode *p = &L->pool[L->stack[L->depth - 1]];
+  return p->kind == CFG_MAP && p->count % 2 == 0;
+}
+
+/* Append a node to the pool as the next child of the innermost open node (or
+ * as the root); 0 when a limit is passed (error set). */
+static uint32_t node_add(struct loader *L, uint8_t kind, yaml_mark_t m, const yaml_char_t *anchor) {
+  int line = (int)m.line + 1, col = (int)m.column + 1;
+  if (L->depth > CFG_MAX_DEPTH) {
+    err_set(L->e, L->d->file, line, col, "nesting deeper than %u levels", CFG_MAX_DEPTH);
+    return 0;
+  }
+  if (kind != PN_ALIAS && ++L->nodes > CFG_MAX_NODES) {
+    err_set(L->e, L->d->file, line, col, "too many YAML nodes (got more than %u, expected at most %u)",
+            CFG_MAX_NODES, CFG_MAX_NODES);
+    return 0;
+  }
+  if (L->npool == L->cap) {
+    L->cap = L->cap ? 2 * L->cap : 256;
+    L->pool = xrealloc(L->pool, (unsigned long long)L->cap * sizeof *L->pool);
+  }
+  uint32_t i = L->npool++;
+  struct pnode *n = &L->pool[i];
+  memset(n, 0, sizeof *n);
+  n->kind = kind;
+  n->line = line;
+  n->col = col;
+  n->size = 1;
+  n->height = 1;
+  n->anchor = PN_NONE;
+  n->text = PN_NONE;
+  if (L->depth > 0) {
+    struct pnode *p = &L->pool[L->stack[L->depth - 1]];
+    if (p->last) L->pool[p->last].next = i;
+    else p->first = i;
+    p->last = i;
+    p->count++;
+  } else if (!L->root) {
+    L->root = i;
+  }
+  if (anchor) {
+    L->pool[i].anchor = str_add(L, (const char *)anchor, strlen((const char *)anchor));
+    anchor_add(L, i);
+  }
+  return i;
+}
+
+static bool on_alias(struct loader *L, const yaml_event_t *ev) {
+  const char *name = (const char *)ev->data.alias.anchor;
+  int line = (int)ev->start_mark.line + 1, col = (int)ev->start_mark.column + 1;
+  uint32_t t = L->anchors ? *anchor_slot(L, name) : 0;
+  if (t == 0)
+    return err_set(L->e, L->d->file, line, col, "alias '*%.64s' refers to no anchor defined before it",
+                   name);
+  const struct pnode *tn = &L->pool[t];
+  if (tn->open)
+    return err_set(L->e, L->d->file, line, col, "alias '*%.64s' refers to a node that contains it",
+                   name);
+  if (at_key(L) && tn->kind != CFG_SCALAR)
+    return err_set(L->e, L->d->file, line, col, "a key must be a plain word, not a list or map");
+  if (L->depth + tn->height - 1 > CFG_MAX_DEPTH)
+    return err_set(L->e, L->d->file, line, col, "alias '*%.64s': nesting deeper than %u levels",
+                   name, CFG_MAX_DEPTH);
+  uint64_t size = tn->size;
+  L->alias_nodes = sat_add(L->alias_nodes, size);
+  L->nodes = sat_add(L->nodes, size);
+  if (L->alias_nodes > CFG_MAX_ALIAS_NODES)
+    return err_set(L->e, L->d->file, line, col,
+                   "alias '*%.64s': too many YAML nodes reached through aliases (got %llu, "
+                   "expected at most %u)",
+                   name, (unsigned long long)L->alias_nodes, CFG_MAX_ALIAS_NODES);
+  if (L->nodes > CFG_MAX_NODES)
+    return err_set(L->e, L->d->file, line, col,
+                   "alias '*%.64s': too many YAML nodes (got %llu, expected at most %u)",
+                   name, (unsigned long long)L->nodes, CFG_MAX_NODES);
+  uint32_t i = node_add(L, PN_ALIAS, ev->start_mark, NULL);
+  struct pnode *n = &L->pool[i];
+  n->target = t;
+  n->size = L->pool[t].size;
+  n->height = L->pool[t].height;
+  child_done(L, i);
+  return true;
+}
+
+/* One parser event; *done when the first document (or the stream) ends. */
+static bool on_event(struct loader *L, const yaml_event_t *ev, bool *done) {
+  int line = (int)ev->start_mark.line + 1, col = (int)ev->start_mark.column + 1;
+  switch (ev->type) {
+  case YAML_STREAM_END_EVENT:
+  case YAML_DOCUMENT_END_EVENT:
+    *done = true;
+    return true;
+  case YAML_SCALAR_EVENT: {
+    size_t len = ev->data.scalar.length;
+    if (len > CFG_MAX_SCALAR_BYTES)
+      return err_set(L->e, L->d->file, line, col, "scalar too long (got %zu bytes, expected at most %u)",
+                     len, CFG_MAX_SCALAR_BYTES);
+    uint32_t i = node_add(L, CFG_SCALAR, ev->start_mark, ev->data.scalar.anchor);
+    if (!i) return false;
+    L->pool[i].text = str_add(L, (const char *)ev->data.scalar.value, len);
+    child_done(L, i);
+    return true;
+  }
+  case YAML_SEQUENCE_START_EVENT:
+  case YAML_MAPPING_START_EVENT: {
+    if (at_key(L))
+      return err_set(L->e, L->d->file, line, col, "a key must be a plain word, not a list or map");
+    bool seq = ev->type == YAML_SEQUENCE_START_EVENT;
+    const yaml_char_t *anchor = seq ? ev->data.sequence_start.anchor : ev->data.mapping_start.anchor;
+    uint32_t i = node_add(L, seq ? CFG_SEQ : CFG_MAP, ev->start_mark, anchor);
+    if (!i) return false;
+    L->pool[i].open = true;
+    L->stack[L->depth++] = i;
+    return true;
+  }
+  case YAML_SEQUENCE_END_EVENT:
+  case YAML_MAPPING_END_EVENT: {
+    CHECK(L->depth > 0);
+    uint32_t i = L->stack[--L->depth];
+    L->pool[i].open = false;
+    child_done(L, i);
+    return true;
+  }
+  case YAML_ALIAS_EVENT:
+    return on_alias(L, ev);
+  default: /* stream and document starts */
+    return true;
+  }
+}
+
+struct key_ref {
+  const char *key;
+  uint32_t i;
+};
+
+static int key_ref_cmp(const void *a, const void *b) {
+  const struct key_ref *x = a, *y = b;
+  int c = strcmp(x->key, y->key);
+  return c ? c : (x->i > y->i) - (x->i < y->i);
+}
+
+/* The first key of map m (in file order) that repeats an earlier one, found by
+ * sorting (a map may have tens of thousands of keys). */
+static bool check_duplicates(const struct cfg_doc *d, const struct cfg_node *m, struct err *e) {
+  if (m->count < 2) return true;
+  struct key_ref *r = xmalloc((unsigned long long)m->count * sizeof *r);
+  for (uint32_t i = 0; i < m->count; i++) r[i] = (struct key_ref){m->items[i].key, i};
+  qsort(r, m->count, sizeof *r, key_ref_cmp);
+  uint32_t dup = UINT32_MAX, first = 0, group = 0;
+  for (uint32_t k = 1; k < m->count; k++) {
+    if (strcmp(r[k].key, r[k - 1].key) != 0) {
+      group = k;
+      continue;
+    }
+    if (r[k].i < dup) {
+      dup = r[k].i;
+      first = r[group].i;
+    }
+  }
+  free(r);
+  if (dup == UINT32_MAX) return true;
+  const struct cfg_node *v = &m->items[dup];
+  return err_set(e, d->file, v->key_line, v->key_col, "duplicate key '%s' (first at line %d)", v->key,
+                 m->items[first].key_line);
+}
+
+/* Copy pool node i into out, aliases expanded (copies keep the positions of
+ * the anchored original). Depth is bounded by the first pass. */
+static bool build(const struct loader *L, uint32_t i, struct cfg_node *out, struct err *e) {
+  const struct pnode *n = &L->pool[i];
+  if (n->kind == PN_ALIAS) n = &L->pool[n->target];
+  out->line = n->line;
+  out->col = n->col;
+  out->kind = (enum cfg_kind)n->kind;
+  if (n->kind == CFG_SCALAR) {
+    out->text = L->d->strings + n->text;
+    return true;
+  }
+  bool map = n->kind == CFG_MAP;
+  out->count = map ? n->count / 2 : n->count;
+  out->items = xcalloc(out->count ? out->count : 1, sizeof *out->items);
+  uint32_t c = n->first;
+  for (uint32_t k = 0; k < out->count; k++) {
+    struct cfg_node *v = &out->items[k];
+    if (map) {
+      /* A key keeps where it is written, even an alias: it locates the entry. */
+      const struct pnode *kw = &L->pool[c];
+      const struct pnode *key = kw->kind == PN_ALIAS ? &L->pool[kw->target] : kw;
+      CHECK(key->kind == CFG_SCALAR); /* the first pass refused other keys */
+      v->key = L->d->strings + key->text;
+      v->key_line = kw->line;
+      v->key_col = kw->col;
+      c = L->pool[c].next;
+    }
+    if (!build(L, c, v, e)) return false;
+    c = L->pool[c].next;
+  }
+  return !map || check_duplicates(L->d, out, e);
 }
 
 static void node_free(struct cfg_node *n) {
   for (uint32_t i = 0; i < n->count; i++) node_free(&n->items[i]);
   free(n->items);
-  free(n->text);
-  free(n->key);
   memset(n, 0, sizeof *n);
 }
 
 void cfg_free(struct cfg_doc *d) {
-  if (d) node_free(&d->root);
+  if (!d) return;
+  node_free(&d->root);
+  free(d->strings);
+  d->strings = NULL;
 }
 
-static bool convert(const struct cfg_doc *d, yaml_document_t *doc, yaml_node_t *yn,
-                    struct cfg_node *out, int depth, struct err *e) {
-  out->line = (int)yn->start_mark.line + 1;
-  out->col = (int)yn->start_mark.column + 1;
-  if (depth > CFG_MAX_DEPTH)
-    return err_set(e, d->file, out->line, out->col, "nesting deeper than %d levels",
-                   CFG_MAX_DEPTH);
-  switch (yn->type) {
-  case YAML_SCALAR_NODE:
-    out->kind = CFG_SCALAR;
-    out->text = dup_str((const char *)yn->data.scalar.value);
-    return true;
-  case YAML_SEQUENCE_NODE: {
-    out->kind = CFG_SEQ;
-    yaml_node_item_t *b = yn->data.sequence.items.start, *t = yn->data.sequence.items.top;
-    out->count = (uint32_t)(t - b);
-    out->items = xcalloc(out->count, sizeof *out->items);
-    for (uint32_t i = 0; i < out->count; i++)
-      if (!convert(d, doc, yaml_document_get_node(doc, b[i]), &out->items[i], depth + 1, e))
-        return false;
-    return true;
-  }
-  case YAML_MAPPING_NODE: {
-    out->kind = CFG_MAP;
-    yaml_node_pair_t *b = yn->data.mapping.pairs.start, *t = yn->data.mapping.pairs.top;
-    out->count = (uint32_t)(t - b);
-    out->items = xcalloc(out->count, sizeof *out->items);
-    for (uint32_t i = 0; i < out->count; i++) {
-      yaml_node_t *k = yaml_document_get_node(doc, b[i].key);
-      int kl = (int)k->start_mark.line + 1, kc = (int)k->start_mark.column + 1;
-      if (k->type != YAML_SCALAR_NODE)
-        return err_set(e, d->file, kl, kc, "a key must be a plain word, not a list or map");
-      const char *key = (const char *)k->data.scalar.value;
-      for (uint32_t j = 0; j < i; j++)
-        if (strcmp(out->items[j].key, key) == 0)
-          return err_set(e, d->file, kl, kc, "duplicate key '%s' (first at line %d)", key,
-                         out->items[j].key_line);
-      struct cfg_node *v = &out->items[i];
-      v->key = dup_str(key);
-      v->key_line = kl;
-      v->key_col = kc;
-      if (!convert(d, doc, yaml_document_get_node(doc, b[i].value), v, depth + 1, e))
-        return false;
+/* Position of byte `at` of text (1-based line and column, in bytes). */
+static void text_position(const char *text, size_t at, int *line, int *col) {
+  *line = 1;
+  *col = 1;
+  for (size_t i = 0; i < at; i++) {
+    if (text[i] == '\n') {
+      ++*line;
+      *col = 1;
+    } else {
+      ++*col;
     }
-    return true;
-  }
-  default:
-    return err_set(e, d->file, out->line, out->col, "empty YAML node");
   }
 }
 
-static bool load(struct cfg_doc *d, yaml_parser_t *p, struct err *e) {
-  yaml_document_t doc;
-  bool ok = false;
-  if (!yaml_parser_load(p, &doc)) {
-    const char *what = p->problem ? p->problem : "malformed YAML";
-    yaml_mark_t m = p->problem_mark;
-    if (p->context)
-      err_set(e, d->file, (int)m.line + 1, (int)m.column + 1, "YAML syntax: %s %s", what,
-              p->context);
-    else
-      err_set(e, d->file, (int)m.line + 1, (int)m.column + 1, "YAML syntax: %s", what);
-    return false;
+/* Parse len bytes of text (len <= CFG_MAX_FILE_BYTES) into d. */
+static bool load(struct cfg_doc *d, const char *text, size_t len, struct err *e) {
+  struct loader L;
+  memset(&L, 0, sizeof L);
+  L.d = d;
+  L.e = e;
+  L.npool = 1; /* index 0 means none */
+  L.cap = 256;
+  L.pool = xcalloc(L.cap, sizeof *L.pool);
+  yaml_parser_t p;
+  CHECK(yaml_parser_initialize(&p));
+  yaml_parser_set_input_string(&p, (const unsigned char *)text, len);
+  bool ok = true, done = false;
+  while (ok && !done) {
+    yaml_event_t ev;
+    if (!yaml_parser_parse(&p, &ev)) {
+      const char *what = p.problem ? p.problem : "malformed YAML";
+      yaml_mark_t m = p.problem_mark;
+      if (p.context)
+        err_set(e, d->file, (int)m.line + 1, (int)m.column + 1, "YAML syntax: %s %s", what, p.context);
+      else
+        err_set(e, d->file, (int)m.line + 1, (int)m.column + 1, "YAML syntax: %s", what);
+      ok = false;
+      break;
+    }
+    ok = on_event(&L, &ev, &done);
+    yaml_event_delete(&ev);
   }
-  yaml_node_t *root = yaml_document_get_root_node(&doc);
-  if (!root)
-    err_set(e, d->file, 0, 0, "empty file (expected a YAML map)");
-  else
-    ok = convert(d, &doc, root, &d->root, 0, e);
-  yaml_document_delete(&doc);
-  if (!ok) node_free(&d->root);
+  yaml_parser_delete(&p);
+  if (ok && !L.root) ok = err_set(e, d->file, 0, 0, "empty file (expected a YAML map)");
+  if (ok) {
+    d->strings = L.str;
+    L.str = NULL;
+    ok = build(&L, L.root, &d->root, e);
+  }
+  free(L.pool);
+  free(L.str);
+  free(L.anchors);
+  if (!ok) cfg_free(d);
   return ok;
+}
+
+/* Refuse text over the size limit, at its first byte past the limit. */
+static bool size_ok(const struct cfg_doc *d, const char *text, size_t len, struct err *e) {
+  if (len <= CFG_MAX_FILE_BYTES) return true;
+  int line, col;
+  text_position(text, CFG_MAX_FILE_BYTES, &line, &col);
+  return err_set(e, d->file, line, col,
+                 "file too large (got more than %u bytes, expected at most %u)", CFG_MAX_FILE_BYTES,
+                 CFG_MAX_FILE_BYTES);
 }
 
 bool cfg_load_file(struct cfg_doc *d, const char *path, struct err *e) {
@@ -112,24 +391,25 @@ bool cfg_load_file(struct cfg_doc *d, const char *path, struct err *e) {
   snprintf(d->file, sizeof d->file, "%s", path);
   FILE *f = fopen(path, "rb");
   if (!f) return err_set(e, path, 0, 0, "cannot open: %s", strerror(errno));
-  yaml_parser_t p;
-  CHECK(yaml_parser_initialize(&p));
-  yaml_parser_set_input_file(&p, f);
-  bool ok = load(d, &p, e);
-  yaml_parser_delete(&p);
+  /* Read at most one byte past the limit: a device or pipe that never ends
+   * is refused like a large file. */
+  char *buf = xmalloc(CFG_MAX_FILE_BYTES + 2);
+  size_t n = fread(buf, 1, CFG_MAX_FILE_BYTES + 1, f);
+  bool ok;
+  if (ferror(f))
+    ok = err_set(e, path, 0, 0, "cannot read: %s", strerror(errno));
+  else
+    ok = size_ok(d, buf, n, e) && load(d, buf, n, e);
   fclose(f);
+  free(buf);
   return ok;
 }
 
 bool cfg_load_text(struct cfg_doc *d, const char *name, const char *text, struct err *e) {
   memset(d, 0, sizeof *d);
   snprintf(d->file, sizeof d->file, "%s", name);
-  yaml_parser_t p;
-  CHECK(yaml_parser_initialize(&p));
-  yaml_parser_set_input_string(&p, (const unsigned char *)text, strlen(text));
-  bool ok = load(d, &p, e);
-  yaml_parser_delete(&p);
-  return ok;
+  size_t len = strlen(text);
+  return size_ok(d, text, len, e) && load(d, text, len, e);
 }
 
 struct cfg_node *cfg_get(struct cfg_node *m, const char *key) {

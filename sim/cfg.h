@@ -13,13 +13,31 @@
 
 struct err;
 
+/* Limits on every YAML input (scenes, machine configs, any later file), so a
+ * hostile file is refused within milliseconds and a few MB of memory, as a user
+ * error at file:line:col (where the limit is crossed):
+ * - CFG_MAX_FILE_BYTES: size of the file (or text);
+ * - CFG_MAX_SCALAR_BYTES: length of one scalar, a value or a key;
+ * - CFG_MAX_DEPTH: levels of lists and maps between the root (level 0) and any
+ *   node, counted with aliases expanded;
+ * - CFG_MAX_NODES: scalars, lists, maps and keys of the document with every
+ *   alias expanded (an alias of a node counts all the nodes it stands for);
+ * - CFG_MAX_ALIAS_NODES: of those, the nodes reached through aliases (the
+ *   "billion laughs" file stops at the alias that crosses it).
+ * An alias must follow its anchor and may not stand inside the node it names. */
+#define CFG_MAX_FILE_BYTES (1u << 20)
+#define CFG_MAX_SCALAR_BYTES 4096u
+#define CFG_MAX_DEPTH 64u
+#define CFG_MAX_NODES 100000u
+#define CFG_MAX_ALIAS_NODES 10000u
+
 enum cfg_kind { CFG_SCALAR, CFG_MAP, CFG_SEQ };
 
 struct cfg_node {
   enum cfg_kind kind;
   int line, col;            /* position of the value, 1-based */
-  char *text;               /* scalar text (owned); NULL for maps and sequences */
-  char *key;                /* key text when this node is a map value (owned) */
+  char *text;               /* scalar text (the document's); NULL for maps and sequences */
+  char *key;                /* key text when this node is a map value (the document's) */
   int key_line, key_col;    /* position of the key */
   struct cfg_node *items;   /* map entries or sequence items (owned) */
   uint32_t count;
@@ -29,11 +47,13 @@ struct cfg_node {
 struct cfg_doc {
   char file[512];
   struct cfg_node root;
+  char *strings; /* every scalar's text, shared by alias copies (owned) */
 };
 
-/* Parse a YAML file (or text, named `name` in messages). An empty document is
- * an error. On failure fills e and returns false (d is then empty, safe to
- * cfg_free). */
+/* Parse a YAML file (or text, named `name` in messages): the first document,
+ * aliases expanded into copies that keep the anchored node's positions. An
+ * empty document or a limit above passed is an error. On failure fills e and
+ * returns false (d is then empty, safe to cfg_free). */
 bool cfg_load_file(struct cfg_doc *d, const char *path, struct err *e);
 bool cfg_load_text(struct cfg_doc *d, const char *name, const char *text, struct err *e);
 void cfg_free(struct cfg_doc *d);

@@ -242,6 +242,14 @@ void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsig
   ls->count++;
 }
 
+void lru_stack_count_repeats(struct lru_stack *ls, unsigned cls, uint64_t loads, uint64_t stores) {
+  CHECK(cls < MEM_CLASS_COUNT);
+  /* NOTE: hist[0] (hits in every size) is left alone: no result reads it. */
+  ls->accesses[cls] += loads + stores;
+  ls->stores[cls] += stores;
+  ls->total += loads + stores;
+}
+
 void lru_stack_finish(struct lru_stack *ls) {
   memset(ls->pending_wb, 0, sizeof ls->pending_wb);
   memset(ls->dirty_end, 0, sizeof ls->dirty_end);

@@ -56,6 +56,15 @@ void lru_stack_destroy(struct lru_stack *ls); /* NULL ok */
  * line; else one hash probe, a list move and one step per size that misses. */
 void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsigned cls);
 
+/* Count, without passing them one by one, `loads` + `stores` accesses of class
+ * cls that the caller filtered out because each repeated the most recent line
+ * with that line's last class, and each store found it dirty already (a store
+ * to the top line makes it dirty in every size). Such an access is a hit in
+ * every size and changes no recency order, dirty state or class: only access
+ * counters move, so the results are exactly those of lru_stack_access. Call it
+ * before reading results; the caller is trusted on the condition. */
+void lru_stack_count_repeats(struct lru_stack *ls, unsigned cls, uint64_t loads, uint64_t stores);
+
 /* End of trace: walk the lines held (O(lines)) to count the lines still dirty
  * in each cache (dirty_at_end) and the writebacks not yet counted (evictions are
  * counted lazily, when a line is next seen). Results call it themselves when

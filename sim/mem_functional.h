@@ -31,7 +31,10 @@ void fn_backend_destroy(struct fn_backend *b); /* NULL ok; does not touch din */
 /* The port the renderer calls through; valid while b lives. */
 struct mem_port fn_backend_port(struct fn_backend *b);
 
-/* The analyser (borrowed): call lru_stack_finish and read results after the run. */
+/* The analyser (borrowed), after the run: call lru_stack_finish and read
+ * results. Accesses that repeat the last line without changing its state skip
+ * the analyser and are counted here; this call hands those counts over, so
+ * call it again after any further access before reading results. */
 struct lru_stack *fn_backend_stack(struct fn_backend *b);
 
 const struct fn_backend_stats *fn_backend_stats(const struct fn_backend *b);

@@ -15,6 +15,71 @@ static int count_lines(const char *s) {
   return n;
 }
 
+/* Write `head`, then `item` n times, then `tail` to path. */
+static void write_file(const char *path, const char *head, const char *item, unsigned n,
+                       const char *tail) {
+  FILE *f = fopen(path, "w");
+  EXPECTF(f != NULL, "cannot write %s", path);
+  if (!f) return;
+  fputs(head, f);
+  for (unsigned i = 0; i < n; i++) fputs(item, f);
+  fputs(tail, f);
+  fclose(f);
+}
+
+/* Hostile YAML (the limits of sim/cfg.h): exit 2 and one line naming
+ * file:line:col where a limit is crossed, no output. Each run is guarded by a
+ * timeout and, without AddressSanitizer (which reserves terabytes of address
+ * space), a 1 GB address-space cap: a regression fails here instead of taking
+ * the machine down (the billion-laughs file once grew to 12 GB in 20 s). */
+static void test_hostile_yaml(void) {
+#ifdef __SANITIZE_ADDRESS__
+  const char *guard = "";
+#else
+  const char *guard = "ulimit -v 1048576; ";
+#endif
+  const char *fanout = RTSIM_TMP "/hostile_fanout.yaml", *scalar = RTSIM_TMP "/hostile_scalar.yaml",
+             *big = RTSIM_TMP "/hostile_big.yaml";
+  /* 20,000 aliases of one scalar: the 10,001st crosses the alias limit. */
+  write_file(fanout, "a: &a x\nk: [", "*a, ", 20000, "*a]\n");
+  /* A one-megabyte scalar. */
+  write_file(scalar, "name: ", "x", 1000000, "\n");
+  /* Two megabytes: refused at the first byte past one. */
+  write_file(big, "#", "c", 2u << 20, "\n");
+  static const struct {
+    const char *path, *want;
+  } cases[] = {
+      {SCN "bad_billion_laughs.yaml",
+       "bad_billion_laughs.yaml:5:36: error: alias '*c': too many YAML nodes reached through aliases "
+       "(got 10108, expected at most 10000)"},
+      {RTSIM_TMP "/hostile_fanout.yaml",
+       "hostile_fanout.yaml:2:40005: error: alias '*a': too many YAML nodes reached through aliases "
+       "(got 10001, expected at most 10000)"},
+      {RTSIM_TMP "/hostile_scalar.yaml",
+       "hostile_scalar.yaml:1:7: error: scalar too long (got 1000000 bytes, expected at most 4096)"},
+      {RTSIM_TMP "/hostile_big.yaml",
+       "hostile_big.yaml:1:1048577: error: file too large (got more than 1048576 bytes, expected at "
+       "most 1048576)"},
+      {"/dev/zero", "/dev/zero:1:1048577: error: file too large"},
+  };
+  char cmd[2048], out[8192];
+  const char *img = RTSIM_TMP "/cli_hostile.exr";
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    unlink(img);
+    snprintf(cmd, sizeof cmd, "%stimeout 60 %s render %s -o %s --width 8 --height 8", guard,
+             RTSIM_BINARY, cases[i].path, img);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 2, "%s: exit %d (124: timed out), output: %s", cases[i].path, rc, out);
+    EXPECTF(strstr(out, cases[i].want) != NULL, "%s: got '%s', want '%s'", cases[i].path, out,
+            cases[i].want);
+    EXPECTF(count_lines(out) == 1, "%s: expected one line, got: %s", cases[i].path, out);
+    EXPECTF(access(img, F_OK) != 0, "%s: output file left behind", cases[i].path);
+  }
+  unlink(fanout);
+  unlink(scalar);
+  unlink(big);
+}
+
 int main(void) {
   static const struct {
     const char *file, *want;
@@ -56,6 +121,8 @@ int main(void) {
       EXPECTF(access(img, F_OK) != 0, "%s: output file left behind", bad[i].file);
     }
   }
+
+  test_hostile_yaml();
 
   /* Command-line mistakes: exit 2 and a message naming the problem. */
   static const struct {

@@ -470,6 +470,56 @@ static void test_backend(void) {
   lru_stack_destroy(NULL);
 }
 
+/* The backend keeps repeats of the last line from the analyser (and hands their
+ * counts over in fn_backend_stack): its results must equal the analyser fed
+ * every line directly, on a trace dense in repeats, class changes and stores of
+ * both kinds to the repeated line. */
+static void test_backend_repeats(void) {
+  struct lru_stack_params p = {6, 6, 9}; /* 1 .. 8 lines */
+  struct fn_backend *b = fn_backend_create(&p, NULL);
+  struct mem_port port = fn_backend_port(b);
+  struct lru_stack *direct = lru_stack_create(&p);
+  uint64_t rng = 7, line = 0;
+  unsigned cls = 0;
+  for (int k = 0; k < 200000; k++) {
+    uint64_t r = rng_next(&rng);
+    if (r % 10 >= 5) line = (r >> 8) % 24; /* else the last line again */
+    if ((r >> 16) % 10 >= 7) cls = (unsigned)((r >> 20) % MEM_CLASS_COUNT);
+    unsigned kind = (unsigned)((r >> 24) % 4); /* 0, 1 load; 2 part store; 3 whole */
+    uint64_t a = line << p.lg2_line;
+    if (kind < 2) {
+      mem_load(&port, a + (r >> 32) % 32, 1 + (uint32_t)((r >> 40) % 32), cls);
+      lru_stack_access(direct, line, LRU_READ, cls);
+    } else if (kind == 2) {
+      mem_store(&port, a + 8, 8, cls);
+      lru_stack_access(direct, line, LRU_WRITE, cls);
+    } else {
+      mem_store(&port, a, 64, cls);
+      lru_stack_access(direct, line, LRU_WRITE_LINE, cls);
+    }
+    if (k == 100000) lru_stack_check_invariants(fn_backend_stack(b)); /* a mid-run handover */
+  }
+  struct lru_stack *ls = fn_backend_stack(b);
+  lru_stack_check_invariants(ls);
+  struct lru_stack_results got, want;
+  lru_stack_get_results(ls, &got);
+  lru_stack_get_results(direct, &want);
+  EXPECT(memcmp(&got, &want, sizeof got) == 0);
+  for (unsigned i = 0; i < want.size_count; i++)
+    for (unsigned c = 0; c < MEM_CLASS_COUNT; c++)
+      EXPECTF(got.size[i].misses[c] == want.size[i].misses[c] &&
+                  got.size[i].writebacks[c] == want.size[i].writebacks[c] &&
+                  got.size[i].dirty_at_end[c] == want.size[i].dirty_at_end[c] &&
+                  got.size[i].accesses[c] == want.size[i].accesses[c] &&
+                  got.size[i].stores[c] == want.size[i].stores[c],
+              "size %u class %u: misses %llu/%llu, writebacks %llu/%llu", i, c,
+              (unsigned long long)got.size[i].misses[c], (unsigned long long)want.size[i].misses[c],
+              (unsigned long long)got.size[i].writebacks[c],
+              (unsigned long long)want.size[i].writebacks[c]);
+  lru_stack_destroy(direct);
+  fn_backend_destroy(b);
+}
+
 static void test_bench(void) {
   double rate = lru_stack_bench(300000, 1);
   EXPECT(rate > 0);
@@ -485,6 +535,7 @@ int main(void) {
   test_adversarial();
   test_default_sizes();
   test_backend();
+  test_backend_repeats();
   test_bench();
   return testing_done("test_lru_stack");
 }

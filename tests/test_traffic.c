@@ -99,6 +99,13 @@ int main(void) {
     int rc = testing_run(cmd, out, sizeof out);
     EXPECTF(rc == 0, "%s", out);
     if (rc != 0) continue;
+    /* The replay command for --cache 8192: fully associative is 8192 / 64 ways
+     * (Dinero IV reads -l1-uassoc as ways; 0 would be direct-mapped). */
+    char want[1024];
+    snprintf(want, sizeof want,
+             "dineroIV -informat d -l1-ubsize 64 -l1-usize 8k -l1-uassoc 128 -l1-urepl l "
+             "-l1-uwback a -l1-uwalloc f < %s\n", din);
+    EXPECTF(strstr(out, want) != NULL, "replay command missing or wrong: %s", out);
     struct replay r;
     for (int k = 0; k < SIZES; k++) {
       r.caches[k] = calloc(1, sizeof(struct naive));
@@ -166,6 +173,18 @@ int main(void) {
     EXPECTF(dyn_misses_8k > 0 && lines == dyn_misses_8k, "dynamic 8 KB: table %llu lines, trace %llu", lines,
             dyn_misses_8k);
   }
+
+  /* Without --cache the replay command is for 512 KB: 8192 ways. --help shows
+   * the same, and nowhere the direct-mapped -l1-uassoc 0. */
+  snprintf(cmd, sizeof cmd,
+           "%s trace %s/scenes/small/room.yaml --policy packet --rays primary --width 4 --height 4 --din %s",
+           RTSIM_BINARY, RTSIM_SOURCE_DIR, din);
+  EXPECT(testing_run(cmd, out, sizeof out) == 0);
+  EXPECTF(strstr(out, "-l1-usize 512k -l1-uassoc 8192 ") != NULL, "%s", out);
+  snprintf(cmd, sizeof cmd, "%s trace --help", RTSIM_BINARY);
+  EXPECT(testing_run(cmd, out, sizeof out) == 0);
+  EXPECTF(strstr(out, "-l1-usize 512k -l1-uassoc 8192\n") != NULL && !strstr(out, "-l1-uassoc 0"),
+          "%s", out);
 
   /* Bad command lines: exit 2. */
   snprintf(cmd, sizeof cmd, "%s traffic %s/scenes/small/room.yaml --rays glossy -o %s", RTSIM_BINARY,
