@@ -243,7 +243,7 @@ void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsig
 }
 
 void lru_stack_count_repeats(struct lru_stack *ls, unsigned cls, uint64_t loads, uint64_t stores) {
-  CHECK(cls < MEM_CLASS_COUNT);
+  CHECK(cls < MEM_CLASS_MAX);
   /* NOTE: hist[0] (hits in every size) is left alone: no result reads it. */
   ls->accesses[cls] += loads + stores;
   ls->stores[cls] += stores;

@@ -22,11 +22,11 @@ struct fn_backend {
   unsigned last_cls;
   bool last_dirty;
   /* Repeats kept from the analyser, by class: [0] loads, [1] stores. */
-  uint64_t repeats[MEM_CLASS_COUNT][2];
+  uint64_t repeats[MEM_CLASS_MAX][2];
   struct fn_backend_stats st;
 };
 
-#define FN_NO_CLASS MEM_CLASS_COUNT
+#define FN_NO_CLASS MEM_CLASS_MAX
 
 /* Feed every line of [addr, addr + size) to the analyser (and the trace). A
  * store covering a line whole allocates it without a fetch (LRU_WRITE_LINE);
@@ -119,7 +119,7 @@ struct mem_port fn_backend_port(struct fn_backend *b) {
 }
 
 struct lru_stack *fn_backend_stack(struct fn_backend *b) {
-  for (unsigned c = 0; c < MEM_CLASS_COUNT; c++) {
+  for (unsigned c = 0; c < MEM_CLASS_MAX; c++) {
     if (b->repeats[c][0] | b->repeats[c][1])
       lru_stack_count_repeats(b->ls, c, b->repeats[c][0], b->repeats[c][1]);
     b->repeats[c][0] = b->repeats[c][1] = 0;

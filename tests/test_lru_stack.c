@@ -484,7 +484,7 @@ static void test_backend_repeats(void) {
   for (int k = 0; k < 200000; k++) {
     uint64_t r = rng_next(&rng);
     if (r % 10 >= 5) line = (r >> 8) % 24; /* else the last line again */
-    if ((r >> 16) % 10 >= 7) cls = (unsigned)((r >> 20) % MEM_CLASS_COUNT);
+    if ((r >> 16) % 10 >= 7) cls = (unsigned)((r >> 20) % MEM_CLASS_MAX);
     unsigned kind = (unsigned)((r >> 24) % 4); /* 0, 1 load; 2 part store; 3 whole */
     uint64_t a = line << p.lg2_line;
     if (kind < 2) {
@@ -506,7 +506,7 @@ static void test_backend_repeats(void) {
   lru_stack_get_results(direct, &want);
   EXPECT(memcmp(&got, &want, sizeof got) == 0);
   for (unsigned i = 0; i < want.size_count; i++)
-    for (unsigned c = 0; c < MEM_CLASS_COUNT; c++)
+    for (unsigned c = 0; c < MEM_CLASS_MAX; c++)
       EXPECTF(got.size[i].misses[c] == want.size[i].misses[c] &&
                   got.size[i].writebacks[c] == want.size[i].writebacks[c] &&
                   got.size[i].dirty_at_end[c] == want.size[i].dirty_at_end[c] &&
