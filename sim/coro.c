@@ -13,10 +13,16 @@
 #include "sim/err.h"
 
 #if defined(__SANITIZE_ADDRESS__)
+#include <sanitizer/asan_interface.h>
 #include <sanitizer/common_interface_defs.h>
 #define CORO_ASAN 1
+/* NOTE: a finished coroutine leaves its frames' redzones poisoned in ASan's
+ * shadow; a stack handed out again (or a new mapping at the same addresses)
+ * must start clean. */
+#define CORO_UNPOISON(p, n) ASAN_UNPOISON_MEMORY_REGION(p, n)
 #else
 #define CORO_ASAN 0
+#define CORO_UNPOISON(p, n) ((void)(p), (void)(n))
 #endif
 
 typedef void *fcontext_t;
@@ -90,6 +96,7 @@ static struct stack *stack_get(struct coro_pool *p) {
   if (p->free) {
     struct stack *s = p->free;
     p->free = s->next;
+    CORO_UNPOISON(s->base + p->page, s->usable);
     return s;
   }
   struct stack *s = xcalloc(1, sizeof *s);
@@ -100,6 +107,7 @@ static struct stack *stack_get(struct coro_pool *p) {
   s->base = m;
   /* The lowest page faults on touch: stacks grow down into it on overflow. */
   CHECK(mprotect(s->base, p->page, PROT_NONE) == 0);
+  CORO_UNPOISON(s->base + p->page, s->usable);
   if (p->paint) memset(s->base + p->page, PAINT, s->usable);
   return s;
 }
