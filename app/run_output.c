@@ -48,7 +48,7 @@ static void measured(const struct run_report *r, struct stats_table *t) {
   const double seconds = cyc / (p->clock_ghz * 1e9);
   stats_u64(t, "cycles", s->cycles);
   stats_f64(t, "seconds", seconds);
-  stats_u64(t, "rays", rays);
+  stats_u64(t, "rays_traced", rays);
   stats_f64(t, "rays_per_second", ratio((double)rays, seconds));
   stats_u64(t, "kd_node_visits", r->tstats->node_visits);
   stats_u64(t, "triangle_tests", r->tstats->tri_tests);
@@ -233,7 +233,7 @@ bool run_output_write(const struct run_report *r, struct err *e) {
 void run_output_summary(const struct run_report *r, FILE *f) {
   struct stats_table t = {0};
   measured(r, &t);
-  static const char *const show[] = {"cycles", "rays", "rays_per_second", "core_utilization",
+  static const char *const show[] = {"cycles", "rays_traced", "rays_per_second", "core_utilization",
                                      "thread_idle_fraction", "l2_miss_rate", "dram_utilization",
                                      "queue_delay_mean", "load_latency_mean", "events"};
   for (unsigned i = 0; i < sizeof show / sizeof show[0]; i++)

@@ -263,6 +263,21 @@ static void test_command(void) {
     snprintf(b, sizeof b, "%s/%s", dirs[1], names[f]);
     EXPECTF(same_file(a, b, f == 3), "%s differs between two runs", names[f]);
   }
+  /* stats.csv's columns are unique names (a merged table joins them by name). */
+  char csvp[2048], hdr[8192];
+  snprintf(csvp, sizeof csvp, "%s/stats.csv", dirs[0]);
+  FILE *hf = fopen(csvp, "r");
+  EXPECT(hf && fgets(hdr, sizeof hdr, hf));
+  if (hf) fclose(hf);
+  hdr[strcspn(hdr, "\n")] = '\0';
+  char *names_at[256];
+  unsigned ncols = 0;
+  for (char *tok = strtok(hdr, ","); tok && ncols < 256; tok = strtok(NULL, ",")) {
+    for (unsigned j = 0; j < ncols; j++)
+      EXPECTF(strcmp(names_at[j], tok) != 0, "stats.csv has column '%s' twice", tok);
+    names_at[ncols++] = tok;
+  }
+  EXPECT(ncols > 30);
   /* The override is in the resolved config. */
   char js[2048];
   snprintf(js, sizeof js, "%s/stats.json", dirs[2]);
