@@ -36,6 +36,11 @@ int app_option_error(const char *cmd, int c, char **argv);
  * otherwise. */
 const char *app_one_scene(const char *cmd, int argc, char **argv);
 
+/* The source revision this program was built from: `git describe --always
+ * --dirty` of the source tree at build time, or "unknown" outside a git
+ * checkout (cmake/revision.cmake writes it; the program never calls git). */
+extern const char app_revision[];
+
 /* Host wall clock in seconds (for reports only; the model never reads it). */
 double app_now(void);
 

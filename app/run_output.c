@@ -31,7 +31,10 @@ static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 static void identity(const struct run_report *r, struct stats_table *t) {
   char rays[64];
   shade_rays_name(r->mask, rays, sizeof rays);
+  char hash[24];
+  snprintf(hash, sizeof hash, "%016llx", (unsigned long long)r->scene_hash);
   stats_str(t, "scene", r->scene_name);
+  stats_str(t, "scene_hash", hash);
   stats_str(t, "policy", r->policy);
   stats_str(t, "rays", rays);
   stats_u64(t, "width", r->width);
@@ -210,6 +213,8 @@ static bool write_json(const struct run_report *r, struct err *e) {
   hist_write_json(&s->load_latency, f);
   fputs(",\n  \"queue_delay_histogram_cycles\": ", f);
   hist_write_json(&s->queue_delay, f);
+  fputs(",\n  \"revision\": ", f);
+  json_write_str(f, app_revision);
   fputs(",\n  \"wall_s\": ", f);
   json_write_f64(f, r->wall_s);
   struct rusage ru;

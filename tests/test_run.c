@@ -282,11 +282,17 @@ static void test_command(void) {
   char js[2048];
   snprintf(js, sizeof js, "%s/stats.json", dirs[2]);
   FILE *f = fopen(js, "r");
-  size_t n = f ? fread(out, 1, sizeof out - 1, f) : 0;
-  out[n] = '\0';
+  static char json[1 << 16];
+  size_t n = f ? fread(json, 1, sizeof json - 1, f) : 0;
+  json[n] = '\0';
   if (f) fclose(f);
-  EXPECT(strstr(out, "\"cores\": 3,") && strstr(out, "\"l2.size\": 8192,") &&
-         strstr(out, "\"policy\": \"packet\""));
+  EXPECT(strstr(json, "\"cores\": 3,") && strstr(json, "\"l2.size\": 8192,") &&
+         strstr(json, "\"policy\": \"packet\""));
+  /* Traceable: the scene's hash (16 hex digits) and the build's revision. */
+  const char *hash = strstr(json, "\"scene_hash\": \"");
+  EXPECT(hash && strspn(hash + 15, "0123456789abcdef") == 16 && hash[31] == '"');
+  const char *rev = strstr(json, "\"revision\": \"");
+  EXPECT(rev && rev[13] != '"');
 
   static const struct {
     const char *args, *want;
