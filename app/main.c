@@ -24,6 +24,10 @@ static const char USAGE[] =
     "  trace SCENE.yaml --din FILE ...  the access stream as a Dinero IV din trace\n"
     "  run MACHINE.yaml SCENE.yaml -o DIR  render on the timed many-core machine:\n"
     "                                   cycles, utilization, L2 and DRAM statistics\n"
+    "  sweep SWEEP.yaml -o DIR          run a sweep file's points (machine configs x\n"
+    "                                   workloads) in parallel, resumable; or print\n"
+    "                                   them as jobs for GNU parallel or Slurm\n"
+    "  merge DIR -o TABLE.csv           a sweep's complete points as one tidy table\n"
     "  bench SCENE.yaml...              primary-ray throughput (rays/s) per scene\n"
     "\n"
     "Run 'rtsim COMMAND --help' for a command's options.\n";
@@ -119,7 +123,9 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "traffic")) return cmd_traffic(argc - 1, argv + 1);
   if (!strcmp(cmd, "trace")) return cmd_trace(argc - 1, argv + 1);
   if (!strcmp(cmd, "run")) return cmd_run(argc - 1, argv + 1);
-  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, traffic, trace, run, bench)\n",
+  if (!strcmp(cmd, "sweep")) return cmd_sweep(argc - 1, argv + 1);
+  if (!strcmp(cmd, "merge")) return cmd_merge(argc - 1, argv + 1);
+  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, traffic, trace, run, sweep, merge, bench)\n",
           cmd);
   return APP_EXIT_USAGE;
 }
