@@ -25,6 +25,7 @@ int cmd_trace(int argc, char **argv);
 int cmd_run(int argc, char **argv);
 int cmd_sweep(int argc, char **argv);
 int cmd_merge(int argc, char **argv);
+int cmd_plot(int argc, char **argv);
 
 /* Print "rtsim: <formatted err>" once to stderr; returns APP_EXIT_USAGE. */
 int app_report(const struct err *e);

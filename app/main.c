@@ -28,6 +28,7 @@ static const char USAGE[] =
     "                                   workloads) in parallel, resumable; or print\n"
     "                                   them as jobs for GNU parallel or Slurm\n"
     "  merge DIR -o TABLE.csv           a sweep's complete points as one tidy table\n"
+    "  plot TABLE.csv --x K --y M -o F  line plots of a merged table (PNG or SVG)\n"
     "  bench SCENE.yaml...              primary-ray throughput (rays/s) per scene\n"
     "\n"
     "Run 'rtsim COMMAND --help' for a command's options.\n";
@@ -125,7 +126,8 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "run")) return cmd_run(argc - 1, argv + 1);
   if (!strcmp(cmd, "sweep")) return cmd_sweep(argc - 1, argv + 1);
   if (!strcmp(cmd, "merge")) return cmd_merge(argc - 1, argv + 1);
-  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, traffic, trace, run, sweep, merge, bench)\n",
+  if (!strcmp(cmd, "plot")) return cmd_plot(argc - 1, argv + 1);
+  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, traffic, trace, run, sweep, merge, plot, bench)\n",
           cmd);
   return APP_EXIT_USAGE;
 }

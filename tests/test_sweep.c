@@ -3,7 +3,7 @@
  * point runs, a run merged into one table, resume after a kill (completed
  * points untouched), a failing point, the job lines through GNU parallel and
  * a simulated Slurm array (the same table), merge's union of columns and its
- * refusals. Fixtures live in tests/data/sweeps; the points are
+ * refusals, and plots. Fixtures live in tests/data/sweeps; the points are
  * 8x6 primary-ray images on configs/tiny.yaml, so each takes a fraction of a
  * second. */
 #include <dirent.h>
@@ -191,6 +191,9 @@ static void test_bad_files(void) {
       {"sweep " GOOD " -o x -j 0", "-j: got '0'"},
       {"merge", "missing DIR"},
       {"merge x", "missing -o TABLE.csv"},
+      {"plot t.csv --y cycles -o t.png", "missing --x KEY"},
+      {"plot t.csv --x a --y b -o t.pdf", "expected a .png or .svg file"},
+      {"plot t.csv --x a --y b -o t.png --where a", "--where: got 'a', expected KEY=VALUE"},
   };
   for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {
     int rc = run("cd %s && %s %s", RTSIM_TMP, RTSIM_BINARY, usage[i].args);
@@ -371,6 +374,52 @@ static void test_merge_edges(void) {
   EXPECT(!exists(RTSIM_TMP "/sw_broken.csv"));
 }
 
+static int has_magic(const char *path, const char *magic) {
+  char *t = read_all(path);
+  int ok = t && strstr(t, magic) == t;
+  free(t);
+  return ok;
+}
+
+/* Plots of the reference table; bad columns and ambiguous plots refused. */
+static void test_plot(void) {
+  const char *t = RTSIM_TMP "/sw_ref.csv";
+  run("rm -f %s/sw_plot.png %s/sw_plot.svg", RTSIM_TMP, RTSIM_TMP);
+  int rc = run("%s plot %s --x rays_per_thread --y cycles --lines policy --panels l2.size -o "
+               "%s/sw_plot.png",
+               RTSIM_BINARY, t, RTSIM_TMP);
+  EXPECTF(rc == 0 && strstr(out, "8 points, 2 lines, 2 panels"), "png: %d %s", rc, out);
+  EXPECT(has_magic(RTSIM_TMP "/sw_plot.png", "\x89PNG"));
+  rc = run("%s plot %s --x rays_per_thread --y l2_fetch_bytes --lines policy --where l2.ways=8 "
+           "--logx --logy -o %s/sw_plot.svg",
+           RTSIM_BINARY, t, RTSIM_TMP);
+  EXPECTF(rc == 0 && strstr(out, "4 points, 2 lines, 1 panel"), "svg: %d %s", rc, out);
+  char *svg = read_all(RTSIM_TMP "/sw_plot.svg");
+  EXPECTF(svg && strstr(svg, "<svg") && strstr(svg, "l2_fetch_bytes (bytes)") &&
+              strstr(svg, "policy = packet"),
+          "svg lacks its labels or legend");
+  free(svg);
+
+  static const struct {
+    const char *args, *want;
+  } bad[] = {
+      {"--x rays_per_thread --y cycls", "sw_ref.csv:1: error: --y: no column 'cycls' (columns: point, policy, rays_per_thread,"},
+      {"--x rays_per_thread --y cycles --lines polcy", "--lines: no column 'polcy'"},
+      {"--x rays_per_thread --y cycles --where l3.size=1", "--where: no column 'l3.size'"},
+      {"--x rays_per_thread --y cycles --lines policy", "differ in l2.size, l2.ways: fix it with --where"},
+      {"--x policy --y cycles", "sw_ref.csv:2:59: error: --x policy: not a number (got 'packet')"},
+      {"--x rays_per_thread --y fetch_queue_bytes --lines policy --panels l2.size --logy", "a value must be positive on a log scale"},
+      {"--x rays_per_thread --y cycles --where l2.size=16KiB", "--where l2.size=16KiB: no row has it (the column holds: 16384, 32768)"},
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    run("rm -f %s/sw_bad.png", RTSIM_TMP);
+    rc = run("%s plot %s %s -o %s/sw_bad.png", RTSIM_BINARY, t, bad[i].args, RTSIM_TMP);
+    EXPECTF(rc == 2 && strstr(out, bad[i].want), "'%s': exit %d: %s", bad[i].args, rc, out);
+    EXPECTF(count_lines(out) == 1, "'%s': expected one line: %s", bad[i].args, out);
+    EXPECT(!exists(RTSIM_TMP "/sw_bad.png"));
+  }
+}
+
 int main(void) {
   test_expansion();
   test_bad_files();
@@ -379,5 +428,6 @@ int main(void) {
   test_failing_point();
   test_jobs_elsewhere();
   test_merge_edges();
+  test_plot();
   return testing_done("test_sweep");
 }
