@@ -128,7 +128,7 @@ int cmd_merge(int argc, char **argv) {
     goto done;
   }
   qsort(names, n, sizeof *names, cmp_names);
-  qsort(partial, npartial, sizeof *partial, cmp_names);
+  if (npartial) qsort(partial, npartial, sizeof *partial, cmp_names);
   add_column(&cols, &ncols, "point");
   for (unsigned i = 0; i < n; i++) {
     char path[8192];
