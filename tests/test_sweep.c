@@ -199,6 +199,9 @@ static void test_bad_files(void) {
     int rc = run("cd %s && %s %s", RTSIM_TMP, RTSIM_BINARY, usage[i].args);
     EXPECTF(rc == 2 && strstr(out, usage[i].want), "'%s': exit %d: %s", usage[i].args, rc, out);
   }
+  static const char *const helps[] = {"sweep", "merge", "plot"};
+  for (size_t i = 0; i < 3; i++)
+    EXPECT(run("%s %s --help", RTSIM_BINARY, helps[i]) == 0 && strstr(out, "usage: rtsim"));
 }
 
 /* Run good.yaml into dir with -j 2 and merge it into table: both succeed. */
