@@ -38,6 +38,10 @@ int app_option_error(const char *cmd, int c, char **argv);
 /* Exactly one positional SCENE.yaml after the options: NULL (error printed)
  * otherwise. */
 const char *app_one_scene(const char *cmd, int argc, char **argv);
+/* Exactly one positional argument after the options: NULL otherwise, with
+ * "missing WHAT" or "expected one NOUN, got N" printed. */
+const char *app_one_operand(const char *cmd, const char *what, const char *noun, int argc,
+                            char **argv);
 
 /* The source revision this program was built from: `git describe --always
  * --dirty` of the source tree at build time, or "unknown" outside a git

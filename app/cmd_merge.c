@@ -90,11 +90,9 @@ int cmd_merge(int argc, char **argv) {
     default: return app_option_error("merge", c, argv);
     }
   }
-  if (argc - optind != 1)
-    return app_usage_error("merge", argc == optind ? "missing DIR" : "expected one directory, got %d",
-                           argc - optind);
+  const char *dir = app_one_operand("merge", "DIR", "directory", argc, argv);
+  if (!dir) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("merge", "missing -o TABLE.csv");
-  const char *dir = argv[optind];
   struct err e = {0};
   DIR *d = opendir(dir);
   if (!d) {

@@ -224,9 +224,8 @@ int cmd_plot(int argc, char **argv) {
     default: return app_option_error("plot", c, argv);
     }
   }
-  if (argc - optind != 1)
-    return app_usage_error("plot", argc == optind ? "missing TABLE.csv" : "expected one table, got %d",
-                           argc - optind);
+  const char *table = app_one_operand("plot", "TABLE.csv", "table", argc, argv);
+  if (!table) return APP_EXIT_USAGE;
   if (!xk || !yk) return app_usage_error("plot", "missing --%s", xk ? "y METRIC" : "x KEY");
   if (!out) return app_usage_error("plot", "missing -o FILE.png or FILE.svg");
   size_t ol = strlen(out);
@@ -240,7 +239,7 @@ int cmd_plot(int argc, char **argv) {
   unsigned *kept = NULL;
   struct row *rows = NULL;
   struct values lines = {0}, panels = {0};
-  if (!csv_read(&t, argv[optind], &e)) return app_report(&e);
+  if (!csv_read(&t, table, &e)) return app_report(&e);
   int xc = column(&t, "--x", xk), yc = xc < 0 ? -1 : column(&t, "--y", yk);
   int lc = -1, pc = -1;
   if (yc >= 0 && lk && (lc = column(&t, "--lines", lk)) < 0) goto fail;

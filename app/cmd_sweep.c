@@ -397,9 +397,8 @@ int cmd_sweep(int argc, char **argv) {
     default: return app_option_error("sweep", c, argv);
     }
   }
-  if (argc - optind != 1)
-    return app_usage_error("sweep", argc == optind ? "missing SWEEP.yaml" : "expected one sweep file, got %d",
-                           argc - optind);
+  const char *sweep_path = app_one_operand("sweep", "SWEEP.yaml", "sweep file", argc, argv);
+  if (!sweep_path) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("sweep", "missing -o DIR");
   if (strpbrk(out, "\n\r")) return app_usage_error("sweep", "-o: a path with a line break cannot go into a job line");
 
@@ -418,7 +417,7 @@ int cmd_sweep(int argc, char **argv) {
 
   struct sweep s;
   struct err e = {0};
-  if (!sweep_load(&s, argv[optind], dir, &e)) {
+  if (!sweep_load(&s, sweep_path, dir, &e)) {
     sweep_free(&s);
     return app_report(&e);
   }

@@ -55,13 +55,18 @@ int app_option_error(const char *cmd, int c, char **argv) {
   return app_usage_error(cmd, "unknown option '%s'", argv[optind - 1]);
 }
 
-const char *app_one_scene(const char *cmd, int argc, char **argv) {
+const char *app_one_operand(const char *cmd, const char *what, const char *noun, int argc,
+                            char **argv) {
   if (optind == argc - 1) return argv[optind];
   if (optind >= argc)
-    app_usage_error(cmd, "missing SCENE.yaml");
+    app_usage_error(cmd, "missing %s", what);
   else
-    app_usage_error(cmd, "expected one scene file, got %d", argc - optind);
+    app_usage_error(cmd, "expected one %s, got %d", noun, argc - optind);
   return NULL;
+}
+
+const char *app_one_scene(const char *cmd, int argc, char **argv) {
+  return app_one_operand(cmd, "SCENE.yaml", "scene file", argc, argv);
 }
 
 double app_now(void) {
