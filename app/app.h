@@ -23,6 +23,9 @@ int cmd_bench(int argc, char **argv);
 int cmd_traffic(int argc, char **argv);
 int cmd_trace(int argc, char **argv);
 int cmd_run(int argc, char **argv);
+int cmd_sweep(int argc, char **argv);
+int cmd_merge(int argc, char **argv);
+int cmd_plot(int argc, char **argv);
 
 /* Print "rtsim: <formatted err>" once to stderr; returns APP_EXIT_USAGE. */
 int app_report(const struct err *e);
@@ -35,6 +38,15 @@ int app_option_error(const char *cmd, int c, char **argv);
 /* Exactly one positional SCENE.yaml after the options: NULL (error printed)
  * otherwise. */
 const char *app_one_scene(const char *cmd, int argc, char **argv);
+/* Exactly one positional argument after the options: NULL otherwise, with
+ * "missing WHAT" or "expected one NOUN, got N" printed. */
+const char *app_one_operand(const char *cmd, const char *what, const char *noun, int argc,
+                            char **argv);
+
+/* The source revision this program was built from: `git describe --always
+ * --dirty` of the source tree at build time, or "unknown" outside a git
+ * checkout (cmake/revision.cmake writes it; the program never calls git). */
+extern const char app_revision[];
 
 /* Host wall clock in seconds (for reports only; the model never reads it). */
 double app_now(void);

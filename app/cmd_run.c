@@ -146,6 +146,7 @@ int cmd_run(int argc, char **argv) {
       .width = W,
       .height = H,
       .seed = t.ar.sc.seed,
+      .scene_hash = scene_hash(&w.scene),
       .cfg = &mc,
       .machine = t.m,
       .rstats = &t.st,

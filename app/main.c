@@ -24,6 +24,11 @@ static const char USAGE[] =
     "  trace SCENE.yaml --din FILE ...  the access stream as a Dinero IV din trace\n"
     "  run MACHINE.yaml SCENE.yaml -o DIR  render on the timed many-core machine:\n"
     "                                   cycles, utilization, L2 and DRAM statistics\n"
+    "  sweep SWEEP.yaml -o DIR          run a sweep file's points (machine configs x\n"
+    "                                   workloads) in parallel, resumable; or print\n"
+    "                                   them as jobs for GNU parallel or Slurm\n"
+    "  merge DIR -o TABLE.csv           a sweep's complete points as one tidy table\n"
+    "  plot TABLE.csv --x K --y M -o F  line plots of a merged table (PNG or SVG)\n"
     "  bench SCENE.yaml...              primary-ray throughput (rays/s) per scene\n"
     "\n"
     "Run 'rtsim COMMAND --help' for a command's options.\n";
@@ -50,13 +55,18 @@ int app_option_error(const char *cmd, int c, char **argv) {
   return app_usage_error(cmd, "unknown option '%s'", argv[optind - 1]);
 }
 
-const char *app_one_scene(const char *cmd, int argc, char **argv) {
+const char *app_one_operand(const char *cmd, const char *what, const char *noun, int argc,
+                            char **argv) {
   if (optind == argc - 1) return argv[optind];
   if (optind >= argc)
-    app_usage_error(cmd, "missing SCENE.yaml");
+    app_usage_error(cmd, "missing %s", what);
   else
-    app_usage_error(cmd, "expected one scene file, got %d", argc - optind);
+    app_usage_error(cmd, "expected one %s, got %d", noun, argc - optind);
   return NULL;
+}
+
+const char *app_one_scene(const char *cmd, int argc, char **argv) {
+  return app_one_operand(cmd, "SCENE.yaml", "scene file", argc, argv);
 }
 
 double app_now(void) {
@@ -119,7 +129,10 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "traffic")) return cmd_traffic(argc - 1, argv + 1);
   if (!strcmp(cmd, "trace")) return cmd_trace(argc - 1, argv + 1);
   if (!strcmp(cmd, "run")) return cmd_run(argc - 1, argv + 1);
-  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, traffic, trace, run, bench)\n",
+  if (!strcmp(cmd, "sweep")) return cmd_sweep(argc - 1, argv + 1);
+  if (!strcmp(cmd, "merge")) return cmd_merge(argc - 1, argv + 1);
+  if (!strcmp(cmd, "plot")) return cmd_plot(argc - 1, argv + 1);
+  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, traffic, trace, run, sweep, merge, plot, bench)\n",
           cmd);
   return APP_EXIT_USAGE;
 }

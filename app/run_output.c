@@ -31,7 +31,10 @@ static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 static void identity(const struct run_report *r, struct stats_table *t) {
   char rays[64];
   shade_rays_name(r->mask, rays, sizeof rays);
+  char hash[24];
+  snprintf(hash, sizeof hash, "%016llx", (unsigned long long)r->scene_hash);
   stats_str(t, "scene", r->scene_name);
+  stats_str(t, "scene_hash", hash);
   stats_str(t, "policy", r->policy);
   stats_str(t, "rays", rays);
   stats_u64(t, "width", r->width);
@@ -48,7 +51,7 @@ static void measured(const struct run_report *r, struct stats_table *t) {
   const double seconds = cyc / (p->clock_ghz * 1e9);
   stats_u64(t, "cycles", s->cycles);
   stats_f64(t, "seconds", seconds);
-  stats_u64(t, "rays", rays);
+  stats_u64(t, "rays_traced", rays);
   stats_f64(t, "rays_per_second", ratio((double)rays, seconds));
   stats_u64(t, "kd_node_visits", r->tstats->node_visits);
   stats_u64(t, "triangle_tests", r->tstats->tri_tests);
@@ -210,6 +213,8 @@ static bool write_json(const struct run_report *r, struct err *e) {
   hist_write_json(&s->load_latency, f);
   fputs(",\n  \"queue_delay_histogram_cycles\": ", f);
   hist_write_json(&s->queue_delay, f);
+  fputs(",\n  \"revision\": ", f);
+  json_write_str(f, app_revision);
   fputs(",\n  \"wall_s\": ", f);
   json_write_f64(f, r->wall_s);
   struct rusage ru;
@@ -233,7 +238,7 @@ bool run_output_write(const struct run_report *r, struct err *e) {
 void run_output_summary(const struct run_report *r, FILE *f) {
   struct stats_table t = {0};
   measured(r, &t);
-  static const char *const show[] = {"cycles", "rays", "rays_per_second", "core_utilization",
+  static const char *const show[] = {"cycles", "rays_traced", "rays_per_second", "core_utilization",
                                      "thread_idle_fraction", "l2_miss_rate", "dram_utilization",
                                      "queue_delay_mean", "load_latency_mean", "events"};
   for (unsigned i = 0; i < sizeof show / sizeof show[0]; i++)

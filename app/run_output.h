@@ -19,6 +19,7 @@ struct run_report {
   const char *out_dir, *machine_path, *scene_path, *scene_name, *policy;
   uint32_t mask, width, height;
   uint64_t seed;
+  uint64_t scene_hash; /* scene_hash() of the loaded scene */
   const struct machine_cfg *cfg;
   const struct machine *machine;
   const struct render_stats *rstats;

@@ -107,5 +107,7 @@ uint64_t scene_hash(const struct scene *s) {
   }
   h = fnv(h, s->lights, s->light_count * sizeof s->lights[0]);
   h = fnv(h, &s->camera, sizeof s->camera);
+  h = fnv(h, &s->background, sizeof s->background);
+  h = fnv(h, &s->ambient, sizeof s->ambient);
   return h;
 }

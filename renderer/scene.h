@@ -72,8 +72,11 @@ uint32_t scene_add_tri(struct scene *s, vec3 a, vec3 b, vec3 c, const vec3 *norm
 /* Axis-aligned bounds of all triangles ({0,0,0} both when empty). */
 void scene_bounds(const struct scene *s, vec3 *lo, vec3 *hi);
 
-/* FNV-1a hash of all triangle, material, light and camera bytes: names a scene
- * in metadata and lets tests compare two loads. */
+/* FNV-1a 64 over the host bytes of every triangle (vertices, normals,
+ * material id), then each material (name, colour, weights), the lights, the
+ * camera, the background and the ambient weight: all the loaded scene that
+ * shapes a render, but not its name, default image size or seed. Names a
+ * scene in stats (scene_hash) and lets tests compare two loads. */
 uint64_t scene_hash(const struct scene *s);
 
 #endif

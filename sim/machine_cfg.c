@@ -199,36 +199,49 @@ bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e) {
   return ok;
 }
 
+int machine_cfg_find(const char *name) {
+  for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++)
+    if (!strcmp(KEYS[i].name, name)) return (int)i;
+  return -1;
+}
+
+bool machine_cfg_set_at(struct machine_cfg *c, unsigned i, const char *value, const char *file,
+                        int line, int col, struct err *e) {
+  CHECK(i < MACHINE_CFG_KEYS);
+  /* The value goes through the same typed reader as a file's. */
+  struct cfg_doc d;
+  memset(&d, 0, sizeof d);
+  snprintf(d.file, sizeof d.file, "%s", file);
+  struct cfg_node n;
+  memset(&n, 0, sizeof n);
+  n.kind = CFG_SCALAR;
+  n.text = (char *)value;
+  n.line = line;
+  n.col = col;
+  if (!read_value(&d, &n, &KEYS[i], &c->p, e)) return false;
+  set_origin(c, i, file, line, col);
+  return true;
+}
+
 bool machine_cfg_set(struct machine_cfg *c, const char *assignment, struct err *e) {
   char where[300];
   snprintf(where, sizeof where, "--set %s", assignment);
   const char *eq = strchr(assignment, '=');
   if (!eq)
     return err_set(e, where, 0, 0, "expected KEY=VALUE (keys: %s)", machine_cfg_key_list());
-  size_t klen = (size_t)(eq - assignment);
-  unsigned i = 0;
-  while (i < MACHINE_CFG_KEYS && !(strlen(KEYS[i].name) == klen && !strncmp(KEYS[i].name, assignment, klen)))
-    i++;
-  if (i == MACHINE_CFG_KEYS)
-    return err_set(e, where, 0, 0, "unknown key '%.*s' (expected one of: %s)", (int)klen,
-                   assignment, machine_cfg_key_list());
-  /* The value goes through the same typed reader as a file's. */
-  struct cfg_doc d;
-  memset(&d, 0, sizeof d);
-  snprintf(d.file, sizeof d.file, "%s", where);
-  struct cfg_node n;
-  memset(&n, 0, sizeof n);
-  n.kind = CFG_SCALAR;
-  n.text = (char *)(eq + 1);
-  if (!read_value(&d, &n, &KEYS[i], &c->p, e)) return false;
-  set_origin(c, i, where, 0, 0);
-  return true;
+  char key[64];
+  snprintf(key, sizeof key, "%.*s", (int)(eq - assignment), assignment);
+  int i = (size_t)(eq - assignment) < sizeof key ? machine_cfg_find(key) : -1;
+  if (i < 0)
+    return err_set(e, where, 0, 0, "unknown key '%.*s' (expected one of: %s)",
+                   (int)(eq - assignment), assignment, machine_cfg_key_list());
+  return machine_cfg_set_at(c, (unsigned)i, eq + 1, where, 0, 0, e);
 }
 
 static unsigned key_index(const char *name) {
-  for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++)
-    if (!strcmp(KEYS[i].name, name)) return i;
-  CHECK(!"no such key");
+  int i = machine_cfg_find(name);
+  CHECK(i >= 0);
+  return (unsigned)i;
 }
 
 /* An error at key `name`, where its value came from. */

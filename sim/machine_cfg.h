@@ -35,6 +35,13 @@ void machine_cfg_defaults(struct machine_cfg *c);
 bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e);
 /* Apply one "key=value" (the value as it would be written in YAML). */
 bool machine_cfg_set(struct machine_cfg *c, const char *assignment, struct err *e);
+/* Index of key `name` ("l2.size"), or -1 when there is no such key. */
+int machine_cfg_find(const char *name);
+/* Set key i from `value` (text as written in YAML), which was written at
+ * file:line:col (0 when unknown): errors now, and relation errors found by
+ * machine_cfg_check later, are reported there. Same checks as a file's. */
+bool machine_cfg_set_at(struct machine_cfg *c, unsigned i, const char *value, const char *file,
+                        int line, int col, struct err *e);
 /* Check relations between keys (a cache that holds whole lines, ways that
  * divide them, ...), naming the key at fault where it was written. */
 bool machine_cfg_check(const struct machine_cfg *c, struct err *e);

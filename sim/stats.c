@@ -116,22 +116,24 @@ void json_write_str(FILE *f, const char *s) {
   fputc('"', f);
 }
 
+void stats_write_csv_str(FILE *f, const char *s) {
+  if (!strpbrk(s, ",\"\r\n")) {
+    fputs(s, f);
+    return;
+  }
+  fputc('"', f);
+  for (const char *p = s; *p; p++) {
+    if (*p == '"') fputc('"', f);
+    fputc(*p, f);
+  }
+  fputc('"', f);
+}
+
 static void csv_value(const struct stats_entry *x, FILE *f) {
   switch (x->kind) {
   case STATS_U64: fprintf(f, "%llu", (unsigned long long)x->u); break;
   case STATS_F64: json_write_f64(f, x->f); break;
-  case STATS_STR:
-    if (strpbrk(x->s, ",\"\n")) {
-      fputc('"', f);
-      for (const char *p = x->s; *p; p++) {
-        if (*p == '"') fputc('"', f);
-        fputc(*p, f);
-      }
-      fputc('"', f);
-    } else {
-      fputs(x->s, f);
-    }
-    break;
+  case STATS_STR: stats_write_csv_str(f, x->s); break;
   }
 }
 

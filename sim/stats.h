@@ -51,6 +51,9 @@ void stats_fini(struct stats_table *t);
 /* "name,name,...\n" and "value,value,...\n" (strings quoted when needed). */
 void stats_write_csv_header(const struct stats_table *t, FILE *f);
 void stats_write_csv_row(const struct stats_table *t, FILE *f);
+/* One CSV field: s as is, or quoted (quotes doubled) when it holds a comma, a
+ * quote or a line break (RFC 4180). */
+void stats_write_csv_str(FILE *f, const char *s);
 /* Members `"name": value` separated by ",\n" + indent (no braces), for the
  * caller to place inside an object. */
 void stats_write_json_members(const struct stats_table *t, FILE *f, const char *indent);

@@ -103,5 +103,19 @@ int main(void) {
   char v[64];
   machine_cfg_value(&c, 0, v, sizeof v);
   EXPECT(!strcmp(v, "2.5"));
+
+  /* A value set with its position (a sweep file's axis value) is reported
+   * there, both when it is read and when a relation check fails later. */
+  EXPECT(machine_cfg_find("l2.ways") >= 0 && machine_cfg_find("l2.way") == -1);
+  unsigned ways = (unsigned)machine_cfg_find("l2.ways");
+  machine_cfg_defaults(&c);
+  memset(&e, 0, sizeof e);
+  EXPECT(!machine_cfg_set_at(&c, ways, "many", "s.yaml", 4, 12, &e));
+  err_format(&e, buf, sizeof buf);
+  EXPECTF(strstr(buf, "s.yaml:4:12: error: l2.ways: not a number of ways (got 'many'"), "got '%s'", buf);
+  memset(&e, 0, sizeof e);
+  EXPECT(machine_cfg_set_at(&c, ways, "7", "s.yaml", 5, 3, &e) && !machine_cfg_check(&c, &e));
+  err_format(&e, buf, sizeof buf);
+  EXPECTF(strstr(buf, "s.yaml:5:3: error: l2.ways: the ways must divide"), "got '%s'", buf);
   return testing_done("test_machine_cfg");
 }

@@ -263,15 +263,36 @@ static void test_command(void) {
     snprintf(b, sizeof b, "%s/%s", dirs[1], names[f]);
     EXPECTF(same_file(a, b, f == 3), "%s differs between two runs", names[f]);
   }
+  /* stats.csv's columns are unique names (a merged table joins them by name). */
+  char csvp[2048], hdr[8192];
+  snprintf(csvp, sizeof csvp, "%s/stats.csv", dirs[0]);
+  FILE *hf = fopen(csvp, "r");
+  EXPECT(hf && fgets(hdr, sizeof hdr, hf));
+  if (hf) fclose(hf);
+  hdr[strcspn(hdr, "\n")] = '\0';
+  char *names_at[256];
+  unsigned ncols = 0;
+  for (char *tok = strtok(hdr, ","); tok && ncols < 256; tok = strtok(NULL, ",")) {
+    for (unsigned j = 0; j < ncols; j++)
+      EXPECTF(strcmp(names_at[j], tok) != 0, "stats.csv has column '%s' twice", tok);
+    names_at[ncols++] = tok;
+  }
+  EXPECT(ncols > 30);
   /* The override is in the resolved config. */
   char js[2048];
   snprintf(js, sizeof js, "%s/stats.json", dirs[2]);
   FILE *f = fopen(js, "r");
-  size_t n = f ? fread(out, 1, sizeof out - 1, f) : 0;
-  out[n] = '\0';
+  static char json[1 << 16];
+  size_t n = f ? fread(json, 1, sizeof json - 1, f) : 0;
+  json[n] = '\0';
   if (f) fclose(f);
-  EXPECT(strstr(out, "\"cores\": 3,") && strstr(out, "\"l2.size\": 8192,") &&
-         strstr(out, "\"policy\": \"packet\""));
+  EXPECT(strstr(json, "\"cores\": 3,") && strstr(json, "\"l2.size\": 8192,") &&
+         strstr(json, "\"policy\": \"packet\""));
+  /* Traceable: the scene's hash (16 hex digits) and the build's revision. */
+  const char *hash = strstr(json, "\"scene_hash\": \"");
+  EXPECT(hash && strspn(hash + 15, "0123456789abcdef") == 16 && hash[31] == '"');
+  const char *rev = strstr(json, "\"revision\": \"");
+  EXPECT(rev && rev[13] != '"');
 
   static const struct {
     const char *args, *want;

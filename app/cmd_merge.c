@@ -1,0 +1,198 @@
+/* rtsim merge: the complete points of a sweep directory as one tidy table.
+ * A row per subdirectory holding a stats.json (complete), in natural order of
+ * the point names; columns: point, the swept keys (point.csv), then the
+ * stats.csv columns, each name once (a swept key that stats.csv also has, as
+ * every config and workload key, takes stats.csv's resolved value: 16KiB
+ * reads 16384). Points with other columns still merge: the union of the
+ * columns in order of first appearance, missing cells empty. */
+#include <dirent.h>
+#include <errno.h>
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "app/app.h"
+#include "app/csv.h"
+#include "sim/err.h"
+#include "sim/stats.h"
+
+static const char HELP[] =
+    "usage: rtsim merge DIR -o TABLE.csv\n"
+    "\n"
+    "Join the complete points of a sweep directory (each subdirectory holding a\n"
+    "stats.json) into one tidy CSV table, a row per point in natural order of\n"
+    "the point names: the column 'point' (the directory name), the swept keys\n"
+    "(from each point's point.csv), then the stats.csv columns. A column name\n"
+    "appears once: a swept key stats.csv also has takes stats.csv's resolved\n"
+    "value (l2.size 16KiB reads 16384). Points with different columns merge into\n"
+    "the union of the columns; missing cells stay empty. Incomplete points are\n"
+    "skipped and named on stderr; a DIR with no complete point is refused.\n"
+    "\n"
+    "options:\n"
+    "  -o, --output TABLE.csv  the table (written whole or not at all)\n"
+    "  -h, --help              this text\n";
+
+static int cmp_names(const void *x, const void *y) {
+  const char *a = *(char *const *)x, *b = *(char *const *)y;
+  int c = csv_natural_cmp(a, b);
+  return c ? c : strcmp(a, b);
+}
+
+static bool has(const char *dir, const char *sub, const char *name) {
+  char p[8192];
+  snprintf(p, sizeof p, "%s/%s/%s", dir, sub, name);
+  struct stat sb;
+  return stat(p, &sb) == 0;
+}
+
+/* One point: its stats.csv and (when swept) point.csv, one row each. */
+struct point {
+  char *name;
+  struct csv_table stats, swept;
+};
+
+static bool read_one_row(struct csv_table *t, const char *path, struct err *e) {
+  if (!csv_read(t, path, e)) return false;
+  if (t->nrows == 1) return true;
+  return err_set(e, path, 0, 0, "expected a header and one row (got %u rows)", t->nrows);
+}
+
+/* The cell of column `name` for point p: stats.csv's, else point.csv's, else "". */
+static const char *cell(const struct point *p, const char *name) {
+  int c = csv_column(&p->stats, name);
+  if (c >= 0) return csv_cell(&p->stats, 0, (unsigned)c);
+  c = csv_column(&p->swept, name);
+  return c >= 0 ? csv_cell(&p->swept, 0, (unsigned)c) : "";
+}
+
+/* Add name to the column list unless present. */
+static void add_column(char ***cols, unsigned *n, const char *name) {
+  for (unsigned i = 0; i < *n; i++)
+    if (!strcmp((*cols)[i], name)) return;
+  *cols = xrealloc(*cols, (*n + 1ull) * sizeof **cols);
+  (*cols)[(*n)++] = (char *)name;
+}
+
+int cmd_merge(int argc, char **argv) {
+  static const struct option opts[] = {
+      {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+  const char *out = NULL;
+  int c;
+  opterr = 0;
+  optind = 1;
+  while ((c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
+    switch (c) {
+    case 'o': out = optarg; break;
+    case 'h': fputs(HELP, stdout); return 0;
+    default: return app_option_error("merge", c, argv);
+    }
+  }
+  const char *dir = app_one_operand("merge", "DIR", "directory", argc, argv);
+  if (!dir) return APP_EXIT_USAGE;
+  if (!out) return app_usage_error("merge", "missing -o TABLE.csv");
+  struct err e = {0};
+  DIR *d = opendir(dir);
+  if (!d) {
+    err_set(&e, dir, 0, 0, "cannot open the sweep directory: %s", strerror(errno));
+    return app_report(&e);
+  }
+  /* Subdirectories that are points: complete ones, and incomplete ones to name. */
+  char **names = NULL, **partial = NULL;
+  unsigned n = 0, npartial = 0;
+  struct dirent *de;
+  while ((de = readdir(d))) {
+    if (de->d_name[0] == '.') continue;
+    if (has(dir, de->d_name, "stats.json")) {
+      names = xrealloc(names, (n + 1ull) * sizeof *names);
+      names[n++] = strdup(de->d_name);
+    } else if (has(dir, de->d_name, "command.sh") || has(dir, de->d_name, "point.csv")) {
+      partial = xrealloc(partial, (npartial + 1ull) * sizeof *partial);
+      partial[npartial++] = strdup(de->d_name);
+    }
+  }
+  closedir(d);
+  int rc = 0;
+  struct point *pts = xcalloc(n, sizeof *pts);
+  char **cols = NULL;
+  unsigned ncols = 0;
+  if (n == 0) {
+    err_set(&e, dir, 0, 0,
+            "no complete point (no subdirectory holds a stats.json%s): nothing to merge",
+            npartial ? "; the points there have not finished" : "");
+    rc = app_report(&e);
+    goto done;
+  }
+  qsort(names, n, sizeof *names, cmp_names);
+  if (npartial) qsort(partial, npartial, sizeof *partial, cmp_names);
+  add_column(&cols, &ncols, "point");
+  for (unsigned i = 0; i < n; i++) {
+    char path[8192];
+    pts[i].name = names[i];
+    snprintf(path, sizeof path, "%s/%s/stats.csv", dir, names[i]);
+    if (!read_one_row(&pts[i].stats, path, &e)) {
+      rc = app_report(&e);
+      goto done;
+    }
+    if (has(dir, names[i], "point.csv")) {
+      snprintf(path, sizeof path, "%s/%s/point.csv", dir, names[i]);
+      if (!read_one_row(&pts[i].swept, path, &e)) {
+        rc = app_report(&e);
+        goto done;
+      }
+    }
+  }
+  /* Swept keys first (in the points' order), then the measured columns. */
+  for (unsigned i = 0; i < n; i++)
+    for (unsigned k = 0; k < pts[i].swept.ncols; k++) add_column(&cols, &ncols, pts[i].swept.names[k]);
+  for (unsigned i = 0; i < n; i++)
+    for (unsigned k = 0; k < pts[i].stats.ncols; k++) add_column(&cols, &ncols, pts[i].stats.names[k]);
+
+  char tmp[8192];
+  snprintf(tmp, sizeof tmp, "%s.tmp", out);
+  FILE *f = fopen(tmp, "w");
+  if (f) {
+    for (unsigned k = 0; k < ncols; k++) {
+      if (k) fputc(',', f);
+      stats_write_csv_str(f, cols[k]);
+    }
+    fputc('\n', f);
+    for (unsigned i = 0; i < n; i++) {
+      stats_write_csv_str(f, pts[i].name);
+      for (unsigned k = 1; k < ncols; k++) {
+        fputc(',', f);
+        stats_write_csv_str(f, cell(&pts[i], cols[k]));
+      }
+      fputc('\n', f);
+    }
+  }
+  bool ok = f && !ferror(f);
+  if (f && fclose(f) != 0) ok = false;
+  if (!ok || rename(tmp, out) != 0) {
+    unlink(tmp);
+    err_set(&e, out, 0, 0, "cannot write the table: %s", strerror(errno));
+    rc = app_report(&e);
+    goto done;
+  }
+  fprintf(stderr, "merge: %u point%s, %u columns into %s", n, n == 1 ? "" : "s", ncols, out);
+  if (npartial) {
+    fprintf(stderr, "; %u incomplete skipped:", npartial);
+    for (unsigned i = 0; i < npartial && i < 5; i++) fprintf(stderr, " %s", partial[i]);
+    if (npartial > 5) fputs(" ...", stderr);
+  }
+  fputc('\n', stderr);
+done:
+  for (unsigned i = 0; i < n; i++) {
+    csv_free(&pts[i].stats);
+    csv_free(&pts[i].swept);
+    free(names[i]);
+  }
+  for (unsigned i = 0; i < npartial; i++) free(partial[i]);
+  free(pts);
+  free(names);
+  free(partial);
+  free(cols);
+  return rc;
+}

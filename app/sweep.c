@@ -1,0 +1,641 @@
+/* Sweep files into points (sweep.h). Reading goes in one pass over the YAML
+ * tree: the base machine, the workload, the fixed overrides, then each axis
+ * value checked on its own where it is written; then the product is expanded
+ * and every point's whole machine config checked; names must be unique; each
+ * distinct scene is loaded once (to check it, and for its image size and the
+ * cost estimate). */
+#define _XOPEN_SOURCE 700 /* realpath */
+#include "app/sweep.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "renderer/policy.h"
+#include "renderer/ray.h"
+#include "renderer/scene.h"
+#include "renderer/scene_file.h"
+#include "renderer/shade.h"
+#include "sim/cfg.h"
+#include "sim/err.h"
+#include "sim/machine_cfg.h"
+
+/* Workload keys; machine keys are machine_cfg's. */
+enum wl { WL_SCENE, WL_POLICY, WL_RAYS, WL_WIDTH, WL_HEIGHT, WL_SEED, WL_COUNT };
+static const char *const WL_NAMES[WL_COUNT + 1] = {"scene", "policy", "rays",
+                                                   "width", "height", "seed", NULL};
+#define WL_LIST "scene, policy, rays, width, height, seed"
+
+/* One key's values (an axis, or one key of a zipped group). */
+struct axis {
+  const char *key;
+  const char *section; /* "axes" or "zip" */
+  int machine_key; /* machine_cfg index, or -1 for a workload key */
+  enum wl wl;
+  struct cfg_node *node; /* the key's map entry (its list of values) */
+  char **resolved;       /* scene axes: absolute paths (owned) */
+};
+
+/* A dimension of the product: one axis, or a zipped group of axes moving together. */
+struct dim {
+  unsigned first, naxes, count;
+};
+
+/* What a scene file gives a point: its size and what the estimate needs. */
+struct scene_info {
+  char *path; /* absolute (owned) */
+  uint32_t width, height, tris, lights;
+};
+
+struct priv {
+  struct cfg_doc doc;
+  char dir[4096]; /* the sweep file's directory, absolute */
+  struct axis *axes;
+  unsigned naxes;
+  struct dim *dims;
+  unsigned ndims;
+  /* The fixed workload (NULL = default) and machine overrides. */
+  struct cfg_node *wl[WL_COUNT];
+  char *scene_fixed; /* absolute (owned) */
+  struct cfg_node *sets;
+  struct machine_cfg base; /* the base config with the fixed overrides */
+  char machine_path[4096];
+  struct scene_info *scenes;
+  unsigned nscenes;
+};
+
+static char *dup_str(const char *s) {
+  size_t n = strlen(s) + 1;
+  char *p = xmalloc(n);
+  memcpy(p, s, n);
+  return p;
+}
+
+/* path resolved against the sweep file's directory, made canonical: false
+ * (error at n) when there is no such file. */
+static bool resolve(const struct priv *pv, const struct cfg_node *n, const char *what,
+                    char **out, struct err *e) {
+  char joined[8192];
+  if (n->text[0] == '/') snprintf(joined, sizeof joined, "%s", n->text);
+  else snprintf(joined, sizeof joined, "%s/%s", pv->dir, n->text);
+  char *real = realpath(joined, NULL);
+  if (!real)
+    return cfg_fail(&pv->doc, n, what, e, "cannot open '%s' (%s; paths are relative to the sweep file)",
+                    n->text, strerror(errno));
+  if (strpbrk(real, "\n\r")) {
+    free(real);
+    return cfg_fail(&pv->doc, n, what, e, "a path with a line break cannot go into a job line");
+  }
+  *out = real;
+  return true;
+}
+
+/* Check one workload value (scalar node n) for key k, where it is written. */
+static bool check_workload(const struct priv *pv, enum wl k, const struct cfg_node *n,
+                           struct err *e) {
+  const struct cfg_doc *d = &pv->doc;
+  const char *key = WL_NAMES[k];
+  char text[4096];
+  if (!cfg_str(d, n, key, text, sizeof text, e)) return false;
+  switch (k) {
+  case WL_SCENE: return true; /* resolved and loaded later */
+  case WL_POLICY: {
+    enum policy_kind p;
+    if (!policy_parse(text, &p) || p == POLICY_DYNAMIC)
+      return cfg_fail(d, n, key, e, "%s (got '%s', expected one of: recursive, packet)",
+                      policy_parse(text, &p) ? "does not run on the machine yet" : "unknown policy",
+                      text);
+    return true;
+  }
+  case WL_RAYS: {
+    uint32_t mask;
+    if (!shade_parse_rays(text, &mask))
+      return cfg_fail(d, n, key, e,
+                      "not a list of ray types (got '%s', expected a comma-separated list of "
+                      "primary, shadow, specular, diffuse in one string)",
+                      text);
+    return true;
+  }
+  case WL_WIDTH:
+  case WL_HEIGHT: {
+    uint64_t v;
+    return cfg_u64(d, n, key, 1, 16384, &v, e);
+  }
+  case WL_SEED: {
+    uint64_t v;
+    return cfg_u64(d, n, key, 0, UINT64_MAX, &v, e);
+  }
+  case WL_COUNT: break;
+  }
+  CHECK(!"bad workload key");
+  return false;
+}
+
+/* A key that is neither a machine nor a workload key. */
+static bool unknown_key(const struct priv *pv, const struct cfg_node *v, const char *section,
+                        struct err *e, bool workload_too) {
+  return err_set(e, pv->doc.file, v->key_line, v->key_col,
+                 "%s.%s: unknown key '%s' (expected a machine config key: %s%s)", section, v->key,
+                 v->key, machine_cfg_key_list(),
+                 workload_too ? "; or a workload key: " WL_LIST : "");
+}
+
+/* Where else key `key` was given, if anywhere (section name and line). */
+static bool given_before(const struct priv *pv, const char *key, const char **where, int *line) {
+  for (unsigned a = 0; a < pv->naxes; a++)
+    if (!strcmp(pv->axes[a].key, key)) {
+      *where = pv->axes[a].section;
+      *line = pv->axes[a].node->key_line;
+      return true;
+    }
+  for (unsigned k = 0; k < WL_COUNT; k++)
+    if (pv->wl[k] && !strcmp(WL_NAMES[k], key)) {
+      *where = "workload";
+      *line = pv->wl[k]->key_line;
+      return true;
+    }
+  for (uint32_t i = 0; pv->sets && i < pv->sets->count; i++)
+    if (!strcmp(pv->sets->items[i].key, key)) {
+      *where = "set";
+      *line = pv->sets->items[i].key_line;
+      return true;
+    }
+  return false;
+}
+
+/* Add map entry v (key: [values]) of section as an axis; check every value. */
+static bool add_axis(struct priv *pv, struct cfg_node *v, const char *section, struct err *e) {
+  const struct cfg_doc *d = &pv->doc;
+  char path[128];
+  snprintf(path, sizeof path, "%s.%s", section, v->key);
+  int mk = machine_cfg_find(v->key);
+  int wk = -1;
+  for (int k = 0; k < WL_COUNT; k++)
+    if (!strcmp(WL_NAMES[k], v->key)) wk = k;
+  if (mk < 0 && wk < 0) return unknown_key(pv, v, section, e, true);
+  const char *where;
+  int line;
+  if (given_before(pv, v->key, &where, &line))
+    return err_set(e, d->file, v->key_line, v->key_col,
+                   "%s: '%s' is given twice (also in %s at line %d; a key moves in one axis or "
+                   "group, or is fixed)",
+                   path, v->key, where, line);
+  if (!cfg_expect_seq(d, v, path, e)) return false;
+  if (v->count == 0)
+    return cfg_fail(d, v, path, e, "empty list (expected at least one value)");
+  struct axis a = {v->key, strcmp(section, "axes") ? "zip" : "axes", mk,
+                   wk >= 0 ? (enum wl)wk : WL_COUNT, v, NULL};
+  if (wk == WL_SCENE) a.resolved = xcalloc(v->count, sizeof *a.resolved);
+  pv->axes = xrealloc(pv->axes, (pv->naxes + 1ull) * sizeof *pv->axes);
+  pv->axes[pv->naxes++] = a;
+  for (uint32_t i = 0; i < v->count; i++) {
+    struct cfg_node *n = &v->items[i];
+    char sub[160];
+    snprintf(sub, sizeof sub, "%s[%u]", path, i);
+    if (n->kind != CFG_SCALAR)
+      return cfg_fail(d, n, sub, e, "wrong type (got a %s, expected one value)",
+                      n->kind == CFG_MAP ? "map" : "list");
+    if (mk >= 0) {
+      struct machine_cfg scratch = pv->base;
+      if (!machine_cfg_set_at(&scratch, (unsigned)mk, n->text, d->file, n->line, n->col, e))
+        return false;
+    } else if (!check_workload(pv, a.wl, n, e)) {
+      return false;
+    } else if (a.wl == WL_SCENE && !resolve(pv, n, sub, &a.resolved[i], e)) {
+      return false;
+    }
+    for (uint32_t j = 0; j < i; j++)
+      if (!strcmp(v->items[j].text, n->text))
+        return cfg_fail(d, n, sub, e, "'%s' is listed twice (first at line %d)", n->text,
+                        v->items[j].line);
+  }
+  return true;
+}
+
+static bool read_file(struct priv *pv, const char *path, struct err *e) {
+  struct cfg_doc *d = &pv->doc;
+  struct cfg_node *root = &d->root;
+  if (!cfg_load_file(d, path, e) || !cfg_expect_map(d, root, "(top level)", e)) return false;
+  char *abs = realpath(path, NULL);
+  CHECK(abs); /* the file was just read */
+  snprintf(pv->dir, sizeof pv->dir, "%s", abs);
+  *strrchr(pv->dir, '/') = '\0';
+  if (!pv->dir[0]) snprintf(pv->dir, sizeof pv->dir, "/");
+  free(abs);
+
+  /* The base machine, then the fixed overrides over it. */
+  struct cfg_node *m = cfg_get(root, "machine");
+  if (!m) return cfg_fail(d, root, "", e, "missing required key 'machine' (the base machine config)");
+  char text[4096], *mpath = NULL;
+  if (!cfg_str(d, m, "machine", text, sizeof text, e) || !resolve(pv, m, "machine", &mpath, e))
+    return false;
+  snprintf(pv->machine_path, sizeof pv->machine_path, "%s", mpath);
+  free(mpath);
+  machine_cfg_defaults(&pv->base);
+  if (!machine_cfg_load(&pv->base, pv->machine_path, e)) return false;
+
+  struct cfg_node *w = cfg_get(root, "workload");
+  if (w) {
+    if (!cfg_expect_map(d, w, "workload", e)) return false;
+    for (int k = 0; k < WL_COUNT; k++) {
+      struct cfg_node *n = cfg_get(w, WL_NAMES[k]);
+      if (!n) continue;
+      char path_k[64];
+      snprintf(path_k, sizeof path_k, "workload.%s", WL_NAMES[k]);
+      if (!check_workload(pv, (enum wl)k, n, e)) return false;
+      if (k == WL_SCENE && !resolve(pv, n, path_k, &pv->scene_fixed, e)) return false;
+      pv->wl[k] = n;
+    }
+    if (!cfg_check_keys(d, w, "workload", WL_LIST, e)) return false;
+  }
+
+  struct cfg_node *sets = cfg_get(root, "set");
+  if (sets) {
+    if (!cfg_expect_map(d, sets, "set", e)) return false;
+    for (uint32_t i = 0; i < sets->count; i++) {
+      struct cfg_node *v = &sets->items[i];
+      int mk = machine_cfg_find(v->key);
+      if (mk < 0) return unknown_key(pv, v, "set", e, false);
+      char path_k[128];
+      snprintf(path_k, sizeof path_k, "set.%s", v->key);
+      if (v->kind != CFG_SCALAR)
+        return cfg_fail(d, v, path_k, e, "wrong type (got a %s, expected one value)",
+                        v->kind == CFG_MAP ? "map" : "list");
+      if (!machine_cfg_set_at(&pv->base, (unsigned)mk, v->text, d->file, v->line, v->col, e))
+        return false;
+    }
+    pv->sets = sets;
+  }
+
+  /* Axes: each its own dimension, in file order; then zipped groups. */
+  struct cfg_node *axes = cfg_get(root, "axes");
+  if (axes) {
+    if (!cfg_expect_map(d, axes, "axes", e)) return false;
+    for (uint32_t i = 0; i < axes->count; i++) {
+      if (!add_axis(pv, &axes->items[i], "axes", e)) return false;
+      pv->dims = xrealloc(pv->dims, (pv->ndims + 1ull) * sizeof *pv->dims);
+      pv->dims[pv->ndims++] = (struct dim){pv->naxes - 1, 1, axes->items[i].count};
+    }
+  }
+  struct cfg_node *zip = cfg_get(root, "zip");
+  if (zip) {
+    if (!cfg_expect_seq(d, zip, "zip", e)) return false;
+    for (uint32_t g = 0; g < zip->count; g++) {
+      struct cfg_node *grp = &zip->items[g];
+      char path_g[64];
+      snprintf(path_g, sizeof path_g, "zip[%u]", g);
+      if (!cfg_expect_map(d, grp, path_g, e)) return false;
+      if (grp->count == 0) return cfg_fail(d, grp, path_g, e, "empty group (expected key: [values])");
+      unsigned first = pv->naxes;
+      for (uint32_t i = 0; i < grp->count; i++) {
+        struct cfg_node *v = &grp->items[i];
+        if (!add_axis(pv, v, path_g, e)) return false;
+        if (v->count != grp->items[0].count)
+          return cfg_fail(d, v, path_g, e,
+                          "%s: %u values, but %s has %u (keys in a group move together)", v->key,
+                          v->count, grp->items[0].key, grp->items[0].count);
+      }
+      pv->dims = xrealloc(pv->dims, (pv->ndims + 1ull) * sizeof *pv->dims);
+      pv->dims[pv->ndims++] = (struct dim){first, grp->count, grp->items[0].count};
+    }
+  }
+  if (!cfg_check_keys(d, root, "", "machine, workload, set, axes, zip", e)) return false;
+  bool scene_swept = false;
+  for (unsigned a = 0; a < pv->naxes; a++) scene_swept |= pv->axes[a].wl == WL_SCENE;
+  if (!pv->scene_fixed && !scene_swept)
+    return cfg_fail(d, w ? w : root, w ? "workload" : "", e,
+                    "missing the scene (give workload.scene, or scene as an axis)");
+  return true;
+}
+
+/* Append to name at *len the value as a directory name can hold it: letters,
+ * digits and . _ + - stay, a comma becomes +, anything else _. */
+static void put_sanitised(char *name, size_t cap, size_t *len, const char *v) {
+  for (const char *p = v; *p && *len + 1 < cap; p++) {
+    char c = *p;
+    bool keep = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                c == '.' || c == '_' || c == '+' || c == '-';
+    name[(*len)++] = keep ? c : c == ',' ? '+' : '_';
+  }
+  name[*len] = '\0';
+}
+
+/* A scene value's name part: its file name without the extension. */
+static void scene_stem(const char *path, char *out, size_t cap) {
+  const char *b = strrchr(path, '/');
+  b = b ? b + 1 : path;
+  snprintf(out, cap, "%s", b);
+  char *dot = strrchr(out, '.');
+  if (dot && dot != out && (!strcmp(dot, ".yaml") || !strcmp(dot, ".yml"))) *dot = '\0';
+}
+
+static uint64_t fnv1a(const char *s) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (; *s; s++) h = (h ^ (unsigned char)*s) * 0x100000001b3ull;
+  return h;
+}
+
+static void put_raw(char *name, size_t cap, size_t *len, const char *v) {
+  for (const char *p = v; *p && *len + 1 < cap; p++) name[(*len)++] = *p;
+  name[*len] = '\0';
+}
+
+/* The dimension axis a belongs to. */
+static unsigned dim_of(const struct priv *pv, unsigned a) {
+  for (unsigned d = 0; d < pv->ndims; d++)
+    if (a >= pv->dims[d].first && a < pv->dims[d].first + pv->dims[d].naxes) return d;
+  CHECK(!"axis outside every dimension");
+  return 0;
+}
+
+/* The point's name from its choices: "key=value,..." or "base" when nothing
+ * is swept; cut to SWEEP_NAME_MAX with a hash of the whole name. */
+static void point_name(const struct priv *pv, const unsigned *choice, char *out) {
+  char full[8192];
+  size_t len = 0;
+  full[0] = '\0';
+  for (unsigned a = 0; a < pv->naxes; a++) {
+    const struct axis *x = &pv->axes[a];
+    const char *v = x->node->items[choice[dim_of(pv, a)]].text;
+    char stem[512];
+    if (x->wl == WL_SCENE) {
+      scene_stem(v, stem, sizeof stem);
+      v = stem;
+    }
+    if (len) put_raw(full, sizeof full, &len, ",");
+    put_raw(full, sizeof full, &len, x->key);
+    put_raw(full, sizeof full, &len, "=");
+    put_sanitised(full, sizeof full, &len, v);
+  }
+  if (!len) snprintf(full, sizeof full, "base");
+  if (strlen(full) <= SWEEP_NAME_MAX) {
+    snprintf(out, SWEEP_NAME_MAX + 1, "%s", full);
+    return;
+  }
+  snprintf(out, SWEEP_NAME_MAX + 1, "%.*s~%016llx", SWEEP_NAME_MAX - 17, full,
+           (unsigned long long)fnv1a(full));
+}
+
+struct by_name {
+  const char *name;
+  unsigned index;
+};
+
+static int cmp_name(const void *a, const void *b) {
+  const struct by_name *x = a, *y = b;
+  int c = strcmp(x->name, y->name);
+  return c ? c : (x->index > y->index) - (x->index < y->index);
+}
+
+/* Two points must not share a directory: report the first pair that would,
+ * at the value of the later one that makes them differ. */
+static bool check_unique(const struct priv *pv, const struct sweep *s, const unsigned *choices,
+                         struct err *e) {
+  struct by_name *v = xmalloc((unsigned long long)s->npoints * sizeof *v);
+  for (unsigned i = 0; i < s->npoints; i++) v[i] = (struct by_name){s->points[i].name, i};
+  qsort(v, s->npoints, sizeof *v, cmp_name);
+  bool ok = true;
+  for (unsigned i = 1; ok && i < s->npoints; i++) {
+    if (strcmp(v[i - 1].name, v[i].name)) continue;
+    const unsigned *ca = &choices[(size_t)v[i - 1].index * pv->ndims];
+    const unsigned *cb = &choices[(size_t)v[i].index * pv->ndims];
+    unsigned a = 0;
+    while (a < pv->naxes && ca[dim_of(pv, a)] == cb[dim_of(pv, a)]) a++;
+    CHECK(a < pv->naxes);
+    const struct cfg_node *n = &pv->axes[a].node->items[cb[dim_of(pv, a)]];
+    ok = cfg_fail(&pv->doc, n, pv->axes[a].key, e,
+                  "two points would share the directory name '%s' (values that differ only in "
+                  "characters a directory name cannot hold, or scenes with the same file name: "
+                  "rename one)",
+                  v[i].name);
+  }
+  free(v);
+  return ok;
+}
+
+/* Rays a pixel traces, roughly: a primary ray, a shadow ray a light, a
+ * mirror ray, and 9 diffuse rays with their own shadow rays. */
+static double rays_per_pixel(uint32_t mask, uint32_t lights) {
+  double shadow = (mask & RAY_MASK(RAY_SHADOW)) ? lights : 0;
+  double r = 1 + shadow;
+  if (mask & RAY_MASK(RAY_SPECULAR)) r += 1;
+  if (mask & RAY_MASK(RAY_DIFFUSE)) r += 9 * (1 + shadow);
+  return r;
+}
+
+static const struct scene_info *find_scene(const struct priv *pv, const char *path) {
+  for (unsigned i = 0; i < pv->nscenes; i++)
+    if (!strcmp(pv->scenes[i].path, path)) return &pv->scenes[i];
+  return NULL;
+}
+
+/* Load each distinct scene once: a bad scene is refused now, and a point
+ * takes its default image size and the estimate's numbers from it. */
+static bool load_scenes(struct priv *pv, struct err *e) {
+  unsigned cap = 1;
+  for (unsigned a = 0; a < pv->naxes; a++)
+    if (pv->axes[a].wl == WL_SCENE) cap += pv->axes[a].node->count;
+  pv->scenes = xcalloc(cap, sizeof *pv->scenes);
+  for (unsigned a = 0; a <= pv->naxes; a++) {
+    bool axis = a < pv->naxes && pv->axes[a].wl == WL_SCENE;
+    unsigned n = axis ? pv->axes[a].node->count : (a == pv->naxes && pv->scene_fixed ? 1 : 0);
+    for (unsigned i = 0; i < n; i++) {
+      const char *path = axis ? pv->axes[a].resolved[i] : pv->scene_fixed;
+      if (find_scene(pv, path)) continue;
+      struct scene sc;
+      if (!scene_load(&sc, path, e)) return false;
+      pv->scenes[pv->nscenes++] = (struct scene_info){dup_str(path), sc.width, sc.height,
+                                                      sc.tri_count, sc.light_count};
+      scene_fini(&sc);
+    }
+  }
+  return true;
+}
+
+/* Argument vector under construction. */
+struct args {
+  char **v;
+  unsigned n, cap;
+};
+
+static void arg(struct args *a, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void arg(struct args *a, const char *fmt, ...) {
+  if (a->n + 2 > a->cap) {
+    a->cap = a->cap ? 2 * a->cap : 32;
+    a->v = xrealloc(a->v, (unsigned long long)a->cap * sizeof *a->v);
+  }
+  char buf[8192];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(buf, sizeof buf, fmt, ap);
+  va_end(ap);
+  a->v[a->n++] = dup_str(buf);
+  a->v[a->n] = NULL;
+}
+
+/* The workload value of key k for a point: its axis value, the fixed one, or NULL. */
+static const char *workload_value(const struct priv *pv, const unsigned *choice, enum wl k,
+                                  unsigned *axis) {
+  for (unsigned a = 0; a < pv->naxes; a++)
+    if (pv->axes[a].wl == k) {
+      *axis = a;
+      return pv->axes[a].node->items[choice[dim_of(pv, a)]].text;
+    }
+  *axis = UINT_MAX;
+  return pv->wl[k] ? pv->wl[k]->text : NULL;
+}
+
+/* Point p's machine config check, its `rtsim run` arguments and its cost. */
+static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *choice,
+                        const char *out_dir, struct err *e) {
+  struct machine_cfg c = pv->base;
+  for (unsigned a = 0; a < pv->naxes; a++) {
+    const struct axis *x = &pv->axes[a];
+    if (x->machine_key < 0) continue;
+    const struct cfg_node *n = &x->node->items[choice[dim_of(pv, a)]];
+    CHECK(machine_cfg_set_at(&c, (unsigned)x->machine_key, n->text, pv->doc.file, n->line,
+                             n->col, e)); /* each value was checked alone */
+  }
+  if (!machine_cfg_check(&c, e)) {
+    size_t l = strlen(e->msg);
+    snprintf(e->msg + l, sizeof e->msg - l, " [point %s]", p->name);
+    if (!e->file[0]) snprintf(e->file, sizeof e->file, "%s", pv->doc.file);
+    return false;
+  }
+  unsigned ax;
+  const char *scene_text = workload_value(pv, choice, WL_SCENE, &ax);
+  const char *scene = ax == UINT_MAX ? pv->scene_fixed : pv->axes[ax].resolved[choice[dim_of(pv, ax)]];
+  CHECK(scene_text && scene);
+  const struct scene_info *si = find_scene(pv, scene);
+  CHECK(si);
+  const char *policy = workload_value(pv, choice, WL_POLICY, &ax);
+  const char *rays = workload_value(pv, choice, WL_RAYS, &ax);
+  const char *width = workload_value(pv, choice, WL_WIDTH, &ax);
+  const char *height = workload_value(pv, choice, WL_HEIGHT, &ax);
+  const char *seed = workload_value(pv, choice, WL_SEED, &ax);
+  uint32_t mask;
+  CHECK(shade_parse_rays(rays ? rays : "primary,shadow,specular,diffuse", &mask));
+  char rays_name[128];
+  shade_rays_name(mask, rays_name, sizeof rays_name);
+  /* Checked values: whole numbers in range (cfg_u64 takes 0x.. and 0.. too). */
+  uint64_t w = width ? strtoull(width, NULL, 0) : si->width;
+  uint64_t h = height ? strtoull(height, NULL, 0) : si->height;
+
+  struct args a = {0};
+  arg(&a, "run");
+  arg(&a, "%s", pv->machine_path);
+  arg(&a, "%s", scene);
+  arg(&a, "-o");
+  arg(&a, "%s/%s", out_dir, p->name);
+  arg(&a, "--policy");
+  arg(&a, "%s", policy ? policy : "recursive");
+  arg(&a, "--rays");
+  arg(&a, "%s", rays_name);
+  arg(&a, "--width");
+  arg(&a, "%llu", (unsigned long long)w);
+  arg(&a, "--height");
+  arg(&a, "%llu", (unsigned long long)h);
+  if (seed) {
+    arg(&a, "--seed");
+    arg(&a, "%llu", (unsigned long long)strtoull(seed, NULL, 0));
+  }
+  for (uint32_t i = 0; pv->sets && i < pv->sets->count; i++) {
+    arg(&a, "--set");
+    arg(&a, "%s=%s", pv->sets->items[i].key, pv->sets->items[i].text);
+  }
+  for (unsigned x = 0; x < pv->naxes; x++) {
+    if (pv->axes[x].machine_key < 0) continue;
+    arg(&a, "--set");
+    arg(&a, "%s=%s", pv->axes[x].key, pv->axes[x].node->items[choice[dim_of(pv, x)]].text);
+  }
+  p->args = a.v;
+  /* The expected host time, to start the longest points first: pixels x rays
+   * a pixel traces x log2 of the triangles (a k-d tree descent) x a mild
+   * growth with the ray contexts (their switches and working sets: on
+   * tiny.yaml, 64 contexts took 1.5x the host time of 2 for the same image).
+   * Latencies and cache sizes are left out: they move simulated cycles far
+   * more than host seconds. A guess for ordering only. */
+  const double contexts = (double)c.p.cores * c.p.threads_per_core * c.p.rays_per_thread;
+  p->cost = (double)w * (double)h * rays_per_pixel(mask, si->lights) * log2(2.0 + si->tris) *
+            (1.0 + log2(contexts) / 9.0);
+  return true;
+}
+
+bool sweep_load(struct sweep *s, const char *path, const char *out_dir, struct err *e) {
+  memset(s, 0, sizeof *s);
+  snprintf(s->file, sizeof s->file, "%s", path);
+  struct priv *pv = xcalloc(1, sizeof *pv);
+  s->priv = pv;
+  if (!read_file(pv, path, e)) return false;
+
+  /* The product's size, before anything is allocated for it. */
+  uint64_t total = 1;
+  for (unsigned d = 0; d < pv->ndims; d++) {
+    total *= pv->dims[d].count;
+    if (total > SWEEP_POINTS_MAX) {
+      const struct cfg_node *n = pv->axes[pv->dims[d].first].node;
+      return err_set(e, pv->doc.file, n->key_line, n->key_col,
+                     "%s: the sweep has more than %u points", n->key, SWEEP_POINTS_MAX);
+    }
+  }
+  s->nkeys = pv->naxes;
+  s->keys = xcalloc(pv->naxes, sizeof *s->keys);
+  for (unsigned a = 0; a < pv->naxes; a++) s->keys[a] = pv->axes[a].key;
+  s->npoints = (unsigned)total;
+  s->points = xcalloc(total, sizeof *s->points);
+  unsigned nd = pv->ndims ? pv->ndims : 1;
+  unsigned *choices = xcalloc(total * nd, sizeof *choices);
+  for (uint64_t i = 0; i < total; i++) {
+    /* Mixed radix, the last dimension fastest. */
+    unsigned *c = &choices[i * nd];
+    uint64_t rest = i;
+    for (unsigned d = pv->ndims; d-- > 0;) {
+      c[d] = (unsigned)(rest % pv->dims[d].count);
+      rest /= pv->dims[d].count;
+    }
+    struct sweep_point *p = &s->points[i];
+    p->index = (unsigned)i;
+    point_name(pv, c, p->name);
+    p->values = xcalloc(pv->naxes ? pv->naxes : 1, sizeof *p->values);
+    for (unsigned a = 0; a < pv->naxes; a++)
+      p->values[a] = pv->axes[a].node->items[c[dim_of(pv, a)]].text;
+  }
+  bool ok = check_unique(pv, s, choices, e) && load_scenes(pv, e);
+  for (unsigned i = 0; ok && i < s->npoints; i++)
+    ok = build_point(pv, &s->points[i], &choices[(size_t)i * nd], out_dir, e);
+  free(choices);
+  return ok;
+}
+
+void sweep_free(struct sweep *s) {
+  if (!s) return;
+  for (unsigned i = 0; i < s->npoints; i++) {
+    struct sweep_point *p = &s->points[i];
+    for (char **a = p->args; a && *a; a++) free(*a);
+    free(p->args);
+    free(p->values);
+  }
+  free(s->points);
+  free(s->keys);
+  struct priv *pv = s->priv;
+  if (pv) {
+    for (unsigned a = 0; a < pv->naxes; a++) {
+      for (uint32_t i = 0; pv->axes[a].resolved && i < pv->axes[a].node->count; i++)
+        free(pv->axes[a].resolved[i]);
+      free(pv->axes[a].resolved);
+    }
+    for (unsigned i = 0; i < pv->nscenes; i++) free(pv->scenes[i].path);
+    free(pv->scenes);
+    free(pv->axes);
+    free(pv->dims);
+    free(pv->scene_fixed);
+    cfg_free(&pv->doc);
+    free(pv);
+  }
+  memset(s, 0, sizeof *s);
+}

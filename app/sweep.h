@@ -1,0 +1,45 @@
+/* Sweep files (configs/sweeps/NAME.yaml; the format is in README.md, Sweeps):
+ * a base machine config, a workload, fixed --set overrides, and axes over
+ * machine config keys or workload keys, expanded into points: the cartesian
+ * product of the axes and zipped groups, first dimension slowest. Everything
+ * is checked when the file is read, every point's machine config included,
+ * so a bad value is refused (file:line:col) before any point runs. Each point
+ * is one `rtsim run` with absolute paths, named by its swept values. */
+#ifndef RTSIM_APP_SWEEP_H
+#define RTSIM_APP_SWEEP_H
+
+#include <stdbool.h>
+
+struct err;
+
+/* Longest point directory name; longer names are cut and end in a hash. */
+#define SWEEP_NAME_MAX 200
+/* Most points one sweep may have. */
+#define SWEEP_POINTS_MAX 1000000u
+
+struct sweep_point {
+  char name[SWEEP_NAME_MAX + 1]; /* directory name: "key=value,key=value" sanitised */
+  unsigned index;                /* position in sweep order */
+  const char **values;           /* the swept keys' values as written (sweep.nkeys; borrowed) */
+  char **args;                   /* `rtsim run` arguments after the program name,
+                                    NULL-terminated (owned) */
+  double cost;                   /* expected host time, relative (see sweep.c) */
+};
+
+struct sweep {
+  char file[512];           /* the sweep file as given */
+  const char **keys;        /* swept keys in dimension order (nkeys; owned by the sweep) */
+  unsigned nkeys;
+  struct sweep_point *points;
+  unsigned npoints;
+  void *priv;               /* axis storage */
+};
+
+/* Read and check the sweep file at path and expand its points, each writing
+ * into out_dir/<point name> (out_dir should be absolute: it goes into the
+ * points' commands as given). On bad input fills e and returns false (s is
+ * then empty, safe to free). */
+bool sweep_load(struct sweep *s, const char *path, const char *out_dir, struct err *e);
+void sweep_free(struct sweep *s);
+
+#endif

@@ -1,0 +1,436 @@
+/* Sweeps, through the command line: expansion (cartesian and zipped, names
+ * unique and readable, longest first), bad sweep files refused before any
+ * point runs, a run merged into one table, resume after a kill (completed
+ * points untouched), a failing point, the job lines through GNU parallel and
+ * a simulated Slurm array (the same table), merge's union of columns and its
+ * refusals, and plots. Fixtures live in tests/data/sweeps; the points are
+ * 8x6 primary-ray images on configs/tiny.yaml, so each takes a fraction of a
+ * second. */
+#include <dirent.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "testing.h"
+
+#define SW RTSIM_TEST_DATA "/sweeps/"
+#define GOOD SW "good.yaml"
+
+/* good.yaml's points in sweep order: policy x rays_per_thread x (l2.size, l2.ways). */
+static const char *const GOOD_NAMES[8] = {
+    "policy=recursive,rays_per_thread=1,l2.size=16KiB,l2.ways=4",
+    "policy=recursive,rays_per_thread=1,l2.size=32KiB,l2.ways=8",
+    "policy=recursive,rays_per_thread=2,l2.size=16KiB,l2.ways=4",
+    "policy=recursive,rays_per_thread=2,l2.size=32KiB,l2.ways=8",
+    "policy=packet,rays_per_thread=1,l2.size=16KiB,l2.ways=4",
+    "policy=packet,rays_per_thread=1,l2.size=32KiB,l2.ways=8",
+    "policy=packet,rays_per_thread=2,l2.size=16KiB,l2.ways=4",
+    "policy=packet,rays_per_thread=2,l2.size=32KiB,l2.ways=8",
+};
+
+static char out[1 << 16];
+
+static int run(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+/* Run a shell command (stderr with stdout into `out`); its exit code. */
+static int run(const char *fmt, ...) {
+  char cmd[8192];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(cmd, sizeof cmd, fmt, ap);
+  va_end(ap);
+  return testing_run(cmd, out, sizeof out);
+}
+
+static int exists(const char *path) {
+  struct stat sb;
+  return stat(path, &sb) == 0;
+}
+
+static int point_file(const char *dir, const char *point, const char *name, struct stat *sb) {
+  char p[16384];
+  snprintf(p, sizeof p, "%s/%s/%s", dir, point, name);
+  return stat(p, sb) == 0;
+}
+
+static int complete_points(const char *dir) {
+  int n = 0;
+  struct stat sb;
+  for (int i = 0; i < 8; i++) n += point_file(dir, GOOD_NAMES[i], "stats.json", &sb);
+  return n;
+}
+
+static char *read_all(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fseek(f, 0, SEEK_END);
+  long n = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  char *b = malloc((size_t)n + 1);
+  size_t got = fread(b, 1, (size_t)n, f);
+  b[got] = '\0';
+  fclose(f);
+  return b;
+}
+
+static int same_text(const char *a, const char *b) {
+  char *x = read_all(a), *y = read_all(b);
+  int same = x && y && !strcmp(x, y);
+  free(x);
+  free(y);
+  return same;
+}
+
+static int count_lines(const char *s) {
+  int n = 0;
+  for (; *s; s++) n += *s == '\n';
+  return n;
+}
+
+/* --emit-jobs prints the points, one line each, absolute paths, names
+ * unique; the longest expected points come first. */
+static void test_expansion(void) {
+  EXPECT(run("rm -rf %s/sw_emit", RTSIM_TMP) == 0);
+  EXPECT(run("cd / && (%s sweep %s -o %s/sw_emit --emit-jobs 2>/dev/null)", RTSIM_BINARY, GOOD,
+             RTSIM_TMP) == 0);
+  EXPECTF(count_lines(out) == 8, "expected 8 job lines, got: %s", out);
+  /* More ray contexts are expected to take longer; equal estimates keep the
+   * sweep's order. */
+  static const int order[8] = {2, 3, 6, 7, 0, 1, 4, 5};
+  char *line = out;
+  for (int k = 0; k < 8 && line; k++) {
+    const int i = order[k];
+    char want[4096];
+    snprintf(want, sizeof want, "-o '%s/sw_emit/%s' ", RTSIM_TMP, GOOD_NAMES[i]);
+    char *nl = strchr(line, '\n');
+    if (nl) *nl = '\0';
+    EXPECTF(!strncmp(line, RTSIM_BINARY " run /", strlen(RTSIM_BINARY) + 6),
+            "line %d does not start with the absolute program: %s", i, line);
+    char plain[4096];
+    snprintf(plain, sizeof plain, "-o %s/sw_emit/%s ", RTSIM_TMP, GOOD_NAMES[i]);
+    EXPECTF(strstr(line, want) || strstr(line, plain), "line %d: want %s in %s", k, plain, line);
+    EXPECTF(strstr(line, "--set dram.latency=100 --set rays_per_thread="),
+            "line %d lacks the fixed and swept --set: %s", i, line);
+    struct stat sb;
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s/sw_emit", RTSIM_TMP);
+    EXPECTF(point_file(dir, GOOD_NAMES[i], "command.sh", &sb) &&
+                point_file(dir, GOOD_NAMES[i], "point.csv", &sb),
+            "%s: no command.sh or point.csv", GOOD_NAMES[i]);
+    line = nl ? nl + 1 : NULL;
+  }
+  for (int i = 0; i < 8; i++)
+    for (int j = 0; j < i; j++) EXPECT(strcmp(GOOD_NAMES[i], GOOD_NAMES[j]) != 0);
+
+  /* Scene values named by their file, commas as '+'; longest first. */
+  EXPECT(run("(%s sweep %snames.yaml -o %s/sw_names --emit-jobs 2>/dev/null)", RTSIM_BINARY, SW,
+             RTSIM_TMP) == 0);
+  EXPECTF(count_lines(out) == 8, "names.yaml: %s", out);
+  static const char *const names[] = {
+      "scene=room,rays=primary,width=4",        "scene=room,rays=primary,width=8",
+      "scene=room,rays=primary+shadow,width=4", "scene=room,rays=primary+shadow,width=8",
+      "scene=grove,rays=primary,width=4",       "scene=grove,rays=primary,width=8",
+      "scene=grove,rays=primary+shadow,width=4", "scene=grove,rays=primary+shadow,width=8"};
+  for (int i = 0; i < 8; i++) {
+    char want[512];
+    snprintf(want, sizeof want, "/sw_names/%s ", names[i]);
+    EXPECTF(strstr(out, want) != NULL, "names.yaml: no point %s in %s", names[i], out);
+  }
+  char *last = out + strlen(out) - 1;
+  while (last > out && last[-1] != '\n') last--;
+  EXPECTF(strstr(out, "rays=primary+shadow,width=8 ") < strchr(out, '\n'),
+          "the first job is not a widest, two-ray-type point: %s", out);
+  EXPECTF(strstr(last, "rays=primary,width=4 ") != NULL, "the last job is not a small one: %s", last);
+  EXPECTF(strstr(out, "--rays primary,shadow --width 8 --height 4"), "workload arguments: %s", out);
+}
+
+/* Bad sweep files: exit 2, one line at file:line:col, nothing created. */
+static void test_bad_files(void) {
+  static const struct {
+    const char *file, *want;
+  } bad[] = {
+      {"bad_top_key.yaml", "bad_top_key.yaml:3:1: error: axis: unknown key 'axis' (expected one of: machine, workload, set, axes, zip)"},
+      {"bad_axis_key.yaml", "bad_axis_key.yaml:5:3: error: axes.l2.sise: unknown key 'l2.sise' (expected a machine config key: clock_ghz,"},
+      {"bad_value.yaml", "bad_value.yaml:4:20: error: l2.size: not a size (got '32MB'"},
+      {"bad_relation.yaml", "bad_relation.yaml:6:16: error: l2.ways: the ways must divide the number of lines (got 3 ways for 256 lines) [point l2.size=16KiB,l2.ways=3]"},
+      {"bad_empty_axis.yaml", "bad_empty_axis.yaml:5:20: error: axes.rays_per_thread: empty list"},
+      {"bad_zip_length.yaml", "bad_zip_length.yaml:5:14: error: zip[0]: l2.ways: 3 values, but l2.size has 2"},
+      {"bad_twice.yaml", "bad_twice.yaml:6:5: error: zip[0].l2.size: 'l2.size' is given twice (also in axes at line 4"},
+      {"bad_dup_value.yaml", "bad_dup_value.yaml:4:17: error: axes.cores[2]: '1' is listed twice"},
+      {"bad_policy.yaml", "bad_policy.yaml:4:23: error: policy: does not run on the machine yet (got 'dynamic'"},
+      {"bad_rays.yaml", "bad_rays.yaml:4:19: error: rays: not a list of ray types (got 'primary,glossy'"},
+      {"bad_scene_missing.yaml", "bad_scene_missing.yaml:3:44: error: axes.scene[1]: cannot open '../../../scenes/small/hall.yaml'"},
+      {"bad_names.yaml", "bad_names.yaml:4:44: error: scene: two points would share the directory name 'scene=room'"},
+      {"bad_no_scene.yaml", "bad_no_scene.yaml:2:11: error: workload: missing the scene"},
+      {"bad_set_key.yaml", "bad_set_key.yaml:4:3: error: set.policy: unknown key 'policy'"},
+      {"bad_nested.yaml", "bad_nested.yaml:4:14: error: axes.cores[1]: wrong type (got a list, expected one value)"},
+      {"bad_machine.yaml", "configs/bad_size_unit.yaml:2:9: error: l2.size: not a size"},
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    run("rm -rf %s/sw_bad", RTSIM_TMP);
+    for (int emit = 0; emit < 2; emit++) {
+      int rc = run("%s sweep %s%s -o %s/sw_bad%s", RTSIM_BINARY, SW, bad[i].file, RTSIM_TMP,
+                   emit ? " --emit-jobs" : "");
+      EXPECTF(rc == 2, "%s: exit %d: %s", bad[i].file, rc, out);
+      EXPECTF(strstr(out, bad[i].want) != NULL, "%s: got '%s', want '%s'", bad[i].file, out,
+              bad[i].want);
+      EXPECTF(count_lines(out) == 1, "%s: expected one line: %s", bad[i].file, out);
+      EXPECTF(!exists(RTSIM_TMP "/sw_bad"), "%s: the sweep directory was created", bad[i].file);
+    }
+  }
+  static const struct {
+    const char *args, *want;
+  } usage[] = {
+      {"sweep", "missing SWEEP.yaml"},
+      {"sweep " GOOD, "missing -o DIR"},
+      {"sweep " GOOD " -o x -j 0", "-j: got '0'"},
+      {"merge", "missing DIR"},
+      {"merge x", "missing -o TABLE.csv"},
+      {"plot t.csv --y cycles -o t.png", "missing --x KEY"},
+      {"plot t.csv --x a --y b -o t.pdf", "expected a .png or .svg file"},
+      {"plot t.csv --x a --y b -o t.png --where a", "--where: got 'a', expected KEY=VALUE"},
+  };
+  for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {
+    int rc = run("cd %s && %s %s", RTSIM_TMP, RTSIM_BINARY, usage[i].args);
+    EXPECTF(rc == 2 && strstr(out, usage[i].want), "'%s': exit %d: %s", usage[i].args, rc, out);
+  }
+  static const char *const helps[] = {"sweep", "merge", "plot"};
+  for (size_t i = 0; i < 3; i++)
+    EXPECT(run("%s %s --help", RTSIM_BINARY, helps[i]) == 0 && strstr(out, "usage: rtsim"));
+}
+
+/* Run good.yaml into dir with -j 2 and merge it into table: both succeed. */
+static void sweep_and_merge(const char *dir, const char *table) {
+  int rc = run("%s sweep %s -o %s -j 2", RTSIM_BINARY, GOOD, dir);
+  EXPECTF(rc == 0, "sweep into %s: exit %d: %s", dir, rc, out);
+  rc = run("%s merge %s -o %s", RTSIM_BINARY, dir, table);
+  EXPECTF(rc == 0 && strstr(out, "merge: 8 points"), "merge %s: exit %d: %s", dir, rc, out);
+}
+
+/* The reference run: every point complete; the table's layout and values. */
+static void test_run_and_merge(void) {
+  run("rm -rf %s/sw_ref %s/sw_ref.csv", RTSIM_TMP, RTSIM_TMP);
+  sweep_and_merge(RTSIM_TMP "/sw_ref", RTSIM_TMP "/sw_ref.csv");
+  EXPECT(complete_points(RTSIM_TMP "/sw_ref") == 8);
+  char *t = read_all(RTSIM_TMP "/sw_ref.csv");
+  EXPECT(t != NULL);
+  if (!t) return;
+  static const char head[] = "point,policy,rays_per_thread,l2.size,l2.ways,scene,scene_hash,rays,width,";
+  EXPECTF(!strncmp(t, head, strlen(head)), "header: %.200s", t);
+  EXPECT(count_lines(t) == 9);
+  /* Rows in natural order of the names; a swept size takes its resolved value. */
+  EXPECTF(strstr(t, "\n\"policy=packet,rays_per_thread=1,l2.size=16KiB,l2.ways=4\",packet,1,16384,4,room-small,"),
+          "first row: %.300s", strchr(t, '\n'));
+  free(t);
+  /* Rerunning finds everything complete and runs nothing. */
+  int rc = run("%s sweep %s -o %s/sw_ref", RTSIM_BINARY, GOOD, RTSIM_TMP);
+  EXPECTF(rc == 0 && strstr(out, "8 points, 8 complete, running 0"), "rerun: %d %s", rc, out);
+  EXPECT(run("(%s sweep %s -o %s/sw_ref --emit-jobs 2>/dev/null)", RTSIM_BINARY, GOOD, RTSIM_TMP) == 0 &&
+         out[0] == '\0');
+  /* The same DIR with a changed sweep is refused, not mixed. */
+  rc = run("%s sweep %sgood_changed.yaml -o %s/sw_ref", RTSIM_BINARY, SW, RTSIM_TMP);
+  EXPECTF(rc == 2 && strstr(out, "was made by another command"), "changed sweep: %d %s", rc, out);
+}
+
+/* Kill a -j 1 sweep (its whole process group) once the first point is
+ * complete; the rerun completes the rest without touching the first. */
+static void test_resume(void) {
+  const char *dir = RTSIM_TMP "/sw_resume";
+  run("rm -rf %s %s.csv", dir, dir);
+  pid_t pid = fork();
+  if (pid == 0) {
+    setpgid(0, 0);
+    freopen("/dev/null", "w", stderr);
+    execl(RTSIM_BINARY, RTSIM_BINARY, "sweep", GOOD, "-o", dir, "-j", "1", (char *)NULL);
+    _exit(127);
+  }
+  setpgid(pid, pid);
+  struct timespec nap = {0, 2000000};
+  for (int i = 0; i < 30000 && complete_points(dir) == 0; i++) nanosleep(&nap, NULL);
+  kill(-pid, SIGKILL);
+  waitpid(pid, NULL, 0);
+  int done = complete_points(dir);
+  EXPECTF(done >= 1 && done < 8, "killed sweep: %d points complete (want some, not all)", done);
+  struct stat before[8], after;
+  int was[8];
+  for (int i = 0; i < 8; i++) was[i] = point_file(dir, GOOD_NAMES[i], "stats.json", &before[i]);
+  int rc = run("%s sweep %s -o %s -j 2", RTSIM_BINARY, GOOD, dir);
+  EXPECTF(rc == 0, "resume: exit %d: %s", rc, out);
+  char want[128];
+  snprintf(want, sizeof want, "8 points, %d complete, running %d", done, 8 - done);
+  EXPECTF(strstr(out, want) != NULL, "resume: want '%s' in %s", want, out);
+  EXPECT(complete_points(dir) == 8);
+  for (int i = 0; i < 8; i++)
+    if (was[i]) {
+      EXPECT(point_file(dir, GOOD_NAMES[i], "stats.json", &after));
+      EXPECTF(after.st_ino == before[i].st_ino &&
+                  after.st_mtim.tv_sec == before[i].st_mtim.tv_sec &&
+                  after.st_mtim.tv_nsec == before[i].st_mtim.tv_nsec,
+              "%s was run again", GOOD_NAMES[i]);
+    }
+  rc = run("%s merge %s -o %s.csv", RTSIM_BINARY, dir, dir);
+  EXPECTF(rc == 0 && same_text(RTSIM_TMP "/sw_resume.csv", RTSIM_TMP "/sw_ref.csv"),
+          "resumed table differs from the reference (%d: %s)", rc, out);
+}
+
+/* A point that fails at run time (its image.exr is a directory, so the image
+ * cannot be renamed into place): the others finish, its stderr is kept, the
+ * summary names it, exit 1; once mended, only it runs. */
+static void test_failing_point(void) {
+  const char *dir = RTSIM_TMP "/sw_fail";
+  const char *bad = GOOD_NAMES[5];
+  run("rm -rf %s && mkdir -p '%s/%s/image.exr/keep'", dir, dir, bad);
+  int rc = run("%s sweep %s -o %s -j 2", RTSIM_BINARY, GOOD, dir);
+  EXPECTF(rc == 1, "exit %d, want 1: %s", rc, out);
+  EXPECT(complete_points(dir) == 7);
+  char want[512];
+  snprintf(want, sizeof want, "1 point failed");
+  EXPECTF(strstr(out, want) && strstr(out, bad) && strstr(out, "Is a directory"), "summary: %s", out);
+  char err_path[4096];
+  snprintf(err_path, sizeof err_path, "%s/%s/error.txt", dir, bad);
+  char *err = read_all(err_path);
+  EXPECTF(err && strstr(err, "cannot write EXR") && strstr(err, "exited with code 2"),
+          "error.txt: %s", err ? err : "(missing)");
+  free(err);
+  /* Merge takes the complete points and names the other. */
+  rc = run("%s merge %s -o %s.csv", RTSIM_BINARY, dir, dir);
+  EXPECTF(rc == 0 && strstr(out, "merge: 7 points") && strstr(out, "1 incomplete skipped"),
+          "merge: %d %s", rc, out);
+  run("rm -rf '%s/%s/image.exr'", dir, bad);
+  rc = run("%s sweep %s -o %s -j 2", RTSIM_BINARY, GOOD, dir);
+  EXPECTF(rc == 0 && strstr(out, "8 points, 7 complete, running 1"), "retry: %d %s", rc, out);
+  EXPECTF(!exists(err_path), "error.txt left after the point succeeded");
+  rc = run("%s merge %s -o %s.csv", RTSIM_BINARY, dir, dir);
+  EXPECT(rc == 0 && same_text(RTSIM_TMP "/sw_fail.csv", RTSIM_TMP "/sw_ref.csv"));
+}
+
+/* The README's recipes: job lines through GNU parallel, and a Slurm array
+ * (each task runs line $SLURM_ARRAY_TASK_ID), both from another directory. */
+static void test_jobs_elsewhere(void) {
+  if (run("parallel --version") != 0) {
+    EXPECTF(0, "GNU parallel is not installed (sh .ci/setup installs it)");
+    return;
+  }
+  run("rm -rf %s/sw_par %s/sw_slurm", RTSIM_TMP, RTSIM_TMP);
+  int rc = run("cd %s && %s sweep %s -o sw_par --emit-jobs 2>/dev/null | (cd / && parallel "
+               "--will-cite -j 2)",
+               RTSIM_TMP, RTSIM_BINARY, GOOD);
+  EXPECTF(rc == 0, "parallel: exit %d: %s", rc, out);
+  rc = run("%s merge %s/sw_par -o %s/sw_par.csv", RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
+  EXPECTF(rc == 0 && same_text(RTSIM_TMP "/sw_par.csv", RTSIM_TMP "/sw_ref.csv"),
+          "the table through GNU parallel differs (%d: %s)", rc, out);
+
+  rc = run("cd %s && %s sweep %s -o sw_slurm --emit-jobs > sw_jobs.txt 2>/dev/null && n=$(wc -l "
+           "< sw_jobs.txt) && i=1 && while [ $i -le $n ]; do SLURM_ARRAY_TASK_ID=$i sh -c 'eval "
+           "\"$(sed -n \"${SLURM_ARRAY_TASK_ID}p\" sw_jobs.txt)\"' >/dev/null || exit 1; i=$((i+1)); "
+           "done",
+           RTSIM_TMP, RTSIM_BINARY, GOOD);
+  EXPECTF(rc == 0, "slurm array: exit %d: %s", rc, out);
+  rc = run("%s merge %s/sw_slurm -o %s/sw_slurm.csv", RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
+  EXPECTF(rc == 0 && same_text(RTSIM_TMP "/sw_slurm.csv", RTSIM_TMP "/sw_ref.csv"),
+          "the table through the Slurm recipe differs (%d: %s)", rc, out);
+}
+
+static void write_text(const char *path, const char *text) {
+  FILE *f = fopen(path, "w");
+  EXPECT(f != NULL);
+  if (!f) return;
+  fputs(text, f);
+  fclose(f);
+}
+
+/* Points with different columns merge into their union; a directory with no
+ * complete point, or a broken stats.csv, is refused. */
+static void test_merge_edges(void) {
+  const char *d = RTSIM_TMP "/sw_union";
+  run("rm -rf %s && mkdir -p %s/p10 %s/p9 %s/q", d, d, d, d);
+  char p[4096];
+  snprintf(p, sizeof p, "%s/p9/stats.json", d), write_text(p, "{}\n");
+  snprintf(p, sizeof p, "%s/p9/stats.csv", d), write_text(p, "x,y\n1,\"a,b\"\n");
+  snprintf(p, sizeof p, "%s/p9/point.csv", d), write_text(p, "k,x\n7,5\n");
+  snprintf(p, sizeof p, "%s/p10/stats.json", d), write_text(p, "{}\n");
+  snprintf(p, sizeof p, "%s/p10/stats.csv", d), write_text(p, "x,z\n3,4\n");
+  snprintf(p, sizeof p, "%s/q/command.sh", d), write_text(p, "exec false\n");
+  int rc = run("%s merge %s -o %s.csv", RTSIM_BINARY, d, d);
+  EXPECTF(rc == 0 && strstr(out, "1 incomplete skipped: q"), "union: %d %s", rc, out);
+  char *t = read_all(RTSIM_TMP "/sw_union.csv");
+  EXPECTF(t && !strcmp(t, "point,k,x,y,z\np9,7,1,\"a,b\",\np10,,3,,4\n"), "union table: %s",
+          t ? t : "(missing)");
+  free(t);
+
+  run("rm -rf %s/sw_none && mkdir -p %s/sw_none/a", RTSIM_TMP, RTSIM_TMP);
+  rc = run("%s merge %s/sw_none -o %s/sw_none.csv", RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
+  EXPECTF(rc == 2 && strstr(out, "sw_none: error: no complete point"), "empty: %d %s", rc, out);
+  EXPECT(!exists(RTSIM_TMP "/sw_none.csv"));
+  rc = run("%s merge %s/sw_missing -o %s/sw_none.csv", RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
+  EXPECTF(rc == 2 && strstr(out, "cannot open the sweep directory"), "missing: %d %s", rc, out);
+
+  snprintf(p, sizeof p, "%s/p10/stats.csv", d), write_text(p, "x,z\n3,4,5\n");
+  rc = run("%s merge %s -o %s/sw_broken.csv", RTSIM_BINARY, d, RTSIM_TMP);
+  EXPECTF(rc == 2 && strstr(out, "p10/stats.csv:2:1: error: row has 3 fields, the header has 2"),
+          "broken: %d %s", rc, out);
+  EXPECT(!exists(RTSIM_TMP "/sw_broken.csv"));
+}
+
+static int has_magic(const char *path, const char *magic) {
+  char *t = read_all(path);
+  int ok = t && strstr(t, magic) == t;
+  free(t);
+  return ok;
+}
+
+/* Plots of the reference table; bad columns and ambiguous plots refused. */
+static void test_plot(void) {
+  const char *t = RTSIM_TMP "/sw_ref.csv";
+  run("rm -f %s/sw_plot.png %s/sw_plot.svg", RTSIM_TMP, RTSIM_TMP);
+  int rc = run("%s plot %s --x rays_per_thread --y cycles --lines policy --panels l2.size -o "
+               "%s/sw_plot.png",
+               RTSIM_BINARY, t, RTSIM_TMP);
+  EXPECTF(rc == 0 && strstr(out, "8 points, 2 lines, 2 panels"), "png: %d %s", rc, out);
+  EXPECT(has_magic(RTSIM_TMP "/sw_plot.png", "\x89PNG"));
+  rc = run("%s plot %s --x rays_per_thread --y l2_fetch_bytes --lines policy --where l2.ways=8 "
+           "--logx --logy -o %s/sw_plot.svg",
+           RTSIM_BINARY, t, RTSIM_TMP);
+  EXPECTF(rc == 0 && strstr(out, "4 points, 2 lines, 1 panel"), "svg: %d %s", rc, out);
+  char *svg = read_all(RTSIM_TMP "/sw_plot.svg");
+  EXPECTF(svg && strstr(svg, "<svg") && strstr(svg, "l2_fetch_bytes (bytes)") &&
+              strstr(svg, "policy = packet"),
+          "svg lacks its labels or legend");
+  free(svg);
+
+  static const struct {
+    const char *args, *want;
+  } bad[] = {
+      {"--x rays_per_thread --y cycls", "sw_ref.csv:1: error: --y: no column 'cycls' (columns: point, policy, rays_per_thread,"},
+      {"--x rays_per_thread --y cycles --lines polcy", "--lines: no column 'polcy'"},
+      {"--x rays_per_thread --y cycles --where l3.size=1", "--where: no column 'l3.size'"},
+      {"--x rays_per_thread --y cycles --lines policy", "differ in l2.size, l2.ways: fix it with --where"},
+      {"--x policy --y cycles", "sw_ref.csv:2:59: error: --x policy: not a number (got 'packet')"},
+      {"--x rays_per_thread --y fetch_queue_bytes --lines policy --panels l2.size --logy", "a value must be positive on a log scale"},
+      {"--x rays_per_thread --y cycles --where l2.size=16KiB", "--where l2.size=16KiB: no row has it (the column holds: 16384, 32768)"},
+  };
+  for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+    run("rm -f %s/sw_bad.png", RTSIM_TMP);
+    rc = run("%s plot %s %s -o %s/sw_bad.png", RTSIM_BINARY, t, bad[i].args, RTSIM_TMP);
+    EXPECTF(rc == 2 && strstr(out, bad[i].want), "'%s': exit %d: %s", bad[i].args, rc, out);
+    EXPECTF(count_lines(out) == 1, "'%s': expected one line: %s", bad[i].args, out);
+    EXPECT(!exists(RTSIM_TMP "/sw_bad.png"));
+  }
+}
+
+int main(void) {
+  test_expansion();
+  test_bad_files();
+  test_run_and_merge();
+  test_resume();
+  test_failing_point();
+  test_jobs_elsewhere();
+  test_merge_edges();
+  test_plot();
+  return testing_done("test_sweep");
+}
