@@ -68,6 +68,10 @@ static void measured(const struct run_report *r, struct stats_table *t) {
   stats_u64(t, "ray_switch_cycles", s->switch_cycles);
   stats_u64(t, "loads", s->loads);
   stats_u64(t, "stores", s->stores);
+  stats_u64(t, "blocking_loads", s->blocking_loads);
+  stats_f64(t, "issue_slots_per_blocking_load", ratio((double)s->issue_slots, (double)s->blocking_loads));
+  uint64_t geo_misses = (s->fetch_bytes_by_class[TRACE_CLASS_GEOMETRY] + s->fetch_bytes_by_class[TRACE_CLASS_NODE]) / 64;
+  stats_f64(t, "issue_slots_per_geometry_miss", ratio((double)s->issue_slots, (double)geo_misses));
   stats_u64(t, "l1_accesses", s->l1_accesses);
   stats_u64(t, "l1_hits", s->l1_hits);
   stats_u64(t, "l2_accesses", s->l2_accesses);

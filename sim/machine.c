@@ -569,6 +569,7 @@ static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
     return;
   }
   m->loads_out += pending;
+  m->st.blocking_loads++;
   c->pending = pending;
   c->wait_from = c->t;
   c->state = CTX_WAIT;

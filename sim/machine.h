@@ -65,7 +65,7 @@ enum machine_tl_col {
   MTL_BUSY_THREAD_CYCLES,
   MTL_COLS
 };
-#define MACHINE_TL_MAX_ROWS 16384u
+#define MACHINE_TL_MAX_ROWS 4096u
 
 struct machine_stats {
   uint64_t cycles;              /* last ray done and the channel drained */
@@ -77,6 +77,7 @@ struct machine_stats {
   uint64_t ray_switches, switch_cycles;
   uint64_t blocks;              /* runs of a ray between waits */
   uint64_t loads, stores, computes;
+  uint64_t blocking_loads;      /* loads that left the L1 and suspended their ray */
   uint64_t waits, wait_cycles;  /* mem_wait: a worker idle by its own choice */
   uint64_t l1_accesses, l1_hits;
   uint64_t l2_accesses, l2_hits, l2_misses, l2_mshr_merges, l2_whole_line_allocs;
