@@ -35,6 +35,8 @@ static const char HELP[] =
     "                     must be fixed so, or be --lines or --panels: two rows\n"
     "                     at the same x on one line are refused\n"
     "  --logx, --logy     logarithmic axis (base 2 when every value is a power of 2)\n"
+    "  --mark-x X         a dashed vertical line at x = X in every panel (e.g. a\n"
+    "                     value a paper names); repeatable\n"
     "  -o FILE            the plot: .png (pngcairo) or .svg\n"
     "  -h, --help         this text\n";
 
@@ -197,10 +199,13 @@ int cmd_plot(int argc, char **argv) {
       {"lines", required_argument, 0, 'l'}, {"panels", required_argument, 0, 'p'},
       {"where", required_argument, 0, 'w'}, {"logx", no_argument, 0, 'X'},
       {"logy", no_argument, 0, 'Y'},        {"output", required_argument, 0, 'o'},
+      {"mark-x", required_argument, 0, 'M'},
       {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
   const char *xk = NULL, *yk = NULL, *lk = NULL, *pk = NULL, *out = NULL;
   const char *where[PLOT_WHERE_MAX];
   unsigned nwhere = 0;
+  double marks[PLOT_WHERE_MAX];
+  unsigned nmarks = 0;
   bool logx = false, logy = false;
   int c;
   opterr = 0;
@@ -219,6 +224,15 @@ int cmd_plot(int argc, char **argv) {
       break;
     case 'X': logx = true; break;
     case 'Y': logy = true; break;
+    case 'M': {
+      char *end = NULL;
+      double v = strtod(optarg, &end);
+      if (nmarks == PLOT_WHERE_MAX || end == optarg || *end || !isfinite(v))
+        return app_usage_error("plot", "--mark-x: got '%s', expected a number (at most %d)", optarg,
+                               PLOT_WHERE_MAX);
+      marks[nmarks++] = v;
+      break;
+    }
     case 'o': out = optarg; break;
     case 'h': fputs(HELP, stdout); return 0;
     default: return app_option_error("plot", c, argv);
@@ -357,6 +371,9 @@ int cmd_plot(int argc, char **argv) {
   gp_str(gp, label);
   fputc('\n', gp);
   if (logx) fprintf(gp, "set logscale x %d\n", xbase);
+  for (unsigned m = 0; m < nmarks; m++)
+    fprintf(gp, "set arrow from %.17g, graph 0 to %.17g, graph 1 nohead dt 2 lw 1.5 lc rgb 'gray30'\n",
+            marks[m], marks[m]);
   if (logy) fprintf(gp, "set logscale y %d\n", ybase);
   char title[1024];
   snprintf(title, sizeof title, "%s against %s%s", yk, xk, nwhere ? " where " : "");
