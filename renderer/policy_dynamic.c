@@ -634,7 +634,7 @@ static void dyn_create(struct policy_job *job) {
   uint32_t *tris = xmalloc((uint64_t)d->kd->node_count * sizeof *tris + 1);
   qpoint_subtree_tris(d->kd, tris);
   struct qpoint_reserve res = {p->cache_bytes, p->dyn_node_share, p->dyn_table_share,
-                               p->dyn_ray_share, p->dyn_ray_buffer_bytes};
+                               p->dyn_ray_share, p->dyn_ray_buffer_bytes, 1};
   struct qpoint_budget bud;
   qpoint_plan(&d->qs, &bud, d->kd, tris, tri_bytes, &res);
   free(tris);

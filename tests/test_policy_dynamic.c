@@ -141,7 +141,7 @@ static void plan(const struct world *w, uint64_t cache, struct qpoint_set *qs, s
   struct policy_params pp;
   policy_params_default(&pp);
   struct qpoint_reserve r = {cache, pp.dyn_node_share, pp.dyn_table_share, pp.dyn_ray_share,
-                             pp.dyn_ray_buffer_bytes};
+                             pp.dyn_ray_buffer_bytes, 1};
   qpoint_plan(qs, b, &w->kd, tris, 128, &r);
   free(tris);
 }
