@@ -89,8 +89,8 @@ static uint64_t stack_used_max;
  * left holding one; table entries are those of queue points. */
 struct qcheck {
   struct trace_layout l;
-  uint8_t *pending; /* per slot: stored and not yet loaded */
-  uint64_t slots, stores, loads, bad, table_accesses, table_max;
+  struct testing_slots slots;
+  uint64_t bad, table_accesses, table_max;
 };
 
 static void qcheck_access(struct qcheck *q, uint64_t addr, unsigned cls, int store) {
@@ -102,23 +102,8 @@ static void qcheck_access(struct qcheck *q, uint64_t addr, unsigned cls, int sto
     return;
   }
   if (addr < q->l.queue_base || addr >= q->l.ray_base) return;
-  uint64_t k = (addr - q->l.queue_base) / 64;
-  if (k >= q->slots) {
-    uint64_t n = 2 * k + 1024;
-    q->pending = realloc(q->pending, n);
-    memset(q->pending + q->slots, 0, n - q->slots);
-    q->slots = n;
-  }
-  q->bad += cls != TRACE_CLASS_RAY || q->pending[k] != !store;
-  q->pending[k] = (uint8_t)store;
-  if (store) q->stores++;
-  else q->loads++;
-}
-
-static uint64_t qcheck_left(const struct qcheck *q) {
-  uint64_t n = 0;
-  for (uint64_t k = 0; k < q->slots; k++) n += q->pending[k];
-  return n;
+  q->bad += cls != TRACE_CLASS_RAY;
+  testing_slots_access(&q->slots, (addr - q->l.queue_base) / 64, store);
 }
 
 /* A worker's port: records queue accesses, then passes everything on. */
@@ -301,6 +286,7 @@ static void test_many_workers(struct world *w) {
     }
     if (p == &small_l2) EXPECTF(oversized > 0, "%s: no leaf over g_max (%u queue points)", dyn[i].name, qs.count);
     EXPECT(group == 1);
+    const uint32_t queues = qs.count;
     qpoint_fini(&qs);
 
     struct render r;
@@ -318,18 +304,22 @@ static void test_many_workers(struct world *w) {
             (unsigned long long)ref_rs.rays[0], (unsigned long long)ref_rs.rays[1],
             (unsigned long long)ref_rs.rays[2], (unsigned long long)ref_rs.rays[3],
             (unsigned long long)ref_rs.spawned);
-    uint64_t left = qcheck_left(&q);
-    EXPECTF(q.bad == 0 && left == 0 && q.stores == q.loads && q.stores > 0 && q.table_accesses > 0,
+    const struct testing_slots *sl = &q.slots;
+    uint64_t left = testing_slots_left(sl);
+    EXPECTF(q.bad == 0 && sl->bad == 0 && left == 0 && sl->stores == sl->loads && sl->stores > 0 &&
+                q.table_accesses > 0,
             "dynamic on %s: queue slots %llu stored, %llu loaded, %llu out of order, %llu left",
-            dyn[i].name, (unsigned long long)q.stores, (unsigned long long)q.loads,
-            (unsigned long long)q.bad, (unsigned long long)left);
+            dyn[i].name, (unsigned long long)sl->stores, (unsigned long long)sl->loads,
+            (unsigned long long)(sl->bad + q.bad), (unsigned long long)left);
+    EXPECTF(q.table_max <= queues, "dynamic on %s: table entry %llu of %u queue points", dyn[i].name,
+            (unsigned long long)q.table_max, queues);
     /* Several contexts share the work: some wait for it; one never does. */
     EXPECTF(workers == 1 ? st.waits == 0 : st.waits > 0, "dynamic on %s: %llu waits", dyn[i].name,
             (unsigned long long)st.waits);
     printf("dynamic on %s: %llu cycles, core utilization %.3f, %llu waits (%llu cycles)\n", dyn[i].name,
            (unsigned long long)st.cycles, (double)st.issue_slots / ((double)p->cores * (double)st.cycles),
            (unsigned long long)st.waits, (unsigned long long)st.wait_cycles);
-    free(q.pending);
+    testing_slots_fini(&q.slots);
     fb_fini(&r.fb);
   }
   fb_fini(&ref.fb);
