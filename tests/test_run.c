@@ -236,8 +236,9 @@ static void test_cross_check(struct world *w) {
  * ray accounted for, and the machine busy. The dynamic policy besides on
  * variants that make its cores share small queue points (a 4 KiB L2: leaves
  * over g_max, processed block by block by all of a core's contexts), many
- * contexts on three cores, and one context; its queues checked throughout. */
-static void test_many_workers(struct world *w) {
+ * contexts on three cores, and one context; its queues checked throughout.
+ * With all false (the other scenes): dynamic on tiny.yaml and 1 x 1 x 1 only. */
+static void test_many_workers(struct world *w, const char *scene, bool all) {
   const uint32_t mask = RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) |
                         RAY_MASK(RAY_DIFFUSE);
   struct machine_cfg c;
@@ -250,7 +251,7 @@ static void test_many_workers(struct world *w) {
   struct render_stats ref_rs;
   struct machine_params one = one_by_one(1 << 20);
   timed_q(w, POLICY_RECURSIVE, mask, &one, &st, &ref, &ref_rs, NULL);
-  for (int k = 0; k < 2; k++) {
+  for (int k = 0; all && k < 2; k++) {
     struct render r;
     timed(w, k ? POLICY_PACKET : POLICY_RECURSIVE, mask, &c.p, &st, &r);
     EXPECTF(same_image(&ref.fb, &r.fb), "%s on tiny.yaml: image differs", k ? "packet" : "recursive");
@@ -271,6 +272,7 @@ static void test_many_workers(struct world *w) {
              {"tiny.yaml, 3 x 3 x 3, 16 KiB L2", &many}, {"1 x 1 x 1", &one}};
   for (unsigned i = 0; i < sizeof dyn / sizeof dyn[0]; i++) {
     const struct machine_params *p = dyn[i].p;
+    if (!all && p != &c.p && p != &one) continue;
     const uint32_t workers = p->cores * p->threads_per_core * p->rays_per_thread;
     /* The plan it runs with: with a 4 KiB L2, some leaves exceed g_max. */
     struct policy_params pp;
@@ -293,7 +295,7 @@ static void test_many_workers(struct world *w) {
     struct render_stats rs;
     struct qcheck q;
     timed_q(w, POLICY_DYNAMIC, mask, p, &st, &r, &rs, &q);
-    EXPECTF(same_image(&ref.fb, &r.fb), "dynamic on %s: image differs from recursive's", dyn[i].name);
+    EXPECTF(same_image(&ref.fb, &r.fb), "%s, dynamic on %s: image differs from recursive's", scene, dyn[i].name);
     EXPECTF(memcmp(rs.rays, ref_rs.rays, sizeof rs.rays) == 0 && rs.spawned == ref_rs.spawned &&
                 rs.terminated == rs.spawned,
             "dynamic on %s: rays %llu/%llu/%llu/%llu, spawned %llu, terminated %llu; recursive "
@@ -316,7 +318,8 @@ static void test_many_workers(struct world *w) {
     /* Several contexts share the work: some wait for it; one never does. */
     EXPECTF(workers == 1 ? st.waits == 0 : st.waits > 0, "dynamic on %s: %llu waits", dyn[i].name,
             (unsigned long long)st.waits);
-    printf("dynamic on %s: %llu cycles, core utilization %.3f, %llu waits (%llu cycles)\n", dyn[i].name,
+    printf("%s, dynamic on %s: %llu cycles, core utilization %.3f, %llu waits (%llu cycles)\n", scene,
+           dyn[i].name,
            (unsigned long long)st.cycles, (double)st.issue_slots / ((double)p->cores * (double)st.cycles),
            (unsigned long long)st.waits, (unsigned long long)st.wait_cycles);
     testing_slots_fini(&q.slots);
@@ -551,7 +554,20 @@ int main(void) {
   struct world w;
   if (!testing_load_world(&w.s, &w.kd, RTSIM_SOURCE_DIR "/scenes/small/room.yaml")) return 1;
   test_cross_check(&w);
-  test_many_workers(&w);
+  test_many_workers(&w, "room", true);
+  const char *others[] = {"grove", "sphereflake"};
+  for (int i = 0; i < 2; i++) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, others[i]);
+    struct world o;
+    if (!testing_load_world(&o.s, &o.kd, path)) {
+      EXPECTF(0, "cannot load %s", path);
+      continue;
+    }
+    test_many_workers(&o, others[i], false);
+    kd_fini(&o.kd);
+    scene_fini(&o.s);
+  }
   test_machine_plan();
   test_command();
   test_command_extremes();
