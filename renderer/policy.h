@@ -15,8 +15,12 @@
  *   access for that item (an access may let another worker claim meanwhile);
  * - a worker reads and writes shared host state only between two accesses,
  *   never across one (cooperative switching needs no locks then);
- * - each worker keeps its rays in its own region of the memory image and
- *   counts its own work (per-pixel costs are differences of its own counters).
+ * - each worker keeps its rays in its own region of the memory image (the
+ *   dynamic policy's wait in the job's queues, each slot claimed before its
+ *   accesses) and counts its own work (per-pixel costs are differences of its
+ *   own counters);
+ * - a worker with nothing to do until others make it waits (mem_wait) rather
+ *   than spin: the dynamic policy's workers share one batch.
  * With one worker every policy makes exactly the accesses it always made. */
 #ifndef RTSIM_RENDERER_POLICY_H
 #define RTSIM_RENDERER_POLICY_H
