@@ -37,7 +37,9 @@ static const char HELP[] =
     "options:\n"
     "  -o, --output DIR    output directory (required)\n"
     "  --policy P          recursive (default: each ray context takes the next pixel\n"
-    "                      in Hilbert order) or packet (each takes the next 8x8 tile)\n"
+    "                      in Hilbert order), packet (each takes the next 8x8 tile)\n"
+    "                      or dynamic (queue points made for the L2 and the cores;\n"
+    "                      each core drains one, its ray contexts share its rays)\n"
     "  --rays LIST         ray types from primary,shadow,specular,diffuse (default all)\n"
     "  --width W --height H  image size (default: the scene's)\n"
     "  --seed S            diffuse sampling seed (default: the scene's)\n"
@@ -78,7 +80,7 @@ int cmd_run(int argc, char **argv) {
       break;
     case 'P':
       if (!policy_parse(optarg, &policy)) {
-        app_usage_error("run", "--policy: got '%s', expected one of: recursive, packet", optarg);
+        app_usage_error("run", "--policy: got '%s', expected one of: recursive, packet, dynamic", optarg);
         goto done;
       }
       break;
@@ -100,10 +102,6 @@ int cmd_run(int argc, char **argv) {
   uint32_t mask;
   if (!shade_parse_rays(rays, &mask)) {
     app_usage_error("run", "--rays: got '%s', expected a comma-separated list of primary, shadow, specular, diffuse", rays);
-    goto done;
-  }
-  if (policy == POLICY_DYNAMIC) {
-    app_usage_error("run", "--policy dynamic does not run on the machine yet (recursive or packet)");
     goto done;
   }
   struct machine_cfg mc;

@@ -37,6 +37,10 @@ static const char TRAFFIC_HELP[] =
     "  --width W --height H  image size (default: the scene's)\n"
     "  --dyn-batch N       dynamic: admit N primary rays at a time, each batch traced\n"
     "                      through all its generations (default 0: all at once)\n"
+    "  --dyn-ray-buffer B  dynamic: bytes of cache reserved for the rays being traced\n"
+    "                      (default 4096: 64 rays; 0: one 64-byte ray, the rule of\n"
+    "                      rtsim run for one ray context); also the rays streamed at\n"
+    "                      once against a block of an oversized leaf's geometry\n"
     "  -o, --output FILE   CSV to write (required), one row per policy and cache size\n"
     "  -h, --help          this text\n"
     "\n"
@@ -45,7 +49,9 @@ static const char TRAFFIC_HELP[] =
     "and leaf lists) and total_mb fetched from DRAM (MB = 2^20 bytes); rel_geometry and\n"
     "rel_total (over recursive at the same size); then fetched bytes by data class\n"
     "(fetch_geometry ... fetch_other), dirty write-back bytes (writeback_bytes), line\n"
-    "accesses, and the potentially visible triangles and their bytes.\n";
+    "accesses, and the potentially visible triangles and their bytes; last, the\n"
+    "dynamic policy's settings as given (dyn_batch, dyn_ray_buffer_bytes: the same on\n"
+    "every row; they change the dynamic rows only).\n";
 
 /* The paper's ray configurations by name, or an explicit list. */
 static bool parse_config(const char *s, uint32_t *mask) {
@@ -119,6 +125,7 @@ int cmd_traffic(int argc, char **argv) {
       {"output", required_argument, 0, 'o'}, {"width", required_argument, 0, 'W'},
       {"height", required_argument, 0, 'H'}, {"rays", required_argument, 0, 'r'},
       {"policy", required_argument, 0, 'P'}, {"dyn-batch", required_argument, 0, 'B'},
+      {"dyn-ray-buffer", required_argument, 0, 'R'},
       {"help", no_argument, 0, 'h'},         {0, 0, 0, 0}};
   const char *out = NULL, *rays = NULL, *policy = "all";
   uint64_t width = 0, height = 0;
@@ -136,6 +143,10 @@ int cmd_traffic(int argc, char **argv) {
     case 'P': policy = optarg; break;
     case 'B':
       if (!app_parse_u64("traffic", "--dyn-batch", optarg, 0, UINT32_MAX, &pp.dyn_batch_rays)) return 2;
+      break;
+    case 'R':
+      if (!app_parse_u64("traffic", "--dyn-ray-buffer", optarg, 0, 1ull << 32, &pp.dyn_ray_buffer_bytes))
+        return 2;
       break;
     case 'h': fputs(TRAFFIC_HELP, stdout); return 0;
     default: return app_option_error("traffic", c, argv);
@@ -213,11 +224,13 @@ int cmd_traffic(int argc, char **argv) {
              "rel_geometry,rel_total");
   for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
     fprintf(f, ",fetch_%s", trace_class_names[cl]);
-  fprintf(f, ",writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes\n");
+  fprintf(f, ",writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes\n");
   const unsigned lg2 = lp.lg2_line;
   struct trace_layout layout;
   trace_layout_default(&layout);
   const uint64_t tri_bytes = layout.tri_bytes;
+  /* The buffer the dynamic runs reserved (one worker: 0 is one ray). */
+  const uint64_t dyn_ray_buffer = pp.dyn_ray_buffer_bytes ? pp.dyn_ray_buffer_bytes : 64;
   for (unsigned i = 0; i < nrows; i++) {
     const struct row *r = &rows[i];
     const struct row *base = NULL;
@@ -237,8 +250,9 @@ int cmd_traffic(int argc, char **argv) {
             bg > 0 ? g / bg : 0.0, bt > 0 ? t / bt : 0.0);
     for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
       fprintf(f, ",%llu", (unsigned long long)fetched(&r->s, cl, lg2));
-    fprintf(f, ",%llu,%llu,%llu,%llu\n", (unsigned long long)wb, (unsigned long long)acc,
-            (unsigned long long)r->pot_vis_tris, (unsigned long long)pv_bytes);
+    fprintf(f, ",%llu,%llu,%llu,%llu,%llu,%llu\n", (unsigned long long)wb, (unsigned long long)acc,
+            (unsigned long long)r->pot_vis_tris, (unsigned long long)pv_bytes,
+            (unsigned long long)pp.dyn_batch_rays, (unsigned long long)dyn_ray_buffer);
   }
   bool ok = !ferror(f);
   ok = (fclose(f) == 0) && ok;
@@ -250,9 +264,11 @@ int cmd_traffic(int argc, char **argv) {
     return app_report(&e);
   }
   printf("scene: %s\nrays: %s\nimage: %ux%u\nruns: %u\n", scene_name, names, W, H, runs);
-  if (want[POLICY_DYNAMIC])
+  if (want[POLICY_DYNAMIC]) {
     printf("dyn_batch: %llu%s\n", (unsigned long long)pp.dyn_batch_rays,
            pp.dyn_batch_rays ? " primary rays at a time" : " (all primary rays at once)");
+    printf("dyn_ray_buffer_bytes: %llu\n", (unsigned long long)dyn_ray_buffer);
+  }
   printf("output: %s\n", out);
   free(rows);
   app_world_fini(&w);
@@ -285,6 +301,8 @@ static const char TRACE_HELP[] =
     "                      dynamic, the size the schedule is made for (default\n"
     "                      524288); a power of two from 1024 to 4194304\n"
     "  --dyn-batch N       dynamic: admit N primary rays at a time (default 0: all)\n"
+    "  --dyn-ray-buffer B  dynamic: bytes reserved for the rays being traced (default\n"
+    "                      4096; 0: one ray)\n"
     "  --width W --height H  image size (default: the scene's)\n"
     "  -h, --help          this text\n";
 
@@ -306,7 +324,8 @@ int cmd_trace(int argc, char **argv) {
       {"din", required_argument, 0, 'd'},    {"width", required_argument, 0, 'W'},
       {"height", required_argument, 0, 'H'}, {"rays", required_argument, 0, 'r'},
       {"policy", required_argument, 0, 'P'}, {"cache", required_argument, 0, 'c'},
-      {"dyn-batch", required_argument, 0, 'B'}, {"help", no_argument, 0, 'h'},
+      {"dyn-batch", required_argument, 0, 'B'}, {"dyn-ray-buffer", required_argument, 0, 'R'},
+      {"help", no_argument, 0, 'h'},
       {0, 0, 0, 0}};
   const char *din_path = NULL, *rays = NULL, *policy = NULL;
   uint64_t width = 0, height = 0, cache = 512 * 1024;
@@ -329,6 +348,10 @@ int cmd_trace(int argc, char **argv) {
       break;
     case 'B':
       if (!app_parse_u64("trace", "--dyn-batch", optarg, 0, UINT32_MAX, &pp.dyn_batch_rays)) return 2;
+      break;
+    case 'R':
+      if (!app_parse_u64("trace", "--dyn-ray-buffer", optarg, 0, 1ull << 32, &pp.dyn_ray_buffer_bytes))
+        return 2;
       break;
     case 'h': fputs(TRACE_HELP, stdout); return 0;
     default: return app_option_error("trace", c, argv);

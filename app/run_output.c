@@ -66,6 +66,8 @@ static void measured(const struct run_report *r, struct stats_table *t) {
   stats_f64(t, "thread_done_fraction", ratio((double)s->thread_done_cycles, tc));
   stats_u64(t, "ray_switches", s->ray_switches);
   stats_u64(t, "ray_switch_cycles", s->switch_cycles);
+  stats_u64(t, "waits", s->waits);
+  stats_u64(t, "wait_cycles", s->wait_cycles);
   stats_u64(t, "loads", s->loads);
   stats_u64(t, "stores", s->stores);
   stats_u64(t, "blocking_loads", s->blocking_loads);

@@ -11,7 +11,7 @@
 struct timed_ctx {
   struct policy_job *job;
   struct policy_worker *workers;
-  uint64_t done;
+  uint64_t done, total; /* as the policy reports them (work items, or rays for dynamic) */
   double t0;
 };
 
@@ -24,13 +24,14 @@ static void run_worker(void *arg, const struct machine_worker_info *info, struct
 }
 
 static void work_progress(void *ctx, uint64_t done, uint64_t total) {
-  (void)total;
-  ((struct timed_ctx *)ctx)->done = done;
+  struct timed_ctx *r = ctx;
+  r->done = done;
+  r->total = total;
 }
 
 static void cycle_progress(void *ctx, uint64_t cycle) {
   struct timed_ctx *r = ctx;
-  double el = app_now() - r->t0, total = (double)policy_job_total(r->job);
+  double el = app_now() - r->t0, total = (double)r->total;
   double frac = total > 0 ? (double)r->done / total : 0;
   char eta[32] = "ETA ?";
   if (frac > 0) snprintf(eta, sizeof eta, "ETA %.0f s", el * (1 - frac) / frac);
@@ -47,7 +48,7 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
   t->ar.setup.layout.tri_cycles = mp->cost_triangle_cycles;
   t->ar.sc.shade_cycles = mp->cost_shade_cycles;
   struct policy_params pp;
-  policy_params_default(&pp);
+  policy_params_machine(&pp, mp->l2_size_bytes, (uint64_t)mp->l2_latency_cycles + mp->dram_latency_cycles);
   const uint32_t n = mp->cores * mp->threads_per_core * mp->rays_per_thread;
   struct timed_ctx r = {0};
   t->ar.setup.progress = work_progress;

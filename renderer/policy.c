@@ -26,6 +26,14 @@ void policy_params_default(struct policy_params *p) {
   p->dyn_ray_share = 16;
   p->dyn_ray_buffer_bytes = 4096;
   p->dyn_batch_rays = 0;
+  p->dyn_wait_cycles = 0;
+}
+
+void policy_params_machine(struct policy_params *p, uint64_t l2_bytes, uint64_t miss_cycles) {
+  policy_params_default(p);
+  p->cache_bytes = l2_bytes;
+  p->dyn_ray_buffer_bytes = 0;
+  p->dyn_wait_cycles = miss_cycles ? miss_cycles : 1;
 }
 
 const char *policy_name(enum policy_kind k) { return (unsigned)k < POLICY_COUNT ? NAMES[k] : "?"; }

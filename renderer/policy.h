@@ -15,8 +15,12 @@
  *   access for that item (an access may let another worker claim meanwhile);
  * - a worker reads and writes shared host state only between two accesses,
  *   never across one (cooperative switching needs no locks then);
- * - each worker keeps its rays in its own region of the memory image and
- *   counts its own work (per-pixel costs are differences of its own counters).
+ * - each worker keeps its rays in its own region of the memory image (the
+ *   dynamic policy's wait in the job's queues, each slot claimed before its
+ *   accesses) and counts its own work (per-pixel costs are differences of its
+ *   own counters);
+ * - a worker with nothing to do until others make it waits (mem_wait) rather
+ *   than spin: the dynamic policy's workers share one batch.
  * With one worker every policy makes exactly the accesses it always made. */
 #ifndef RTSIM_RENDERER_POLICY_H
 #define RTSIM_RENDERER_POLICY_H
@@ -41,18 +45,66 @@ struct policy_params {
    * by a share of cache_bytes: k-d nodes up to 1/dyn_node_share (4: the paper's
    * 1 MB of 4 MB), the queue table (8 bytes a queue point) up to
    * 1/dyn_table_share (16: 256 KB of 4 MB), a ray buffer of
-   * dyn_ray_buffer_bytes (4096: 64 rays) up to 1/dyn_ray_share (16). The rest
-   * is g_max, the geometry a queue point's subtree may hold (qpoint.h). */
+   * dyn_ray_buffer_bytes up to 1/dyn_ray_share (16). What is left, divided
+   * among the job's cores, is g_max, the geometry a queue point's subtree may
+   * hold (qpoint.h). The rules for a machine of C cores x T threads x R ray
+   * contexts a thread and an L2 of S bytes (policy_params_machine; the job's
+   * `workers` = C x T x R, its `cores` = C):
+   * - g_max = (S - nodes - table - ray buffer) / C. Every core holds its own
+   *   queue point, and takes the next one as soon as its rays are handed out,
+   *   so C queue points are drained at once and each needs its subtree's
+   *   geometry resident in the shared L2 at the same time; the tree, the
+   *   table and the ray buffer are shared. (A core that has just taken its
+   *   next queue point still finishes up to T x R - 1 rays of the previous
+   *   one: a short overlap the rule does not reserve for.)
+   * - The rays active at once (the ray buffer) are one per ray context:
+   *   C x T x R x 64 bytes (dyn_ray_buffer_bytes = 0). Queued rays wait in
+   *   memory; a ray is brought into the cache when a context takes it and
+   *   leaves with it, so the contexts hold exactly the rays in flight. This is
+   *   the paper's "only enough rays to mask the latency": it argues that 2 to
+   *   4 rays a thread hide a miss, and R is that number, chosen in the
+   *   machine config. A leaf whose geometry exceeds g_max is processed in
+   *   blocks of g_max; each context streams one ray at a time against a
+   *   block (the group: the ray buffer over the workers).
+   * The functional reproduction (one worker, policy_params_default) keeps a
+   * 4096-byte buffer (64 rays) instead: see results/traffic. */
   uint32_t dyn_node_share, dyn_table_share, dyn_ray_share;
-  uint64_t dyn_ray_buffer_bytes;
+  uint64_t dyn_ray_buffer_bytes; /* 0: one 64-byte ray per worker */
   /* dynamic: primary rays admitted at a time, each batch traced through all
-   * its generations before the next is admitted; this bounds the rays active at
-   * once (the paper's continuum between recursive and fully deferred tracing).
-   * 0 (default): every primary ray at once, as the paper's section 2 reads. */
+   * its generations before the next is admitted; this bounds the rays queued
+   * at once (the paper's continuum between recursive and fully deferred
+   * tracing). 0 (default): every primary ray at once, as the paper's section 2
+   * reads. */
   uint64_t dyn_batch_rays;
+  /* dynamic with several workers: a worker with nothing to take (its core's
+   * queue point handed out, no other free, the phase not over) waits this many
+   * cycles (mem_wait) before it looks again. Work for it appears only when a
+   * ray of another worker reaches a queue point or a phase ends, and rays in
+   * flight move at the pace of their misses: policy_params_machine waits one
+   * L2 miss to an idle DRAM (l2.latency + dram.latency). 0: never waits (one
+   * worker never needs to; a CHECK holds it to that). */
+  uint64_t dyn_wait_cycles;
 };
 
 void policy_params_default(struct policy_params *p);
+
+/* The defaults, then what the dynamic policy is made for on a machine (the
+ * rules above): cache_bytes = l2_bytes, one ray of buffer per worker, waits of
+ * miss_cycles (the L2 latency plus the DRAM latency; at least 1). Plain
+ * integers: the renderer does not know the machine. */
+void policy_params_machine(struct policy_params *p, uint64_t l2_bytes, uint64_t miss_cycles);
+
+struct qpoint_set;
+struct qpoint_budget;
+
+/* The dynamic policy's queue points for a job of `workers` workers on `cores`
+ * cores (the rules above): qpoint_plan's selection (qs, caller finishes it
+ * with qpoint_fini) and budget (b), the triangles of an oversized leaf's block
+ * (*block_tris, at least 1) and the rays a worker streams against a block at
+ * once (*group, at least 1). */
+void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32_t cores,
+                         const struct kd_tree *kd, uint32_t tri_bytes, struct qpoint_set *qs,
+                         struct qpoint_budget *b, uint32_t *block_tris, uint32_t *group);
 
 /* What every worker of one render shares, read-only during the render except
  * for the framebuffer (contributions are sums, so their order does not
@@ -75,8 +127,8 @@ struct policy_setup {
 
 /* One render's shared work list and whatever the policy shares between its
  * workers (opaque). State that belongs to one core of the machine (the
- * dynamic policy's queue points, later) is kept in the job, indexed by the
- * worker's core. */
+ * dynamic policy's queue point) is kept in the job, indexed by the worker's
+ * core. */
 struct policy_job;
 
 /* One worker: a simulated ray context. Caller-provided storage; set up by
@@ -101,7 +153,7 @@ struct policy_job *policy_job_create(enum policy_kind k, const struct policy_set
 
 /* Whether policy k can render with this many workers: recursive and packet
  * with any number whose ray regions fit the ray region of the layout; dynamic
- * with one only, for now. */
+ * with any (its rays wait in the shared queues). */
 bool policy_workers_supported(enum policy_kind k, uint32_t workers);
 
 /* Bytes of the memory image one worker's rays occupy (its ray stack or packet
@@ -119,8 +171,9 @@ void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_
  * access), trace, shade, trace what it spawns. False, with no access made,
  * when no work was left. Recursive: one pixel, in Hilbert order, its ray tree
  * depth first; packet: one tile; dynamic: one batch of primary rays
- * (dyn_batch_rays, by default all) through all its generations. Any access
- * through w's port may suspend w. */
+ * (dyn_batch_rays, by default all) through all its generations, which all
+ * workers take part in (it returns when the batch is done; a worker may wait
+ * meanwhile, dyn_wait_cycles). Any access through w's port may suspend w. */
 bool policy_job_step(struct policy_job *job, struct policy_worker *w);
 
 /* The worker loop: policy_job_step until no work is left. */

@@ -129,8 +129,9 @@ static uint64_t share(uint64_t cache, uint32_t div) {
 static uint64_t min_u64(uint64_t a, uint64_t b) { return a < b ? a : b; }
 
 static uint64_t gmax_of(const struct qpoint_reserve *r, struct qpoint_budget *b) {
+  CHECK(r->holders > 0);
   uint64_t used = b->node_bytes + b->table_bytes + b->ray_bytes;
-  b->gmax_bytes = r->cache_bytes > used ? r->cache_bytes - used : 0;
+  b->gmax_bytes = r->cache_bytes > used ? (r->cache_bytes - used) / r->holders : 0;
   return b->gmax_bytes;
 }
 

@@ -25,12 +25,17 @@ void qpoint_subtree_tris(const struct kd_tree *kd, uint32_t *out);
  *   node_bytes  = min(8 * nodes,             cache / node_share)
  *   table_bytes = min(8 * queue points,      cache / table_share)
  *   ray_bytes   = min(ray_buffer_bytes,      cache / ray_share)
- *   gmax_bytes  = cache - node_bytes - table_bytes - ray_bytes (0 if negative)
- * The paper's 4 MB example: 1 MB of nodes (share 4), a 256 KB table (share 16). */
+ *   gmax_bytes  = (cache - node_bytes - table_bytes - ray_bytes) / holders
+ *                 (0 if negative)
+ * The paper's 4 MB example: 1 MB of nodes (share 4), a 256 KB table (share 16).
+ * holders: queue points whose geometry must be resident at once (the cores of
+ * a machine that each drain one; 1 for a single thread): the tree, the table
+ * and the ray buffer are shared, the geometry is each holder's own. */
 struct qpoint_reserve {
   uint64_t cache_bytes;
   uint32_t node_share, table_share, ray_share; /* > 0 */
   uint64_t ray_buffer_bytes;
+  uint32_t holders; /* > 0 */
 };
 
 struct qpoint_budget {

@@ -151,6 +151,8 @@ int main(void) {
       {"trace " SCN "good_room_tiny.yaml --din x.din --policy packet", "missing --rays"},
       {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --dyn-batch many", "--dyn-batch: got 'many', expected a whole number from 0 to 4294967295"},
       {"trace " SCN "good_room_tiny.yaml --din x.din --policy dynamic --rays primary --dyn-batch -3", "--dyn-batch: got '-3'"},
+      {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --dyn-ray-buffer 1e3", "--dyn-ray-buffer: got '1e3', expected a whole number from 0 to 4294967296"},
+      {"trace " SCN "good_room_tiny.yaml --din x.din --policy dynamic --rays primary --dyn-ray-buffer 99999999999", "--dyn-ray-buffer: got '99999999999'"},
   };
   for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {
     snprintf(cmd, sizeof cmd, "cd %s && %s %s", RTSIM_TMP, RTSIM_BINARY, usage[i].args);

@@ -34,24 +34,12 @@ static int load(struct world *w, const char *path) {
 struct counter {
   struct trace_layout l;
   uint64_t table_loads, table_stores, table_bad, max_table;
-  uint64_t slot_loads, slot_stores, slot_bad, class_bad;
+  struct testing_slots slots;
+  uint64_t class_bad;
   uint64_t other_ray; /* ray accesses outside the queues and the camera array */
-  uint8_t *pending;    /* per queue slot: stored and not yet loaded */
-  uint64_t slots;
   uint8_t *cam;        /* per pixel: times its primary ray was read */
   uint64_t npix, cam_bad;
 };
-
-static uint8_t *slot_of(struct counter *c, uint64_t addr) {
-  uint64_t k = (addr - c->l.queue_base) / 64;
-  if (k >= c->slots) {
-    uint64_t n = 2 * k + 1024;
-    c->pending = realloc(c->pending, n);
-    memset(c->pending + c->slots, 0, n - c->slots);
-    c->slots = n;
-  }
-  return &c->pending[k];
-}
 
 static void on_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls, int store) {
   struct counter *c = ctx;
@@ -66,16 +54,7 @@ static void on_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls, int
       c->table_loads++;
   } else if (addr >= c->l.queue_base && addr < c->l.ray_base) {
     c->class_bad += cls != TRACE_CLASS_RAY || size != 64 || (addr - c->l.queue_base) % 64 != 0;
-    uint8_t *p = slot_of(c, addr);
-    if (store) {
-      c->slot_stores++;
-      c->slot_bad += *p != 0; /* a queued ray overwritten before being read */
-      *p = 1;
-    } else {
-      c->slot_loads++;
-      c->slot_bad += *p != 1; /* a load of a slot holding no queued ray */
-      *p = 0;
-    }
+    testing_slots_access(&c->slots, (addr - c->l.queue_base) / 64, store);
   } else if (addr >= c->l.camera_base) {
     uint64_t k = (addr - c->l.camera_base) / 64;
     c->cam_bad += store || cls != TRACE_CLASS_RAY || size != 64 || (addr - c->l.camera_base) % 64 != 0 ||
@@ -141,7 +120,7 @@ static void plan(const struct world *w, uint64_t cache, struct qpoint_set *qs, s
   struct policy_params pp;
   policy_params_default(&pp);
   struct qpoint_reserve r = {cache, pp.dyn_node_share, pp.dyn_table_share, pp.dyn_ray_share,
-                             pp.dyn_ray_buffer_bytes};
+                             pp.dyn_ray_buffer_bytes, 1};
   qpoint_plan(qs, b, &w->kd, tris, 128, &r);
   free(tris);
 }
@@ -198,12 +177,12 @@ static void check_scene(const char *name) {
             (unsigned long long)ref.st.rays[2], (unsigned long long)ref.st.rays[3]);
     EXPECT(dy.st.spawned == ref.st.spawned && dy.st.terminated == ref.st.terminated);
     /* Queue discipline. */
-    bool leftover = false;
-    for (uint64_t k = 0; k < cnt.slots; k++) leftover |= cnt.pending[k] != 0;
-    EXPECTF(!leftover && cnt.slot_bad == 0 && cnt.slot_loads == cnt.slot_stores && cnt.slot_stores > 0,
-            "%s %u KB: queue slots: %llu stores, %llu loads, %llu bad, leftover %d", name, kb,
-            (unsigned long long)cnt.slot_stores, (unsigned long long)cnt.slot_loads,
-            (unsigned long long)cnt.slot_bad, (int)leftover);
+    const struct testing_slots *sl = &cnt.slots;
+    uint64_t leftover = testing_slots_left(sl);
+    EXPECTF(!leftover && sl->bad == 0 && sl->loads == sl->stores && sl->stores > 0,
+            "%s %u KB: queue slots: %llu stores, %llu loads, %llu bad, leftover %llu", name, kb,
+            (unsigned long long)sl->stores, (unsigned long long)sl->loads,
+            (unsigned long long)sl->bad, (unsigned long long)leftover);
     /* Each enqueue reads and writes its table entry; so does each drain. */
     EXPECT(cnt.table_loads == cnt.table_stores && cnt.table_bad == 0 && cnt.class_bad == 0);
     EXPECT(cnt.table_loads >= ref.st.rays[RAY_PRIMARY] / 2);
@@ -225,17 +204,17 @@ static void check_scene(const char *name) {
       EXPECTF(memcmp(db.fb.acc, ref.fb.acc, fb_bytes) == 0, "%s batch 7: image differs from recursive", name);
       EXPECT(memcmp(db.st.rays, ref.st.rays, sizeof ref.st.rays) == 0);
       EXPECT(db.st.spawned == ref.st.spawned && db.st.terminated == ref.st.terminated);
-      bool left = false, once7 = true;
-      for (uint64_t k = 0; k < cb.slots; k++) left |= cb.pending[k] != 0;
+      bool once7 = true;
       for (uint64_t k = 0; k < cb.npix; k++) once7 &= cb.cam[k] == 1;
-      EXPECT(!left && cb.slot_bad == 0 && cb.slot_loads == cb.slot_stores && once7);
+      EXPECT(testing_slots_left(&cb.slots) == 0 && cb.slots.bad == 0 &&
+             cb.slots.loads == cb.slots.stores && once7);
       EXPECTF(db.st.ray_slots_max < dy.st.ray_slots_max, "%s batch 7: %llu rays queued at most, unbatched %llu",
               name, (unsigned long long)db.st.ray_slots_max, (unsigned long long)dy.st.ray_slots_max);
-      free(cb.pending);
+      testing_slots_fini(&cb.slots);
       free(cb.cam);
       result_fini(&db);
     }
-    free(cnt.pending);
+    testing_slots_fini(&cnt.slots);
     free(cnt.cam);
     result_fini(&dy);
 

@@ -103,7 +103,7 @@ static void check_figure1(void) {
    * and a floor at zero for tiny caches. */
   struct qpoint_budget b;
   struct qpoint_set qs;
-  struct qpoint_reserve r = {4u << 20, 4, 16, 16, 4096};
+  struct qpoint_reserve r = {4u << 20, 4, 16, 16, 4096, 1};
   qpoint_plan(&qs, &b, &kd, tris, 1, &r);
   EXPECT(b.node_bytes == 8 * 15 && b.ray_bytes == 4096 && b.table_bytes == 8);
   EXPECT(b.gmax_bytes == (4u << 20) - 8 * 15 - 8 - 4096 && qs.count == 1);
@@ -122,6 +122,15 @@ static void check_figure1(void) {
   r.cache_bytes = 1024;
   qpoint_plan(&qs, &b, &kd, tris, 1, &r);
   EXPECT(b.gmax_bytes == 0 && qs.count == 8);
+  qpoint_fini(&qs);
+  /* Several holders share what is left for geometry: 3 holders of a 64-byte
+   * cache (16 bytes of nodes, 4 of table, 4 of rays: each at its share) get
+   * 40 / 3 = 13 each, which makes the C nodes queue points. */
+  r = (struct qpoint_reserve){64, 4, 16, 16, 4, 3};
+  qpoint_plan(&qs, &b, &kd, tris, 1, &r);
+  EXPECT(b.node_bytes == 16 && b.ray_bytes == 4 && b.table_bytes == 4);
+  EXPECTF(b.gmax_bytes == (64 - 16 - 4 - 4) / 3 && qs.count == 4, "gmax %llu, %u queue points",
+          (unsigned long long)b.gmax_bytes, qs.count);
   qpoint_fini(&qs);
   free(kd.nodes);
   free(kd.prims);

@@ -1,7 +1,10 @@
 /* The renderer on the timed machine: the 1 x 1 x 1, no-L1, fully associative
  * machine fetches and writes back exactly what the functional model counts, at
- * any DRAM latency and bandwidth; many workers give the same image as one; and
- * rtsim run's outputs (image, determinism, bad input) through the command. */
+ * any DRAM latency and bandwidth, for every policy (dynamic's schedule made for
+ * that machine on both sides); many workers give the same image as one, and
+ * the dynamic policy's queues are each stored before they are read, read once
+ * and left empty; its queue points ask no more of the L2 than its rule allows;
+ * and rtsim run's outputs (image, determinism, bad input) through the command. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,6 +16,7 @@
 #include "renderer/image.h"
 #include "renderer/kdtree.h"
 #include "renderer/policy.h"
+#include "renderer/qpoint.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
@@ -52,7 +56,8 @@ static void render_init(struct render *r, struct world *w, uint32_t mask) {
 }
 
 /* Functional fetch and write-back bytes of a fully associative LRU cache of
- * 2^lg2 bytes. */
+ * 2^lg2 bytes; the dynamic policy's schedule is the one it makes for a
+ * 1 x 1 x 1 machine with that L2. */
 static void functional(struct world *w, enum policy_kind k, uint32_t mask, unsigned lg2,
                        uint64_t *fetch, uint64_t *wb) {
   struct lru_stack_params lp = lru_stack_params_default();
@@ -60,7 +65,7 @@ static void functional(struct world *w, enum policy_kind k, uint32_t mask, unsig
   struct render r;
   render_init(&r, w, mask);
   struct policy_params pp;
-  policy_params_default(&pp);
+  policy_params_machine(&pp, 1ull << lg2, 1);
   struct render_stats st;
   policy_run(k, &r.setup, &pp, fn_backend_port(b), &st, NULL);
   struct lru_stack_results res;
@@ -77,41 +82,106 @@ static void functional(struct world *w, enum policy_kind k, uint32_t mask, unsig
 /* The deepest coroutine stack any run of this test used (painted stacks). */
 static uint64_t stack_used_max;
 
+/* The dynamic policy's queue discipline, seen from the accesses the workers
+ * issue (in issue order, across all workers): a queue slot is stored before it
+ * is loaded, loaded once per store (a blocked leaf pass stores its rays back
+ * and loads them again), never overwritten while it holds a ray, and none is
+ * left holding one; table entries are those of queue points. */
+struct qcheck {
+  struct trace_layout l;
+  struct testing_slots slots;
+  uint64_t bad, table_accesses, table_max;
+};
+
+static void qcheck_access(struct qcheck *q, uint64_t addr, unsigned cls, int store) {
+  if (addr >= q->l.qtable_base && addr < q->l.queue_base) {
+    uint64_t e = (addr - q->l.qtable_base) / 8 + 1;
+    if (e > q->table_max) q->table_max = e;
+    q->table_accesses++;
+    q->bad += cls != TRACE_CLASS_QUEUE;
+    return;
+  }
+  if (addr < q->l.queue_base || addr >= q->l.ray_base) return;
+  q->bad += cls != TRACE_CLASS_RAY;
+  testing_slots_access(&q->slots, (addr - q->l.queue_base) / 64, store);
+}
+
+/* A worker's port: records queue accesses, then passes everything on. */
+struct wport {
+  struct mem_port in;
+  struct qcheck *q;
+};
+
+static void w_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  struct wport *p = ctx;
+  qcheck_access(p->q, addr, cls, 0);
+  mem_load(&p->in, addr, size, cls);
+}
+static void w_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  struct wport *p = ctx;
+  qcheck_access(p->q, addr, cls, 1);
+  mem_store(&p->in, addr, size, cls);
+}
+static void w_compute(void *ctx, uint64_t cycles) { mem_compute(&((struct wport *)ctx)->in, cycles); }
+static void w_wait(void *ctx, uint64_t cycles) { mem_wait(&((struct wport *)ctx)->in, cycles); }
+static const struct mem_ops WPORT_OPS = {w_load, w_store, w_compute, w_wait};
+
 struct timed_ctx {
   struct policy_job *job;
   struct policy_worker *workers;
+  struct wport *ports; /* NULL: the machine's ports as they are */
 };
 
 static void timed_worker(void *arg, const struct machine_worker_info *info, struct mem_port port) {
   struct timed_ctx *t = arg;
   struct policy_worker *w = &t->workers[info->id];
+  if (t->ports) {
+    t->ports[info->id].in = port;
+    port = (struct mem_port){&WPORT_OPS, &t->ports[info->id]};
+  }
   policy_worker_init(w, t->job, info->id, info->core, info->thread, port);
   policy_job_work(t->job, w);
   policy_worker_fini(t->job, w);
 }
 
-/* Run on machine p; the machine's stats are copied out, the framebuffer kept
- * in r (caller finishes it). */
-static void timed(struct world *w, enum policy_kind k, uint32_t mask, const struct machine_params *p,
-                  struct machine_stats *out, struct render *r) {
+/* Run on machine p with the policy parameters rtsim run gives it; the
+ * machine's stats and the render's are copied out (rs may be NULL), the
+ * framebuffer kept in r (caller finishes it). With q, every worker's queue
+ * accesses are checked. */
+static void timed_q(struct world *w, enum policy_kind k, uint32_t mask,
+                    const struct machine_params *p, struct machine_stats *out, struct render *r,
+                    struct render_stats *rs, struct qcheck *q) {
   render_init(r, w, mask);
   r->setup.layout.node_cycles = p->cost_node_cycles;
   r->setup.layout.tri_cycles = p->cost_triangle_cycles;
   r->sc.shade_cycles = p->cost_shade_cycles;
   struct policy_params pp;
-  policy_params_default(&pp);
+  policy_params_machine(&pp, p->l2_size_bytes, (uint64_t)p->l2_latency_cycles + p->dram_latency_cycles);
   uint32_t n = p->cores * p->threads_per_core * p->rays_per_thread;
-  struct timed_ctx t = {policy_job_create(k, &r->setup, &pp, n, p->cores), NULL};
+  struct timed_ctx t = {policy_job_create(k, &r->setup, &pp, n, p->cores), NULL, NULL};
   t.workers = calloc(n, sizeof *t.workers);
+  if (q) {
+    memset(q, 0, sizeof *q);
+    q->l = r->setup.layout;
+    t.ports = calloc(n, sizeof *t.ports);
+    for (uint32_t i = 0; i < n; i++) t.ports[i].q = q;
+  }
   struct machine *m = machine_create_painted(p, 0);
   machine_run(m, timed_worker, &t, NULL, NULL);
   if (machine_stack_used_max(m) > stack_used_max) stack_used_max = machine_stack_used_max(m);
   struct render_stats st;
   policy_job_finish(t.job, &st, NULL);
+  if (rs) *rs = st;
   *out = *machine_get_stats(m);
   machine_destroy(m);
   free(t.workers);
+  free(t.ports);
   policy_job_destroy(t.job);
+}
+
+static void timed(struct world *w, enum policy_kind k, uint32_t mask, const struct machine_params *p,
+                  struct machine_stats *out, struct render *r) {
+  timed_q(w, k, mask, p, out, r, NULL, NULL);
 }
 
 static struct machine_params one_by_one(uint64_t l2_bytes) {
@@ -131,14 +201,14 @@ static int same_image(const struct framebuffer *a, const struct framebuffer *b) 
 
 static void test_cross_check(struct world *w) {
   const uint32_t mask = RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_DIFFUSE);
-  const enum policy_kind kinds[] = {POLICY_RECURSIVE, POLICY_PACKET};
+  const enum policy_kind kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC};
   const unsigned sizes[] = {12, 16};
   const struct {
     uint64_t latency;
     double bw;
     uint32_t mshrs, queue;
   } drams[] = {{0, 1e4, 64, 32}, {200, 16, 64, 32}, {1000, 0.5, 2, 1}};
-  for (unsigned k = 0; k < 2; k++)
+  for (unsigned k = 0; k < 3; k++)
     for (unsigned s = 0; s < 2; s++) {
       uint64_t fetch, wb;
       functional(w, kinds[k], mask, sizes[s], &fetch, &wb);
@@ -163,8 +233,12 @@ static void test_cross_check(struct world *w) {
 }
 
 /* Many ray contexts interleaved on the tiny machine: the same picture, every
- * ray accounted for, and the machine busy. */
-static void test_many_workers(struct world *w) {
+ * ray accounted for, and the machine busy. The dynamic policy besides on
+ * variants that make its cores share small queue points (a 4 KiB L2: leaves
+ * over g_max, processed block by block by all of a core's contexts), many
+ * contexts on three cores, and one context; its queues checked throughout.
+ * With all false (the other scenes): dynamic on tiny.yaml and 1 x 1 x 1 only. */
+static void test_many_workers(struct world *w, const char *scene, bool all) {
   const uint32_t mask = RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) |
                         RAY_MASK(RAY_DIFFUSE);
   struct machine_cfg c;
@@ -174,16 +248,155 @@ static void test_many_workers(struct world *w) {
   CHECK(machine_cfg_load(&c, RTSIM_SOURCE_DIR "/configs/tiny.yaml", &e));
   struct render ref;
   struct machine_stats st;
+  struct render_stats ref_rs;
   struct machine_params one = one_by_one(1 << 20);
-  timed(w, POLICY_RECURSIVE, mask, &one, &st, &ref);
-  for (int k = 0; k < 2; k++) {
+  timed_q(w, POLICY_RECURSIVE, mask, &one, &st, &ref, &ref_rs, NULL);
+  for (int k = 0; all && k < 2; k++) {
     struct render r;
     timed(w, k ? POLICY_PACKET : POLICY_RECURSIVE, mask, &c.p, &st, &r);
     EXPECTF(same_image(&ref.fb, &r.fb), "%s on tiny.yaml: image differs", k ? "packet" : "recursive");
     EXPECT(st.l2_mshr_merges > 0 && st.l2_misses > 0 && st.issue_slots > 0);
     fb_fini(&r.fb);
   }
+
+  struct machine_params small_l2 = c.p, many = c.p;
+  small_l2.l2_size_bytes = 4096;
+  many.cores = 3;
+  many.threads_per_core = 3;
+  many.rays_per_thread = 3;
+  many.l2_size_bytes = 16384;
+  const struct {
+    const char *name;
+    const struct machine_params *p;
+  } dyn[] = {{"tiny.yaml", &c.p}, {"tiny.yaml, 4 KiB L2", &small_l2},
+             {"tiny.yaml, 3 x 3 x 3, 16 KiB L2", &many}, {"1 x 1 x 1", &one}};
+  for (unsigned i = 0; i < sizeof dyn / sizeof dyn[0]; i++) {
+    const struct machine_params *p = dyn[i].p;
+    if (!all && p != &c.p && p != &one) continue;
+    const uint32_t workers = p->cores * p->threads_per_core * p->rays_per_thread;
+    /* The plan it runs with: with a 4 KiB L2, some leaves exceed g_max. */
+    struct policy_params pp;
+    policy_params_machine(&pp, p->l2_size_bytes, 1);
+    struct qpoint_set qs;
+    struct qpoint_budget b;
+    uint32_t bt, group;
+    policy_dynamic_plan(&pp, workers, p->cores, &w->kd, 128, &qs, &b, &bt, &group);
+    uint32_t oversized = 0;
+    for (uint32_t q = 0; q < qs.count; q++) {
+      struct kd_node nd = qs.nodes[qs.qnode[q]];
+      oversized += kd_is_leaf(nd) && kd_leaf_count(nd) > bt;
+    }
+    if (p == &small_l2) EXPECTF(oversized > 0, "%s: no leaf over g_max (%u queue points)", dyn[i].name, qs.count);
+    EXPECT(group == 1);
+    const uint32_t queues = qs.count;
+    qpoint_fini(&qs);
+
+    struct render r;
+    struct render_stats rs;
+    struct qcheck q;
+    timed_q(w, POLICY_DYNAMIC, mask, p, &st, &r, &rs, &q);
+    EXPECTF(same_image(&ref.fb, &r.fb), "%s, dynamic on %s: image differs from recursive's", scene, dyn[i].name);
+    EXPECTF(memcmp(rs.rays, ref_rs.rays, sizeof rs.rays) == 0 && rs.spawned == ref_rs.spawned &&
+                rs.terminated == rs.spawned,
+            "dynamic on %s: rays %llu/%llu/%llu/%llu, spawned %llu, terminated %llu; recursive "
+            "%llu/%llu/%llu/%llu, %llu",
+            dyn[i].name, (unsigned long long)rs.rays[0], (unsigned long long)rs.rays[1],
+            (unsigned long long)rs.rays[2], (unsigned long long)rs.rays[3],
+            (unsigned long long)rs.spawned, (unsigned long long)rs.terminated,
+            (unsigned long long)ref_rs.rays[0], (unsigned long long)ref_rs.rays[1],
+            (unsigned long long)ref_rs.rays[2], (unsigned long long)ref_rs.rays[3],
+            (unsigned long long)ref_rs.spawned);
+    const struct testing_slots *sl = &q.slots;
+    uint64_t left = testing_slots_left(sl);
+    EXPECTF(q.bad == 0 && sl->bad == 0 && left == 0 && sl->stores == sl->loads && sl->stores > 0 &&
+                q.table_accesses > 0,
+            "dynamic on %s: queue slots %llu stored, %llu loaded, %llu out of order, %llu left",
+            dyn[i].name, (unsigned long long)sl->stores, (unsigned long long)sl->loads,
+            (unsigned long long)(sl->bad + q.bad), (unsigned long long)left);
+    EXPECTF(q.table_max <= queues, "dynamic on %s: table entry %llu of %u queue points", dyn[i].name,
+            (unsigned long long)q.table_max, queues);
+    /* Several contexts share the work: some wait for it; one never does. */
+    EXPECTF(workers == 1 ? st.waits == 0 : st.waits > 0, "dynamic on %s: %llu waits", dyn[i].name,
+            (unsigned long long)st.waits);
+    printf("%s, dynamic on %s: %llu cycles, core utilization %.3f, %llu waits (%llu cycles)\n", scene,
+           dyn[i].name,
+           (unsigned long long)st.cycles, (double)st.issue_slots / ((double)p->cores * (double)st.cycles),
+           (unsigned long long)st.waits, (unsigned long long)st.wait_cycles);
+    testing_slots_fini(&q.slots);
+    fb_fini(&r.fb);
+  }
   fb_fini(&ref.fb);
+}
+
+/* Queue points made for a machine ask no more of the L2 than the rule of
+ * policy.h: g_max = (L2 - nodes - table - ray buffer) / cores, the ray buffer
+ * one 64-byte ray per ray context (within its 1/16 share), so that every
+ * core's queue point can be resident at once; each queue point's subtree
+ * geometry fits g_max, or it is a leaf, whose blocks do. */
+static void test_machine_plan(void) {
+  const char *cfgs[] = {"tiny", "default", "paper-2007"};
+  const char *scenes[] = {"room", "grove", "sphereflake"};
+  const uint64_t l2s[] = {0, 4096, 65536};
+  for (unsigned si = 0; si < 3; si++) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, scenes[si]);
+    struct world w;
+    if (!testing_load_world(&w.s, &w.kd, path)) {
+      EXPECTF(0, "cannot load %s", path);
+      continue;
+    }
+    uint32_t *tris = malloc(((size_t)w.kd.node_count + 1) * sizeof *tris);
+    qpoint_subtree_tris(&w.kd, tris);
+    for (unsigned ci = 0; ci < 3; ci++)
+      for (unsigned li = 0; li < 3; li++) {
+        snprintf(path, sizeof path, "%s/configs/%s.yaml", RTSIM_SOURCE_DIR, cfgs[ci]);
+        struct machine_cfg c;
+        machine_cfg_defaults(&c);
+        struct err e;
+        memset(&e, 0, sizeof e);
+        CHECK(machine_cfg_load(&c, path, &e));
+        const struct machine_params *p = &c.p;
+        const uint64_t S = l2s[li] ? l2s[li] : p->l2_size_bytes;
+        const uint32_t C = p->cores, workers = C * p->threads_per_core * p->rays_per_thread;
+        struct policy_params pp;
+        policy_params_machine(&pp, S, (uint64_t)p->l2_latency_cycles + p->dram_latency_cycles);
+        struct qpoint_set qs;
+        struct qpoint_budget b;
+        uint32_t bt, group;
+        policy_dynamic_plan(&pp, workers, C, &w.kd, 128, &qs, &b, &bt, &group);
+        /* The budget, by hand. */
+        uint64_t nodes = 8ull * w.kd.node_count < S / 4 ? 8ull * w.kd.node_count : S / 4;
+        uint64_t rays = 64ull * workers < S / 16 ? 64ull * workers : S / 16;
+        uint64_t table = 8ull * qs.count < S / 16 ? 8ull * qs.count : S / 16;
+        uint64_t used = nodes + rays + b.table_bytes;
+        EXPECTF(b.node_bytes == nodes && b.ray_bytes == rays && b.table_bytes <= S / 16 &&
+                    b.table_bytes >= table && b.gmax_bytes == (S > used ? (S - used) / C : 0),
+                "%s, %s, L2 %llu: budget %llu/%llu/%llu/%llu", scenes[si], cfgs[ci],
+                (unsigned long long)S, (unsigned long long)b.node_bytes,
+                (unsigned long long)b.table_bytes, (unsigned long long)b.ray_bytes,
+                (unsigned long long)b.gmax_bytes);
+        /* Every core's queue point resident at once, besides the reservations. */
+        EXPECT(C * b.gmax_bytes + b.node_bytes + b.table_bytes + b.ray_bytes <= S);
+        EXPECT(bt == (b.gmax_bytes / 128 ? b.gmax_bytes / 128 : 1) && group == 1);
+        uint32_t over = 0;
+        for (uint32_t q = 0; q < qs.count; q++) {
+          uint32_t n = qs.qnode[q];
+          bool leaf = kd_is_leaf(qs.nodes[n]);
+          if ((uint64_t)tris[n] * 128 <= b.gmax_bytes) continue;
+          over++;
+          EXPECTF(leaf, "%s, %s, L2 %llu: queue point %u holds %u triangles, g_max %llu", scenes[si],
+                  cfgs[ci], (unsigned long long)S, n, tris[n], (unsigned long long)b.gmax_bytes);
+          EXPECT((uint64_t)bt * 128 <= b.gmax_bytes || bt == 1);
+        }
+        if (li == 0)
+          printf("%s on %s: %u cores, g_max %llu bytes, %u queue points, %u leaves over g_max\n",
+                 scenes[si], cfgs[ci], C, (unsigned long long)b.gmax_bytes, qs.count, over);
+        qpoint_fini(&qs);
+      }
+    free(tris);
+    kd_fini(&w.kd);
+    scene_fini(&w.s);
+  }
 }
 
 /* RGB planes of two EXR files are equal, bit for bit. */
@@ -244,10 +457,13 @@ static void test_command(void) {
   const char *ref = RTSIM_TMP "/run_ref.exr";
   snprintf(cmd, sizeof cmd, "%s render %s --width 24 --height 16 -o %s", RTSIM_BINARY, scene, ref);
   EXPECT(testing_run(cmd, out, sizeof out) == 0);
-  const char *dirs[] = {RTSIM_TMP "/run_a", RTSIM_TMP "/run_b", RTSIM_TMP "/run_p"};
-  for (int i = 0; i < 3; i++) {
+  const char *dirs[] = {RTSIM_TMP "/run_a", RTSIM_TMP "/run_b", RTSIM_TMP "/run_p",
+                        RTSIM_TMP "/run_d", RTSIM_TMP "/run_e"};
+  const char *opts[] = {"", "", "--policy packet --set cores=3 --set l2.size=8KiB",
+                        "--policy dynamic --set cores=3", "--policy dynamic --set cores=3"};
+  for (int i = 0; i < 5; i++) {
     snprintf(cmd, sizeof cmd, "%s run %s %s --width 24 --height 16 %s -o %s", RTSIM_BINARY, tiny,
-             scene, i == 2 ? "--policy packet --set cores=3 --set l2.size=8KiB" : "", dirs[i]);
+             scene, opts[i], dirs[i]);
     int rc = testing_run(cmd, out, sizeof out);
     EXPECTF(rc == 0, "%s: exit %d: %s", cmd, rc, out);
     const char *files[] = {"image.exr", "stats.json", "stats.csv", "timeline.csv", "traffic.png"};
@@ -257,12 +473,13 @@ static void test_command(void) {
     EXPECTF(same_rgb(ref, img), "%s: RGB differs from rtsim render's", dirs[i]);
   }
   const char *names[] = {"stats.csv", "timeline.csv", "image.exr", "stats.json"};
-  for (int f = 0; f < 4; f++) {
-    char a[2048], b[2048];
-    snprintf(a, sizeof a, "%s/%s", dirs[0], names[f]);
-    snprintf(b, sizeof b, "%s/%s", dirs[1], names[f]);
-    EXPECTF(same_file(a, b, f == 3), "%s differs between two runs", names[f]);
-  }
+  for (int d = 0; d < 2; d++) /* recursive, then dynamic: the same bytes twice */
+    for (int f = 0; f < 4; f++) {
+      char a[2048], b[2048];
+      snprintf(a, sizeof a, "%s/%s", dirs[3 * d], names[f]);
+      snprintf(b, sizeof b, "%s/%s", dirs[3 * d + 1], names[f]);
+      EXPECTF(same_file(a, b, f == 3), "%s differs between two runs (%s)", names[f], dirs[3 * d]);
+    }
   /* stats.csv's columns are unique names (a merged table joins them by name). */
   char csvp[2048], hdr[8192];
   snprintf(csvp, sizeof csvp, "%s/stats.csv", dirs[0]);
@@ -302,7 +519,6 @@ static void test_command(void) {
       {"run CFG SCN -o DIR --set dram.bytes_per_cycle=0", "dram.bytes_per_cycle: out of range"},
       {"run CFG SCN -o DIR --set l3.size=1", "unknown key 'l3.size'"},
       {"run " RTSIM_TEST_DATA "/configs/bad_size_unit.yaml SCN -o DIR", "bad_size_unit.yaml:2:9: error: l2.size"},
-      {"run CFG SCN -o DIR --policy dynamic", "does not run on the machine yet"},
       {"run CFG SCN -o DIR --policy fastest", "--policy: got 'fastest'"},
       {"run CFG -o DIR", "expected MACHINE.yaml SCENE.yaml, got 1 file"},
       {"run CFG SCN", "missing -o OUTDIR"},
@@ -359,7 +575,21 @@ int main(void) {
   struct world w;
   if (!testing_load_world(&w.s, &w.kd, RTSIM_SOURCE_DIR "/scenes/small/room.yaml")) return 1;
   test_cross_check(&w);
-  test_many_workers(&w);
+  test_many_workers(&w, "room", true);
+  const char *others[] = {"grove", "sphereflake"};
+  for (int i = 0; i < 2; i++) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, others[i]);
+    struct world o;
+    if (!testing_load_world(&o.s, &o.kd, path)) {
+      EXPECTF(0, "cannot load %s", path);
+      continue;
+    }
+    test_many_workers(&o, others[i], false);
+    kd_fini(&o.kd);
+    scene_fini(&o.s);
+  }
+  test_machine_plan();
   test_command();
   test_command_extremes();
   /* The kernels' deepest stack, against the size the machine gives them: the

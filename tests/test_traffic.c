@@ -185,6 +185,21 @@ int main(void) {
   EXPECT(testing_run(cmd, out, sizeof out) == 0);
   EXPECTF(strstr(out, "-l1-usize 512k -l1-uassoc 8192\n") != NULL && !strstr(out, "-l1-uassoc 0"),
           "%s", out);
+  /* The dynamic settings are columns of every row: as given, and changing the
+   * dynamic rows only (one ray of buffer frees cache for geometry). */
+  snprintf(cmd, sizeof cmd,
+           "%s traffic %s/scenes/small/room.yaml --rays shadow --width 24 --height 24 --dyn-batch 7 "
+           "--dyn-ray-buffer 0 -o %s && cat %s",
+           RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
+  EXPECT(testing_run(cmd, out, sizeof out) == 0);
+  EXPECT(strstr(out, ",pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes\n") != NULL);
+  int tagged = 0;
+  for (const char *q = strstr(out, "\nroom"); q; q = strchr(q + 1, '\n')) {
+    const char *eol = strchr(q + 1, '\n');
+    if (!eol) break;
+    tagged += eol - q > 6 && !strncmp(eol - 5, ",7,64", 5);
+  }
+  EXPECTF(tagged == 3 * SIZES, "%d of %d rows end with the dynamic settings", tagged, 3 * SIZES);
 
   /* Bad command lines: exit 2. */
   snprintf(cmd, sizeof cmd, "%s traffic %s/scenes/small/room.yaml --rays glossy -o %s", RTSIM_BINARY,

@@ -1,5 +1,6 @@
 #include "testing.h"
 
+#include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
 
@@ -66,4 +67,30 @@ struct ray testing_make_ray(float ox, float oy, float oz, float dx, float dy, fl
   r.ignore_prim = -1;
   r.hit_prim = -1;
   return r;
+}
+
+void testing_slots_access(struct testing_slots *t, uint64_t k, bool store) {
+  if (k >= t->n) {
+    uint64_t n = 2 * k + 1024;
+    t->pending = xrealloc(t->pending, n);
+    memset(t->pending + t->n, 0, n - t->n);
+    t->n = n;
+  }
+  t->bad += t->pending[k] != !store; /* overwritten before read, or read unstored */
+  t->pending[k] = (uint8_t)store;
+  if (store)
+    t->stores++;
+  else
+    t->loads++;
+}
+
+uint64_t testing_slots_left(const struct testing_slots *t) {
+  uint64_t n = 0;
+  for (uint64_t k = 0; k < t->n; k++) n += t->pending[k];
+  return n;
+}
+
+void testing_slots_fini(struct testing_slots *t) {
+  free(t->pending);
+  memset(t, 0, sizeof *t);
 }

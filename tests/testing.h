@@ -2,6 +2,8 @@
 #ifndef RTSIM_TESTS_TESTING_H
 #define RTSIM_TESTS_TESTING_H
 
+#include <stdbool.h>
+#include <stdint.h>
 #include <stdio.h>
 
 extern int testing_failures;
@@ -49,6 +51,19 @@ struct ray;
  * primitive and no pending hit. */
 struct ray testing_make_ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmin,
                             float tmax);
+
+/* The dynamic policy's queue slots as its accesses show them, in issue order:
+ * a slot is stored before it is loaded, loaded once per store, and never
+ * stored over while it holds a ray. Zero-initialise; testing_slots_fini. */
+struct testing_slots {
+  uint8_t *pending; /* per slot: stored and not yet loaded */
+  uint64_t n, stores, loads, bad;
+};
+/* A store (store true) or load of slot k; one out of order counts in bad. */
+void testing_slots_access(struct testing_slots *t, uint64_t k, bool store);
+/* Slots still holding a ray: stored and never loaded. */
+uint64_t testing_slots_left(const struct testing_slots *t);
+void testing_slots_fini(struct testing_slots *t);
 
 /* Run a shell command, capture its stderr+stdout into buf; return exit code
  * (or -1 if it did not exit normally). */
