@@ -105,14 +105,11 @@ static struct stack *stack_get(struct coro_pool *p) {
                  -1, 0);
   if (m == MAP_FAILED) err_check_failed(__FILE__, __LINE__, "mmap of a coroutine stack");
   s->base = m;
-#if CORO_ASAN
-  /* NOTE: a mapping where an earlier pool's stack was inherits its shadow, and
-   * that holds the redzones of entry()'s frame, which never returns (it ends
-   * by a switch): without this, painting the new stack trips over them. */
-  __asan_unpoison_memory_region(s->base + p->page, s->usable);
-#endif
   /* The lowest page faults on touch: stacks grow down into it on overflow. */
   CHECK(mprotect(s->base, p->page, PROT_NONE) == 0);
+  /* A mapping where an earlier pool's stack was inherits its shadow, which
+   * holds the redzones of entry()'s frame (it never returns: it ends by a
+   * switch); painting the new stack would trip over them. */
   CORO_UNPOISON(s->base + p->page, s->usable);
   if (p->paint) memset(s->base + p->page, PAINT, s->usable);
   return s;
