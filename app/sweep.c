@@ -106,9 +106,8 @@ static bool check_workload(const struct priv *pv, enum wl k, const struct cfg_no
   case WL_SCENE: return true; /* resolved and loaded later */
   case WL_POLICY: {
     enum policy_kind p;
-    if (!policy_parse(text, &p) || p == POLICY_DYNAMIC)
-      return cfg_fail(d, n, key, e, "%s (got '%s', expected one of: recursive, packet)",
-                      policy_parse(text, &p) ? "does not run on the machine yet" : "unknown policy",
+    if (!policy_parse(text, &p))
+      return cfg_fail(d, n, key, e, "unknown policy (got '%s', expected one of: recursive, packet, dynamic)",
                       text);
     return true;
   }

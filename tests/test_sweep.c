@@ -162,7 +162,7 @@ static void test_bad_files(void) {
       {"bad_zip_length.yaml", "bad_zip_length.yaml:5:14: error: zip[0]: l2.ways: 3 values, but l2.size has 2"},
       {"bad_twice.yaml", "bad_twice.yaml:6:5: error: zip[0].l2.size: 'l2.size' is given twice (also in axes at line 4"},
       {"bad_dup_value.yaml", "bad_dup_value.yaml:4:17: error: axes.cores[2]: '1' is listed twice"},
-      {"bad_policy.yaml", "bad_policy.yaml:4:23: error: policy: does not run on the machine yet (got 'dynamic'"},
+      {"bad_policy.yaml", "bad_policy.yaml:4:23: error: policy: unknown policy (got 'fastest'"},
       {"bad_rays.yaml", "bad_rays.yaml:4:19: error: rays: not a list of ray types (got 'primary,glossy'"},
       {"bad_scene_missing.yaml", "bad_scene_missing.yaml:3:44: error: axes.scene[1]: cannot open '../../../scenes/small/hall.yaml'"},
       {"bad_names.yaml", "bad_names.yaml:4:44: error: scene: two points would share the directory name 'scene=room'"},
