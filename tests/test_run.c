@@ -522,7 +522,10 @@ static void test_command(void) {
   }
 }
 
-/* Whole runs at the machine's extremes: every output written, no nan or inf. */
+/* Whole runs at the machine's extremes: every output written, no nan or inf.
+ * The dynamic policy too (its contexts all stay for the batch, so the most
+ * contexts it is given are 16 x 8 x 8; the 64-byte L2 leaves g_max 0: every
+ * leaf a queue point, its triangles one block each). */
 static void test_command_extremes(void) {
   static const char *const sets[] = {
       "--set cores=1 --set threads_per_core=1 --set rays_per_thread=1",
@@ -530,6 +533,11 @@ static void test_command_extremes(void) {
       "--set dram.latency=0 --set dram.bytes_per_cycle=10000",
       "--set dram.latency=1000000 --set timeline.window=1",
       "--set dram.bytes_per_cycle=0.01 --set l2.size=64 --set l2.ways=full --set l2.mshrs=1",
+      "--policy dynamic --set cores=1 --set threads_per_core=1 --set rays_per_thread=1",
+      "--policy dynamic --set cores=16 --set threads_per_core=8 --set rays_per_thread=8",
+      "--policy dynamic --set dram.latency=0 --set dram.bytes_per_cycle=10000",
+      "--policy dynamic --set dram.latency=1000000 --set timeline.window=1",
+      "--policy dynamic --set dram.bytes_per_cycle=0.01 --set l2.size=64 --set l2.ways=full --set l2.mshrs=1",
   };
   char cmd[4096], out[8192];
   const char *dir = RTSIM_TMP "/run_extreme";
