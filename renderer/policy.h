@@ -78,11 +78,14 @@ struct policy_params {
   uint64_t dyn_batch_rays;
   /* dynamic with several workers: a worker with nothing to take (its core's
    * queue point handed out, no other free, the phase not over) waits this many
-   * cycles (mem_wait) before it looks again. Work for it appears only when a
-   * ray of another worker reaches a queue point or a phase ends, and rays in
-   * flight move at the pace of their misses: policy_params_machine waits one
-   * L2 miss to an idle DRAM (l2.latency + dram.latency). 0: never waits (one
-   * worker never needs to; a CHECK holds it to that). */
+   * cycles (mem_wait) before it looks again, twice as long each time it finds
+   * nothing again, up to 64 times this; finding work starts it over. Work for
+   * it appears only when a ray of another worker reaches a queue point or a
+   * phase ends, and rays in flight move at the pace of their misses:
+   * policy_params_machine starts at one L2 miss to an idle DRAM (l2.latency +
+   * dram.latency). The doubling keeps the host from polling for long idle
+   * stretches (a machine of thousands of contexts on a small image). 0: never
+   * waits (one worker never needs to; a CHECK holds it to that). */
   uint64_t dyn_wait_cycles;
 };
 

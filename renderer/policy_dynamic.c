@@ -94,6 +94,13 @@
 
 #define DYN_CHUNK_RAYS 64u
 #define DYN_NONE UINT32_MAX
+/* A worker that keeps finding nothing to take doubles its wait, up to
+ * 2^DYN_WAIT_DOUBLINGS x dyn_wait_cycles (dyn_step). Measured against a fixed
+ * wait (tiny and default configs, small grove and room at 64x48): cycles
+ * within 0.1%, 3% on default/grove; 11x to 43x fewer waits, and a 64 x 8 x 8
+ * machine on a 6x4 image in 1.2 s instead of 13. 3 doublings: cycles within
+ * 0.4% but 6x the waits of 6; 9: 8% more cycles on default/grove. */
+#define DYN_WAIT_DOUBLINGS 6u
 /* Host-only mark of a ray that ended during a blocked pass (never simulated). */
 #define DYN_FLAG_DEAD 0x80u
 
@@ -1055,9 +1062,10 @@ static void batch_end(struct policy_job *job, struct dyn *d) {
 /* Take part in a batch of primary rays until it is done: the first worker to
  * find none under way claims the next (before any access), every worker then
  * does what work() finds, starts the next phase when it finds the phase over,
- * and otherwise waits. One worker does the whole batch in the order the
- * single loop did: each primary ray to its first queue, then every generation:
- * closest-hit rays, their shadow rays, the next generation. */
+ * and otherwise waits (longer each time in a row: DYN_WAIT_DOUBLINGS). One
+ * worker does the whole batch in the order the single loop did: each primary
+ * ray to its first queue, then every generation: closest-hit rays, their
+ * shadow rays, the next generation. */
 static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
   struct dyn *d = job->shared;
   if (!d->active) {
@@ -1082,8 +1090,12 @@ static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
   x->tr = &wk->tr;
   x->st = &wk->st;
   const uint64_t seq = d->batch_seq;
+  uint32_t idle = 0; /* waits in a row */
   while (d->batch_seq == seq) {
-    if (work(x)) continue;
+    if (work(x)) {
+      idle = 0;
+      continue;
+    }
     if (phase_over(d)) {
       if (advance(d)) batch_end(job, d);
       continue;
@@ -1091,7 +1103,8 @@ static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
     /* Others are still tracing rays of this phase (or testing the last rays
      * of this core's pass): their rays may make work for this one. */
     CHECK(d->wait_cycles > 0);
-    mem_wait(&x->tr->mem, d->wait_cycles);
+    mem_wait(&x->tr->mem, d->wait_cycles << idle);
+    if (idle < DYN_WAIT_DOUBLINGS) idle++;
   }
   return true;
 }

@@ -36,6 +36,20 @@ struct world {
   struct kd_tree kd;
 };
 
+/* scenes/small/NAME.yaml and its tree; false (a failed check) if it does not load. */
+static bool load_small(struct world *w, const char *name) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, name);
+  bool ok = testing_load_world(&w->s, &w->kd, path);
+  EXPECTF(ok, "cannot load %s", path);
+  return ok;
+}
+
+static void world_fini(struct world *w) {
+  kd_fini(&w->kd);
+  scene_fini(&w->s);
+}
+
 struct render {
   struct shade_ctx sc;
   struct framebuffer fb;
@@ -184,6 +198,18 @@ static void timed(struct world *w, enum policy_kind k, uint32_t mask, const stru
   timed_q(w, k, mask, p, out, r, NULL, NULL);
 }
 
+/* configs/NAME.yaml, resolved (it must load). */
+static struct machine_params shipped_config(const char *name) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/configs/%s.yaml", RTSIM_SOURCE_DIR, name);
+  struct machine_cfg c;
+  machine_cfg_defaults(&c);
+  struct err e;
+  memset(&e, 0, sizeof e);
+  CHECK(machine_cfg_load(&c, path, &e));
+  return c.p;
+}
+
 static struct machine_params one_by_one(uint64_t l2_bytes) {
   struct machine_cfg c;
   machine_cfg_defaults(&c);
@@ -241,11 +267,7 @@ static void test_cross_check(struct world *w) {
 static void test_many_workers(struct world *w, const char *scene, bool all) {
   const uint32_t mask = RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) |
                         RAY_MASK(RAY_DIFFUSE);
-  struct machine_cfg c;
-  machine_cfg_defaults(&c);
-  struct err e;
-  memset(&e, 0, sizeof e);
-  CHECK(machine_cfg_load(&c, RTSIM_SOURCE_DIR "/configs/tiny.yaml", &e));
+  const struct machine_params tiny = shipped_config("tiny");
   struct render ref;
   struct machine_stats st;
   struct render_stats ref_rs;
@@ -253,13 +275,13 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
   timed_q(w, POLICY_RECURSIVE, mask, &one, &st, &ref, &ref_rs, NULL);
   for (int k = 0; all && k < 2; k++) {
     struct render r;
-    timed(w, k ? POLICY_PACKET : POLICY_RECURSIVE, mask, &c.p, &st, &r);
+    timed(w, k ? POLICY_PACKET : POLICY_RECURSIVE, mask, &tiny, &st, &r);
     EXPECTF(same_image(&ref.fb, &r.fb), "%s on tiny.yaml: image differs", k ? "packet" : "recursive");
     EXPECT(st.l2_mshr_merges > 0 && st.l2_misses > 0 && st.issue_slots > 0);
     fb_fini(&r.fb);
   }
 
-  struct machine_params small_l2 = c.p, many = c.p;
+  struct machine_params small_l2 = tiny, many = tiny;
   small_l2.l2_size_bytes = 4096;
   many.cores = 3;
   many.threads_per_core = 3;
@@ -268,11 +290,11 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
   const struct {
     const char *name;
     const struct machine_params *p;
-  } dyn[] = {{"tiny.yaml", &c.p}, {"tiny.yaml, 4 KiB L2", &small_l2},
+  } dyn[] = {{"tiny.yaml", &tiny}, {"tiny.yaml, 4 KiB L2", &small_l2},
              {"tiny.yaml, 3 x 3 x 3, 16 KiB L2", &many}, {"1 x 1 x 1", &one}};
   for (unsigned i = 0; i < sizeof dyn / sizeof dyn[0]; i++) {
     const struct machine_params *p = dyn[i].p;
-    if (!all && p != &c.p && p != &one) continue;
+    if (!all && p != &tiny && p != &one) continue;
     const uint32_t workers = p->cores * p->threads_per_core * p->rays_per_thread;
     /* The plan it runs with: with a 4 KiB L2, some leaves exceed g_max. */
     struct policy_params pp;
@@ -338,24 +360,13 @@ static void test_machine_plan(void) {
   const char *scenes[] = {"room", "grove", "sphereflake"};
   const uint64_t l2s[] = {0, 4096, 65536};
   for (unsigned si = 0; si < 3; si++) {
-    char path[1024];
-    snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, scenes[si]);
     struct world w;
-    if (!testing_load_world(&w.s, &w.kd, path)) {
-      EXPECTF(0, "cannot load %s", path);
-      continue;
-    }
+    if (!load_small(&w, scenes[si])) continue;
     uint32_t *tris = malloc(((size_t)w.kd.node_count + 1) * sizeof *tris);
     qpoint_subtree_tris(&w.kd, tris);
     for (unsigned ci = 0; ci < 3; ci++)
       for (unsigned li = 0; li < 3; li++) {
-        snprintf(path, sizeof path, "%s/configs/%s.yaml", RTSIM_SOURCE_DIR, cfgs[ci]);
-        struct machine_cfg c;
-        machine_cfg_defaults(&c);
-        struct err e;
-        memset(&e, 0, sizeof e);
-        CHECK(machine_cfg_load(&c, path, &e));
-        const struct machine_params *p = &c.p;
+        const struct machine_params cp = shipped_config(cfgs[ci]), *p = &cp;
         const uint64_t S = l2s[li] ? l2s[li] : p->l2_size_bytes;
         const uint32_t C = p->cores, workers = C * p->threads_per_core * p->rays_per_thread;
         struct policy_params pp;
@@ -394,8 +405,7 @@ static void test_machine_plan(void) {
         qpoint_fini(&qs);
       }
     free(tris);
-    kd_fini(&w.kd);
-    scene_fini(&w.s);
+    world_fini(&w);
   }
 }
 
@@ -543,7 +553,10 @@ static void test_command(void) {
   }
 }
 
-/* Whole runs at the machine's extremes: every output written, no nan or inf. */
+/* Whole runs at the machine's extremes: every output written, no nan or inf.
+ * The dynamic policy too (its contexts all stay for the batch, so the most
+ * contexts it is given are 16 x 8 x 8; the 64-byte L2 leaves g_max 0: every
+ * leaf a queue point, its triangles one block each). */
 static void test_command_extremes(void) {
   static const char *const sets[] = {
       "--set cores=1 --set threads_per_core=1 --set rays_per_thread=1",
@@ -551,6 +564,11 @@ static void test_command_extremes(void) {
       "--set dram.latency=0 --set dram.bytes_per_cycle=10000",
       "--set dram.latency=1000000 --set timeline.window=1",
       "--set dram.bytes_per_cycle=0.01 --set l2.size=64 --set l2.ways=full --set l2.mshrs=1",
+      "--policy dynamic --set cores=1 --set threads_per_core=1 --set rays_per_thread=1",
+      "--policy dynamic --set cores=16 --set threads_per_core=8 --set rays_per_thread=8",
+      "--policy dynamic --set dram.latency=0 --set dram.bytes_per_cycle=10000",
+      "--policy dynamic --set dram.latency=1000000 --set timeline.window=1",
+      "--policy dynamic --set dram.bytes_per_cycle=0.01 --set l2.size=64 --set l2.ways=full --set l2.mshrs=1",
   };
   char cmd[4096], out[8192];
   const char *dir = RTSIM_TMP "/run_extreme";
@@ -573,21 +591,15 @@ static void test_command_extremes(void) {
 
 int main(void) {
   struct world w;
-  if (!testing_load_world(&w.s, &w.kd, RTSIM_SOURCE_DIR "/scenes/small/room.yaml")) return 1;
+  if (!load_small(&w, "room")) return testing_done("test_run");
   test_cross_check(&w);
   test_many_workers(&w, "room", true);
   const char *others[] = {"grove", "sphereflake"};
   for (int i = 0; i < 2; i++) {
-    char path[1024];
-    snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, others[i]);
     struct world o;
-    if (!testing_load_world(&o.s, &o.kd, path)) {
-      EXPECTF(0, "cannot load %s", path);
-      continue;
-    }
+    if (!load_small(&o, others[i])) continue;
     test_many_workers(&o, others[i], false);
-    kd_fini(&o.kd);
-    scene_fini(&o.s);
+    world_fini(&o);
   }
   test_machine_plan();
   test_command();
@@ -597,7 +609,6 @@ int main(void) {
   printf("deepest coroutine stack: %llu bytes of %zu\n", (unsigned long long)stack_used_max,
          coro_default_stack_bytes());
   EXPECT(stack_used_max > 0 && 4 * stack_used_max <= coro_default_stack_bytes());
-  kd_fini(&w.kd);
-  scene_fini(&w.s);
+  world_fini(&w);
   return testing_done("test_run");
 }
