@@ -60,7 +60,7 @@ struct mcore {
 
 /* An access waiting for the L2 (stalled input), or a waiter on a pending line. */
 struct req {
-  uint64_t line, at;
+  uint64_t line;
   uint32_t ctx; /* NONE: a posted store */
   uint8_t op, cls;
   uint32_t next;
@@ -162,16 +162,13 @@ static void tl_span_ticks(struct machine *m, unsigned col, uint64_t a, uint64_t 
     return;
   }
   const double per_tick = amount / (double)(b - a);
-  uint64_t x = a;
-  while (x < b) {
-    uint64_t win = m->tl_window << DRAM_TICK_BITS;
-    uint64_t w = x / win;
-    double *row = tl_row(m, w);
-    win = m->tl_window << DRAM_TICK_BITS; /* the row lookup may have coarsened */
+  /* The row of the span's last window first: any coarsening happens now. */
+  tl_row(m, ((b - 1) >> DRAM_TICK_BITS) / m->tl_window);
+  const uint64_t win = m->tl_window << DRAM_TICK_BITS;
+  for (uint64_t x = a; x < b;) {
     uint64_t end = (x / win + 1) * win;
     if (end > b) end = b;
-    row = tl_row(m, x / win);
-    row[col] += per_tick * (double)(end - x);
+    tl_row(m, x / win)[col] += per_tick * (double)(end - x);
     x = end;
   }
 }
@@ -395,10 +392,9 @@ static void ev_l2_access(void *ctx, uint64_t arg) {
   r.op = (uint8_t)((arg >> 4) & 3);
   r.cls = (uint8_t)(arg & 15);
   r.ctx = r.op == OP_LOAD ? (uint32_t)(c - m->ctx) : NONE;
-  r.at = engine_now(m->eng);
   r.next = NONE;
   /* In order: while anything is stalled, later accesses queue behind it. */
-  if (m->stall_head != NONE || !l2_try(m, &r, r.at)) stall_push(m, &r);
+  if (m->stall_head != NONE || !l2_try(m, &r, engine_now(m->eng))) stall_push(m, &r);
 }
 
 static void dram_account(struct machine *m, const struct dram_timing *tm, unsigned col, int cls) {

@@ -142,6 +142,8 @@ int main(void) {
       {"hits", "missing SCENE.yaml"},
       {"bench --repeat 0 " SCN "good_room_tiny.yaml", "--repeat: got '0'"},
       {"bench --analyser 0", "--analyser: got '0'"},
+      {"bench --timed " RTSIM_TEST_DATA "/configs/bad_size_unit.yaml " SCN "good_room_tiny.yaml", "bad_size_unit.yaml:2:9: error: l2.size: not a size"},
+      {"bench --timed", "option --timed needs a value"},
       {"bench --rays primary,glossy " SCN "good_room_tiny.yaml", "--rays: got 'primary,glossy'"},
       {"render " SCN "good_room_tiny.yaml -o x.exr --policy fifo", "--policy: got 'fifo', expected one of: recursive, packet, dynamic"},
       {"traffic " SCN "good_room_tiny.yaml -o x.csv", "missing --rays"},

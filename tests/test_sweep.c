@@ -194,6 +194,7 @@ static void test_bad_files(void) {
       {"plot t.csv --y cycles -o t.png", "missing --x KEY"},
       {"plot t.csv --x a --y b -o t.pdf", "expected a .png or .svg file"},
       {"plot t.csv --x a --y b -o t.png --where a", "--where: got 'a', expected KEY=VALUE"},
+      {"plot t.csv --x a --y b -o t.png --mark-x two", "--mark-x: got 'two', expected a number"},
   };
   for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {
     int rc = run("cd %s && %s %s", RTSIM_TMP, RTSIM_BINARY, usage[i].args);
