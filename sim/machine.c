@@ -133,7 +133,8 @@ static double *tl_row(struct machine *m, uint64_t w) {
         double b = 2 * i + 1 < m->tl_rows ? m->tl[(2 * i + 1) * MTL_COLS + c] : 0.0;
         m->tl[i * MTL_COLS + c] = m->tl[2 * i * MTL_COLS + c] + b;
       }
-    memset(m->tl + half * MTL_COLS, 0, (m->tl_rows - half) * MTL_COLS * sizeof *m->tl);
+    if (m->tl_rows > half) /* (an empty timeline has no array yet) */
+      memset(m->tl + half * MTL_COLS, 0, (m->tl_rows - half) * MTL_COLS * sizeof *m->tl);
     m->tl_rows = half;
     m->tl_window *= 2;
     w /= 2;
