@@ -46,6 +46,7 @@ void isect_prepare(struct isect_ray *r, vec3 o, vec3 d) {
   r->sx = comp(d, kx) / dz;
   r->sy = comp(d, ky) / dz;
   r->sz = 1.0f / dz;
+  r->perm = 2 * kz + (dz < 0.0f);
 }
 
 /* True when the triangle's area is zero. Float differences and their products
@@ -58,18 +59,18 @@ static bool tri_degenerate(vec3 a, vec3 b, vec3 c) {
   return nx == 0.0 && ny == 0.0 && nz == 0.0;
 }
 
-bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, float tmax,
-               float *t, float *b1, float *b2) {
+/* The test for one axis permutation (kx, ky, kz constants after inlining, so
+ * every coordinate is picked without a round trip through memory). */
+static inline __attribute__((always_inline)) bool isect_perm(const struct isect_ray *r, vec3 a,
+                                                             vec3 b, vec3 c, int kx, int ky, int kz,
+                                                             float tmin, float tmax, float *t,
+                                                             float *b1, float *b2) {
   /* Translate to the ray origin, permute so that kz is the ray's main axis, shear. */
-  vec3 v[3] = {v3_sub(a, r->o), v3_sub(b, r->o), v3_sub(c, r->o)};
-  float pa[3], pb[3], pc[3];
-  memcpy(pa, &v[0], sizeof pa);
-  memcpy(pb, &v[1], sizeof pb);
-  memcpy(pc, &v[2], sizeof pc);
-  float az = pa[r->kz], bz = pb[r->kz], cz = pc[r->kz];
-  float ax = pa[r->kx] - r->sx * az, ay = pa[r->ky] - r->sy * az;
-  float bx = pb[r->kx] - r->sx * bz, by = pb[r->ky] - r->sy * bz;
-  float cx = pc[r->kx] - r->sx * cz, cy = pc[r->ky] - r->sy * cz;
+  float oz = v3_get(r->o, kz), ox = v3_get(r->o, kx), oy = v3_get(r->o, ky);
+  float az = v3_get(a, kz) - oz, bz = v3_get(b, kz) - oz, cz = v3_get(c, kz) - oz;
+  float ax = (v3_get(a, kx) - ox) - r->sx * az, ay = (v3_get(a, ky) - oy) - r->sy * az;
+  float bx = (v3_get(b, kx) - ox) - r->sx * bz, by = (v3_get(b, ky) - oy) - r->sy * bz;
+  float cx = (v3_get(c, kx) - ox) - r->sx * cz, cy = (v3_get(c, ky) - oy) - r->sy * cz;
 
   /* Edge functions; e0 is the weight of a. A shared edge gives exactly negated
    * values in its two triangles (same products), hence watertightness. */
@@ -105,14 +106,15 @@ bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, fl
   if (!(tt > tmin && tt < tmax)) return false;
 
   /* PBRT-v3: reject hits too close to the origin to be surely in front of it. */
-  float max_zt = fmaxf(fabsf(az), fmaxf(fabsf(bz), fabsf(cz)));
-  float max_xt = fmaxf(fabsf(ax), fmaxf(fabsf(bx), fabsf(cx)));
-  float max_yt = fmaxf(fabsf(ay), fmaxf(fabsf(by), fabsf(cy)));
+  /* Every value here is finite (a NaN or infinite det or t returned above). */
+  float max_zt = max_nonnan(fabsf(az), max_nonnan(fabsf(bz), fabsf(cz)));
+  float max_xt = max_nonnan(fabsf(ax), max_nonnan(fabsf(bx), fabsf(cx)));
+  float max_yt = max_nonnan(fabsf(ay), max_nonnan(fabsf(by), fabsf(cy)));
   float delta_z = gamma_f(3) * max_zt;
   float delta_x = gamma_f(5) * (max_xt + max_zt);
   float delta_y = gamma_f(5) * (max_yt + max_zt);
   float delta_e = 2.0f * (gamma_f(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-  float max_e = fmaxf(fabsf(e0), fmaxf(fabsf(e1), fabsf(e2)));
+  float max_e = max_nonnan(fabsf(e0), max_nonnan(fabsf(e1), fabsf(e2)));
   float delta_t =
       3.0f * (gamma_f(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / fabsf(det);
   if (tt <= delta_t) return false;
@@ -122,6 +124,18 @@ bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, fl
   *b1 = e1 / det;
   *b2 = e2 / det;
   return true;
+}
+
+bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, float tmax,
+               float *t, float *b1, float *b2) {
+  switch (r->perm) {
+  case 0: return isect_perm(r, a, b, c, 1, 2, 0, tmin, tmax, t, b1, b2);
+  case 1: return isect_perm(r, a, b, c, 2, 1, 0, tmin, tmax, t, b1, b2);
+  case 2: return isect_perm(r, a, b, c, 2, 0, 1, tmin, tmax, t, b1, b2);
+  case 3: return isect_perm(r, a, b, c, 0, 2, 1, tmin, tmax, t, b1, b2);
+  case 4: return isect_perm(r, a, b, c, 0, 1, 2, tmin, tmax, t, b1, b2);
+  default: return isect_perm(r, a, b, c, 1, 0, 2, tmin, tmax, t, b1, b2);
+  }
 }
 
 _Static_assert(TRACE_CLASS_COUNT <= MEM_CLASS_MAX, "the simulator keeps every class apart");
@@ -433,7 +447,7 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
           if (trav_hit_wins((found & bit) != 0, t, p, q->best_t, pk->best_p[i])) {
             found |= bit;
             q->best_t = t;
-            q->upper = nextafterf(t, INFINITY); /* equal t still competes on prim id */
+            q->upper = float_next_up(t); /* equal t still competes on prim id */
             pk->best_p[i] = p;
             hits[i].t = t;
             hits[i].prim = (int32_t)p;

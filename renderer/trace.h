@@ -29,6 +29,7 @@ struct isect_ray {
   vec3 o;
   int kx, ky, kz;
   float sx, sy, sz;
+  int perm; /* 2 kz + (kx, ky swapped): which specialised test runs */
 };
 
 void isect_prepare(struct isect_ray *r, vec3 o, vec3 d);

@@ -11,6 +11,7 @@
 #include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "renderer/kdtree.h"
 #include "renderer/ray.h"
@@ -58,7 +59,7 @@ static inline bool trav_setup(struct trav_ray *tr, const struct kd_tree *kd, con
   tr->o[2] = r->o.z;
   float reach = 0.0f;
   for (int a = 0; a < 3; a++)
-    reach = fmaxf(reach, fmaxf(fabsf(lo[a] - tr->o[a]), fabsf(hi[a] - tr->o[a])));
+    reach = max_nonnan(reach, max_nonnan(fabsf(lo[a] - tr->o[a]), fabsf(hi[a] - tr->o[a])));
   tr->delta = reach * TRACE_SLACK + FLT_MIN;
   float t0 = r->tmin, t1 = r->tmax;
   for (int a = 0; a < 3; a++) {
@@ -183,10 +184,18 @@ static inline bool trav_hit_wins(bool found, float t, uint32_t p, float best_t, 
 /* One ray's best hit so far. upper is the bound handed to the triangle test:
  * tmax until a hit is found, then nextafter(t), so that a hit at equal t still
  * competes on its primitive id. */
+/* A mailbox (host only): the last triangles the ray was tested against, direct
+ * mapped by primitive id. A big triangle lies in many leaves; testing it again
+ * gives nothing new (best only improves, and the test is monotone in its upper
+ * bound: a miss stays a miss, a hit cannot win twice), so the host skips the
+ * arithmetic. The loads and cycles are still announced: the simulated tracer
+ * has no mailbox, and every simulated figure is the same with or without. */
+#define TRAV_MBOX 8
 struct trav_best {
   bool found;
   float t, b1, b2, upper;
   uint32_t p;
+  uint32_t mbox[TRAV_MBOX];
 };
 
 static inline void trav_best_init(struct trav_best *b, float tmax) {
@@ -194,6 +203,15 @@ static inline void trav_best_init(struct trav_best *b, float tmax) {
   b->t = b->upper = tmax;
   b->b1 = b->b2 = 0.0f;
   b->p = 0;
+  memset(b->mbox, 0xff, sizeof b->mbox);
+}
+
+/* True if b's ray has been tested against p already (and records it if not). */
+static inline bool trav_mbox_seen(struct trav_best *b, uint32_t p) {
+  uint32_t *slot = &b->mbox[p & (TRAV_MBOX - 1)];
+  if (*slot == p) return true;
+  *slot = p;
+  return false;
 }
 
 /* Keep hit (t, p, b1, b2) if it wins under the hit rule. */
@@ -203,7 +221,7 @@ static inline void trav_best_offer(struct trav_best *b, float t, uint32_t p, flo
   b->t = t;
   b->b1 = b1;
   b->b2 = b2;
-  b->upper = nextafterf(t, INFINITY);
+  b->upper = float_next_up(t);
   b->p = p;
 }
 
@@ -227,6 +245,7 @@ static inline bool trav_leaf(struct tracer *tr, const struct isect_ray *ir, floa
     uint32_t p = trav_leaf_prim(tr, off + j);
     if ((int64_t)p == (int64_t)ignore) continue;
     announce_tri(tr, p, 1);
+    if (trav_mbox_seen(b, p)) continue;
     const struct scene_tri *tri = &tr->scene->tris[p];
     float t, b1, b2;
     if (!isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], tmin, b->upper, &t, &b1, &b2)) continue;

@@ -4,6 +4,7 @@
 #define RTSIM_RENDERER_VEC_H
 
 #include <math.h>
+#include <stdint.h>
 
 typedef struct { float x, y, z; } vec3;
 
@@ -21,6 +22,22 @@ static inline vec3 v3_norm(vec3 a) {
   float l = v3_len(a);
   return l > 0.0f ? v3_scale(a, 1.0f / l) : a;
 }
+/* max and min of two non-NaN floats: one compare, where fmaxf and fminf are
+ * library calls (their NaN rule keeps the compiler from using maxss). */
+static inline float max_nonnan(float a, float b) { return a > b ? a : b; }
+static inline float min_nonnan(float a, float b) { return a < b ? a : b; }
+
+/* The next float above x (finite): nextafterf(x, INFINITY) without the call. */
+static inline float float_next_up(float x) {
+  union {
+    float f;
+    uint32_t u;
+  } v = {x};
+  if (x == 0.0f) return 0x1p-149f;
+  v.u = x > 0.0f ? v.u + 1 : v.u - 1;
+  return v.f;
+}
+
 static inline float v3_get(vec3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? a.y : a.z; }
 static inline vec3 v3_min(vec3 a, vec3 b) {
   return v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z));
