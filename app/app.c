@@ -67,6 +67,7 @@ bool app_world_load(struct app_world *w, const char *path) {
   double t1 = app_now();
   struct kd_build_params p;
   kd_build_params_default(&p);
+  p.clip = w->scene.kd_clip;
   kd_build(&w->kd, &w->scene, &p);
   w->load_s = t1 - t0;
   w->build_s = app_now() - t1;

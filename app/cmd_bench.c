@@ -3,8 +3,15 @@
  * same workload, and the one-pass analyser's own speed. */
 #include <getopt.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
 
 #include "app/app.h"
+#include "app/bench_embree.h"
+#include "renderer/camera.h"
+#include "renderer/meshio.h"
+#include "renderer/ray.h"
+#include "renderer/scene.h"
 #include "renderer/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
@@ -40,6 +47,17 @@ static const char HELP[] =
     "                         1024 cycles ahead as most of the machine's do; and\n"
     "                         1 to 2^20 cycles ahead, mostly past the calendar) and\n"
     "                         the coroutine switch (ns, best of 5 x 10M switches)\n"
+    "  --embree               (builds with -DRTSIM_EMBREE=ON; primary rays only) also\n"
+    "                         trace the image's primary rays, in the render's order,\n"
+    "                         one at a time with rtsim's tracer alone (no shading)\n"
+    "                         and with Embree 3 (single thread, rtcIntersect1,\n"
+    "                         robust mode) on the scene exported as PLY and read\n"
+    "                         back; adds kd_splits (the scene's kd_tree.splits),\n"
+    "                         kd_refs_per_tri, kd_max_leaf, trace_s,\n"
+    "                         trace_rays_per_s, embree_build_s, embree_s,\n"
+    "                         embree_rays_per_s, vs_embree (rays_per_s over\n"
+    "                         embree_rays_per_s), trace_vs_embree and\n"
+    "                         prim_mismatches (rays whose hit primitive differs)\n"
     "  --timed MACHINE.yaml   instead of the functional backend, time rtsim run's\n"
     "                         timed machine on the same image: once with the\n"
     "                         machine as configured and once with 1 core x 1 thread\n"
@@ -62,6 +80,66 @@ static double render_once(const struct app_world *w, uint32_t mask, uint32_t W, 
   app_render_fini(&ar);
   *rays = render_stats_total(&st);
   return s;
+}
+
+/* The image's primary rays in the order the recursive policy casts them. */
+static struct ray *primary_rays(const struct scene *s, uint32_t W, uint32_t H) {
+  uint32_t n = W * H;
+  uint32_t *order = xmalloc((unsigned long long)n * sizeof *order);
+  struct ray *rays = xmalloc((unsigned long long)n * sizeof *rays);
+  struct camera_frame cf;
+  camera_frame_init(&cf, &s->camera, W, H);
+  camera_hilbert_order(W, H, order);
+  for (uint32_t i = 0; i < n; i++) camera_primary(&cf, order[i] % W, order[i] / W, s->seed, &rays[i]);
+  free(order);
+  return rays;
+}
+
+/* rtsim's tracer alone on the same rays (native backend); prim[i] its hits. */
+static double trace_only(const struct app_world *w, const struct ray *rays, uint32_t n, int32_t *prim) {
+  struct tracer tr;
+  struct trace_layout lay;
+  trace_layout_default(&lay);
+  tracer_init(&tr, &w->scene, &w->kd, mem_port_native(), &lay);
+  double t0 = app_now();
+  for (uint32_t i = 0; i < n; i++) {
+    struct hit h;
+    trace_closest(&tr, &rays[i], &h);
+    prim[i] = h.prim;
+  }
+  return app_now() - t0;
+}
+
+/* The Embree peer over w's triangles as a PLY file holds them: export, read
+ * back through the importer, remove the file. NULL on failure (reported). */
+static struct bench_embree *embree_from_ply(const struct app_world *w, double *build_s) {
+  const char *td = getenv("TMPDIR");
+  char dir[4096];
+  snprintf(dir, sizeof dir, "%s/rtsim-bench-XXXXXX", td && *td ? td : "/tmp");
+  if (!mkdtemp(dir)) {
+    perror("rtsim bench: cannot make a temporary directory");
+    return NULL;
+  }
+  char ply[4200];
+  snprintf(ply, sizeof ply, "%s/scene.ply", dir);
+  struct err e = {0};
+  struct scene back;
+  scene_init(&back);
+  struct meshio_xform xf = {1.0f, v3(0, 0, 0)};
+  struct bench_embree *be = NULL;
+  if (meshio_export_ply(&w->scene, ply, &e) && meshio_import(&back, ply, &xf, 0, &e)) {
+    if (back.tri_count != w->scene.tri_count)
+      fprintf(stderr, "rtsim bench: %s: read back %u triangles, wrote %u\n", ply, back.tri_count,
+              w->scene.tri_count);
+    else
+      be = bench_embree_create(&back, build_s);
+  } else {
+    app_report(&e);
+  }
+  scene_fini(&back);
+  unlink(ply);
+  rmdir(dir);
+  return be;
 }
 
 /* The timed machine against the native render of the same image. */
@@ -114,11 +192,12 @@ int cmd_bench(int argc, char **argv) {
                                        {"analyser", required_argument, 0, 'a'},
                                        {"engine", no_argument, 0, 'e'},
                                        {"timed", required_argument, 0, 't'},
+                                       {"embree", no_argument, 0, 'E'},
                                        {"help", no_argument, 0, 'h'},
                                        {0, 0, 0, 0}};
   uint64_t width = 0, height = 0, repeat = 3, analyser = 0;
   const char *rays = "primary";
-  bool functional = false, engine = false;
+  bool functional = false, engine = false, embree = false;
   const char *timed = NULL;
   int c;
   opterr = 0;
@@ -133,6 +212,7 @@ int cmd_bench(int argc, char **argv) {
     case 'f': functional = true; break;
     case 'e': engine = true; break;
     case 't': timed = optarg; break;
+    case 'E': embree = true; break;
     case 'h': fputs(HELP, stdout); return 0;
     default: return app_option_error("bench", c, argv);
     }
@@ -158,8 +238,16 @@ int cmd_bench(int argc, char **argv) {
     return app_usage_error("bench", "--rays: got '%s', expected a comma-separated list of primary, shadow, specular, diffuse", rays);
   if (optind >= argc) return app_usage_error("bench", "missing SCENE.yaml");
   if (timed) return bench_timed(timed, mask, width, height, repeat, argc, argv);
-  printf("scene,triangles,kd_nodes,kd_build_s,width,height,rays,native_s,rays_per_s%s\n",
-         functional ? ",functional_s,slowdown,line_accesses,accesses_per_s" : "");
+  if (embree && !bench_embree_available())
+    return app_usage_error("bench", "--embree: this rtsim was built without Embree (install "
+                                    "libembree-dev and configure with -DRTSIM_EMBREE=ON)");
+  if (embree && mask != RAY_MASK(RAY_PRIMARY))
+    return app_usage_error("bench", "--embree compares primary rays only; got --rays %s", rays);
+  printf("scene,triangles,kd_nodes,kd_build_s,width,height,rays,native_s,rays_per_s%s%s\n",
+         functional ? ",functional_s,slowdown,line_accesses,accesses_per_s" : "",
+         embree ? ",kd_splits,kd_refs_per_tri,kd_max_leaf,trace_s,trace_rays_per_s,embree_build_s,embree_s,"
+                  "embree_rays_per_s,vs_embree,trace_vs_embree,prim_mismatches"
+                : "");
   for (int i = optind; i < argc; i++) {
     struct app_world w;
     if (!app_world_load(&w, argv[i])) return 2;
@@ -167,11 +255,30 @@ int cmd_bench(int argc, char **argv) {
     uint32_t H = height ? (uint32_t)height : w.scene.height;
     /* Native and functional renders alternate, so both see the same machine
      * state (the other core's load, frequency); each keeps its best time. */
-    double best = 0, fbest = 0;
-    uint64_t nrays = 0, acc = 0;
+    double best = 0, fbest = 0, tbest = 0, ebest = 0, ebuild = 0;
+    uint64_t nrays = 0, acc = 0, mismatches = 0;
+    struct bench_embree *be = NULL;
+    struct ray *prays = NULL;
+    int32_t *tprim = NULL, *eprim = NULL;
+    uint32_t np = W * H;
+    if (embree) {
+      be = embree_from_ply(&w, &ebuild);
+      if (!be) {
+        app_world_fini(&w);
+        return 1;
+      }
+      prays = primary_rays(&w.scene, W, H);
+      tprim = xmalloc((unsigned long long)np * sizeof *tprim);
+      eprim = xmalloc((unsigned long long)np * sizeof *eprim);
+    }
     for (uint64_t k = 0; k < repeat; k++) {
       double s = render_once(&w, mask, W, H, mem_port_native(), &nrays);
       if (k == 0 || s < best) best = s;
+      if (embree) {
+        double ts = trace_only(&w, prays, np, tprim), es = bench_embree_trace(be, prays, np, eprim);
+        if (k == 0 || ts < tbest) tbest = ts;
+        if (k == 0 || es < ebest) ebest = es;
+      }
       if (!functional) continue;
       struct lru_stack_params lp = lru_stack_params_default();
       struct fn_backend *b = fn_backend_create(&lp, NULL);
@@ -187,6 +294,19 @@ int cmd_bench(int argc, char **argv) {
     if (functional)
       printf(",%.4f,%.2f,%llu,%.0f", fbest, best > 0 ? fbest / best : 0.0, (unsigned long long)acc,
              fbest > 0 ? (double)acc / fbest : 0.0);
+    if (embree) {
+      for (uint32_t j = 0; j < np; j++) mismatches += tprim[j] != eprim[j];
+      double rps = best > 0 ? (double)nrays / best : 0.0, trps = tbest > 0 ? np / tbest : 0.0,
+             erps = ebest > 0 ? np / ebest : 0.0;
+      printf(",%s,%.2f,%u,%.4f,%.0f,%.3f,%.4f,%.0f,%.3f,%.3f,%llu",
+             w.scene.kd_clip ? "clipped" : "whole", w.scene.tri_count ? (double)w.kd.stats.leaf_prim_refs / w.scene.tri_count : 0.0,
+             w.kd.stats.max_leaf_prims, tbest, trps, ebuild, ebest, erps, erps > 0 ? rps / erps : 0.0,
+             erps > 0 ? trps / erps : 0.0, (unsigned long long)mismatches);
+      bench_embree_destroy(be);
+      free(prays);
+      free(tprim);
+      free(eprim);
+    }
     printf("\n");
     fflush(stdout);
     app_world_fini(&w);

@@ -48,6 +48,9 @@ static void print_world(const struct app_world *w, const char *path) {
   printf("triangles: %u\n", w->scene.tri_count);
   printf("load_s: %.3f\n", w->load_s);
   printf("kd_build_s: %.3f\n", w->build_s);
+  printf("kd_splits: %s\n", w->scene.kd_clip ? "clipped" : "whole");
+  printf("kd_refs_per_triangle: %.2f\n",
+         w->scene.tri_count ? (double)k->leaf_prim_refs / w->scene.tri_count : 0.0);
   printf("kd_nodes: %u\n", k->nodes);
   printf("kd_leaves: %u (empty %u)\n", k->leaves, k->empty_leaves);
   printf("kd_depth_max: %u\n", k->max_depth);

@@ -145,6 +145,7 @@ int cmd_run(int argc, char **argv) {
       .height = H,
       .seed = t.ar.sc.seed,
       .scene_hash = scene_hash(&w.scene),
+      .kd_splits = w.scene.kd_clip ? "clipped" : "whole",
       .cfg = &mc,
       .machine = t.m,
       .rstats = &t.st,

@@ -51,7 +51,8 @@ static const char TRAFFIC_HELP[] =
     "(fetch_geometry ... fetch_other), dirty write-back bytes (writeback_bytes), line\n"
     "accesses, and the potentially visible triangles and their bytes; last, the\n"
     "dynamic policy's settings as given (dyn_batch, dyn_ray_buffer_bytes: the same on\n"
-    "every row; they change the dynamic rows only).\n";
+    "every row; they change the dynamic rows only); and kd_splits, the scene's k-d\n"
+    "tree (whole: PBRT's, the paper's; clipped: perfect splits; scene key kd_tree).\n";
 
 /* The paper's ray configurations by name, or an explicit list. */
 static bool parse_config(const char *s, uint32_t *mask) {
@@ -224,7 +225,8 @@ int cmd_traffic(int argc, char **argv) {
              "rel_geometry,rel_total");
   for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
     fprintf(f, ",fetch_%s", trace_class_names[cl]);
-  fprintf(f, ",writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes\n");
+  fprintf(f, ",writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes,"
+             "kd_splits\n");
   const unsigned lg2 = lp.lg2_line;
   struct trace_layout layout;
   trace_layout_default(&layout);
@@ -250,9 +252,10 @@ int cmd_traffic(int argc, char **argv) {
             bg > 0 ? g / bg : 0.0, bt > 0 ? t / bt : 0.0);
     for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
       fprintf(f, ",%llu", (unsigned long long)fetched(&r->s, cl, lg2));
-    fprintf(f, ",%llu,%llu,%llu,%llu,%llu,%llu\n", (unsigned long long)wb, (unsigned long long)acc,
+    fprintf(f, ",%llu,%llu,%llu,%llu,%llu,%llu,%s\n", (unsigned long long)wb, (unsigned long long)acc,
             (unsigned long long)r->pot_vis_tris, (unsigned long long)pv_bytes,
-            (unsigned long long)pp.dyn_batch_rays, (unsigned long long)dyn_ray_buffer);
+            (unsigned long long)pp.dyn_batch_rays, (unsigned long long)dyn_ray_buffer,
+            w.scene.kd_clip ? "clipped" : "whole");
   }
   bool ok = !ferror(f);
   ok = (fclose(f) == 0) && ok;

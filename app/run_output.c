@@ -35,6 +35,7 @@ static void identity(const struct run_report *r, struct stats_table *t) {
   snprintf(hash, sizeof hash, "%016llx", (unsigned long long)r->scene_hash);
   stats_str(t, "scene", r->scene_name);
   stats_str(t, "scene_hash", hash);
+  stats_str(t, "kd_splits", r->kd_splits);
   stats_str(t, "policy", r->policy);
   stats_str(t, "rays", rays);
   stats_u64(t, "width", r->width);

@@ -20,6 +20,7 @@ struct run_report {
   uint32_t mask, width, height;
   uint64_t seed;
   uint64_t scene_hash; /* scene_hash() of the loaded scene */
+  const char *kd_splits; /* "whole" or "clipped": how the k-d tree was built */
   const struct machine_cfg *cfg;
   const struct machine *machine;
   const struct render_stats *rstats;

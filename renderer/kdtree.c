@@ -7,6 +7,7 @@
  * split moved). Children and their lists are indices and arena offsets. */
 #include "renderer/kdtree.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -35,6 +36,7 @@ struct kd_lists {
 
 struct kd_builder {
   const struct kd_build_params *p;
+  const struct scene *scene;
   struct kd_tree *t;
   struct kd_box *tb;  /* triangle bounds */
   uint8_t *side;      /* classification scratch: bit 0 below, bit 1 above */
@@ -42,6 +44,11 @@ struct kd_builder {
   size_t arena_top, arena_cap;
   uint32_t node_cap, prim_cap;
   uint32_t *leaf_scratch;
+  /* Perfect splits: the straddlers of the node being split (prims) and the
+   * events of their clipped bounds in each child, one list per axis. */
+  uint32_t *strad;
+  struct kd_ev *sev[2][3];
+  uint32_t sev_len[2][3], sev_cap;
 };
 
 float kd_trim_split(float s) {
@@ -76,6 +83,7 @@ void kd_build_params_default(struct kd_build_params *p) {
   p->empty_bonus = 0.5f;
   p->max_prims = 1;
   p->max_depth = -1;
+  p->clip = false;
 }
 
 void kd_fini(struct kd_tree *t) {
@@ -92,8 +100,19 @@ static uint32_t float_key(float f) {
   return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
 }
 
-/* Stable LSD radix sort by t; equal keys keep their input order (prim order). */
+/* Stable sort by t; equal keys keep their input order (prim order): insertion
+ * for short lists, LSD radix otherwise. */
 static void sort_events(struct kd_ev *ev, size_t n) {
+  if (n <= 64) {
+    for (size_t x = 1; x < n; x++) {
+      struct kd_ev v = ev[x];
+      uint32_t k = float_key(v.t);
+      size_t y = x;
+      for (; y > 0 && float_key(ev[y - 1].t) > k; y--) ev[y] = ev[y - 1];
+      ev[y] = v;
+    }
+    return;
+  }
   struct kd_ev *tmp = xmalloc(n * sizeof *tmp);
   struct kd_ev *src = ev, *dst = tmp;
   for (int pass = 0; pass < 4; pass++) {
@@ -253,6 +272,135 @@ static void sweep_axis(const struct kd_builder *b, const struct kd_lists *l, con
   }
 }
 
+/* Largest float <= d, and smallest float >= d (d finite, in float range). */
+static float float_down(double d) {
+  float f = (float)d;
+  return (double)f > d ? nextafterf(f, -INFINITY) : f;
+}
+static float float_up(double d) {
+  float f = (float)d;
+  return (double)f < d ? nextafterf(f, INFINITY) : f;
+}
+
+/* Bounds of what triangle p has inside box bx, conservatively: the triangle is
+ * clipped in double against bx widened by a margin m (2^-40 of the largest
+ * coordinate involved, far above the clipping's rounding), the result widened
+ * by m, rounded outwards to float and cut back to bx and to the triangle's own
+ * bounds (both exact). So every point of the triangle in bx lies in *out, and
+ * a triangle that touches bx, even at one point, is never dropped. False if
+ * the triangle misses the widened box. */
+static bool clip_tri(const struct kd_builder *b, uint32_t p, const struct kd_box *bx,
+                     struct kd_box *out) {
+  double poly[2][9][3];
+  const struct scene_tri *tr = &b->scene->tris[p];
+  double mag = 0.0;
+  for (int k = 0; k < 3; k++)
+    for (int a = 0; a < 3; a++) {
+      poly[0][k][a] = v3_get(tr->v[k], a);
+      double x = fabs(poly[0][k][a]);
+      mag = x > mag ? x : mag;
+    }
+  for (int a = 0; a < 3; a++) {
+    double l = fabs(bx->lo[a]), h = fabs(bx->hi[a]);
+    mag = l > mag ? l : mag;
+    mag = h > mag ? h : mag;
+  }
+  double m = mag * 0x1p-40 + DBL_MIN;
+  int n = 3, cur = 0;
+  for (int a = 0; a < 3; a++)
+    for (int hi = 0; hi < 2; hi++) {
+      double c = hi ? (double)bx->hi[a] + m : (double)bx->lo[a] - m;
+      double(*src)[3] = poly[cur], (*dst)[3] = poly[cur ^ 1];
+      int nn = 0;
+      for (int i = 0; i < n; i++) {
+        const double *P = src[i], *Q = src[i + 1 == n ? 0 : i + 1];
+        double dp = hi ? c - P[a] : P[a] - c, dq = hi ? c - Q[a] : Q[a] - c; /* >= 0 inside */
+        if (dp >= 0.0) {
+          memcpy(dst[nn++], P, sizeof dst[0]);
+        }
+        if ((dp >= 0.0) != (dq >= 0.0)) {
+          double t = dp / (dp - dq);
+          for (int k = 0; k < 3; k++) dst[nn][k] = P[k] + t * (Q[k] - P[k]);
+          dst[nn++][a] = c;
+        }
+      }
+      n = nn;
+      cur ^= 1;
+      if (n == 0) return false;
+    }
+  for (int a = 0; a < 3; a++) {
+    double lo = poly[cur][0][a], hi = lo;
+    for (int i = 1; i < n; i++) {
+      double x = poly[cur][i][a];
+      lo = x < lo ? x : lo;
+      hi = x > hi ? x : hi;
+    }
+    out->lo[a] = max_nonnan(float_down(lo - m), max_nonnan(bx->lo[a], b->tb[p].lo[a]));
+    out->hi[a] = min_nonnan(float_up(hi + m), min_nonnan(bx->hi[a], b->tb[p].hi[a]));
+    if (out->lo[a] > out->hi[a]) return false;
+  }
+  return true;
+}
+
+static void sev_push(struct kd_builder *b, int child, int a, float t, uint32_t pt) {
+  /* Each list holds at most two events per straddler: sized in clip_straddlers. */
+  b->sev[child][a][b->sev_len[child][a]].t = t;
+  b->sev[child][a][b->sev_len[child][a]++].pt = pt;
+}
+
+/* Clip the ns straddlers b->strad[] to each child box, make the events of
+ * their clipped bounds (sorted, one list per child and axis) and drop each
+ * from the children it misses (adjusting *nb, *na and side[]). */
+static void clip_straddlers(struct kd_builder *b, uint32_t ns, const struct kd_box *below,
+                            const struct kd_box *above, uint32_t *nb, uint32_t *na) {
+  if (2 * ns > b->sev_cap) {
+    b->sev_cap = 2 * ns;
+    for (int c = 0; c < 2; c++)
+      for (int a = 0; a < 3; a++) b->sev[c][a] = xrealloc(b->sev[c][a], b->sev_cap * sizeof *b->sev[c][a]);
+  }
+  for (int c = 0; c < 2; c++)
+    for (int a = 0; a < 3; a++) b->sev_len[c][a] = 0;
+  for (uint32_t i = 0; i < ns; i++) {
+    uint32_t p = b->strad[i];
+    for (int c = 0; c < 2; c++) {
+      struct kd_box cb;
+      if (!clip_tri(b, p, c ? above : below, &cb)) {
+        b->side[p] = (uint8_t)(b->side[p] & ~(c ? 2u : 1u));
+        (*(c ? na : nb))--;
+        continue;
+      }
+      for (int a = 0; a < 3; a++) {
+        if (cb.lo[a] == cb.hi[a]) {
+          sev_push(b, c, a, cb.lo[a], (p << 2) | KD_EV_PLANAR);
+        } else {
+          sev_push(b, c, a, cb.lo[a], (p << 2) | KD_EV_START);
+          sev_push(b, c, a, cb.hi[a], (p << 2) | KD_EV_END);
+        }
+      }
+    }
+    b->side[p] |= 4u; /* straddler: its old events are replaced */
+  }
+  for (int c = 0; c < 2; c++)
+    for (int a = 0; a < 3; a++) sort_events(b->sev[c][a], b->sev_len[c][a]);
+}
+
+/* Write to dst, in order of t, the events of ev[0..n) whose triangle is a
+ * non-straddler on side `bit`, merged with the straddler events s[0..ns)
+ * (ties: the old events first). Returns the count written. */
+static size_t merge_events(const struct kd_builder *b, const struct kd_ev *ev, uint32_t n,
+                           uint8_t bit, const struct kd_ev *sv, uint32_t ns, struct kd_ev *dst) {
+  size_t w = 0;
+  uint32_t i = 0, j = 0;
+  for (;;) {
+    while (i < n && (b->side[ev[i].pt >> 2] & (4u | bit)) != bit) i++;
+    if (i == n) break;
+    while (j < ns && float_key(sv[j].t) < float_key(ev[i].t)) dst[w++] = sv[j++];
+    dst[w++] = ev[i++];
+  }
+  while (j < ns) dst[w++] = sv[j++];
+  return w;
+}
+
 /* Build node over the n triangles whose event lists are l (at the arena's top
  * region starting at l->off). On return the arena is popped back to l->off. */
 static void build_node(struct kd_builder *b, const struct kd_box *bx, const struct kd_lists *l,
@@ -283,27 +431,47 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
     return;
   }
 
-  /* Classify against the trimmed plane (best.s has an even mantissa already). */
+  /* Classify against the trimmed plane (best.s has an even mantissa already),
+   * from the split axis's events, i.e. the node's own (clipped) bounds: below
+   * if the lower bound is < s, above if the upper bound is > s, both if flat
+   * at s. Triangles on both sides are the straddlers. */
   int a = best.axis;
   float s = best.s;
   CHECK(!mantissa_odd(s) && kd_trim_split(s) == s);
-  const struct kd_ev *ev0 = b->arena + l->off;
-  uint32_t nb = 0, na = 0;
-  for (uint32_t j = 0; j < l->len[0]; j++) {
-    if ((ev0[j].pt & 3u) == KD_EV_END) continue;
-    uint32_t p = ev0[j].pt >> 2;
-    float lo = b->tb[p].lo[a], hi = b->tb[p].hi[a];
-    bool flat_at = lo == hi && lo == s;
-    uint8_t sd = (uint8_t)(((lo < s || flat_at) ? 1u : 0u) | ((hi > s || flat_at) ? 2u : 0u));
+  size_t base_a = 0;
+  for (int k = 0; k < a; k++) base_a += l->len[k];
+  const struct kd_ev *ea = b->arena + l->off + base_a;
+  uint32_t nb = 0, na = 0, ns = 0;
+  for (uint32_t j = 0; j < l->len[a]; j++) {
+    uint32_t p = ea[j].pt >> 2, ty = ea[j].pt & 3u;
+    float v = ea[j].t;
+    if (ty == KD_EV_START) {
+      b->side[p] = v < s ? 1u : 0u;
+      continue;
+    }
+    if (ty == KD_EV_END)
+      b->side[p] = (uint8_t)(b->side[p] | (v > s ? 2u : 0u));
+    else
+      b->side[p] = (uint8_t)(v < s ? 1u : (v > s ? 2u : 3u));
+    uint8_t sd = b->side[p];
     CHECK(sd != 0);
-    b->side[p] = sd;
     nb += sd & 1u;
     na += sd >> 1;
+    if (sd == 3u && b->p->clip) b->strad[ns++] = p;
   }
 
+  struct kd_box below = *bx, above = *bx;
+  below.hi[a] = s;
+  above.lo[a] = s;
+  bool clip = b->p->clip && ns > 0;
+  if (clip) clip_straddlers(b, ns, &below, &above, &nb, &na);
+
   /* Split the lists in one stable pass: above events to the top, below events
-   * after room for all; then close the gap and move both down over this
-   * node's lists, which are dead now: [above lists][below lists]. */
+   * after room for all (no child list is longer than the parent's: a clipped
+   * straddler has at most as many events as before); then close the gap and
+   * move both down over this node's lists, which are dead now:
+   * [above lists][below lists]. With clipping, the straddlers' old events are
+   * dropped and their clipped ones merged in. */
   size_t total = (size_t)l->len[0] + l->len[1] + l->len[2];
   arena_reserve(b, total * 2);
   const struct kd_ev *e = b->arena + l->off;
@@ -312,15 +480,21 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
   size_t wa = 0, wb = 0;
   for (int k = 0; k < 3; k++) {
     size_t a0 = wa, b0 = wb;
-    for (uint32_t j = 0; j < l->len[k]; j++) {
-      uint8_t sd = b->side[e[j].pt >> 2];
-      da[wa] = e[j];
-      wa += sd >> 1;
-      db[wb] = e[j];
-      wb += sd & 1u;
+    if (!clip) {
+      for (uint32_t j = 0; j < l->len[k]; j++) {
+        uint8_t sd = b->side[e[j].pt >> 2];
+        da[wa] = e[j];
+        wa += sd >> 1;
+        db[wb] = e[j];
+        wb += sd & 1u;
+      }
+    } else {
+      wa += merge_events(b, e, l->len[k], 2u, b->sev[1][k], b->sev_len[1][k], da + wa);
+      wb += merge_events(b, e, l->len[k], 1u, b->sev[0][k], b->sev_len[0][k], db + wb);
     }
     la.len[k] = (uint32_t)(wa - a0);
     lb.len[k] = (uint32_t)(wb - b0);
+    CHECK(la.len[k] <= l->len[k] && lb.len[k] <= l->len[k]);
     e += l->len[k];
   }
   memmove(da + wa, db, wb * sizeof *db);
@@ -328,9 +502,6 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
   lb.off = l->off + wa;
   b->arena_top = l->off + wa + wb;
 
-  struct kd_box below = *bx, above = *bx;
-  below.hi[a] = s;
-  above.lo[a] = s;
   build_node(b, &below, &lb, nb, depth + 1, depth_left - 1, bad_refines);
   uint32_t above_idx = t->node_count;
   CHECK(above_idx < (1u << 30));
@@ -363,6 +534,8 @@ void kd_build(struct kd_tree *t, const struct scene *s, const struct kd_build_pa
   b.tb = xmalloc((n ? n : 1) * sizeof *b.tb);
   b.side = xcalloc(n ? n : 1, 1);
   b.leaf_scratch = xmalloc((n ? n : 1) * sizeof *b.leaf_scratch);
+  b.scene = s;
+  if (p->clip) b.strad = xmalloc((n ? n : 1) * sizeof *b.strad);
   for (uint32_t i = 0; i < n; i++) {
     const struct scene_tri *tr = &s->tris[i];
     for (int a = 0; a < 3; a++) {
@@ -408,5 +581,8 @@ void kd_build(struct kd_tree *t, const struct scene *s, const struct kd_build_pa
   free(b.tb);
   free(b.side);
   free(b.leaf_scratch);
+  free(b.strad);
+  for (int c = 0; c < 2; c++)
+    for (int a = 0; a < 3; a++) free(b.sev[c][a]);
   free(b.arena);
 }

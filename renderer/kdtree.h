@@ -55,6 +55,10 @@ struct kd_build_params {
   float empty_bonus;    /* SAH bonus for an empty child, in [0,1) (PBRT: 0.5) */
   uint32_t max_prims;   /* make a leaf at or below this many triangles (PBRT: 1) */
   int max_depth;        /* < 0: 8 + 1.3 log2(N) as PBRT */
+  bool clip;            /* perfect splits: a triangle cut by a plane is clipped to
+                           each child's box and goes on with the bounds of what
+                           lies inside it; false (default): with its whole bounds,
+                           as PBRT's tree and the paper's */
 };
 
 struct kd_stats {

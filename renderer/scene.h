@@ -50,6 +50,8 @@ struct scene {
   vec3 background;        /* colour of rays that leave the scene */
   float ambient;          /* ambient term weight (times material colour) */
   uint64_t seed;          /* generator seed (also the default render seed) */
+  bool kd_clip;           /* kd_tree.splits: clipped (perfect splits) rather than
+                             whole (PBRT's and the paper's tree, the default) */
 };
 
 void scene_init(struct scene *s);

@@ -247,6 +247,19 @@ static bool load_geometry(const struct cfg_doc *d, struct cfg_node *n, const cha
   return true;
 }
 
+/* kd_tree: {splits: whole | clipped}. How the k-d tree treats a triangle cut
+ * by a split plane: whole keeps its full bounds on both sides (PBRT, as the
+ * paper); clipped carries only the bounds of the part inside each child. */
+static bool load_kd_tree(struct cfg_doc *d, struct cfg_node *n, struct scene *s, struct err *e) {
+  if (!cfg_expect_map(d, n, "kd_tree", e)) return false;
+  struct cfg_node *v = cfg_get(n, "splits");
+  static const char *const splits[] = {"whole", "clipped", NULL};
+  int k = 0;
+  if (v && !cfg_enum(d, v, "kd_tree.splits", splits, &k, e)) return false;
+  s->kd_clip = k == 1;
+  return cfg_check_keys(d, n, "kd_tree", "splits", e);
+}
+
 bool scene_load(struct scene *s, const char *path, struct err *e) {
   scene_init(s);
   struct cfg_doc d;
@@ -268,13 +281,15 @@ bool scene_load(struct scene *s, const char *path, struct err *e) {
   s->ambient = (float)amb;
   if ((n = cfg_get(r, "lights")) && !load_lights(&d, n, s, e)) goto done;
   if ((n = cfg_get(r, "materials")) && !load_materials(&d, n, s, e)) goto done;
+  if ((n = cfg_get(r, "kd_tree")) && !load_kd_tree(&d, n, s, e)) goto done;
   if (!(n = cfg_get(r, "geometry"))) {
     cfg_fail(&d, r, "", e, "missing required key 'geometry'");
     goto done;
   }
   /* Check the top level before generating geometry, which can take seconds. */
   if (!cfg_check_keys(&d, r, "",
-                      "name, seed, image, camera, background, ambient, lights, materials, geometry",
+                      "name, seed, image, camera, background, ambient, lights, materials, "
+                      "kd_tree, geometry",
                       e))
     goto done;
   ok = load_geometry(&d, n, path, s, e);

@@ -96,6 +96,7 @@ int main(void) {
       {"bad_mesh_broken.yaml", "bad_mesh_broken.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/broken.ply: cannot import mesh: "},
       {"bad_light_key.yaml", "bad_light_key.yaml:3:5: error: lights[0]: missing required key 'position'"},
       {"bad_camera_degenerate.yaml", "bad_camera_degenerate.yaml:1:31: error: camera.at: equals camera.from"},
+      {"bad_kd_splits.yaml", "bad_kd_splits.yaml:2:19: error: kd_tree.splits: unknown value (got 'perfect', expected one of: whole, clipped)"},
       {"bad_color.yaml", "bad_color.yaml:3:20: error: materials.red.color[1]: out of range (got 2, expected 0 to 1)"},
       {"bad_empty.yaml", "bad_empty.yaml: error: empty file"},
       {"bad_width.yaml", "bad_width.yaml:2:16: error: image.width: out of range (got 0, expected 1 to 16384)"},

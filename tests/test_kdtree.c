@@ -155,6 +155,60 @@ static bool must_hold(const struct tbox *t, const float lo[3], const float hi[3]
   return true;
 }
 
+/* With perfect splits a leaf must hold every triangle that meets its box: the
+ * box shrunk by a hair (1e-6 of its extent) along every axis the triangle is
+ * not flat in, and closed along an axis it is flat in (a triangle lying in a
+ * face belongs to the leaves on both sides). Separating-axis test (box axes,
+ * triangle normal, the nine edge-by-axis crosses) in double. */
+static bool meets_tri(const struct scene_tri *tri, const float lo[3], const float hi[3]) {
+  double v[3][3], c[3], h[3];
+  for (int a = 0; a < 3; a++) {
+    double x0 = v3_at(tri->v[0], a), x1 = v3_at(tri->v[1], a), x2 = v3_at(tri->v[2], a);
+    bool flat = x0 == x1 && x1 == x2;
+    double e = flat ? 0.0 : 1e-6 * ((double)hi[a] - lo[a]);
+    double l = lo[a] + e, u = hi[a] - e;
+    if (l > u) return false;
+    c[a] = 0.5 * (l + u);
+    h[a] = 0.5 * (u - l);
+    v[0][a] = x0 - c[a];
+    v[1][a] = x1 - c[a];
+    v[2][a] = x2 - c[a];
+  }
+  double axes[13][3];
+  int na = 0;
+  for (int a = 0; a < 3; a++) {
+    double ax[3] = {0, 0, 0};
+    ax[a] = 1;
+    memcpy(axes[na++], ax, sizeof ax);
+  }
+  double ed[3][3];
+  for (int k = 0; k < 3; k++)
+    for (int a = 0; a < 3; a++) ed[k][a] = v[(k + 1) % 3][a] - v[k][a];
+  axes[na][0] = ed[0][1] * ed[1][2] - ed[0][2] * ed[1][1];
+  axes[na][1] = ed[0][2] * ed[1][0] - ed[0][0] * ed[1][2];
+  axes[na][2] = ed[0][0] * ed[1][1] - ed[0][1] * ed[1][0];
+  na++;
+  for (int k = 0; k < 3; k++)
+    for (int a = 0; a < 3; a++) {
+      double u[3] = {0, 0, 0};
+      u[a] = 1;
+      axes[na][0] = ed[k][1] * u[2] - ed[k][2] * u[1];
+      axes[na][1] = ed[k][2] * u[0] - ed[k][0] * u[2];
+      axes[na][2] = ed[k][0] * u[1] - ed[k][1] * u[0];
+      na++;
+    }
+  for (int i = 0; i < na; i++) {
+    const double *n = axes[i];
+    double p0 = n[0] * v[0][0] + n[1] * v[0][1] + n[2] * v[0][2];
+    double p1 = n[0] * v[1][0] + n[1] * v[1][1] + n[2] * v[1][2];
+    double p2 = n[0] * v[2][0] + n[1] * v[2][1] + n[2] * v[2][2];
+    double mn = fmin(p0, fmin(p1, p2)), mx = fmax(p0, fmax(p1, p2));
+    double r = h[0] * fabs(n[0]) + h[1] * fabs(n[1]) + h[2] * fabs(n[2]);
+    if (mn > r || mx < -r) return false;
+  }
+  return true;
+}
+
 static bool touches(const struct tbox *t, const float lo[3], const float hi[3]) {
   for (int a = 0; a < 3; a++)
     if (t->lo[a] > hi[a] || t->hi[a] < lo[a]) return false;
@@ -175,7 +229,7 @@ static int pbrt_max_depth(uint32_t n) {
 /* Walk the tree with node boxes; returns the number of splits that differ from
  * every triangle bound (i.e. were moved by trimming). */
 static uint32_t check_structure(const char *name, const struct scene *s, const struct kd_tree *kd,
-                                int max_depth) {
+                                int max_depth, bool clip) {
   uint32_t n = s->tri_count;
   struct tbox *tb = tri_boxes(s);
   float *coords[3]; /* sorted vertex coordinates per axis */
@@ -253,7 +307,8 @@ static uint32_t check_structure(const char *name, const struct scene *s, const s
       }
     }
     for (uint32_t p = 0; p < n; p++) {
-      if (!in_leaf[p] && must_hold(&tb[p], e.lo, e.hi)) {
+      if (!in_leaf[p] && (clip ? must_hold(&tb[p], e.lo, e.hi) && meets_tri(&s->tris[p], e.lo, e.hi)
+                                    : must_hold(&tb[p], e.lo, e.hi))) {
         EXPECTF(0, "%s: leaf %u (depth %u) misses triangle %u overlapping it", name, e.node,
                 e.depth, p);
         errors++;
@@ -472,7 +527,7 @@ static void run_scene(const char *name, const struct scene *s, const struct kd_b
   struct kd_tree kd;
   kd_build(&kd, s, bp);
   int md = bp->max_depth < 0 ? pbrt_max_depth(s->tri_count) : bp->max_depth;
-  check_structure(name, s, &kd, md);
+  check_structure(name, s, &kd, md, bp->clip);
   check_rays(name, s, &kd, nrays, seed);
   fprintf(stderr, "%s: %u tris, %u nodes, %u leaves (%u empty), depth %u, max leaf %u, refs %llu\n",
           name, s->tri_count, kd.stats.nodes, kd.stats.leaves, kd.stats.empty_leaves,
@@ -500,7 +555,7 @@ static void test_small_cases(void) {
   struct kd_build_params bp;
   kd_build_params_default(&bp);
   EXPECT(bp.cost_isect == 80.0f && bp.cost_traversal == 1.0f && bp.empty_bonus == 0.5f &&
-         bp.max_prims == 1 && bp.max_depth < 0);
+         bp.max_prims == 1 && bp.max_depth < 0 && !bp.clip);
   /* Empty scene: one empty leaf; everything misses. */
   struct scene s;
   scene_init(&s);
@@ -538,15 +593,41 @@ static void test_odd_mantissas(void) {
   struct scene s;
   scene_init(&s);
   soup_grid(&s, 31, 1500, true);
+  /* Whole bounds (no clipping): every candidate is a vertex coordinate, all odd. */
+  bp.clip = false;
   struct kd_tree kd;
   kd_build(&kd, &s, &bp);
   uint32_t interior = kd.stats.nodes - kd.stats.leaves;
-  uint32_t trimmed = check_structure("odd soup", &s, &kd, pbrt_max_depth(s.tri_count));
+  uint32_t trimmed = check_structure("odd soup", &s, &kd, pbrt_max_depth(s.tri_count), false);
   EXPECTF(interior > 100 && trimmed == interior, "odd soup: %u of %u splits trimmed", trimmed,
           interior);
   check_rays("odd soup", &s, &kd, 20000, 32);
   kd_fini(&kd);
+  /* Clipped bounds are rounded outwards, odd or not: trimming stays conservative. */
+  bp.clip = true;
+  run_scene("odd soup clipped", &s, &bp, 20000, 33);
   scene_fini(&s);
+}
+
+/* Perfect splits against whole bounds on one scene: both exact against brute
+ * force, and clipping must cut references. */
+static void compare_clip(const char *name, const struct scene *s, int nrays, uint64_t seed) {
+  struct kd_build_params bp;
+  kd_build_params_default(&bp);
+  bp.clip = true;
+  run_scene(name, s, &bp, nrays, seed);
+  struct kd_tree kc, kw;
+  kd_build(&kc, s, &bp);
+  bp.clip = false;
+  char wname[96];
+  snprintf(wname, sizeof wname, "%s whole bounds", name);
+  run_scene(wname, s, &bp, nrays, seed + 1);
+  kd_build(&kw, s, &bp);
+  EXPECTF(kc.stats.leaf_prim_refs < kw.stats.leaf_prim_refs,
+          "%s: clipping gave %llu references, whole bounds %llu", name,
+          (unsigned long long)kc.stats.leaf_prim_refs, (unsigned long long)kw.stats.leaf_prim_refs);
+  kd_fini(&kc);
+  kd_fini(&kw);
 }
 
 static void test_soups(void) {
@@ -555,7 +636,7 @@ static void test_soups(void) {
   struct scene s;
   scene_init(&s);
   soup_random(&s, 41, 3000);
-  run_scene("random soup", &s, &bp, 20000, 42);
+  compare_clip("random soup", &s, 20000, 42);
   scene_fini(&s);
 
   scene_init(&s);
@@ -587,20 +668,18 @@ static void test_soups(void) {
 }
 
 static void test_generated(void) {
-  struct kd_build_params bp;
-  kd_build_params_default(&bp);
   struct scene s;
   scene_init(&s);
   gen_sphereflake(&s, 1, 3);
-  run_scene("sphereflake 1", &s, &bp, 20000, 61);
+  compare_clip("sphereflake 1", &s, 20000, 61);
   scene_fini(&s);
   scene_init(&s);
   gen_grove(&s, 0.02, 1);
-  run_scene("grove 0.02", &s, &bp, 20000, 62);
+  compare_clip("grove 0.02", &s, 20000, 62);
   scene_fini(&s);
   scene_init(&s);
   gen_room(&s, 0.05, 1);
-  run_scene("room 0.05", &s, &bp, 20000, 63);
+  compare_clip("room 0.05", &s, 20000, 63);
   scene_fini(&s);
 }
 

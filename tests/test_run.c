@@ -518,6 +518,7 @@ static void test_command(void) {
   /* Traceable: the scene's hash (16 hex digits) and the build's revision. */
   const char *hash = strstr(json, "\"scene_hash\": \"");
   EXPECT(hash && strspn(hash + 15, "0123456789abcdef") == 16 && hash[31] == '"');
+  EXPECT(strstr(json, "\"kd_splits\": \"whole\""));
   const char *rev = strstr(json, "\"revision\": \"");
   EXPECT(rev && rev[13] != '"');
 

@@ -221,7 +221,8 @@ static void test_run_and_merge(void) {
   char *t = read_all(RTSIM_TMP "/sw_ref.csv");
   EXPECT(t != NULL);
   if (!t) return;
-  static const char head[] = "point,policy,rays_per_thread,l2.size,l2.ways,scene,scene_hash,rays,width,";
+  static const char head[] =
+      "point,policy,rays_per_thread,l2.size,l2.ways,scene,scene_hash,kd_splits,rays,width,";
   EXPECTF(!strncmp(t, head, strlen(head)), "header: %.200s", t);
   EXPECT(count_lines(t) == 9);
   /* Rows in natural order of the names; a swept size takes its resolved value. */
