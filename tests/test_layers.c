@@ -1,7 +1,8 @@
 /* The one door: sim/ never includes a renderer/ header; renderer/ includes from
- * sim/ only the memory interface (mem.h) and the two input utilities that know
+ * sim/ only the memory interface (mem.h) and the file utilities that know
  * nothing of cycles or caches (cfg.h: YAML with positions, err.h: user-error
- * records), shared so that scene and machine files report errors alike. */
+ * records, outfile.h: whole-or-absent output files), shared so that scene and
+ * machine files report errors alike and every output is written one way. */
 #include <dirent.h>
 #include <stdio.h>
 #include <string.h>
@@ -43,7 +44,7 @@ static int scan(const char *dir, const char *forbidden_prefix, const char *const
 
 int main(void) {
   static const char *const none[] = {NULL};
-  static const char *const door[] = {"sim/mem.h", "sim/cfg.h", "sim/err.h", NULL};
+  static const char *const door[] = {"sim/mem.h", "sim/cfg.h", "sim/err.h", "sim/outfile.h", NULL};
   EXPECT(scan(RTSIM_SOURCE_DIR "/sim", "renderer/", none) > 0);
   EXPECT(scan(RTSIM_SOURCE_DIR "/renderer", "sim/", door) > 0);
   return testing_done("test_layers");
