@@ -17,6 +17,7 @@
 #include "app/app.h"
 #include "app/csv.h"
 #include "sim/err.h"
+#include "sim/outfile.h"
 #include "sim/stats.h"
 
 static const char HELP[] =
@@ -150,29 +151,26 @@ int cmd_merge(int argc, char **argv) {
   for (unsigned i = 0; i < n; i++)
     for (unsigned k = 0; k < pts[i].stats.ncols; k++) add_column(&cols, &ncols, pts[i].stats.names[k]);
 
-  char tmp[8192];
-  snprintf(tmp, sizeof tmp, "%s.tmp", out);
-  FILE *f = fopen(tmp, "w");
-  if (f) {
-    for (unsigned k = 0; k < ncols; k++) {
-      if (k) fputc(',', f);
-      stats_write_csv_str(f, cols[k]);
+  struct outfile o;
+  if (!outfile_open(&o, out, "the table", &e)) {
+    rc = app_report(&e);
+    goto done;
+  }
+  FILE *f = o.f;
+  for (unsigned k = 0; k < ncols; k++) {
+    if (k) fputc(',', f);
+    stats_write_csv_str(f, cols[k]);
+  }
+  fputc('\n', f);
+  for (unsigned i = 0; i < n; i++) {
+    stats_write_csv_str(f, pts[i].name);
+    for (unsigned k = 1; k < ncols; k++) {
+      fputc(',', f);
+      stats_write_csv_str(f, cell(&pts[i], cols[k]));
     }
     fputc('\n', f);
-    for (unsigned i = 0; i < n; i++) {
-      stats_write_csv_str(f, pts[i].name);
-      for (unsigned k = 1; k < ncols; k++) {
-        fputc(',', f);
-        stats_write_csv_str(f, cell(&pts[i], cols[k]));
-      }
-      fputc('\n', f);
-    }
   }
-  bool ok = f && !ferror(f);
-  if (f && fclose(f) != 0) ok = false;
-  if (!ok || rename(tmp, out) != 0) {
-    unlink(tmp);
-    err_set(&e, out, 0, 0, "cannot write the table: %s", strerror(errno));
+  if (!outfile_commit(&o, &e)) {
     rc = app_report(&e);
     goto done;
   }

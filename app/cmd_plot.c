@@ -2,17 +2,18 @@
  * header) through gnuplot: METRIC against KEY, one line per value of a
  * --lines column, one panel per value of a --panels column, units on the
  * axes from the column names. The script goes to gnuplot on a pipe with the
- * data inline; the picture is written under a temporary name and renamed. */
+ * data inline; the picture is written under a temporary name and renamed
+ * (sim/outfile.h). */
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "app/app.h"
 #include "app/csv.h"
 #include "sim/err.h"
+#include "sim/outfile.h"
 
 static const char HELP[] =
     "usage: rtsim plot TABLE.csv --x KEY --y METRIC -o FILE.png|FILE.svg [options]\n"
@@ -253,6 +254,7 @@ int cmd_plot(int argc, char **argv) {
   unsigned *kept = NULL;
   struct row *rows = NULL;
   struct values lines = {0}, panels = {0};
+  struct outfile plot = {0};
   if (!csv_read(&t, table, &e)) return app_report(&e);
   int xc = column(&t, "--x", xk), yc = xc < 0 ? -1 : column(&t, "--y", yk);
   int lc = -1, pc = -1;
@@ -351,8 +353,11 @@ int cmd_plot(int argc, char **argv) {
   free(xs);
   free(ys);
   unsigned cols = (unsigned)ceil(sqrt((double)panels.n)), prow = (panels.n + cols - 1) / cols;
-  char tmp[8192], label[512];
-  snprintf(tmp, sizeof tmp, "%s.tmp", out);
+  char label[512];
+  if (!outfile_open_named(&plot, out, "the plot", &e)) {
+    rc = 1;
+    goto fail;
+  }
   FILE *gp = popen("gnuplot >/dev/null", "w");
   if (!gp) {
     err_set(&e, out, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
@@ -361,7 +366,7 @@ int cmd_plot(int argc, char **argv) {
   }
   fprintf(gp, "set terminal %s size %u,%u noenhanced font ',11'\nset output ", svg ? "svg" : "pngcairo",
           cols * 620, prow * 420);
-  gp_str(gp, tmp);
+  gp_str(gp, plot.tmp);
   fputs("\nset grid\nset key outside right top\nset pointsize 0.8\n", gp);
   axis_label(xk, label, sizeof label);
   fputs("set xlabel ", gp);
@@ -415,9 +420,12 @@ int cmd_plot(int argc, char **argv) {
     }
   }
   fputs("unset multiplot\n", gp);
-  if (pclose(gp) != 0 || rename(tmp, out) != 0) {
-    unlink(tmp);
+  if (pclose(gp) != 0) {
     err_set(&e, out, 0, 0, "gnuplot could not draw the plot (is gnuplot-nox installed?)");
+    rc = 1;
+    goto fail;
+  }
+  if (!outfile_commit(&plot, &e)) {
     rc = 1;
     goto fail;
   }
@@ -425,6 +433,7 @@ int cmd_plot(int argc, char **argv) {
           lines.n == 1 ? "" : "s", panels.n, panels.n == 1 ? "" : "s", out);
   rc = 0;
 fail:
+  outfile_abort(&plot);
   if (e.set) app_report(&e);
   free(kept);
   free(rows);

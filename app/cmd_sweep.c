@@ -21,6 +21,7 @@
 #include "app/app.h"
 #include "app/sweep.h"
 #include "sim/err.h"
+#include "sim/outfile.h"
 #include "sim/stats.h"
 
 static const char HELP[] =
@@ -101,16 +102,16 @@ static bool exists(const char *dir, const char *name) {
 /* Write text to dir/name through a temporary name. */
 static bool write_file(const char *dir, const char *name, const char *text, int mode,
                        struct err *e) {
-  char path[8192], tmp[8300];
+  char path[8192];
   snprintf(path, sizeof path, "%s/%s", dir, name);
-  snprintf(tmp, sizeof tmp, "%s/.%s.tmp", dir, name);
-  FILE *f = fopen(tmp, "w");
-  bool ok = f && fputs(text, f) >= 0;
-  if (f && fclose(f) != 0) ok = false;
-  if (ok) chmod(tmp, (mode_t)mode);
-  if (ok && rename(tmp, path) == 0) return true;
-  unlink(tmp);
-  return err_set(e, path, 0, 0, "cannot write: %s", strerror(errno));
+  struct outfile o;
+  if (!outfile_open(&o, path, "the file", e)) return false;
+  fputs(text, o.f);
+  if (fchmod(fileno(o.f), (mode_t)mode) != 0) {
+    outfile_abort(&o);
+    return err_set(e, path, 0, 0, "cannot write the file: %s", strerror(errno));
+  }
+  return outfile_commit(&o, e);
 }
 
 /* mkdir -p. */
@@ -209,12 +210,11 @@ static void format_duration(double s, char *out, size_t cap) {
 struct running {
   pid_t pid;
   struct job *j;
+  struct outfile err; /* its stderr, to become DIR/<point>/error.txt if it fails */
 };
 
-/* Start job j: stdout to /dev/null, stderr to DIR/<point>/.error.txt.tmp. */
-static pid_t launch(const char *bin, struct job *j, const sigset_t *mask) {
-  char err_path[8192];
-  snprintf(err_path, sizeof err_path, "%s/.error.txt.tmp", j->dir);
+/* Start job j: stdout to /dev/null, stderr to err_path. */
+static pid_t launch(const char *bin, struct job *j, const char *err_path, const sigset_t *mask) {
   pid_t pid = fork();
   if (pid != 0) return pid;
   /* The child: the parent's signal mask must not outlive exec. */
@@ -236,18 +236,16 @@ static pid_t launch(const char *bin, struct job *j, const sigset_t *mask) {
   _exit(127);
 }
 
-/* A finished point: complete, or failed with its stderr kept as error.txt. */
-static bool settle(struct job *j, int status) {
-  char tmp[8192], final[8192];
-  snprintf(tmp, sizeof tmp, "%s/.error.txt.tmp", j->dir);
-  snprintf(final, sizeof final, "%s/error.txt", j->dir);
+/* A finished point: complete, or failed with its stderr (err) kept as
+ * error.txt. */
+static bool settle(struct job *j, int status, struct outfile *err) {
   j->complete = WIFEXITED(status) && WEXITSTATUS(status) == 0 && exists(j->dir, "stats.json");
   if (j->complete) {
-    unlink(tmp);
-    unlink(final);
+    unlink(err->path); /* an earlier attempt's */
+    outfile_abort(err);
     return true;
   }
-  FILE *f = fopen(tmp, "a");
+  FILE *f = fopen(err->tmp, "a");
   if (f) {
     if (WIFEXITED(status) && WEXITSTATUS(status) == 0)
       fprintf(f, "rtsim sweep: the point exited with code 0 but wrote no stats.json\n");
@@ -258,7 +256,8 @@ static bool settle(struct job *j, int status) {
               strsignal(WTERMSIG(status)));
     fclose(f);
   }
-  rename(tmp, final);
+  struct err e = {0};
+  outfile_commit(err, &e); /* on failure first_error() says "(no message)" */
   return false;
 }
 
@@ -306,21 +305,25 @@ static int run_jobs(const char *bin, struct job **todo, unsigned n, unsigned job
     while (t.running < jobs && next < n) {
       struct err e = {0};
       struct job *j = todo[next++];
-      if (!prepare(s, j, &e)) {
+      char err_path[8192];
+      snprintf(err_path, sizeof err_path, "%s/error.txt", j->dir);
+      struct outfile err;
+      if (!prepare(s, j, &e) || !outfile_open_named(&err, err_path, "the file", &e)) {
         if (tty) fputs("\r\033[K", stderr);
         app_report(&e);
         t.failed++;
         continue;
       }
-      pid_t pid = launch(bin, j, &old);
+      pid_t pid = launch(bin, j, err.tmp, &old);
       if (pid < 0) {
         fprintf(stderr, "rtsim sweep: cannot start a process: %s\n", strerror(errno));
+        outfile_abort(&err);
         t.failed++;
         continue;
       }
       for (unsigned k = 0; k < jobs; k++)
         if (!run[k].pid) {
-          run[k] = (struct running){pid, j};
+          run[k] = (struct running){pid, j, err};
           break;
         }
       t.running++;
@@ -337,7 +340,7 @@ static int run_jobs(const char *bin, struct job **todo, unsigned n, unsigned job
         struct job *j = run[k].j;
         run[k].pid = 0;
         t.running--;
-        if (settle(j, status)) {
+        if (settle(j, status, &run[k].err)) {
           t.done++;
           t.cost_done += j->p->cost;
         } else {
@@ -356,9 +359,7 @@ static int run_jobs(const char *bin, struct job **todo, unsigned n, unsigned job
     for (unsigned k = 0; k < jobs; k++)
       if (run[k].pid) {
         waitpid(run[k].pid, NULL, 0);
-        char tmp[8192];
-        snprintf(tmp, sizeof tmp, "%s/.error.txt.tmp", run[k].j->dir);
-        unlink(tmp);
+        outfile_abort(&run[k].err);
       }
   }
   if (tty) fputs("\r\033[K", stderr);

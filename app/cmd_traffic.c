@@ -16,6 +16,7 @@
 #include "sim/err.h"
 #include "sim/lru_stack.h"
 #include "sim/mem_functional.h"
+#include "sim/outfile.h"
 
 #define MIB (1024.0 * 1024.0)
 
@@ -204,17 +205,14 @@ int cmd_traffic(int argc, char **argv) {
   }
   progress_line("done", runs, runs);
 
-  char tmp[1100];
-  snprintf(tmp, sizeof tmp, "%s.tmp", out);
-  FILE *f = fopen(tmp, "w");
-  struct err e;
-  memset(&e, 0, sizeof e);
-  if (!f) {
-    err_set(&e, out, 0, 0, "cannot write the table");
+  struct err e = {0};
+  struct outfile o;
+  if (!outfile_open(&o, out, "the table", &e)) {
     free(rows);
     app_world_fini(&w);
     return app_report(&e);
   }
+  FILE *f = o.f;
   char names[64];
   shade_rays_name(mask, names, sizeof names);
   for (char *q = names; *q; q++)
@@ -254,11 +252,7 @@ int cmd_traffic(int argc, char **argv) {
             (unsigned long long)r->pot_vis_tris, (unsigned long long)pv_bytes,
             (unsigned long long)pp.dyn_batch_rays, (unsigned long long)dyn_ray_buffer);
   }
-  bool ok = !ferror(f);
-  ok = (fclose(f) == 0) && ok;
-  if (!ok || rename(tmp, out) != 0) {
-    unlink(tmp);
-    err_set(&e, out, 0, 0, "cannot write the table");
+  if (!outfile_commit(&o, &e)) {
     free(rows);
     app_world_fini(&w);
     return app_report(&e);

@@ -17,6 +17,7 @@
 #include "sim/err.h"
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
+#include "sim/outfile.h"
 #include "sim/stats.h"
 
 void run_output_invalidate(const char *dir) {
@@ -107,41 +108,31 @@ static void measured(const struct run_report *r, struct stats_table *t) {
   stats_u64(t, "coroutine_stacks_max", s->stacks_max);
 }
 
-/* Open dir/name.tmp for writing; the caller renames it with finish(). */
-static FILE *open_tmp(const struct run_report *r, const char *name, char *tmp, char *final,
-                      size_t cap) {
-  snprintf(final, cap, "%s/%s", r->out_dir, name);
-  snprintf(tmp, cap, "%s/.%s.tmp", r->out_dir, name);
-  return fopen(tmp, "w");
-}
-
-static bool finish(FILE *f, const char *tmp, const char *final, struct err *e) {
-  bool ok = f && !ferror(f);
-  if (f && fclose(f) != 0) ok = false;
-  if (ok && rename(tmp, final) == 0) return true;
-  unlink(tmp);
-  return err_set(e, final, 0, 0, "cannot write the file");
+/* Start OUTDIR/name through a temporary (commit with outfile_commit). */
+static bool open_out(struct outfile *o, const struct run_report *r, const char *name,
+                     struct err *e) {
+  char path[4200];
+  snprintf(path, sizeof path, "%s/%s", r->out_dir, name);
+  return outfile_open(o, path, "the file", e);
 }
 
 static bool write_csv(const struct run_report *r, struct err *e) {
-  char tmp[4200], final[4200];
-  FILE *f = open_tmp(r, "stats.csv", tmp, final, sizeof tmp);
+  struct outfile o;
+  if (!open_out(&o, r, "stats.csv", e)) return false;
   struct stats_table t = {0};
   identity(r, &t);
   machine_cfg_to_stats(r->cfg, &t);
   measured(r, &t);
-  if (f) {
-    stats_write_csv_header(&t, f);
-    stats_write_csv_row(&t, f);
-  }
+  stats_write_csv_header(&t, o.f);
+  stats_write_csv_row(&t, o.f);
   stats_fini(&t);
-  return finish(f, tmp, final, e);
+  return outfile_commit(&o, e);
 }
 
 static bool write_timeline(const struct run_report *r, struct err *e) {
-  char tmp[4200], final[4200];
-  FILE *f = open_tmp(r, "timeline.csv", tmp, final, sizeof tmp);
-  if (!f) return finish(f, tmp, final, e);
+  struct outfile o;
+  if (!open_out(&o, r, "timeline.csv", e)) return false;
+  FILE *f = o.f;
   const struct machine *m = r->machine;
   const uint64_t rows = machine_timeline_rows(m), win = machine_timeline_window(m);
   const uint64_t end = machine_get_stats(m)->cycles;
@@ -158,17 +149,21 @@ static bool write_timeline(const struct run_report *r, struct err *e) {
     fprintf(f, ",%.0f,%.0f,%.0f,%.4f\n", v[MTL_L2_ACCESSES], v[MTL_L2_MISSES], v[MTL_ISSUED_OPS],
             v[MTL_BUSY_THREAD_CYCLES] / (double)len);
   }
-  return finish(f, tmp, final, e);
+  return outfile_commit(&o, e);
 }
 
 /* DRAM bytes per cycle over the run by data class, read from timeline.csv. */
 static bool write_plot(const struct run_report *r, struct err *e) {
-  char csv[4200], tmp[4200], final[4200], cmd[8192];
+  char csv[4200], final[4200], cmd[8192];
   snprintf(csv, sizeof csv, "%s/timeline.csv", r->out_dir);
   snprintf(final, sizeof final, "%s/traffic.png", r->out_dir);
-  snprintf(tmp, sizeof tmp, "%s/.traffic.png.tmp", r->out_dir);
+  struct outfile o;
+  if (!outfile_open_named(&o, final, "the plot", e)) return false;
   FILE *gp = popen("gnuplot >/dev/null 2>&1", "w");
-  if (!gp) return err_set(e, final, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
+  if (!gp) {
+    outfile_abort(&o);
+    return err_set(e, final, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
+  }
   int n = snprintf(cmd, sizeof cmd,
                    "set terminal pngcairo size 1000,560 noenhanced\nset output '%s'\n"
                    "set datafile separator ','\nset key outside right top\n"
@@ -176,7 +171,7 @@ static bool write_plot(const struct run_report *r, struct err *e) {
                    "set xlabel 'simulated time (million cycles)'\n"
                    "set ylabel 'DRAM bytes per cycle'\nset grid\nset yrange [0:*]\n"
                    "plot '%s' using (($1+$2/2)/1e6):(($3+$4)/$2) with steps lw 2 lc rgb 'black' title 'all (read + write)'",
-                   tmp, r->scene_name, r->policy, r->width, r->height,
+                   o.tmp, r->scene_name, r->policy, r->width, r->height,
                    (unsigned long long)machine_timeline_window(r->machine), csv);
   for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++)
     n += snprintf(cmd + n, sizeof cmd - (size_t)n,
@@ -185,18 +180,17 @@ static bool write_plot(const struct run_report *r, struct err *e) {
   snprintf(cmd + n, sizeof cmd - (size_t)n,
            ", '' using (($1+$2/2)/1e6):($4/$2) with steps dt 2 title 'write-backs'\n");
   fputs(cmd, gp);
-  int rc = pclose(gp);
-  if (rc != 0 || rename(tmp, final) != 0) {
-    unlink(tmp);
+  if (pclose(gp) != 0) {
+    outfile_abort(&o);
     return err_set(e, final, 0, 0, "gnuplot could not draw the plot (is gnuplot-nox installed?)");
   }
-  return true;
+  return outfile_commit(&o, e);
 }
 
 static bool write_json(const struct run_report *r, struct err *e) {
-  char tmp[4200], final[4200];
-  FILE *f = open_tmp(r, "stats.json", tmp, final, sizeof tmp);
-  if (!f) return finish(f, tmp, final, e);
+  struct outfile o;
+  if (!open_out(&o, r, "stats.json", e)) return false;
+  FILE *f = o.f;
   const struct machine_stats *s = machine_get_stats(r->machine);
   struct stats_table t = {0};
   identity(r, &t);
@@ -227,7 +221,7 @@ static bool write_json(const struct run_report *r, struct err *e) {
   if (getrusage(RUSAGE_SELF, &ru) == 0)
     fprintf(f, ",\n  \"peak_rss_mb\": %.1f", (double)ru.ru_maxrss / 1024.0);
   fputs("\n}\n", f);
-  return finish(f, tmp, final, e);
+  return outfile_commit(&o, e);
 }
 
 bool run_output_write(const struct run_report *r, struct err *e) {
