@@ -17,6 +17,7 @@
 #include "sim/err.h"
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
+#include "sim/outfile.h"
 
 static const char HELP[] =
     "usage: rtsim run MACHINE.yaml SCENE.yaml -o OUTDIR [options]\n"
@@ -125,8 +126,10 @@ int cmd_run(int argc, char **argv) {
     app_usage_error("run", "-o %s: cannot create the directory (%s)", out, strerror(errno));
     goto done;
   }
-  /* An earlier run's stats.json would mark this directory complete. */
+  /* An earlier run's stats.json would mark this directory complete; a killed
+   * run's temporaries would stay forever. */
   run_output_invalidate(out);
+  outfile_remove_stale(out);
 
   struct app_world w;
   if (!app_world_load(&w, scene_path)) goto done;

@@ -132,6 +132,7 @@ static bool make_dirs(const char *path, struct err *e) {
 /* Make DIR/<point> with its command.sh and point.csv. */
 static bool prepare(const struct sweep *s, const struct job *j, struct err *e) {
   if (!make_dirs(j->dir, e)) return false;
+  outfile_remove_stale(j->dir); /* of an attempt that was killed */
   char *text = NULL;
   size_t len = 0;
   FILE *f = open_memstream(&text, &len);

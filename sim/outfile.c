@@ -2,8 +2,10 @@
  * destination, renamed over it on success, removed on failure. */
 #include "sim/outfile.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -96,4 +98,35 @@ void outfile_abort(struct outfile *o) {
   if (o->f) fclose(o->f);
   unlink(o->tmp);
   reset(o);
+}
+
+/* The pid in a temporary's name ".<name>.<pid>.<n>.tmp", or 0 if it is not
+ * one. */
+static long tmp_pid(const char *name) {
+  size_t len = strlen(name);
+  if (name[0] != '.' || len < 9 || strcmp(name + len - 4, ".tmp") != 0) return 0;
+  const char *p = name + len - 4; /* at ".tmp" */
+  const char *q = p;
+  while (q > name && q[-1] >= '0' && q[-1] <= '9') q--;
+  if (q == p || q == name || q[-1] != '.') return 0; /* <n> */
+  p = --q;                                           /* at ".<n>" */
+  while (q > name && q[-1] >= '0' && q[-1] <= '9') q--;
+  if (q == p || q - 1 <= name || q[-1] != '.') return 0; /* <pid> */
+  return strtol(q, NULL, 10);
+}
+
+unsigned outfile_remove_stale(const char *dir) {
+  DIR *d = opendir(dir);
+  if (!d) return 0;
+  unsigned n = 0;
+  struct dirent *de;
+  while ((de = readdir(d))) {
+    long pid = tmp_pid(de->d_name);
+    if (pid <= 0 || kill((pid_t)pid, 0) == 0 || errno != ESRCH) continue;
+    char path[8192];
+    snprintf(path, sizeof path, "%s/%s", dir, de->d_name);
+    n += unlink(path) == 0;
+  }
+  closedir(d);
+  return n;
 }

@@ -44,4 +44,9 @@ bool outfile_commit(struct outfile *o, struct err *e);
  * Resets o; does nothing on a reset or zeroed o. */
 void outfile_abort(struct outfile *o);
 
+/* Remove the temporaries in dir of processes that no longer run (a process
+ * killed outright cannot remove its own). Returns how many were removed; a
+ * directory that cannot be read removes none. */
+unsigned outfile_remove_stale(const char *dir);
+
 #endif

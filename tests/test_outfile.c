@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "sim/err.h"
@@ -152,11 +153,33 @@ static void test_failures(void) {
   EXPECT(entries() == 0);
 }
 
+/* Temporaries of a killed process are removed; live ones and other files stay. */
+static void test_stale(void) {
+  pid_t child = fork();
+  if (child == 0) _exit(0);
+  EXPECT(child > 0 && waitpid(child, NULL, 0) == child); /* now no process has that pid */
+  char dead[512], live[512];
+  snprintf(dead, sizeof dead, DIR_ "/.f.txt.%ld.0.tmp", (long)child);
+  snprintf(live, sizeof live, DIR_ "/.f.txt.%ld.0.tmp", (long)getpid());
+  put(dead, "stale");
+  put(live, "in progress");
+  put(DIR_ "/.f.txt.tmp", "not a temporary of ours");
+  put(DIR_ "/f.1.2.tmp", "not hidden: not ours");
+  EXPECT(outfile_remove_stale(DIR_) == 1);
+  EXPECT(access(dead, F_OK) != 0 && access(live, F_OK) == 0);
+  EXPECT(access(DIR_ "/.f.txt.tmp", F_OK) == 0 && access(DIR_ "/f.1.2.tmp", F_OK) == 0);
+  EXPECT(outfile_remove_stale(DIR_ "/no_such_dir") == 0);
+  unlink(live);
+  unlink(DIR_ "/.f.txt.tmp");
+  unlink(DIR_ "/f.1.2.tmp");
+}
+
 int main(void) {
   int rc = system("rm -rf '" DIR_ "' && mkdir -p '" DIR_ "'");
   EXPECT(rc == 0);
   test_commit_and_abort();
   test_named();
   test_failures();
+  test_stale();
   return testing_done("test_outfile");
 }
