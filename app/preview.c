@@ -19,7 +19,9 @@ static unsigned char to_srgb8(float v) {
 
 bool app_write_preview(const struct image *im, const char *png, struct err *e) {
   int r = image_channel(im, "R"), g = image_channel(im, "G"), b = image_channel(im, "B");
-  CHECK(r >= 0 && g >= 0 && b >= 0);
+  CHECK_GE(r, 0);
+  CHECK_GE(g, 0);
+  CHECK_GE(b, 0);
   /* The raw pixels gnuplot reads: a scratch temporary, never committed. */
   struct outfile raw, out = {0};
   if (!outfile_open(&raw, png, "the preview", e)) return false;

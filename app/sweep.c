@@ -405,7 +405,7 @@ static bool check_unique(const struct priv *pv, const struct sweep *s, const uns
     const unsigned *cb = &choices[(size_t)v[i].index * pv->ndims];
     unsigned a = 0;
     while (a < pv->naxes && ca[dim_of(pv, a)] == cb[dim_of(pv, a)]) a++;
-    CHECK(a < pv->naxes);
+    CHECK_LT(a, pv->naxes);
     const struct cfg_node *n = &pv->axes[a].node->items[cb[dim_of(pv, a)]];
     ok = cfg_fail(&pv->doc, n, pv->axes[a].key, e,
                   "two points would share the directory name '%s' (values that differ only in "

@@ -23,14 +23,14 @@ struct image_exr_msg {
 
 void image_init(struct image *im, uint32_t width, uint32_t height, uint32_t channel_count,
                 const char *const *names) {
-  CHECK(channel_count <= IMAGE_MAX_CHANNELS);
+  CHECK_LE(channel_count, IMAGE_MAX_CHANNELS);
   memset(im, 0, sizeof *im);
   im->width = width;
   im->height = height;
   im->channel_count = channel_count;
   unsigned long long pixels = (unsigned long long)width * height;
   for (uint32_t c = 0; c < channel_count; c++) {
-    CHECK(strlen(names[c]) < IMAGE_NAME_MAX);
+    CHECK_LT(strlen(names[c]), IMAGE_NAME_MAX);
     snprintf(im->names[c], IMAGE_NAME_MAX, "%s", names[c]);
     im->planes[c] = xcalloc(pixels, sizeof(float));
   }

@@ -261,7 +261,8 @@ static bool reversed(const struct ray *r, struct ray *rv) {
  * real one would carry it (the paper's rays have spare bytes). */
 static void restore_hit(const struct dyn *d, const struct isect_ray *ir, const struct ray *r,
                         struct hit *h) {
-  CHECK(r->hit_prim >= 0 && (uint32_t)r->hit_prim < d->s->tri_count);
+  CHECK_GE(r->hit_prim, 0);
+  CHECK_LT((uint32_t)r->hit_prim, d->s->tri_count);
   const struct scene_tri *tri = &d->s->tris[r->hit_prim];
   bool ok = isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, r->tmax, &h->t, &h->b1, &h->b2);
   CHECK(ok);
@@ -339,7 +340,8 @@ static void walk_to(const struct dyn *d, struct tracer *tr, struct walk *w, uint
     bool ok = trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &next, w->stack, &w->sp);
     CHECK(ok);
     if (next != c) {
-      CHECK(w->sp > 0 && w->stack[w->sp - 1].node == c);
+      CHECK_GT(w->sp, 0);
+      CHECK_EQ(w->stack[w->sp - 1].node, c);
       w->sp--;
       w->t0 = w->stack[w->sp].t0;
       w->t1 = w->stack[w->sp].t1;
@@ -433,7 +435,7 @@ static uint32_t chunk_alloc(struct dyn *d) {
 static void chunk_hold(struct dyn *d, uint32_t c) { d->chunk_refs[c]++; }
 
 static void chunk_drop(struct dyn *d, uint32_t c) {
-  CHECK(d->chunk_refs[c] > 0);
+  CHECK_GT(d->chunk_refs[c], 0);
   if (--d->chunk_refs[c] > 0) return;
   d->chunk_next[c] = d->free_head;
   d->free_head = c;
@@ -522,7 +524,7 @@ static void route(struct dyn_worker *x, struct ray *r, const struct walk *w, enu
                   struct dyn_queue *qset) {
   if (e == WALK_QUEUED) {
     int64_t qi = qpoint_index(&x->d->qs, w->ni);
-    CHECK(qi >= 0);
+    CHECK_GE(qi, 0);
     r->hit_prim = w->best.found ? (int32_t)w->best.p : -1;
     enqueue(x, (uint32_t)qi, r, qset);
   } else {
@@ -683,7 +685,7 @@ static void take(struct dyn_worker *x) {
   struct dyn *d = x->d;
   const uint32_t core = x->wk->core;
   struct dyn_drain *dr = &d->drain[core];
-  CHECK(dr->qi == DYN_NONE);
+  CHECK_EQ(dr->qi, DYN_NONE);
   const uint32_t qi = heap_pop(d);
   struct dyn_queue *q = &d->q[qi];
   q->held = true;
@@ -773,7 +775,7 @@ static void slot_done(struct dyn_worker *x, uint32_t t) {
 static void claim_done(struct dyn_worker *x) {
   struct dyn_drain *dr = &x->d->drain[x->cl.drain];
   if (dr->seq == x->cl.seq) {
-    CHECK(dr->busy > 0);
+    CHECK_GT(dr->busy, 0);
     dr->busy--;
   }
 }
@@ -782,7 +784,7 @@ static void claim_done(struct dyn_worker *x) {
  * above). One worker never waits: its enqueues are over before it drains. */
 static void wait_stored(struct dyn_worker *x, uint64_t slot) {
   while (!x->d->stored[slot]) {
-    CHECK(x->d->wait_cycles > 0);
+    CHECK_GT(x->d->wait_cycles, 0);
     mem_wait(&x->tr->mem, x->d->wait_cycles);
   }
 }
@@ -924,12 +926,13 @@ static bool phase_over(const struct dyn *d) {
  * takes its place): the cores let their queue points go, and the set's
  * non-empty queues are ordered in the heap. */
 static void activate(struct dyn *d, struct dyn_queue **other) {
-  CHECK(d->heap_n == 0 && d->pending == 0);
+  CHECK_EQ(d->heap_n, 0);
+  CHECK_EQ(d->pending, 0);
   for (uint32_t c = 0; c < d->cores; c++) {
     struct dyn_drain *dr = &d->drain[c];
     d->core[c].drain = DYN_NONE;
     if (dr->qi == DYN_NONE) continue;
-    CHECK(d->q[dr->qi].count == 0);
+    CHECK_EQ(d->q[dr->qi].count, 0);
     release(d, dr);
   }
   struct dyn_queue *t = d->q;
@@ -970,7 +973,10 @@ static uint32_t clamp_u32(uint64_t v) { return v == 0 ? 1 : (v > UINT32_MAX ? UI
 void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32_t cores,
                          const struct kd_tree *kd, uint32_t tri_bytes, struct qpoint_set *qs,
                          struct qpoint_budget *b, uint32_t *block_tris, uint32_t *group) {
-  CHECK(workers >= 1 && cores >= 1 && cores <= workers && tri_bytes > 0);
+  CHECK_GE(workers, 1);
+  CHECK_GE(cores, 1);
+  CHECK_LE(cores, workers);
+  CHECK_GT(tri_bytes, 0);
   uint32_t *tris = xmalloc((uint64_t)kd->node_count * sizeof *tris + 1);
   qpoint_subtree_tris(kd, tris);
   const uint64_t rays = p->dyn_ray_buffer_bytes ? p->dyn_ray_buffer_bytes
@@ -1071,7 +1077,8 @@ static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
   if (!d->active) {
     uint64_t k0, n = policy_job_claim(job, d->batch, &k0);
     if (n == 0) return false;
-    CHECK(d->pending == 0 && d->heap_n == 0);
+    CHECK_EQ(d->pending, 0);
+    CHECK_EQ(d->heap_n, 0);
     d->active = true;
     d->lo = d->admit_next = k0;
     d->hi = k0 + n;
@@ -1102,7 +1109,7 @@ static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
     }
     /* Others are still tracing rays of this phase (or testing the last rays
      * of this core's pass): their rays may make work for this one. */
-    CHECK(d->wait_cycles > 0);
+    CHECK_GT(d->wait_cycles, 0);
     mem_wait(&x->tr->mem, d->wait_cycles << idle);
     if (idle < DYN_WAIT_DOUBLINGS) idle++;
   }
@@ -1113,16 +1120,22 @@ static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
  * rays in flight. */
 static void dyn_finish(struct policy_job *job, struct render_stats *st) {
   const struct dyn *d = job->shared;
-  CHECK(!d->active && d->heap_n == 0 && d->pending == 0);
-  for (uint32_t i = 0; i < d->qs.count; i++)
-    CHECK(d->q[i].count == 0 && d->qsh[i].count == 0 && d->qn[i].count == 0 && !d->q[i].held);
-  for (uint32_t c = 0; c < d->cores; c++) CHECK(d->drain[c].qi == DYN_NONE);
+  CHECK(!d->active);
+  CHECK_EQ(d->heap_n, 0);
+  CHECK_EQ(d->pending, 0);
+  for (uint32_t i = 0; i < d->qs.count; i++) {
+    CHECK_EQ(d->q[i].count, 0);
+    CHECK_EQ(d->qsh[i].count, 0);
+    CHECK_EQ(d->qn[i].count, 0);
+    CHECK(!d->q[i].held);
+  }
+  for (uint32_t c = 0; c < d->cores; c++) CHECK_EQ(d->drain[c].qi, DYN_NONE);
   uint32_t free_chunks = 0;
   for (uint32_t c = d->free_head; c != DYN_NONE; c = d->chunk_next[c]) {
-    CHECK(d->chunk_refs[c] == 0);
+    CHECK_EQ(d->chunk_refs[c], 0);
     free_chunks++;
   }
-  CHECK(free_chunks == d->chunks);
+  CHECK_EQ(free_chunks, d->chunks);
   st->ray_slots_max += (uint64_t)d->chunks * DYN_CHUNK_RAYS;
 }
 

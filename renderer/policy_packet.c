@@ -68,7 +68,8 @@ static uint32_t child_group(const struct ray *parent, const struct ray *c, uint6
     break;
   default: CHECK(!"unexpected child ray type");
   }
-  CHECK(g < GROUP_COUNT && !(*used & (1ull << g)));
+  CHECK_LT(g, GROUP_COUNT);
+  CHECK(!(*used & (1ull << g)));
   *used |= 1ull << g;
   return g;
 }
@@ -94,7 +95,8 @@ struct pkt_scratch {
 
 static void pkt_create(struct policy_job *job) {
   const uint32_t w = job->setup.fb->width, h = job->setup.fb->height, dim = job->params.packet_dim;
-  CHECK(dim >= 1 && dim * dim <= PACKET_MAX);
+  CHECK_GE(dim, 1);
+  CHECK_LE(dim * dim, PACKET_MAX);
   job->total = (uint64_t)((w + dim - 1) / dim) * ((h + dim - 1) / dim);
   job->progress_every = 64;
   job->shared = NULL;
@@ -164,7 +166,7 @@ static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
         uint64_t used = 0;
         for (uint32_t j = 0; j < ns; j++) {
           struct packet *gp = &group[child_group(&cur->r[i], &x->spawn[j], &used)];
-          CHECK(gp->n < PACKET_MAX);
+          CHECK_LT(gp->n, PACKET_MAX);
           gp->r[gp->n++] = x->spawn[j];
         }
         st->spawned += ns;
@@ -172,7 +174,7 @@ static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
       /* Push in reverse so the shadow packets (light order) are traced first. */
       for (uint32_t g = GROUP_COUNT; g-- > 0;) {
         if (group[g].n == 0) continue;
-        CHECK(top < PACKET_STACK);
+        CHECK_LT(top, PACKET_STACK);
         struct packet *dst = &stack[top];
         dst->n = group[g].n;
         for (uint32_t i = 0; i < dst->n; i++) {

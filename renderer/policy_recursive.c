@@ -76,7 +76,7 @@ static bool rec_step(struct policy_job *job, struct policy_worker *wk) {
     struct hit hit;
     trace_closest(tr, &r, &hit);
     uint32_t n = shade_hit(sc, &r, &hit, fb, mem, x->spawn);
-    CHECK(top + n <= RECURSIVE_STACK);
+    CHECK_LE(top + n, RECURSIVE_STACK);
     /* Push in reverse so the first spawned (shadow rays) are traced first. */
     for (uint32_t i = n; i-- > 0;) {
       mem_store(mem, stack_addr + (uint64_t)top * sizeof r, sizeof r, TRACE_CLASS_RAY);

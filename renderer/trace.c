@@ -266,7 +266,7 @@ static inline uint32_t pk_count(uint64_t m) {
 static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
                                    const struct ray *rays, uint32_t n, bool any_hit,
                                    struct hit *hits, bool *occ, struct trace_packet_cost *cost) {
-  CHECK(n <= TRACE_PACKET_MAX);
+  CHECK_LE(n, TRACE_PACKET_MAX);
   const struct kd_tree *kd = tr->kd;
   const struct scene *s = tr->scene;
   uint64_t live = 0, ign = 0, found = 0;
@@ -326,7 +326,7 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
       const uint64_t up = act & pk->pos[a], down = act & pk->neg[a];
       const bool bf = !down || (up && pk_count(up) >= pk_count(down));
       const uint64_t flat = pk->flat[a];
-      CHECK(sp < KD_DEPTH_LIMIT);
+      CHECK_LT(sp, KD_DEPTH_LIMIT);
       float *restrict pool = pk->pool + ptop; /* the second child's intervals */
       uint32_t k = 0;
       uint64_t mf = 0, ms = 0;
@@ -502,7 +502,8 @@ bool trace_brute(const struct scene *s, const struct ray *r, struct hit *h) {
 }
 
 vec3 trace_hit_point(const struct scene *s, const struct hit *h, vec3 *err) {
-  CHECK(h->prim >= 0 && (uint32_t)h->prim < s->tri_count);
+  CHECK_GE(h->prim, 0);
+  CHECK_LT((uint32_t)h->prim, s->tri_count);
   const struct scene_tri *tri = &s->tris[h->prim];
   float b0 = 1.0f - h->b1 - h->b2;
   vec3 p0 = v3_scale(tri->v[0], b0), p1 = v3_scale(tri->v[1], h->b1),
@@ -518,7 +519,8 @@ vec3 trace_hit_point(const struct scene *s, const struct hit *h, vec3 *err) {
 }
 
 vec3 trace_geom_normal(const struct scene *s, const struct hit *h) {
-  CHECK(h->prim >= 0 && (uint32_t)h->prim < s->tri_count);
+  CHECK_GE(h->prim, 0);
+  CHECK_LT((uint32_t)h->prim, s->tri_count);
   const struct scene_tri *tri = &s->tris[h->prim];
   vec3 n = v3_cross(v3_sub(tri->v[1], tri->v[0]), v3_sub(tri->v[2], tri->v[0]));
   float l = v3_len(n);

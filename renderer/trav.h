@@ -128,7 +128,7 @@ static inline bool trav_interior(const struct trav_ray *tr, struct kd_node nd, u
     }
   }
   if (vnear && vfar) {
-    CHECK(*sp < KD_DEPTH_LIMIT);
+    CHECK_LT(*sp, KD_DEPTH_LIMIT);
     stack[*sp].node = far_c;
     stack[*sp].t0 = f0;
     stack[*sp].t1 = f1;

@@ -29,7 +29,8 @@ static void writer_flush(struct din_writer *w) {
 }
 
 struct din_writer *din_writer_open(const char *path, unsigned lg2_line, struct err *e) {
-  CHECK(lg2_line >= 2 && lg2_line <= 20);
+  CHECK_GE(lg2_line, 2);
+  CHECK_LE(lg2_line, 20);
   struct din_writer *w = xcalloc(1, sizeof *w);
   if (!outfile_open(&w->out, path, "din trace", e)) {
     free(w);
@@ -58,9 +59,9 @@ void din_writer_record(struct din_writer *w, uint64_t addr, bool is_store) {
 }
 
 void din_writer_access(struct din_writer *w, uint64_t addr, uint32_t size_bytes, bool is_store) {
-  CHECK(size_bytes > 0);
+  CHECK_GT(size_bytes, 0);
   uint64_t last = addr + (size_bytes - 1);
-  CHECK(last >= addr); /* no wrap past 2^64 */
+  CHECK_GE(last, addr); /* no wrap past 2^64 */
   uint64_t line = addr >> w->lg2_line, end = last >> w->lg2_line;
   din_writer_record(w, addr, is_store);
   while (line != end) {

@@ -287,7 +287,7 @@ static void line_done(struct machine *m, struct mctx *c, uint64_t line, uint64_t
     else cache_touch(l1, s);
   }
   m->loads_back++;
-  CHECK(c->pending > 0);
+  CHECK_GT(c->pending, 0);
   if (--c->pending == 0) {
     hist_add(&m->st.load_latency, t - c->wait_from);
     ray_ready(m, c, t);
@@ -521,7 +521,7 @@ static void ev_issue(void *ctx, uint64_t core) {
     th->live--;
     th_next(m, th, c->t);
   } else {
-    CHECK(c->state == CTX_WAIT);
+    CHECK_EQ(c->state, CTX_WAIT);
     th_next(m, th, c->t);
   }
   kick(m, (uint32_t)core);
@@ -540,7 +540,8 @@ static void t_compute(void *ctx, uint64_t cycles) {
 static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct mctx *c = ctx;
   struct machine *m = c->m;
-  CHECK(size > 0 && cls < MEM_CLASS_MAX);
+  CHECK_GT(size, 0);
+  CHECK_LT(cls, MEM_CLASS_MAX);
   c->t++;
   c->slots++;
   m->st.loads++;
@@ -576,7 +577,8 @@ static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
 static void t_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct mctx *c = ctx;
   struct machine *m = c->m;
-  CHECK(size > 0 && cls < MEM_CLASS_MAX);
+  CHECK_GT(size, 0);
+  CHECK_LT(cls, MEM_CLASS_MAX);
   c->t++;
   c->slots++;
   m->st.stores++;
@@ -717,9 +719,10 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   for (uint32_t i = 0; i < m->p.cores; i++) kick(m, i);
   engine_run(m->eng);
   /* Everything must be over: every ray returned, no miss outstanding. */
-  for (uint32_t i = 0; i < m->nctx; i++) CHECK(m->ctx[i].state == CTX_DONE);
-  CHECK(m->mshr_used == 0 && m->stall_head == NONE);
-  CHECK(m->loads_out == m->loads_back);
+  for (uint32_t i = 0; i < m->nctx; i++) CHECK_EQ(m->ctx[i].state, CTX_DONE);
+  CHECK_EQ(m->mshr_used, 0);
+  CHECK_EQ(m->stall_head, NONE);
+  CHECK_EQ(m->loads_out, m->loads_back);
   dram_finish(m->dram);
   const struct dram_stats *ds = dram_get_stats(m->dram);
   /* The end: the last event, the last block's last cycle (blocks run ahead
@@ -730,7 +733,7 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   for (uint32_t t = 0; t < m->nth; t++)
     if (m->th[t].since > end) end = m->th[t].since;
   for (uint32_t t = 0; t < m->nth; t++) {
-    CHECK(m->th[t].state == TH_DONE);
+    CHECK_EQ(m->th[t].state, TH_DONE);
     th_account(m, &m->th[t], end);
   }
   struct machine_stats *st = &m->st;
@@ -746,10 +749,10 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   st->dram_fifo_max = ds->fifo_max;
   st->events = engine_events(m->eng);
   /* Conservation: bytes asked of DRAM are the bytes it moved. */
-  CHECK(st->dram_read_bytes == st->l2_fetch_bytes);
-  CHECK(st->dram_write_bytes == st->l2_writeback_bytes);
-  CHECK(st->thread_busy_cycles + st->thread_wait_cycles + st->thread_done_cycles ==
-        (uint64_t)m->nth * end);
+  CHECK_EQ(st->dram_read_bytes, st->l2_fetch_bytes);
+  CHECK_EQ(st->dram_write_bytes, st->l2_writeback_bytes);
+  CHECK_EQ(st->thread_busy_cycles + st->thread_wait_cycles + st->thread_done_cycles,
+           (uint64_t)m->nth * end);
   /* The timeline covers the whole run. */
   if (end > 0) tl_row(m, (end - 1) / m->tl_window);
 }
@@ -758,6 +761,6 @@ const struct machine_stats *machine_get_stats(const struct machine *m) { return 
 uint64_t machine_timeline_window(const struct machine *m) { return m->tl_window; }
 uint64_t machine_timeline_rows(const struct machine *m) { return m->tl_rows; }
 const double *machine_timeline_row(const struct machine *m, uint64_t i) {
-  CHECK(i < m->tl_rows);
+  CHECK_LT(i, m->tl_rows);
   return m->tl + i * MTL_COLS;
 }

@@ -56,9 +56,10 @@ static inline void fn_line(struct fn_backend *b, uint64_t line, enum lru_op op, 
 
 static inline void fn_access(struct fn_backend *b, uint64_t addr, uint32_t size, bool is_store,
                              unsigned cls) {
-  CHECK(size > 0 && cls < MEM_CLASS_MAX);
+  CHECK_GT(size, 0);
+  CHECK_LT(cls, MEM_CLASS_MAX);
   uint64_t last = addr + (size - 1);
-  CHECK(last >= addr); /* an access may not wrap past 2^64 */
+  CHECK_GE(last, addr); /* an access may not wrap past 2^64 */
   uint64_t line = addr >> b->lg2_line, end = last >> b->lg2_line;
   b->st.line_accesses[cls] += end - line + 1;
   if (!is_store) {

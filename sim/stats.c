@@ -67,7 +67,7 @@ void hist_write_json(const struct hist *h, FILE *f) {
 }
 
 static struct stats_entry *add(struct stats_table *t, const char *name, enum stats_kind k) {
-  CHECK(strlen(name) < sizeof t->e[0].name);
+  CHECK_LT(strlen(name), sizeof t->e[0].name);
   if (t->n == t->cap) {
     t->cap = t->cap ? 2 * t->cap : 64;
     t->e = xrealloc(t->e, (unsigned long long)t->cap * sizeof *t->e);

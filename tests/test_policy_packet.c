@@ -253,7 +253,7 @@ static void test_traversal(struct world *w) {
       for (uint32_t light = 0; light < SCENE_MAX_LIGHTS; light++)
         for (uint32_t i = 0; i < n; i++)
           if (set[i].type == type && set[i].light == light) by_kind[m++] = set[i];
-    CHECK(m == n);
+    CHECK_EQ(m, n);
     snprintf(what, sizeof what, "%s secondary by kind", w->name);
     packets_of(&tr, pk, by_kind, m, what, &cs);
     snprintf(what, sizeof what, "%s secondary mixed", w->name);
