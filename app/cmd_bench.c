@@ -174,12 +174,13 @@ int cmd_bench(int argc, char **argv) {
       if (k == 0 || s < best) best = s;
       if (!functional) continue;
       struct lru_stack_params lp = lru_stack_params_default();
-      struct fn_backend *b = fn_backend_create(&lp, NULL);
-      double fs = render_once(&w, mask, W, H, fn_backend_port(b), &nrays);
+      struct mem_functional *b = mem_functional_create(&lp, NULL);
+      double fs = render_once(&w, mask, W, H, mem_functional_port(b), &nrays);
       if (k == 0 || fs < fbest) fbest = fs;
       acc = 0;
-      for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++) acc += fn_backend_stats(b)->line_accesses[cl];
-      fn_backend_destroy(b);
+      for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
+        acc += mem_functional_get_stats(b)->line_accesses[cl];
+      mem_functional_destroy(b);
     }
     printf("%s,%u,%u,%.3f,%u,%u,%llu,%.4f,%.0f", w.scene.name[0] ? w.scene.name : argv[i],
            w.scene.tri_count, w.kd.stats.nodes, w.build_s, W, H, (unsigned long long)nrays, best,

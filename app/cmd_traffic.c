@@ -77,20 +77,20 @@ static void run_functional(const struct app_world *w, enum policy_kind k, uint32
                            uint32_t width, uint32_t height, const struct policy_params *pp,
                            const struct lru_stack_params *lp, struct din_writer *din,
                            struct fn_run *out) {
-  struct fn_backend *b = fn_backend_create(lp, din);
+  struct mem_functional *b = mem_functional_create(lp, din);
   struct app_render ar;
   app_render_init(&ar, w, mask, w->scene.seed, width, height);
   uint64_t words = ((uint64_t)w->scene.tri_count + 63) / 64;
   uint64_t *tested = xcalloc(words, sizeof *tested);
   ar.setup.tested = tested;
-  policy_run(k, &ar.setup, pp, fn_backend_port(b), &out->st, NULL);
-  lru_stack_finish(fn_backend_stack(b));
-  lru_stack_get_results(fn_backend_stack(b), &out->res);
+  policy_run(k, &ar.setup, pp, mem_functional_port(b), &out->st, NULL);
+  lru_stack_finish(mem_functional_stack(b));
+  lru_stack_get_results(mem_functional_stack(b), &out->res);
   out->pot_vis_tris = 0;
   for (uint64_t i = 0; i < words; i++) out->pot_vis_tris += (uint64_t)__builtin_popcountll(tested[i]);
   free(tested);
   app_render_fini(&ar);
-  fn_backend_destroy(b);
+  mem_functional_destroy(b);
 }
 
 static uint64_t fetched(const struct lru_stack_size_stats *s, unsigned cls, unsigned lg2_line) {

@@ -197,8 +197,8 @@ static void test_backend_trace(void) {
   EXPECT(w != NULL);
   if (!w) return;
   struct lru_stack_params p = {6, 6, 12};
-  struct fn_backend *b = fn_backend_create(&p, w);
-  struct mem_port port = fn_backend_port(b);
+  struct mem_functional *b = mem_functional_create(&p, w);
+  struct mem_port port = mem_functional_port(b);
   uint64_t rng = 11;
   for (int k = 0; k < 30000; k++) {
     uint64_t r = rng_next(&rng);
@@ -214,7 +214,8 @@ static void test_backend_trace(void) {
   /* A line access is one record, or two (read, write) for a store to part of
    * a line. */
   uint64_t lines = 0, records = din_writer_records(w);
-  for (unsigned c = 0; c < MEM_CLASS_MAX; c++) lines += fn_backend_stats(b)->line_accesses[c];
+  for (unsigned c = 0; c < MEM_CLASS_MAX; c++)
+    lines += mem_functional_get_stats(b)->line_accesses[c];
   EXPECTF(records > lines && records < 2 * lines, "%llu records for %llu line accesses",
           (unsigned long long)records, (unsigned long long)lines);
   EXPECT(din_writer_close(w, &e));
@@ -222,7 +223,7 @@ static void test_backend_trace(void) {
   sink_init(&replay);
   EXPECT(din_read_file(path, on_record, &replay, NULL, &e));
   EXPECT(replay.records == records);
-  struct lru_stack *ls = fn_backend_stack(b);
+  struct lru_stack *ls = mem_functional_stack(b);
   struct lru_stack_results r;
   lru_stack_get_results(ls, &r);
   for (unsigned i = 0; i < NV_SIZES; i++) {
@@ -236,7 +237,7 @@ static void test_backend_trace(void) {
     EXPECT(m == lru_stack_misses(replay.ls, i, 0));
     EXPECT(wb == replay.nv.c[i].wb);
   }
-  fn_backend_destroy(b);
+  mem_functional_destroy(b);
   lru_stack_destroy(replay.ls);
 }
 

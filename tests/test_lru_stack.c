@@ -416,8 +416,8 @@ enum { C0 = 0, C1 = 1, C2 = 2, C3 = 3, C_LAST = MEM_CLASS_MAX - 1 };
 
 static void test_backend(void) {
   struct lru_stack_params p = {6, 6, 9}; /* 1 .. 8 lines */
-  struct fn_backend *b = fn_backend_create(&p, NULL);
-  struct mem_port port = fn_backend_port(b);
+  struct mem_functional *b = mem_functional_create(&p, NULL);
+  struct mem_port port = mem_functional_port(b);
   mem_load(&port, 60, 8, C2);                    /* lines 0 and 1 */
   mem_store(&port, 64, 64, C2);                  /* line 1 */
   mem_load(&port, 128, 1, C0);                   /* line 2 */
@@ -425,14 +425,14 @@ static void test_backend(void) {
   mem_compute(&port, 1000);                      /* ignored */
   mem_store(&port, UINT64_MAX - 63, 64, C_LAST); /* the very last line */
   mem_load(&port, UINT64_MAX, 1, C_LAST);
-  const struct fn_backend_stats *st = fn_backend_stats(b);
+  const struct mem_functional_stats *st = mem_functional_get_stats(b);
   EXPECT(st->loads[C2] == 1 && st->stores[C2] == 1);
   EXPECT(st->bytes_loaded[C2] == 8 && st->bytes_stored[C2] == 64);
   EXPECT(st->line_accesses[C2] == 3);
   EXPECT(st->line_accesses[C0] == 1 && st->line_accesses[C1] == 4);
   EXPECT(st->bytes_loaded[C1] == 200);
   EXPECT(st->line_accesses[C_LAST] == 2 && st->bytes_stored[C_LAST] == 64);
-  struct lru_stack *ls = fn_backend_stack(b);
+  struct lru_stack *ls = mem_functional_stack(b);
   lru_stack_check_invariants(ls);
   lru_stack_finish(ls);
   struct lru_stack_results r;
@@ -447,17 +447,17 @@ static void test_backend(void) {
   EXPECT(r.size[3].misses[C2] == 2 && r.size[3].misses[C1] == 3);
   EXPECT(r.size[3].misses[C_LAST] == 0);
   EXPECT(r.size[3].dirty_at_end[C2] == 1 && r.size[3].dirty_at_end[C_LAST] == 1);
-  fn_backend_destroy(b);
+  mem_functional_destroy(b);
 
   /* Whole-line stores are found line by line: [1000, 1128) covers line 16 whole
    * and lines 15 and 17 in part, so 2 fetches; a 64-byte store across a line
    * boundary covers neither line whole (2 more); a 128-byte aligned store none. */
-  b = fn_backend_create(&p, NULL);
-  port = fn_backend_port(b);
+  b = mem_functional_create(&p, NULL);
+  port = mem_functional_port(b);
   mem_store(&port, 1000, 128, C3);
   mem_store(&port, 32, 64, C2);
   mem_store(&port, 4096, 128, C0);
-  ls = fn_backend_stack(b);
+  ls = mem_functional_stack(b);
   lru_stack_get_results(ls, &r);
   for (unsigned i = 0; i < r.size_count; i++) {
     EXPECTF(r.size[i].misses[C3] == 2, "size %u: %llu class-3 fetches", i,
@@ -465,19 +465,19 @@ static void test_backend(void) {
     EXPECT(r.size[i].misses[C2] == 2 && r.size[i].misses[C0] == 0);
   }
   EXPECT(r.size[3].dirty_at_end[C3] == 3 && r.size[3].dirty_at_end[C0] == 2);
-  fn_backend_destroy(b);
-  fn_backend_destroy(NULL);
+  mem_functional_destroy(b);
+  mem_functional_destroy(NULL);
   lru_stack_destroy(NULL);
 }
 
 /* The backend keeps repeats of the last line from the analyser (and hands their
- * counts over in fn_backend_stack): its results must equal the analyser fed
+ * counts over in mem_functional_stack): its results must equal the analyser fed
  * every line directly, on a trace dense in repeats, class changes and stores of
  * both kinds to the repeated line. */
 static void test_backend_repeats(void) {
   struct lru_stack_params p = {6, 6, 9}; /* 1 .. 8 lines */
-  struct fn_backend *b = fn_backend_create(&p, NULL);
-  struct mem_port port = fn_backend_port(b);
+  struct mem_functional *b = mem_functional_create(&p, NULL);
+  struct mem_port port = mem_functional_port(b);
   struct lru_stack *direct = lru_stack_create(&p);
   uint64_t rng = 7, line = 0;
   unsigned cls = 0;
@@ -497,9 +497,9 @@ static void test_backend_repeats(void) {
       mem_store(&port, a, 64, cls);
       lru_stack_access(direct, line, LRU_WRITE_LINE, cls);
     }
-    if (k == 100000) lru_stack_check_invariants(fn_backend_stack(b)); /* a mid-run handover */
+    if (k == 100000) lru_stack_check_invariants(mem_functional_stack(b)); /* a mid-run handover */
   }
-  struct lru_stack *ls = fn_backend_stack(b);
+  struct lru_stack *ls = mem_functional_stack(b);
   lru_stack_check_invariants(ls);
   struct lru_stack_results got, want;
   lru_stack_get_results(ls, &got);
@@ -517,7 +517,7 @@ static void test_backend_repeats(void) {
               (unsigned long long)got.size[i].writebacks[c],
               (unsigned long long)want.size[i].writebacks[c]);
   lru_stack_destroy(direct);
-  fn_backend_destroy(b);
+  mem_functional_destroy(b);
 }
 
 static void test_bench(void) {
