@@ -162,12 +162,12 @@ static inline void count_evictions(struct lru_stack *ls, unsigned d, unsigned s,
   }
 }
 
-void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsigned cls) {
+void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_stack_op op, unsigned cls) {
   CHECK_LT(cls, MEM_CLASS_MAX);
-  CHECK_LE(op, LRU_WRITE_LINE);
-  const bool is_store = op != LRU_READ;
+  CHECK_LE(op, LRU_STACK_WRITE_LINE);
+  const bool is_store = op != LRU_STACK_READ;
   /* Misses are counted in hist: a whole-line store never fetches. */
-  const unsigned fetch = op != LRU_WRITE_LINE;
+  const unsigned fetch = op != LRU_STACK_WRITE_LINE;
   ls->accesses[cls]++;
   ls->stores[cls] += is_store;
   ls->total++;
@@ -387,7 +387,8 @@ double lru_stack_bench(uint64_t accesses, uint64_t seed) {
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     for (uint64_t k = 0; k < n; k++)
-      lru_stack_access(ls, buf[k] >> 4, (enum lru_op)((buf[k] >> 3) & 1), (unsigned)(buf[k] & 7));
+      lru_stack_access(ls, buf[k] >> 4, (enum lru_stack_op)((buf[k] >> 3) & 1),
+                       (unsigned)(buf[k] & 7));
     clock_gettime(CLOCK_MONOTONIC, &t1);
     seconds += (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     done += n;

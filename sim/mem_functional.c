@@ -29,21 +29,22 @@ struct mem_functional {
 #define FN_NO_CLASS MEM_CLASS_MAX
 
 /* Feed every line of [addr, addr + size) to the analyser (and the trace). A
- * store covering a line whole allocates it without a fetch (LRU_WRITE_LINE);
- * a store to part of a line fetches it first (LRU_WRITE). In the din trace the
+ * store covering a line whole allocates it without a fetch (LRU_STACK_WRITE_LINE);
+ * a store to part of a line fetches it first (LRU_STACK_WRITE). In the din trace the
  * latter is a read record then a write record, so Dinero IV replays both kinds
  * exactly with its write-allocate policy "nofetch" (-lN-Twalloc f). */
-static inline void fn_line(struct mem_functional *b, uint64_t line, enum lru_op op, unsigned cls) {
+static inline void fn_line(struct mem_functional *b, uint64_t line, enum lru_stack_op op,
+                           unsigned cls) {
   if (b->din) {
     uint64_t a = line << b->lg2_line;
-    if (op != LRU_WRITE_LINE) din_writer_record(b->din, a, false);
-    if (op != LRU_READ) din_writer_record(b->din, a, true);
+    if (op != LRU_STACK_WRITE_LINE) din_writer_record(b->din, a, false);
+    if (op != LRU_STACK_READ) din_writer_record(b->din, a, true);
   }
   /* The last line again, same class, and no clean line to dirty: a hit in every
    * size that changes nothing but counters (a quarter of the accesses on grove).
    * Count it here and skip the analyser's call; mem_functional_stack hands the
    * counts over. A whole-line store to it is such a store too: no fetch either way. */
-  const bool store = op != LRU_READ;
+  const bool store = op != LRU_STACK_READ;
   if (line == b->last_line && cls == b->last_cls && (!store || b->last_dirty)) {
     b->repeats[cls][store]++;
     return;
@@ -64,7 +65,7 @@ static inline void fn_access(struct mem_functional *b, uint64_t addr, uint32_t s
   b->st.line_accesses[cls] += end - line + 1;
   if (!is_store) {
     for (;;) {
-      fn_line(b, line, LRU_READ, cls);
+      fn_line(b, line, LRU_STACK_READ, cls);
       if (line == end) break;
       line++;
     }
@@ -76,7 +77,7 @@ static inline void fn_access(struct mem_functional *b, uint64_t addr, uint32_t s
   bool last_whole = (last & lmask) == lmask;
   for (;;) {
     bool whole = line >= first && (line < end || last_whole);
-    fn_line(b, line, whole ? LRU_WRITE_LINE : LRU_WRITE, cls);
+    fn_line(b, line, whole ? LRU_STACK_WRITE_LINE : LRU_STACK_WRITE, cls);
     if (line == end) break;
     line++;
   }

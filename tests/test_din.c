@@ -75,7 +75,7 @@ static void sink_init(struct sink *s) {
 
 static void sink_line(struct sink *s, uint64_t addr, int store) {
   nv_access(&s->nv, addr >> 6, store);
-  lru_stack_access(s->ls, addr >> 6, store ? LRU_WRITE_LINE : LRU_READ, 0);
+  lru_stack_access(s->ls, addr >> 6, store ? LRU_STACK_WRITE_LINE : LRU_STACK_READ, 0);
 }
 
 static void on_record(void *ctx, unsigned label, uint64_t addr) {

@@ -72,10 +72,10 @@ static void nc_push_front(struct naive_cache *c, int32_t x) {
   c->head = x;
 }
 
-/* op as enum lru_op: 0 load, 1 store (fetch on miss), 2 whole-line store
+/* op as enum lru_stack_op: 0 load, 1 store (fetch on miss), 2 whole-line store
  * (allocate on miss without fetching: not a miss). */
 static void naive_access(struct naive *nv, uint32_t id, int op, unsigned cls) {
-  const uint8_t store = op != LRU_READ;
+  const uint8_t store = op != LRU_STACK_READ;
   for (unsigned i = 0; i < nv->n; i++) {
     struct naive_cache *c = &nv->c[i];
     int32_t x = (int32_t)id;
@@ -83,7 +83,7 @@ static void naive_access(struct naive *nv, uint32_t id, int op, unsigned cls) {
       nc_unlink(c, x);
       c->dirty[id] |= store;
     } else {
-      if (op != LRU_WRITE_LINE) c->misses[cls]++;
+      if (op != LRU_STACK_WRITE_LINE) c->misses[cls]++;
       if (c->count == c->cap) {
         int32_t v = c->tail;
         nc_unlink(c, v);
@@ -170,7 +170,7 @@ static int compare_run(const char *name, const struct trace *t, const struct lru
   struct lru_stack *ls = lru_stack_create(p);
   for (size_t k = 0; k < t->n; k++) {
     naive_access(&nv, t->a[k].id, t->a[k].store, t->a[k].cls);
-    lru_stack_access(ls, map_line(m, t->a[k].id), (enum lru_op)t->a[k].store, t->a[k].cls);
+    lru_stack_access(ls, map_line(m, t->a[k].id), (enum lru_stack_op)t->a[k].store, t->a[k].cls);
     if (check_every && k % check_every == 0) lru_stack_check_invariants(ls);
   }
   lru_stack_check_invariants(ls);
@@ -229,7 +229,7 @@ static void test_hand_computed(void) {
     unsigned cls;
   } tr[] = {{0, 0, 0}, {1, 1, 2}, {0, 0, 0}, {2, 0, 1}, {1, 0, 3}, {3, 1, 2}, {0, 0, 0}, {1, 0, 4}};
   for (size_t k = 0; k < sizeof tr / sizeof tr[0]; k++) {
-    lru_stack_access(ls, tr[k].line, tr[k].store ? LRU_WRITE : LRU_READ, tr[k].cls);
+    lru_stack_access(ls, tr[k].line, tr[k].store ? LRU_STACK_WRITE : LRU_STACK_READ, tr[k].cls);
     lru_stack_check_invariants(ls);
   }
   lru_stack_finish(ls);
@@ -267,8 +267,10 @@ static void test_random(void) {
     for (int k = 0; k < 60000; k++) {
       uint64_t r = rng_next(&rng);
       unsigned roll = (unsigned)((r >> 32) % 10); /* 70% loads, 20% stores, 10% whole-line stores */
-      tr_add(&t, (uint32_t)(r % universes[u]), roll < 7 ? LRU_READ : roll < 9 ? LRU_WRITE : LRU_WRITE_LINE,
-             (unsigned)((r >> 40) % MEM_CLASS_MAX));
+      enum lru_stack_op op = roll < 7   ? LRU_STACK_READ
+                             : roll < 9 ? LRU_STACK_WRITE
+                                        : LRU_STACK_WRITE_LINE;
+      tr_add(&t, (uint32_t)(r % universes[u]), op, (unsigned)((r >> 40) % MEM_CLASS_MAX));
     }
     char name[64];
     snprintf(name, sizeof name, "random N=%u", universes[u]);
@@ -305,7 +307,7 @@ static void test_loops(void) {
       /* The LRU pathology, exactly: a sweep of cap+1 lines misses every time in
        * the cache of cap lines; a sweep of cap lines misses only the first round. */
       struct lru_stack *ls = lru_stack_create(&p);
-      for (size_t k = 0; k < t.n; k++) lru_stack_access(ls, t.a[k].id, LRU_READ, 0);
+      for (size_t k = 0; k < t.n; k++) lru_stack_access(ls, t.a[k].id, LRU_STACK_READ, 0);
       unsigned idx = (unsigned)__builtin_ctz(cap);
       uint64_t want = len > cap ? t.n : len;
       EXPECTF(lru_stack_misses(ls, idx, 0) == want, "loop %u in %u lines: %llu misses, want %llu",
@@ -391,7 +393,7 @@ static void test_default_sizes(void) {
                          : (uint32_t)((r >> 16) % 20000);
       tr_add(&t, hot, (r >> 40) % 4 == 0, (unsigned)(r >> 44) % MEM_CLASS_MAX);
     } else {
-      tr_add(&t, stream++, (r >> 40) % 4 == 0 ? LRU_WRITE_LINE : LRU_READ, 2);
+      tr_add(&t, stream++, (r >> 40) % 4 == 0 ? LRU_STACK_WRITE_LINE : LRU_STACK_READ, 2);
       if (stream == 130000) stream = 30000; /* stream revisits: deep reuse */
     }
   }
@@ -489,13 +491,13 @@ static void test_backend_repeats(void) {
     uint64_t a = line << p.lg2_line;
     if (kind < 2) {
       mem_load(&port, a + (r >> 32) % 32, 1 + (uint32_t)((r >> 40) % 32), cls);
-      lru_stack_access(direct, line, LRU_READ, cls);
+      lru_stack_access(direct, line, LRU_STACK_READ, cls);
     } else if (kind == 2) {
       mem_store(&port, a + 8, 8, cls);
-      lru_stack_access(direct, line, LRU_WRITE, cls);
+      lru_stack_access(direct, line, LRU_STACK_WRITE, cls);
     } else {
       mem_store(&port, a, 64, cls);
-      lru_stack_access(direct, line, LRU_WRITE_LINE, cls);
+      lru_stack_access(direct, line, LRU_STACK_WRITE_LINE, cls);
     }
     if (k == 100000) lru_stack_check_invariants(mem_functional_stack(b)); /* a mid-run handover */
   }
