@@ -144,10 +144,11 @@ static bool write_timeline(const struct run_report *r, struct err *e) {
     uint64_t start = i * win, len = start + win <= end ? win : (end > start ? end - start : 0);
     if (len == 0) break;
     fprintf(f, "%llu,%llu,%.2f,%.2f", (unsigned long long)start, (unsigned long long)len,
-            v[MTL_DRAM_READ_BYTES], v[MTL_DRAM_WRITE_BYTES]);
-    for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) fprintf(f, ",%.2f", v[MTL_READ_CLASS0 + c]);
-    fprintf(f, ",%.0f,%.0f,%.0f,%.4f\n", v[MTL_L2_ACCESSES], v[MTL_L2_MISSES], v[MTL_ISSUED_OPS],
-            v[MTL_BUSY_THREAD_CYCLES] / (double)len);
+            v[MACHINE_TL_DRAM_READ_BYTES], v[MACHINE_TL_DRAM_WRITE_BYTES]);
+    for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++)
+      fprintf(f, ",%.2f", v[MACHINE_TL_READ_CLASS0 + c]);
+    fprintf(f, ",%.0f,%.0f,%.0f,%.4f\n", v[MACHINE_TL_L2_ACCESSES], v[MACHINE_TL_L2_MISSES],
+            v[MACHINE_TL_ISSUED_OPS], v[MACHINE_TL_BUSY_THREAD_CYCLES] / (double)len);
   }
   return outfile_commit(&o, e);
 }

@@ -129,12 +129,13 @@ static double *tl_row(struct machine *m, uint64_t w) {
     /* Coarsen: windows double, pairs of rows merge. */
     uint64_t half = (m->tl_rows + 1) / 2;
     for (uint64_t i = 0; i < half; i++)
-      for (unsigned c = 0; c < MTL_COLS; c++) {
-        double b = 2 * i + 1 < m->tl_rows ? m->tl[(2 * i + 1) * MTL_COLS + c] : 0.0;
-        m->tl[i * MTL_COLS + c] = m->tl[2 * i * MTL_COLS + c] + b;
+      for (unsigned c = 0; c < MACHINE_TL_COLS; c++) {
+        double b = 2 * i + 1 < m->tl_rows ? m->tl[(2 * i + 1) * MACHINE_TL_COLS + c] : 0.0;
+        m->tl[i * MACHINE_TL_COLS + c] = m->tl[2 * i * MACHINE_TL_COLS + c] + b;
       }
     if (m->tl_rows > half) /* (an empty timeline has no array yet) */
-      memset(m->tl + half * MTL_COLS, 0, (m->tl_rows - half) * MTL_COLS * sizeof *m->tl);
+      memset(m->tl + half * MACHINE_TL_COLS, 0,
+             (m->tl_rows - half) * MACHINE_TL_COLS * sizeof *m->tl);
     m->tl_rows = half;
     m->tl_window *= 2;
     w /= 2;
@@ -143,12 +144,13 @@ static double *tl_row(struct machine *m, uint64_t w) {
     uint64_t cap = m->tl_cap ? m->tl_cap : 256;
     while (cap <= w) cap *= 2;
     if (cap > MACHINE_TL_MAX_ROWS) cap = MACHINE_TL_MAX_ROWS;
-    m->tl = xrealloc(m->tl, cap * MTL_COLS * sizeof *m->tl);
-    memset(m->tl + m->tl_cap * MTL_COLS, 0, (cap - m->tl_cap) * MTL_COLS * sizeof *m->tl);
+    m->tl = xrealloc(m->tl, cap * MACHINE_TL_COLS * sizeof *m->tl);
+    memset(m->tl + m->tl_cap * MACHINE_TL_COLS, 0,
+           (cap - m->tl_cap) * MACHINE_TL_COLS * sizeof *m->tl);
     m->tl_cap = cap;
   }
   if (w >= m->tl_rows) m->tl_rows = w + 1;
-  return m->tl + w * MTL_COLS;
+  return m->tl + w * MACHINE_TL_COLS;
 }
 
 /* Add amount at cycle t. */
@@ -187,7 +189,7 @@ static void th_account(struct machine *m, struct mthread *th, uint64_t t) {
   switch (th->state) {
   case TH_BUSY:
     m->st.thread_busy_cycles += d;
-    tl_span(m, MTL_BUSY_THREAD_CYCLES, th->since, t, 1.0);
+    tl_span(m, MACHINE_TL_BUSY_THREAD_CYCLES, th->since, t, 1.0);
     break;
   case TH_WAIT: m->st.thread_wait_cycles += d; break;
   default: m->st.thread_done_cycles += d; break;
@@ -319,7 +321,7 @@ static bool l2_try(struct machine *m, const struct req *r, uint64_t t) {
   uint64_t ready = start + m->p.l2_latency_cycles;
   m->st.l2_accesses++;
   m->st.l2_accesses_by_class[r->cls]++;
-  tl_point(m, MTL_L2_ACCESSES, start, 1.0);
+  tl_point(m, MACHINE_TL_L2_ACCESSES, start, 1.0);
   struct mctx *c = r->ctx == NONE ? NULL : &m->ctx[r->ctx];
   if (hit) {
     cache_touch(m->l2, slot);
@@ -350,7 +352,7 @@ static bool l2_try(struct machine *m, const struct req *r, uint64_t t) {
   m->st.l2_misses++;
   m->st.l2_fetch_bytes += LINE_BYTES;
   m->st.fetch_bytes_by_class[r->cls] += LINE_BYTES;
-  tl_point(m, MTL_L2_MISSES, start, 1.0);
+  tl_point(m, MACHINE_TL_L2_MISSES, start, 1.0);
   m->miss_cls[victim] = r->cls;
   m->waiters[victim] = NONE;
   if (c) {
@@ -401,7 +403,9 @@ static void ev_l2_access(void *ctx, uint64_t arg) {
 static void dram_account(struct machine *m, const struct dram_timing *tm, unsigned col, int cls) {
   hist_add(&m->st.queue_delay, tm->wait_cycles);
   tl_span_ticks(m, col, tm->start_ticks, tm->end_ticks, LINE_BYTES);
-  if (cls >= 0) tl_span_ticks(m, MTL_READ_CLASS0 + (unsigned)cls, tm->start_ticks, tm->end_ticks, LINE_BYTES);
+  if (cls >= 0)
+    tl_span_ticks(m, MACHINE_TL_READ_CLASS0 + (unsigned)cls, tm->start_ticks, tm->end_ticks,
+                  LINE_BYTES);
 }
 
 static void ev_fill(void *ctx, uint64_t slot);
@@ -411,7 +415,7 @@ static void ev_dram_read(void *ctx, uint64_t slot) {
   struct dram_timing tm;
   dram_submit(m->dram, engine_now(m->eng), cache_line(m->l2, (uint32_t)slot) << MACHINE_LG2_LINE,
               LINE_BYTES, false, &tm);
-  dram_account(m, &tm, MTL_DRAM_READ_BYTES, m->miss_cls[slot]);
+  dram_account(m, &tm, MACHINE_TL_DRAM_READ_BYTES, m->miss_cls[slot]);
   engine_at(m->eng, tm.done_cycle, ev_fill, m, slot);
 }
 
@@ -419,7 +423,7 @@ static void ev_dram_write(void *ctx, uint64_t line) {
   struct machine *m = ctx;
   struct dram_timing tm;
   dram_submit(m->dram, engine_now(m->eng), line << MACHINE_LG2_LINE, LINE_BYTES, true, &tm);
-  dram_account(m, &tm, MTL_DRAM_WRITE_BYTES, -1);
+  dram_account(m, &tm, MACHINE_TL_DRAM_WRITE_BYTES, -1);
 }
 
 static void ev_fill(void *ctx, uint64_t slot) {
@@ -511,7 +515,7 @@ static void ev_issue(void *ctx, uint64_t core) {
   m->st.blocks++;
   k->port_free = t + c->slots;
   m->st.issue_slots += c->slots;
-  tl_span(m, MTL_ISSUED_OPS, t, t + c->slots, 1.0);
+  tl_span(m, MACHINE_TL_ISSUED_OPS, t, t + c->slots, 1.0);
   if (coro_finished(c->co)) {
     c->state = CTX_DONE;
     if (m->painted_max < coro_stack_used(c->co)) m->painted_max = coro_stack_used(c->co);
@@ -762,5 +766,5 @@ uint64_t machine_timeline_window(const struct machine *m) { return m->tl_window;
 uint64_t machine_timeline_rows(const struct machine *m) { return m->tl_rows; }
 const double *machine_timeline_row(const struct machine *m, uint64_t i) {
   CHECK_LT(i, m->tl_rows);
-  return m->tl + i * MTL_COLS;
+  return m->tl + i * MACHINE_TL_COLS;
 }
