@@ -15,6 +15,7 @@
 #include "renderer/trace.h"
 #include "sim/dram.h"
 #include "sim/err.h"
+#include "sim/hist.h"
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
 #include "sim/outfile.h"
@@ -196,9 +197,9 @@ static bool write_json(const struct run_report *r, struct err *e) {
   struct stats_table t = {0};
   identity(r, &t);
   fputs("{\n  \"tool\": \"rtsim run\",\n  \"machine_file\": ", f);
-  json_write_str(f, r->machine_path);
+  stats_write_json_str(f, r->machine_path);
   fputs(",\n  \"scene_file\": ", f);
-  json_write_str(f, r->scene_path);
+  stats_write_json_str(f, r->scene_path);
   fputs(",\n", f);
   stats_write_json_members(&t, f, "  ");
   stats_fini(&t);
@@ -215,9 +216,9 @@ static bool write_json(const struct run_report *r, struct err *e) {
   fputs(",\n  \"queue_delay_histogram_cycles\": ", f);
   hist_write_json(&s->queue_delay, f);
   fputs(",\n  \"revision\": ", f);
-  json_write_str(f, app_revision);
+  stats_write_json_str(f, app_revision);
   fputs(",\n  \"wall_s\": ", f);
-  json_write_f64(f, r->wall_s);
+  stats_write_json_f64(f, r->wall_s);
   struct rusage ru;
   if (getrusage(RUSAGE_SELF, &ru) == 0)
     fprintf(f, ",\n  \"peak_rss_mb\": %.1f", (double)ru.ru_maxrss / 1024.0);

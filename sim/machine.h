@@ -32,7 +32,7 @@
 #include <stdint.h>
 
 #include "sim/mem.h"
-#include "sim/stats.h"
+#include "sim/hist.h"
 
 #define MACHINE_LG2_LINE 6 /* 64-byte lines everywhere */
 

@@ -320,9 +320,9 @@ void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *in
     char v[64];
     machine_cfg_value(c, i, v, sizeof v);
     fprintf(f, "%s%s", i ? ",\n" : "", indent);
-    json_write_str(f, KEYS[i].name);
+    stats_write_json_str(f, KEYS[i].name);
     fputs(": ", f);
-    if (!strcmp(v, "full")) json_write_str(f, v);
+    if (!strcmp(v, "full")) stats_write_json_str(f, v);
     else fputs(v, f);
   }
 }
