@@ -69,10 +69,10 @@ int cmd_hits(int argc, char **argv) {
   if (!scene_path) return APP_EXIT_USAGE;
   struct app_world w;
   if (!app_world_load(&w, scene_path)) return 2;
-  struct tracer tr;
+  struct trace_ctx tr;
   struct trace_layout layout;
   trace_layout_default(&layout);
-  tracer_init(&tr, &w.scene, &w.kd, mem_port_native(), &layout);
+  trace_init(&tr, &w.scene, &w.kd, mem_port_native(), &layout);
 
   struct err e;
   memset(&e, 0, sizeof e);
@@ -112,7 +112,7 @@ int cmd_hits(int argc, char **argv) {
       rc = app_report(&e);
       break;
     }
-    struct hit h;
+    struct trace_hit h;
     if (trace_closest(&tr, &r, &h))
       printf("%llu,%.9g,%d\n", id, (double)h.t, h.prim);
     else

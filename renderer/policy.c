@@ -82,7 +82,7 @@ void policy_job_done(struct policy_job *job, uint64_t n) {
 
 void policy_primary(const struct policy_job *job, struct policy_worker *w, uint32_t x, uint32_t y,
                     struct ray *r) {
-  const struct tracer *tr = &w->tr;
+  const struct trace_ctx *tr = &w->tr;
   uint64_t pix = (uint64_t)y * job->setup.fb->width + x;
   mem_load(&tr->mem, tr->layout.camera_base + pix * sizeof *r, sizeof *r, TRACE_CLASS_RAY);
   camera_primary(&job->cf, x, y, job->setup.sc->seed, r);
@@ -134,7 +134,7 @@ void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_
   CHECK_LT(core, job->cores);
   const struct policy_setup *s = &job->setup;
   memset(w, 0, sizeof *w);
-  tracer_init(&w->tr, s->scene, s->kd, port, &s->layout);
+  trace_init(&w->tr, s->scene, s->kd, port, &s->layout);
   w->tr.tested = s->tested;
   w->tr.layout.ray_base += (uint64_t)id * job->mod->region_bytes;
   w->id = id;

@@ -104,7 +104,7 @@
 /* Host-only mark of a ray that ended during a blocked pass (never simulated). */
 #define DYN_FLAG_DEAD 0x80u
 
-/* Traversal steps (trav_setup, trav_interior, announce_*) come from
+/* Traversal steps (trav_setup, trav_interior, trav_announce_*) come from
  * renderer/trav.h, shared with trace.c: the same arithmetic gives the same hits. */
 
 /* ---- policy state ---------------------------------------------------------- */
@@ -209,7 +209,7 @@ struct dyn_worker {
   struct dyn *d;
   struct policy_job *job;
   struct policy_worker *wk;
-  struct tracer *tr;
+  struct trace_ctx *tr;
   struct render_stats *st;
   struct ray_buf pend;
   struct dyn_claim cl;
@@ -219,7 +219,7 @@ struct dyn_worker {
  * reversed segment), the canonical ray's test, the best hit so far. */
 struct walk {
   struct trav_ray tv;
-  struct isect_ray ir;
+  struct trace_isect_ray ir;
   float tmin;
   int32_t ignore;
   bool any;
@@ -251,7 +251,7 @@ static bool reversed(const struct ray *r, struct ray *rv) {
   float m = r->tmax * (1.0f / 65536.0f);
   rv->tmin = -m;
   rv->tmax = r->tmax + m;
-  return isfinite(m) && ray_valid(rv);
+  return isfinite(m) && trav_ray_valid(rv);
 }
 
 /* Recompute the hit a record carries (hit_prim) with its canonical ray: the
@@ -259,12 +259,13 @@ static bool reversed(const struct ray *r, struct ray *rv) {
  * so this is the very hit found earlier (t, b1, b2 bit for bit).
  * NOTE: not announced as a load: the host record has no room for t, where a
  * real one would carry it (the paper's rays have spare bytes). */
-static void restore_hit(const struct dyn *d, const struct isect_ray *ir, const struct ray *r,
-                        struct hit *h) {
+static void restore_hit(const struct dyn *d, const struct trace_isect_ray *ir, const struct ray *r,
+                        struct trace_hit *h) {
   CHECK_GE(r->hit_prim, 0);
   CHECK_LT((uint32_t)r->hit_prim, d->s->tri_count);
   const struct scene_tri *tri = &d->s->tris[r->hit_prim];
-  bool ok = isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, r->tmax, &h->t, &h->b1, &h->b2);
+  bool ok = trace_isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, r->tmax, &h->t, &h->b1,
+                            &h->b2);
   CHECK(ok);
   h->prim = r->hit_prim;
 }
@@ -277,14 +278,14 @@ static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) 
   trav_best_init(&w->best, r->tmax);
   w->tmin = r->tmin;
   w->ignore = r->ignore_prim;
-  if (!ray_valid(r) || kd->node_count == 0) return false;
+  if (!trav_ray_valid(r) || kd->node_count == 0) return false;
   if (!trav_setup(&w->tv, kd, r)) return false;
-  isect_prepare(&w->ir, r->o, r->d);
+  trace_isect_prepare(&w->ir, r->o, r->d);
   if (w->any) {
     struct ray rv;
     if (reversed(r, &rv) && !trav_setup(&w->tv, kd, &rv)) return false;
   } else if (r->hit_prim >= 0) {
-    struct hit h;
+    struct trace_hit h;
     restore_hit(d, &w->ir, r, &h);
     trav_best_offer(&w->best, h.t, (uint32_t)h.prim, h.b1, h.b2);
   }
@@ -297,7 +298,7 @@ static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) 
 
 /* Test entries [j0, j1) of leaf nd as trace.c does. True: a shadow ray is
  * occluded. */
-static bool walk_leaf(struct tracer *tr, struct walk *w, struct kd_node nd, uint32_t j0,
+static bool walk_leaf(struct trace_ctx *tr, struct walk *w, struct kd_node nd, uint32_t j0,
                       uint32_t j1) {
   return trav_leaf(tr, &w->ir, w->tmin, w->ignore, w->any, nd, j0, j1, &w->best);
 }
@@ -311,10 +312,10 @@ static bool walk_pop(struct walk *w, int floor) {
 /* Traverse from the current node. In a queue point's subtree (to_queue false)
  * run until its pending nodes (those above floor) are done; above the queue
  * points (to_queue true) stop at the first queue point reached. */
-static enum walk_end walk_run(const struct dyn *d, struct tracer *tr, struct walk *w, int floor,
+static enum walk_end walk_run(const struct dyn *d, struct trace_ctx *tr, struct walk *w, int floor,
                               bool to_queue) {
   for (;;) {
-    announce_node(tr, w->ni, 1);
+    trav_announce_node(tr, w->ni, 1);
     struct kd_node nd = d->qs.nodes[w->ni];
     if (to_queue && kd_is_queue_point(nd)) return WALK_QUEUED;
     if (!kd_is_leaf(nd)) {
@@ -331,9 +332,9 @@ static enum walk_end walk_run(const struct dyn *d, struct tracer *tr, struct wal
  * the path to q, pushing what the original traversal pushed there. Where the
  * path goes to the far child, the traversal had pushed it, finished the near
  * side, and popped it: so pop it here. */
-static void walk_to(const struct dyn *d, struct tracer *tr, struct walk *w, uint32_t q) {
+static void walk_to(const struct dyn *d, struct trace_ctx *tr, struct walk *w, uint32_t q) {
   while (w->ni != q) {
-    announce_node(tr, w->ni, 1);
+    trav_announce_node(tr, w->ni, 1);
     struct kd_node nd = d->qs.nodes[w->ni];
     CHECK(!kd_is_leaf(nd));
     uint32_t c = q >= kd_above(nd) ? kd_above(nd) : w->ni + 1, next;
@@ -351,7 +352,7 @@ static void walk_to(const struct dyn *d, struct tracer *tr, struct walk *w, uint
 }
 
 /* After a queue point's subtree: on to the next queue point, or the end. */
-static enum walk_end walk_leave(const struct dyn *d, struct tracer *tr, struct walk *w) {
+static enum walk_end walk_leave(const struct dyn *d, struct trace_ctx *tr, struct walk *w) {
   if (!walk_pop(w, 0)) return WALK_DONE;
   return walk_run(d, tr, w, 0, true);
 }
@@ -507,7 +508,7 @@ static void terminate(struct dyn_worker *x, struct ray *r, const struct walk *w,
   if (r->type == RAY_SHADOW) {
     shade_shadow(r, e == WALK_HIT, s->fb, &x->tr->mem);
   } else {
-    struct hit h;
+    struct trace_hit h;
     trav_best_hit(&w->best, &h);
     r->hit_prim = -1;
     struct ray spawn[SHADE_MAX_SPAWN];
@@ -553,14 +554,14 @@ static void cost_add(const struct dyn_worker *x, uint32_t pixel, uint64_t nodes0
  * queue point holding its origin.) */
 static void start(struct dyn_worker *x, struct ray *r) {
   struct dyn *d = x->d;
-  struct tracer *tr = x->tr;
+  struct trace_ctx *tr = x->tr;
   uint64_t n0 = tr->stats.node_visits, t0 = tr->stats.tri_tests;
   struct walk w;
   struct dyn_queue *qset = r->type == RAY_PRIMARY ? d->q : r->type == RAY_SHADOW ? d->qsh : d->qn;
   if (!walk_init(d, &w, r)) {
     terminate(x, r, &w, WALK_DONE);
   } else {
-    struct tracer quiet = *tr;
+    struct trace_ctx quiet = *tr;
     quiet.mem = mem_port_native();
     enum walk_end e = walk_run(d, &quiet, &w, 0, true);
     tr->stats = quiet.stats;
@@ -584,7 +585,7 @@ static void flush(struct dyn_worker *x) {
 /* A ray of interior queue point node: its subtree, then onward. */
 static void process_subtree(struct dyn_worker *x, struct ray *r, uint32_t node) {
   struct dyn *d = x->d;
-  struct tracer *tr = x->tr;
+  struct trace_ctx *tr = x->tr;
   uint64_t n0 = tr->stats.node_visits, t0 = tr->stats.tri_tests;
   struct walk w;
   CHECK(walk_init(d, &w, r));
@@ -598,7 +599,7 @@ static void process_subtree(struct dyn_worker *x, struct ray *r, uint32_t node) 
 
 /* Load (announce) entries [j0, j1) of a leaf's geometry, as the paper does on
  * opening a queue at a leaf: it will all be tested. */
-static void preload_leaf(struct tracer *tr, struct kd_node nd, uint32_t j0, uint32_t j1) {
+static void preload_leaf(struct trace_ctx *tr, struct kd_node nd, uint32_t j0, uint32_t j1) {
   uint32_t off = kd_leaf_offset(nd);
   for (uint32_t j = j0; j < j1; j++) {
     uint32_t p = trav_leaf_prim(tr, off + j);
@@ -809,7 +810,7 @@ static void trace_subtree_claim(struct dyn_worker *x) {
  * single traversal finds (the hit rule does not depend on their order). */
 static void trace_leaf_claim(struct dyn_worker *x) {
   struct dyn *d = x->d;
-  struct tracer *tr = x->tr;
+  struct trace_ctx *tr = x->tr;
   const struct mem_port *mem = &tr->mem;
   const struct dyn_claim *cl = &x->cl;
   const struct kd_node nd = d->qs.nodes[cl->node];

@@ -88,7 +88,7 @@ struct pkt_scratch {
   struct packet cur;
   struct trace_packet *pk;
   struct trace_packet_cost cost;
-  struct hit hits[PACKET_MAX];
+  struct trace_hit hits[PACKET_MAX];
   bool occ[PACKET_MAX];
   struct ray spawn[SHADE_MAX_SPAWN];
 };
@@ -121,7 +121,7 @@ static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
   }
   struct pkt_scratch *x = wk->scratch;
   struct packet *stack = x->stack, *group = x->group, *cur = &x->cur;
-  struct tracer *tr = &wk->tr;
+  struct trace_ctx *tr = &wk->tr;
   const struct shade_ctx *sc = job->setup.sc;
   struct framebuffer *fb = job->setup.fb;
   struct render_stats *st = &wk->st;

@@ -46,7 +46,7 @@ static bool rec_step(struct policy_job *job, struct policy_worker *wk) {
   if (!wk->scratch) wk->scratch = xmalloc(sizeof(struct rec_scratch));
   struct rec_scratch *x = wk->scratch;
   struct ray *stack = x->stack;
-  struct tracer *tr = &wk->tr;
+  struct trace_ctx *tr = &wk->tr;
   struct render_stats *st = &wk->st;
   const struct shade_ctx *sc = job->setup.sc;
   struct framebuffer *fb = job->setup.fb;
@@ -73,7 +73,7 @@ static bool rec_step(struct policy_job *job, struct policy_worker *wk) {
       shade_shadow(&r, trace_any(tr, &r), fb, mem);
       continue;
     }
-    struct hit hit;
+    struct trace_hit hit;
     trace_closest(tr, &r, &hit);
     uint32_t n = shade_hit(sc, &r, &hit, fb, mem, x->spawn);
     CHECK_LE(top + n, RECURSIVE_STACK);
