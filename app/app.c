@@ -60,7 +60,7 @@ bool app_world_load(struct app_world *w, const char *path) {
   struct err e;
   memset(&e, 0, sizeof e);
   double t0 = app_now();
-  if (!scene_load(&w->scene, path, &e)) {
+  if (!scene_file_load(&w->scene, path, &e)) {
     app_report(&e);
     return false;
   }

@@ -39,7 +39,7 @@ int cmd_export(int argc, char **argv) {
   struct scene s;
   struct err e;
   memset(&e, 0, sizeof e);
-  if (!scene_load(&s, scene_path, &e)) return app_report(&e);
+  if (!scene_file_load(&s, scene_path, &e)) return app_report(&e);
   bool ok = meshio_export_ply(&s, out, &e);
   if (ok) printf("triangles: %u\noutput: %s\n", s.tri_count, out);
   scene_fini(&s);

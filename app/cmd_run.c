@@ -137,7 +137,7 @@ int cmd_run(int argc, char **argv) {
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   struct app_timed t;
   app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, isatty(2));
-  struct run_report rep = {
+  struct run_output_report rep = {
       .out_dir = out,
       .machine_path = machine_path,
       .scene_path = scene_path,

@@ -30,7 +30,7 @@ void run_output_invalidate(const char *dir) {
 static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 
 /* The workload's identity (first columns) and the resolved config. */
-static void identity(const struct run_report *r, struct stats_table *t) {
+static void identity(const struct run_output_report *r, struct stats_table *t) {
   char rays[64];
   shade_rays_name(r->mask, rays, sizeof rays);
   char hash[24];
@@ -45,7 +45,7 @@ static void identity(const struct run_report *r, struct stats_table *t) {
 }
 
 /* Every measured scalar, units in the names. */
-static void measured(const struct run_report *r, struct stats_table *t) {
+static void measured(const struct run_output_report *r, struct stats_table *t) {
   const struct machine_stats *s = machine_get_stats(r->machine);
   const struct machine_params *p = &r->cfg->p;
   const double cyc = (double)s->cycles, tick = (double)(1ull << DRAM_TICK_BITS);
@@ -110,14 +110,14 @@ static void measured(const struct run_report *r, struct stats_table *t) {
 }
 
 /* Start OUTDIR/name through a temporary (commit with outfile_commit). */
-static bool open_out(struct outfile *o, const struct run_report *r, const char *name,
+static bool open_out(struct outfile *o, const struct run_output_report *r, const char *name,
                      struct err *e) {
   char path[4200];
   snprintf(path, sizeof path, "%s/%s", r->out_dir, name);
   return outfile_open(o, path, "the file", e);
 }
 
-static bool write_csv(const struct run_report *r, struct err *e) {
+static bool write_csv(const struct run_output_report *r, struct err *e) {
   struct outfile o;
   if (!open_out(&o, r, "stats.csv", e)) return false;
   struct stats_table t = {0};
@@ -130,7 +130,7 @@ static bool write_csv(const struct run_report *r, struct err *e) {
   return outfile_commit(&o, e);
 }
 
-static bool write_timeline(const struct run_report *r, struct err *e) {
+static bool write_timeline(const struct run_output_report *r, struct err *e) {
   struct outfile o;
   if (!open_out(&o, r, "timeline.csv", e)) return false;
   FILE *f = o.f;
@@ -155,7 +155,7 @@ static bool write_timeline(const struct run_report *r, struct err *e) {
 }
 
 /* DRAM bytes per cycle over the run by data class, read from timeline.csv. */
-static bool write_plot(const struct run_report *r, struct err *e) {
+static bool write_plot(const struct run_output_report *r, struct err *e) {
   char csv[4200], final[4200], cmd[8192];
   snprintf(csv, sizeof csv, "%s/timeline.csv", r->out_dir);
   snprintf(final, sizeof final, "%s/traffic.png", r->out_dir);
@@ -189,7 +189,7 @@ static bool write_plot(const struct run_report *r, struct err *e) {
   return outfile_commit(&o, e);
 }
 
-static bool write_json(const struct run_report *r, struct err *e) {
+static bool write_json(const struct run_output_report *r, struct err *e) {
   struct outfile o;
   if (!open_out(&o, r, "stats.json", e)) return false;
   FILE *f = o.f;
@@ -226,7 +226,7 @@ static bool write_json(const struct run_report *r, struct err *e) {
   return outfile_commit(&o, e);
 }
 
-bool run_output_write(const struct run_report *r, struct err *e) {
+bool run_output_write(const struct run_output_report *r, struct err *e) {
   char path[4200];
   snprintf(path, sizeof path, "%s/image.exr", r->out_dir);
   struct image im;
@@ -237,7 +237,7 @@ bool run_output_write(const struct run_report *r, struct err *e) {
   return ok && write_csv(r, e) && write_timeline(r, e) && write_plot(r, e) && write_json(r, e);
 }
 
-void run_output_summary(const struct run_report *r, FILE *f) {
+void run_output_summary(const struct run_output_report *r, FILE *f) {
   struct stats_table t = {0};
   measured(r, &t);
   static const char *const show[] = {"cycles", "rays_traced", "rays_per_second", "core_utilization",

@@ -447,7 +447,7 @@ static bool load_scenes(struct priv *pv, struct err *e) {
       const char *path = axis ? pv->axes[a].resolved[i] : pv->scene_fixed;
       if (find_scene(pv, path)) continue;
       struct scene sc;
-      if (!scene_load(&sc, path, e)) return false;
+      if (!scene_file_load(&sc, path, e)) return false;
       pv->scenes[pv->nscenes++] = (struct scene_info){dup_str(path), sc.width, sc.height,
                                                       sc.tri_count, sc.light_count};
       scene_fini(&sc);

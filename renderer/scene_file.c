@@ -247,7 +247,7 @@ static bool load_geometry(const struct cfg_doc *d, struct cfg_node *n, const cha
   return true;
 }
 
-bool scene_load(struct scene *s, const char *path, struct err *e) {
+bool scene_file_load(struct scene *s, const char *path, struct err *e) {
   scene_init(s);
   struct cfg_doc d;
   if (!cfg_load_file(&d, path, e)) return false;

@@ -55,7 +55,7 @@ unsigned testing_temps_of(const char *path) {
 int testing_load_world(struct scene *s, struct kd_tree *kd, const char *path) {
   struct err e;
   memset(&e, 0, sizeof e);
-  if (!scene_load(s, path, &e)) {
+  if (!scene_file_load(s, path, &e)) {
     fprintf(stderr, "%s:%d:%d: %s\n", e.file, e.line, e.col, e.msg);
     return 0;
   }
