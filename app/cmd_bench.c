@@ -1,10 +1,11 @@
 /* rtsim bench: host speed figures (a benchmark, not a test): native render
  * throughput per scene, the functional backend's slowdown against it on the
  * same workload, and the one-pass analyser's own speed. */
+#include "app/app.h"
+
 #include <getopt.h>
 #include <stdio.h>
 
-#include "app/app.h"
 #include "renderer/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"

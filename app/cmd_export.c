@@ -1,9 +1,10 @@
 /* rtsim export: the scene's triangles as PLY, face i = primitive i. */
+#include "app/app.h"
+
 #include <getopt.h>
 #include <stdio.h>
 #include <string.h>
 
-#include "app/app.h"
 #include "renderer/meshio.h"
 #include "renderer/scene_file.h"
 #include "sim/err.h"

@@ -1,5 +1,7 @@
 /* rtsim hits: nearest hits for rays given as CSV on stdin. A stable interface
  * for cross-checking our intersection against any other ray tracer. */
+#include "app/app.h"
+
 #include <errno.h>
 #include <getopt.h>
 #include <math.h>
@@ -7,7 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "app/app.h"
 #include "renderer/ray.h"
 #include "renderer/trace.h"
 #include "sim/err.h"

@@ -5,6 +5,8 @@
  * every config and workload key, takes stats.csv's resolved value: 16KiB
  * reads 16384). Points with other columns still merge: the union of the
  * columns in order of first appearance, missing cells empty. */
+#include "app/app.h"
+
 #include <dirent.h>
 #include <errno.h>
 #include <getopt.h>
@@ -14,7 +16,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "app/app.h"
 #include "app/csv.h"
 #include "sim/err.h"
 #include "sim/outfile.h"

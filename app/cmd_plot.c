@@ -4,13 +4,14 @@
  * axes from the column names. The script goes to gnuplot on a pipe with the
  * data inline; the picture is written under a temporary name and renamed
  * (sim/outfile.h). */
+#include "app/app.h"
+
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "app/app.h"
 #include "app/csv.h"
 #include "sim/err.h"
 #include "sim/outfile.h"

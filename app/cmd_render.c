@@ -1,11 +1,12 @@
 /* rtsim render: ray trace a scene to an OpenEXR image and print a summary. */
+#include "app/app.h"
+
 #include <getopt.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
-#include "app/app.h"
 #include "renderer/framebuffer.h"
 #include "renderer/image.h"
 #include "renderer/policy.h"

@@ -1,6 +1,8 @@
 /* rtsim run: render a scene on the timed machine and write what it measured.
  * Glue only: parse, load the machine config and the scene, run one policy
  * worker per ray context on the machine, hand the numbers to run_output.c. */
+#include "app/app.h"
+
 #include <errno.h>
 #include <getopt.h>
 #include <stdio.h>
@@ -9,7 +11,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "app/app.h"
 #include "app/run_output.h"
 #include "renderer/policy.h"
 #include "renderer/shade.h"

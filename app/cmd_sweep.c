@@ -6,6 +6,9 @@
  * command.sh (its exact command), point.csv (its swept values, for merge),
  * error.txt (its stderr, when it failed), and rtsim run's outputs. */
 #define _XOPEN_SOURCE 700 /* realpath */
+
+#include "app/app.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <getopt.h>
@@ -18,7 +21,6 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "app/app.h"
 #include "app/sweep.h"
 #include "sim/err.h"
 #include "sim/outfile.h"

@@ -1,13 +1,14 @@
 /* rtsim traffic and rtsim trace: DRAM-to-L2 traffic of the scheduling policies
  * for every cache size at once (functional backend, one-pass LRU analysis), and
  * the raw access stream as a Dinero IV din trace. */
+#include "app/app.h"
+
 #include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
-#include "app/app.h"
 #include "renderer/framebuffer.h"
 #include "renderer/policy.h"
 #include "renderer/shade.h"

@@ -1,11 +1,12 @@
 /* PNG previews of rendered images through gnuplot (rgbimage plot of raw 8-bit
  * sRGB), so results/ can carry light pictures beside the EXR files. */
+#include "app/app.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "app/app.h"
 #include "renderer/image.h"
 #include "sim/err.h"
 #include "sim/outfile.h"

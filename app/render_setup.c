@@ -1,7 +1,8 @@
 /* The one render setup of the commands (app.h: struct app_render). */
+#include "app/app.h"
+
 #include <string.h>
 
-#include "app/app.h"
 #include "renderer/trace.h"
 
 void app_render_init(struct app_render *r, const struct app_world *w, uint32_t mask, uint64_t seed,

@@ -1,10 +1,11 @@
 /* One render on the timed machine (app.h: struct app_timed), for rtsim run and
  * rtsim bench: a policy job, one worker per ray context, the machine. */
+#include "app/app.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <unistd.h>
 
-#include "app/app.h"
 #include "sim/err.h"
 #include "sim/machine.h"
 

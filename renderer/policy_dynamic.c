@@ -75,6 +75,8 @@
  *   only when the last ray handed out from it is done (chunk_refs), so the
  *   writes a blocked leaf pass makes into a ray's slot after its accesses (its
  *   best hit, or its end) always land in the ray's own record. */
+#include "renderer/policy_impl.h"
+
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -84,7 +86,6 @@
 #include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
 #include "renderer/policy.h"
-#include "renderer/policy_impl.h"
 #include "renderer/qpoint.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
