@@ -1,16 +1,16 @@
 /* The shared pieces of the rtsim program (app.h): error reporting, option
- * values, the world a command loads. main.c only dispatches. */
+ * values several commands take, the world a command loads. main.c only dispatches. */
 #include "app/app.h"
 
-#include <errno.h>
-#include <getopt.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
+#include "renderer/policy.h"
 #include "renderer/scene_file.h"
+#include "renderer/shade.h"
 #include "sim/err.h"
 
 int app_report(const struct err *e) {
@@ -30,24 +30,9 @@ int app_usage_error(const char *cmd, const char *fmt, ...) {
   return APP_EXIT_USAGE;
 }
 
-int app_option_error(const char *cmd, int c, char **argv) {
-  if (c == ':') return app_usage_error(cmd, "option %s needs a value", argv[optind - 1]);
-  return app_usage_error(cmd, "unknown option '%s'", argv[optind - 1]);
-}
+bool app_parse_rays(const char *text, void *mask) { return shade_parse_rays(text, mask); }
 
-const char *app_one_operand(const char *cmd, const char *what, const char *noun, int argc,
-                            char **argv) {
-  if (optind == argc - 1) return argv[optind];
-  if (optind >= argc)
-    app_usage_error(cmd, "missing %s", what);
-  else
-    app_usage_error(cmd, "expected one %s, got %d", noun, argc - optind);
-  return NULL;
-}
-
-const char *app_one_scene(const char *cmd, int argc, char **argv) {
-  return app_one_operand(cmd, "SCENE.yaml", "scene file", argc, argv);
-}
+bool app_parse_policy(const char *text, void *kind) { return policy_parse(text, kind); }
 
 double app_now(void) {
   struct timespec ts;
@@ -76,18 +61,4 @@ bool app_world_load(struct app_world *w, const char *path) {
 void app_world_fini(struct app_world *w) {
   kd_fini(&w->kd);
   scene_fini(&w->scene);
-}
-
-bool app_parse_u64(const char *cmd, const char *opt, const char *text, uint64_t lo, uint64_t hi,
-                   uint64_t *out) {
-  char *end = NULL;
-  errno = 0;
-  unsigned long long v = (text[0] >= '0' && text[0] <= '9') ? strtoull(text, &end, 10) : 0;
-  if (!end || *end || errno || v < lo || v > hi) {
-    app_usage_error(cmd, "%s: got '%s', expected a whole number from %llu to %llu", opt, text,
-                    (unsigned long long)lo, (unsigned long long)hi);
-    return false;
-  }
-  *out = v;
-  return true;
 }

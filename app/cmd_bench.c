@@ -3,9 +3,10 @@
  * same workload, and the one-pass analyser's own speed. */
 #include "app/app.h"
 
-#include <getopt.h>
+#include <getopt.h> /* optind: the scenes are argv[optind..argc) */
 #include <stdio.h>
 
+#include "app/opts.h"
 #include "renderer/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
@@ -107,37 +108,23 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
 }
 
 int cmd_bench(int argc, char **argv) {
-  static const struct option opts[] = {{"width", required_argument, 0, 'W'},
-                                       {"height", required_argument, 0, 'H'},
-                                       {"repeat", required_argument, 0, 'n'},
-                                       {"rays", required_argument, 0, 'r'},
-                                       {"functional", no_argument, 0, 'f'},
-                                       {"analyser", required_argument, 0, 'a'},
-                                       {"engine", no_argument, 0, 'e'},
-                                       {"timed", required_argument, 0, 't'},
-                                       {"help", no_argument, 0, 'h'},
-                                       {0, 0, 0, 0}};
   uint64_t width = 0, height = 0, repeat = 3, analyser = 0;
-  const char *rays = "primary";
+  uint32_t mask = RAY_MASK(RAY_PRIMARY);
   bool functional = false, engine = false;
   const char *timed = NULL;
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'W': if (!app_parse_u64("bench", "--width", optarg, 1, 16384, &width)) return 2; break;
-    case 'H': if (!app_parse_u64("bench", "--height", optarg, 1, 16384, &height)) return 2; break;
-    case 'n': if (!app_parse_u64("bench", "--repeat", optarg, 1, 1000, &repeat)) return 2; break;
-    case 'a': if (!app_parse_u64("bench", "--analyser", optarg, 1, 1ull << 40, &analyser)) return 2; break;
-    case 'r': rays = optarg; break;
-    case 'f': functional = true; break;
-    case 'e': engine = true; break;
-    case 't': timed = optarg; break;
-    case 'h': fputs(HELP, stdout); return 0;
-    default: return app_option_error("bench", c, argv);
-    }
-  }
+  const struct opts_spec spec[] = {
+      OPTS_U64("width", 0, &width, 1, 16384),
+      OPTS_U64("height", 0, &height, 1, 16384),
+      OPTS_U64("repeat", 0, &repeat, 1, 1000),
+      OPTS_PARSE("rays", 0, &mask, app_parse_rays, APP_RAYS_EXPECT),
+      OPTS_FLAG("functional", 0, &functional),
+      OPTS_U64("analyser", 0, &analyser, 1, 1ull << 40),
+      OPTS_FLAG("engine", 0, &engine),
+      OPTS_STR("timed", 0, &timed),
+      OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("bench", HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
   if (analyser) {
     printf("line_accesses,accesses_per_s\n%llu,%.0f\n", (unsigned long long)analyser,
            lru_stack_bench(analyser, 1));
@@ -154,10 +141,7 @@ int cmd_bench(int argc, char **argv) {
            near, far, ns);
     return 0;
   }
-  uint32_t mask;
-  if (!shade_parse_rays(rays, &mask))
-    return app_usage_error("bench", "--rays: got '%s', expected a comma-separated list of primary, shadow, specular, diffuse", rays);
-  if (optind >= argc) return app_usage_error("bench", "missing SCENE.yaml");
+  if (args.n == 0) return app_usage_error("bench", "missing SCENE.yaml");
   if (timed) return bench_timed(timed, mask, width, height, repeat, argc, argv);
   printf("scene,triangles,kd_nodes,kd_build_s,width,height,rays,native_s,rays_per_s%s\n",
          functional ? ",functional_s,slowdown,line_accesses,accesses_per_s" : "");

@@ -9,7 +9,6 @@
 
 #include <dirent.h>
 #include <errno.h>
-#include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,6 +16,7 @@
 #include <unistd.h>
 
 #include "app/csv.h"
+#include "app/opts.h"
 #include "sim/err.h"
 #include "sim/outfile.h"
 #include "sim/stats.h"
@@ -79,20 +79,12 @@ static void add_column(char ***cols, unsigned *n, const char *name) {
 }
 
 int cmd_merge(int argc, char **argv) {
-  static const struct option opts[] = {
-      {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   const char *out = NULL;
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'o': out = optarg; break;
-    case 'h': fputs(HELP, stdout); return 0;
-    default: return app_option_error("merge", c, argv);
-    }
-  }
-  const char *dir = app_one_operand("merge", "DIR", "directory", argc, argv);
+  const struct opts_spec spec[] = {OPTS_STR("output", 'o', &out), OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("merge", HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char *dir = opts_one(&args, "DIR", "directory");
   if (!dir) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("merge", "missing -o TABLE.csv");
   struct err e = {0};
@@ -116,7 +108,7 @@ int cmd_merge(int argc, char **argv) {
     }
   }
   closedir(d);
-  int rc = 0;
+  rc = 0;
   struct point *pts = xcalloc(n, sizeof *pts);
   char **cols = NULL;
   unsigned ncols = 0;

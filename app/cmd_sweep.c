@@ -11,7 +11,6 @@
 
 #include <errno.h>
 #include <fcntl.h>
-#include <getopt.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -21,6 +20,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "app/opts.h"
 #include "app/sweep.h"
 #include "sim/err.h"
 #include "sim/outfile.h"
@@ -380,28 +380,17 @@ static int by_cost(const void *a, const void *b) {
 }
 
 int cmd_sweep(int argc, char **argv) {
-  static const struct option opts[] = {{"output", required_argument, 0, 'o'},
-                                       {"jobs", required_argument, 0, 'j'},
-                                       {"emit-jobs", no_argument, 0, 'E'},
-                                       {"help", no_argument, 0, 'h'},
-                                       {0, 0, 0, 0}};
   const char *out = NULL;
   long cores = sysconf(_SC_NPROCESSORS_ONLN);
   uint64_t jobs = cores > 0 ? (uint64_t)cores : 1;
   bool emit = false;
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":o:j:h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'o': out = optarg; break;
-    case 'j': if (!app_parse_u64("sweep", "-j", optarg, 1, 4096, &jobs)) return APP_EXIT_USAGE; break;
-    case 'E': emit = true; break;
-    case 'h': fputs(HELP, stdout); return 0;
-    default: return app_option_error("sweep", c, argv);
-    }
-  }
-  const char *sweep_path = app_one_operand("sweep", "SWEEP.yaml", "sweep file", argc, argv);
+  const struct opts_spec spec[] = {OPTS_STR("output", 'o', &out),
+                                   OPTS_U64("jobs", 'j', &jobs, 1, 4096),
+                                   OPTS_FLAG("emit-jobs", 0, &emit), OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("sweep", HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char *sweep_path = opts_one(&args, "SWEEP.yaml", "sweep file");
   if (!sweep_path) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("sweep", "missing -o DIR");
   if (strpbrk(out, "\n\r")) return app_usage_error("sweep", "-o: a path with a line break cannot go into a job line");
@@ -428,7 +417,7 @@ int cmd_sweep(int argc, char **argv) {
   struct job *all = xcalloc(s.npoints, sizeof *all);
   struct job **todo = xcalloc(s.npoints, sizeof *todo);
   unsigned ntodo = 0, complete = 0;
-  int rc = 0;
+  rc = 0;
   for (unsigned i = 0; i < s.npoints; i++) {
     struct job *j = &all[i];
     j->p = &s.points[i];

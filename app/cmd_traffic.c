@@ -3,12 +3,12 @@
  * the raw access stream as a Dinero IV din trace. */
 #include "app/app.h"
 
-#include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
+#include "app/opts.h"
 #include "renderer/framebuffer.h"
 #include "renderer/policy.h"
 #include "renderer/shade.h"
@@ -55,8 +55,10 @@ static const char TRAFFIC_HELP[] =
     "dynamic policy's settings as given (dyn_batch, dyn_ray_buffer_bytes: the same on\n"
     "every row; they change the dynamic rows only).\n";
 
-/* The paper's ray configurations by name, or an explicit list. */
-static bool parse_config(const char *s, uint32_t *mask) {
+/* The paper's ray configurations by name, or an explicit list, into a
+ * uint32_t mask (an option's value: opts.h). */
+static bool parse_config(const char *s, void *dst) {
+  uint32_t *mask = dst;
   const uint32_t P = RAY_MASK(RAY_PRIMARY), S = RAY_MASK(RAY_SHADOW);
   if (!strcmp(s, "primary")) *mask = P;
   else if (!strcmp(s, "shadow")) *mask = P | S;
@@ -65,6 +67,14 @@ static bool parse_config(const char *s, uint32_t *mask) {
   else return shade_parse_rays(s, mask);
   return true;
 }
+#define CONFIG_EXPECT "primary, shadow, specular, diffuse or a comma-separated list of ray types"
+
+/* The options traffic and trace share besides their own. */
+#define TRAFFIC_OPTS(width, height, mask, pp)                                                \
+  OPTS_U64("width", 0, width, 1, 16384), OPTS_U64("height", 0, height, 1, 16384),           \
+      OPTS_PARSE("rays", 0, mask, parse_config, CONFIG_EXPECT),                             \
+      OPTS_U64("dyn-batch", 0, &(pp)->dyn_batch_rays, 0, UINT32_MAX),                       \
+      OPTS_U64("dyn-ray-buffer", 0, &(pp)->dyn_ray_buffer_bytes, 0, 1ull << 32)
 
 /* One functional run of policy k; analyser results, and the potentially
  * visible triangles counted. din may be NULL. */
@@ -122,53 +132,36 @@ static void progress_line(const char *what, unsigned done, unsigned total) {
   fflush(stderr);
 }
 
+/* --policy of traffic: one policy (and recursive, the baseline) or all, into
+ * a bool want[POLICY_COUNT]. */
+static bool parse_policies(const char *s, void *dst) {
+  bool *want = dst;
+  enum policy_kind pk;
+  for (int p = 0; p < POLICY_COUNT; p++) want[p] = !strcmp(s, "all");
+  if (want[0]) return true;
+  if (!policy_parse(s, &pk)) return false;
+  want[pk] = want[POLICY_RECURSIVE] = true;
+  return true;
+}
+
 int cmd_traffic(int argc, char **argv) {
-  static const struct option opts[] = {
-      {"output", required_argument, 0, 'o'}, {"width", required_argument, 0, 'W'},
-      {"height", required_argument, 0, 'H'}, {"rays", required_argument, 0, 'r'},
-      {"policy", required_argument, 0, 'P'}, {"dyn-batch", required_argument, 0, 'B'},
-      {"dyn-ray-buffer", required_argument, 0, 'R'},
-      {"help", no_argument, 0, 'h'},         {0, 0, 0, 0}};
-  const char *out = NULL, *rays = NULL, *policy = "all";
+  const char *out = NULL;
+  uint32_t mask = 0; /* 0: no --rays */
   uint64_t width = 0, height = 0;
+  bool want[POLICY_COUNT] = {true, true, true};
   struct policy_params pp;
   policy_params_default(&pp);
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'o': out = optarg; break;
-    case 'W': if (!app_parse_u64("traffic", "--width", optarg, 1, 16384, &width)) return 2; break;
-    case 'H': if (!app_parse_u64("traffic", "--height", optarg, 1, 16384, &height)) return 2; break;
-    case 'r': rays = optarg; break;
-    case 'P': policy = optarg; break;
-    case 'B':
-      if (!app_parse_u64("traffic", "--dyn-batch", optarg, 0, UINT32_MAX, &pp.dyn_batch_rays)) return 2;
-      break;
-    case 'R':
-      if (!app_parse_u64("traffic", "--dyn-ray-buffer", optarg, 0, 1ull << 32, &pp.dyn_ray_buffer_bytes))
-        return 2;
-      break;
-    case 'h': fputs(TRAFFIC_HELP, stdout); return 0;
-    default: return app_option_error("traffic", c, argv);
-    }
-  }
-  const char *scene_path = app_one_scene("traffic", argc, argv);
+  const struct opts_spec spec[] = {
+      OPTS_STR("output", 'o', &out), TRAFFIC_OPTS(&width, &height, &mask, &pp),
+      OPTS_PARSE("policy", 0, want, parse_policies, "one of: recursive, packet, dynamic, all"),
+      OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("traffic", TRAFFIC_HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("traffic", "missing -o TABLE.csv");
-  if (!rays) return app_usage_error("traffic", "missing --rays (primary, shadow, specular or diffuse)");
-  uint32_t mask;
-  if (!parse_config(rays, &mask))
-    return app_usage_error("traffic", "--rays: got '%s', expected primary, shadow, specular, diffuse or a comma-separated list of ray types", rays);
-  bool want[POLICY_COUNT] = {false, false, false};
-  enum policy_kind pk;
-  if (!strcmp(policy, "all"))
-    want[0] = want[1] = want[2] = true;
-  else if (policy_parse(policy, &pk))
-    want[pk] = want[POLICY_RECURSIVE] = true;
-  else
-    return app_usage_error("traffic", "--policy: got '%s', expected one of: recursive, packet, dynamic, all", policy);
+  if (!mask) return app_usage_error("traffic", "missing --rays (primary, shadow, specular or diffuse)");
 
   struct app_world w;
   if (!app_world_load(&w, scene_path)) return 2;
@@ -314,55 +307,36 @@ static void dinero_command(uint64_t bytes, unsigned lg2_line, const char *din, c
            (unsigned long long)(bytes >> lg2_line), din);
 }
 
+/* --cache of trace: a power of two from 1 KiB to 4 MiB, into a uint64_t. */
+static bool parse_cache(const char *s, void *dst) {
+  uint64_t v;
+  if (!opts_u64(s, 1024, 4194304, &v) || (v & (v - 1))) return false;
+  *(uint64_t *)dst = v;
+  return true;
+}
+
 int cmd_trace(int argc, char **argv) {
-  static const struct option opts[] = {
-      {"din", required_argument, 0, 'd'},    {"width", required_argument, 0, 'W'},
-      {"height", required_argument, 0, 'H'}, {"rays", required_argument, 0, 'r'},
-      {"policy", required_argument, 0, 'P'}, {"cache", required_argument, 0, 'c'},
-      {"dyn-batch", required_argument, 0, 'B'}, {"dyn-ray-buffer", required_argument, 0, 'R'},
-      {"help", no_argument, 0, 'h'},
-      {0, 0, 0, 0}};
-  const char *din_path = NULL, *rays = NULL, *policy = NULL;
+  const char *din_path = NULL;
+  uint32_t mask = 0; /* 0: no --rays */
   uint64_t width = 0, height = 0, cache = 512 * 1024;
+  enum policy_kind pk = POLICY_RECURSIVE;
+  bool have_policy = false;
   struct policy_params pp;
   policy_params_default(&pp);
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'd': din_path = optarg; break;
-    case 'W': if (!app_parse_u64("trace", "--width", optarg, 1, 16384, &width)) return 2; break;
-    case 'H': if (!app_parse_u64("trace", "--height", optarg, 1, 16384, &height)) return 2; break;
-    case 'r': rays = optarg; break;
-    case 'P': policy = optarg; break;
-    case 'c':
-      if (!app_parse_u64("trace", "--cache", optarg, 1024, 4194304, &cache)) return 2;
-      if (cache & (cache - 1))
-        return app_usage_error("trace", "--cache: got '%s', expected a power of two", optarg);
-      break;
-    case 'B':
-      if (!app_parse_u64("trace", "--dyn-batch", optarg, 0, UINT32_MAX, &pp.dyn_batch_rays)) return 2;
-      break;
-    case 'R':
-      if (!app_parse_u64("trace", "--dyn-ray-buffer", optarg, 0, 1ull << 32, &pp.dyn_ray_buffer_bytes))
-        return 2;
-      break;
-    case 'h': fputs(TRACE_HELP, stdout); return 0;
-    default: return app_option_error("trace", c, argv);
-    }
-  }
-  const char *scene_path = app_one_scene("trace", argc, argv);
+  const struct opts_spec spec[] = {
+      OPTS_STR("din", 0, &din_path), TRAFFIC_OPTS(&width, &height, &mask, &pp),
+      {.name = "policy", .kind = OPTS_KIND_PARSE, .dst = &pk, .parse = app_parse_policy,
+       .expect = APP_POLICY_EXPECT, .given = &have_policy},
+      OPTS_PARSE("cache", 0, &cache, parse_cache, "a power of two from 1024 to 4194304"),
+      OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("trace", TRACE_HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;
   if (!din_path) return app_usage_error("trace", "missing --din FILE");
-  if (!policy) return app_usage_error("trace", "missing --policy (recursive, packet or dynamic)");
-  if (!rays) return app_usage_error("trace", "missing --rays (primary, shadow, specular or diffuse)");
-  enum policy_kind pk;
-  if (!policy_parse(policy, &pk))
-    return app_usage_error("trace", "--policy: got '%s', expected one of: recursive, packet, dynamic", policy);
-  uint32_t mask;
-  if (!parse_config(rays, &mask))
-    return app_usage_error("trace", "--rays: got '%s', expected primary, shadow, specular, diffuse or a comma-separated list of ray types", rays);
+  if (!have_policy) return app_usage_error("trace", "missing --policy (recursive, packet or dynamic)");
+  if (!mask) return app_usage_error("trace", "missing --rays (primary, shadow, specular or diffuse)");
   struct app_world w;
   if (!app_world_load(&w, scene_path)) return 2;
   uint32_t W = width ? (uint32_t)width : w.scene.width;
