@@ -96,9 +96,4 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
                    const struct machine_params *mp, bool progress);
 void app_timed_fini(struct app_timed *t);
 
-struct image;
-/* Write an sRGB PNG preview of im's R, G, B channels through gnuplot (temporary
- * name + rename). On failure fills e (file = png) and returns false. */
-bool app_write_preview(const struct image *im, const char *png, struct err *e);
-
 #endif

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "app/opts.h"
+#include "app/preview.h"
 #include "renderer/framebuffer.h"
 #include "renderer/image.h"
 #include "renderer/policy.h"
@@ -107,7 +108,7 @@ int cmd_render(int argc, char **argv) {
                               sizeof *fb->cost_tris + im.channel_count * sizeof(float));
   struct err e;
   memset(&e, 0, sizeof e);
-  bool ok = image_write_exr(&im, out, half, &e) && (!preview || app_write_preview(&im, preview, &e));
+  bool ok = image_write_exr(&im, out, half, &e) && (!preview || preview_write_png(&im, preview, &e));
   image_fini(&im);
   const uint64_t seed_used = ar.sc.seed;
   app_render_fini(&ar);

@@ -1,6 +1,6 @@
 /* PNG previews of rendered images through gnuplot (rgbimage plot of raw 8-bit
  * sRGB), so results/ can carry light pictures beside the EXR files. */
-#include "app/app.h"
+#include "app/preview.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -18,7 +18,7 @@ static unsigned char to_srgb8(float v) {
   return (unsigned char)lrintf(s * 255.0f);
 }
 
-bool app_write_preview(const struct image *im, const char *png, struct err *e) {
+bool preview_write_png(const struct image *im, const char *png, struct err *e) {
   int r = image_channel(im, "R"), g = image_channel(im, "G"), b = image_channel(im, "B");
   CHECK_GE(r, 0);
   CHECK_GE(g, 0);
