@@ -68,13 +68,9 @@ int cmd_render(int argc, char **argv) {
   enum policy_kind policy = POLICY_RECURSIVE;
   const struct opts_spec spec[] = {
       OPTS_STR("output", 'o', &out),
-      OPTS_U64("width", 0, &width, 1, 16384),
-      OPTS_U64("height", 0, &height, 1, 16384),
-      OPTS_PARSE("rays", 0, &mask, app_parse_rays, APP_RAYS_EXPECT),
-      {.name = "seed", .kind = OPTS_KIND_U64, .dst = &seed, .hi = UINT64_MAX, .given = &have_seed},
+      APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy),
       OPTS_FLAG("half", 0, &half),
       OPTS_STR("preview", 0, &preview),
-      OPTS_PARSE("policy", 0, &policy, app_parse_policy, APP_POLICY_EXPECT),
       OPTS_END};
   struct opts_args args;
   int rc = opts_parse("render", HELP, spec, argc, argv, &args);

@@ -75,11 +75,7 @@ int cmd_run(int argc, char **argv) {
   struct sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v), 0}; /* at most one an argument */
   const struct opts_spec spec[] = {
       OPTS_STR("output", 'o', &out),
-      OPTS_U64("width", 0, &width, 1, 16384),
-      OPTS_U64("height", 0, &height, 1, 16384),
-      OPTS_PARSE("rays", 0, &mask, app_parse_rays, APP_RAYS_EXPECT),
-      {.name = "seed", .kind = OPTS_KIND_U64, .dst = &seed, .hi = UINT64_MAX, .given = &have_seed},
-      OPTS_PARSE("policy", 0, &policy, app_parse_policy, APP_POLICY_EXPECT),
+      APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy),
       OPTS_PARSE("set", 0, &sets, add_set, "KEY=VALUE"),
       OPTS_END};
   struct opts_args args;
