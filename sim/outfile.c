@@ -53,9 +53,10 @@ static int create_tmp(struct outfile *o, const char *path, const char *what) {
 bool outfile_open(struct outfile *o, const char *path, const char *what, struct err *e) {
   int fd = create_tmp(o, path, what);
   if (fd < 0) {
+    int code = errno;
     free(o->tmp);
     o->tmp = NULL; /* not ours to remove */
-    return fail(o, e, "cannot create a temporary file beside it: ", errno);
+    return fail(o, e, "cannot create a temporary file beside it: ", code);
   }
   o->f = fdopen(fd, "w");
   if (!o->f) {
