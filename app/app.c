@@ -1,17 +1,20 @@
 /* The shared pieces of the rtsim program (app.h): error reporting, option
- * values, the world a command loads. main.c only dispatches. */
+ * values several commands take, the world a command loads, the one render
+ * setup, and a render on the timed machine. main.c only dispatches. */
 #include "app/app.h"
 
-#include <errno.h>
-#include <getopt.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
+#include "renderer/policy.h"
 #include "renderer/scene_file.h"
+#include "renderer/shade.h"
+#include "renderer/trace.h"
 #include "sim/err.h"
+#include "sim/machine.h"
 
 int app_report(const struct err *e) {
   char buf[ERR_FILE_MAX + ERR_MSG_MAX + 64];
@@ -30,24 +33,9 @@ int app_usage_error(const char *cmd, const char *fmt, ...) {
   return APP_EXIT_USAGE;
 }
 
-int app_option_error(const char *cmd, int c, char **argv) {
-  if (c == ':') return app_usage_error(cmd, "option %s needs a value", argv[optind - 1]);
-  return app_usage_error(cmd, "unknown option '%s'", argv[optind - 1]);
-}
+bool app_parse_rays(const char *text, void *mask) { return shade_parse_rays(text, mask); }
 
-const char *app_one_operand(const char *cmd, const char *what, const char *noun, int argc,
-                            char **argv) {
-  if (optind == argc - 1) return argv[optind];
-  if (optind >= argc)
-    app_usage_error(cmd, "missing %s", what);
-  else
-    app_usage_error(cmd, "expected one %s, got %d", noun, argc - optind);
-  return NULL;
-}
-
-const char *app_one_scene(const char *cmd, int argc, char **argv) {
-  return app_one_operand(cmd, "SCENE.yaml", "scene file", argc, argv);
-}
+bool app_parse_policy(const char *text, void *kind) { return policy_parse(text, kind); }
 
 double app_now(void) {
   struct timespec ts;
@@ -60,7 +48,7 @@ bool app_world_load(struct app_world *w, const char *path) {
   struct err e;
   memset(&e, 0, sizeof e);
   double t0 = app_now();
-  if (!scene_load(&w->scene, path, &e)) {
+  if (!scene_file_load(&w->scene, path, &e)) {
     app_report(&e);
     return false;
   }
@@ -79,16 +67,85 @@ void app_world_fini(struct app_world *w) {
   scene_fini(&w->scene);
 }
 
-bool app_parse_u64(const char *cmd, const char *opt, const char *text, uint64_t lo, uint64_t hi,
-                   uint64_t *out) {
-  char *end = NULL;
-  errno = 0;
-  unsigned long long v = (text[0] >= '0' && text[0] <= '9') ? strtoull(text, &end, 10) : 0;
-  if (!end || *end || errno || v < lo || v > hi) {
-    app_usage_error(cmd, "%s: got '%s', expected a whole number from %llu to %llu", opt, text,
-                    (unsigned long long)lo, (unsigned long long)hi);
-    return false;
-  }
-  *out = v;
-  return true;
+/* ---- the one render setup (struct app_render) --------------------------------- */
+
+void app_render_init(struct app_render *r, const struct app_world *w, uint32_t mask, uint64_t seed,
+                     uint32_t width, uint32_t height) {
+  memset(r, 0, sizeof *r);
+  r->sc.scene = &w->scene;
+  r->sc.ray_mask = mask;
+  r->sc.seed = seed;
+  struct policy_setup *s = &r->setup;
+  s->scene = &w->scene;
+  s->kd = &w->kd;
+  trace_layout_default(&s->layout);
+  s->sc = &r->sc;
+  fb_init(&r->fb, width, height, s->layout.fb_base);
+  s->fb = &r->fb;
+}
+
+void app_render_fini(struct app_render *r) { fb_fini(&r->fb); }
+
+/* ---- one render on the timed machine (struct app_timed), for run and bench ---- */
+
+struct timed_ctx {
+  struct policy_job *job;
+  struct policy_worker *workers;
+  uint64_t done, total; /* as the policy reports them (work items, or rays for dynamic) */
+  double t0;
+};
+
+static void run_worker(void *arg, const struct machine_worker_info *info, struct mem_port port) {
+  struct timed_ctx *r = arg;
+  struct policy_worker *w = &r->workers[info->id];
+  policy_worker_init(w, r->job, info->id, info->core, info->thread, port);
+  policy_job_work(r->job, w);
+  policy_worker_fini(r->job, w);
+}
+
+static void work_progress(void *ctx, uint64_t done, uint64_t total) {
+  struct timed_ctx *r = ctx;
+  r->done = done;
+  r->total = total;
+}
+
+static void cycle_progress(void *ctx, uint64_t cycle) {
+  struct timed_ctx *r = ctx;
+  double el = app_now() - r->t0, total = (double)r->total;
+  double frac = total > 0 ? (double)r->done / total : 0;
+  char eta[32] = "ETA ?";
+  if (frac > 0) snprintf(eta, sizeof eta, "ETA %.0f s", el * (1 - frac) / frac);
+  fprintf(stderr, "\rrun: %.4g Mcycles simulated, work %5.1f%%, %.3g Mcycles/s, %s   ",
+          (double)cycle / 1e6, 100 * frac, el > 0 ? (double)cycle / el / 1e6 : 0.0, eta);
+  fflush(stderr);
+}
+
+void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask, uint64_t seed,
+                   uint32_t width, uint32_t height, enum policy_kind k,
+                   const struct machine_params *mp, bool progress) {
+  app_render_init(&t->ar, w, mask, seed, width, height);
+  t->ar.setup.layout.node_cycles = mp->cost_node_cycles;
+  t->ar.setup.layout.tri_cycles = mp->cost_triangle_cycles;
+  t->ar.sc.shade_cycles = mp->cost_shade_cycles;
+  struct policy_params pp;
+  policy_params_machine(&pp, mp->l2_size_bytes, (uint64_t)mp->l2_latency_cycles + mp->dram_latency_cycles);
+  const uint32_t n = mp->cores * mp->threads_per_core * mp->rays_per_thread;
+  struct timed_ctx r = {0};
+  t->ar.setup.progress = work_progress;
+  t->ar.setup.progress_ctx = &r;
+  r.job = policy_job_create(k, &t->ar.setup, &pp, n, mp->cores);
+  r.workers = xcalloc(n, sizeof *r.workers);
+  t->m = machine_create(mp, 0);
+  r.t0 = app_now();
+  machine_run(t->m, run_worker, &r, progress ? cycle_progress : NULL, &r);
+  t->wall_s = app_now() - r.t0;
+  if (progress) fputc('\n', stderr);
+  policy_job_finish(r.job, &t->st, &t->ts);
+  free(r.workers);
+  policy_job_destroy(r.job);
+}
+
+void app_timed_fini(struct app_timed *t) {
+  machine_destroy(t->m);
+  app_render_fini(&t->ar);
 }

@@ -32,16 +32,22 @@ int app_report(const struct err *e);
 /* Print "rtsim CMD: message" plus a hint to run --help; returns APP_EXIT_USAGE. */
 int app_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
-/* getopt_long's ':' (missing value) or '?' (unknown option) for command cmd:
- * prints the usage error and returns APP_EXIT_USAGE. */
-int app_option_error(const char *cmd, int c, char **argv);
-/* Exactly one positional SCENE.yaml after the options: NULL (error printed)
- * otherwise. */
-const char *app_one_scene(const char *cmd, int argc, char **argv);
-/* Exactly one positional argument after the options: NULL otherwise, with
- * "missing WHAT" or "expected one NOUN, got N" printed. */
-const char *app_one_operand(const char *cmd, const char *what, const char *noun, int argc,
-                            char **argv);
+/* Option values several commands take (app/opts.h, OPTS_KIND_PARSE): ray
+ * types, comma-separated, into a uint32_t mask (shade_parse_rays); a policy
+ * name into an enum policy_kind. */
+bool app_parse_rays(const char *text, void *mask);
+#define APP_RAYS_EXPECT "a comma-separated list of primary, shadow, specular, diffuse"
+bool app_parse_policy(const char *text, void *kind);
+#define APP_POLICY_EXPECT "one of: recursive, packet, dynamic"
+/* The opts.h table entries render and run share: --width, --height (uint64_t),
+ * --rays (uint32_t mask), --seed (uint64_t, and a bool set when given),
+ * --policy (enum policy_kind). */
+#define APP_RENDER_OPTS(width, height, mask, seed, have_seed, policy)                        \
+  OPTS_U64("width", 0, width, 1, 16384), OPTS_U64("height", 0, height, 1, 16384),           \
+      OPTS_PARSE("rays", 0, mask, app_parse_rays, APP_RAYS_EXPECT),                         \
+      {.name = "seed", .kind = OPTS_KIND_U64, .dst = (seed), .hi = UINT64_MAX,              \
+       .given = (have_seed)},                                                               \
+      OPTS_PARSE("policy", 0, policy, app_parse_policy, APP_POLICY_EXPECT)
 
 /* The source revision this program was built from: `git describe --always
  * --dirty` of the source tree at build time, or "unknown" outside a git
@@ -98,14 +104,5 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
                    uint32_t width, uint32_t height, enum policy_kind k,
                    const struct machine_params *mp, bool progress);
 void app_timed_fini(struct app_timed *t);
-
-struct image;
-/* Write an sRGB PNG preview of im's R, G, B channels through gnuplot (temporary
- * name + rename). On failure fills e (file = png) and returns false. */
-bool app_write_preview(const struct image *im, const char *png, struct err *e);
-
-/* Whole-number option value in [lo, hi]; on error prints and returns false. */
-bool app_parse_u64(const char *cmd, const char *opt, const char *text, uint64_t lo, uint64_t hi,
-                   uint64_t *out);
 
 #endif

@@ -1,13 +1,15 @@
 /* rtsim bench: host speed figures (a benchmark, not a test): native render
  * throughput per scene, the functional backend's slowdown against it on the
  * same workload, and the one-pass analyser's own speed. */
-#include <getopt.h>
+#include "app/app.h"
+
+#include <getopt.h> /* optind: the scenes are argv[optind..argc) */
 #include <stdio.h>
 #include <stdlib.h>
 #include <unistd.h>
 
-#include "app/app.h"
 #include "app/bench_embree.h"
+#include "app/opts.h"
 #include "renderer/camera.h"
 #include "renderer/meshio.h"
 #include "renderer/ray.h"
@@ -97,13 +99,13 @@ static struct ray *primary_rays(const struct scene *s, uint32_t W, uint32_t H) {
 
 /* rtsim's tracer alone on the same rays (native backend); prim[i] its hits. */
 static double trace_only(const struct app_world *w, const struct ray *rays, uint32_t n, int32_t *prim) {
-  struct tracer tr;
+  struct trace_ctx tr;
   struct trace_layout lay;
   trace_layout_default(&lay);
-  tracer_init(&tr, &w->scene, &w->kd, mem_port_native(), &lay);
+  trace_init(&tr, &w->scene, &w->kd, mem_port_native(), &lay);
   double t0 = app_now();
   for (uint32_t i = 0; i < n; i++) {
-    struct hit h;
+    struct trace_hit h;
     trace_closest(&tr, &rays[i], &h);
     prim[i] = h.prim;
   }
@@ -184,39 +186,24 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
 }
 
 int cmd_bench(int argc, char **argv) {
-  static const struct option opts[] = {{"width", required_argument, 0, 'W'},
-                                       {"height", required_argument, 0, 'H'},
-                                       {"repeat", required_argument, 0, 'n'},
-                                       {"rays", required_argument, 0, 'r'},
-                                       {"functional", no_argument, 0, 'f'},
-                                       {"analyser", required_argument, 0, 'a'},
-                                       {"engine", no_argument, 0, 'e'},
-                                       {"timed", required_argument, 0, 't'},
-                                       {"embree", no_argument, 0, 'E'},
-                                       {"help", no_argument, 0, 'h'},
-                                       {0, 0, 0, 0}};
   uint64_t width = 0, height = 0, repeat = 3, analyser = 0;
-  const char *rays = "primary";
+  uint32_t mask = RAY_MASK(RAY_PRIMARY);
   bool functional = false, engine = false, embree = false;
   const char *timed = NULL;
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'W': if (!app_parse_u64("bench", "--width", optarg, 1, 16384, &width)) return 2; break;
-    case 'H': if (!app_parse_u64("bench", "--height", optarg, 1, 16384, &height)) return 2; break;
-    case 'n': if (!app_parse_u64("bench", "--repeat", optarg, 1, 1000, &repeat)) return 2; break;
-    case 'a': if (!app_parse_u64("bench", "--analyser", optarg, 1, 1ull << 40, &analyser)) return 2; break;
-    case 'r': rays = optarg; break;
-    case 'f': functional = true; break;
-    case 'e': engine = true; break;
-    case 't': timed = optarg; break;
-    case 'E': embree = true; break;
-    case 'h': fputs(HELP, stdout); return 0;
-    default: return app_option_error("bench", c, argv);
-    }
-  }
+  const struct opts_spec spec[] = {
+      OPTS_U64("width", 0, &width, 1, 16384),
+      OPTS_U64("height", 0, &height, 1, 16384),
+      OPTS_U64("repeat", 0, &repeat, 1, 1000),
+      OPTS_PARSE("rays", 0, &mask, app_parse_rays, APP_RAYS_EXPECT),
+      OPTS_FLAG("functional", 0, &functional),
+      OPTS_U64("analyser", 0, &analyser, 1, 1ull << 40),
+      OPTS_FLAG("engine", 0, &engine),
+      OPTS_STR("timed", 0, &timed),
+      OPTS_FLAG("embree", 0, &embree),
+      OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("bench", HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
   if (analyser) {
     printf("line_accesses,accesses_per_s\n%llu,%.0f\n", (unsigned long long)analyser,
            lru_stack_bench(analyser, 1));
@@ -233,16 +220,13 @@ int cmd_bench(int argc, char **argv) {
            near, far, ns);
     return 0;
   }
-  uint32_t mask;
-  if (!shade_parse_rays(rays, &mask))
-    return app_usage_error("bench", "--rays: got '%s', expected a comma-separated list of primary, shadow, specular, diffuse", rays);
-  if (optind >= argc) return app_usage_error("bench", "missing SCENE.yaml");
+  if (args.n == 0) return app_usage_error("bench", "missing SCENE.yaml");
   if (timed) return bench_timed(timed, mask, width, height, repeat, argc, argv);
   if (embree && !bench_embree_available())
     return app_usage_error("bench", "--embree: this rtsim was built without Embree (install "
                                     "libembree-dev and configure with -DRTSIM_EMBREE=ON)");
   if (embree && mask != RAY_MASK(RAY_PRIMARY))
-    return app_usage_error("bench", "--embree compares primary rays only; got --rays %s", rays);
+    return app_usage_error("bench", "--embree compares primary rays only (--rays primary)");
   printf("scene,triangles,kd_nodes,kd_build_s,width,height,rays,native_s,rays_per_s%s%s\n",
          functional ? ",functional_s,slowdown,line_accesses,accesses_per_s" : "",
          embree ? ",kd_splits,kd_refs_per_tri,kd_max_leaf,trace_s,trace_rays_per_s,embree_build_s,embree_s,"
@@ -281,12 +265,13 @@ int cmd_bench(int argc, char **argv) {
       }
       if (!functional) continue;
       struct lru_stack_params lp = lru_stack_params_default();
-      struct fn_backend *b = fn_backend_create(&lp, NULL);
-      double fs = render_once(&w, mask, W, H, fn_backend_port(b), &nrays);
+      struct mem_functional *b = mem_functional_create(&lp, NULL);
+      double fs = render_once(&w, mask, W, H, mem_functional_port(b), &nrays);
       if (k == 0 || fs < fbest) fbest = fs;
       acc = 0;
-      for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++) acc += fn_backend_stats(b)->line_accesses[cl];
-      fn_backend_destroy(b);
+      for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
+        acc += mem_functional_get_stats(b)->line_accesses[cl];
+      mem_functional_destroy(b);
     }
     printf("%s,%u,%u,%.3f,%u,%u,%llu,%.4f,%.0f", w.scene.name[0] ? w.scene.name : argv[i],
            w.scene.tri_count, w.kd.stats.nodes, w.build_s, W, H, (unsigned long long)nrays, best,

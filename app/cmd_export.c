@@ -1,9 +1,10 @@
 /* rtsim export: the scene's triangles as PLY, face i = primitive i. */
-#include <getopt.h>
+#include "app/app.h"
+
 #include <stdio.h>
 #include <string.h>
 
-#include "app/app.h"
+#include "app/opts.h"
 #include "renderer/meshio.h"
 #include "renderer/scene_file.h"
 #include "sim/err.h"
@@ -20,26 +21,18 @@ static const char HELP[] =
     "  -h, --help          this text\n";
 
 int cmd_export(int argc, char **argv) {
-  static const struct option opts[] = {
-      {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   const char *out = NULL;
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'o': out = optarg; break;
-    case 'h': fputs(HELP, stdout); return 0;
-    default: return app_option_error("export", c, argv);
-    }
-  }
-  const char *scene_path = app_one_scene("export", argc, argv);
+  const struct opts_spec spec[] = {OPTS_STR("output", 'o', &out), OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("export", HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("export", "missing -o SCENE.ply");
   struct scene s;
   struct err e;
   memset(&e, 0, sizeof e);
-  if (!scene_load(&s, scene_path, &e)) return app_report(&e);
+  if (!scene_file_load(&s, scene_path, &e)) return app_report(&e);
   bool ok = meshio_export_ply(&s, out, &e);
   if (ok) printf("triangles: %u\noutput: %s\n", s.tri_count, out);
   scene_fini(&s);

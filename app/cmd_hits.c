@@ -1,13 +1,14 @@
 /* rtsim hits: nearest hits for rays given as CSV on stdin. A stable interface
  * for cross-checking our intersection against any other ray tracer. */
+#include "app/app.h"
+
 #include <errno.h>
-#include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "app/app.h"
+#include "app/opts.h"
 #include "renderer/ray.h"
 #include "renderer/trace.h"
 #include "sim/err.h"
@@ -54,31 +55,24 @@ static bool parse_line(char *line, unsigned long lineno, unsigned long long *id,
 }
 
 int cmd_hits(int argc, char **argv) {
-  static const struct option opts[] = {{"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
-    if (c == 'h') {
-      fputs(HELP, stdout);
-      return 0;
-    }
-    return app_option_error("hits", c, argv);
-  }
-  const char *scene_path = app_one_scene("hits", argc, argv);
+  const struct opts_spec spec[] = {OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("hits", HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;
   struct app_world w;
   if (!app_world_load(&w, scene_path)) return 2;
-  struct tracer tr;
+  struct trace_ctx tr;
   struct trace_layout layout;
   trace_layout_default(&layout);
-  tracer_init(&tr, &w.scene, &w.kd, mem_port_native(), &layout);
+  trace_init(&tr, &w.scene, &w.kd, mem_port_native(), &layout);
 
   struct err e;
   memset(&e, 0, sizeof e);
   char line[4096];
   unsigned long lineno = 0;
-  int rc = 0;
+  rc = 0;
   while (fgets(line, sizeof line, stdin)) {
     lineno++;
     size_t len = strlen(line);
@@ -112,7 +106,7 @@ int cmd_hits(int argc, char **argv) {
       rc = app_report(&e);
       break;
     }
-    struct hit h;
+    struct trace_hit h;
     if (trace_closest(&tr, &r, &h))
       printf("%llu,%.9g,%d\n", id, (double)h.t, h.prim);
     else

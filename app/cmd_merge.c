@@ -5,18 +5,20 @@
  * every config and workload key, takes stats.csv's resolved value: 16KiB
  * reads 16384). Points with other columns still merge: the union of the
  * columns in order of first appearance, missing cells empty. */
+#include "app/app.h"
+
 #include <dirent.h>
 #include <errno.h>
-#include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "app/app.h"
 #include "app/csv.h"
+#include "app/opts.h"
 #include "sim/err.h"
+#include "sim/outfile.h"
 #include "sim/stats.h"
 
 static const char HELP[] =
@@ -77,20 +79,12 @@ static void add_column(char ***cols, unsigned *n, const char *name) {
 }
 
 int cmd_merge(int argc, char **argv) {
-  static const struct option opts[] = {
-      {"output", required_argument, 0, 'o'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   const char *out = NULL;
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'o': out = optarg; break;
-    case 'h': fputs(HELP, stdout); return 0;
-    default: return app_option_error("merge", c, argv);
-    }
-  }
-  const char *dir = app_one_operand("merge", "DIR", "directory", argc, argv);
+  const struct opts_spec spec[] = {OPTS_STR("output", 'o', &out), OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("merge", HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char *dir = opts_one(&args, "DIR", "directory");
   if (!dir) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("merge", "missing -o TABLE.csv");
   struct err e = {0};
@@ -114,7 +108,7 @@ int cmd_merge(int argc, char **argv) {
     }
   }
   closedir(d);
-  int rc = 0;
+  rc = 0;
   struct point *pts = xcalloc(n, sizeof *pts);
   char **cols = NULL;
   unsigned ncols = 0;
@@ -150,29 +144,26 @@ int cmd_merge(int argc, char **argv) {
   for (unsigned i = 0; i < n; i++)
     for (unsigned k = 0; k < pts[i].stats.ncols; k++) add_column(&cols, &ncols, pts[i].stats.names[k]);
 
-  char tmp[8192];
-  snprintf(tmp, sizeof tmp, "%s.tmp", out);
-  FILE *f = fopen(tmp, "w");
-  if (f) {
-    for (unsigned k = 0; k < ncols; k++) {
-      if (k) fputc(',', f);
-      stats_write_csv_str(f, cols[k]);
+  struct outfile o;
+  if (!outfile_open(&o, out, "the table", &e)) {
+    rc = app_report(&e);
+    goto done;
+  }
+  FILE *f = o.f;
+  for (unsigned k = 0; k < ncols; k++) {
+    if (k) fputc(',', f);
+    stats_write_csv_str(f, cols[k]);
+  }
+  fputc('\n', f);
+  for (unsigned i = 0; i < n; i++) {
+    stats_write_csv_str(f, pts[i].name);
+    for (unsigned k = 1; k < ncols; k++) {
+      fputc(',', f);
+      stats_write_csv_str(f, cell(&pts[i], cols[k]));
     }
     fputc('\n', f);
-    for (unsigned i = 0; i < n; i++) {
-      stats_write_csv_str(f, pts[i].name);
-      for (unsigned k = 1; k < ncols; k++) {
-        fputc(',', f);
-        stats_write_csv_str(f, cell(&pts[i], cols[k]));
-      }
-      fputc('\n', f);
-    }
   }
-  bool ok = f && !ferror(f);
-  if (f && fclose(f) != 0) ok = false;
-  if (!ok || rename(tmp, out) != 0) {
-    unlink(tmp);
-    err_set(&e, out, 0, 0, "cannot write the table: %s", strerror(errno));
+  if (!outfile_commit(&o, &e)) {
     rc = app_report(&e);
     goto done;
   }

@@ -2,17 +2,19 @@
  * header) through gnuplot: METRIC against KEY, one line per value of a
  * --lines column, one panel per value of a --panels column, units on the
  * axes from the column names. The script goes to gnuplot on a pipe with the
- * data inline; the picture is written under a temporary name and renamed. */
-#include <getopt.h>
+ * data inline; the picture is written under a temporary name and renamed
+ * (sim/outfile.h). */
+#include "app/app.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
-#include "app/app.h"
 #include "app/csv.h"
+#include "app/opts.h"
 #include "sim/err.h"
+#include "sim/outfile.h"
 
 static const char HELP[] =
     "usage: rtsim plot TABLE.csv --x KEY --y METRIC -o FILE.png|FILE.svg [options]\n"
@@ -193,52 +195,59 @@ static unsigned index_of(const struct values *v, const char *s) {
   return 0;
 }
 
+/* The --where filters, KEY=VALUE each (argv's strings). */
+struct wheres {
+  const char *v[PLOT_WHERE_MAX];
+  unsigned n;
+};
+
+static bool add_where(const char *text, void *dst) {
+  struct wheres *w = dst;
+  if (w->n == PLOT_WHERE_MAX || !strchr(text, '=')) return false;
+  w->v[w->n++] = text;
+  return true;
+}
+
+/* The --mark-x values. */
+struct marks {
+  double v[PLOT_WHERE_MAX];
+  unsigned n;
+};
+
+static bool add_mark(const char *text, void *dst) {
+  struct marks *m = dst;
+  char *end = NULL;
+  double v = strtod(text, &end);
+  if (m->n == PLOT_WHERE_MAX || end == text || *end || !isfinite(v)) return false;
+  m->v[m->n++] = v;
+  return true;
+}
+
+#define PLOT_AT_MOST_(s) " (at most " #s ")"
+#define PLOT_AT_MOST(s) PLOT_AT_MOST_(s)
+
 int cmd_plot(int argc, char **argv) {
-  static const struct option opts[] = {
-      {"x", required_argument, 0, 'x'},     {"y", required_argument, 0, 'y'},
-      {"lines", required_argument, 0, 'l'}, {"panels", required_argument, 0, 'p'},
-      {"where", required_argument, 0, 'w'}, {"logx", no_argument, 0, 'X'},
-      {"logy", no_argument, 0, 'Y'},        {"output", required_argument, 0, 'o'},
-      {"mark-x", required_argument, 0, 'M'},
-      {"help", no_argument, 0, 'h'},        {0, 0, 0, 0}};
   const char *xk = NULL, *yk = NULL, *lk = NULL, *pk = NULL, *out = NULL;
-  const char *where[PLOT_WHERE_MAX];
-  unsigned nwhere = 0;
-  double marks[PLOT_WHERE_MAX];
-  unsigned nmarks = 0;
+  struct wheres wh = {.n = 0};
+  struct marks mk = {.n = 0};
   bool logx = false, logy = false;
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'x': xk = optarg; break;
-    case 'y': yk = optarg; break;
-    case 'l': lk = optarg; break;
-    case 'p': pk = optarg; break;
-    case 'w':
-      if (nwhere == PLOT_WHERE_MAX || !strchr(optarg, '='))
-        return app_usage_error("plot", "--where: got '%s', expected KEY=VALUE (at most %d)", optarg,
-                               PLOT_WHERE_MAX);
-      where[nwhere++] = optarg;
-      break;
-    case 'X': logx = true; break;
-    case 'Y': logy = true; break;
-    case 'M': {
-      char *end = NULL;
-      double v = strtod(optarg, &end);
-      if (nmarks == PLOT_WHERE_MAX || end == optarg || *end || !isfinite(v))
-        return app_usage_error("plot", "--mark-x: got '%s', expected a number (at most %d)", optarg,
-                               PLOT_WHERE_MAX);
-      marks[nmarks++] = v;
-      break;
-    }
-    case 'o': out = optarg; break;
-    case 'h': fputs(HELP, stdout); return 0;
-    default: return app_option_error("plot", c, argv);
-    }
-  }
-  const char *table = app_one_operand("plot", "TABLE.csv", "table", argc, argv);
+  const struct opts_spec spec[] = {
+      OPTS_STR("x", 0, &xk),
+      OPTS_STR("y", 0, &yk),
+      OPTS_STR("lines", 0, &lk),
+      OPTS_STR("panels", 0, &pk),
+      OPTS_PARSE("where", 0, &wh, add_where, "KEY=VALUE" PLOT_AT_MOST(PLOT_WHERE_MAX)),
+      OPTS_FLAG("logx", 0, &logx),
+      OPTS_FLAG("logy", 0, &logy),
+      OPTS_STR("output", 'o', &out),
+      OPTS_PARSE("mark-x", 0, &mk, add_mark, "a number" PLOT_AT_MOST(PLOT_WHERE_MAX)),
+      OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("plot", HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char **where = wh.v;
+  const unsigned nwhere = wh.n;
+  const char *table = opts_one(&args, "TABLE.csv", "table");
   if (!table) return APP_EXIT_USAGE;
   if (!xk || !yk) return app_usage_error("plot", "missing --%s", xk ? "y METRIC" : "x KEY");
   if (!out) return app_usage_error("plot", "missing -o FILE.png or FILE.svg");
@@ -249,10 +258,11 @@ int cmd_plot(int argc, char **argv) {
 
   struct csv_table t;
   struct err e = {0};
-  int rc = APP_EXIT_USAGE;
+  rc = APP_EXIT_USAGE;
   unsigned *kept = NULL;
   struct row *rows = NULL;
   struct values lines = {0}, panels = {0};
+  struct outfile plot = {0};
   if (!csv_read(&t, table, &e)) return app_report(&e);
   int xc = column(&t, "--x", xk), yc = xc < 0 ? -1 : column(&t, "--y", yk);
   int lc = -1, pc = -1;
@@ -351,8 +361,11 @@ int cmd_plot(int argc, char **argv) {
   free(xs);
   free(ys);
   unsigned cols = (unsigned)ceil(sqrt((double)panels.n)), prow = (panels.n + cols - 1) / cols;
-  char tmp[8192], label[512];
-  snprintf(tmp, sizeof tmp, "%s.tmp", out);
+  char label[512];
+  if (!outfile_open_named(&plot, out, "the plot", &e)) {
+    rc = 1;
+    goto fail;
+  }
   FILE *gp = popen("gnuplot >/dev/null", "w");
   if (!gp) {
     err_set(&e, out, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
@@ -361,7 +374,7 @@ int cmd_plot(int argc, char **argv) {
   }
   fprintf(gp, "set terminal %s size %u,%u noenhanced font ',11'\nset output ", svg ? "svg" : "pngcairo",
           cols * 620, prow * 420);
-  gp_str(gp, tmp);
+  gp_str(gp, plot.tmp);
   fputs("\nset grid\nset key outside right top\nset pointsize 0.8\n", gp);
   axis_label(xk, label, sizeof label);
   fputs("set xlabel ", gp);
@@ -371,9 +384,9 @@ int cmd_plot(int argc, char **argv) {
   gp_str(gp, label);
   fputc('\n', gp);
   if (logx) fprintf(gp, "set logscale x %d\n", xbase);
-  for (unsigned m = 0; m < nmarks; m++)
+  for (unsigned m = 0; m < mk.n; m++)
     fprintf(gp, "set arrow from %.17g, graph 0 to %.17g, graph 1 nohead dt 2 lw 1.5 lc rgb 'gray30'\n",
-            marks[m], marks[m]);
+            mk.v[m], mk.v[m]);
   if (logy) fprintf(gp, "set logscale y %d\n", ybase);
   char title[1024];
   snprintf(title, sizeof title, "%s against %s%s", yk, xk, nwhere ? " where " : "");
@@ -415,9 +428,12 @@ int cmd_plot(int argc, char **argv) {
     }
   }
   fputs("unset multiplot\n", gp);
-  if (pclose(gp) != 0 || rename(tmp, out) != 0) {
-    unlink(tmp);
+  if (pclose(gp) != 0) {
     err_set(&e, out, 0, 0, "gnuplot could not draw the plot (is gnuplot-nox installed?)");
+    rc = 1;
+    goto fail;
+  }
+  if (!outfile_commit(&plot, &e)) {
     rc = 1;
     goto fail;
   }
@@ -425,6 +441,7 @@ int cmd_plot(int argc, char **argv) {
           lines.n == 1 ? "" : "s", panels.n, panels.n == 1 ? "" : "s", out);
   rc = 0;
 fail:
+  outfile_abort(&plot);
   if (e.set) app_report(&e);
   free(kept);
   free(rows);

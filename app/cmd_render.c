@@ -1,11 +1,13 @@
 /* rtsim render: ray trace a scene to an OpenEXR image and print a summary. */
-#include <getopt.h>
+#include "app/app.h"
+
 #include <stdio.h>
 #include <string.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
-#include "app/app.h"
+#include "app/opts.h"
+#include "app/preview.h"
 #include "renderer/framebuffer.h"
 #include "renderer/image.h"
 #include "renderer/policy.h"
@@ -62,43 +64,23 @@ static void print_world(const struct app_world *w, const char *path) {
 }
 
 int cmd_render(int argc, char **argv) {
-  static const struct option opts[] = {
-      {"output", required_argument, 0, 'o'}, {"width", required_argument, 0, 'W'},
-      {"height", required_argument, 0, 'H'}, {"rays", required_argument, 0, 'r'},
-      {"seed", required_argument, 0, 's'},   {"half", no_argument, 0, 'f'},
-      {"preview", required_argument, 0, 'p'}, {"policy", required_argument, 0, 'P'},
-      {"help", no_argument, 0, 'h'},         {0, 0, 0, 0}};
-  const char *out = NULL, *preview = NULL, *rays = "primary,shadow,specular,diffuse";
+  const char *out = NULL, *preview = NULL;
+  uint32_t mask = RAY_MASK(RAY_TYPE_COUNT) - 1; /* every ray type */
   uint64_t width = 0, height = 0, seed = 0;
   bool have_seed = false, half = false;
   enum policy_kind policy = POLICY_RECURSIVE;
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'o': out = optarg; break;
-    case 'W': if (!app_parse_u64("render", "--width", optarg, 1, 16384, &width)) return 2; break;
-    case 'H': if (!app_parse_u64("render", "--height", optarg, 1, 16384, &height)) return 2; break;
-    case 'r': rays = optarg; break;
-    case 's': if (!app_parse_u64("render", "--seed", optarg, 0, UINT64_MAX, &seed)) return 2;
-              have_seed = true; break;
-    case 'f': half = true; break;
-    case 'p': preview = optarg; break;
-    case 'P':
-      if (!policy_parse(optarg, &policy))
-        return app_usage_error("render", "--policy: got '%s', expected one of: recursive, packet, dynamic", optarg);
-      break;
-    case 'h': fputs(HELP, stdout); return 0;
-    default: return app_option_error("render", c, argv);
-    }
-  }
-  const char *scene_path = app_one_scene("render", argc, argv);
+  const struct opts_spec spec[] = {
+      OPTS_STR("output", 'o', &out),
+      APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy),
+      OPTS_FLAG("half", 0, &half),
+      OPTS_STR("preview", 0, &preview),
+      OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("render", HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("render", "missing -o IMAGE.exr");
-  uint32_t mask;
-  if (!shade_parse_rays(rays, &mask))
-    return app_usage_error("render", "--rays: got '%s', expected a comma-separated list of primary, shadow, specular, diffuse", rays);
   const char *path = scene_path;
 
   struct app_world w;
@@ -125,7 +107,7 @@ int cmd_render(int argc, char **argv) {
                               sizeof *fb->cost_tris + im.channel_count * sizeof(float));
   struct err e;
   memset(&e, 0, sizeof e);
-  bool ok = image_write_exr(&im, out, half, &e) && (!preview || app_write_preview(&im, preview, &e));
+  bool ok = image_write_exr(&im, out, half, &e) && (!preview || preview_write_png(&im, preview, &e));
   image_fini(&im);
   const uint64_t seed_used = ar.sc.seed;
   app_render_fini(&ar);

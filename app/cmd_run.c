@@ -1,15 +1,16 @@
 /* rtsim run: render a scene on the timed machine and write what it measured.
  * Glue only: parse, load the machine config and the scene, run one policy
  * worker per ray context on the machine, hand the numbers to run_output.c. */
+#include "app/app.h"
+
 #include <errno.h>
-#include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "app/app.h"
+#include "app/opts.h"
 #include "app/run_output.h"
 #include "renderer/policy.h"
 #include "renderer/shade.h"
@@ -17,6 +18,7 @@
 #include "sim/err.h"
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
+#include "sim/outfile.h"
 
 static const char HELP[] =
     "usage: rtsim run MACHINE.yaml SCENE.yaml -o OUTDIR [options]\n"
@@ -52,56 +54,42 @@ static const char HELP[] =
     "                      costs.ray_switch timeline.window\n"
     "  -h, --help          this text\n";
 
+/* The --set assignments, in order (argv's strings). */
+struct sets {
+  const char **v;
+  unsigned n;
+};
+
+static bool add_set(const char *text, void *dst) {
+  struct sets *s = dst;
+  s->v[s->n++] = text;
+  return true;
+}
+
 int cmd_run(int argc, char **argv) {
-  static const struct option opts[] = {
-      {"output", required_argument, 0, 'o'}, {"width", required_argument, 0, 'W'},
-      {"height", required_argument, 0, 'H'}, {"rays", required_argument, 0, 'r'},
-      {"seed", required_argument, 0, 's'},   {"policy", required_argument, 0, 'P'},
-      {"set", required_argument, 0, 'S'},    {"help", no_argument, 0, 'h'},
-      {0, 0, 0, 0}};
-  const char *out = NULL, *rays = "primary,shadow,specular,diffuse";
+  const char *out = NULL;
+  uint32_t mask = RAY_MASK(RAY_TYPE_COUNT) - 1; /* every ray type */
   uint64_t width = 0, height = 0, seed = 0;
   bool have_seed = false;
   enum policy_kind policy = POLICY_RECURSIVE;
-  const char **sets = xcalloc((size_t)argc + 1, sizeof *sets);
-  int nsets = 0, c;
-  opterr = 0;
-  optind = 1;
-  int rc = APP_EXIT_USAGE;
-  while ((c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'o': out = optarg; break;
-    case 'W': if (!app_parse_u64("run", "--width", optarg, 1, 16384, &width)) goto done; break;
-    case 'H': if (!app_parse_u64("run", "--height", optarg, 1, 16384, &height)) goto done; break;
-    case 'r': rays = optarg; break;
-    case 's':
-      if (!app_parse_u64("run", "--seed", optarg, 0, UINT64_MAX, &seed)) goto done;
-      have_seed = true;
-      break;
-    case 'P':
-      if (!policy_parse(optarg, &policy)) {
-        app_usage_error("run", "--policy: got '%s', expected one of: recursive, packet, dynamic", optarg);
-        goto done;
-      }
-      break;
-    case 'S': sets[nsets++] = optarg; break;
-    case 'h': fputs(HELP, stdout); rc = 0; goto done;
-    default: app_option_error("run", c, argv); goto done;
-    }
-  }
-  if (argc - optind != 2) {
-    app_usage_error("run", "expected MACHINE.yaml SCENE.yaml, got %d file%s", argc - optind,
-                    argc - optind == 1 ? "" : "s");
+  struct sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v), 0}; /* at most one an argument */
+  const struct opts_spec spec[] = {
+      OPTS_STR("output", 'o', &out),
+      APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy),
+      OPTS_PARSE("set", 0, &sets, add_set, "KEY=VALUE"),
+      OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("run", HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) goto done;
+  rc = APP_EXIT_USAGE;
+  if (args.n != 2) {
+    app_usage_error("run", "expected MACHINE.yaml SCENE.yaml, got %d file%s", args.n,
+                    args.n == 1 ? "" : "s");
     goto done;
   }
-  const char *machine_path = argv[optind], *scene_path = argv[optind + 1];
+  const char *machine_path = args.v[0], *scene_path = args.v[1];
   if (!out) {
     app_usage_error("run", "missing -o OUTDIR");
-    goto done;
-  }
-  uint32_t mask;
-  if (!shade_parse_rays(rays, &mask)) {
-    app_usage_error("run", "--rays: got '%s', expected a comma-separated list of primary, shadow, specular, diffuse", rays);
     goto done;
   }
   struct machine_cfg mc;
@@ -112,8 +100,8 @@ int cmd_run(int argc, char **argv) {
     app_report(&e);
     goto done;
   }
-  for (int i = 0; i < nsets; i++)
-    if (!machine_cfg_set(&mc, sets[i], &e)) {
+  for (unsigned i = 0; i < sets.n; i++)
+    if (!machine_cfg_set(&mc, sets.v[i], &e)) {
       app_report(&e);
       goto done;
     }
@@ -125,8 +113,10 @@ int cmd_run(int argc, char **argv) {
     app_usage_error("run", "-o %s: cannot create the directory (%s)", out, strerror(errno));
     goto done;
   }
-  /* An earlier run's stats.json would mark this directory complete. */
+  /* An earlier run's stats.json would mark this directory complete; a killed
+   * run's temporaries would stay forever. */
   run_output_invalidate(out);
+  outfile_remove_stale(out);
 
   struct app_world w;
   if (!app_world_load(&w, scene_path)) goto done;
@@ -134,7 +124,7 @@ int cmd_run(int argc, char **argv) {
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   struct app_timed t;
   app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, isatty(2));
-  struct run_report rep = {
+  struct run_output_report rep = {
       .out_dir = out,
       .machine_path = machine_path,
       .scene_path = scene_path,
@@ -158,6 +148,6 @@ int cmd_run(int argc, char **argv) {
   app_timed_fini(&t);
   app_world_fini(&w);
 done:
-  free(sets);
+  free(sets.v);
   return rc;
 }

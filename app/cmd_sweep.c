@@ -6,9 +6,11 @@
  * command.sh (its exact command), point.csv (its swept values, for merge),
  * error.txt (its stderr, when it failed), and rtsim run's outputs. */
 #define _XOPEN_SOURCE 700 /* realpath */
+
+#include "app/app.h"
+
 #include <errno.h>
 #include <fcntl.h>
-#include <getopt.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -18,9 +20,10 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "app/app.h"
+#include "app/opts.h"
 #include "app/sweep.h"
 #include "sim/err.h"
+#include "sim/outfile.h"
 #include "sim/stats.h"
 
 static const char HELP[] =
@@ -101,16 +104,16 @@ static bool exists(const char *dir, const char *name) {
 /* Write text to dir/name through a temporary name. */
 static bool write_file(const char *dir, const char *name, const char *text, int mode,
                        struct err *e) {
-  char path[8192], tmp[8300];
+  char path[8192];
   snprintf(path, sizeof path, "%s/%s", dir, name);
-  snprintf(tmp, sizeof tmp, "%s/.%s.tmp", dir, name);
-  FILE *f = fopen(tmp, "w");
-  bool ok = f && fputs(text, f) >= 0;
-  if (f && fclose(f) != 0) ok = false;
-  if (ok) chmod(tmp, (mode_t)mode);
-  if (ok && rename(tmp, path) == 0) return true;
-  unlink(tmp);
-  return err_set(e, path, 0, 0, "cannot write: %s", strerror(errno));
+  struct outfile o;
+  if (!outfile_open(&o, path, "the file", e)) return false;
+  fputs(text, o.f);
+  if (fchmod(fileno(o.f), (mode_t)mode) != 0) {
+    outfile_abort(&o);
+    return err_set(e, path, 0, 0, "cannot write the file: %s", strerror(errno));
+  }
+  return outfile_commit(&o, e);
 }
 
 /* mkdir -p. */
@@ -131,6 +134,7 @@ static bool make_dirs(const char *path, struct err *e) {
 /* Make DIR/<point> with its command.sh and point.csv. */
 static bool prepare(const struct sweep *s, const struct job *j, struct err *e) {
   if (!make_dirs(j->dir, e)) return false;
+  outfile_remove_stale(j->dir); /* of an attempt that was killed */
   char *text = NULL;
   size_t len = 0;
   FILE *f = open_memstream(&text, &len);
@@ -209,12 +213,11 @@ static void format_duration(double s, char *out, size_t cap) {
 struct running {
   pid_t pid;
   struct job *j;
+  struct outfile err; /* its stderr, to become DIR/<point>/error.txt if it fails */
 };
 
-/* Start job j: stdout to /dev/null, stderr to DIR/<point>/.error.txt.tmp. */
-static pid_t launch(const char *bin, struct job *j, const sigset_t *mask) {
-  char err_path[8192];
-  snprintf(err_path, sizeof err_path, "%s/.error.txt.tmp", j->dir);
+/* Start job j: stdout to /dev/null, stderr to err_path. */
+static pid_t launch(const char *bin, struct job *j, const char *err_path, const sigset_t *mask) {
   pid_t pid = fork();
   if (pid != 0) return pid;
   /* The child: the parent's signal mask must not outlive exec. */
@@ -236,18 +239,16 @@ static pid_t launch(const char *bin, struct job *j, const sigset_t *mask) {
   _exit(127);
 }
 
-/* A finished point: complete, or failed with its stderr kept as error.txt. */
-static bool settle(struct job *j, int status) {
-  char tmp[8192], final[8192];
-  snprintf(tmp, sizeof tmp, "%s/.error.txt.tmp", j->dir);
-  snprintf(final, sizeof final, "%s/error.txt", j->dir);
+/* A finished point: complete, or failed with its stderr (err) kept as
+ * error.txt. */
+static bool settle(struct job *j, int status, struct outfile *err) {
   j->complete = WIFEXITED(status) && WEXITSTATUS(status) == 0 && exists(j->dir, "stats.json");
   if (j->complete) {
-    unlink(tmp);
-    unlink(final);
+    unlink(err->path); /* an earlier attempt's */
+    outfile_abort(err);
     return true;
   }
-  FILE *f = fopen(tmp, "a");
+  FILE *f = fopen(err->tmp, "a");
   if (f) {
     if (WIFEXITED(status) && WEXITSTATUS(status) == 0)
       fprintf(f, "rtsim sweep: the point exited with code 0 but wrote no stats.json\n");
@@ -258,7 +259,8 @@ static bool settle(struct job *j, int status) {
               strsignal(WTERMSIG(status)));
     fclose(f);
   }
-  rename(tmp, final);
+  struct err e = {0};
+  outfile_commit(err, &e); /* on failure first_error() says "(no message)" */
   return false;
 }
 
@@ -306,21 +308,25 @@ static int run_jobs(const char *bin, struct job **todo, unsigned n, unsigned job
     while (t.running < jobs && next < n) {
       struct err e = {0};
       struct job *j = todo[next++];
-      if (!prepare(s, j, &e)) {
+      char err_path[8192];
+      snprintf(err_path, sizeof err_path, "%s/error.txt", j->dir);
+      struct outfile err;
+      if (!prepare(s, j, &e) || !outfile_open_named(&err, err_path, "the file", &e)) {
         if (tty) fputs("\r\033[K", stderr);
         app_report(&e);
         t.failed++;
         continue;
       }
-      pid_t pid = launch(bin, j, &old);
+      pid_t pid = launch(bin, j, err.tmp, &old);
       if (pid < 0) {
         fprintf(stderr, "rtsim sweep: cannot start a process: %s\n", strerror(errno));
+        outfile_abort(&err);
         t.failed++;
         continue;
       }
       for (unsigned k = 0; k < jobs; k++)
         if (!run[k].pid) {
-          run[k] = (struct running){pid, j};
+          run[k] = (struct running){pid, j, err};
           break;
         }
       t.running++;
@@ -337,7 +343,7 @@ static int run_jobs(const char *bin, struct job **todo, unsigned n, unsigned job
         struct job *j = run[k].j;
         run[k].pid = 0;
         t.running--;
-        if (settle(j, status)) {
+        if (settle(j, status, &run[k].err)) {
           t.done++;
           t.cost_done += j->p->cost;
         } else {
@@ -356,9 +362,7 @@ static int run_jobs(const char *bin, struct job **todo, unsigned n, unsigned job
     for (unsigned k = 0; k < jobs; k++)
       if (run[k].pid) {
         waitpid(run[k].pid, NULL, 0);
-        char tmp[8192];
-        snprintf(tmp, sizeof tmp, "%s/.error.txt.tmp", run[k].j->dir);
-        unlink(tmp);
+        outfile_abort(&run[k].err);
       }
   }
   if (tty) fputs("\r\033[K", stderr);
@@ -376,28 +380,17 @@ static int by_cost(const void *a, const void *b) {
 }
 
 int cmd_sweep(int argc, char **argv) {
-  static const struct option opts[] = {{"output", required_argument, 0, 'o'},
-                                       {"jobs", required_argument, 0, 'j'},
-                                       {"emit-jobs", no_argument, 0, 'E'},
-                                       {"help", no_argument, 0, 'h'},
-                                       {0, 0, 0, 0}};
   const char *out = NULL;
   long cores = sysconf(_SC_NPROCESSORS_ONLN);
   uint64_t jobs = cores > 0 ? (uint64_t)cores : 1;
   bool emit = false;
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":o:j:h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'o': out = optarg; break;
-    case 'j': if (!app_parse_u64("sweep", "-j", optarg, 1, 4096, &jobs)) return APP_EXIT_USAGE; break;
-    case 'E': emit = true; break;
-    case 'h': fputs(HELP, stdout); return 0;
-    default: return app_option_error("sweep", c, argv);
-    }
-  }
-  const char *sweep_path = app_one_operand("sweep", "SWEEP.yaml", "sweep file", argc, argv);
+  const struct opts_spec spec[] = {OPTS_STR("output", 'o', &out),
+                                   OPTS_U64("jobs", 'j', &jobs, 1, 4096),
+                                   OPTS_FLAG("emit-jobs", 0, &emit), OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("sweep", HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char *sweep_path = opts_one(&args, "SWEEP.yaml", "sweep file");
   if (!sweep_path) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("sweep", "missing -o DIR");
   if (strpbrk(out, "\n\r")) return app_usage_error("sweep", "-o: a path with a line break cannot go into a job line");
@@ -424,7 +417,7 @@ int cmd_sweep(int argc, char **argv) {
   struct job *all = xcalloc(s.npoints, sizeof *all);
   struct job **todo = xcalloc(s.npoints, sizeof *todo);
   unsigned ntodo = 0, complete = 0;
-  int rc = 0;
+  rc = 0;
   for (unsigned i = 0; i < s.npoints; i++) {
     struct job *j = &all[i];
     j->p = &s.points[i];

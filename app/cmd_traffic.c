@@ -1,13 +1,14 @@
 /* rtsim traffic and rtsim trace: DRAM-to-L2 traffic of the scheduling policies
  * for every cache size at once (functional backend, one-pass LRU analysis), and
  * the raw access stream as a Dinero IV din trace. */
-#include <getopt.h>
+#include "app/app.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
-#include "app/app.h"
+#include "app/opts.h"
 #include "renderer/framebuffer.h"
 #include "renderer/policy.h"
 #include "renderer/shade.h"
@@ -16,6 +17,7 @@
 #include "sim/err.h"
 #include "sim/lru_stack.h"
 #include "sim/mem_functional.h"
+#include "sim/outfile.h"
 
 #define MIB (1024.0 * 1024.0)
 
@@ -54,8 +56,10 @@ static const char TRAFFIC_HELP[] =
     "every row; they change the dynamic rows only); and kd_splits, the scene's k-d\n"
     "tree (whole: PBRT's, the paper's; clipped: perfect splits; scene key kd_tree).\n";
 
-/* The paper's ray configurations by name, or an explicit list. */
-static bool parse_config(const char *s, uint32_t *mask) {
+/* The paper's ray configurations by name, or an explicit list, into a
+ * uint32_t mask (an option's value: opts.h). */
+static bool parse_config(const char *s, void *dst) {
+  uint32_t *mask = dst;
   const uint32_t P = RAY_MASK(RAY_PRIMARY), S = RAY_MASK(RAY_SHADOW);
   if (!strcmp(s, "primary")) *mask = P;
   else if (!strcmp(s, "shadow")) *mask = P | S;
@@ -64,6 +68,14 @@ static bool parse_config(const char *s, uint32_t *mask) {
   else return shade_parse_rays(s, mask);
   return true;
 }
+#define CONFIG_EXPECT "primary, shadow, specular, diffuse or a comma-separated list of ray types"
+
+/* The options traffic and trace share besides their own. */
+#define TRAFFIC_OPTS(width, height, mask, pp)                                                \
+  OPTS_U64("width", 0, width, 1, 16384), OPTS_U64("height", 0, height, 1, 16384),           \
+      OPTS_PARSE("rays", 0, mask, parse_config, CONFIG_EXPECT),                             \
+      OPTS_U64("dyn-batch", 0, &(pp)->dyn_batch_rays, 0, UINT32_MAX),                       \
+      OPTS_U64("dyn-ray-buffer", 0, &(pp)->dyn_ray_buffer_bytes, 0, 1ull << 32)
 
 /* One functional run of policy k; analyser results, and the potentially
  * visible triangles counted. din may be NULL. */
@@ -77,20 +89,20 @@ static void run_functional(const struct app_world *w, enum policy_kind k, uint32
                            uint32_t width, uint32_t height, const struct policy_params *pp,
                            const struct lru_stack_params *lp, struct din_writer *din,
                            struct fn_run *out) {
-  struct fn_backend *b = fn_backend_create(lp, din);
+  struct mem_functional *b = mem_functional_create(lp, din);
   struct app_render ar;
   app_render_init(&ar, w, mask, w->scene.seed, width, height);
   uint64_t words = ((uint64_t)w->scene.tri_count + 63) / 64;
   uint64_t *tested = xcalloc(words, sizeof *tested);
   ar.setup.tested = tested;
-  policy_run(k, &ar.setup, pp, fn_backend_port(b), &out->st, NULL);
-  lru_stack_finish(fn_backend_stack(b));
-  lru_stack_get_results(fn_backend_stack(b), &out->res);
+  policy_run(k, &ar.setup, pp, mem_functional_port(b), &out->st, NULL);
+  lru_stack_finish(mem_functional_stack(b));
+  lru_stack_get_results(mem_functional_stack(b), &out->res);
   out->pot_vis_tris = 0;
   for (uint64_t i = 0; i < words; i++) out->pot_vis_tris += (uint64_t)__builtin_popcountll(tested[i]);
   free(tested);
   app_render_fini(&ar);
-  fn_backend_destroy(b);
+  mem_functional_destroy(b);
 }
 
 static uint64_t fetched(const struct lru_stack_size_stats *s, unsigned cls, unsigned lg2_line) {
@@ -121,53 +133,36 @@ static void progress_line(const char *what, unsigned done, unsigned total) {
   fflush(stderr);
 }
 
+/* --policy of traffic: one policy (and recursive, the baseline) or all, into
+ * a bool want[POLICY_COUNT]. */
+static bool parse_policies(const char *s, void *dst) {
+  bool *want = dst;
+  enum policy_kind pk;
+  for (int p = 0; p < POLICY_COUNT; p++) want[p] = !strcmp(s, "all");
+  if (want[0]) return true;
+  if (!policy_parse(s, &pk)) return false;
+  want[pk] = want[POLICY_RECURSIVE] = true;
+  return true;
+}
+
 int cmd_traffic(int argc, char **argv) {
-  static const struct option opts[] = {
-      {"output", required_argument, 0, 'o'}, {"width", required_argument, 0, 'W'},
-      {"height", required_argument, 0, 'H'}, {"rays", required_argument, 0, 'r'},
-      {"policy", required_argument, 0, 'P'}, {"dyn-batch", required_argument, 0, 'B'},
-      {"dyn-ray-buffer", required_argument, 0, 'R'},
-      {"help", no_argument, 0, 'h'},         {0, 0, 0, 0}};
-  const char *out = NULL, *rays = NULL, *policy = "all";
+  const char *out = NULL;
+  uint32_t mask = 0; /* 0: no --rays */
   uint64_t width = 0, height = 0;
+  bool want[POLICY_COUNT] = {true, true, true};
   struct policy_params pp;
   policy_params_default(&pp);
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":o:h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'o': out = optarg; break;
-    case 'W': if (!app_parse_u64("traffic", "--width", optarg, 1, 16384, &width)) return 2; break;
-    case 'H': if (!app_parse_u64("traffic", "--height", optarg, 1, 16384, &height)) return 2; break;
-    case 'r': rays = optarg; break;
-    case 'P': policy = optarg; break;
-    case 'B':
-      if (!app_parse_u64("traffic", "--dyn-batch", optarg, 0, UINT32_MAX, &pp.dyn_batch_rays)) return 2;
-      break;
-    case 'R':
-      if (!app_parse_u64("traffic", "--dyn-ray-buffer", optarg, 0, 1ull << 32, &pp.dyn_ray_buffer_bytes))
-        return 2;
-      break;
-    case 'h': fputs(TRAFFIC_HELP, stdout); return 0;
-    default: return app_option_error("traffic", c, argv);
-    }
-  }
-  const char *scene_path = app_one_scene("traffic", argc, argv);
+  const struct opts_spec spec[] = {
+      OPTS_STR("output", 'o', &out), TRAFFIC_OPTS(&width, &height, &mask, &pp),
+      OPTS_PARSE("policy", 0, want, parse_policies, "one of: recursive, packet, dynamic, all"),
+      OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("traffic", TRAFFIC_HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("traffic", "missing -o TABLE.csv");
-  if (!rays) return app_usage_error("traffic", "missing --rays (primary, shadow, specular or diffuse)");
-  uint32_t mask;
-  if (!parse_config(rays, &mask))
-    return app_usage_error("traffic", "--rays: got '%s', expected primary, shadow, specular, diffuse or a comma-separated list of ray types", rays);
-  bool want[POLICY_COUNT] = {false, false, false};
-  enum policy_kind pk;
-  if (!strcmp(policy, "all"))
-    want[0] = want[1] = want[2] = true;
-  else if (policy_parse(policy, &pk))
-    want[pk] = want[POLICY_RECURSIVE] = true;
-  else
-    return app_usage_error("traffic", "--policy: got '%s', expected one of: recursive, packet, dynamic, all", policy);
+  if (!mask) return app_usage_error("traffic", "missing --rays (primary, shadow, specular or diffuse)");
 
   struct app_world w;
   if (!app_world_load(&w, scene_path)) return 2;
@@ -205,17 +200,14 @@ int cmd_traffic(int argc, char **argv) {
   }
   progress_line("done", runs, runs);
 
-  char tmp[1100];
-  snprintf(tmp, sizeof tmp, "%s.tmp", out);
-  FILE *f = fopen(tmp, "w");
-  struct err e;
-  memset(&e, 0, sizeof e);
-  if (!f) {
-    err_set(&e, out, 0, 0, "cannot write the table");
+  struct err e = {0};
+  struct outfile o;
+  if (!outfile_open(&o, out, "the table", &e)) {
     free(rows);
     app_world_fini(&w);
     return app_report(&e);
   }
+  FILE *f = o.f;
   char names[64];
   shade_rays_name(mask, names, sizeof names);
   for (char *q = names; *q; q++)
@@ -257,11 +249,7 @@ int cmd_traffic(int argc, char **argv) {
             (unsigned long long)pp.dyn_batch_rays, (unsigned long long)dyn_ray_buffer,
             w.scene.kd_clip ? "clipped" : "whole");
   }
-  bool ok = !ferror(f);
-  ok = (fclose(f) == 0) && ok;
-  if (!ok || rename(tmp, out) != 0) {
-    unlink(tmp);
-    err_set(&e, out, 0, 0, "cannot write the table");
+  if (!outfile_commit(&o, &e)) {
     free(rows);
     app_world_fini(&w);
     return app_report(&e);
@@ -322,55 +310,36 @@ static void dinero_command(uint64_t bytes, unsigned lg2_line, const char *din, c
            (unsigned long long)(bytes >> lg2_line), din);
 }
 
+/* --cache of trace: a power of two from 1 KiB to 4 MiB, into a uint64_t. */
+static bool parse_cache(const char *s, void *dst) {
+  uint64_t v;
+  if (!opts_u64(s, 1024, 4194304, &v) || (v & (v - 1))) return false;
+  *(uint64_t *)dst = v;
+  return true;
+}
+
 int cmd_trace(int argc, char **argv) {
-  static const struct option opts[] = {
-      {"din", required_argument, 0, 'd'},    {"width", required_argument, 0, 'W'},
-      {"height", required_argument, 0, 'H'}, {"rays", required_argument, 0, 'r'},
-      {"policy", required_argument, 0, 'P'}, {"cache", required_argument, 0, 'c'},
-      {"dyn-batch", required_argument, 0, 'B'}, {"dyn-ray-buffer", required_argument, 0, 'R'},
-      {"help", no_argument, 0, 'h'},
-      {0, 0, 0, 0}};
-  const char *din_path = NULL, *rays = NULL, *policy = NULL;
+  const char *din_path = NULL;
+  uint32_t mask = 0; /* 0: no --rays */
   uint64_t width = 0, height = 0, cache = 512 * 1024;
+  enum policy_kind pk = POLICY_RECURSIVE;
+  bool have_policy = false;
   struct policy_params pp;
   policy_params_default(&pp);
-  int c;
-  opterr = 0;
-  optind = 1;
-  while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
-    switch (c) {
-    case 'd': din_path = optarg; break;
-    case 'W': if (!app_parse_u64("trace", "--width", optarg, 1, 16384, &width)) return 2; break;
-    case 'H': if (!app_parse_u64("trace", "--height", optarg, 1, 16384, &height)) return 2; break;
-    case 'r': rays = optarg; break;
-    case 'P': policy = optarg; break;
-    case 'c':
-      if (!app_parse_u64("trace", "--cache", optarg, 1024, 4194304, &cache)) return 2;
-      if (cache & (cache - 1))
-        return app_usage_error("trace", "--cache: got '%s', expected a power of two", optarg);
-      break;
-    case 'B':
-      if (!app_parse_u64("trace", "--dyn-batch", optarg, 0, UINT32_MAX, &pp.dyn_batch_rays)) return 2;
-      break;
-    case 'R':
-      if (!app_parse_u64("trace", "--dyn-ray-buffer", optarg, 0, 1ull << 32, &pp.dyn_ray_buffer_bytes))
-        return 2;
-      break;
-    case 'h': fputs(TRACE_HELP, stdout); return 0;
-    default: return app_option_error("trace", c, argv);
-    }
-  }
-  const char *scene_path = app_one_scene("trace", argc, argv);
+  const struct opts_spec spec[] = {
+      OPTS_STR("din", 0, &din_path), TRAFFIC_OPTS(&width, &height, &mask, &pp),
+      {.name = "policy", .kind = OPTS_KIND_PARSE, .dst = &pk, .parse = app_parse_policy,
+       .expect = APP_POLICY_EXPECT, .given = &have_policy},
+      OPTS_PARSE("cache", 0, &cache, parse_cache, "a power of two from 1024 to 4194304"),
+      OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("trace", TRACE_HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;
   if (!din_path) return app_usage_error("trace", "missing --din FILE");
-  if (!policy) return app_usage_error("trace", "missing --policy (recursive, packet or dynamic)");
-  if (!rays) return app_usage_error("trace", "missing --rays (primary, shadow, specular or diffuse)");
-  enum policy_kind pk;
-  if (!policy_parse(policy, &pk))
-    return app_usage_error("trace", "--policy: got '%s', expected one of: recursive, packet, dynamic", policy);
-  uint32_t mask;
-  if (!parse_config(rays, &mask))
-    return app_usage_error("trace", "--rays: got '%s', expected primary, shadow, specular, diffuse or a comma-separated list of ray types", rays);
+  if (!have_policy) return app_usage_error("trace", "missing --policy (recursive, packet or dynamic)");
+  if (!mask) return app_usage_error("trace", "missing --rays (primary, shadow, specular or diffuse)");
   struct app_world w;
   if (!app_world_load(&w, scene_path)) return 2;
   uint32_t W = width ? (uint32_t)width : w.scene.width;

@@ -1,9 +1,9 @@
 /* rtsim: entry point. Hands the command line to the subcommand, whose exit
  * code it returns (the shared helpers are in app.c). */
+#include "app/app.h"
+
 #include <stdio.h>
 #include <string.h>
-
-#include "app/app.h"
 
 static const char USAGE[] =
     "usage: rtsim COMMAND [options]\n"

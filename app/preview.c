@@ -1,14 +1,15 @@
 /* PNG previews of rendered images through gnuplot (rgbimage plot of raw 8-bit
  * sRGB), so results/ can carry light pictures beside the EXR files. */
+#include "app/preview.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
-#include "app/app.h"
 #include "renderer/image.h"
 #include "sim/err.h"
+#include "sim/outfile.h"
 
 static unsigned char to_srgb8(float v) {
   if (!(v > 0.0f)) return 0;
@@ -17,14 +18,14 @@ static unsigned char to_srgb8(float v) {
   return (unsigned char)lrintf(s * 255.0f);
 }
 
-bool app_write_preview(const struct image *im, const char *png, struct err *e) {
+bool preview_write_png(const struct image *im, const char *png, struct err *e) {
   int r = image_channel(im, "R"), g = image_channel(im, "G"), b = image_channel(im, "B");
-  CHECK(r >= 0 && g >= 0 && b >= 0);
-  char raw[1100], tmp[1100], cmd[4096];
-  snprintf(raw, sizeof raw, "%s.rgb.tmp", png);
-  snprintf(tmp, sizeof tmp, "%s.tmp", png);
-  FILE *f = fopen(raw, "wb");
-  if (!f) return err_set(e, png, 0, 0, "cannot write the preview's temporary file");
+  CHECK_GE(r, 0);
+  CHECK_GE(g, 0);
+  CHECK_GE(b, 0);
+  /* The raw pixels gnuplot reads: a scratch temporary, never committed. */
+  struct outfile raw, out = {0};
+  if (!outfile_open(&raw, png, "the preview", e)) return false;
   uint64_t n = (uint64_t)im->width * im->height;
   unsigned char *px = xmalloc(3 * n);
   for (uint64_t i = 0; i < n; i++) {
@@ -32,31 +33,27 @@ bool app_write_preview(const struct image *im, const char *png, struct err *e) {
     px[3 * i + 1] = to_srgb8(im->planes[g][i]);
     px[3 * i + 2] = to_srgb8(im->planes[b][i]);
   }
-  bool wrote = fwrite(px, 3, n, f) == n;
+  bool ok = fwrite(px, 3, n, raw.f) == n && fflush(raw.f) == 0;
   free(px);
-  if (fclose(f) != 0 || !wrote) {
-    unlink(raw);
-    return err_set(e, png, 0, 0, "cannot write the preview's temporary file");
+  if (!ok) err_set(e, png, 0, 0, "cannot write the preview's temporary file");
+  ok = ok && outfile_open_named(&out, png, "the preview", e);
+  FILE *gp = ok ? popen("gnuplot >/dev/null 2>&1", "w") : NULL;
+  if (ok && !gp) ok = err_set(e, png, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
+  if (ok) {
+    /* Row 0 of the image is the top; gnuplot's y grows upward, hence flipy. */
+    fprintf(gp,
+            "set terminal png size %u,%u\nset output '%s'\nset lmargin at screen 0\n"
+            "set rmargin at screen 1\nset tmargin at screen 1\nset bmargin at screen 0\n"
+            "unset border\nunset tics\nunset key\nset xrange [-0.5:%u-0.5]\n"
+            "set yrange [-0.5:%u-0.5]\n"
+            "plot '%s' binary array=(%u,%u) flipy format='%%uchar%%uchar%%uchar' with rgbimage\n",
+            im->width, im->height, out.tmp, im->width, im->height, raw.tmp, im->width,
+            im->height);
+    if (pclose(gp) != 0)
+      ok = err_set(e, png, 0, 0, "gnuplot could not write the preview (is gnuplot-nox installed?)");
   }
-  FILE *gp = popen("gnuplot >/dev/null 2>&1", "w");
-  if (!gp) {
-    unlink(raw);
-    return err_set(e, png, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
-  }
-  /* Row 0 of the image is the top; gnuplot's y grows upward, hence flipy. */
-  snprintf(cmd, sizeof cmd,
-           "set terminal png size %u,%u\nset output '%s'\nset lmargin at screen 0\n"
-           "set rmargin at screen 1\nset tmargin at screen 1\nset bmargin at screen 0\n"
-           "unset border\nunset tics\nunset key\nset xrange [-0.5:%u-0.5]\n"
-           "set yrange [-0.5:%u-0.5]\n"
-           "plot '%s' binary array=(%u,%u) flipy format='%%uchar%%uchar%%uchar' with rgbimage\n",
-           im->width, im->height, tmp, im->width, im->height, raw, im->width, im->height);
-  fputs(cmd, gp);
-  int rc = pclose(gp);
-  unlink(raw);
-  if (rc != 0 || rename(tmp, png) != 0) {
-    unlink(tmp);
-    return err_set(e, png, 0, 0, "gnuplot could not write the preview (is gnuplot-nox installed?)");
-  }
-  return true;
+  ok = ok && outfile_commit(&out, e);
+  outfile_abort(&out);
+  outfile_abort(&raw);
+  return ok;
 }

@@ -15,8 +15,10 @@
 #include "renderer/trace.h"
 #include "sim/dram.h"
 #include "sim/err.h"
+#include "sim/hist.h"
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
+#include "sim/outfile.h"
 #include "sim/stats.h"
 
 void run_output_invalidate(const char *dir) {
@@ -28,7 +30,7 @@ void run_output_invalidate(const char *dir) {
 static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 
 /* The workload's identity (first columns) and the resolved config. */
-static void identity(const struct run_report *r, struct stats_table *t) {
+static void identity(const struct run_output_report *r, struct stats_table *t) {
   char rays[64];
   shade_rays_name(r->mask, rays, sizeof rays);
   char hash[24];
@@ -44,7 +46,7 @@ static void identity(const struct run_report *r, struct stats_table *t) {
 }
 
 /* Every measured scalar, units in the names. */
-static void measured(const struct run_report *r, struct stats_table *t) {
+static void measured(const struct run_output_report *r, struct stats_table *t) {
   const struct machine_stats *s = machine_get_stats(r->machine);
   const struct machine_params *p = &r->cfg->p;
   const double cyc = (double)s->cycles, tick = (double)(1ull << DRAM_TICK_BITS);
@@ -108,41 +110,31 @@ static void measured(const struct run_report *r, struct stats_table *t) {
   stats_u64(t, "coroutine_stacks_max", s->stacks_max);
 }
 
-/* Open dir/name.tmp for writing; the caller renames it with finish(). */
-static FILE *open_tmp(const struct run_report *r, const char *name, char *tmp, char *final,
-                      size_t cap) {
-  snprintf(final, cap, "%s/%s", r->out_dir, name);
-  snprintf(tmp, cap, "%s/.%s.tmp", r->out_dir, name);
-  return fopen(tmp, "w");
+/* Start OUTDIR/name through a temporary (commit with outfile_commit). */
+static bool open_out(struct outfile *o, const struct run_output_report *r, const char *name,
+                     struct err *e) {
+  char path[4200];
+  snprintf(path, sizeof path, "%s/%s", r->out_dir, name);
+  return outfile_open(o, path, "the file", e);
 }
 
-static bool finish(FILE *f, const char *tmp, const char *final, struct err *e) {
-  bool ok = f && !ferror(f);
-  if (f && fclose(f) != 0) ok = false;
-  if (ok && rename(tmp, final) == 0) return true;
-  unlink(tmp);
-  return err_set(e, final, 0, 0, "cannot write the file");
-}
-
-static bool write_csv(const struct run_report *r, struct err *e) {
-  char tmp[4200], final[4200];
-  FILE *f = open_tmp(r, "stats.csv", tmp, final, sizeof tmp);
+static bool write_csv(const struct run_output_report *r, struct err *e) {
+  struct outfile o;
+  if (!open_out(&o, r, "stats.csv", e)) return false;
   struct stats_table t = {0};
   identity(r, &t);
   machine_cfg_to_stats(r->cfg, &t);
   measured(r, &t);
-  if (f) {
-    stats_write_csv_header(&t, f);
-    stats_write_csv_row(&t, f);
-  }
+  stats_write_csv_header(&t, o.f);
+  stats_write_csv_row(&t, o.f);
   stats_fini(&t);
-  return finish(f, tmp, final, e);
+  return outfile_commit(&o, e);
 }
 
-static bool write_timeline(const struct run_report *r, struct err *e) {
-  char tmp[4200], final[4200];
-  FILE *f = open_tmp(r, "timeline.csv", tmp, final, sizeof tmp);
-  if (!f) return finish(f, tmp, final, e);
+static bool write_timeline(const struct run_output_report *r, struct err *e) {
+  struct outfile o;
+  if (!open_out(&o, r, "timeline.csv", e)) return false;
+  FILE *f = o.f;
   const struct machine *m = r->machine;
   const uint64_t rows = machine_timeline_rows(m), win = machine_timeline_window(m);
   const uint64_t end = machine_get_stats(m)->cycles;
@@ -154,22 +146,27 @@ static bool write_timeline(const struct run_report *r, struct err *e) {
     uint64_t start = i * win, len = start + win <= end ? win : (end > start ? end - start : 0);
     if (len == 0) break;
     fprintf(f, "%llu,%llu,%.2f,%.2f", (unsigned long long)start, (unsigned long long)len,
-            v[MTL_DRAM_READ_BYTES], v[MTL_DRAM_WRITE_BYTES]);
-    for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) fprintf(f, ",%.2f", v[MTL_READ_CLASS0 + c]);
-    fprintf(f, ",%.0f,%.0f,%.0f,%.4f\n", v[MTL_L2_ACCESSES], v[MTL_L2_MISSES], v[MTL_ISSUED_OPS],
-            v[MTL_BUSY_THREAD_CYCLES] / (double)len);
+            v[MACHINE_TL_DRAM_READ_BYTES], v[MACHINE_TL_DRAM_WRITE_BYTES]);
+    for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++)
+      fprintf(f, ",%.2f", v[MACHINE_TL_READ_CLASS0 + c]);
+    fprintf(f, ",%.0f,%.0f,%.0f,%.4f\n", v[MACHINE_TL_L2_ACCESSES], v[MACHINE_TL_L2_MISSES],
+            v[MACHINE_TL_ISSUED_OPS], v[MACHINE_TL_BUSY_THREAD_CYCLES] / (double)len);
   }
-  return finish(f, tmp, final, e);
+  return outfile_commit(&o, e);
 }
 
 /* DRAM bytes per cycle over the run by data class, read from timeline.csv. */
-static bool write_plot(const struct run_report *r, struct err *e) {
-  char csv[4200], tmp[4200], final[4200], cmd[8192];
+static bool write_plot(const struct run_output_report *r, struct err *e) {
+  char csv[4200], final[4200], cmd[8192];
   snprintf(csv, sizeof csv, "%s/timeline.csv", r->out_dir);
   snprintf(final, sizeof final, "%s/traffic.png", r->out_dir);
-  snprintf(tmp, sizeof tmp, "%s/.traffic.png.tmp", r->out_dir);
+  struct outfile o;
+  if (!outfile_open_named(&o, final, "the plot", e)) return false;
   FILE *gp = popen("gnuplot >/dev/null 2>&1", "w");
-  if (!gp) return err_set(e, final, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
+  if (!gp) {
+    outfile_abort(&o);
+    return err_set(e, final, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
+  }
   int n = snprintf(cmd, sizeof cmd,
                    "set terminal pngcairo size 1000,560 noenhanced\nset output '%s'\n"
                    "set datafile separator ','\nset key outside right top\n"
@@ -177,7 +174,7 @@ static bool write_plot(const struct run_report *r, struct err *e) {
                    "set xlabel 'simulated time (million cycles)'\n"
                    "set ylabel 'DRAM bytes per cycle'\nset grid\nset yrange [0:*]\n"
                    "plot '%s' using (($1+$2/2)/1e6):(($3+$4)/$2) with steps lw 2 lc rgb 'black' title 'all (read + write)'",
-                   tmp, r->scene_name, r->policy, r->width, r->height,
+                   o.tmp, r->scene_name, r->policy, r->width, r->height,
                    (unsigned long long)machine_timeline_window(r->machine), csv);
   for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++)
     n += snprintf(cmd + n, sizeof cmd - (size_t)n,
@@ -186,25 +183,24 @@ static bool write_plot(const struct run_report *r, struct err *e) {
   snprintf(cmd + n, sizeof cmd - (size_t)n,
            ", '' using (($1+$2/2)/1e6):($4/$2) with steps dt 2 title 'write-backs'\n");
   fputs(cmd, gp);
-  int rc = pclose(gp);
-  if (rc != 0 || rename(tmp, final) != 0) {
-    unlink(tmp);
+  if (pclose(gp) != 0) {
+    outfile_abort(&o);
     return err_set(e, final, 0, 0, "gnuplot could not draw the plot (is gnuplot-nox installed?)");
   }
-  return true;
+  return outfile_commit(&o, e);
 }
 
-static bool write_json(const struct run_report *r, struct err *e) {
-  char tmp[4200], final[4200];
-  FILE *f = open_tmp(r, "stats.json", tmp, final, sizeof tmp);
-  if (!f) return finish(f, tmp, final, e);
+static bool write_json(const struct run_output_report *r, struct err *e) {
+  struct outfile o;
+  if (!open_out(&o, r, "stats.json", e)) return false;
+  FILE *f = o.f;
   const struct machine_stats *s = machine_get_stats(r->machine);
   struct stats_table t = {0};
   identity(r, &t);
   fputs("{\n  \"tool\": \"rtsim run\",\n  \"machine_file\": ", f);
-  json_write_str(f, r->machine_path);
+  stats_write_json_str(f, r->machine_path);
   fputs(",\n  \"scene_file\": ", f);
-  json_write_str(f, r->scene_path);
+  stats_write_json_str(f, r->scene_path);
   fputs(",\n", f);
   stats_write_json_members(&t, f, "  ");
   stats_fini(&t);
@@ -221,17 +217,17 @@ static bool write_json(const struct run_report *r, struct err *e) {
   fputs(",\n  \"queue_delay_histogram_cycles\": ", f);
   hist_write_json(&s->queue_delay, f);
   fputs(",\n  \"revision\": ", f);
-  json_write_str(f, app_revision);
+  stats_write_json_str(f, app_revision);
   fputs(",\n  \"wall_s\": ", f);
-  json_write_f64(f, r->wall_s);
+  stats_write_json_f64(f, r->wall_s);
   struct rusage ru;
   if (getrusage(RUSAGE_SELF, &ru) == 0)
     fprintf(f, ",\n  \"peak_rss_mb\": %.1f", (double)ru.ru_maxrss / 1024.0);
   fputs("\n}\n", f);
-  return finish(f, tmp, final, e);
+  return outfile_commit(&o, e);
 }
 
-bool run_output_write(const struct run_report *r, struct err *e) {
+bool run_output_write(const struct run_output_report *r, struct err *e) {
   char path[4200];
   snprintf(path, sizeof path, "%s/image.exr", r->out_dir);
   struct image im;
@@ -242,7 +238,7 @@ bool run_output_write(const struct run_report *r, struct err *e) {
   return ok && write_csv(r, e) && write_timeline(r, e) && write_plot(r, e) && write_json(r, e);
 }
 
-void run_output_summary(const struct run_report *r, FILE *f) {
+void run_output_summary(const struct run_output_report *r, FILE *f) {
   struct stats_table t = {0};
   measured(r, &t);
   static const char *const show[] = {"cycles", "rays_traced", "rays_per_second", "core_utilization",

@@ -15,7 +15,7 @@ struct render_stats;
 struct trace_stats;
 struct framebuffer;
 
-struct run_report {
+struct run_output_report {
   const char *out_dir, *machine_path, *scene_path, *scene_name, *policy;
   uint32_t mask, width, height;
   uint64_t seed;
@@ -32,8 +32,8 @@ struct run_report {
 /* Remove a previous run's stats.json from dir (ignore its absence). */
 void run_output_invalidate(const char *dir);
 /* Write every output; on failure fills e (file = the one that failed). */
-bool run_output_write(const struct run_report *r, struct err *e);
+bool run_output_write(const struct run_output_report *r, struct err *e);
 /* A few "key: value" lines for a person. */
-void run_output_summary(const struct run_report *r, FILE *f);
+void run_output_summary(const struct run_output_report *r, FILE *f);
 
 #endif

@@ -405,7 +405,7 @@ static bool check_unique(const struct priv *pv, const struct sweep *s, const uns
     const unsigned *cb = &choices[(size_t)v[i].index * pv->ndims];
     unsigned a = 0;
     while (a < pv->naxes && ca[dim_of(pv, a)] == cb[dim_of(pv, a)]) a++;
-    CHECK(a < pv->naxes);
+    CHECK_LT(a, pv->naxes);
     const struct cfg_node *n = &pv->axes[a].node->items[cb[dim_of(pv, a)]];
     ok = cfg_fail(&pv->doc, n, pv->axes[a].key, e,
                   "two points would share the directory name '%s' (values that differ only in "
@@ -447,7 +447,7 @@ static bool load_scenes(struct priv *pv, struct err *e) {
       const char *path = axis ? pv->axes[a].resolved[i] : pv->scene_fixed;
       if (find_scene(pv, path)) continue;
       struct scene sc;
-      if (!scene_load(&sc, path, e)) return false;
+      if (!scene_file_load(&sc, path, e)) return false;
       pv->scenes[pv->nscenes++] = (struct scene_info){dup_str(path), sc.width, sc.height,
                                                       sc.tri_count, sc.light_count};
       scene_fini(&sc);

@@ -73,5 +73,5 @@ void camera_hilbert_order(uint32_t width, uint32_t height, uint32_t *order) {
     hilbert_d2xy(n, d, &x, &y);
     if (x < width && y < height) order[k++] = y * width + x;
   }
-  CHECK(k == (uint64_t)width * height);
+  CHECK_EQ(k, (uint64_t)width * height);
 }

@@ -56,7 +56,8 @@ void gen_quad(struct scene *s, gen_d3 a, gen_d3 b, gen_d3 c, gen_d3 d, uint32_t 
 
 void gen_grid(struct scene *s, gen_d3 o, gen_d3 eu, gen_d3 ev, uint32_t nu, uint32_t nv,
               uint32_t mat) {
-  CHECK(nu >= 1 && nv >= 1);
+  CHECK_GE(nu, 1);
+  CHECK_GE(nv, 1);
   for (uint32_t j = 0; j < nv; j++)
     for (uint32_t i = 0; i < nu; i++) {
       gen_d3 c[4];
@@ -106,7 +107,7 @@ static gen_d3 sphere_dir(const uint32_t idx[3], uint32_t tess) {
 }
 
 void gen_sphere(struct scene *s, gen_d3 centre, double radius, uint32_t tess, uint32_t mat) {
-  CHECK(tess >= 1);
+  CHECK_GE(tess, 1);
   for (int axis = 0; axis < 3; axis++)
     for (int side = 0; side < 2; side++) {
       /* Walk the face along (a, b) with e_a x e_b pointing outward, so quads
@@ -147,7 +148,8 @@ uint64_t gen_lathe_tri_count(const double *r, uint32_t n, uint32_t sides) {
 
 void gen_lathe(struct scene *s, const struct gen_frame *f, const double *r, const double *z,
                uint32_t n, uint32_t sides, uint32_t mat) {
-  CHECK(n >= 2 && sides >= 3);
+  CHECK_GE(n, 2);
+  CHECK_GE(sides, 3);
   /* Ring vertices are computed once into this table and reused by every
    * triangle that touches them; index j == sides wraps to 0. */
   gen_d3 *ring = xmalloc((unsigned long long)n * sides * sizeof *ring);

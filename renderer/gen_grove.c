@@ -129,7 +129,7 @@ static void grove_place(struct rng *r, uint32_t n, double *xy) {
 }
 
 void gen_grove(struct scene *s, double detail, uint64_t seed) {
-  CHECK(detail > 0.0);
+  CHECK_GT(detail, 0.0);
   struct grove_ctx c;
   c.s = s;
   c.bark = scene_material_or_default(s, "bark", v3(0.35f, 0.25f, 0.15f), 0.9f, 0.0f);

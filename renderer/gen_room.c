@@ -508,7 +508,7 @@ static void room_fixtures(struct room_ctx *c) {
 }
 
 void gen_room(struct scene *s, double detail, uint64_t seed) {
-  CHECK(detail > 0.0);
+  CHECK_GT(detail, 0.0);
   struct room_ctx c;
   c.s = s;
   c.rng = rng_make(seed, 0x726f6f6dull);

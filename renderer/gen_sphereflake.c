@@ -86,7 +86,7 @@ uint64_t gen_sphereflake_tri_count(uint32_t levels, uint32_t tess) {
 }
 
 void gen_sphereflake(struct scene *s, uint32_t levels, uint32_t tess) {
-  CHECK(tess >= 1);
+  CHECK_GE(tess, 1);
   uint32_t flake = scene_material_or_default(s, "flake", v3(1.0f, 0.9f, 0.7f), 0.5f, 0.5f);
   uint32_t floor_mat = scene_material_or_default(s, "floor", v3(1.0f, 0.75f, 0.33f), 1.0f, 0.0f);
   /* Floor square at z = -radius/2 of the enclosing unit sphere, facing up. */

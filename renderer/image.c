@@ -1,11 +1,10 @@
 /* Float images with named channels and their EXR files, through OpenEXR's C
- * API (OpenEXRCore). Writes go to "<path>.tmp" and are renamed only when the
- * library reports the file complete. The library's error messages are caught
+ * API (OpenEXRCore). Writes go to a temporary (sim/outfile.h) renamed only
+ * when the library reports the file complete. The library's error messages are caught
  * by a handler that stores the first one per context, so the user sees one
  * line (ours) carrying the root cause, and nothing is printed to stderr. */
 #include "renderer/image.h"
 
-#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,6 +12,7 @@
 #include <openexr.h>
 
 #include "sim/err.h"
+#include "sim/outfile.h"
 
 #define IMAGE_EXR_MSG_MAX 512
 
@@ -23,14 +23,14 @@ struct image_exr_msg {
 
 void image_init(struct image *im, uint32_t width, uint32_t height, uint32_t channel_count,
                 const char *const *names) {
-  CHECK(channel_count <= IMAGE_MAX_CHANNELS);
+  CHECK_LE(channel_count, IMAGE_MAX_CHANNELS);
   memset(im, 0, sizeof *im);
   im->width = width;
   im->height = height;
   im->channel_count = channel_count;
   unsigned long long pixels = (unsigned long long)width * height;
   for (uint32_t c = 0; c < channel_count; c++) {
-    CHECK(strlen(names[c]) < IMAGE_NAME_MAX);
+    CHECK_LT(strlen(names[c]), IMAGE_NAME_MAX);
     snprintf(im->names[c], IMAGE_NAME_MAX, "%s", names[c]);
     im->planes[c] = xcalloc(pixels, sizeof(float));
   }
@@ -101,9 +101,7 @@ bool image_write_exr(const struct image *im, const char *path, bool half, struct
   int part = 0;
   int32_t lines = 0;
 
-  size_t tmp_len = strlen(path) + 5;
-  char *tmp = xmalloc(tmp_len);
-  snprintf(tmp, tmp_len, "%s.tmp", path);
+  struct outfile out = {0};
 
   if (im->width == 0 || im->height == 0 || im->channel_count == 0 ||
       im->width > INT32_MAX || im->height > INT32_MAX) {
@@ -112,8 +110,9 @@ bool image_write_exr(const struct image *im, const char *path, bool half, struct
     goto done;
   }
 
+  if (!outfile_open_named(&out, path, "EXR", e)) goto done;
   stage = "cannot create file";
-  rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
+  rv = exr_start_write(&ctx, out.tmp, EXR_WRITE_FILE_DIRECTLY, &init);
   if (rv != EXR_ERR_SUCCESS) goto fail;
 
   stage = "cannot define header";
@@ -155,11 +154,7 @@ bool image_write_exr(const struct image *im, const char *path, bool half, struct
   stage = "cannot finish file";
   rv = exr_finish(&ctx);
   if (rv != EXR_ERR_SUCCESS) goto fail;
-  if (rename(tmp, path) != 0) {
-    err_set(e, path, 0, 0, "cannot write EXR: rename from %s failed: %s", tmp, strerror(errno));
-    goto done;
-  }
-  ok = true;
+  ok = outfile_commit(&out, e);
   goto done;
 
 fail:
@@ -167,8 +162,7 @@ fail:
 done:
   if (enc_live) exr_encoding_destroy(ctx, &enc);
   if (ctx) exr_finish(&ctx);
-  if (!ok) remove(tmp);
-  free(tmp);
+  outfile_abort(&out);
   return ok;
 }
 

@@ -5,7 +5,6 @@
  * primitive i with its vertices in stored order, byte for byte. */
 #include "renderer/meshio.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -17,6 +16,7 @@
 
 #include "renderer/scene.h"
 #include "sim/err.h"
+#include "sim/outfile.h"
 
 /* Import in two stages. The file is read with validation only (indices in
  * range), then checked for what assimp's own post-processing would trip on,
@@ -199,9 +199,7 @@ static void meshio_put_f32(unsigned char *p, float f) {
 }
 
 bool meshio_export_ply(const struct scene *s, const char *path, struct err *e) {
-  size_t tmp_len = strlen(path) + 5;
-  char *tmp = xmalloc(tmp_len);
-  snprintf(tmp, tmp_len, "%s.tmp", path);
+  struct outfile out = {0};
   bool ok = false;
   unsigned char *buf = NULL;
 
@@ -212,11 +210,8 @@ bool meshio_export_ply(const struct scene *s, const char *path, struct err *e) {
             "max %lld)", (unsigned long long)n, ((long long)INT32_MAX + 1) / 3);
     goto done;
   }
-  FILE *f = fopen(tmp, "wb");
-  if (!f) {
-    err_set(e, path, 0, 0, "cannot write PLY: cannot create %s: %s", tmp, strerror(errno));
-    goto done;
-  }
+  if (!outfile_open(&out, path, "PLY", e)) goto done;
+  FILE *f = out.f;
   int hw = fprintf(f,
                    "ply\n"
                    "format binary_little_endian 1.0\n"
@@ -253,24 +248,11 @@ bool meshio_export_ply(const struct scene *s, const char *path, struct err *e) {
     }
     io_ok = fwrite(buf, 1, used, f) == used;
   }
-  int saved = errno;
-  if (fclose(f) != 0 && io_ok) {
-    io_ok = false;
-    saved = errno;
-  }
-  if (!io_ok) {
-    err_set(e, path, 0, 0, "cannot write PLY: write to %s failed: %s", tmp, strerror(saved));
-    goto done;
-  }
-  if (rename(tmp, path) != 0) {
-    err_set(e, path, 0, 0, "cannot write PLY: rename from %s failed: %s", tmp, strerror(errno));
-    goto done;
-  }
-  ok = true;
+  /* A failed write set the stream's error flag: the commit reports it. */
+  ok = outfile_commit(&out, e);
 
 done:
-  if (!ok) remove(tmp);
+  outfile_abort(&out);
   free(buf);
-  free(tmp);
   return ok;
 }

@@ -47,19 +47,6 @@ bool policy_parse(const char *name, enum policy_kind *k) {
   return false;
 }
 
-uint64_t render_stats_total(const struct render_stats *st) {
-  uint64_t n = 0;
-  for (int t = 0; t < RAY_TYPE_COUNT; t++) n += st->rays[t];
-  return n;
-}
-
-void render_stats_add(struct render_stats *sum, const struct render_stats *st) {
-  for (int t = 0; t < RAY_TYPE_COUNT; t++) sum->rays[t] += st->rays[t];
-  sum->spawned += st->spawned;
-  sum->terminated += st->terminated;
-  sum->ray_slots_max += st->ray_slots_max;
-}
-
 /* ---- the work list ----------------------------------------------------------- */
 
 uint64_t policy_job_claim(struct policy_job *job, uint64_t n, uint64_t *first) {
@@ -73,7 +60,7 @@ uint64_t policy_job_claim(struct policy_job *job, uint64_t n, uint64_t *first) {
 void policy_job_done(struct policy_job *job, uint64_t n) {
   uint64_t before = job->done;
   job->done += n;
-  CHECK(job->done <= job->total);
+  CHECK_LE(job->done, job->total);
   const struct policy_setup *s = &job->setup;
   if (!s->progress || job->progress_every == 0) return;
   if (job->done / job->progress_every != before / job->progress_every || job->done == job->total)
@@ -82,7 +69,7 @@ void policy_job_done(struct policy_job *job, uint64_t n) {
 
 void policy_primary(const struct policy_job *job, struct policy_worker *w, uint32_t x, uint32_t y,
                     struct ray *r) {
-  const struct tracer *tr = &w->tr;
+  const struct trace_ctx *tr = &w->tr;
   uint64_t pix = (uint64_t)y * job->setup.fb->width + x;
   mem_load(&tr->mem, tr->layout.camera_base + pix * sizeof *r, sizeof *r, TRACE_CLASS_RAY);
   camera_primary(&job->cf, x, y, job->setup.sc->seed, r);
@@ -91,7 +78,7 @@ void policy_primary(const struct policy_job *job, struct policy_worker *w, uint3
 /* ---- jobs and workers --------------------------------------------------------- */
 
 uint64_t policy_ray_region_bytes(enum policy_kind k) {
-  CHECK((unsigned)k < POLICY_COUNT);
+  CHECK_LT((unsigned)k, POLICY_COUNT);
   return MODULES[k]->region_bytes;
 }
 
@@ -106,8 +93,9 @@ bool policy_workers_supported(enum policy_kind k, uint32_t workers) {
 struct policy_job *policy_job_create(enum policy_kind k, const struct policy_setup *s,
                                      const struct policy_params *p, uint32_t workers,
                                      uint32_t cores) {
-  CHECK(policy_workers_supported(k, workers) && cores >= 1);
-  CHECK(s->sc->scene == s->scene);
+  CHECK(policy_workers_supported(k, workers));
+  CHECK_GE(cores, 1);
+  CHECK_EQ(s->sc->scene, s->scene);
   struct policy_job *job = xcalloc(1, sizeof *job);
   job->mod = MODULES[k];
   job->setup = *s;
@@ -129,10 +117,11 @@ uint64_t policy_job_total(const struct policy_job *job) { return job->total; }
 
 void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_t id,
                         uint32_t core, uint32_t thread, struct mem_port port) {
-  CHECK(id < job->workers && core < job->cores);
+  CHECK_LT(id, job->workers);
+  CHECK_LT(core, job->cores);
   const struct policy_setup *s = &job->setup;
   memset(w, 0, sizeof *w);
-  tracer_init(&w->tr, s->scene, s->kd, port, &s->layout);
+  trace_init(&w->tr, s->scene, s->kd, port, &s->layout);
   w->tr.tested = s->tested;
   w->tr.layout.ray_base += (uint64_t)id * job->mod->region_bytes;
   w->id = id;
@@ -151,7 +140,7 @@ void policy_job_work(struct policy_job *job, struct policy_worker *w) {
 }
 
 void policy_worker_fini(struct policy_job *job, struct policy_worker *w) {
-  CHECK(job->live > 0);
+  CHECK_GT(job->live, 0);
   job->mod->scratch_free(w->scratch);
   w->scratch = NULL;
   render_stats_add(&job->st, &w->st);
@@ -161,11 +150,12 @@ void policy_worker_fini(struct policy_job *job, struct policy_worker *w) {
 }
 
 void policy_job_finish(struct policy_job *job, struct render_stats *st, struct trace_stats *ts) {
-  CHECK(job->live == 0);
-  CHECK(job->next == job->total && job->done == job->total);
+  CHECK_EQ(job->live, 0);
+  CHECK_EQ(job->next, job->total);
+  CHECK_EQ(job->done, job->total);
   *st = job->st;
   if (job->mod->finish) job->mod->finish(job, st);
-  CHECK(st->spawned == st->terminated);
+  CHECK_EQ(st->spawned, st->terminated);
   if (ts) *ts = job->ts;
 }
 

@@ -140,7 +140,7 @@ struct policy_worker {
   /* Its own tracer: its memory port, its trace_stats, and its layout, whose
    * ray_base is its own ray region: setup ray_base + id x
    * policy_ray_region_bytes (worker 0 keeps the setup's ray_base). */
-  struct tracer tr;
+  struct trace_ctx tr;
   struct render_stats st;         /* its own counters */
   uint32_t id;                    /* 0 .. workers-1: selects its ray region */
   uint32_t core, thread;          /* where it runs (plain integers; core < cores) */

@@ -75,6 +75,8 @@
  *   only when the last ray handed out from it is done (chunk_refs), so the
  *   writes a blocked leaf pass makes into a ray's slot after its accesses (its
  *   best hit, or its end) always land in the ray's own record. */
+#include "renderer/policy_impl.h"
+
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -84,7 +86,6 @@
 #include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
 #include "renderer/policy.h"
-#include "renderer/policy_impl.h"
 #include "renderer/qpoint.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
@@ -104,7 +105,7 @@
 /* Host-only mark of a ray that ended during a blocked pass (never simulated). */
 #define DYN_FLAG_DEAD 0x80u
 
-/* Traversal steps (trav_setup, trav_interior, announce_*) come from
+/* Traversal steps (trav_setup, trav_interior, trav_announce_*) come from
  * renderer/trav.h, shared with trace.c: the same arithmetic gives the same hits. */
 
 /* ---- policy state ---------------------------------------------------------- */
@@ -209,7 +210,7 @@ struct dyn_worker {
   struct dyn *d;
   struct policy_job *job;
   struct policy_worker *wk;
-  struct tracer *tr;
+  struct trace_ctx *tr;
   struct render_stats *st;
   struct ray_buf pend;
   struct dyn_claim cl;
@@ -219,7 +220,7 @@ struct dyn_worker {
  * reversed segment), the canonical ray's test, the best hit so far. */
 struct walk {
   struct trav_ray tv;
-  struct isect_ray ir;
+  struct trace_isect_ray ir;
   float tmin;
   int32_t ignore;
   bool any;
@@ -251,7 +252,7 @@ static bool reversed(const struct ray *r, struct ray *rv) {
   float m = r->tmax * (1.0f / 65536.0f);
   rv->tmin = -m;
   rv->tmax = r->tmax + m;
-  return isfinite(m) && ray_valid(rv);
+  return isfinite(m) && trav_ray_valid(rv);
 }
 
 /* Recompute the hit a record carries (hit_prim) with its canonical ray: the
@@ -259,11 +260,13 @@ static bool reversed(const struct ray *r, struct ray *rv) {
  * so this is the very hit found earlier (t, b1, b2 bit for bit).
  * NOTE: not announced as a load: the host record has no room for t, where a
  * real one would carry it (the paper's rays have spare bytes). */
-static void restore_hit(const struct dyn *d, const struct isect_ray *ir, const struct ray *r,
-                        struct hit *h) {
-  CHECK(r->hit_prim >= 0 && (uint32_t)r->hit_prim < d->s->tri_count);
+static void restore_hit(const struct dyn *d, const struct trace_isect_ray *ir, const struct ray *r,
+                        struct trace_hit *h) {
+  CHECK_GE(r->hit_prim, 0);
+  CHECK_LT((uint32_t)r->hit_prim, d->s->tri_count);
   const struct scene_tri *tri = &d->s->tris[r->hit_prim];
-  bool ok = isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, r->tmax, &h->t, &h->b1, &h->b2);
+  bool ok = trace_isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, r->tmax, &h->t, &h->b1,
+                            &h->b2);
   CHECK(ok);
   h->prim = r->hit_prim;
 }
@@ -276,14 +279,14 @@ static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) 
   trav_best_init(&w->best, r->tmax);
   w->tmin = r->tmin;
   w->ignore = r->ignore_prim;
-  if (!ray_valid(r) || kd->node_count == 0) return false;
+  if (!trav_ray_valid(r) || kd->node_count == 0) return false;
   if (!trav_setup(&w->tv, kd, r)) return false;
-  isect_prepare(&w->ir, r->o, r->d);
+  trace_isect_prepare(&w->ir, r->o, r->d);
   if (w->any) {
     struct ray rv;
     if (reversed(r, &rv) && !trav_setup(&w->tv, kd, &rv)) return false;
   } else if (r->hit_prim >= 0) {
-    struct hit h;
+    struct trace_hit h;
     restore_hit(d, &w->ir, r, &h);
     trav_best_offer(&w->best, h.t, (uint32_t)h.prim, h.b1, h.b2);
   }
@@ -296,7 +299,7 @@ static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) 
 
 /* Test entries [j0, j1) of leaf nd as trace.c does. True: a shadow ray is
  * occluded. */
-static bool walk_leaf(struct tracer *tr, struct walk *w, struct kd_node nd, uint32_t j0,
+static bool walk_leaf(struct trace_ctx *tr, struct walk *w, struct kd_node nd, uint32_t j0,
                       uint32_t j1) {
   return trav_leaf(tr, &w->ir, w->tmin, w->ignore, w->any, nd, j0, j1, &w->best);
 }
@@ -310,10 +313,10 @@ static bool walk_pop(struct walk *w, int floor) {
 /* Traverse from the current node. In a queue point's subtree (to_queue false)
  * run until its pending nodes (those above floor) are done; above the queue
  * points (to_queue true) stop at the first queue point reached. */
-static enum walk_end walk_run(const struct dyn *d, struct tracer *tr, struct walk *w, int floor,
+static enum walk_end walk_run(const struct dyn *d, struct trace_ctx *tr, struct walk *w, int floor,
                               bool to_queue) {
   for (;;) {
-    announce_node(tr, w->ni, 1);
+    trav_announce_node(tr, w->ni, 1);
     struct kd_node nd = d->qs.nodes[w->ni];
     if (to_queue && kd_is_queue_point(nd)) return WALK_QUEUED;
     if (!kd_is_leaf(nd)) {
@@ -330,16 +333,17 @@ static enum walk_end walk_run(const struct dyn *d, struct tracer *tr, struct wal
  * the path to q, pushing what the original traversal pushed there. Where the
  * path goes to the far child, the traversal had pushed it, finished the near
  * side, and popped it: so pop it here. */
-static void walk_to(const struct dyn *d, struct tracer *tr, struct walk *w, uint32_t q) {
+static void walk_to(const struct dyn *d, struct trace_ctx *tr, struct walk *w, uint32_t q) {
   while (w->ni != q) {
-    announce_node(tr, w->ni, 1);
+    trav_announce_node(tr, w->ni, 1);
     struct kd_node nd = d->qs.nodes[w->ni];
     CHECK(!kd_is_leaf(nd));
     uint32_t c = q >= kd_above(nd) ? kd_above(nd) : w->ni + 1, next;
     bool ok = trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &next, w->stack, &w->sp);
     CHECK(ok);
     if (next != c) {
-      CHECK(w->sp > 0 && w->stack[w->sp - 1].node == c);
+      CHECK_GT(w->sp, 0);
+      CHECK_EQ(w->stack[w->sp - 1].node, c);
       w->sp--;
       w->t0 = w->stack[w->sp].t0;
       w->t1 = w->stack[w->sp].t1;
@@ -349,7 +353,7 @@ static void walk_to(const struct dyn *d, struct tracer *tr, struct walk *w, uint
 }
 
 /* After a queue point's subtree: on to the next queue point, or the end. */
-static enum walk_end walk_leave(const struct dyn *d, struct tracer *tr, struct walk *w) {
+static enum walk_end walk_leave(const struct dyn *d, struct trace_ctx *tr, struct walk *w) {
   if (!walk_pop(w, 0)) return WALK_DONE;
   return walk_run(d, tr, w, 0, true);
 }
@@ -433,7 +437,7 @@ static uint32_t chunk_alloc(struct dyn *d) {
 static void chunk_hold(struct dyn *d, uint32_t c) { d->chunk_refs[c]++; }
 
 static void chunk_drop(struct dyn *d, uint32_t c) {
-  CHECK(d->chunk_refs[c] > 0);
+  CHECK_GT(d->chunk_refs[c], 0);
   if (--d->chunk_refs[c] > 0) return;
   d->chunk_next[c] = d->free_head;
   d->free_head = c;
@@ -505,7 +509,7 @@ static void terminate(struct dyn_worker *x, struct ray *r, const struct walk *w,
   if (r->type == RAY_SHADOW) {
     shade_shadow(r, e == WALK_HIT, s->fb, &x->tr->mem);
   } else {
-    struct hit h;
+    struct trace_hit h;
     trav_best_hit(&w->best, &h);
     r->hit_prim = -1;
     struct ray spawn[SHADE_MAX_SPAWN];
@@ -522,7 +526,7 @@ static void route(struct dyn_worker *x, struct ray *r, const struct walk *w, enu
                   struct dyn_queue *qset) {
   if (e == WALK_QUEUED) {
     int64_t qi = qpoint_index(&x->d->qs, w->ni);
-    CHECK(qi >= 0);
+    CHECK_GE(qi, 0);
     r->hit_prim = w->best.found ? (int32_t)w->best.p : -1;
     enqueue(x, (uint32_t)qi, r, qset);
   } else {
@@ -551,14 +555,14 @@ static void cost_add(const struct dyn_worker *x, uint32_t pixel, uint64_t nodes0
  * queue point holding its origin.) */
 static void start(struct dyn_worker *x, struct ray *r) {
   struct dyn *d = x->d;
-  struct tracer *tr = x->tr;
+  struct trace_ctx *tr = x->tr;
   uint64_t n0 = tr->stats.node_visits, t0 = tr->stats.tri_tests;
   struct walk w;
   struct dyn_queue *qset = r->type == RAY_PRIMARY ? d->q : r->type == RAY_SHADOW ? d->qsh : d->qn;
   if (!walk_init(d, &w, r)) {
     terminate(x, r, &w, WALK_DONE);
   } else {
-    struct tracer quiet = *tr;
+    struct trace_ctx quiet = *tr;
     quiet.mem = mem_port_native();
     enum walk_end e = walk_run(d, &quiet, &w, 0, true);
     tr->stats = quiet.stats;
@@ -582,7 +586,7 @@ static void flush(struct dyn_worker *x) {
 /* A ray of interior queue point node: its subtree, then onward. */
 static void process_subtree(struct dyn_worker *x, struct ray *r, uint32_t node) {
   struct dyn *d = x->d;
-  struct tracer *tr = x->tr;
+  struct trace_ctx *tr = x->tr;
   uint64_t n0 = tr->stats.node_visits, t0 = tr->stats.tri_tests;
   struct walk w;
   CHECK(walk_init(d, &w, r));
@@ -596,7 +600,7 @@ static void process_subtree(struct dyn_worker *x, struct ray *r, uint32_t node) 
 
 /* Load (announce) entries [j0, j1) of a leaf's geometry, as the paper does on
  * opening a queue at a leaf: it will all be tested. */
-static void preload_leaf(struct tracer *tr, struct kd_node nd, uint32_t j0, uint32_t j1) {
+static void preload_leaf(struct trace_ctx *tr, struct kd_node nd, uint32_t j0, uint32_t j1) {
   uint32_t off = kd_leaf_offset(nd);
   for (uint32_t j = j0; j < j1; j++) {
     uint32_t p = trav_leaf_prim(tr, off + j);
@@ -683,7 +687,7 @@ static void take(struct dyn_worker *x) {
   struct dyn *d = x->d;
   const uint32_t core = x->wk->core;
   struct dyn_drain *dr = &d->drain[core];
-  CHECK(dr->qi == DYN_NONE);
+  CHECK_EQ(dr->qi, DYN_NONE);
   const uint32_t qi = heap_pop(d);
   struct dyn_queue *q = &d->q[qi];
   q->held = true;
@@ -773,7 +777,7 @@ static void slot_done(struct dyn_worker *x, uint32_t t) {
 static void claim_done(struct dyn_worker *x) {
   struct dyn_drain *dr = &x->d->drain[x->cl.drain];
   if (dr->seq == x->cl.seq) {
-    CHECK(dr->busy > 0);
+    CHECK_GT(dr->busy, 0);
     dr->busy--;
   }
 }
@@ -782,7 +786,7 @@ static void claim_done(struct dyn_worker *x) {
  * above). One worker never waits: its enqueues are over before it drains. */
 static void wait_stored(struct dyn_worker *x, uint64_t slot) {
   while (!x->d->stored[slot]) {
-    CHECK(x->d->wait_cycles > 0);
+    CHECK_GT(x->d->wait_cycles, 0);
     mem_wait(&x->tr->mem, x->d->wait_cycles);
   }
 }
@@ -807,7 +811,7 @@ static void trace_subtree_claim(struct dyn_worker *x) {
  * single traversal finds (the hit rule does not depend on their order). */
 static void trace_leaf_claim(struct dyn_worker *x) {
   struct dyn *d = x->d;
-  struct tracer *tr = x->tr;
+  struct trace_ctx *tr = x->tr;
   const struct mem_port *mem = &tr->mem;
   const struct dyn_claim *cl = &x->cl;
   const struct kd_node nd = d->qs.nodes[cl->node];
@@ -924,12 +928,13 @@ static bool phase_over(const struct dyn *d) {
  * takes its place): the cores let their queue points go, and the set's
  * non-empty queues are ordered in the heap. */
 static void activate(struct dyn *d, struct dyn_queue **other) {
-  CHECK(d->heap_n == 0 && d->pending == 0);
+  CHECK_EQ(d->heap_n, 0);
+  CHECK_EQ(d->pending, 0);
   for (uint32_t c = 0; c < d->cores; c++) {
     struct dyn_drain *dr = &d->drain[c];
     d->core[c].drain = DYN_NONE;
     if (dr->qi == DYN_NONE) continue;
-    CHECK(d->q[dr->qi].count == 0);
+    CHECK_EQ(d->q[dr->qi].count, 0);
     release(d, dr);
   }
   struct dyn_queue *t = d->q;
@@ -970,7 +975,10 @@ static uint32_t clamp_u32(uint64_t v) { return v == 0 ? 1 : (v > UINT32_MAX ? UI
 void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32_t cores,
                          const struct kd_tree *kd, uint32_t tri_bytes, struct qpoint_set *qs,
                          struct qpoint_budget *b, uint32_t *block_tris, uint32_t *group) {
-  CHECK(workers >= 1 && cores >= 1 && cores <= workers && tri_bytes > 0);
+  CHECK_GE(workers, 1);
+  CHECK_GE(cores, 1);
+  CHECK_LE(cores, workers);
+  CHECK_GT(tri_bytes, 0);
   uint32_t *tris = xmalloc((uint64_t)kd->node_count * sizeof *tris + 1);
   qpoint_subtree_tris(kd, tris);
   const uint64_t rays = p->dyn_ray_buffer_bytes ? p->dyn_ray_buffer_bytes
@@ -1071,7 +1079,8 @@ static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
   if (!d->active) {
     uint64_t k0, n = policy_job_claim(job, d->batch, &k0);
     if (n == 0) return false;
-    CHECK(d->pending == 0 && d->heap_n == 0);
+    CHECK_EQ(d->pending, 0);
+    CHECK_EQ(d->heap_n, 0);
     d->active = true;
     d->lo = d->admit_next = k0;
     d->hi = k0 + n;
@@ -1102,7 +1111,7 @@ static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
     }
     /* Others are still tracing rays of this phase (or testing the last rays
      * of this core's pass): their rays may make work for this one. */
-    CHECK(d->wait_cycles > 0);
+    CHECK_GT(d->wait_cycles, 0);
     mem_wait(&x->tr->mem, d->wait_cycles << idle);
     if (idle < DYN_WAIT_DOUBLINGS) idle++;
   }
@@ -1113,16 +1122,22 @@ static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
  * rays in flight. */
 static void dyn_finish(struct policy_job *job, struct render_stats *st) {
   const struct dyn *d = job->shared;
-  CHECK(!d->active && d->heap_n == 0 && d->pending == 0);
-  for (uint32_t i = 0; i < d->qs.count; i++)
-    CHECK(d->q[i].count == 0 && d->qsh[i].count == 0 && d->qn[i].count == 0 && !d->q[i].held);
-  for (uint32_t c = 0; c < d->cores; c++) CHECK(d->drain[c].qi == DYN_NONE);
+  CHECK(!d->active);
+  CHECK_EQ(d->heap_n, 0);
+  CHECK_EQ(d->pending, 0);
+  for (uint32_t i = 0; i < d->qs.count; i++) {
+    CHECK_EQ(d->q[i].count, 0);
+    CHECK_EQ(d->qsh[i].count, 0);
+    CHECK_EQ(d->qn[i].count, 0);
+    CHECK(!d->q[i].held);
+  }
+  for (uint32_t c = 0; c < d->cores; c++) CHECK_EQ(d->drain[c].qi, DYN_NONE);
   uint32_t free_chunks = 0;
   for (uint32_t c = d->free_head; c != DYN_NONE; c = d->chunk_next[c]) {
-    CHECK(d->chunk_refs[c] == 0);
+    CHECK_EQ(d->chunk_refs[c], 0);
     free_chunks++;
   }
-  CHECK(free_chunks == d->chunks);
+  CHECK_EQ(free_chunks, d->chunks);
   st->ray_slots_max += (uint64_t)d->chunks * DYN_CHUNK_RAYS;
 }
 

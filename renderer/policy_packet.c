@@ -17,13 +17,14 @@
  * was active in, triangles tested against it) goes to its pixel, so they read
  * like the recursive policy's. tr->stats.node_visits counts packet node visits
  * (one fetch serves the packet); tri_tests counts ray/triangle tests. */
+#include "renderer/policy_impl.h"
+
 #include <stdlib.h>
 #include <string.h>
 
 #include "renderer/camera.h"
 #include "renderer/framebuffer.h"
 #include "renderer/policy.h"
-#include "renderer/policy_impl.h"
 #include "renderer/rng.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
@@ -68,7 +69,8 @@ static uint32_t child_group(const struct ray *parent, const struct ray *c, uint6
     break;
   default: CHECK(!"unexpected child ray type");
   }
-  CHECK(g < GROUP_COUNT && !(*used & (1ull << g)));
+  CHECK_LT(g, GROUP_COUNT);
+  CHECK(!(*used & (1ull << g)));
   *used |= 1ull << g;
   return g;
 }
@@ -87,14 +89,15 @@ struct pkt_scratch {
   struct packet cur;
   struct trace_packet *pk;
   struct trace_packet_cost cost;
-  struct hit hits[PACKET_MAX];
+  struct trace_hit hits[PACKET_MAX];
   bool occ[PACKET_MAX];
   struct ray spawn[SHADE_MAX_SPAWN];
 };
 
 static void pkt_create(struct policy_job *job) {
   const uint32_t w = job->setup.fb->width, h = job->setup.fb->height, dim = job->params.packet_dim;
-  CHECK(dim >= 1 && dim * dim <= PACKET_MAX);
+  CHECK_GE(dim, 1);
+  CHECK_LE(dim * dim, PACKET_MAX);
   job->total = (uint64_t)((w + dim - 1) / dim) * ((h + dim - 1) / dim);
   job->progress_every = 64;
   job->shared = NULL;
@@ -119,7 +122,7 @@ static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
   }
   struct pkt_scratch *x = wk->scratch;
   struct packet *stack = x->stack, *group = x->group, *cur = &x->cur;
-  struct tracer *tr = &wk->tr;
+  struct trace_ctx *tr = &wk->tr;
   const struct shade_ctx *sc = job->setup.sc;
   struct framebuffer *fb = job->setup.fb;
   struct render_stats *st = &wk->st;
@@ -164,7 +167,7 @@ static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
         uint64_t used = 0;
         for (uint32_t j = 0; j < ns; j++) {
           struct packet *gp = &group[child_group(&cur->r[i], &x->spawn[j], &used)];
-          CHECK(gp->n < PACKET_MAX);
+          CHECK_LT(gp->n, PACKET_MAX);
           gp->r[gp->n++] = x->spawn[j];
         }
         st->spawned += ns;
@@ -172,7 +175,7 @@ static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
       /* Push in reverse so the shadow packets (light order) are traced first. */
       for (uint32_t g = GROUP_COUNT; g-- > 0;) {
         if (group[g].n == 0) continue;
-        CHECK(top < PACKET_STACK);
+        CHECK_LT(top, PACKET_STACK);
         struct packet *dst = &stack[top];
         dst->n = group[g].n;
         for (uint32_t i = 0; i < dst->n; i++) {

@@ -6,12 +6,13 @@
  * simulated memory image, in the worker's ray region (a push is a store, a pop
  * a load), so a coroutine can suspend anywhere and its ray traffic is counted
  * like any other data. */
+#include "renderer/policy_impl.h"
+
 #include <stdlib.h>
 
 #include "renderer/camera.h"
 #include "renderer/framebuffer.h"
 #include "renderer/policy.h"
-#include "renderer/policy_impl.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
@@ -46,7 +47,7 @@ static bool rec_step(struct policy_job *job, struct policy_worker *wk) {
   if (!wk->scratch) wk->scratch = xmalloc(sizeof(struct rec_scratch));
   struct rec_scratch *x = wk->scratch;
   struct ray *stack = x->stack;
-  struct tracer *tr = &wk->tr;
+  struct trace_ctx *tr = &wk->tr;
   struct render_stats *st = &wk->st;
   const struct shade_ctx *sc = job->setup.sc;
   struct framebuffer *fb = job->setup.fb;
@@ -73,10 +74,10 @@ static bool rec_step(struct policy_job *job, struct policy_worker *wk) {
       shade_shadow(&r, trace_any(tr, &r), fb, mem);
       continue;
     }
-    struct hit hit;
+    struct trace_hit hit;
     trace_closest(tr, &r, &hit);
     uint32_t n = shade_hit(sc, &r, &hit, fb, mem, x->spawn);
-    CHECK(top + n <= RECURSIVE_STACK);
+    CHECK_LE(top + n, RECURSIVE_STACK);
     /* Push in reverse so the first spawned (shadow rays) are traced first. */
     for (uint32_t i = n; i-- > 0;) {
       mem_store(mem, stack_addr + (uint64_t)top * sizeof r, sizeof r, TRACE_CLASS_RAY);

@@ -30,7 +30,9 @@ void qpoint_subtree_tris(const struct kd_tree *kd, uint32_t *out) {
   for (uint32_t i = 0; i < n; i++) {
     struct kd_node nd = kd->nodes[i];
     if (kd_is_leaf(nd)) continue;
-    CHECK(i + 1 < n && kd_above(nd) > i + 1 && kd_above(nd) < n);
+    CHECK_LT(i + 1, n);
+    CHECK_GT(kd_above(nd), i + 1);
+    CHECK_LT(kd_above(nd), n);
     parent[i + 1] = i;
     parent[kd_above(nd)] = i;
   }
@@ -73,7 +75,8 @@ void qpoint_subtree_tris(const struct kd_tree *kd, uint32_t *out) {
   }
   for (uint32_t i = n; i-- > 1;) acc[parent[i]] += acc[i];
   for (uint32_t i = 0; i < n; i++) {
-    CHECK(acc[i] >= 0 && acc[i] <= (int64_t)tri_count);
+    CHECK_GE(acc[i], 0);
+    CHECK_LE(acc[i], (int64_t)tri_count);
     out[i] = (uint32_t)acc[i];
   }
   free(start);
@@ -122,14 +125,14 @@ void qpoint_select(struct qpoint_set *qs, const struct kd_tree *kd, const uint32
 }
 
 static uint64_t share(uint64_t cache, uint32_t div) {
-  CHECK(div > 0);
+  CHECK_GT(div, 0);
   return cache / div;
 }
 
 static uint64_t min_u64(uint64_t a, uint64_t b) { return a < b ? a : b; }
 
 static uint64_t gmax_of(const struct qpoint_reserve *r, struct qpoint_budget *b) {
-  CHECK(r->holders > 0);
+  CHECK_GT(r->holders, 0);
   uint64_t used = b->node_bytes + b->table_bytes + b->ray_bytes;
   b->gmax_bytes = r->cache_bytes > used ? (r->cache_bytes - used) / r->holders : 0;
   return b->gmax_bytes;
@@ -148,7 +151,7 @@ void qpoint_plan(struct qpoint_set *qs, struct qpoint_budget *b, const struct kd
       uint32_t before = qs->count;
       qpoint_fini(qs);
       qpoint_select(qs, kd, tris, tri_bytes, b->gmax_bytes);
-      CHECK(qs->count <= before);
+      CHECK_LE(qs->count, before);
     }
   }
 }

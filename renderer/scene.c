@@ -29,7 +29,7 @@ int scene_find_material(const struct scene *s, const char *name) {
 }
 
 uint32_t scene_add_material(struct scene *s, const struct scene_material *m) {
-  CHECK(scene_find_material(s, m->name) < 0);
+  CHECK_LT(scene_find_material(s, m->name), 0);
   if (s->mat_count == s->mat_cap) {
     s->mat_cap = s->mat_cap ? 2 * s->mat_cap : 8;
     s->mats = xrealloc(s->mats, (unsigned long long)s->mat_cap * sizeof *s->mats);

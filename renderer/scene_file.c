@@ -260,7 +260,7 @@ static bool load_kd_tree(struct cfg_doc *d, struct cfg_node *n, struct scene *s,
   return cfg_check_keys(d, n, "kd_tree", "splits", e);
 }
 
-bool scene_load(struct scene *s, const char *path, struct err *e) {
+bool scene_file_load(struct scene *s, const char *path, struct err *e) {
   scene_init(s);
   struct cfg_doc d;
   if (!cfg_load_file(&d, path, e)) return false;

@@ -12,6 +12,6 @@ struct err;
 /* Load the scene file at path into s (scene_init is done here). Any problem in
  * the file or in a mesh it names fails with one message at the offending
  * value's file:line:col; s is then empty (scene_fini already done). */
-bool scene_load(struct scene *s, const char *path, struct err *e);
+bool scene_file_load(struct scene *s, const char *path, struct err *e);
 
 #endif

@@ -38,7 +38,7 @@ static void basis(vec3 n, vec3 *t, vec3 *b) {
   *b = v3(bb, sign + n.y * n.y * a, -n.y);
 }
 
-uint32_t shade_hit(const struct shade_ctx *c, const struct ray *r, const struct hit *h,
+uint32_t shade_hit(const struct shade_ctx *c, const struct ray *r, const struct trace_hit *h,
                    struct framebuffer *fb, const struct mem_port *mem, struct ray *out) {
   const struct scene *s = c->scene;
   if (h->prim < 0) {

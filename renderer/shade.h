@@ -18,7 +18,7 @@
 #include "sim/mem.h"
 
 struct scene;
-struct hit;
+struct trace_hit;
 struct framebuffer;
 
 #define SHADE_MAX_DEPTH 2        /* reflection bounces, the paper's limit */
@@ -38,7 +38,7 @@ struct shade_ctx {
 /* Shade the result of a non-shadow ray r (h->prim < 0: a miss). A hit
  * announces c->shade_cycles of compute. Adds direct contributions to fb and writes the rays it spawns to out[] (at most
  * SHADE_MAX_SPAWN), shadow rays first. Returns how many it spawned. */
-uint32_t shade_hit(const struct shade_ctx *c, const struct ray *r, const struct hit *h,
+uint32_t shade_hit(const struct shade_ctx *c, const struct ray *r, const struct trace_hit *h,
                    struct framebuffer *fb, const struct mem_port *mem, struct ray *out);
 
 /* Account for a shadow ray: adds its contribution unless occluded. */

@@ -27,7 +27,7 @@ static float gamma_f(int n) {
 static float comp(vec3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
 _Static_assert(sizeof(vec3) == 3 * sizeof(float), "vec3 is three packed floats");
 
-void isect_prepare(struct isect_ray *r, vec3 o, vec3 d) {
+void trace_isect_prepare(struct trace_isect_ray *r, vec3 o, vec3 d) {
   float ax = fabsf(d.x), ay = fabsf(d.y), az = fabsf(d.z);
   int kz = (ax > ay) ? (ax > az ? 0 : 2) : (ay > az ? 1 : 2);
   int kx = kz + 1 == 3 ? 0 : kz + 1;
@@ -61,10 +61,11 @@ static bool tri_degenerate(vec3 a, vec3 b, vec3 c) {
 
 /* The test for one axis permutation (kx, ky, kz constants after inlining, so
  * every coordinate is picked without a round trip through memory). */
-static inline __attribute__((always_inline)) bool isect_perm(const struct isect_ray *r, vec3 a,
-                                                             vec3 b, vec3 c, int kx, int ky, int kz,
-                                                             float tmin, float tmax, float *t,
-                                                             float *b1, float *b2) {
+static inline __attribute__((always_inline)) bool isect_perm(const struct trace_isect_ray *r,
+                                                             vec3 a, vec3 b, vec3 c, int kx,
+                                                             int ky, int kz, float tmin,
+                                                             float tmax, float *t, float *b1,
+                                                             float *b2) {
   /* Translate to the ray origin, permute so that kz is the ray's main axis, shear. */
   float oz = v3_get(r->o, kz), ox = v3_get(r->o, kx), oy = v3_get(r->o, ky);
   float az = v3_get(a, kz) - oz, bz = v3_get(b, kz) - oz, cz = v3_get(c, kz) - oz;
@@ -126,8 +127,8 @@ static inline __attribute__((always_inline)) bool isect_perm(const struct isect_
   return true;
 }
 
-bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, float tmax,
-               float *t, float *b1, float *b2) {
+bool trace_isect_tri(const struct trace_isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin,
+                     float tmax, float *t, float *b1, float *b2) {
   switch (r->perm) {
   case 0: return isect_perm(r, a, b, c, 1, 2, 0, tmin, tmax, t, b1, b2);
   case 1: return isect_perm(r, a, b, c, 2, 1, 0, tmin, tmax, t, b1, b2);
@@ -157,8 +158,8 @@ void trace_layout_default(struct trace_layout *l) {
   l->tri_cycles = 30; /* watertight test: ~25 flops plus compares */
 }
 
-void tracer_init(struct tracer *tr, const struct scene *s, const struct kd_tree *kd,
-                 struct mem_port mem, const struct trace_layout *layout) {
+void trace_init(struct trace_ctx *tr, const struct scene *s, const struct kd_tree *kd,
+                struct mem_port mem, const struct trace_layout *layout) {
   memset(tr, 0, sizeof *tr);
   tr->scene = s;
   tr->kd = kd;
@@ -172,16 +173,16 @@ void tracer_init(struct tracer *tr, const struct scene *s, const struct kd_tree 
 /* Shared loop of trace_closest (any_hit false) and trace_any (true). Hits are
  * accepted against the ray's whole (tmin, best t) range, not the node's
  * interval; a node is skipped when the best hit lies before its interval. */
-static bool traverse(struct tracer *tr, const struct ray *r, bool any_hit, struct hit *h) {
+static bool traverse(struct trace_ctx *tr, const struct ray *r, bool any_hit, struct trace_hit *h) {
   h->t = r->tmax;
   h->prim = -1;
   h->b1 = h->b2 = 0.0f;
   const struct kd_tree *kd = tr->kd;
-  if (!ray_valid(r) || kd->node_count == 0) return false;
+  if (!trav_ray_valid(r) || kd->node_count == 0) return false;
   struct trav_ray tv;
   if (!trav_setup(&tv, kd, r)) return false;
-  struct isect_ray ir;
-  isect_prepare(&ir, r->o, r->d);
+  struct trace_isect_ray ir;
+  trace_isect_prepare(&ir, r->o, r->d);
 
   struct trav_entry stack[KD_DEPTH_LIMIT];
   int sp = 0;
@@ -190,7 +191,7 @@ static bool traverse(struct tracer *tr, const struct ray *r, bool any_hit, struc
   struct trav_best best;
   trav_best_init(&best, r->tmax);
   for (;;) {
-    announce_node(tr, ni, 1);
+    trav_announce_node(tr, ni, 1);
     struct kd_node nd = kd->nodes[ni];
     if (!kd_is_leaf(nd)) {
       if (trav_interior(&tv, nd, ni, &t0, &t1, &ni, stack, &sp)) continue;
@@ -205,12 +206,12 @@ static bool traverse(struct tracer *tr, const struct ray *r, bool any_hit, struc
   return best.found;
 }
 
-bool trace_closest(struct tracer *tr, const struct ray *r, struct hit *h) {
+bool trace_closest(struct trace_ctx *tr, const struct ray *r, struct trace_hit *h) {
   return traverse(tr, r, false, h);
 }
 
-bool trace_any(struct tracer *tr, const struct ray *r) {
-  struct hit h;
+bool trace_any(struct trace_ctx *tr, const struct ray *r) {
+  struct trace_hit h;
   return traverse(tr, r, true, &h);
 }
 
@@ -244,7 +245,7 @@ struct pk_entry {
 
 struct trace_packet {
   struct pk_ray ray[TRACE_PACKET_MAX];
-  struct isect_ray ir[TRACE_PACKET_MAX];
+  struct trace_isect_ray ir[TRACE_PACKET_MAX];
   uint32_t best_p[TRACE_PACKET_MAX], tris[TRACE_PACKET_MAX];
   int32_t ignore[TRACE_PACKET_MAX];
   uint64_t flat[3], pos[3], neg[3]; /* bit i: ray i does not move / moves up / down the axis */
@@ -277,10 +278,11 @@ static inline uint32_t pk_count(uint64_t m) {
 
 /* Shared loop of trace_packet_closest (any_hit false: hits) and
  * trace_packet_any (true: occ). */
-static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
+static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk,
                                    const struct ray *rays, uint32_t n, bool any_hit,
-                                   struct hit *hits, bool *occ, struct trace_packet_cost *cost) {
-  CHECK(n <= TRACE_PACKET_MAX);
+                                   struct trace_hit *hits, bool *occ,
+                                   struct trace_packet_cost *cost) {
+  CHECK_LE(n, TRACE_PACKET_MAX);
   const struct kd_tree *kd = tr->kd;
   const struct scene *s = tr->scene;
   uint64_t live = 0, ign = 0, found = 0;
@@ -298,7 +300,7 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
     q->nodes = 0;
     pk->tris[i] = 0;
     struct trav_ray tv;
-    if (!ray_valid(r) || kd->node_count == 0 || !trav_setup(&tv, kd, r)) continue;
+    if (!trav_ray_valid(r) || kd->node_count == 0 || !trav_setup(&tv, kd, r)) continue;
     uint64_t bit = 1ull << i;
     live |= bit;
     for (int a = 0; a < 3; a++) {
@@ -318,7 +320,7 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
     q->tmin = r->tmin;
     q->upper = r->tmax;
     q->best_t = r->tmax;
-    isect_prepare(&pk->ir[i], r->o, r->d);
+    trace_isect_prepare(&pk->ir[i], r->o, r->d);
     pk->best_p[i] = 0;
     pk->ignore[i] = r->ignore_prim;
     if (r->ignore_prim >= 0) ign |= bit;
@@ -330,7 +332,7 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
   uint64_t act = live;
   while (live) {
     /* One fetch of the node for the packet; the work of every ray needing it. */
-    announce_node(tr, ni, pk_count(act));
+    trav_announce_node(tr, ni, pk_count(act));
     struct kd_node nd = kd->nodes[ni];
     if (!kd_is_leaf(nd)) {
       const int a = kd_axis(nd);
@@ -340,7 +342,7 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
       const uint64_t up = act & pk->pos[a], down = act & pk->neg[a];
       const bool bf = !down || (up && pk_count(up) >= pk_count(down));
       const uint64_t flat = pk->flat[a];
-      CHECK(sp < KD_DEPTH_LIMIT);
+      CHECK_LT(sp, KD_DEPTH_LIMIT);
       float *restrict pool = pk->pool + ptop; /* the second child's intervals */
       uint32_t k = 0;
       uint64_t mf = 0, ms = 0;
@@ -428,7 +430,7 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
         if (!tm) continue;
         /* One fetch of the triangle for the packet; a test per ray. */
         const uint32_t k = pk_count(tm);
-        announce_tri(tr, p, k);
+        trav_announce_tri(tr, p, k);
         const struct scene_tri *tri = &s->tris[p];
         const vec3 v0 = tri->v[0], v1 = tri->v[1], v2 = tri->v[2];
         for (uint64_t m = tm; m; m &= m - 1) {
@@ -437,7 +439,7 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
           struct pk_ray *q = &pk->ray[i];
           pk->tris[i]++;
           float t, b1, b2;
-          if (!isect_tri(&pk->ir[i], v0, v1, v2, q->tmin, q->upper, &t, &b1, &b2)) continue;
+          if (!trace_isect_tri(&pk->ir[i], v0, v1, v2, q->tmin, q->upper, &t, &b1, &b2)) continue;
           if (any_hit) {
             occ[i] = true;
             live &= ~bit;
@@ -485,38 +487,39 @@ static inline void packet_traverse(struct tracer *tr, struct trace_packet *pk,
     }
 }
 
-void trace_packet_closest(struct tracer *tr, struct trace_packet *pk, const struct ray *rays,
-                          uint32_t n, struct hit *hits, struct trace_packet_cost *cost) {
+void trace_packet_closest(struct trace_ctx *tr, struct trace_packet *pk, const struct ray *rays,
+                          uint32_t n, struct trace_hit *hits, struct trace_packet_cost *cost) {
   packet_traverse(tr, pk, rays, n, false, hits, NULL, cost);
 }
 
-void trace_packet_any(struct tracer *tr, struct trace_packet *pk, const struct ray *rays,
+void trace_packet_any(struct trace_ctx *tr, struct trace_packet *pk, const struct ray *rays,
                       uint32_t n, bool *occluded, struct trace_packet_cost *cost) {
   packet_traverse(tr, pk, rays, n, true, NULL, occluded, cost);
 }
 
-bool trace_brute(const struct scene *s, const struct ray *r, struct hit *h) {
+bool trace_brute(const struct scene *s, const struct ray *r, struct trace_hit *h) {
   h->t = r->tmax;
   h->prim = -1;
   h->b1 = h->b2 = 0.0f;
-  if (!ray_valid(r)) return false;
-  struct isect_ray ir;
-  isect_prepare(&ir, r->o, r->d);
+  if (!trav_ray_valid(r)) return false;
+  struct trace_isect_ray ir;
+  trace_isect_prepare(&ir, r->o, r->d);
   struct trav_best best;
   trav_best_init(&best, r->tmax);
   for (uint32_t p = 0; p < s->tri_count; p++) {
     if ((int64_t)p == (int64_t)r->ignore_prim) continue;
     const struct scene_tri *tri = &s->tris[p];
     float t, b1, b2;
-    if (isect_tri(&ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, best.upper, &t, &b1, &b2))
+    if (trace_isect_tri(&ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, best.upper, &t, &b1, &b2))
       trav_best_offer(&best, t, p, b1, b2);
   }
   trav_best_hit(&best, h);
   return best.found;
 }
 
-vec3 trace_hit_point(const struct scene *s, const struct hit *h, vec3 *err) {
-  CHECK(h->prim >= 0 && (uint32_t)h->prim < s->tri_count);
+vec3 trace_hit_point(const struct scene *s, const struct trace_hit *h, vec3 *err) {
+  CHECK_GE(h->prim, 0);
+  CHECK_LT((uint32_t)h->prim, s->tri_count);
   const struct scene_tri *tri = &s->tris[h->prim];
   float b0 = 1.0f - h->b1 - h->b2;
   vec3 p0 = v3_scale(tri->v[0], b0), p1 = v3_scale(tri->v[1], h->b1),
@@ -531,8 +534,9 @@ vec3 trace_hit_point(const struct scene *s, const struct hit *h, vec3 *err) {
   return p;
 }
 
-vec3 trace_geom_normal(const struct scene *s, const struct hit *h) {
-  CHECK(h->prim >= 0 && (uint32_t)h->prim < s->tri_count);
+vec3 trace_geom_normal(const struct scene *s, const struct trace_hit *h) {
+  CHECK_GE(h->prim, 0);
+  CHECK_LT((uint32_t)h->prim, s->tri_count);
   const struct scene_tri *tri = &s->tris[h->prim];
   vec3 n = v3_cross(v3_sub(tri->v[1], tri->v[0]), v3_sub(tri->v[2], tri->v[0]));
   float l = v3_len(n);

@@ -18,27 +18,27 @@ struct scene;
 struct kd_tree;
 struct ray;
 
-struct hit {
+struct trace_hit {
   float t;
   int32_t prim;   /* -1: miss */
   float b1, b2;   /* barycentric weights of vertices 1 and 2 (vertex 0: 1-b1-b2) */
 };
 
 /* Per-ray precomputation of the watertight test. */
-struct isect_ray {
+struct trace_isect_ray {
   vec3 o;
   int kx, ky, kz;
   float sx, sy, sz;
   int perm; /* 2 kz + (kx, ky swapped): which specialised test runs */
 };
 
-void isect_prepare(struct isect_ray *r, vec3 o, vec3 d);
+void trace_isect_prepare(struct trace_isect_ray *r, vec3 o, vec3 d);
 
 /* Watertight test of one triangle. On a hit with tmin < t < tmax sets *t, *b1,
  * *b2 and returns true. Zero-area and edge-on triangles never hit. */
-bool isect_tri(const struct isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin, float tmax,
-               float *t, float *b1, float *b2);
-/* NOTE: like PBRT-v3, isect_tri also rejects a hit whose t is within its own
+bool trace_isect_tri(const struct trace_isect_ray *r, vec3 a, vec3 b, vec3 c, float tmin,
+                     float tmax, float *t, float *b1, float *b2);
+/* NOTE: like PBRT-v3, trace_isect_tri also rejects a hit whose t is within its own
  * rounding-error bound of 0 (cannot be sure it lies in front of the origin). */
 
 /* Data classes of the renderer's accesses (small integers to the simulator,
@@ -80,7 +80,7 @@ struct trace_stats {
   uint64_t node_visits, tri_tests;
 };
 
-struct tracer {
+struct trace_ctx {
   const struct scene *scene;
   const struct kd_tree *kd;
   struct mem_port mem;
@@ -91,14 +91,14 @@ struct tracer {
   uint64_t *tested;
 };
 
-void tracer_init(struct tracer *tr, const struct scene *s, const struct kd_tree *kd,
-                 struct mem_port mem, const struct trace_layout *layout);
+void trace_init(struct trace_ctx *tr, const struct scene *s, const struct kd_tree *kd,
+                struct mem_port mem, const struct trace_layout *layout);
 
 /* Nearest hit along r (rule above). Returns false (h->prim = -1) on a miss. */
-bool trace_closest(struct tracer *tr, const struct ray *r, struct hit *h);
+bool trace_closest(struct trace_ctx *tr, const struct ray *r, struct trace_hit *h);
 
 /* True if any triangle is hit in (tmin, tmax) (shadow rays). */
-bool trace_any(struct tracer *tr, const struct ray *r);
+bool trace_any(struct trace_ctx *tr, const struct ray *r);
 
 /* Packet queries: up to TRACE_PACKET_MAX rays descend the tree together (the
  * classic packet k-d traversal). Each ray keeps its own interval, widened exactly
@@ -125,23 +125,23 @@ struct trace_packet_cost {
 /* hits[i] = what trace_closest(tr, &rays[i]) returns in its hit, for i < n
  * (n <= TRACE_PACKET_MAX). cost may be NULL; if not, its first n entries are
  * overwritten. */
-void trace_packet_closest(struct tracer *tr, struct trace_packet *pk, const struct ray *rays,
-                          uint32_t n, struct hit *hits, struct trace_packet_cost *cost);
+void trace_packet_closest(struct trace_ctx *tr, struct trace_packet *pk, const struct ray *rays,
+                          uint32_t n, struct trace_hit *hits, struct trace_packet_cost *cost);
 
 /* occluded[i] = trace_any(tr, &rays[i]), for i < n. cost as above. */
-void trace_packet_any(struct tracer *tr, struct trace_packet *pk, const struct ray *rays,
+void trace_packet_any(struct trace_ctx *tr, struct trace_packet *pk, const struct ray *rays,
                       uint32_t n, bool *occluded, struct trace_packet_cost *cost);
 
 /* Reference: test every triangle, same hit rule. No memory accesses. */
-bool trace_brute(const struct scene *s, const struct ray *r, struct hit *h);
+bool trace_brute(const struct scene *s, const struct ray *r, struct trace_hit *h);
 
 /* Point and geometric normal of a hit, plus a conservative bound on the point's
  * rounding error (PBRT-v3 style), for spawning secondary rays that cannot hit
  * their own surface: offset = trace_offset_origin(p, err, n, d). */
-vec3 trace_hit_point(const struct scene *s, const struct hit *h, vec3 *err);
+vec3 trace_hit_point(const struct scene *s, const struct trace_hit *h, vec3 *err);
 vec3 trace_offset_origin(vec3 p, vec3 err, vec3 n, vec3 d);
 /* Unit geometric normal of the hit triangle (cross(v1 - v0, v2 - v0), so its
  * side follows the winding), or {0,0,0} for a zero-area triangle. */
-vec3 trace_geom_normal(const struct scene *s, const struct hit *h);
+vec3 trace_geom_normal(const struct scene *s, const struct trace_hit *h);
 
 #endif

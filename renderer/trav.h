@@ -26,11 +26,11 @@
  * its hit points lie within ~8 eps R of the triangle; 64 FLT_EPSILON (7.6e-6 R)
  * leaves a wide margin. Cost: rays within this distance of a split plane visit
  * both children, which is negligible. */
-#define TRACE_SLACK (64.0f * FLT_EPSILON)
+#define TRAV_SLACK (64.0f * FLT_EPSILON)
 
 /* Rays whose direction is shorter than this (largest component) miss
  * everything: below it 1/d overflows and the test's shear is meaningless. */
-#define TRACE_MIN_DIR 1e-30f
+#define TRAV_MIN_DIR 1e-30f
 
 /* Per-ray traversal constants. flat[a]: d[a] is too small for 1/d[a]; the ray
  * is then treated as not moving along a (it moves < 1e-8 R inside the box). */
@@ -41,12 +41,12 @@ struct trav_ray {
   float t0, t1; /* clipped to the slack-thickened root box */
 };
 
-static inline bool ray_valid(const struct ray *r) {
+static inline bool trav_ray_valid(const struct ray *r) {
   if (!isfinite(r->o.x) || !isfinite(r->o.y) || !isfinite(r->o.z)) return false;
   if (!isfinite(r->d.x) || !isfinite(r->d.y) || !isfinite(r->d.z)) return false;
   if (isnan(r->tmin) || isnan(r->tmax) || !(r->tmin < r->tmax)) return false;
   float m = fmaxf(fabsf(r->d.x), fmaxf(fabsf(r->d.y), fabsf(r->d.z)));
-  return m >= TRACE_MIN_DIR;
+  return m >= TRAV_MIN_DIR;
 }
 
 /* Set up tr and clip the ray to the thickened root box; false if it misses.
@@ -60,7 +60,7 @@ static inline bool trav_setup(struct trav_ray *tr, const struct kd_tree *kd, con
   float reach = 0.0f;
   for (int a = 0; a < 3; a++)
     reach = max_nonnan(reach, max_nonnan(fabsf(lo[a] - tr->o[a]), fabsf(hi[a] - tr->o[a])));
-  tr->delta = reach * TRACE_SLACK + FLT_MIN;
+  tr->delta = reach * TRAV_SLACK + FLT_MIN;
   float t0 = r->tmin, t1 = r->tmax;
   for (int a = 0; a < 3; a++) {
     float inv = 1.0f / d[a];
@@ -129,7 +129,7 @@ static inline bool trav_interior(const struct trav_ray *tr, struct kd_node nd, u
     }
   }
   if (vnear && vfar) {
-    CHECK(*sp < KD_DEPTH_LIMIT);
+    CHECK_LT(*sp, KD_DEPTH_LIMIT);
     stack[*sp].node = far_c;
     stack[*sp].t0 = f0;
     stack[*sp].t1 = f1;
@@ -152,7 +152,7 @@ static inline bool trav_interior(const struct trav_ray *tr, struct kd_node nd, u
 
 /* Announce a visit of node ni by `rays` rays at once (1, or a packet's active
  * rays): one node load, node_cycles of compute per ray. */
-static inline void announce_node(struct tracer *tr, uint32_t ni, uint32_t rays) {
+static inline void trav_announce_node(struct trace_ctx *tr, uint32_t ni, uint32_t rays) {
   mem_load(&tr->mem, tr->layout.node_base + 8ull * ni, 8, TRACE_CLASS_NODE);
   mem_compute(&tr->mem, (uint64_t)tr->layout.node_cycles * rays);
   tr->stats.node_visits++;
@@ -160,7 +160,7 @@ static inline void announce_node(struct tracer *tr, uint32_t ni, uint32_t rays) 
 
 /* Announce triangle p tested against `rays` rays at once: one record load,
  * tri_cycles of compute and one test per ray. */
-static inline void announce_tri(struct tracer *tr, uint32_t p, uint32_t rays) {
+static inline void trav_announce_tri(struct trace_ctx *tr, uint32_t p, uint32_t rays) {
   mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p,
            tr->layout.tri_bytes, TRACE_CLASS_GEOMETRY);
   mem_compute(&tr->mem, (uint64_t)tr->layout.tri_cycles * rays);
@@ -169,7 +169,7 @@ static inline void announce_tri(struct tracer *tr, uint32_t p, uint32_t rays) {
 }
 
 /* Entry j of the leaf index lists: its 4-byte load, then the primitive. */
-static inline uint32_t trav_leaf_prim(struct tracer *tr, uint32_t j) {
+static inline uint32_t trav_leaf_prim(struct trace_ctx *tr, uint32_t j) {
   mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * j, 4, TRACE_CLASS_NODE);
   return tr->kd->prims[j];
 }
@@ -226,7 +226,7 @@ static inline void trav_best_offer(struct trav_best *b, float t, uint32_t p, flo
 }
 
 /* The query result of b: its hit, or a miss (prim -1) at t = tmax. */
-static inline void trav_best_hit(const struct trav_best *b, struct hit *h) {
+static inline void trav_best_hit(const struct trav_best *b, struct trace_hit *h) {
   h->t = b->t;
   h->prim = b->found ? (int32_t)b->p : -1;
   h->b1 = b->b1;
@@ -237,18 +237,19 @@ static inline void trav_best_hit(const struct trav_best *b, struct hit *h) {
  * leaf-list load, then (unless it is the ray's ignore primitive) a triangle
  * load and test in (tmin, b->upper); hits go to b. With any, stop at the first
  * hit and return true; otherwise return false. */
-static inline bool trav_leaf(struct tracer *tr, const struct isect_ray *ir, float tmin,
+static inline bool trav_leaf(struct trace_ctx *tr, const struct trace_isect_ray *ir, float tmin,
                              int32_t ignore, bool any, struct kd_node nd, uint32_t j0,
                              uint32_t j1, struct trav_best *b) {
   uint32_t off = kd_leaf_offset(nd);
   for (uint32_t j = j0; j < j1; j++) {
     uint32_t p = trav_leaf_prim(tr, off + j);
     if ((int64_t)p == (int64_t)ignore) continue;
-    announce_tri(tr, p, 1);
+    trav_announce_tri(tr, p, 1);
     if (trav_mbox_seen(b, p)) continue;
     const struct scene_tri *tri = &tr->scene->tris[p];
     float t, b1, b2;
-    if (!isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], tmin, b->upper, &t, &b1, &b2)) continue;
+    if (!trace_isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], tmin, b->upper, &t, &b1, &b2))
+      continue;
     trav_best_offer(b, t, p, b1, b2);
     if (any) return true;
   }

@@ -179,7 +179,8 @@ void cache_set_pending(struct cache *c, uint32_t slot, bool pending) {
 
 void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bool pending) {
   struct slot *x = &c->slots[slot];
-  CHECK(set_of_slot(c, slot) == set_of_line(c, line) && !(x->flags & F_PENDING));
+  CHECK_EQ(set_of_slot(c, slot), set_of_line(c, line));
+  CHECK(!(x->flags & F_PENDING));
   if (!c->scan && (x->flags & F_VALID)) table_del(c, x->line);
   x->line = line;
   x->flags = F_VALID | (dirty ? F_DIRTY : 0) | (pending ? F_PENDING : 0);

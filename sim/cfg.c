@@ -51,7 +51,7 @@ struct loader {
 
 static uint32_t str_add(struct loader *L, const char *s, size_t len) {
   /* Bounded by the file size (each scalar and anchor is stored once). */
-  CHECK(L->str_len + len + 1 < PN_NONE);
+  CHECK_LT(L->str_len + len + 1, PN_NONE);
   if (L->str_len + len + 1 > L->str_cap) {
     while (L->str_len + len + 1 > L->str_cap) L->str_cap = L->str_cap ? 2 * L->str_cap : 4096;
     L->str = xrealloc(L->str, L->str_cap);
@@ -224,7 +224,7 @@ static bool on_event(struct loader *L, const yaml_event_t *ev, bool *done) {
   }
   case YAML_SEQUENCE_END_EVENT:
   case YAML_MAPPING_END_EVENT: {
-    CHECK(L->depth > 0);
+    CHECK_GT(L->depth, 0);
     uint32_t i = L->stack[--L->depth];
     L->pool[i].open = false;
     child_done(L, i);
@@ -295,7 +295,7 @@ static bool build(const struct loader *L, uint32_t i, struct cfg_node *out, stru
       /* A key keeps where it is written, even an alias: it locates the entry. */
       const struct pnode *kw = &L->pool[c];
       const struct pnode *key = kw->kind == PN_ALIAS ? &L->pool[kw->target] : kw;
-      CHECK(key->kind == CFG_SCALAR); /* the first pass refused other keys */
+      CHECK_EQ(key->kind, CFG_SCALAR); /* the first pass refused other keys */
       v->key = L->d->strings + key->text;
       v->key_line = kw->line;
       v->key_col = kw->col;

@@ -9,12 +9,12 @@
 #include <string.h>
 
 #include "sim/err.h"
+#include "sim/outfile.h"
 
 enum { DIN_BUF_BYTES = 1 << 16, DIN_RECORD_MAX = 2 + 16 + 1 };
 
 struct din_writer {
-  FILE *f;
-  char *path, *tmp;
+  struct outfile out;
   unsigned lg2_line;
   int write_errno; /* first write error, 0 if none */
   uint64_t records;
@@ -23,28 +23,19 @@ struct din_writer {
 };
 
 static void writer_flush(struct din_writer *w) {
-  if (w->used && !w->write_errno && fwrite(w->buf, 1, w->used, w->f) != w->used)
+  if (w->used && !w->write_errno && fwrite(w->buf, 1, w->used, w->out.f) != w->used)
     w->write_errno = errno ? errno : EIO;
   w->used = 0;
 }
 
 struct din_writer *din_writer_open(const char *path, unsigned lg2_line, struct err *e) {
-  CHECK(lg2_line >= 2 && lg2_line <= 20);
-  size_t n = strlen(path);
-  char *tmp = xmalloc(n + 5);
-  memcpy(tmp, path, n);
-  memcpy(tmp + n, ".tmp", 5);
-  FILE *f = fopen(tmp, "wb");
-  if (!f) {
-    err_set(e, path, 0, 0, "cannot create din trace: %s", strerror(errno));
-    free(tmp);
+  CHECK_GE(lg2_line, 2);
+  CHECK_LE(lg2_line, 20);
+  struct din_writer *w = xcalloc(1, sizeof *w);
+  if (!outfile_open(&w->out, path, "din trace", e)) {
+    free(w);
     return NULL;
   }
-  struct din_writer *w = xcalloc(1, sizeof *w);
-  w->f = f;
-  w->tmp = tmp;
-  w->path = xmalloc(n + 1);
-  memcpy(w->path, path, n + 1);
   w->lg2_line = lg2_line;
   return w;
 }
@@ -68,9 +59,9 @@ void din_writer_record(struct din_writer *w, uint64_t addr, bool is_store) {
 }
 
 void din_writer_access(struct din_writer *w, uint64_t addr, uint32_t size_bytes, bool is_store) {
-  CHECK(size_bytes > 0);
+  CHECK_GT(size_bytes, 0);
   uint64_t last = addr + (size_bytes - 1);
-  CHECK(last >= addr); /* no wrap past 2^64 */
+  CHECK_GE(last, addr); /* no wrap past 2^64 */
   uint64_t line = addr >> w->lg2_line, end = last >> w->lg2_line;
   din_writer_record(w, addr, is_store);
   while (line != end) {
@@ -81,32 +72,25 @@ void din_writer_access(struct din_writer *w, uint64_t addr, uint32_t size_bytes,
 
 uint64_t din_writer_records(const struct din_writer *w) { return w->records; }
 
-static void writer_free(struct din_writer *w) {
-  free(w->path);
-  free(w->tmp);
-  free(w);
-}
-
 bool din_writer_close(struct din_writer *w, struct err *e) {
   if (!w) return true;
   writer_flush(w);
-  int code = w->write_errno;
-  if (fflush(w->f) != 0 && !code) code = errno ? errno : EIO;
-  if (fclose(w->f) != 0 && !code) code = errno ? errno : EIO;
-  if (!code && rename(w->tmp, w->path) != 0) code = errno ? errno : EIO;
-  if (code) {
-    remove(w->tmp);
-    err_set(e, w->path, 0, 0, "cannot write din trace: %s", strerror(code));
+  bool ok;
+  if (w->write_errno) {
+    err_set(e, w->out.path, 0, 0, "cannot write din trace: %s", strerror(w->write_errno));
+    outfile_abort(&w->out);
+    ok = false;
+  } else {
+    ok = outfile_commit(&w->out, e);
   }
-  writer_free(w);
-  return code == 0;
+  free(w);
+  return ok;
 }
 
 void din_writer_discard(struct din_writer *w) {
   if (!w) return;
-  fclose(w->f);
-  remove(w->tmp);
-  writer_free(w);
+  outfile_abort(&w->out);
+  free(w);
 }
 
 static int hex_value(int c) {

@@ -25,9 +25,9 @@ enum din_label {
 
 struct din_writer;
 
-/* Start a trace for path: records go to "<path>.tmp", renamed to path by a
- * successful din_writer_close. Lines are 2^lg2_line bytes (2 <= lg2_line <= 20).
- * NULL with e set (file = path) when the file cannot be created. */
+/* Start a trace for path: records go to a temporary beside it (outfile.h),
+ * renamed to path by a successful din_writer_close. Lines are 2^lg2_line
+ * bytes (2 <= lg2_line <= 20). NULL with e set (file = path) when the file cannot be created. */
 struct din_writer *din_writer_open(const char *path, unsigned lg2_line, struct err *e);
 
 /* One record at addr (label 1 if is_store else 0). */

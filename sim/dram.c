@@ -45,7 +45,7 @@ static void sweep_to(struct dram *d, uint64_t x) {
       if (d->occ > d->st.fifo_max) d->st.fifo_max = (uint32_t)d->occ;
     } else {
       /* The head starts: it entered no later than it started. */
-      CHECK(d->sw_e > 0);
+      CHECK_GT(d->sw_e, 0);
       d->sw_lo++;
       d->sw_n--;
       d->sw_e--;
@@ -106,7 +106,8 @@ void dram_destroy(struct dram *d) {
 void dram_submit(struct dram *d, uint64_t at, uint64_t addr, uint32_t bytes, bool write,
                  struct dram_timing *out) {
   (void)addr;
-  CHECK(at >= d->last_arrival && at < (1ull << (64 - DRAM_TICK_BITS - 1)));
+  CHECK_GE(at, d->last_arrival);
+  CHECK_LT(at, (1ull << (64 - DRAM_TICK_BITS - 1)));
   d->last_arrival = at;
   uint64_t arrive = at << DRAM_TICK_BITS;
   sweep_to(d, arrive);

@@ -122,7 +122,7 @@ static void migrate(struct engine *e) {
 }
 
 void engine_at(struct engine *e, uint64_t at, engine_fn fn, void *ctx, uint64_t arg) {
-  CHECK(at >= e->now);
+  CHECK_GE(at, e->now);
   uint32_t n = node_new(e);
   struct node *x = &e->nodes[n];
   x->at = at;

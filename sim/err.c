@@ -35,6 +35,26 @@ void err_check_failed(const char *file, int line, const char *expr) {
   abort();
 }
 
+static void print_value(const char *expr, struct err_value v) {
+  fprintf(stderr, "%s = ", expr);
+  switch (v.kind) {
+  case ERR_VALUE_SIGNED: fprintf(stderr, "%lld", v.i); break;
+  case ERR_VALUE_UNSIGNED: fprintf(stderr, "%llu", v.u); break;
+  case ERR_VALUE_FLOAT: fprintf(stderr, "%.17Lg", v.f); break;
+  case ERR_VALUE_POINTER: fprintf(stderr, "%p", (const void *)v.p); break;
+  }
+}
+
+void err_check_op_failed(const char *file, int line, const char *a, const char *op, const char *b,
+                         struct err_value va, struct err_value vb) {
+  fprintf(stderr, "%s:%d: internal error: CHECK(%s %s %s) failed: ", file, line, a, op, b);
+  print_value(a, va);
+  fputs(", ", stderr);
+  print_value(b, vb);
+  fputc('\n', stderr);
+  abort();
+}
+
 static void *oom(unsigned long long size) {
   fprintf(stderr, "rtsim: out of memory allocating %llu bytes\n", size);
   abort();

@@ -162,11 +162,12 @@ static inline void count_evictions(struct lru_stack *ls, unsigned d, unsigned s,
   }
 }
 
-void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsigned cls) {
-  CHECK(cls < MEM_CLASS_MAX && op <= LRU_WRITE_LINE);
-  const bool is_store = op != LRU_READ;
+void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_stack_op op, unsigned cls) {
+  CHECK_LT(cls, MEM_CLASS_MAX);
+  CHECK_LE(op, LRU_STACK_WRITE_LINE);
+  const bool is_store = op != LRU_STACK_READ;
   /* Misses are counted in hist: a whole-line store never fetches. */
-  const unsigned fetch = op != LRU_WRITE_LINE;
+  const unsigned fetch = op != LRU_STACK_WRITE_LINE;
   ls->accesses[cls]++;
   ls->stores[cls] += is_store;
   ls->total++;
@@ -243,7 +244,7 @@ void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsig
 }
 
 void lru_stack_count_repeats(struct lru_stack *ls, unsigned cls, uint64_t loads, uint64_t stores) {
-  CHECK(cls < MEM_CLASS_MAX);
+  CHECK_LT(cls, MEM_CLASS_MAX);
   /* NOTE: hist[0] (hits in every size) is left alone: no result reads it. */
   ls->accesses[cls] += loads + stores;
   ls->stores[cls] += stores;
@@ -273,18 +274,20 @@ static void refresh_snapshot(struct lru_stack *ls) {
 unsigned lru_stack_size_count(const struct lru_stack *ls) { return ls->nsz; }
 
 uint64_t lru_stack_misses(const struct lru_stack *ls, unsigned size_index, unsigned cls) {
-  CHECK(size_index < ls->nsz && cls < MEM_CLASS_MAX);
+  CHECK_LT(size_index, ls->nsz);
+  CHECK_LT(cls, MEM_CLASS_MAX);
   uint64_t m = 0;
   for (unsigned s = size_index + 1; s <= ls->nsz; s++) m += ls->hist[s][cls];
   return m;
 }
 
 uint64_t lru_stack_writebacks(struct lru_stack *ls, unsigned size_index, unsigned cls) {
-  CHECK(size_index < ls->nsz && cls < MEM_CLASS_MAX);
+  CHECK_LT(size_index, ls->nsz);
+  CHECK_LT(cls, MEM_CLASS_MAX);
   refresh_snapshot(ls);
   int64_t w = 0;
   for (unsigned i = 0; i <= size_index; i++) w += ls->wbdiff[i][cls];
-  CHECK(w >= 0);
+  CHECK_GE(w, 0);
   return (uint64_t)w + ls->pending_wb[size_index][cls];
 }
 
@@ -315,29 +318,32 @@ void lru_stack_check_invariants(const struct lru_stack *ls) {
   uint32_t depth = 0, prev = 0;
   for (uint32_t p = nd[0].next; p != 0; p = nd[p].next) {
     depth++;
-    CHECK(depth <= ls->count);
-    CHECK(nd[p].prev == prev);
+    CHECK_LE(depth, ls->count);
+    CHECK_EQ(nd[p].prev, prev);
     unsigned s = 0;
     while (ls->cap[s] < depth) s++;
-    CHECK(nd[p].seg == s);
-    CHECK(nd[p].dfrom <= ls->nsz);
-    CHECK(nd[p].cls < MEM_CLASS_MAX);
-    if (depth == ls->cap[s]) CHECK(ls->bound[s] == p);
+    CHECK_EQ(nd[p].seg, s);
+    CHECK_LE(nd[p].dfrom, ls->nsz);
+    CHECK_LT(nd[p].cls, MEM_CLASS_MAX);
+    if (depth == ls->cap[s]) CHECK_EQ(ls->bound[s], p);
     /* The slot names this node and is reachable from the line's home slot. */
-    CHECK(nd[p].slot <= ls->mask && ls->slot[nd[p].slot] == p);
+    CHECK_LE(nd[p].slot, ls->mask);
+    CHECK_EQ(ls->slot[nd[p].slot], p);
     uint64_t line = nd[p].line;
-    if (depth == 1) CHECK(line == ls->top_line);
-    for (uint64_t h = slot_of(ls, line); h != nd[p].slot; h = (h + 1) & ls->mask)
-      CHECK(ls->slot[h] != 0 && nd[ls->slot[h]].line != line);
+    if (depth == 1) CHECK_EQ(line, ls->top_line);
+    for (uint64_t h = slot_of(ls, line); h != nd[p].slot; h = (h + 1) & ls->mask) {
+      CHECK_NE(ls->slot[h], 0);
+      CHECK_NE(nd[ls->slot[h]].line, line);
+    }
     prev = p;
   }
-  CHECK(depth == ls->count);
-  CHECK(nd[0].prev == prev);
+  CHECK_EQ(depth, ls->count);
+  CHECK_EQ(nd[0].prev, prev);
   for (unsigned i = 0; i < ls->nsz; i++)
-    if (ls->cap[i] > ls->count) CHECK(ls->bound[i] == 0);
+    if (ls->cap[i] > ls->count) CHECK_EQ(ls->bound[i], 0);
   uint64_t used = 0;
   for (uint64_t h = 0; h <= ls->mask; h++) used += ls->slot[h] != 0;
-  CHECK(used == ls->count);
+  CHECK_EQ(used, ls->count);
 }
 
 /* splitmix64: the benchmark's own RNG state, passed explicitly. */
@@ -381,7 +387,8 @@ double lru_stack_bench(uint64_t accesses, uint64_t seed) {
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     for (uint64_t k = 0; k < n; k++)
-      lru_stack_access(ls, buf[k] >> 4, (enum lru_op)((buf[k] >> 3) & 1), (unsigned)(buf[k] & 7));
+      lru_stack_access(ls, buf[k] >> 4, (enum lru_stack_op)((buf[k] >> 3) & 1),
+                       (unsigned)(buf[k] & 7));
     clock_gettime(CLOCK_MONOTONIC, &t1);
     seconds += (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     done += n;

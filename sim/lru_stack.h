@@ -37,10 +37,10 @@ struct lru_stack_params lru_stack_params_default(void);
 const char *lru_stack_params_problem(const struct lru_stack_params *p);
 
 /* What an access does to its line. */
-enum lru_op {
-  LRU_READ = 0,       /* load: a miss fetches the line */
-  LRU_WRITE = 1,      /* store to part of the line: a miss fetches it first */
-  LRU_WRITE_LINE = 2  /* store of the whole line: a miss allocates, no fetch */
+enum lru_stack_op {
+  LRU_STACK_READ = 0,       /* load: a miss fetches the line */
+  LRU_STACK_WRITE = 1,      /* store to part of the line: a miss fetches it first */
+  LRU_STACK_WRITE_LINE = 2  /* store of the whole line: a miss allocates, no fetch */
 };
 
 struct lru_stack;
@@ -54,7 +54,7 @@ void lru_stack_destroy(struct lru_stack *ls); /* NULL ok */
  * 64-bit value; the caller splits multi-line requests (mem_functional does).
  * cls < MEM_CLASS_MAX (CHECKed). Cost: O(1) for a repeat of the most recent
  * line; else one hash probe, a list move and one step per size that misses. */
-void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_op op, unsigned cls);
+void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_stack_op op, unsigned cls);
 
 /* Count, without passing them one by one, `loads` + `stores` accesses of class
  * cls that the caller filtered out because each repeated the most recent line
@@ -77,8 +77,8 @@ struct lru_stack_size_stats {
   uint64_t capacity_bytes;
   uint64_t accesses[MEM_CLASS_MAX]; /* line accesses, by class of the access */
   uint64_t stores[MEM_CLASS_MAX];   /* of which stores */
-  /* Lines fetched from DRAM, by class of the access that missed (LRU_READ or
-   * LRU_WRITE; an LRU_WRITE_LINE miss fetches nothing and is not counted). */
+  /* Lines fetched from DRAM, by class of the access that missed (LRU_STACK_READ or
+   * LRU_STACK_WRITE; an LRU_STACK_WRITE_LINE miss fetches nothing and is not counted). */
   uint64_t misses[MEM_CLASS_MAX];
   /* Dirty lines evicted (written back), by class of the line's last access. */
   uint64_t writebacks[MEM_CLASS_MAX];

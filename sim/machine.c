@@ -129,12 +129,13 @@ static double *tl_row(struct machine *m, uint64_t w) {
     /* Coarsen: windows double, pairs of rows merge. */
     uint64_t half = (m->tl_rows + 1) / 2;
     for (uint64_t i = 0; i < half; i++)
-      for (unsigned c = 0; c < MTL_COLS; c++) {
-        double b = 2 * i + 1 < m->tl_rows ? m->tl[(2 * i + 1) * MTL_COLS + c] : 0.0;
-        m->tl[i * MTL_COLS + c] = m->tl[2 * i * MTL_COLS + c] + b;
+      for (unsigned c = 0; c < MACHINE_TL_COLS; c++) {
+        double b = 2 * i + 1 < m->tl_rows ? m->tl[(2 * i + 1) * MACHINE_TL_COLS + c] : 0.0;
+        m->tl[i * MACHINE_TL_COLS + c] = m->tl[2 * i * MACHINE_TL_COLS + c] + b;
       }
     if (m->tl_rows > half) /* (an empty timeline has no array yet) */
-      memset(m->tl + half * MTL_COLS, 0, (m->tl_rows - half) * MTL_COLS * sizeof *m->tl);
+      memset(m->tl + half * MACHINE_TL_COLS, 0,
+             (m->tl_rows - half) * MACHINE_TL_COLS * sizeof *m->tl);
     m->tl_rows = half;
     m->tl_window *= 2;
     w /= 2;
@@ -143,12 +144,13 @@ static double *tl_row(struct machine *m, uint64_t w) {
     uint64_t cap = m->tl_cap ? m->tl_cap : 256;
     while (cap <= w) cap *= 2;
     if (cap > MACHINE_TL_MAX_ROWS) cap = MACHINE_TL_MAX_ROWS;
-    m->tl = xrealloc(m->tl, cap * MTL_COLS * sizeof *m->tl);
-    memset(m->tl + m->tl_cap * MTL_COLS, 0, (cap - m->tl_cap) * MTL_COLS * sizeof *m->tl);
+    m->tl = xrealloc(m->tl, cap * MACHINE_TL_COLS * sizeof *m->tl);
+    memset(m->tl + m->tl_cap * MACHINE_TL_COLS, 0,
+           (cap - m->tl_cap) * MACHINE_TL_COLS * sizeof *m->tl);
     m->tl_cap = cap;
   }
   if (w >= m->tl_rows) m->tl_rows = w + 1;
-  return m->tl + w * MTL_COLS;
+  return m->tl + w * MACHINE_TL_COLS;
 }
 
 /* Add amount at cycle t. */
@@ -187,7 +189,7 @@ static void th_account(struct machine *m, struct mthread *th, uint64_t t) {
   switch (th->state) {
   case TH_BUSY:
     m->st.thread_busy_cycles += d;
-    tl_span(m, MTL_BUSY_THREAD_CYCLES, th->since, t, 1.0);
+    tl_span(m, MACHINE_TL_BUSY_THREAD_CYCLES, th->since, t, 1.0);
     break;
   case TH_WAIT: m->st.thread_wait_cycles += d; break;
   default: m->st.thread_done_cycles += d; break;
@@ -287,7 +289,7 @@ static void line_done(struct machine *m, struct mctx *c, uint64_t line, uint64_t
     else cache_touch(l1, s);
   }
   m->loads_back++;
-  CHECK(c->pending > 0);
+  CHECK_GT(c->pending, 0);
   if (--c->pending == 0) {
     hist_add(&m->st.load_latency, t - c->wait_from);
     ray_ready(m, c, t);
@@ -319,7 +321,7 @@ static bool l2_try(struct machine *m, const struct req *r, uint64_t t) {
   uint64_t ready = start + m->p.l2_latency_cycles;
   m->st.l2_accesses++;
   m->st.l2_accesses_by_class[r->cls]++;
-  tl_point(m, MTL_L2_ACCESSES, start, 1.0);
+  tl_point(m, MACHINE_TL_L2_ACCESSES, start, 1.0);
   struct mctx *c = r->ctx == NONE ? NULL : &m->ctx[r->ctx];
   if (hit) {
     cache_touch(m->l2, slot);
@@ -350,7 +352,7 @@ static bool l2_try(struct machine *m, const struct req *r, uint64_t t) {
   m->st.l2_misses++;
   m->st.l2_fetch_bytes += LINE_BYTES;
   m->st.fetch_bytes_by_class[r->cls] += LINE_BYTES;
-  tl_point(m, MTL_L2_MISSES, start, 1.0);
+  tl_point(m, MACHINE_TL_L2_MISSES, start, 1.0);
   m->miss_cls[victim] = r->cls;
   m->waiters[victim] = NONE;
   if (c) {
@@ -401,7 +403,9 @@ static void ev_l2_access(void *ctx, uint64_t arg) {
 static void dram_account(struct machine *m, const struct dram_timing *tm, unsigned col, int cls) {
   hist_add(&m->st.queue_delay, tm->wait_cycles);
   tl_span_ticks(m, col, tm->start_ticks, tm->end_ticks, LINE_BYTES);
-  if (cls >= 0) tl_span_ticks(m, MTL_READ_CLASS0 + (unsigned)cls, tm->start_ticks, tm->end_ticks, LINE_BYTES);
+  if (cls >= 0)
+    tl_span_ticks(m, MACHINE_TL_READ_CLASS0 + (unsigned)cls, tm->start_ticks, tm->end_ticks,
+                  LINE_BYTES);
 }
 
 static void ev_fill(void *ctx, uint64_t slot);
@@ -411,7 +415,7 @@ static void ev_dram_read(void *ctx, uint64_t slot) {
   struct dram_timing tm;
   dram_submit(m->dram, engine_now(m->eng), cache_line(m->l2, (uint32_t)slot) << MACHINE_LG2_LINE,
               LINE_BYTES, false, &tm);
-  dram_account(m, &tm, MTL_DRAM_READ_BYTES, m->miss_cls[slot]);
+  dram_account(m, &tm, MACHINE_TL_DRAM_READ_BYTES, m->miss_cls[slot]);
   engine_at(m->eng, tm.done_cycle, ev_fill, m, slot);
 }
 
@@ -419,7 +423,7 @@ static void ev_dram_write(void *ctx, uint64_t line) {
   struct machine *m = ctx;
   struct dram_timing tm;
   dram_submit(m->dram, engine_now(m->eng), line << MACHINE_LG2_LINE, LINE_BYTES, true, &tm);
-  dram_account(m, &tm, MTL_DRAM_WRITE_BYTES, -1);
+  dram_account(m, &tm, MACHINE_TL_DRAM_WRITE_BYTES, -1);
 }
 
 static void ev_fill(void *ctx, uint64_t slot) {
@@ -511,7 +515,7 @@ static void ev_issue(void *ctx, uint64_t core) {
   m->st.blocks++;
   k->port_free = t + c->slots;
   m->st.issue_slots += c->slots;
-  tl_span(m, MTL_ISSUED_OPS, t, t + c->slots, 1.0);
+  tl_span(m, MACHINE_TL_ISSUED_OPS, t, t + c->slots, 1.0);
   if (coro_finished(c->co)) {
     c->state = CTX_DONE;
     if (m->painted_max < coro_stack_used(c->co)) m->painted_max = coro_stack_used(c->co);
@@ -521,7 +525,7 @@ static void ev_issue(void *ctx, uint64_t core) {
     th->live--;
     th_next(m, th, c->t);
   } else {
-    CHECK(c->state == CTX_WAIT);
+    CHECK_EQ(c->state, CTX_WAIT);
     th_next(m, th, c->t);
   }
   kick(m, (uint32_t)core);
@@ -540,7 +544,8 @@ static void t_compute(void *ctx, uint64_t cycles) {
 static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct mctx *c = ctx;
   struct machine *m = c->m;
-  CHECK(size > 0 && cls < MEM_CLASS_MAX);
+  CHECK_GT(size, 0);
+  CHECK_LT(cls, MEM_CLASS_MAX);
   c->t++;
   c->slots++;
   m->st.loads++;
@@ -576,7 +581,8 @@ static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
 static void t_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct mctx *c = ctx;
   struct machine *m = c->m;
-  CHECK(size > 0 && cls < MEM_CLASS_MAX);
+  CHECK_GT(size, 0);
+  CHECK_LT(cls, MEM_CLASS_MAX);
   c->t++;
   c->slots++;
   m->st.stores++;
@@ -717,9 +723,10 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   for (uint32_t i = 0; i < m->p.cores; i++) kick(m, i);
   engine_run(m->eng);
   /* Everything must be over: every ray returned, no miss outstanding. */
-  for (uint32_t i = 0; i < m->nctx; i++) CHECK(m->ctx[i].state == CTX_DONE);
-  CHECK(m->mshr_used == 0 && m->stall_head == NONE);
-  CHECK(m->loads_out == m->loads_back);
+  for (uint32_t i = 0; i < m->nctx; i++) CHECK_EQ(m->ctx[i].state, CTX_DONE);
+  CHECK_EQ(m->mshr_used, 0);
+  CHECK_EQ(m->stall_head, NONE);
+  CHECK_EQ(m->loads_out, m->loads_back);
   dram_finish(m->dram);
   const struct dram_stats *ds = dram_get_stats(m->dram);
   /* The end: the last event, the last block's last cycle (blocks run ahead
@@ -730,7 +737,7 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   for (uint32_t t = 0; t < m->nth; t++)
     if (m->th[t].since > end) end = m->th[t].since;
   for (uint32_t t = 0; t < m->nth; t++) {
-    CHECK(m->th[t].state == TH_DONE);
+    CHECK_EQ(m->th[t].state, TH_DONE);
     th_account(m, &m->th[t], end);
   }
   struct machine_stats *st = &m->st;
@@ -746,10 +753,10 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   st->dram_fifo_max = ds->fifo_max;
   st->events = engine_events(m->eng);
   /* Conservation: bytes asked of DRAM are the bytes it moved. */
-  CHECK(st->dram_read_bytes == st->l2_fetch_bytes);
-  CHECK(st->dram_write_bytes == st->l2_writeback_bytes);
-  CHECK(st->thread_busy_cycles + st->thread_wait_cycles + st->thread_done_cycles ==
-        (uint64_t)m->nth * end);
+  CHECK_EQ(st->dram_read_bytes, st->l2_fetch_bytes);
+  CHECK_EQ(st->dram_write_bytes, st->l2_writeback_bytes);
+  CHECK_EQ(st->thread_busy_cycles + st->thread_wait_cycles + st->thread_done_cycles,
+           (uint64_t)m->nth * end);
   /* The timeline covers the whole run. */
   if (end > 0) tl_row(m, (end - 1) / m->tl_window);
 }
@@ -758,6 +765,6 @@ const struct machine_stats *machine_get_stats(const struct machine *m) { return 
 uint64_t machine_timeline_window(const struct machine *m) { return m->tl_window; }
 uint64_t machine_timeline_rows(const struct machine *m) { return m->tl_rows; }
 const double *machine_timeline_row(const struct machine *m, uint64_t i) {
-  CHECK(i < m->tl_rows);
-  return m->tl + i * MTL_COLS;
+  CHECK_LT(i, m->tl_rows);
+  return m->tl + i * MACHINE_TL_COLS;
 }

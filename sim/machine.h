@@ -32,7 +32,7 @@
 #include <stdint.h>
 
 #include "sim/mem.h"
-#include "sim/stats.h"
+#include "sim/hist.h"
 
 #define MACHINE_LG2_LINE 6 /* 64-byte lines everywhere */
 
@@ -56,14 +56,14 @@ struct machine_params {
 
 /* Columns of a timeline row (values are per window; see machine.c). */
 enum machine_tl_col {
-  MTL_DRAM_READ_BYTES,
-  MTL_DRAM_WRITE_BYTES,
-  MTL_READ_CLASS0, /* MEM_CLASS_MAX columns: read bytes by class */
-  MTL_L2_ACCESSES = MTL_READ_CLASS0 + MEM_CLASS_MAX,
-  MTL_L2_MISSES,
-  MTL_ISSUED_OPS,
-  MTL_BUSY_THREAD_CYCLES,
-  MTL_COLS
+  MACHINE_TL_DRAM_READ_BYTES,
+  MACHINE_TL_DRAM_WRITE_BYTES,
+  MACHINE_TL_READ_CLASS0, /* MEM_CLASS_MAX columns: read bytes by class */
+  MACHINE_TL_L2_ACCESSES = MACHINE_TL_READ_CLASS0 + MEM_CLASS_MAX,
+  MACHINE_TL_L2_MISSES,
+  MACHINE_TL_ISSUED_OPS,
+  MACHINE_TL_BUSY_THREAD_CYCLES,
+  MACHINE_TL_COLS
 };
 #define MACHINE_TL_MAX_ROWS 4096u
 
@@ -127,7 +127,8 @@ const struct machine_stats *machine_get_stats(const struct machine *m);
  * double when a run would need more than MACHINE_TL_MAX_ROWS). */
 uint64_t machine_timeline_window(const struct machine *m);
 uint64_t machine_timeline_rows(const struct machine *m);
-const double *machine_timeline_row(const struct machine *m, uint64_t i); /* MTL_COLS values */
+/* Row i: MACHINE_TL_COLS values. */
+const double *machine_timeline_row(const struct machine *m, uint64_t i);
 
 /* The deepest coroutine stack use seen, in bytes (painted stacks only: set
  * paint with machine_create_painted; else 0). */

@@ -207,7 +207,7 @@ int machine_cfg_find(const char *name) {
 
 bool machine_cfg_set_at(struct machine_cfg *c, unsigned i, const char *value, const char *file,
                         int line, int col, struct err *e) {
-  CHECK(i < MACHINE_CFG_KEYS);
+  CHECK_LT(i, MACHINE_CFG_KEYS);
   /* The value goes through the same typed reader as a file's. */
   struct cfg_doc d;
   memset(&d, 0, sizeof d);
@@ -240,7 +240,7 @@ bool machine_cfg_set(struct machine_cfg *c, const char *assignment, struct err *
 
 static unsigned key_index(const char *name) {
   int i = machine_cfg_find(name);
-  CHECK(i >= 0);
+  CHECK_GE(i, 0);
   return (unsigned)i;
 }
 
@@ -320,9 +320,9 @@ void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *in
     char v[64];
     machine_cfg_value(c, i, v, sizeof v);
     fprintf(f, "%s%s", i ? ",\n" : "", indent);
-    json_write_str(f, KEYS[i].name);
+    stats_write_json_str(f, KEYS[i].name);
     fputs(": ", f);
-    if (!strcmp(v, "full")) json_write_str(f, v);
+    if (!strcmp(v, "full")) stats_write_json_str(f, v);
     else fputs(v, f);
   }
 }

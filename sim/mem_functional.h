@@ -13,30 +13,31 @@
 struct din_writer;
 
 /* What the renderer asked for, by data class (requests, not lines). */
-struct fn_backend_stats {
+struct mem_functional_stats {
   uint64_t loads[MEM_CLASS_MAX], stores[MEM_CLASS_MAX]; /* requests */
   uint64_t bytes_loaded[MEM_CLASS_MAX], bytes_stored[MEM_CLASS_MAX];
   uint64_t line_accesses[MEM_CLASS_MAX]; /* lines touched, = analyser accesses */
 };
 
-struct fn_backend;
+struct mem_functional;
 
 /* Create a backend with a fresh analyser of geometry p (must pass
  * lru_stack_params_problem; CHECKed). din is borrowed and may be NULL: the
  * caller closes it after the run; records go one per line of p->lg2_line.
  * Caller destroys. */
-struct fn_backend *fn_backend_create(const struct lru_stack_params *p, struct din_writer *din);
-void fn_backend_destroy(struct fn_backend *b); /* NULL ok; does not touch din */
+struct mem_functional *mem_functional_create(const struct lru_stack_params *p,
+                                             struct din_writer *din);
+void mem_functional_destroy(struct mem_functional *b); /* NULL ok; does not touch din */
 
 /* The port the renderer calls through; valid while b lives. */
-struct mem_port fn_backend_port(struct fn_backend *b);
+struct mem_port mem_functional_port(struct mem_functional *b);
 
 /* The analyser (borrowed), after the run: call lru_stack_finish and read
  * results. Accesses that repeat the last line without changing its state skip
  * the analyser and are counted here; this call hands those counts over, so
  * call it again after any further access before reading results. */
-struct lru_stack *fn_backend_stack(struct fn_backend *b);
+struct lru_stack *mem_functional_stack(struct mem_functional *b);
 
-const struct fn_backend_stats *fn_backend_stats(const struct fn_backend *b);
+const struct mem_functional_stats *mem_functional_get_stats(const struct mem_functional *b);
 
 #endif

@@ -1,4 +1,4 @@
-/* Histograms and scalar tables. */
+/* Tables of named scalars and their CSV and JSON forms. */
 #include "sim/stats.h"
 
 #include <math.h>
@@ -7,67 +7,8 @@
 
 #include "sim/err.h"
 
-static unsigned bucket_of(uint64_t v) {
-  if (v < HIST_EXACT) return (unsigned)v;
-  unsigned e = 63u - (unsigned)__builtin_clzll(v); /* >= 6 */
-  unsigned sub = (unsigned)(v >> (e - 3)) & 7u;
-  return HIST_EXACT + (e - 6u) * 8u + sub;
-}
-
-void hist_bucket_range(unsigned i, uint64_t *lo, uint64_t *hi) {
-  if (i < HIST_EXACT) {
-    *lo = *hi = i;
-    return;
-  }
-  unsigned e = (i - HIST_EXACT) / 8u + 6u, sub = (i - HIST_EXACT) % 8u;
-  uint64_t w = 1ull << (e - 3);
-  *lo = (1ull << e) + sub * w;
-  *hi = *lo + (w - 1);
-}
-
-void hist_add(struct hist *h, uint64_t v) {
-  h->count++;
-  h->sum += v;
-  if (v > h->max) h->max = v;
-  h->bucket[bucket_of(v)]++;
-}
-
-uint64_t hist_quantile(const struct hist *h, double q) {
-  if (h->count == 0) return 0;
-  uint64_t need = (uint64_t)ceil(q * (double)h->count);
-  if (need < 1) need = 1;
-  uint64_t seen = 0;
-  for (unsigned i = 0; i < HIST_BUCKETS; i++) {
-    seen += h->bucket[i];
-    if (seen >= need) {
-      uint64_t lo, hi;
-      hist_bucket_range(i, &lo, &hi);
-      return hi < h->max ? hi : h->max;
-    }
-  }
-  return h->max;
-}
-
-double hist_mean(const struct hist *h) {
-  return h->count ? (double)h->sum / (double)h->count : 0.0;
-}
-
-void hist_write_json(const struct hist *h, FILE *f) {
-  fputc('[', f);
-  bool first = true;
-  for (unsigned i = 0; i < HIST_BUCKETS; i++) {
-    if (!h->bucket[i]) continue;
-    uint64_t lo, hi;
-    hist_bucket_range(i, &lo, &hi);
-    fprintf(f, "%s{\"lo\": %llu, \"hi\": %llu, \"count\": %llu}", first ? "" : ", ",
-            (unsigned long long)lo, (unsigned long long)hi, (unsigned long long)h->bucket[i]);
-    first = false;
-  }
-  fputc(']', f);
-}
-
 static struct stats_entry *add(struct stats_table *t, const char *name, enum stats_kind k) {
-  CHECK(strlen(name) < sizeof t->e[0].name);
+  CHECK_LT(strlen(name), sizeof t->e[0].name);
   if (t->n == t->cap) {
     t->cap = t->cap ? 2 * t->cap : 64;
     t->e = xrealloc(t->e, (unsigned long long)t->cap * sizeof *t->e);
@@ -96,7 +37,7 @@ void stats_fini(struct stats_table *t) {
   memset(t, 0, sizeof *t);
 }
 
-void json_write_f64(FILE *f, double v) {
+void stats_write_json_f64(FILE *f, double v) {
   char buf[64];
   for (int prec = 15; prec <= 17; prec++) {
     snprintf(buf, sizeof buf, "%.*g", prec, v);
@@ -106,7 +47,7 @@ void json_write_f64(FILE *f, double v) {
   fputs(buf, f);
 }
 
-void json_write_str(FILE *f, const char *s) {
+void stats_write_json_str(FILE *f, const char *s) {
   fputc('"', f);
   for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
     if (*p == '"' || *p == '\\') fprintf(f, "\\%c", *p);
@@ -132,7 +73,7 @@ void stats_write_csv_str(FILE *f, const char *s) {
 static void csv_value(const struct stats_entry *x, FILE *f) {
   switch (x->kind) {
   case STATS_U64: fprintf(f, "%llu", (unsigned long long)x->u); break;
-  case STATS_F64: json_write_f64(f, x->f); break;
+  case STATS_F64: stats_write_json_f64(f, x->f); break;
   case STATS_STR: stats_write_csv_str(f, x->s); break;
   }
 }
@@ -154,9 +95,9 @@ void stats_write_json_members(const struct stats_table *t, FILE *f, const char *
   for (unsigned i = 0; i < t->n; i++) {
     const struct stats_entry *x = &t->e[i];
     fprintf(f, "%s%s", i ? ",\n" : "", indent);
-    json_write_str(f, x->name);
+    stats_write_json_str(f, x->name);
     fputs(": ", f);
-    if (x->kind == STATS_STR) json_write_str(f, x->s);
+    if (x->kind == STATS_STR) stats_write_json_str(f, x->s);
     else csv_value(x, f);
   }
 }

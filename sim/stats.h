@@ -1,5 +1,5 @@
-/* Numbers a run reports: log-linear histograms of cycle counts, and a table of
- * named scalars written as one tidy CSV row or as JSON members. Names carry
+/* Numbers a run reports: a table of named scalars written as one tidy CSV row
+ * or as JSON members (histograms are in hist.h). Names carry
  * their units (_cycles, _bytes, _fraction); counters are integers, ratios are
  * computed once at the end. */
 #ifndef RTSIM_SIM_STATS_H
@@ -8,26 +8,6 @@
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
-
-/* Exact below 64; above, 8 buckets an octave (each at most 12.5% wide). */
-#define HIST_EXACT 64u
-#define HIST_BUCKETS (HIST_EXACT + 58u * 8u)
-
-struct hist {
-  uint64_t count, sum, max;
-  uint64_t bucket[HIST_BUCKETS];
-};
-
-void hist_add(struct hist *h, uint64_t v);
-/* Bucket i covers [lo, hi] (inclusive). */
-void hist_bucket_range(unsigned i, uint64_t *lo, uint64_t *hi);
-/* The upper edge of the bucket holding the q-quantile (0 < q <= 1) of the
- * values: exact below 64, at most 12.5% above the true quantile beyond. 0 when
- * empty. */
-uint64_t hist_quantile(const struct hist *h, double q);
-double hist_mean(const struct hist *h);
-/* JSON array of the non-empty buckets: [{"lo":L,"hi":H,"count":N},...]. */
-void hist_write_json(const struct hist *h, FILE *f);
 
 /* A table of scalars in insertion order. */
 enum stats_kind { STATS_U64, STATS_F64, STATS_STR };
@@ -59,8 +39,8 @@ void stats_write_csv_str(FILE *f, const char *s);
 void stats_write_json_members(const struct stats_table *t, FILE *f, const char *indent);
 
 /* A JSON string literal of s. */
-void json_write_str(FILE *f, const char *s);
+void stats_write_json_str(FILE *f, const char *s);
 /* A double as JSON (shortest form that reads back the same bits). */
-void json_write_f64(FILE *f, double v);
+void stats_write_json_f64(FILE *f, double v);
 
 #endif

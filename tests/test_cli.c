@@ -156,6 +156,13 @@ int main(void) {
       {"trace " SCN "good_room_tiny.yaml --din x.din --policy dynamic --rays primary --dyn-batch -3", "--dyn-batch: got '-3'"},
       {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --dyn-ray-buffer 1e3", "--dyn-ray-buffer: got '1e3', expected a whole number from 0 to 4294967296"},
       {"trace " SCN "good_room_tiny.yaml --din x.din --policy dynamic --rays primary --dyn-ray-buffer 99999999999", "--dyn-ray-buffer: got '99999999999'"},
+      {"trace " SCN "good_room_tiny.yaml --din x.din --policy packet --rays primary --cache 3000", "--cache: got '3000', expected a power of two from 1024 to 4194304"},
+      {"trace " SCN "good_room_tiny.yaml --din x.din --rays primary", "missing --policy"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --half=1", "rtsim render: error: option --half takes no value"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr -xo", "unknown option '-x'"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --seed -1", "--seed: got '-1', expected a whole number from 0 to 18446744073709551615"},
+      {"export " SCN "good_room_tiny.yaml " SCN "good_room_tiny.yaml -o x.ply", "expected one scene file, got 2"},
+      {"hits --rays primary", "unknown option '--rays'"},
   };
   for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {
     snprintf(cmd, sizeof cmd, "cd %s && %s %s", RTSIM_TMP, RTSIM_BINARY, usage[i].args);
@@ -172,11 +179,16 @@ int main(void) {
     }
   }
 
-  /* --help of every command succeeds and documents its options. */
-  static const char *const helps[] = {"render", "export", "hits", "bench", "traffic", "trace"};
-  for (size_t i = 0; i < 6; i++) {
+  /* --help and -h of every command succeed and print its own usage. */
+  static const char *const helps[] = {"render", "export", "hits",  "bench", "traffic",
+                                      "trace",  "run",    "sweep", "merge", "plot"};
+  for (size_t i = 0; i < sizeof helps / sizeof helps[0]; i++) {
+    char want[64];
+    snprintf(want, sizeof want, "usage: rtsim %s ", helps[i]);
     snprintf(cmd, sizeof cmd, "%s %s --help", RTSIM_BINARY, helps[i]);
-    EXPECT(testing_run(cmd, out, sizeof out) == 0 && strstr(out, "usage: rtsim") != NULL);
+    EXPECTF(testing_run(cmd, out, sizeof out) == 0 && strstr(out, want) == out, "%s", cmd);
+    snprintf(cmd, sizeof cmd, "%s %s -h", RTSIM_BINARY, helps[i]);
+    EXPECTF(testing_run(cmd, out, sizeof out) == 0 && strstr(out, want) == out, "%s", cmd);
   }
 
   /* hits: malformed CSV is reported at <stdin>:line:col. */

@@ -75,7 +75,7 @@ static void sink_init(struct sink *s) {
 
 static void sink_line(struct sink *s, uint64_t addr, int store) {
   nv_access(&s->nv, addr >> 6, store);
-  lru_stack_access(s->ls, addr >> 6, store ? LRU_WRITE_LINE : LRU_READ, 0);
+  lru_stack_access(s->ls, addr >> 6, store ? LRU_STACK_WRITE_LINE : LRU_STACK_READ, 0);
 }
 
 static void on_record(void *ctx, unsigned label, uint64_t addr) {
@@ -149,9 +149,7 @@ static void test_exact_text(void) {
                      "0 abcdef\n";
   const char *got = slurp(path);
   EXPECTF(got && strcmp(got, want) == 0, "din text:\n%s", got ? got : "(missing)");
-  char tmp[512];
-  snprintf(tmp, sizeof tmp, "%s.tmp", path);
-  EXPECT(!file_exists(tmp));
+  EXPECT(testing_temps_of(path) == 0);
   EXPECT(din_writer_close(NULL, &e));
 }
 
@@ -199,8 +197,8 @@ static void test_backend_trace(void) {
   EXPECT(w != NULL);
   if (!w) return;
   struct lru_stack_params p = {6, 6, 12};
-  struct fn_backend *b = fn_backend_create(&p, w);
-  struct mem_port port = fn_backend_port(b);
+  struct mem_functional *b = mem_functional_create(&p, w);
+  struct mem_port port = mem_functional_port(b);
   uint64_t rng = 11;
   for (int k = 0; k < 30000; k++) {
     uint64_t r = rng_next(&rng);
@@ -216,7 +214,8 @@ static void test_backend_trace(void) {
   /* A line access is one record, or two (read, write) for a store to part of
    * a line. */
   uint64_t lines = 0, records = din_writer_records(w);
-  for (unsigned c = 0; c < MEM_CLASS_MAX; c++) lines += fn_backend_stats(b)->line_accesses[c];
+  for (unsigned c = 0; c < MEM_CLASS_MAX; c++)
+    lines += mem_functional_get_stats(b)->line_accesses[c];
   EXPECTF(records > lines && records < 2 * lines, "%llu records for %llu line accesses",
           (unsigned long long)records, (unsigned long long)lines);
   EXPECT(din_writer_close(w, &e));
@@ -224,7 +223,7 @@ static void test_backend_trace(void) {
   sink_init(&replay);
   EXPECT(din_read_file(path, on_record, &replay, NULL, &e));
   EXPECT(replay.records == records);
-  struct lru_stack *ls = fn_backend_stack(b);
+  struct lru_stack *ls = mem_functional_stack(b);
   struct lru_stack_results r;
   lru_stack_get_results(ls, &r);
   for (unsigned i = 0; i < NV_SIZES; i++) {
@@ -238,7 +237,7 @@ static void test_backend_trace(void) {
     EXPECT(m == lru_stack_misses(replay.ls, i, 0));
     EXPECT(wb == replay.nv.c[i].wb);
   }
-  fn_backend_destroy(b);
+  mem_functional_destroy(b);
   lru_stack_destroy(replay.ls);
 }
 
@@ -329,9 +328,7 @@ static void test_write_failures(void) {
   struct din_writer *w = din_writer_open(path, 6, &e);
   EXPECT(w == NULL);
   EXPECT(e.set && strcmp(e.file, path) == 0 && strstr(e.msg, "cannot create"));
-  char tmp[512];
-  snprintf(tmp, sizeof tmp, "%s.tmp", path);
-  EXPECT(!file_exists(path) && !file_exists(tmp));
+  EXPECT(!file_exists(path));
 
   /* Abandoned: no file, no temporary; an earlier complete trace survives. */
   const char *keep = RTSIM_TMP "/test_din_keep.din";
@@ -349,8 +346,7 @@ static void test_write_failures(void) {
     din_writer_access(w, 128, 1, false);
     din_writer_discard(w);
   }
-  snprintf(tmp, sizeof tmp, "%s.tmp", keep);
-  EXPECT(!file_exists(tmp));
+  EXPECT(testing_temps_of(keep) == 0);
   const char *got = slurp(keep);
   EXPECT(got && strcmp(got, "1 40\n") == 0);
   din_writer_discard(NULL);

@@ -448,7 +448,7 @@ static struct ray make_test_ray(struct rng *g, const struct scene *s, const stru
   return r;
 }
 
-static struct ray_result result_of(bool hit, const struct hit *h, bool any) {
+static struct ray_result result_of(bool hit, const struct trace_hit *h, bool any) {
   struct ray_result res;
   res.prim = hit ? h->prim : -1;
   res.t = hit ? fbits(h->t) : 0;
@@ -466,15 +466,15 @@ static int check_rays(const char *name, const struct scene *s, struct kd_tree *k
   int *saxes;
   uint32_t nsplit;
   split_values(kd, &svals, &saxes, &nsplit);
-  struct tracer tr;
-  tracer_init(&tr, s, kd, mem_port_native(), NULL);
+  struct trace_ctx tr;
+  trace_init(&tr, s, kd, mem_port_native(), NULL);
   struct rng g = rng_make(seed, 4);
   struct ray *rays = malloc((size_t)nrays * sizeof *rays);
   struct ray_result *res = malloc((size_t)nrays * sizeof *res);
   int mism = 0, any_mism = 0, hits = 0;
   for (int i = 0; i < nrays; i++) {
     rays[i] = make_test_ray(&g, s, kd, svals, saxes, nsplit, i);
-    struct hit hb, ht;
+    struct trace_hit hb, ht;
     bool bb = trace_brute(s, &rays[i], &hb);
     bool bt = trace_closest(&tr, &rays[i], &ht);
     bool ba = trace_any(&tr, &rays[i]);
@@ -501,7 +501,7 @@ static int check_rays(const char *name, const struct scene *s, struct kd_tree *k
   for (uint32_t i = 0; i < kd->node_count; i++) kd_set_queue_point(&kd->nodes[i], true);
   int qmism = 0;
   for (int i = 0; i < nrays; i++) {
-    struct hit h;
+    struct trace_hit h;
     bool b = trace_closest(&tr, &rays[i], &h);
     struct ray_result r = result_of(b, &h, trace_any(&tr, &rays[i]));
     if (r.prim != res[i].prim || r.t != res[i].t || r.b1 != res[i].b1 || r.b2 != res[i].b2 ||
@@ -563,21 +563,21 @@ static void test_small_cases(void) {
   kd_build(&kd, &s, &bp);
   EXPECT(kd.node_count == 1 && kd_is_leaf(kd.nodes[0]) && kd_leaf_count(kd.nodes[0]) == 0);
   EXPECT(kd.stats.nodes == 1 && kd.stats.leaves == 1 && kd.stats.empty_leaves == 1);
-  struct tracer tr;
-  tracer_init(&tr, &s, &kd, mem_port_native(), NULL);
+  struct trace_ctx tr;
+  trace_init(&tr, &s, &kd, mem_port_native(), NULL);
   struct ray r;
   memset(&r, 0, sizeof r);
   r.d = v3(0, 0, 1);
   r.tmax = INFINITY;
   r.ignore_prim = -1;
-  struct hit h;
+  struct trace_hit h;
   EXPECT(!trace_closest(&tr, &r, &h) && h.prim == -1 && !trace_any(&tr, &r));
   kd_fini(&kd);
   /* One triangle. */
   scene_add_tri(&s, v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0), NULL, 0);
   kd_build(&kd, &s, &bp);
   EXPECT(kd.node_count == 1 && kd_leaf_count(kd.nodes[0]) == 1);
-  tracer_init(&tr, &s, &kd, mem_port_native(), NULL);
+  trace_init(&tr, &s, &kd, mem_port_native(), NULL);
   r.o = v3(0.25f, 0.25f, -1);
   EXPECT(trace_closest(&tr, &r, &h) && h.prim == 0 && h.t == 1.0f && trace_any(&tr, &r));
   EXPECT(tr.stats.node_visits == 2 && tr.stats.tri_tests == 2);

@@ -72,10 +72,10 @@ static void nc_push_front(struct naive_cache *c, int32_t x) {
   c->head = x;
 }
 
-/* op as enum lru_op: 0 load, 1 store (fetch on miss), 2 whole-line store
+/* op as enum lru_stack_op: 0 load, 1 store (fetch on miss), 2 whole-line store
  * (allocate on miss without fetching: not a miss). */
 static void naive_access(struct naive *nv, uint32_t id, int op, unsigned cls) {
-  const uint8_t store = op != LRU_READ;
+  const uint8_t store = op != LRU_STACK_READ;
   for (unsigned i = 0; i < nv->n; i++) {
     struct naive_cache *c = &nv->c[i];
     int32_t x = (int32_t)id;
@@ -83,7 +83,7 @@ static void naive_access(struct naive *nv, uint32_t id, int op, unsigned cls) {
       nc_unlink(c, x);
       c->dirty[id] |= store;
     } else {
-      if (op != LRU_WRITE_LINE) c->misses[cls]++;
+      if (op != LRU_STACK_WRITE_LINE) c->misses[cls]++;
       if (c->count == c->cap) {
         int32_t v = c->tail;
         nc_unlink(c, v);
@@ -170,7 +170,7 @@ static int compare_run(const char *name, const struct trace *t, const struct lru
   struct lru_stack *ls = lru_stack_create(p);
   for (size_t k = 0; k < t->n; k++) {
     naive_access(&nv, t->a[k].id, t->a[k].store, t->a[k].cls);
-    lru_stack_access(ls, map_line(m, t->a[k].id), (enum lru_op)t->a[k].store, t->a[k].cls);
+    lru_stack_access(ls, map_line(m, t->a[k].id), (enum lru_stack_op)t->a[k].store, t->a[k].cls);
     if (check_every && k % check_every == 0) lru_stack_check_invariants(ls);
   }
   lru_stack_check_invariants(ls);
@@ -229,7 +229,7 @@ static void test_hand_computed(void) {
     unsigned cls;
   } tr[] = {{0, 0, 0}, {1, 1, 2}, {0, 0, 0}, {2, 0, 1}, {1, 0, 3}, {3, 1, 2}, {0, 0, 0}, {1, 0, 4}};
   for (size_t k = 0; k < sizeof tr / sizeof tr[0]; k++) {
-    lru_stack_access(ls, tr[k].line, tr[k].store ? LRU_WRITE : LRU_READ, tr[k].cls);
+    lru_stack_access(ls, tr[k].line, tr[k].store ? LRU_STACK_WRITE : LRU_STACK_READ, tr[k].cls);
     lru_stack_check_invariants(ls);
   }
   lru_stack_finish(ls);
@@ -267,8 +267,10 @@ static void test_random(void) {
     for (int k = 0; k < 60000; k++) {
       uint64_t r = rng_next(&rng);
       unsigned roll = (unsigned)((r >> 32) % 10); /* 70% loads, 20% stores, 10% whole-line stores */
-      tr_add(&t, (uint32_t)(r % universes[u]), roll < 7 ? LRU_READ : roll < 9 ? LRU_WRITE : LRU_WRITE_LINE,
-             (unsigned)((r >> 40) % MEM_CLASS_MAX));
+      enum lru_stack_op op = roll < 7   ? LRU_STACK_READ
+                             : roll < 9 ? LRU_STACK_WRITE
+                                        : LRU_STACK_WRITE_LINE;
+      tr_add(&t, (uint32_t)(r % universes[u]), op, (unsigned)((r >> 40) % MEM_CLASS_MAX));
     }
     char name[64];
     snprintf(name, sizeof name, "random N=%u", universes[u]);
@@ -305,7 +307,7 @@ static void test_loops(void) {
       /* The LRU pathology, exactly: a sweep of cap+1 lines misses every time in
        * the cache of cap lines; a sweep of cap lines misses only the first round. */
       struct lru_stack *ls = lru_stack_create(&p);
-      for (size_t k = 0; k < t.n; k++) lru_stack_access(ls, t.a[k].id, LRU_READ, 0);
+      for (size_t k = 0; k < t.n; k++) lru_stack_access(ls, t.a[k].id, LRU_STACK_READ, 0);
       unsigned idx = (unsigned)__builtin_ctz(cap);
       uint64_t want = len > cap ? t.n : len;
       EXPECTF(lru_stack_misses(ls, idx, 0) == want, "loop %u in %u lines: %llu misses, want %llu",
@@ -391,7 +393,7 @@ static void test_default_sizes(void) {
                          : (uint32_t)((r >> 16) % 20000);
       tr_add(&t, hot, (r >> 40) % 4 == 0, (unsigned)(r >> 44) % MEM_CLASS_MAX);
     } else {
-      tr_add(&t, stream++, (r >> 40) % 4 == 0 ? LRU_WRITE_LINE : LRU_READ, 2);
+      tr_add(&t, stream++, (r >> 40) % 4 == 0 ? LRU_STACK_WRITE_LINE : LRU_STACK_READ, 2);
       if (stream == 130000) stream = 30000; /* stream revisits: deep reuse */
     }
   }
@@ -416,8 +418,8 @@ enum { C0 = 0, C1 = 1, C2 = 2, C3 = 3, C_LAST = MEM_CLASS_MAX - 1 };
 
 static void test_backend(void) {
   struct lru_stack_params p = {6, 6, 9}; /* 1 .. 8 lines */
-  struct fn_backend *b = fn_backend_create(&p, NULL);
-  struct mem_port port = fn_backend_port(b);
+  struct mem_functional *b = mem_functional_create(&p, NULL);
+  struct mem_port port = mem_functional_port(b);
   mem_load(&port, 60, 8, C2);                    /* lines 0 and 1 */
   mem_store(&port, 64, 64, C2);                  /* line 1 */
   mem_load(&port, 128, 1, C0);                   /* line 2 */
@@ -425,14 +427,14 @@ static void test_backend(void) {
   mem_compute(&port, 1000);                      /* ignored */
   mem_store(&port, UINT64_MAX - 63, 64, C_LAST); /* the very last line */
   mem_load(&port, UINT64_MAX, 1, C_LAST);
-  const struct fn_backend_stats *st = fn_backend_stats(b);
+  const struct mem_functional_stats *st = mem_functional_get_stats(b);
   EXPECT(st->loads[C2] == 1 && st->stores[C2] == 1);
   EXPECT(st->bytes_loaded[C2] == 8 && st->bytes_stored[C2] == 64);
   EXPECT(st->line_accesses[C2] == 3);
   EXPECT(st->line_accesses[C0] == 1 && st->line_accesses[C1] == 4);
   EXPECT(st->bytes_loaded[C1] == 200);
   EXPECT(st->line_accesses[C_LAST] == 2 && st->bytes_stored[C_LAST] == 64);
-  struct lru_stack *ls = fn_backend_stack(b);
+  struct lru_stack *ls = mem_functional_stack(b);
   lru_stack_check_invariants(ls);
   lru_stack_finish(ls);
   struct lru_stack_results r;
@@ -447,17 +449,17 @@ static void test_backend(void) {
   EXPECT(r.size[3].misses[C2] == 2 && r.size[3].misses[C1] == 3);
   EXPECT(r.size[3].misses[C_LAST] == 0);
   EXPECT(r.size[3].dirty_at_end[C2] == 1 && r.size[3].dirty_at_end[C_LAST] == 1);
-  fn_backend_destroy(b);
+  mem_functional_destroy(b);
 
   /* Whole-line stores are found line by line: [1000, 1128) covers line 16 whole
    * and lines 15 and 17 in part, so 2 fetches; a 64-byte store across a line
    * boundary covers neither line whole (2 more); a 128-byte aligned store none. */
-  b = fn_backend_create(&p, NULL);
-  port = fn_backend_port(b);
+  b = mem_functional_create(&p, NULL);
+  port = mem_functional_port(b);
   mem_store(&port, 1000, 128, C3);
   mem_store(&port, 32, 64, C2);
   mem_store(&port, 4096, 128, C0);
-  ls = fn_backend_stack(b);
+  ls = mem_functional_stack(b);
   lru_stack_get_results(ls, &r);
   for (unsigned i = 0; i < r.size_count; i++) {
     EXPECTF(r.size[i].misses[C3] == 2, "size %u: %llu class-3 fetches", i,
@@ -465,19 +467,19 @@ static void test_backend(void) {
     EXPECT(r.size[i].misses[C2] == 2 && r.size[i].misses[C0] == 0);
   }
   EXPECT(r.size[3].dirty_at_end[C3] == 3 && r.size[3].dirty_at_end[C0] == 2);
-  fn_backend_destroy(b);
-  fn_backend_destroy(NULL);
+  mem_functional_destroy(b);
+  mem_functional_destroy(NULL);
   lru_stack_destroy(NULL);
 }
 
 /* The backend keeps repeats of the last line from the analyser (and hands their
- * counts over in fn_backend_stack): its results must equal the analyser fed
+ * counts over in mem_functional_stack): its results must equal the analyser fed
  * every line directly, on a trace dense in repeats, class changes and stores of
  * both kinds to the repeated line. */
 static void test_backend_repeats(void) {
   struct lru_stack_params p = {6, 6, 9}; /* 1 .. 8 lines */
-  struct fn_backend *b = fn_backend_create(&p, NULL);
-  struct mem_port port = fn_backend_port(b);
+  struct mem_functional *b = mem_functional_create(&p, NULL);
+  struct mem_port port = mem_functional_port(b);
   struct lru_stack *direct = lru_stack_create(&p);
   uint64_t rng = 7, line = 0;
   unsigned cls = 0;
@@ -489,17 +491,17 @@ static void test_backend_repeats(void) {
     uint64_t a = line << p.lg2_line;
     if (kind < 2) {
       mem_load(&port, a + (r >> 32) % 32, 1 + (uint32_t)((r >> 40) % 32), cls);
-      lru_stack_access(direct, line, LRU_READ, cls);
+      lru_stack_access(direct, line, LRU_STACK_READ, cls);
     } else if (kind == 2) {
       mem_store(&port, a + 8, 8, cls);
-      lru_stack_access(direct, line, LRU_WRITE, cls);
+      lru_stack_access(direct, line, LRU_STACK_WRITE, cls);
     } else {
       mem_store(&port, a, 64, cls);
-      lru_stack_access(direct, line, LRU_WRITE_LINE, cls);
+      lru_stack_access(direct, line, LRU_STACK_WRITE_LINE, cls);
     }
-    if (k == 100000) lru_stack_check_invariants(fn_backend_stack(b)); /* a mid-run handover */
+    if (k == 100000) lru_stack_check_invariants(mem_functional_stack(b)); /* a mid-run handover */
   }
-  struct lru_stack *ls = fn_backend_stack(b);
+  struct lru_stack *ls = mem_functional_stack(b);
   lru_stack_check_invariants(ls);
   struct lru_stack_results got, want;
   lru_stack_get_results(ls, &got);
@@ -517,7 +519,7 @@ static void test_backend_repeats(void) {
               (unsigned long long)got.size[i].writebacks[c],
               (unsigned long long)want.size[i].writebacks[c]);
   lru_stack_destroy(direct);
-  fn_backend_destroy(b);
+  mem_functional_destroy(b);
 }
 
 static void test_bench(void) {

@@ -112,8 +112,8 @@ static void test_saturation(void) {
   double worst = 0, sum = 0;
   for (uint64_t i = 0; i < rows; i++) {
     const double *r = machine_timeline_row(m, i);
-    double b = r[MTL_DRAM_READ_BYTES] + r[MTL_DRAM_WRITE_BYTES];
-    sum += r[MTL_DRAM_READ_BYTES];
+    double b = r[MACHINE_TL_DRAM_READ_BYTES] + r[MACHINE_TL_DRAM_WRITE_BYTES];
+    sum += r[MACHINE_TL_DRAM_READ_BYTES];
     if (b / (double)w > worst) worst = b / (double)w;
   }
   EXPECTF(worst <= 6.4 * (1 + 1e-9), "a window moved %.6f bytes/cycle", worst);
@@ -184,8 +184,8 @@ static void expect_sane(const struct machine *m, const char *what) {
   int finite = 1;
   for (uint64_t i = 0; i < rows; i++) {
     const double *r = machine_timeline_row(m, i);
-    for (unsigned c = 0; c < MTL_COLS; c++) finite &= isfinite(r[c]) && r[c] >= 0;
-    busy += r[MTL_BUSY_THREAD_CYCLES];
+    for (unsigned c = 0; c < MACHINE_TL_COLS; c++) finite &= isfinite(r[c]) && r[c] >= 0;
+    busy += r[MACHINE_TL_BUSY_THREAD_CYCLES];
   }
   EXPECTF(finite, "%s: a timeline value is not finite", what);
   EXPECTF(fabs(busy - (double)st->thread_busy_cycles) <= 1e-6 * busy + 1, "%s: busy %.0f vs %llu",

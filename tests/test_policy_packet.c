@@ -67,7 +67,7 @@ static void count_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
 
 static const struct mem_ops COUNT_OPS = {count_load, count_store, NULL, NULL};
 
-static int same_hit(const struct hit *a, const struct hit *b) {
+static int same_hit(const struct trace_hit *a, const struct trace_hit *b) {
   return a->prim == b->prim && memcmp(&a->t, &b->t, sizeof a->t) == 0 &&
          memcmp(&a->b1, &b->b1, sizeof a->b1) == 0 && memcmp(&a->b2, &b->b2, sizeof a->b2) == 0;
 }
@@ -78,9 +78,9 @@ struct cmp_stats {
 
 /* Trace rays[0..n) as one packet, closest and any, and compare every ray with
  * its single-ray query. Also: per-ray triangle tests add up to the tracer's. */
-static void compare_packet(struct tracer *tr, struct trace_packet *pk, const struct ray *rays,
+static void compare_packet(struct trace_ctx *tr, struct trace_packet *pk, const struct ray *rays,
                            uint32_t n, const char *what, struct cmp_stats *cs) {
-  struct hit ph[TRACE_PACKET_MAX], sh;
+  struct trace_hit ph[TRACE_PACKET_MAX], sh;
   bool pocc[TRACE_PACKET_MAX];
   struct trace_packet_cost cost;
   uint64_t tris0 = tr->stats.tri_tests;
@@ -125,7 +125,7 @@ static vec3 rnd_dir(struct rng *g) {
 /* Sizes of partial and full packets used for every ray set. */
 static const uint32_t SIZES[] = {1, 7, 64};
 
-static void packets_of(struct tracer *tr, struct trace_packet *pk, const struct ray *rays,
+static void packets_of(struct trace_ctx *tr, struct trace_packet *pk, const struct ray *rays,
                        uint32_t count, const char *what, struct cmp_stats *cs) {
   char buf[128];
   for (uint32_t z = 0; z < sizeof SIZES / sizeof SIZES[0]; z++)
@@ -144,8 +144,8 @@ static void test_traversal(struct world *w) {
   memset(&cnt, 0, sizeof cnt);
   cnt.ray_hi = UINT64_MAX;
   struct mem_port port = {&COUNT_OPS, &cnt};
-  struct tracer tr;
-  tracer_init(&tr, &w->s, &w->kd, port, NULL);
+  struct trace_ctx tr;
+  trace_init(&tr, &w->s, &w->kd, port, NULL);
   struct trace_packet *pk = trace_packet_create();
   struct ray *set = xmalloc(SET_MAX * sizeof *set);
   struct cmp_stats cs;
@@ -169,8 +169,8 @@ static void test_traversal(struct world *w) {
     packets_of(&tr, pk, set, n, what, &cs);
     uint64_t fewer = 0, packet_total = 0, single_total = 0;
     for (uint32_t k = 0; k < n; k += 64) {
-      struct hit hits[64];
-      struct hit h;
+      struct trace_hit hits[64];
+      struct trace_hit h;
       uint64_t n0 = cnt.loads[TRACE_CLASS_NODE];
       trace_packet_closest(&tr, pk, set + k, 64, hits, NULL);
       uint64_t packet_loads = cnt.loads[TRACE_CLASS_NODE] - n0;
@@ -242,7 +242,7 @@ static void test_traversal(struct world *w) {
     for (uint32_t pix = 0; pix < 64 * 64 && n + SHADE_MAX_SPAWN <= SET_MAX; pix += 3) {
       struct ray r;
       camera_primary(&cf, pix % 64, pix / 64, 5, &r);
-      struct hit h;
+      struct trace_hit h;
       trace_closest(&tr, &r, &h);
       uint32_t k = shade_hit(&sc, &r, &h, &fb, &tr.mem, spawn);
       for (uint32_t j = 0; j < k; j++) set[n++] = spawn[j];
@@ -253,7 +253,7 @@ static void test_traversal(struct world *w) {
       for (uint32_t light = 0; light < SCENE_MAX_LIGHTS; light++)
         for (uint32_t i = 0; i < n; i++)
           if (set[i].type == type && set[i].light == light) by_kind[m++] = set[i];
-    CHECK(m == n);
+    CHECK_EQ(m, n);
     snprintf(what, sizeof what, "%s secondary by kind", w->name);
     packets_of(&tr, pk, by_kind, m, what, &cs);
     snprintf(what, sizeof what, "%s secondary mixed", w->name);

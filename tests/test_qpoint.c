@@ -142,7 +142,7 @@ static void check_scene(const char *path) {
   struct scene s;
   struct err e;
   memset(&e, 0, sizeof e);
-  if (!scene_load(&s, path, &e)) {
+  if (!scene_file_load(&s, path, &e)) {
     EXPECTF(0, "%s: %s", path, e.msg);
     return;
   }

@@ -122,7 +122,7 @@ int main(void) {
     for (uint32_t x = 0; x < size; x++) {
       struct ray r;
       camera_primary(&cf, x, y, 7, &r);
-      struct hit h;
+      struct trace_hit h;
       uint32_t p = y * size + x;
       bool is_bg = memcmp(&f3.acc[3 * p], bg.acc, 3 * sizeof *bg.acc) == 0;
       if (!trace_brute(&g.s, &r, &h)) {

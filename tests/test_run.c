@@ -75,22 +75,22 @@ static void render_init(struct render *r, struct world *w, uint32_t mask) {
 static void functional(struct world *w, enum policy_kind k, uint32_t mask, unsigned lg2,
                        uint64_t *fetch, uint64_t *wb) {
   struct lru_stack_params lp = lru_stack_params_default();
-  struct fn_backend *b = fn_backend_create(&lp, NULL);
+  struct mem_functional *b = mem_functional_create(&lp, NULL);
   struct render r;
   render_init(&r, w, mask);
   struct policy_params pp;
   policy_params_machine(&pp, 1ull << lg2, 1);
   struct render_stats st;
-  policy_run(k, &r.setup, &pp, fn_backend_port(b), &st, NULL);
+  policy_run(k, &r.setup, &pp, mem_functional_port(b), &st, NULL);
   struct lru_stack_results res;
-  lru_stack_get_results(fn_backend_stack(b), &res);
+  lru_stack_get_results(mem_functional_stack(b), &res);
   *fetch = *wb = 0;
   for (unsigned c = 0; c < MEM_CLASS_MAX; c++) {
     *fetch += res.size[lg2 - lp.lg2_min].misses[c] * 64;
     *wb += res.size[lg2 - lp.lg2_min].writebacks[c] * 64;
   }
   fb_fini(&r.fb);
-  fn_backend_destroy(b);
+  mem_functional_destroy(b);
 }
 
 /* The deepest coroutine stack any run of this test used (painted stacks). */

@@ -11,7 +11,7 @@
 static int load(struct scene *s, const char *path) {
   struct err e;
   memset(&e, 0, sizeof e);
-  int ok = scene_load(s, path, &e);
+  int ok = scene_file_load(s, path, &e);
   EXPECTF(ok, "%s: %s:%d:%d %s", path, e.file, e.line, e.col, e.msg);
   return ok;
 }

@@ -21,9 +21,9 @@ static vec3 sc(vec3 v, float s) { return v3_scale(v, s); }
 
 static bool tri_hit(vec3 a, vec3 b, vec3 c, vec3 o, vec3 d, float tmin, float tmax, float *t,
                     float *b1, float *b2) {
-  struct isect_ray r;
-  isect_prepare(&r, o, d);
-  return isect_tri(&r, a, b, c, tmin, tmax, t, b1, b2);
+  struct trace_isect_ray r;
+  trace_isect_prepare(&r, o, d);
+  return trace_isect_tri(&r, a, b, c, tmin, tmax, t, b1, b2);
 }
 
 static struct ray make_ray(vec3 o, vec3 d, float tmin, float tmax) {
@@ -91,7 +91,7 @@ static void test_tmin_tmax(void) {
   scene_add_tri(&s, a, b, c, NULL, 0);
   scene_add_tri(&s, v3(0, 0, 1), v3(1, 0, 1), v3(0, 1, 1), NULL, 0);
   struct ray r = make_ray(o, d, 0, INFINITY);
-  struct hit h;
+  struct trace_hit h;
   EXPECT(trace_brute(&s, &r, &h) && h.prim == 2 && h.t == 1.0f);
   r.ignore_prim = 2;
   EXPECT(trace_brute(&s, &r, &h) && h.prim == 0 && h.t == 2.0f);
@@ -301,8 +301,8 @@ static void self_isect_case(const char *name, int is_plane, vec3 ctr, float size
   struct kd_build_params bp;
   kd_build_params_default(&bp);
   kd_build(&kd, &s, &bp);
-  struct tracer tr;
-  tracer_init(&tr, &s, &kd, mem_port_native(), NULL);
+  struct trace_ctx tr;
+  trace_init(&tr, &s, &kd, mem_port_native(), NULL);
   struct rng g = rng_make(14, (uint64_t)is_plane * 7 + (uint64_t)(size * 1000.0f));
   int primaries = 0, spawned = 0, self_hits = 0, brute_hits = 0, inward_bad = 0;
   for (int i = 0; i < 1500; i++) {
@@ -311,7 +311,7 @@ static void self_isect_case(const char *name, int is_plane, vec3 ctr, float size
                                     size));
     vec3 d = v3_norm(v3(rnd(&g, -1, 1), rnd(&g, -1, 1), rnd(&g, -1, 1)));
     struct ray r = make_ray(v3_sub(aim, v3_scale(d, 3.0f * size)), d, 0, INFINITY);
-    struct hit h;
+    struct trace_hit h;
     if (!trace_closest(&tr, &r, &h)) continue;
     primaries++;
     vec3 err, p = trace_hit_point(&s, &h, &err);
@@ -325,7 +325,7 @@ static void self_isect_case(const char *name, int is_plane, vec3 ctr, float size
       vec3 w = dir_around(v3_scale(n, (float)side), ct, rnd(&g, 0, 6.3f));
       vec3 o2 = trace_offset_origin(p, err, n, w);
       struct ray r2 = make_ray(o2, w, 0, INFINITY);
-      struct hit h2;
+      struct trace_hit h2;
       spawned++;
       if (trace_closest(&tr, &r2, &h2)) self_hits++;
       if (j < 3 && trace_brute(&s, &r2, &h2)) brute_hits++;
@@ -338,7 +338,7 @@ static void self_isect_case(const char *name, int is_plane, vec3 ctr, float size
       vec3 w = dir_around(v3_scale(n, -1.0f), rnd(&g, 0.5f, 1.0f), rnd(&g, 0, 6.3f));
       vec3 o2 = trace_offset_origin(p, err, n, w);
       struct ray r2 = make_ray(o2, w, 0, INFINITY);
-      struct hit h2;
+      struct trace_hit h2;
       if (!trace_closest(&tr, &r2, &h2) || h2.prim == h.prim || h2.t < 0.5f * size) inward_bad++;
     }
   }
@@ -371,7 +371,7 @@ static void test_hit_point(void) {
   scene_init(&s);
   scene_add_tri(&s, v3(0, 0, 0), v3(4, 0, 0), v3(0, 4, 0), NULL, 0);
   struct ray r = make_ray(v3(1, 2, 5), v3(0, 0, -1), 0, INFINITY);
-  struct hit h;
+  struct trace_hit h;
   EXPECT(trace_brute(&s, &r, &h) && h.prim == 0 && h.t == 5.0f);
   vec3 err, p = trace_hit_point(&s, &h, &err);
   EXPECT(p.x == 1.0f && p.y == 2.0f && p.z == 0.0f);
@@ -430,14 +430,14 @@ static void test_memory_announcements(void) {
   trace_layout_default(&c.l);
   static const struct mem_ops ops = {count_load, NULL, count_compute, NULL};
   struct mem_port port = {&ops, &c};
-  struct tracer tr;
-  tracer_init(&tr, &s, &kd, port, NULL);
+  struct trace_ctx tr;
+  trace_init(&tr, &s, &kd, port, NULL);
   struct rng g = rng_make(15, 1);
   int hits = 0;
   for (int i = 0; i < 500; i++) {
     vec3 d = v3_norm(v3(rnd(&g, -1, 1), rnd(&g, -1, 1), rnd(&g, -1, 1)));
     struct ray r = make_ray(v3_scale(d, -3.0f), v3_add(d, v3(0.1f, 0, 0)), 0, INFINITY);
-    struct hit h;
+    struct trace_hit h;
     hits += trace_closest(&tr, &r, &h);
     trace_any(&tr, &r);
   }

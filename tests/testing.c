@@ -1,5 +1,6 @@
 #include "testing.h"
 
+#include <dirent.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
@@ -33,10 +34,28 @@ int testing_run(const char *cmd, char *buf, unsigned buf_size) {
   return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
+unsigned testing_temps_of(const char *path) {
+  const char *slash = strrchr(path, '/');
+  char dir[4096], prefix[1024];
+  snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) : 1, slash ? path : ".");
+  snprintf(prefix, sizeof prefix, ".%s.", slash ? slash + 1 : path);
+  DIR *d = opendir(dir);
+  if (!d) return 0;
+  unsigned n = 0;
+  struct dirent *de;
+  while ((de = readdir(d))) {
+    size_t len = strlen(de->d_name);
+    n += !strncmp(de->d_name, prefix, strlen(prefix)) && len > 4 &&
+         !strcmp(de->d_name + len - 4, ".tmp");
+  }
+  closedir(d);
+  return n;
+}
+
 int testing_load_world(struct scene *s, struct kd_tree *kd, const char *path) {
   struct err e;
   memset(&e, 0, sizeof e);
-  if (!scene_load(s, path, &e)) {
+  if (!scene_file_load(s, path, &e)) {
     fprintf(stderr, "%s:%d:%d: %s\n", e.file, e.line, e.col, e.msg);
     return 0;
   }

@@ -65,6 +65,10 @@ void testing_slots_access(struct testing_slots *t, uint64_t k, bool store);
 uint64_t testing_slots_left(const struct testing_slots *t);
 void testing_slots_fini(struct testing_slots *t);
 
+/* Temporaries of sim/outfile.h left beside path (".<name>.*.tmp" in its
+ * directory): 0 when none, or when the directory does not exist. */
+unsigned testing_temps_of(const char *path);
+
 /* Run a shell command, capture its stderr+stdout into buf; return exit code
  * (or -1 if it did not exit normally). */
 int testing_run(const char *cmd, char *buf, unsigned buf_size);

@@ -1,0 +1,128 @@
+/* The one option parser of the rtsim commands (opts.h): a table of options
+ * turned into getopt_long's, values checked and stored by kind. */
+#include "app/opts.h"
+
+#include <errno.h>
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "app/app.h"
+#include "sim/err.h"
+
+/* getopt_long's value for options without a letter: past every char. */
+enum { OPTS_LONG_ONLY = 256 };
+
+bool opts_u64(const char *text, uint64_t lo, uint64_t hi, uint64_t *out) {
+  char *end = NULL;
+  errno = 0;
+  unsigned long long v = (text[0] >= '0' && text[0] <= '9') ? strtoull(text, &end, 10) : 0;
+  if (!end || *end || errno || v < lo || v > hi) return false;
+  *out = v;
+  return true;
+}
+
+/* Store the value of option s, named as the user typed it; false after the
+ * message. */
+static bool take(const char *cmd, const struct opts_spec *s, const char *opt, const char *text) {
+  switch (s->kind) {
+  case OPTS_KIND_FLAG: *(bool *)s->dst = true; break;
+  case OPTS_KIND_STR: *(const char **)s->dst = text; break;
+  case OPTS_KIND_U64:
+    if (!opts_u64(text, s->lo, s->hi, s->dst)) {
+      app_usage_error(cmd, "%s: got '%s', expected a whole number from %llu to %llu", opt, text,
+                      (unsigned long long)s->lo, (unsigned long long)s->hi);
+      return false;
+    }
+    break;
+  case OPTS_KIND_PARSE:
+    if (!s->parse(text, s->dst)) {
+      app_usage_error(cmd, "%s: got '%s', expected %s", opt, text, s->expect);
+      return false;
+    }
+    break;
+  }
+  if (s->given) *s->given = true;
+  return true;
+}
+
+/* The spec getopt_long answered c for, or NULL. */
+static const struct opts_spec *find(const struct opts_spec *spec, unsigned n, int c) {
+  for (unsigned i = 0; i < n; i++)
+    if (spec[i].letter ? c == spec[i].letter : c == OPTS_LONG_ONLY + (int)i) return &spec[i];
+  return NULL;
+}
+
+int opts_parse(const char *cmd, const char *help, const struct opts_spec *spec, int argc,
+               char **argv, struct opts_args *rest) {
+  unsigned n = 0;
+  while (spec[n].name) n++;
+  /* getopt_long's tables: ours, then --help, then the terminator. */
+  struct option *lo = xcalloc(n + 2, sizeof *lo);
+  char *shorts = xmalloc(2 * n + 3);
+  size_t k = 0;
+  shorts[k++] = ':'; /* a missing value is ':', not '?' */
+  for (unsigned i = 0; i < n; i++) {
+    const bool value = spec[i].kind != OPTS_KIND_FLAG;
+    lo[i].name = spec[i].name;
+    lo[i].has_arg = value ? required_argument : no_argument;
+    lo[i].val = spec[i].letter ? spec[i].letter : OPTS_LONG_ONLY + (int)i;
+    if (spec[i].letter) {
+      CHECK_NE(spec[i].letter, 'h'); /* -h is help */
+      shorts[k++] = spec[i].letter;
+      if (value) shorts[k++] = ':';
+    }
+  }
+  lo[n] = (struct option){"help", no_argument, NULL, 'h'};
+  shorts[k++] = 'h';
+  shorts[k] = '\0';
+
+  int rc = OPTS_GO;
+  opterr = 0; /* we say what is wrong, once */
+  optind = 1;
+  while (rc == OPTS_GO) {
+    int li = -1;
+    int c = getopt_long(argc, argv, shorts, lo, &li);
+    if (c == -1) break;
+    const struct opts_spec *s = find(spec, n, c);
+    if (c == 'h') {
+      fputs(help, stdout);
+      rc = 0;
+    } else if (c == ':') {
+      rc = app_usage_error(cmd, "option %s needs a value", argv[optind - 1]);
+    } else if (c == '?' && optopt && (optopt == 'h' || find(spec, n, optopt))) {
+      /* --flag=value: getopt_long names the flag in optopt. */
+      const struct opts_spec *f = find(spec, n, optopt);
+      rc = app_usage_error(cmd, "option --%s takes no value", f ? f->name : "help");
+    } else if (c == '?' && optopt) {
+      rc = app_usage_error(cmd, "unknown option '-%c'", optopt);
+    } else if (c == '?' || !s) {
+      rc = app_usage_error(cmd, "unknown option '%s'", argv[optind - 1]);
+    } else {
+      char opt[128];
+      if (li >= 0) snprintf(opt, sizeof opt, "--%s", s->name);
+      else snprintf(opt, sizeof opt, "-%c", s->letter);
+      if (!take(cmd, s, opt, optarg)) rc = APP_EXIT_USAGE;
+    }
+  }
+  free(lo);
+  free(shorts);
+  rest->cmd = cmd;
+  rest->n = argc - optind;
+  rest->v = argv + optind;
+  return rc;
+}
+
+const char *opts_one(const struct opts_args *a, const char *what, const char *noun) {
+  if (a->n == 1) return a->v[0];
+  if (a->n == 0)
+    app_usage_error(a->cmd, "missing %s", what);
+  else
+    app_usage_error(a->cmd, "expected one %s, got %d", noun, a->n);
+  return NULL;
+}
+
+const char *opts_one_scene(const struct opts_args *a) {
+  return opts_one(a, "SCENE.yaml", "scene file");
+}
