@@ -146,6 +146,10 @@ int main(void) {
       {"bench --timed " RTSIM_TEST_DATA "/configs/bad_size_unit.yaml " SCN "good_room_tiny.yaml", "bad_size_unit.yaml:2:9: error: l2.size: not a size"},
       {"bench --timed", "option --timed needs a value"},
       {"bench --rays primary,glossy " SCN "good_room_tiny.yaml", "--rays: got 'primary,glossy'"},
+#ifndef RTSIM_HAVE_EMBREE
+      {"bench --embree " SCN "good_room_tiny.yaml", "--embree: this rtsim was built without Embree"},
+#endif
+      {"bench --embree --rays primary,shadow " SCN "good_room_tiny.yaml", "--embree"},
       {"render " SCN "good_room_tiny.yaml -o x.exr --policy fifo", "--policy: got 'fifo', expected one of: recursive, packet, dynamic"},
       {"traffic " SCN "good_room_tiny.yaml -o x.csv", "missing --rays"},
       {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --policy fifo", "--policy: got 'fifo'"},
