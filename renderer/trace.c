@@ -173,7 +173,9 @@ void trace_init(struct trace_ctx *tr, const struct scene *s, const struct kd_tre
 /* Shared loop of trace_closest (any_hit false) and trace_any (true). Hits are
  * accepted against the ray's whole (tmin, best t) range, not the node's
  * interval; a node is skipped when the best hit lies before its interval. */
-static bool traverse(struct trace_ctx *tr, const struct ray *r, bool any_hit, struct trace_hit *h) {
+static inline __attribute__((always_inline)) bool traverse_n(struct trace_ctx *tr,
+                                                              const struct ray *r, bool any_hit,
+                                                              struct trace_hit *h, bool native) {
   h->t = r->tmax;
   h->prim = -1;
   h->b1 = h->b2 = 0.0f;
@@ -191,12 +193,12 @@ static bool traverse(struct trace_ctx *tr, const struct ray *r, bool any_hit, st
   struct trav_best best;
   trav_best_init(&best, r->tmax);
   for (;;) {
-    trav_announce_node(tr, ni, 1);
+    trav_visit_node(tr, ni, 1, native);
     struct kd_node nd = kd->nodes[ni];
     if (!kd_is_leaf(nd)) {
       if (trav_interior(&tv, nd, ni, &t0, &t1, &ni, stack, &sp)) continue;
-    } else if (trav_leaf(tr, &ir, r->tmin, r->ignore_prim, any_hit, nd, 0, kd_leaf_count(nd),
-                         &best)) {
+    } else if (trav_leaf_n(tr, &ir, r->tmin, r->ignore_prim, any_hit, nd, 0, kd_leaf_count(nd),
+                           &best, native)) {
       break; /* any_hit: the first hit */
     }
     /* Next node from the stack, skipping those entirely beyond the best hit. */
@@ -204,6 +206,13 @@ static bool traverse(struct trace_ctx *tr, const struct ray *r, bool any_hit, st
   }
   trav_best_hit(&best, h);
   return best.found;
+}
+
+/* One copy of the loop for the native port (no backend calls inside), one for
+ * the others. */
+static bool traverse(struct trace_ctx *tr, const struct ray *r, bool any_hit, struct trace_hit *h) {
+  if (!tr->mem.ops) return traverse_n(tr, r, any_hit, h, true);
+  return traverse_n(tr, r, any_hit, h, false);
 }
 
 bool trace_closest(struct trace_ctx *tr, const struct ray *r, struct trace_hit *h) {

@@ -150,28 +150,46 @@ static inline bool trav_interior(const struct trav_ray *tr, struct kd_node nd, u
   return false;
 }
 
+/* The announcements below take `native`, true when tr->mem is the native
+ * port (which does nothing with them): a caller that passes a constant gets a
+ * copy of its loop with no backend calls in it, which the compiler can keep
+ * tight. Counters move either way. Host only: nothing simulated changes. */
+
 /* Announce a visit of node ni by `rays` rays at once (1, or a packet's active
  * rays): one node load, node_cycles of compute per ray. */
-static inline void trav_announce_node(struct trace_ctx *tr, uint32_t ni, uint32_t rays) {
-  mem_load(&tr->mem, tr->layout.node_base + 8ull * ni, 8, TRACE_CLASS_NODE);
-  mem_compute(&tr->mem, (uint64_t)tr->layout.node_cycles * rays);
+static inline void trav_visit_node(struct trace_ctx *tr, uint32_t ni, uint32_t rays, bool native) {
+  if (!native) {
+    mem_load(&tr->mem, tr->layout.node_base + 8ull * ni, 8, TRACE_CLASS_NODE);
+    mem_compute(&tr->mem, (uint64_t)tr->layout.node_cycles * rays);
+  }
   tr->stats.node_visits++;
+}
+static inline void trav_announce_node(struct trace_ctx *tr, uint32_t ni, uint32_t rays) {
+  trav_visit_node(tr, ni, rays, false);
 }
 
 /* Announce triangle p tested against `rays` rays at once: one record load,
  * tri_cycles of compute and one test per ray. */
-static inline void trav_announce_tri(struct trace_ctx *tr, uint32_t p, uint32_t rays) {
-  mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p,
-           tr->layout.tri_bytes, TRACE_CLASS_GEOMETRY);
-  mem_compute(&tr->mem, (uint64_t)tr->layout.tri_cycles * rays);
+static inline void trav_visit_tri(struct trace_ctx *tr, uint32_t p, uint32_t rays, bool native) {
+  if (!native) {
+    mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p,
+             tr->layout.tri_bytes, TRACE_CLASS_GEOMETRY);
+    mem_compute(&tr->mem, (uint64_t)tr->layout.tri_cycles * rays);
+  }
   tr->stats.tri_tests += rays;
   if (tr->tested) tr->tested[p >> 6] |= 1ull << (p & 63);
 }
+static inline void trav_announce_tri(struct trace_ctx *tr, uint32_t p, uint32_t rays) {
+  trav_visit_tri(tr, p, rays, false);
+}
 
 /* Entry j of the leaf index lists: its 4-byte load, then the primitive. */
-static inline uint32_t trav_leaf_prim(struct trace_ctx *tr, uint32_t j) {
-  mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * j, 4, TRACE_CLASS_NODE);
+static inline uint32_t trav_leaf_prim_n(struct trace_ctx *tr, uint32_t j, bool native) {
+  if (!native) mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * j, 4, TRACE_CLASS_NODE);
   return tr->kd->prims[j];
+}
+static inline uint32_t trav_leaf_prim(struct trace_ctx *tr, uint32_t j) {
+  return trav_leaf_prim_n(tr, j, false);
 }
 
 /* The hit rule: a hit (t, p) beats the best so far (best_t, best_p) when
@@ -237,14 +255,14 @@ static inline void trav_best_hit(const struct trav_best *b, struct trace_hit *h)
  * leaf-list load, then (unless it is the ray's ignore primitive) a triangle
  * load and test in (tmin, b->upper); hits go to b. With any, stop at the first
  * hit and return true; otherwise return false. */
-static inline bool trav_leaf(struct trace_ctx *tr, const struct trace_isect_ray *ir, float tmin,
-                             int32_t ignore, bool any, struct kd_node nd, uint32_t j0,
-                             uint32_t j1, struct trav_best *b) {
+static inline bool trav_leaf_n(struct trace_ctx *tr, const struct trace_isect_ray *ir, float tmin,
+                               int32_t ignore, bool any, struct kd_node nd, uint32_t j0,
+                               uint32_t j1, struct trav_best *b, bool native) {
   uint32_t off = kd_leaf_offset(nd);
   for (uint32_t j = j0; j < j1; j++) {
-    uint32_t p = trav_leaf_prim(tr, off + j);
+    uint32_t p = trav_leaf_prim_n(tr, off + j, native);
     if ((int64_t)p == (int64_t)ignore) continue;
-    trav_announce_tri(tr, p, 1);
+    trav_visit_tri(tr, p, 1, native);
     if (trav_mbox_seen(b, p)) continue;
     const struct scene_tri *tri = &tr->scene->tris[p];
     float t, b1, b2;
@@ -254,6 +272,11 @@ static inline bool trav_leaf(struct trace_ctx *tr, const struct trace_isect_ray 
     if (any) return true;
   }
   return false;
+}
+static inline bool trav_leaf(struct trace_ctx *tr, const struct trace_isect_ray *ir, float tmin,
+                             int32_t ignore, bool any, struct kd_node nd, uint32_t j0,
+                             uint32_t j1, struct trav_best *b) {
+  return trav_leaf_n(tr, ir, tmin, ignore, any, nd, j0, j1, b, false);
 }
 
 /* Pop the next pending node above stack depth floor into (*ni, *t0, *t1),
