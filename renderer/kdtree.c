@@ -132,7 +132,7 @@ static void sort_events(struct kd_ev *ev, size_t n) {
 static uint32_t new_node(struct kd_builder *b) {
   struct kd_tree *t = b->t;
   if (t->node_count == b->node_cap) {
-    CHECK(b->node_cap < (1u << 30));
+    CHECK_LT(b->node_cap, 1u << 30);
     b->node_cap = b->node_cap ? 2 * b->node_cap : 1024;
     t->nodes = xrealloc(t->nodes, (unsigned long long)b->node_cap * sizeof *t->nodes);
   }
@@ -162,7 +162,7 @@ static void make_leaf(struct kd_builder *b, uint32_t i, const struct kd_lists *l
   uint32_t k = 0;
   for (uint32_t j = 0; j < l->len[0]; j++)
     if ((ev[j].pt & 3u) != KD_EV_END) b->leaf_scratch[k++] = ev[j].pt >> 2;
-  CHECK(k == n);
+  CHECK_EQ(k, n);
   if (n > 16) {
     qsort(b->leaf_scratch, n, sizeof *b->leaf_scratch, cmp_u32);
   } else {
@@ -175,12 +175,12 @@ static void make_leaf(struct kd_builder *b, uint32_t i, const struct kd_lists *l
   if (t->prim_ref_count + n > b->prim_cap) {
     uint64_t cap = b->prim_cap ? b->prim_cap : 1024;
     while (cap < (uint64_t)t->prim_ref_count + n) cap *= 2;
-    CHECK(cap <= UINT32_MAX);
+    CHECK_LE(cap, UINT32_MAX);
     b->prim_cap = (uint32_t)cap;
     t->prims = xrealloc(t->prims, cap * sizeof *t->prims);
   }
   if (n) memcpy(t->prims + t->prim_ref_count, b->leaf_scratch, n * sizeof *t->prims);
-  CHECK(n < (1u << 29));
+  CHECK_LT(n, 1u << 29);
   t->nodes[i].w0 = t->prim_ref_count;
   t->nodes[i].w1 = (n << 3) | 3u;
   t->prim_ref_count += n;
@@ -191,7 +191,8 @@ static void make_leaf(struct kd_builder *b, uint32_t i, const struct kd_lists *l
   t->stats.leaf_prim_refs += n;
 }
 
-struct kd_split {
+/* The best split plane found so far: its SAH cost, position and axis (-1: none). */
+struct kd_plane {
   double cost;
   float s;
   int axis;
@@ -206,7 +207,7 @@ static double box_area(const struct kd_box *bx) {
 /* SAH cost of splitting bx at s on axis a with nb triangles below, na above
  * (PBRT-v3's formula, evaluated in double). */
 static inline void consider(const struct kd_builder *b, const struct kd_box *bx, double inv_area, int a,
-                     float s, uint32_t nb, uint32_t na, struct kd_split *best) {
+                     float s, uint32_t nb, uint32_t na, struct kd_plane *best) {
   if (!(s > bx->lo[a] && s < bx->hi[a])) return;
   int o0 = (a + 1) % 3, o1 = (a + 2) % 3;
   double d0 = (double)bx->hi[o0] - bx->lo[o0], d1 = (double)bx->hi[o1] - bx->lo[o1];
@@ -227,7 +228,7 @@ static inline void consider(const struct kd_builder *b, const struct kd_box *bx,
  * and just above v), and the counts are exact for the trimmed plane s:
  *   below = #(lower bound < s) + #(flat at s),  above = #(upper bound > s) + #(flat at s). */
 static void sweep_axis(const struct kd_builder *b, const struct kd_lists *l, const struct kd_box *bx,
-                       double inv_area, int a, struct kd_split *best) {
+                       double inv_area, int a, struct kd_plane *best) {
   const struct kd_ev *ev = b->arena + l->off;
   size_t base = 0;
   for (int k = 0; k < a; k++) base += l->len[k];
@@ -414,7 +415,7 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
   }
 
   /* Choose the split: the box's longest axis first, the others if it has no candidate. */
-  struct kd_split best = {INFINITY, 0.0f, -1};
+  struct kd_plane best = {INFINITY, 0.0f, -1};
   double area = box_area(bx);
   if (area > 0.0) {
     double inv_area = 1.0 / area;
@@ -454,7 +455,7 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
     else
       b->side[p] = (uint8_t)(v < s ? 1u : (v > s ? 2u : 3u));
     uint8_t sd = b->side[p];
-    CHECK(sd != 0);
+    CHECK_NE(sd, 0);
     nb += sd & 1u;
     na += sd >> 1;
     if (sd == 3u && b->p->clip) b->strad[ns++] = p;
@@ -494,7 +495,8 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
     }
     la.len[k] = (uint32_t)(wa - a0);
     lb.len[k] = (uint32_t)(wb - b0);
-    CHECK(la.len[k] <= l->len[k] && lb.len[k] <= l->len[k]);
+    CHECK_LE(la.len[k], l->len[k]);
+    CHECK_LE(lb.len[k], l->len[k]);
     e += l->len[k];
   }
   memmove(da + wa, db, wb * sizeof *db);
@@ -504,7 +506,7 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
 
   build_node(b, &below, &lb, nb, depth + 1, depth_left - 1, bad_refines);
   uint32_t above_idx = t->node_count;
-  CHECK(above_idx < (1u << 30));
+  CHECK_LT(above_idx, 1u << 30);
   build_node(b, &above, &la, na, depth + 1, depth_left - 1, bad_refines);
   uint32_t bits;
   memcpy(&bits, &s, sizeof bits);
@@ -520,7 +522,7 @@ void kd_build(struct kd_tree *t, const struct scene *s, const struct kd_build_pa
   b.p = p;
   b.t = t;
   uint32_t n = s->tri_count;
-  CHECK(n < (1u << 29));
+  CHECK_LT(n, 1u << 29);
   scene_bounds(s, &t->lo, &t->hi);
 
   int max_depth = p->max_depth;
@@ -572,7 +574,7 @@ void kd_build(struct kd_tree *t, const struct scene *s, const struct kd_build_pa
   }
   struct kd_box bx = {{t->lo.x, t->lo.y, t->lo.z}, {t->hi.x, t->hi.y, t->hi.z}};
   build_node(&b, &bx, &root, n, 0, max_depth, 0);
-  CHECK(b.arena_top == 0);
+  CHECK_EQ(b.arena_top, 0);
 
   /* Trim the arrays to size: the tree lives as long as the scene. */
   t->nodes = xrealloc(t->nodes, (unsigned long long)t->node_count * sizeof *t->nodes);
