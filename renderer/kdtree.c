@@ -289,10 +289,14 @@ static float float_up(double d) {
  * by m, rounded outwards to float and cut back to bx and to the triangle's own
  * bounds (both exact). So every point of the triangle in bx lies in *out, and
  * a triangle that touches bx, even at one point, is never dropped. False if
- * the triangle misses the widened box. */
+ * the triangle misses the widened box. A triangle clipped by six planes has at
+ * most 9 corners; should rounding ever make more (a sliver turned slightly
+ * non-convex), the bounds fall back to bx and the triangle's own, which is
+ * still conservative. */
+#define KD_CLIP_MAX 16
 static bool clip_tri(const struct kd_builder *b, uint32_t p, const struct kd_box *bx,
                      struct kd_box *out) {
-  double poly[2][9][3];
+  double poly[2][KD_CLIP_MAX][3];
   const struct scene_tri *tr = &b->scene->tris[p];
   double mag = 0.0;
   for (int k = 0; k < 3; k++)
@@ -314,6 +318,14 @@ static bool clip_tri(const struct kd_builder *b, uint32_t p, const struct kd_box
       double(*src)[3] = poly[cur], (*dst)[3] = poly[cur ^ 1];
       int nn = 0;
       for (int i = 0; i < n; i++) {
+        if (nn + 2 > KD_CLIP_MAX) {
+          for (int k = 0; k < 3; k++) {
+            out->lo[k] = max_nonnan(bx->lo[k], b->tb[p].lo[k]);
+            out->hi[k] = min_nonnan(bx->hi[k], b->tb[p].hi[k]);
+            if (out->lo[k] > out->hi[k]) return false; /* its bounds miss bx */
+          }
+          return true;
+        }
         const double *P = src[i], *Q = src[i + 1 == n ? 0 : i + 1];
         double dp = hi ? c - P[a] : P[a] - c, dq = hi ? c - Q[a] : Q[a] - c; /* >= 0 inside */
         if (dp >= 0.0) {
