@@ -262,6 +262,10 @@ struct trace_packet {
    * LIFO pool (dense, so a deferred node of two rays touches one line). */
   struct pk_entry stack[KD_DEPTH_LIMIT];
   float pool[KD_DEPTH_LIMIT * TRACE_PACKET_MAX * 2];
+  /* The packet's mailbox (host only, as trav_best's for single rays): the last
+   * triangles tested, direct mapped, each with the rays it was tested against. */
+  uint32_t mb_prim[TRAV_MBOX * 2];
+  uint64_t mb_rays[TRAV_MBOX * 2];
   void *alloc; /* what to free */
 };
 
@@ -296,6 +300,7 @@ static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk
   const struct scene *s = tr->scene;
   uint64_t live = 0, ign = 0, found = 0;
   for (int a = 0; a < 3; a++) pk->flat[a] = pk->pos[a] = pk->neg[a] = 0;
+  memset(pk->mb_prim, 0xff, sizeof pk->mb_prim);
   for (uint32_t i = 0; i < n; i++) {
     const struct ray *r = &rays[i];
     if (any_hit) {
@@ -442,11 +447,20 @@ static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk
         trav_announce_tri(tr, p, k);
         const struct scene_tri *tri = &s->tris[p];
         const vec3 v0 = tri->v[0], v1 = tri->v[1], v2 = tri->v[2];
+        /* Rays tested against p before skip the arithmetic (see trav_best). */
+        const uint32_t slot = p & (2 * TRAV_MBOX - 1);
+        if (pk->mb_prim[slot] != p) {
+          pk->mb_prim[slot] = p;
+          pk->mb_rays[slot] = 0;
+        }
+        const uint64_t seen = pk->mb_rays[slot];
+        pk->mb_rays[slot] |= tm;
         for (uint64_t m = tm; m; m &= m - 1) {
           const int i = pk_first(m);
           const uint64_t bit = 1ull << i;
           struct pk_ray *q = &pk->ray[i];
           pk->tris[i]++;
+          if (seen & bit) continue;
           float t, b1, b2;
           if (!trace_isect_tri(&pk->ir[i], v0, v1, v2, q->tmin, q->upper, &t, &b1, &b2)) continue;
           if (any_hit) {
