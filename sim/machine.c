@@ -541,13 +541,18 @@ static void t_compute(void *ctx, uint64_t cycles) {
   c->m->st.computes++;
 }
 
-static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
-  struct mctx *c = ctx;
-  struct machine *m = c->m;
+/* What a load and a store pay first: one issue slot at the context's time. */
+static struct machine *door_issue(struct mctx *c, uint32_t size, unsigned cls) {
   CHECK_GT(size, 0);
   CHECK_LT(cls, MEM_CLASS_MAX);
   c->t++;
   c->slots++;
+  return c->m;
+}
+
+static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  struct mctx *c = ctx;
+  struct machine *m = door_issue(c, size, cls);
   m->st.loads++;
   struct cache *l1 = m->core[c->info.core].l1;
   uint64_t line = addr >> MACHINE_LG2_LINE, end = (addr + size - 1) >> MACHINE_LG2_LINE;
@@ -580,11 +585,7 @@ static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
 
 static void t_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct mctx *c = ctx;
-  struct machine *m = c->m;
-  CHECK_GT(size, 0);
-  CHECK_LT(cls, MEM_CLASS_MAX);
-  c->t++;
-  c->slots++;
+  struct machine *m = door_issue(c, size, cls);
   m->st.stores++;
   struct cache *l1 = m->core[c->info.core].l1;
   const uint64_t last = addr + size - 1, lmask = LINE_BYTES - 1;
