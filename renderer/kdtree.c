@@ -283,6 +283,28 @@ static float float_up(double d) {
   return (double)f < d ? nextafterf(f, INFINITY) : f;
 }
 
+/* *out = the bounds of the n corners c (widened by m, rounded outwards; none:
+ * unbounded) cut back to bx and to triangle p's own bounds; false if empty. */
+static bool cut_bounds(const struct kd_builder *b, uint32_t p, const struct kd_box *bx,
+                       double (*c)[3], int n, double m, struct kd_box *out) {
+  for (int a = 0; a < 3; a++) {
+    float lo = -INFINITY, hi = INFINITY;
+    if (n > 0) {
+      double dl = c[0][a], dh = dl;
+      for (int i = 1; i < n; i++) {
+        dl = c[i][a] < dl ? c[i][a] : dl;
+        dh = c[i][a] > dh ? c[i][a] : dh;
+      }
+      lo = float_down(dl - m);
+      hi = float_up(dh + m);
+    }
+    out->lo[a] = max_nonnan(lo, max_nonnan(bx->lo[a], b->tb[p].lo[a]));
+    out->hi[a] = min_nonnan(hi, min_nonnan(bx->hi[a], b->tb[p].hi[a]));
+    if (out->lo[a] > out->hi[a]) return false;
+  }
+  return true;
+}
+
 /* Bounds of what triangle p has inside box bx, conservatively: the triangle is
  * clipped in double against bx widened by a margin m (2^-40 of the largest
  * coordinate involved, far above the clipping's rounding), the result widened
@@ -318,14 +340,7 @@ static bool clip_tri(const struct kd_builder *b, uint32_t p, const struct kd_box
       double(*src)[3] = poly[cur], (*dst)[3] = poly[cur ^ 1];
       int nn = 0;
       for (int i = 0; i < n; i++) {
-        if (nn + 2 > KD_CLIP_MAX) {
-          for (int k = 0; k < 3; k++) {
-            out->lo[k] = max_nonnan(bx->lo[k], b->tb[p].lo[k]);
-            out->hi[k] = min_nonnan(bx->hi[k], b->tb[p].hi[k]);
-            if (out->lo[k] > out->hi[k]) return false; /* its bounds miss bx */
-          }
-          return true;
-        }
+        if (nn + 2 > KD_CLIP_MAX) return cut_bounds(b, p, bx, NULL, 0, 0.0, out);
         const double *P = src[i], *Q = src[i + 1 == n ? 0 : i + 1];
         double dp = hi ? c - P[a] : P[a] - c, dq = hi ? c - Q[a] : Q[a] - c; /* >= 0 inside */
         if (dp >= 0.0) {
@@ -341,18 +356,7 @@ static bool clip_tri(const struct kd_builder *b, uint32_t p, const struct kd_box
       cur ^= 1;
       if (n == 0) return false;
     }
-  for (int a = 0; a < 3; a++) {
-    double lo = poly[cur][0][a], hi = lo;
-    for (int i = 1; i < n; i++) {
-      double x = poly[cur][i][a];
-      lo = x < lo ? x : lo;
-      hi = x > hi ? x : hi;
-    }
-    out->lo[a] = max_nonnan(float_down(lo - m), max_nonnan(bx->lo[a], b->tb[p].lo[a]));
-    out->hi[a] = min_nonnan(float_up(hi + m), min_nonnan(bx->hi[a], b->tb[p].hi[a]));
-    if (out->lo[a] > out->hi[a]) return false;
-  }
-  return true;
+  return cut_bounds(b, p, bx, poly[cur], n, m, out);
 }
 
 static void sev_push(struct kd_builder *b, int child, int a, float t, uint32_t pt) {
