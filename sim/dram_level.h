@@ -32,8 +32,9 @@ struct dram_client {
 };
 
 struct dram_level_ops {
-  /* Could the level take a read (write = false) or a write now? */
-  bool (*can_take)(const void *self, bool write);
+  /* Could the level take a read (write = false) or a write of the line at
+   * byte address addr now? (A level with channels answers for addr's.) */
+  bool (*can_take)(const void *self, uint64_t addr, bool write);
   /* Take one request of one 64-byte line at byte address addr (line aligned)
    * now; only after can_take said yes (CHECKed). tag is the client's. */
   void (*take)(void *self, uint64_t addr, bool write, uint64_t tag);
