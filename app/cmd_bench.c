@@ -66,7 +66,7 @@ static const char HELP[] =
     "                         x 1 ray of it, each against the best native render;\n"
     "                         prints scene, width, height, rays, machine, contexts,\n"
     "                         native_s, timed_s, slowdown, cycles, events,\n"
-    "                         events_per_s, core_utilization, dram_utilization\n"
+    "                         events_per_s, core_utilization, dram_bytes_per_cycle\n"
     "  -h, --help             this text\n";
 
 static double render_once(const struct app_world *w, uint32_t mask, uint32_t W, uint32_t H,
@@ -152,7 +152,7 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
   struct err e = {0};
   if (!machine_cfg_load(&mc, cfg_path, &e) || !machine_cfg_check(&mc, &e)) return app_report(&e);
   printf("scene,width,height,rays,machine,contexts,native_s,timed_s,slowdown,cycles,events,"
-         "events_per_s,core_utilization,dram_utilization\n");
+         "events_per_s,core_utilization,dram_bytes_per_cycle\n");
   for (int i = optind; i < argc; i++) {
     struct app_world w;
     if (!app_world_load(&w, argv[i])) return 2;
@@ -176,7 +176,7 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
              best > 0 ? t.wall_s / best : 0.0, (unsigned long long)st->cycles,
              (unsigned long long)st->events, t.wall_s > 0 ? (double)st->events / t.wall_s : 0.0,
              (double)st->issue_slots / ((double)p.cores * (double)st->cycles),
-             (double)st->dram_busy_ticks / (double)(1ull << 20) / (double)st->cycles);
+             (double)(st->dram.read_bytes + st->dram.write_bytes) / (double)st->cycles);
       fflush(stdout);
       app_timed_fini(&t);
     }

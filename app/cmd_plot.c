@@ -22,7 +22,8 @@ static const char HELP[] =
     "Plot column METRIC against column KEY of a tidy table (rtsim merge's) as\n"
     "lines with points, through gnuplot. Axis labels carry the unit the column\n"
     "name gives: _bytes, l1.size, l2.size: bytes; cycles, _cycles, .latency,\n"
-    "costs., timeline.window, queue_delay_, load_latency_: cycles; _fraction,\n"
+    "costs., timeline.window, _wait_mean, _latency_mean/_p50/_p95/_p99/_max:\n"
+    "cycles; _fraction,\n"
     "utilization, _rate: fraction; _per_second: per second; _bytes_per_cycle:\n"
     "bytes per cycle; seconds, _s: seconds; clock_ghz: GHz; _mb: MiB; anything\n"
     "else is a count or a label. Rows with an empty KEY or METRIC cell are left out.\n"
@@ -54,7 +55,8 @@ static const char *unit_of(const char *name) {
   if (ENDS("_bytes") || !strcmp(name, "l1.size") || !strcmp(name, "l2.size")) return "bytes";
   if (ENDS("_per_second")) return "per second";
   if (!strcmp(name, "cycles") || ENDS("_cycles") || ENDS(".latency") || STARTS("costs.") ||
-      !strcmp(name, "timeline.window") || STARTS("queue_delay_") || STARTS("load_latency_"))
+      !strcmp(name, "timeline.window") || ENDS("_wait_mean") || STARTS("load_latency_") ||
+      (STARTS("dram_") && strstr(name, "_latency_")))
     return "cycles";
   if (ENDS("_fraction") || ENDS("utilization") || ENDS("_rate")) return "fraction";
   if (!strcmp(name, "seconds") || ENDS("_s")) return "seconds";

@@ -20,6 +20,7 @@
 #include "sim/machine_cfg.h"
 #include "sim/outfile.h"
 #include "sim/stats.h"
+#include "sim/timeline.h"
 
 void run_output_invalidate(const char *dir) {
   char p[4200];
@@ -45,11 +46,26 @@ static void identity(const struct run_output_report *r, struct stats_table *t) {
   stats_u64(t, "seed", r->seed);
 }
 
+/* A queue's numbers for Little's law: requests that left it, their mean wait,
+ * and the mean and most requests inside (length_mean x cycles = wait_mean x
+ * requests, measured apart). */
+static void queue(struct stats_table *t, const char *prefix, const struct qmeter *q, uint64_t cycles) {
+  char name[64];
+  snprintf(name, sizeof name, "%s_requests", prefix);
+  stats_u64(t, name, q->left);
+  snprintf(name, sizeof name, "%s_wait_mean", prefix);
+  stats_f64(t, name, ratio((double)q->wait_sum, (double)q->left));
+  snprintf(name, sizeof name, "%s_length_mean", prefix);
+  stats_f64(t, name, ratio((double)q->area, (double)cycles));
+  snprintf(name, sizeof name, "%s_length_max", prefix);
+  stats_u64(t, name, q->max);
+}
+
 /* Every measured scalar, units in the names. */
 static void measured(const struct run_output_report *r, struct stats_table *t) {
   const struct machine_stats *s = machine_get_stats(r->machine);
   const struct machine_params *p = &r->cfg->p;
-  const double cyc = (double)s->cycles, tick = (double)(1ull << DRAM_TICK_BITS);
+  const double cyc = (double)s->cycles;
   const uint64_t rays = render_stats_total(r->rstats);
   const double seconds = cyc / (p->clock_ghz * 1e9);
   stats_u64(t, "cycles", s->cycles);
@@ -75,34 +91,50 @@ static void measured(const struct run_output_report *r, struct stats_table *t) {
   stats_u64(t, "stores", s->stores);
   stats_u64(t, "blocking_loads", s->blocking_loads);
   stats_f64(t, "issue_slots_per_blocking_load", ratio((double)s->issue_slots, (double)s->blocking_loads));
-  uint64_t geo_misses = (s->fetch_bytes_by_class[TRACE_CLASS_GEOMETRY] + s->fetch_bytes_by_class[TRACE_CLASS_NODE]) / 64;
+  const struct l2_stats *l2 = &s->l2;
+  uint64_t geo_misses = (l2->fetch_bytes_by_class[TRACE_CLASS_GEOMETRY] + l2->fetch_bytes_by_class[TRACE_CLASS_NODE]) / 64;
   stats_f64(t, "issue_slots_per_geometry_miss", ratio((double)s->issue_slots, (double)geo_misses));
   stats_u64(t, "l1_accesses", s->l1_accesses);
   stats_u64(t, "l1_hits", s->l1_hits);
-  stats_u64(t, "l2_accesses", s->l2_accesses);
-  stats_u64(t, "l2_hits", s->l2_hits);
-  stats_u64(t, "l2_misses", s->l2_misses);
-  stats_f64(t, "l2_miss_rate", ratio((double)s->l2_misses, (double)s->l2_accesses));
-  stats_u64(t, "l2_mshr_merges", s->l2_mshr_merges);
-  stats_u64(t, "l2_whole_line_allocs", s->l2_whole_line_allocs);
-  stats_u64(t, "l2_stalls", s->l2_stalls);
-  stats_u64(t, "l2_bank_wait_cycles", s->l2_bank_wait_cycles);
-  stats_u64(t, "l2_fetch_bytes", s->l2_fetch_bytes);
-  stats_u64(t, "l2_writeback_bytes", s->l2_writeback_bytes);
+  stats_u64(t, "l2_accesses", l2->accesses);
+  stats_u64(t, "l2_hits", l2->hits);
+  stats_u64(t, "l2_misses", l2->misses);
+  stats_f64(t, "l2_miss_rate", ratio((double)l2->misses, (double)l2->accesses));
+  stats_u64(t, "l2_mshr_merges", l2->mshr_merges);
+  stats_u64(t, "l2_merges_held", l2->merges_held);
+  stats_u64(t, "l2_whole_line_allocs", l2->whole_line_allocs);
+  stats_u64(t, "l2_stalls", l2->stalls);
+  static const char *const why[L2_STALL_COUNT] = {"mshr", "set", "write_buffer", "dram"};
+  for (unsigned i = 0; i < L2_STALL_COUNT; i++) {
+    char name[64];
+    snprintf(name, sizeof name, "l2_stall_%s_cycles", why[i]);
+    stats_u64(t, name, l2->stall_cycles[i]);
+  }
+  stats_u64(t, "l2_bank_wait_cycles", l2->bank_wait_cycles);
+  stats_u64(t, "l2_fetch_bytes", l2->fetch_bytes);
+  stats_u64(t, "l2_writeback_bytes", l2->writeback_bytes);
   for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) {
     char name[64];
     snprintf(name, sizeof name, "fetch_%s_bytes", trace_class_names[c]);
-    stats_u64(t, name, s->fetch_bytes_by_class[c]);
+    stats_u64(t, name, l2->fetch_bytes_by_class[c]);
   }
-  stats_u64(t, "dram_read_bytes", s->dram_read_bytes);
-  stats_u64(t, "dram_write_bytes", s->dram_write_bytes);
-  stats_f64(t, "dram_bytes_per_cycle", ratio((double)(s->dram_read_bytes + s->dram_write_bytes), cyc));
-  stats_f64(t, "dram_utilization", ratio((double)s->dram_busy_ticks / tick, cyc));
-  uint64_t reqs = s->dram_reads + s->dram_writes;
-  stats_f64(t, "queue_delay_mean", ratio((double)s->dram_wait_ticks_sum / tick, (double)reqs));
-  stats_u64(t, "queue_delay_p95", hist_quantile(&s->queue_delay, 0.95));
-  stats_f64(t, "dram_queue_length_mean", ratio(s->dram_fifo_area, cyc));
-  stats_u64(t, "dram_queue_length_max", s->dram_fifo_max);
+  queue(t, "l2_stall_queue", &l2->stall_queue, s->cycles);
+  queue(t, "l2_miss_queue", &l2->miss_queue, s->cycles);
+  stats_u64(t, "backpressure_cycles", l2->miss_queue.wait_sum);
+  queue(t, "l2_write_buffer", &l2->write_buffer, s->cycles);
+  const struct dram_stats *d = &s->dram;
+  stats_u64(t, "dram_reads", d->reads);
+  stats_u64(t, "dram_writes", d->writes);
+  stats_u64(t, "dram_read_bytes", d->read_bytes);
+  stats_u64(t, "dram_write_bytes", d->write_bytes);
+  stats_f64(t, "dram_bytes_per_cycle", ratio((double)(d->read_bytes + d->write_bytes), cyc));
+  stats_f64(t, "dram_read_latency_mean", hist_mean(&d->read_latency));
+  stats_u64(t, "dram_read_latency_p50", hist_quantile(&d->read_latency, 0.50));
+  stats_u64(t, "dram_read_latency_p95", hist_quantile(&d->read_latency, 0.95));
+  stats_u64(t, "dram_read_latency_p99", hist_quantile(&d->read_latency, 0.99));
+  stats_u64(t, "dram_read_latency_max", d->read_latency.max);
+  stats_f64(t, "dram_write_latency_mean", hist_mean(&d->write_latency));
+  dram_report(machine_dram(r->machine), t, s->cycles);
   stats_f64(t, "load_latency_mean", hist_mean(&s->load_latency));
   stats_u64(t, "load_latency_p95", hist_quantile(&s->load_latency, 0.95));
   stats_u64(t, "load_latency_max", s->load_latency.max);
@@ -135,14 +167,14 @@ static bool write_timeline(const struct run_output_report *r, struct err *e) {
   struct outfile o;
   if (!open_out(&o, r, "timeline.csv", e)) return false;
   FILE *f = o.f;
-  const struct machine *m = r->machine;
-  const uint64_t rows = machine_timeline_rows(m), win = machine_timeline_window(m);
-  const uint64_t end = machine_get_stats(m)->cycles;
+  const struct timeline *tl = machine_timeline(r->machine);
+  const uint64_t rows = tl->rows, win = tl->window;
+  const uint64_t end = machine_get_stats(r->machine)->cycles;
   fputs("cycle,cycles,dram_read_bytes,dram_write_bytes", f);
   for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) fprintf(f, ",read_%s_bytes", trace_class_names[c]);
   fputs(",l2_accesses,l2_misses,issued_ops,busy_threads\n", f);
   for (uint64_t i = 0; i < rows; i++) {
-    const double *v = machine_timeline_row(m, i);
+    const double *v = timeline_row(tl, i);
     uint64_t start = i * win, len = start + win <= end ? win : (end > start ? end - start : 0);
     if (len == 0) break;
     fprintf(f, "%llu,%llu,%.2f,%.2f", (unsigned long long)start, (unsigned long long)len,
@@ -175,7 +207,7 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
                    "set ylabel 'DRAM bytes per cycle'\nset grid\nset yrange [0:*]\n"
                    "plot '%s' using (($1+$2/2)/1e6):(($3+$4)/$2) with steps lw 2 lc rgb 'black' title 'all (read + write)'",
                    o.tmp, r->scene_name, r->policy, r->width, r->height,
-                   (unsigned long long)machine_timeline_window(r->machine), csv);
+                   (unsigned long long)machine_timeline(r->machine)->window, csv);
   for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++)
     n += snprintf(cmd + n, sizeof cmd - (size_t)n,
                   ", '' using (($1+$2/2)/1e6):($%u/$2) with steps title 'read: %s'", 5 + c,
@@ -211,11 +243,11 @@ static bool write_json(const struct run_output_report *r, struct err *e) {
   stats_write_json_members(&t, f, "  ");
   stats_fini(&t);
   fprintf(f, ",\n  \"timeline_window_cycles\": %llu",
-          (unsigned long long)machine_timeline_window(r->machine));
+          (unsigned long long)machine_timeline(r->machine)->window);
   fputs(",\n  \"load_latency_histogram_cycles\": ", f);
   hist_write_json(&s->load_latency, f);
-  fputs(",\n  \"queue_delay_histogram_cycles\": ", f);
-  hist_write_json(&s->queue_delay, f);
+  fputs(",\n  \"dram_read_latency_histogram_cycles\": ", f);
+  hist_write_json(&s->dram.read_latency, f);
   fputs(",\n  \"revision\": ", f);
   stats_write_json_str(f, app_revision);
   fputs(",\n  \"wall_s\": ", f);
@@ -242,8 +274,8 @@ void run_output_summary(const struct run_output_report *r, FILE *f) {
   struct stats_table t = {0};
   measured(r, &t);
   static const char *const show[] = {"cycles", "rays_traced", "rays_per_second", "core_utilization",
-                                     "thread_idle_fraction", "l2_miss_rate", "dram_utilization",
-                                     "queue_delay_mean", "load_latency_mean", "events"};
+                                     "thread_idle_fraction", "l2_miss_rate", "dram_bytes_per_cycle",
+                                     "dram_read_latency_mean", "load_latency_mean", "events"};
   for (unsigned i = 0; i < sizeof show / sizeof show[0]; i++)
     for (unsigned j = 0; j < t.n; j++)
       if (!strcmp(t.e[j].name, show[i])) {

@@ -1,143 +1,161 @@
-/* A FIFO channel solved in closed form at submission: request k enters the FIFO
- * at max(arrival, start of request k - depth) and starts its transfer at
- * max(entry, end of request k - 1). A ring of the last `depth` start times is
- * all the state the bound needs. */
+/* Every request passes through here on its way to the level: it gets a
+ * sequence number (the tag the level sees), its arrival and the client's tag
+ * wait in a ring indexed by that number, and when the level serves it the
+ * latency is counted and the client told. The ring's head is the oldest
+ * request not yet traced, so trace lines come out in arrival order however
+ * the level reorders. */
 #include "sim/dram.h"
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
-#include "sim/err.h"
+#include "sim/dram_fixed.h"
+#include "sim/engine.h"
+#include "sim/stats.h"
+
+const char *const dram_model_names[DRAM_MODEL_COUNT] = {"fixed", "channel", "banked"};
+
+struct flight {
+  uint64_t addr, tag, at, done_at;
+  bool write, done;
+};
 
 struct dram {
   struct dram_params p;
-  double ticks_per_byte;
-  uint64_t *starts; /* ring: start ticks of the last queue_depth requests */
-  uint64_t k;       /* requests so far */
-  uint64_t last_arrival;
-  /* Occupancy sweep: entry and start ticks of requests not yet started at
-   * sweep_t (a ring of capacity sw_cap from sw_lo, sw_n long); sw_e: how many
-   * of them have entered by sweep_t. */
-  uint64_t (*sw)[2];
-  uint64_t sw_cap, sw_lo, sw_n, sw_e;
-  uint64_t sweep_t;
-  double occ;
+  struct engine *eng;
+  struct dram_client client;
+  const struct dram_level_ops *ops;
+  void *level;
+  struct dram_clock clock;
+  struct flight *ring; /* capacity a power of two, indexed by sequence */
+  uint64_t cap, head, next;
+  uint64_t inflight; /* taken, not yet served */
+  FILE *trace;
   struct dram_stats st;
 };
 
-/* Advance the occupancy integral to tick x: entries and starts are each
- * non-decreasing, so two pointers merge them in time order. */
-static void sweep_to(struct dram *d, uint64_t x) {
-  const double tick = 1.0 / (double)(1ull << DRAM_TICK_BITS);
-  while (d->sw_n) {
-    uint64_t *head = d->sw[d->sw_lo % d->sw_cap];
-    uint64_t next_entry = d->sw_e < d->sw_n ? d->sw[(d->sw_lo + d->sw_e) % d->sw_cap][0] : UINT64_MAX;
-    uint64_t next_start = head[1];
-    uint64_t ev = next_entry < next_start ? next_entry : next_start;
-    if (ev > x) break;
-    d->st.fifo_area += d->occ * (double)(ev - d->sweep_t) * tick;
-    d->sweep_t = ev;
-    /* At equal ticks a start goes first (its place frees for the entry), unless
-     * the head has not entered yet. */
-    if (d->sw_e == 0 || next_entry < next_start) {
-      d->sw_e++;
-      d->occ += 1.0;
-      if (d->occ > d->st.fifo_max) d->st.fifo_max = (uint32_t)d->occ;
-    } else {
-      /* The head starts: it entered no later than it started. */
-      CHECK_GT(d->sw_e, 0);
-      d->sw_lo++;
-      d->sw_n--;
-      d->sw_e--;
-      d->occ -= 1.0;
-    }
-  }
-  if (x != UINT64_MAX && x > d->sweep_t) {
-    d->st.fifo_area += d->occ * (double)(x - d->sweep_t) * tick;
-    d->sweep_t = x;
-  }
-}
-
-static void sweep_add(struct dram *d, uint64_t entry, uint64_t start) {
-  if (d->sw_n == d->sw_cap) {
-    uint64_t cap = d->sw_cap ? 2 * d->sw_cap : 64;
-    uint64_t(*n)[2] = xmalloc(cap * sizeof *n);
-    for (uint64_t i = 0; i < d->sw_n; i++) {
-      n[i][0] = d->sw[(d->sw_lo + i) % d->sw_cap][0];
-      n[i][1] = d->sw[(d->sw_lo + i) % d->sw_cap][1];
-    }
-    free(d->sw);
-    d->sw = n;
-    d->sw_cap = cap;
-    d->sw_lo = 0;
-  }
-  uint64_t *r = d->sw[(d->sw_lo + d->sw_n) % d->sw_cap];
-  r[0] = entry;
-  r[1] = start;
-  d->sw_n++;
-}
-
-void dram_finish(struct dram *d) { sweep_to(d, UINT64_MAX); }
-
 const char *dram_params_problem(const struct dram_params *p) {
-  if (!(p->bytes_per_cycle > 0) || !isfinite(p->bytes_per_cycle) || p->bytes_per_cycle > 1e6)
-    return "the bandwidth must be above 0 and at most 10^6 bytes per cycle";
-  if (p->queue_depth < 1 || p->queue_depth > (1u << 20)) return "the queue depth must be 1 to 2^20";
-  if (p->latency_cycles > (1ull << 40)) return "the latency must be at most 2^40 cycles";
+  if (p->model >= DRAM_MODEL_COUNT) return "dram.model: expected fixed, channel or banked";
+  if (p->clock_mhz < 1 || p->clock_mhz > 16000) return "dram.clock_mhz: must be 1 to 16000";
+  if (p->model == DRAM_MODEL_FIXED && p->latency_cycles > (1ull << 40))
+    return "dram.latency: must be at most 2^40 cycles";
+  if (p->model == DRAM_MODEL_CHANNEL) {
+    struct dram_channel_params c = {p->latency_cycles, p->bytes_per_cycle, p->queue_depth};
+    return dram_channel_params_problem(&c);
+  }
+  if (p->model == DRAM_MODEL_BANKED) return "dram.model: banked is not built yet";
   return NULL;
 }
 
-struct dram *dram_create(const struct dram_params *p) {
+static void trace_flush(struct dram *d) {
+  while (d->head < d->next) {
+    struct flight *f = &d->ring[d->head & (d->cap - 1)];
+    if (!f->done) break;
+    if (d->trace)
+      fprintf(d->trace, "0x%llx %s %llu %llu %llu\n", (unsigned long long)f->addr,
+              f->write ? "WRITE" : "READ",
+              (unsigned long long)dram_clock_from_core(d->clock, f->at), (unsigned long long)f->at,
+              (unsigned long long)f->done_at);
+    d->head++;
+  }
+}
+
+static void level_done(void *ctx, uint64_t seq) {
+  struct dram *d = ctx;
+  CHECK(seq >= d->head && seq < d->next);
+  struct flight *f = &d->ring[seq & (d->cap - 1)];
+  CHECK(!f->done);
+  f->done = true;
+  f->done_at = engine_now(d->eng);
+  hist_add(f->write ? &d->st.write_latency : &d->st.read_latency, f->done_at - f->at);
+  d->inflight--;
+  uint64_t tag = f->tag;
+  if (seq == d->head) trace_flush(d);
+  d->client.done(d->client.ctx, tag);
+}
+
+static void level_space(void *ctx) {
+  struct dram *d = ctx;
+  d->client.space(d->client.ctx);
+}
+
+struct dram *dram_create(const struct dram_params *p, uint64_t core_khz, struct engine *e,
+                         const struct dram_client *client) {
   CHECK(dram_params_problem(p) == NULL);
   struct dram *d = xcalloc(1, sizeof *d);
   d->p = *p;
-  d->ticks_per_byte = (double)(1ull << DRAM_TICK_BITS) / p->bytes_per_cycle;
-  d->starts = xcalloc(p->queue_depth, sizeof *d->starts);
+  d->eng = e;
+  d->client = *client;
+  d->clock = dram_clock_make(core_khz, (uint64_t)p->clock_mhz * 1000);
+  d->cap = 64;
+  d->ring = xcalloc(d->cap, sizeof *d->ring);
+  struct dram_client mine = {d, level_done, level_space};
+  switch (p->model) {
+  case DRAM_MODEL_FIXED:
+    d->ops = &dram_fixed_ops;
+    d->level = dram_fixed_create(p->latency_cycles, e, &mine);
+    break;
+  case DRAM_MODEL_CHANNEL: {
+    struct dram_channel_params c = {p->latency_cycles, p->bytes_per_cycle, p->queue_depth};
+    d->ops = &dram_channel_ops;
+    d->level = dram_channel_create(&c, e, &mine);
+    break;
+  }
+  default: CHECK(false);
+  }
   return d;
 }
 
 void dram_destroy(struct dram *d) {
   if (!d) return;
-  free(d->sw);
-  free(d->starts);
+  d->ops->destroy(d->level);
+  free(d->ring);
   free(d);
 }
 
-void dram_submit(struct dram *d, uint64_t at, uint64_t addr, uint32_t bytes, bool write,
-                 struct dram_timing *out) {
-  (void)addr;
-  CHECK_GE(at, d->last_arrival);
-  CHECK_LT(at, (1ull << (64 - DRAM_TICK_BITS - 1)));
-  d->last_arrival = at;
-  uint64_t arrive = at << DRAM_TICK_BITS;
-  sweep_to(d, arrive);
-  uint64_t entry = arrive;
-  uint32_t slot = (uint32_t)(d->k % d->p.queue_depth);
-  if (d->k >= d->p.queue_depth && d->starts[slot] > entry) entry = d->starts[slot];
-  uint64_t start = entry > d->st.last_end_ticks ? entry : d->st.last_end_ticks;
-  /* At least one tick, so a transfer always takes time. */
-  uint64_t dur = (uint64_t)llround((double)bytes * d->ticks_per_byte);
-  if (dur == 0) dur = 1;
-  uint64_t end = start + dur;
-  d->starts[slot] = start;
-  d->k++;
-  d->st.last_end_ticks = end;
-  d->st.busy_ticks += dur;
-  out->start_ticks = start;
-  out->end_ticks = end;
-  out->wait_cycles = dram_ticks_to_cycles_ceil(start - arrive);
-  out->done_cycle = dram_ticks_to_cycles_ceil(end) + d->p.latency_cycles;
-  d->st.wait_ticks_sum += start - arrive;
-  d->st.fifo_wait_cycles_sum += (double)(start - entry) / (double)(1ull << DRAM_TICK_BITS);
-  sweep_add(d, entry, start);
-  d->st.backpressure_cycles += dram_ticks_to_cycles_ceil(entry - arrive);
+bool dram_can_take(const struct dram *d, uint64_t addr, bool write) {
+  return d->ops->can_take(d->level, addr, write);
+}
+
+void dram_take(struct dram *d, uint64_t addr, bool write, uint64_t tag) {
+  if (d->next - d->head == d->cap) {
+    /* Grow the ring, keeping each request at its sequence modulo the new size. */
+    uint64_t cap = 2 * d->cap;
+    struct flight *n = xcalloc(cap, sizeof *n);
+    for (uint64_t s = d->head; s < d->next; s++) n[s & (cap - 1)] = d->ring[s & (d->cap - 1)];
+    free(d->ring);
+    d->ring = n;
+    d->cap = cap;
+  }
+  uint64_t seq = d->next++;
+  struct flight *f = &d->ring[seq & (d->cap - 1)];
+  f->addr = addr;
+  f->tag = tag;
+  f->at = engine_now(d->eng);
+  f->write = write;
+  f->done = false;
+  if (++d->inflight > d->st.in_flight_max) d->st.in_flight_max = d->inflight;
   if (write) {
     d->st.writes++;
-    d->st.write_bytes += bytes;
+    d->st.write_bytes += 64;
   } else {
     d->st.reads++;
-    d->st.read_bytes += bytes;
+    d->st.read_bytes += 64;
   }
+  d->ops->take(d->level, addr, write, seq);
+}
+
+void dram_finish(struct dram *d) {
+  CHECK_EQ(d->inflight, 0);
+  CHECK_EQ(d->head, d->next);
+  d->ops->finish(d->level);
 }
 
 const struct dram_stats *dram_get_stats(const struct dram *d) { return &d->st; }
+
+void dram_report(const struct dram *d, struct stats_table *t, uint64_t cycles) {
+  d->ops->report(d->level, t, cycles);
+}
+
+void dram_trace_to(struct dram *d, FILE *f) { d->trace = f; }

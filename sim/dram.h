@@ -1,71 +1,65 @@
-/* The DRAM channel: requests wait in a FIFO of bounded depth, then cross the
- * channel one at a time at bytes_per_cycle (fractional allowed), and their data
- * is delivered latency_cycles after the transfer ends. A request finding the
- * FIFO full waits outside it (back-pressure on the L2) until a place frees.
- * Reads and write-backs share the FIFO and the bandwidth.
- *
- * Requests must be submitted in non-decreasing arrival cycles (the machine
- * submits from events, in time order). The FIFO is deterministic, so a request's
- * whole timing is known when it is submitted. Time inside the channel is kept
- * in ticks of 2^-DRAM_TICK_BITS cycle, so fractional transfer times add up
- * without drift (2^44 cycles of range).
- *
- * This is the small interface a banked, row-buffer model would replace. */
+/* The DRAM behind the L2: one level of detail chosen by dram.model (fixed
+ * latency, the FIFO channel, or banked DDR; sim/dram_level.h is what each
+ * implements), wrapped so that every level is counted, timed and traced the
+ * same way: reads and writes, bytes, the latency of each request from the
+ * cycle the level took it to the cycle it was served, and on request a trace
+ * of every request in arrival order (README "DRAM traces"). */
 #ifndef RTSIM_SIM_DRAM_H
 #define RTSIM_SIM_DRAM_H
 
 #include <stdbool.h>
 #include <stdint.h>
+#include <stdio.h>
 
-#define DRAM_TICK_BITS 20
+#include "sim/dram_channel.h"
+#include "sim/dram_level.h"
+#include "sim/hist.h"
+
+enum dram_model { DRAM_MODEL_FIXED, DRAM_MODEL_CHANNEL, DRAM_MODEL_BANKED, DRAM_MODEL_COUNT };
+extern const char *const dram_model_names[DRAM_MODEL_COUNT]; /* "fixed", "channel", "banked" */
 
 struct dram_params {
-  uint64_t latency_cycles;
-  double bytes_per_cycle; /* > 0 */
-  uint32_t queue_depth;   /* requests that may wait for the channel, >= 1 */
+  enum dram_model model;
+  uint64_t latency_cycles; /* fixed and channel: core cycles */
+  double bytes_per_cycle;  /* channel */
+  uint32_t queue_depth;    /* channel */
+  uint32_t clock_mhz;      /* the DRAM's own clock (banked timing; the trace's DRAM cycles) */
 };
 
-/* NULL if usable, else what is wrong. */
+/* NULL if usable, else what is wrong, naming the dram.* key. */
 const char *dram_params_problem(const struct dram_params *p);
 
-/* The timing of one request. Cycles are whole (rounded up from ticks). */
-struct dram_timing {
-  uint64_t start_ticks, end_ticks; /* the transfer on the channel */
-  uint64_t wait_cycles;            /* from arrival to the start of the transfer (rounded up) */
-  uint64_t done_cycle;             /* data delivered (end + latency) */
-};
-
+/* Counted here for every level. */
 struct dram_stats {
   uint64_t reads, writes, read_bytes, write_bytes;
-  uint64_t wait_ticks_sum;      /* sum of waits, in ticks (exact) */
-  uint64_t backpressure_cycles; /* of which spent outside a full FIFO */
-  uint64_t busy_ticks;          /* transfer time */
-  /* The FIFO itself, for Little's law: the sum over requests of the time spent
-   * inside it (entry to start), and the time integral of its occupancy,
-   * measured apart by sweeping entries and starts in time order (in cycles x
-   * requests; complete after dram_finish). */
-  double fifo_wait_cycles_sum, fifo_area;
-  uint32_t fifo_max;            /* most requests inside the FIFO at once */
-  uint64_t last_end_ticks;      /* when the channel is next free */
+  struct hist read_latency;  /* cycles from taken to data delivered */
+  struct hist write_latency; /* cycles from taken to written */
+  uint64_t in_flight_max;
 };
 
 struct dram;
 
-struct dram *dram_create(const struct dram_params *p); /* p CHECKed; caller destroys */
-void dram_destroy(struct dram *d);                     /* NULL ok */
+/* p must pass dram_params_problem (CHECKed); core_khz: the core clock in kHz
+ * (1 to 2^24). client is told of each request served. Caller destroys. */
+struct dram *dram_create(const struct dram_params *p, uint64_t core_khz, struct engine *e,
+                         const struct dram_client *client);
+void dram_destroy(struct dram *d); /* NULL ok */
 
-/* Submit a request of `bytes` (addr: for models that decode it) arriving at
- * cycle `at`. Fills *out. */
-void dram_submit(struct dram *d, uint64_t at, uint64_t addr, uint32_t bytes, bool write,
-                 struct dram_timing *out);
-
-/* Close the occupancy integral (call once, after the last submission). */
+/* The level's questions and orders, at engine_now (sim/dram_level.h).
+ * Requests are one 64-byte line at a line-aligned byte address; the tag is
+ * the client's, handed back in client->done. */
+bool dram_can_take(const struct dram *d, uint64_t addr, bool write);
+void dram_take(struct dram *d, uint64_t addr, bool write, uint64_t tag);
+/* After the run (nothing in flight, CHECKed). */
 void dram_finish(struct dram *d);
 
 const struct dram_stats *dram_get_stats(const struct dram *d);
+/* The level's own numbers (names with units), for a run of `cycles`. */
+void dram_report(const struct dram *d, struct stats_table *t, uint64_t cycles);
 
-static inline uint64_t dram_ticks_to_cycles_ceil(uint64_t ticks) {
-  return (ticks + ((1ull << DRAM_TICK_BITS) - 1)) >> DRAM_TICK_BITS;
-}
+/* Write every request from now on to f, one line each in arrival order, as
+ * soon as it and every earlier one are served (README "DRAM traces"); the
+ * caller owns f and checks it for errors. */
+void dram_trace_to(struct dram *d, FILE *f);
 
 #endif

@@ -6,9 +6,9 @@
 
 static unsigned bucket_of(uint64_t v) {
   if (v < HIST_EXACT) return (unsigned)v;
-  unsigned e = 63u - (unsigned)__builtin_clzll(v); /* >= 6 */
-  unsigned sub = (unsigned)(v >> (e - 3)) & 7u;
-  return HIST_EXACT + (e - 6u) * 8u + sub;
+  unsigned e = 63u - (unsigned)__builtin_clzll(v); /* >= HIST_EXACT_BITS */
+  unsigned sub = (unsigned)(v >> (e - HIST_SUB_BITS)) & ((1u << HIST_SUB_BITS) - 1u);
+  return HIST_EXACT + (e - HIST_EXACT_BITS) * (1u << HIST_SUB_BITS) + sub;
 }
 
 void hist_bucket_range(unsigned i, uint64_t *lo, uint64_t *hi) {
@@ -16,8 +16,9 @@ void hist_bucket_range(unsigned i, uint64_t *lo, uint64_t *hi) {
     *lo = *hi = i;
     return;
   }
-  unsigned e = (i - HIST_EXACT) / 8u + 6u, sub = (i - HIST_EXACT) % 8u;
-  uint64_t w = 1ull << (e - 3);
+  unsigned e = (i - HIST_EXACT) / (1u << HIST_SUB_BITS) + HIST_EXACT_BITS;
+  unsigned sub = (i - HIST_EXACT) % (1u << HIST_SUB_BITS);
+  uint64_t w = 1ull << (e - HIST_SUB_BITS);
   *lo = (1ull << e) + sub * w;
   *hi = *lo + (w - 1);
 }

@@ -16,23 +16,19 @@
  *   free); with none ready it idles. Resuming the ray it last ran is free.
  * - Stores are posted: they take their slot and go on to the L1 (write-through,
  *   no allocation) and the L2; the ray does not wait.
- * - L2: LRU sets (or fully associative), 64-byte lines, write-back, write-
- *   allocate, a store covering a whole line allocates it without a fetch. One
- *   access per bank per cycle (line-interleaved). A miss allocates its line at
- *   once (pending until the fill) and takes an MSHR; later accesses to a
- *   pending line merge. A miss that finds the MSHRs full, or a set whose ways
- *   are all pending, stalls the L2's input in order until a fill frees one.
- *   Misses go to DRAM l2.latency cycles after their bank takes them; dirty
- *   victims are written back through the same channel.
- * - DRAM: sim/dram.h. */
+ * - L2: sim/l2.h. DRAM: sim/dram.h (one level of detail, dram.model). */
 #ifndef RTSIM_SIM_MACHINE_H
 #define RTSIM_SIM_MACHINE_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "sim/mem.h"
+#include "sim/dram.h"
 #include "sim/hist.h"
+#include "sim/l2.h"
+#include "sim/mem.h"
+
+struct timeline;
 
 #define MACHINE_LG2_LINE 6 /* 64-byte lines everywhere */
 
@@ -44,10 +40,12 @@ struct machine_params {
   uint32_t l1_latency_cycles;
   uint64_t l2_size_bytes;
   uint32_t l2_ways; /* 0: fully associative */
-  uint32_t l2_latency_cycles, l2_banks, l2_mshrs;
+  uint32_t l2_latency_cycles, l2_banks, l2_mshrs, l2_write_buffer;
+  uint32_t dram_model; /* enum dram_model */
   uint64_t dram_latency_cycles;
   double dram_bytes_per_cycle;
   uint32_t dram_queue_depth;
+  uint32_t dram_clock_mhz;
   /* Compute the renderer announces (the machine charges what it is told). */
   uint32_t cost_node_cycles, cost_triangle_cycles, cost_shade_cycles;
   uint32_t cost_ray_switch_cycles;
@@ -65,7 +63,6 @@ enum machine_tl_col {
   MACHINE_TL_BUSY_THREAD_CYCLES,
   MACHINE_TL_COLS
 };
-#define MACHINE_TL_MAX_ROWS 4096u
 
 struct machine_stats {
   uint64_t cycles;              /* last ray done and the channel drained */
@@ -80,17 +77,9 @@ struct machine_stats {
   uint64_t blocking_loads;      /* loads that left the L1 and suspended their ray */
   uint64_t waits, wait_cycles;  /* mem_wait: a worker idle by its own choice */
   uint64_t l1_accesses, l1_hits;
-  uint64_t l2_accesses, l2_hits, l2_misses, l2_mshr_merges, l2_whole_line_allocs;
-  uint64_t l2_bank_wait_cycles, l2_stalls;
-  uint64_t l2_accesses_by_class[MEM_CLASS_MAX];
-  uint64_t l2_fetch_bytes, l2_writeback_bytes;
-  uint64_t fetch_bytes_by_class[MEM_CLASS_MAX];
-  uint64_t dram_reads, dram_writes, dram_read_bytes, dram_write_bytes;
-  uint64_t dram_busy_ticks, dram_wait_ticks_sum;
-  double dram_fifo_wait_cycles_sum, dram_fifo_area; /* Little's law (sim/dram.h) */
-  uint32_t dram_fifo_max;
+  struct l2_stats l2;       /* sim/l2.h, as of the end of the run */
+  struct dram_stats dram;   /* sim/dram.h, likewise (the level's own: machine_dram) */
   struct hist load_latency; /* cycles from a load's issue to its data (L1 hits too) */
-  struct hist queue_delay;  /* cycles a DRAM request waits for the channel */
   uint64_t events;
   uint64_t stacks_max;      /* coroutine stacks alive at once */
 };
@@ -123,12 +112,10 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
 
 const struct machine_stats *machine_get_stats(const struct machine *m);
 
-/* The timeline: rows of window_cycles each (the last may be shorter; windows
- * double when a run would need more than MACHINE_TL_MAX_ROWS). */
-uint64_t machine_timeline_window(const struct machine *m);
-uint64_t machine_timeline_rows(const struct machine *m);
-/* Row i: MACHINE_TL_COLS values. */
-const double *machine_timeline_row(const struct machine *m, uint64_t i);
+/* The timeline: rows of MACHINE_TL_COLS values (sim/timeline.h). */
+const struct timeline *machine_timeline(const struct machine *m);
+/* The DRAM (its level's numbers: dram_report; its trace: dram_trace_to). */
+struct dram *machine_dram(const struct machine *m);
 
 /* The deepest coroutine stack use seen, in bytes (painted stacks only: set
  * paint with machine_create_painted; else 0). */

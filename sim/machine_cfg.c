@@ -11,16 +11,17 @@
 #include "sim/err.h"
 #include "sim/stats.h"
 
-enum kind { K_U32, K_U64, K_F64, K_SIZE, K_WAYS };
+enum kind { K_U32, K_U64, K_F64, K_SIZE, K_WAYS, K_ENUM };
 
 struct key {
   const char *name; /* "section.key" or "key" */
   enum kind kind;
   double lo, hi;
   size_t off;
+  const char *const *names; /* K_ENUM: the values' names (a uint32_t index), hi + 1 of them */
 };
 
-#define OFF(f) offsetof(struct machine_params, f)
+#define OFF(f) offsetof(struct machine_params, f), NULL
 static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"clock_ghz", K_F64, 1e-3, 1e3, OFF(clock_ghz)},
     {"cores", K_U32, 1, 4096, OFF(cores)},
@@ -34,9 +35,12 @@ static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"l2.latency", K_U32, 0, 1e6, OFF(l2_latency_cycles)},
     {"l2.banks", K_U32, 1, 4096, OFF(l2_banks)},
     {"l2.mshrs", K_U32, 1, 1u << 20, OFF(l2_mshrs)},
+    {"l2.write_buffer", K_U32, 1, 1u << 20, OFF(l2_write_buffer)},
+    {"dram.model", K_ENUM, 0, DRAM_MODEL_COUNT - 1, offsetof(struct machine_params, dram_model), dram_model_names},
     {"dram.latency", K_U64, 0, 1e9, OFF(dram_latency_cycles)},
     {"dram.bytes_per_cycle", K_F64, 1e-6, 1e6, OFF(dram_bytes_per_cycle)},
     {"dram.queue_depth", K_U32, 1, 1u << 20, OFF(dram_queue_depth)},
+    {"dram.clock_mhz", K_U32, 1, 16000, OFF(dram_clock_mhz)},
     {"costs.node", K_U32, 0, 1e6, OFF(cost_node_cycles)},
     {"costs.triangle", K_U32, 0, 1e6, OFF(cost_triangle_cycles)},
     {"costs.shade", K_U32, 0, 1e6, OFF(cost_shade_cycles)},
@@ -51,9 +55,9 @@ const char *machine_cfg_key(unsigned i) { return i < MACHINE_CFG_KEYS ? KEYS[i].
 
 const char *machine_cfg_key_list(void) {
   return "clock_ghz, cores, threads_per_core, rays_per_thread, l1.size, l1.ways, l1.latency, "
-         "l2.size, l2.ways, l2.latency, l2.banks, l2.mshrs, dram.latency, "
-         "dram.bytes_per_cycle, dram.queue_depth, costs.node, costs.triangle, costs.shade, "
-         "costs.ray_switch, timeline.window";
+         "l2.size, l2.ways, l2.latency, l2.banks, l2.mshrs, l2.write_buffer, dram.model, "
+         "dram.latency, dram.bytes_per_cycle, dram.queue_depth, dram.clock_mhz, costs.node, "
+         "costs.triangle, costs.shade, costs.ray_switch, timeline.window";
 }
 
 void machine_cfg_defaults(struct machine_cfg *c) {
@@ -72,9 +76,12 @@ void machine_cfg_defaults(struct machine_cfg *c) {
   p->l2_latency_cycles = 20;
   p->l2_banks = 8;
   p->l2_mshrs = 64;
+  p->l2_write_buffer = 16;
+  p->dram_model = DRAM_MODEL_CHANNEL;
   p->dram_latency_cycles = 200;
   p->dram_bytes_per_cycle = 16;
   p->dram_queue_depth = 32;
+  p->dram_clock_mhz = 1200;
   p->cost_node_cycles = 7;
   p->cost_triangle_cycles = 20;
   p->cost_shade_cycles = 50;
@@ -135,6 +142,19 @@ static bool read_value(const struct cfg_doc *d, const struct cfg_node *n, const 
     memcpy(dst, &v, sizeof v);
     return true;
   }
+  case K_ENUM: {
+    char list[256] = "";
+    for (unsigned i = 0; i <= (unsigned)k->hi; i++) {
+      if (n->kind == CFG_SCALAR && strcmp(n->text, k->names[i]) == 0) {
+        uint32_t v = i;
+        memcpy(dst, &v, sizeof v);
+        return true;
+      }
+      snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", i ? ", " : "", k->names[i]);
+    }
+    return cfg_fail(d, n, k->name, e, "unknown value (got '%s', expected one of: %s)",
+                    n->kind == CFG_SCALAR ? n->text : "a list or map", list);
+  }
   case K_WAYS: {
     uint32_t v = 0;
     if (n->kind == CFG_SCALAR && strcmp(n->text, "full") == 0) {
@@ -184,8 +204,8 @@ bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e) {
     else set_origin(c, i, path, n->line, n->col);
   }
   static const char *const expected[NSECTIONS] = {
-      "size, ways, latency", "size, ways, latency, banks, mshrs",
-      "latency, bytes_per_cycle, queue_depth", "node, triangle, shade, ray_switch", "window"};
+      "size, ways, latency", "size, ways, latency, banks, mshrs, write_buffer",
+      "model, latency, bytes_per_cycle, queue_depth, clock_mhz", "node, triangle, shade, ray_switch", "window"};
   for (unsigned s = 0; ok && s < NSECTIONS; s++) {
     struct cfg_node *sec = cfg_get(&d.root, SECTIONS[s]);
     if (sec && !cfg_check_keys(&d, sec, SECTIONS[s], expected[s], e)) ok = false;
@@ -297,6 +317,12 @@ void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsig
     }
     break;
   }
+  case K_ENUM: {
+    uint32_t v;
+    memcpy(&v, src, sizeof v);
+    snprintf(buf, cap, "%s", k->names[v]);
+    break;
+  }
   case K_U32:
   case K_WAYS: {
     uint32_t v;
@@ -322,7 +348,7 @@ void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *in
     fprintf(f, "%s%s", i ? ",\n" : "", indent);
     stats_write_json_str(f, KEYS[i].name);
     fputs(": ", f);
-    if (!strcmp(v, "full")) stats_write_json_str(f, v);
+    if (KEYS[i].kind == K_ENUM || !strcmp(v, "full")) stats_write_json_str(f, v);
     else fputs(v, f);
   }
 }

@@ -15,7 +15,7 @@
 struct err;
 struct stats_table;
 
-#define MACHINE_CFG_KEYS 20
+#define MACHINE_CFG_KEYS 23
 
 /* Where each key's value came from, for errors found after reading. */
 struct machine_cfg_origin {

@@ -33,7 +33,7 @@ int main(void) {
   static const struct {
     const char *file, *want;
   } bad[] = {
-      {"bad_unknown_key.yaml", "bad_unknown_key.yaml:3:3: error: l2.sise: unknown key 'sise' (expected one of: size, ways, latency, banks, mshrs)"},
+      {"bad_unknown_key.yaml", "bad_unknown_key.yaml:3:3: error: l2.sise: unknown key 'sise' (expected one of: size, ways, latency, banks, mshrs, write_buffer)"},
       {"bad_top_key.yaml", "bad_top_key.yaml:1:1: error: core: unknown key 'core' (expected one of: clock_ghz,"},
       {"bad_size_unit.yaml", "bad_size_unit.yaml:2:9: error: l2.size: not a size (got '4MB'"},
       {"bad_cores_zero.yaml", "bad_cores_zero.yaml:2:8: error: cores: out of range (got 0, expected 1 to 4096)"},

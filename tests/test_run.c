@@ -248,10 +248,10 @@ static void test_cross_check(struct world *w) {
         struct machine_stats st;
         struct render r;
         timed(w, kinds[k], mask, &p, &st, &r);
-        EXPECTF(st.l2_fetch_bytes == fetch && st.l2_writeback_bytes == wb,
+        EXPECTF(st.l2.fetch_bytes == fetch && st.l2.writeback_bytes == wb,
                 "%s at 2^%u, DRAM %llu cycles %.1f B/c: timed %llu/%llu, functional %llu/%llu",
                 policy_name(kinds[k]), sizes[s], (unsigned long long)drams[d].latency, drams[d].bw,
-                (unsigned long long)st.l2_fetch_bytes, (unsigned long long)st.l2_writeback_bytes,
+                (unsigned long long)st.l2.fetch_bytes, (unsigned long long)st.l2.writeback_bytes,
                 (unsigned long long)fetch, (unsigned long long)wb);
         fb_fini(&r.fb);
       }
@@ -277,7 +277,7 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
     struct render r;
     timed(w, k ? POLICY_PACKET : POLICY_RECURSIVE, mask, &tiny, &st, &r);
     EXPECTF(same_image(&ref.fb, &r.fb), "%s on tiny.yaml: image differs", k ? "packet" : "recursive");
-    EXPECT(st.l2_mshr_merges > 0 && st.l2_misses > 0 && st.issue_slots > 0);
+    EXPECT(st.l2.mshr_merges > 0 && st.l2.misses > 0 && st.issue_slots > 0);
     fb_fini(&r.fb);
   }
 

@@ -1,0 +1,191 @@
+/* A FIFO channel solved in closed form when a request is taken: request k
+ * starts its transfer at max(taken, end of request k - 1). It is taken only
+ * while the FIFO has a free place: the request queue_depth places ahead of it
+ * has started. A ring of the last queue_depth start times is all the state
+ * that rule needs. */
+#include "sim/dram_channel.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+#include "sim/engine.h"
+#include "sim/stats.h"
+
+struct dram_channel {
+  struct dram_channel_params p;
+  struct engine *eng;
+  struct dram_client client;
+  double ticks_per_byte;
+  uint64_t *starts; /* ring: start ticks of the last queue_depth requests */
+  uint64_t k;       /* requests so far */
+  uint64_t space_at; /* cycle of the pending space event, or UINT64_MAX */
+  /* Occupancy sweep: entry and start ticks of requests not yet started at
+   * sweep_t (a ring of capacity sw_cap from sw_lo, sw_n long); sw_e: how many
+   * of them have entered by sweep_t. */
+  uint64_t (*sw)[2];
+  uint64_t sw_cap, sw_lo, sw_n, sw_e;
+  uint64_t sweep_t;
+  double occ;
+  struct dram_channel_stats st;
+};
+
+#define LINE_BYTES 64u
+
+/* Advance the occupancy integral to tick x: entries and starts are each
+ * non-decreasing, so two pointers merge them in time order. */
+static void sweep_to(struct dram_channel *d, uint64_t x) {
+  const double tick = 1.0 / (double)(1ull << DRAM_TICK_BITS);
+  while (d->sw_n) {
+    uint64_t *head = d->sw[d->sw_lo % d->sw_cap];
+    uint64_t next_entry = d->sw_e < d->sw_n ? d->sw[(d->sw_lo + d->sw_e) % d->sw_cap][0] : UINT64_MAX;
+    uint64_t next_start = head[1];
+    uint64_t ev = next_entry < next_start ? next_entry : next_start;
+    if (ev > x) break;
+    d->st.fifo_area += d->occ * (double)(ev - d->sweep_t) * tick;
+    d->sweep_t = ev;
+    /* At equal ticks a start goes first (its place frees for the entry), unless
+     * the head has not entered yet. */
+    if (d->sw_e == 0 || next_entry < next_start) {
+      d->sw_e++;
+      d->occ += 1.0;
+      if (d->occ > d->st.fifo_max) d->st.fifo_max = (uint32_t)d->occ;
+    } else {
+      /* The head starts: it entered no later than it started. */
+      CHECK_GT(d->sw_e, 0);
+      d->sw_lo++;
+      d->sw_n--;
+      d->sw_e--;
+      d->occ -= 1.0;
+    }
+  }
+  if (x != UINT64_MAX && x > d->sweep_t) {
+    d->st.fifo_area += d->occ * (double)(x - d->sweep_t) * tick;
+    d->sweep_t = x;
+  }
+}
+
+static void sweep_add(struct dram_channel *d, uint64_t entry, uint64_t start) {
+  if (d->sw_n == d->sw_cap) {
+    uint64_t cap = d->sw_cap ? 2 * d->sw_cap : 64;
+    uint64_t(*n)[2] = xmalloc(cap * sizeof *n);
+    for (uint64_t i = 0; i < d->sw_n; i++) {
+      n[i][0] = d->sw[(d->sw_lo + i) % d->sw_cap][0];
+      n[i][1] = d->sw[(d->sw_lo + i) % d->sw_cap][1];
+    }
+    free(d->sw);
+    d->sw = n;
+    d->sw_cap = cap;
+    d->sw_lo = 0;
+  }
+  uint64_t *r = d->sw[(d->sw_lo + d->sw_n) % d->sw_cap];
+  r[0] = entry;
+  r[1] = start;
+  d->sw_n++;
+}
+
+const char *dram_channel_params_problem(const struct dram_channel_params *p) {
+  if (!(p->bytes_per_cycle > 0) || !isfinite(p->bytes_per_cycle) || p->bytes_per_cycle > 1e6)
+    return "dram.bytes_per_cycle: must be above 0 and at most 10^6 bytes per cycle";
+  if (p->bytes_per_cycle < 1e-6) return "dram.bytes_per_cycle: must be at least 10^-6";
+  if (p->queue_depth < 1 || p->queue_depth > (1u << 20)) return "dram.queue_depth: must be 1 to 2^20";
+  if (p->latency_cycles > (1ull << 40)) return "dram.latency: must be at most 2^40 cycles";
+  return NULL;
+}
+
+static void ev_done(void *ctx, uint64_t tag) {
+  struct dram_channel *d = ctx;
+  d->client.done(d->client.ctx, tag);
+}
+
+static void ev_space(void *ctx, uint64_t arg) {
+  struct dram_channel *d = ctx;
+  (void)arg;
+  d->space_at = UINT64_MAX;
+  d->client.space(d->client.ctx);
+}
+
+/* Is a FIFO place free at tick now? The request queue_depth ahead has started. */
+static bool place_free(const struct dram_channel *d, uint64_t now_ticks) {
+  return d->k < d->p.queue_depth || d->starts[d->k % d->p.queue_depth] <= now_ticks;
+}
+
+static bool ch_can_take(const void *self, uint64_t addr, bool write) {
+  const struct dram_channel *d = self;
+  (void)addr;
+  (void)write;
+  return place_free(d, engine_now(d->eng) << DRAM_TICK_BITS);
+}
+
+static void ch_take(void *self, uint64_t addr, bool write, uint64_t tag) {
+  struct dram_channel *d = self;
+  (void)addr;
+  const uint64_t now = engine_now(d->eng);
+  CHECK_LT(now, (1ull << (64 - DRAM_TICK_BITS - 1)));
+  const uint64_t arrive = now << DRAM_TICK_BITS;
+  CHECK(place_free(d, arrive));
+  sweep_to(d, arrive);
+  uint32_t slot = (uint32_t)(d->k % d->p.queue_depth);
+  uint64_t start = arrive > d->st.last_end_ticks ? arrive : d->st.last_end_ticks;
+  /* At least one tick, so a transfer always takes time. */
+  uint64_t dur = (uint64_t)llround((double)LINE_BYTES * d->ticks_per_byte);
+  if (dur == 0) dur = 1;
+  uint64_t end = start + dur;
+  d->starts[slot] = start;
+  d->k++;
+  d->st.requests++;
+  d->st.last_end_ticks = end;
+  d->st.busy_ticks += dur;
+  d->st.wait_ticks_sum += start - arrive;
+  sweep_add(d, arrive, start);
+  uint64_t done = dram_ticks_to_cycles_ceil(end) + (write ? 0 : d->p.latency_cycles);
+  engine_at(d->eng, done, ev_done, d, tag);
+  /* Full now: tell the client when the next place frees (the request
+   * queue_depth ahead of the next one starts). */
+  if (!place_free(d, arrive)) {
+    uint64_t at = dram_ticks_to_cycles_ceil(d->starts[d->k % d->p.queue_depth]);
+    if (d->space_at != at) {
+      d->space_at = at;
+      engine_at(d->eng, at, ev_space, d, 0);
+    }
+  }
+}
+
+static void ch_finish(void *self) { sweep_to(self, UINT64_MAX); }
+
+static void ch_report(const void *self, struct stats_table *t, uint64_t cycles) {
+  const struct dram_channel *d = self;
+  const double tick = (double)(1ull << DRAM_TICK_BITS), cyc = (double)cycles;
+  const double n = (double)d->st.requests;
+  stats_f64(t, "dram_utilization", cyc > 0 ? (double)d->st.busy_ticks / tick / cyc : 0.0);
+  stats_f64(t, "dram_fifo_wait_mean", n > 0 ? (double)d->st.wait_ticks_sum / tick / n : 0.0);
+  stats_f64(t, "dram_fifo_length_mean", cyc > 0 ? d->st.fifo_area / cyc : 0.0);
+  stats_u64(t, "dram_fifo_length_max", d->st.fifo_max);
+}
+
+static void ch_destroy(void *self) {
+  struct dram_channel *d = self;
+  if (!d) return;
+  free(d->sw);
+  free(d->starts);
+  free(d);
+}
+
+const struct dram_level_ops dram_channel_ops = {ch_can_take, ch_take, ch_finish, ch_report,
+                                                ch_destroy};
+
+struct dram_channel *dram_channel_create(const struct dram_channel_params *p, struct engine *e,
+                                         const struct dram_client *client) {
+  CHECK(dram_channel_params_problem(p) == NULL);
+  struct dram_channel *d = xcalloc(1, sizeof *d);
+  d->p = *p;
+  d->eng = e;
+  d->client = *client;
+  d->space_at = UINT64_MAX;
+  d->ticks_per_byte = (double)(1ull << DRAM_TICK_BITS) / p->bytes_per_cycle;
+  d->starts = xcalloc(p->queue_depth, sizeof *d->starts);
+  return d;
+}
+
+const struct dram_channel_stats *dram_channel_get_stats(const struct dram_channel *d) {
+  return &d->st;
+}

@@ -1,0 +1,52 @@
+/* The FIFO channel level (dram.model: channel): requests wait in a FIFO of
+ * queue_depth places, cross the channel one at a time at bytes_per_cycle
+ * (fractional allowed), and a read's data is delivered latency_cycles after
+ * its transfer ends; a write is served when its transfer ends. Reads and
+ * writes share the FIFO and the bandwidth. A full FIFO refuses requests
+ * (can_take), so they wait at the L2, in order: the back-pressure.
+ *
+ * The FIFO is deterministic, so a request's whole timing is known when it is
+ * taken. Time inside the channel is kept in ticks of 2^-DRAM_TICK_BITS cycle,
+ * so fractional transfer times add up without drift. */
+#ifndef RTSIM_SIM_DRAM_CHANNEL_H
+#define RTSIM_SIM_DRAM_CHANNEL_H
+
+#include <stdint.h>
+
+#include "sim/dram_level.h"
+
+#define DRAM_TICK_BITS 20
+
+struct dram_channel_params {
+  uint64_t latency_cycles;
+  double bytes_per_cycle; /* > 0 */
+  uint32_t queue_depth;   /* requests that may wait for the channel, >= 1 */
+};
+
+/* NULL if usable, else what is wrong (naming the dram.* key). */
+const char *dram_channel_params_problem(const struct dram_channel_params *p);
+
+struct dram_channel_stats {
+  uint64_t requests;
+  uint64_t busy_ticks;     /* transfer time */
+  uint64_t wait_ticks_sum; /* from take to the start of the transfer (the FIFO wait), exact */
+  /* The FIFO's occupancy integral, by time (in cycles x requests), apart from
+   * the waits, for Little's law; complete after finish. */
+  double fifo_area;
+  uint32_t fifo_max;
+  uint64_t last_end_ticks; /* when the channel is next free */
+};
+
+struct dram_channel;
+
+/* p must pass dram_channel_params_problem (CHECKed). Destroy through the ops. */
+struct dram_channel *dram_channel_create(const struct dram_channel_params *p, struct engine *e,
+                                         const struct dram_client *client);
+extern const struct dram_level_ops dram_channel_ops; /* self: a struct dram_channel * */
+const struct dram_channel_stats *dram_channel_get_stats(const struct dram_channel *d);
+
+static inline uint64_t dram_ticks_to_cycles_ceil(uint64_t ticks) {
+  return (ticks + ((1ull << DRAM_TICK_BITS) - 1)) >> DRAM_TICK_BITS;
+}
+
+#endif

@@ -1,0 +1,418 @@
+/* The L2's state: the tag array (sim/cache.h), per slot the head of its
+ * waiter list and the class of the miss; a pool of request records (stalled
+ * accesses and waiters on pending lines); the miss queue (slots whose fetch
+ * the DRAM has not yet taken) and the write buffer (lines to write back), both
+ * FIFO rings. Events: a miss leaving for the DRAM, a write-back entering the
+ * write buffer, a held merge answered; the DRAM calls back when a fetch or a
+ * write is served and when it has room again. */
+#include "sim/l2.h"
+
+#include <stdlib.h>
+
+#include "sim/cache.h"
+#include "sim/dram.h"
+#include "sim/timeline.h"
+
+#define NONE UINT32_MAX
+#define LINE_BYTES (1u << L2_LG2_LINE)
+
+struct req {
+  uint64_t line;
+  void *waiter;      /* NULL: a posted store */
+  uint64_t ready_at; /* a merged load: not before this cycle */
+  uint8_t op, cls;
+  uint32_t next;
+};
+
+/* A FIFO ring of (value, entered) pairs, growing by doubling. */
+struct ring {
+  uint64_t (*v)[2];
+  uint64_t cap, lo, n;
+};
+
+static void ring_push(struct ring *r, uint64_t value, uint64_t at) {
+  if (r->n == r->cap) {
+    uint64_t cap = r->cap ? 2 * r->cap : 64;
+    uint64_t(*v)[2] = xmalloc(cap * sizeof *v);
+    for (uint64_t i = 0; i < r->n; i++) {
+      v[i][0] = r->v[(r->lo + i) % r->cap][0];
+      v[i][1] = r->v[(r->lo + i) % r->cap][1];
+    }
+    free(r->v);
+    r->v = v;
+    r->cap = cap;
+    r->lo = 0;
+  }
+  r->v[(r->lo + r->n) % r->cap][0] = value;
+  r->v[(r->lo + r->n) % r->cap][1] = at;
+  r->n++;
+}
+
+static const uint64_t *ring_head(const struct ring *r) { return r->v[r->lo % r->cap]; }
+
+static void ring_pop(struct ring *r) {
+  r->lo = (r->lo + 1) % r->cap;
+  r->n--;
+}
+
+struct l2 {
+  struct l2_params p;
+  struct engine *eng;
+  struct timeline *tl;
+  struct l2_timeline_cols col;
+  struct l2_client client;
+  struct dram *dram;
+  struct cache *tags;
+  uint64_t *bank_free;
+  uint32_t *waiters; /* per slot: head of its waiter list (reqs), newest first */
+  uint8_t *miss_cls; /* per slot: class of the access that missed */
+  uint32_t mshr_used;
+  uint32_t wb_used; /* write-buffer places taken (reserved at eviction) */
+  struct req *reqs;
+  uint32_t req_free, req_cap;
+  uint32_t stall_head, stall_tail;
+  int stall_reason;      /* the oldest stalled access's reason, or -1 */
+  uint64_t stall_since;  /* when that reason began */
+  int last_refusal;      /* why l2_try last said no */
+  struct ring miss_q, wb;
+  struct l2_stats st;
+};
+
+const char *l2_params_problem(const struct l2_params *p) {
+  struct cache_params c = {p->size_bytes, p->ways, L2_LG2_LINE};
+  if (cache_params_problem(&c)) return "l2: size and ways do not make a cache of 64-byte lines";
+  if (p->banks < 1 || p->banks > 4096) return "l2.banks: must be 1 to 4096";
+  if (p->mshrs < 1 || p->mshrs > (1u << 20)) return "l2.mshrs: must be 1 to 2^20";
+  if (p->write_buffer < 1 || p->write_buffer > (1u << 20)) return "l2.write_buffer: must be 1 to 2^20";
+  return NULL;
+}
+
+static uint32_t req_new(struct l2 *l2) {
+  if (l2->req_free == NONE) {
+    uint32_t old = l2->req_cap;
+    l2->req_cap = old ? 2 * old : 1024;
+    l2->reqs = xrealloc(l2->reqs, (uint64_t)l2->req_cap * sizeof *l2->reqs);
+    for (uint32_t i = old; i < l2->req_cap; i++) l2->reqs[i].next = i + 1 < l2->req_cap ? i + 1 : NONE;
+    l2->req_free = old;
+  }
+  uint32_t r = l2->req_free;
+  l2->req_free = l2->reqs[r].next;
+  l2->reqs[r].next = NONE;
+  return r;
+}
+
+static void req_release(struct l2 *l2, uint32_t r) {
+  l2->reqs[r].next = l2->req_free;
+  l2->req_free = r;
+}
+
+/* DRAM tags: a fetch carries its slot, a write-back nothing but its kind. */
+static uint64_t tag_read(uint32_t slot) { return (uint64_t)slot << 1; }
+#define TAG_WRITE 1u
+
+static void ev_to_dram(void *ctx, uint64_t slot);
+static void ev_to_write_buffer(void *ctx, uint64_t line);
+static void ev_held_merge(void *ctx, uint64_t r);
+static void pump(struct l2 *l2);
+
+/* Try one access at cycle t; false (and last_refusal) if it must wait. */
+static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
+  if (l2->miss_q.n) {
+    l2->last_refusal = L2_STALL_DRAM;
+    return false;
+  }
+  const uint64_t line = r->line;
+  uint32_t slot = cache_find(l2->tags, line);
+  bool hit = slot != CACHE_NONE;
+  uint32_t victim = CACHE_NONE;
+  if (!hit) {
+    if (r->op != L2_STORE_LINE && l2->mshr_used >= l2->p.mshrs) {
+      l2->last_refusal = L2_STALL_MSHR;
+      return false;
+    }
+    victim = cache_victim(l2->tags, line);
+    if (victim == CACHE_NONE) {
+      l2->last_refusal = L2_STALL_SET;
+      return false;
+    }
+    if (cache_valid(l2->tags, victim) && cache_dirty(l2->tags, victim) &&
+        l2->wb_used >= l2->p.write_buffer) {
+      l2->last_refusal = L2_STALL_WRITE_BUFFER;
+      return false;
+    }
+  }
+  uint64_t *bf = &l2->bank_free[line % l2->p.banks];
+  uint64_t start = t > *bf ? t : *bf;
+  l2->st.bank_wait_cycles += start - t;
+  *bf = start + 1;
+  uint64_t ready = start + l2->p.latency_cycles;
+  l2->st.accesses++;
+  l2->st.accesses_by_class[r->cls]++;
+  timeline_point(l2->tl, l2->col.accesses, start, 1.0);
+  if (hit) {
+    cache_touch(l2->tags, slot);
+    if (r->op != L2_LOAD) cache_set_dirty(l2->tags, slot);
+    if (cache_pending(l2->tags, slot)) {
+      l2->st.mshr_merges++;
+      if (r->waiter) {
+        uint32_t w = req_new(l2);
+        l2->reqs[w] = *r;
+        l2->reqs[w].ready_at = ready;
+        l2->reqs[w].next = l2->waiters[slot];
+        l2->waiters[slot] = w;
+      }
+    } else {
+      l2->st.hits++;
+      if (r->waiter) engine_at(l2->eng, ready, l2->client.ready, r->waiter, line);
+    }
+    return true;
+  }
+  if (cache_valid(l2->tags, victim) && cache_dirty(l2->tags, victim)) {
+    l2->wb_used++;
+    l2->st.writeback_bytes += LINE_BYTES;
+    engine_at(l2->eng, ready, ev_to_write_buffer, l2, cache_line(l2->tags, victim));
+  }
+  if (r->op == L2_STORE_LINE) {
+    /* Nothing of the old line survives: allocate without a fetch. */
+    l2->st.whole_line_allocs++;
+    cache_install(l2->tags, victim, line, true, false);
+    return true;
+  }
+  cache_install(l2->tags, victim, line, r->op != L2_LOAD, true);
+  l2->mshr_used++;
+  l2->st.misses++;
+  l2->st.fetch_bytes += LINE_BYTES;
+  l2->st.fetch_bytes_by_class[r->cls] += LINE_BYTES;
+  timeline_point(l2->tl, l2->col.misses, start, 1.0);
+  l2->miss_cls[victim] = r->cls;
+  l2->waiters[victim] = NONE;
+  if (r->waiter) {
+    uint32_t w = req_new(l2);
+    l2->reqs[w] = *r;
+    l2->reqs[w].ready_at = ready;
+    l2->reqs[w].next = NONE;
+    l2->waiters[victim] = w;
+  }
+  engine_at(l2->eng, ready, ev_to_dram, l2, victim);
+  return true;
+}
+
+/* Attribute the stall time so far to the current reason; then take `reason`
+ * (-1: not stalled) from cycle t. */
+static void stall_reason_set(struct l2 *l2, int reason, uint64_t t) {
+  if (l2->stall_reason >= 0) l2->st.stall_cycles[l2->stall_reason] += t - l2->stall_since;
+  l2->stall_reason = reason;
+  l2->stall_since = t;
+}
+
+static void stall_push(struct l2 *l2, const struct req *r, uint64_t t) {
+  uint32_t i = req_new(l2);
+  l2->reqs[i] = *r;
+  l2->reqs[i].ready_at = t; /* (the cycle it entered the stall queue) */
+  l2->reqs[i].next = NONE;
+  if (l2->stall_tail == NONE) l2->stall_head = i;
+  else l2->reqs[l2->stall_tail].next = i;
+  l2->stall_tail = i;
+  l2->st.stalls++;
+  qmeter_enter(&l2->st.stall_queue, t);
+}
+
+/* Retry stalled accesses, oldest first, until one must still wait. */
+static void stall_retry(struct l2 *l2, uint64_t t) {
+  while (l2->stall_head != NONE) {
+    uint32_t i = l2->stall_head;
+    struct req r = l2->reqs[i];
+    if (!l2_try(l2, &r, t)) {
+      if (l2->last_refusal != l2->stall_reason) stall_reason_set(l2, l2->last_refusal, t);
+      return;
+    }
+    qmeter_leave(&l2->st.stall_queue, t, r.ready_at);
+    l2->stall_head = r.next;
+    if (l2->stall_head == NONE) l2->stall_tail = NONE;
+    req_release(l2, i);
+  }
+  if (l2->stall_reason >= 0) stall_reason_set(l2, -1, t);
+}
+
+void l2_access(struct l2 *l2, uint64_t line, enum l2_op op, unsigned cls, void *waiter) {
+  const uint64_t t = engine_now(l2->eng);
+  struct req r = {line, waiter, 0, (uint8_t)op, (uint8_t)cls, NONE};
+  /* In order: while anything is stalled, later accesses queue behind it. */
+  if (l2->stall_head != NONE) {
+    stall_push(l2, &r, t);
+  } else if (!l2_try(l2, &r, t)) {
+    stall_push(l2, &r, t);
+    stall_reason_set(l2, l2->last_refusal, t);
+  }
+}
+
+/* ---- towards the DRAM ---- */
+
+static bool try_read(struct l2 *l2, uint64_t t) {
+  if (!l2->miss_q.n) return false;
+  uint32_t slot = (uint32_t)ring_head(&l2->miss_q)[0];
+  uint64_t addr = cache_line(l2->tags, slot) << L2_LG2_LINE;
+  if (!dram_can_take(l2->dram, addr, false)) return false;
+  qmeter_leave(&l2->st.miss_queue, t, ring_head(&l2->miss_q)[1]);
+  ring_pop(&l2->miss_q);
+  dram_take(l2->dram, addr, false, tag_read(slot));
+  return true;
+}
+
+static bool try_write(struct l2 *l2, uint64_t t) {
+  if (!l2->wb.n) return false;
+  uint64_t addr = ring_head(&l2->wb)[0] << L2_LG2_LINE;
+  if (!dram_can_take(l2->dram, addr, true)) return false;
+  qmeter_leave(&l2->st.write_buffer, t, ring_head(&l2->wb)[1]);
+  ring_pop(&l2->wb);
+  l2->wb_used--;
+  dram_take(l2->dram, addr, true, TAG_WRITE);
+  return true;
+}
+
+/* Hand the DRAM what it will take: reads first, writes when no read waits,
+ * or first when the write buffer is full. Then let stalled accesses retry. */
+static void pump(struct l2 *l2) {
+  const uint64_t t = engine_now(l2->eng);
+  bool moved = false;
+  for (;;) {
+    bool writes_first = l2->wb_used >= l2->p.write_buffer;
+    if (writes_first && try_write(l2, t)) {
+      moved = true;
+      continue;
+    }
+    if (try_read(l2, t)) {
+      moved = true;
+      continue;
+    }
+    if (!writes_first && !l2->miss_q.n && try_write(l2, t)) {
+      moved = true;
+      continue;
+    }
+    break;
+  }
+  if (moved && l2->stall_head != NONE) stall_retry(l2, t);
+}
+
+static void ev_to_dram(void *ctx, uint64_t slot) {
+  struct l2 *l2 = ctx;
+  const uint64_t t = engine_now(l2->eng);
+  ring_push(&l2->miss_q, slot, t);
+  qmeter_enter(&l2->st.miss_queue, t);
+  pump(l2);
+}
+
+static void ev_to_write_buffer(void *ctx, uint64_t line) {
+  struct l2 *l2 = ctx;
+  const uint64_t t = engine_now(l2->eng);
+  ring_push(&l2->wb, line, t);
+  qmeter_enter(&l2->st.write_buffer, t);
+  pump(l2);
+}
+
+static void ev_held_merge(void *ctx, uint64_t r) {
+  struct l2 *l2 = ctx;
+  const struct req *q = &l2->reqs[r];
+  l2->client.ready(q->waiter, q->line);
+  req_release(l2, (uint32_t)r);
+}
+
+/* ---- from the DRAM ---- */
+
+static void fill(struct l2 *l2, uint32_t s, uint64_t t) {
+  cache_set_pending(l2->tags, s, false);
+  l2->mshr_used--;
+  unsigned cls = l2->miss_cls[s];
+  timeline_point(l2->tl, l2->col.read_bytes, t, LINE_BYTES);
+  timeline_point(l2->tl, l2->col.read_class0 + cls, t, LINE_BYTES);
+  uint32_t w = l2->waiters[s];
+  l2->waiters[s] = NONE;
+  /* Waiters were pushed newest first: answer them oldest first. */
+  uint32_t prev = NONE;
+  while (w != NONE) {
+    uint32_t n = l2->reqs[w].next;
+    l2->reqs[w].next = prev;
+    prev = w;
+    w = n;
+  }
+  for (w = prev; w != NONE;) {
+    uint32_t n = l2->reqs[w].next;
+    if (l2->reqs[w].ready_at > t) {
+      /* A merged load is never answered sooner than an L2 hit would be. */
+      l2->st.merges_held++;
+      engine_at(l2->eng, l2->reqs[w].ready_at, ev_held_merge, l2, w);
+    } else {
+      l2->client.ready(l2->reqs[w].waiter, l2->reqs[w].line);
+      req_release(l2, w);
+    }
+    w = n;
+  }
+  stall_retry(l2, t);
+}
+
+static void dram_done(void *ctx, uint64_t tag) {
+  struct l2 *l2 = ctx;
+  const uint64_t t = engine_now(l2->eng);
+  if (tag == TAG_WRITE) {
+    timeline_point(l2->tl, l2->col.write_bytes, t, LINE_BYTES);
+    return;
+  }
+  fill(l2, (uint32_t)(tag >> 1), t);
+}
+
+static void dram_space(void *ctx) { pump(ctx); }
+
+struct dram_client l2_dram_client(struct l2 *l2) {
+  struct dram_client c = {l2, dram_done, dram_space};
+  return c;
+}
+
+void l2_attach(struct l2 *l2, struct dram *d) { l2->dram = d; }
+
+/* ---- life ---- */
+
+struct l2 *l2_create(const struct l2_params *p, struct engine *e, struct timeline *tl,
+                     const struct l2_timeline_cols *cols, const struct l2_client *client) {
+  CHECK(l2_params_problem(p) == NULL);
+  struct l2 *l2 = xcalloc(1, sizeof *l2);
+  l2->p = *p;
+  l2->eng = e;
+  l2->tl = tl;
+  l2->col = *cols;
+  l2->client = *client;
+  struct cache_params cp = {p->size_bytes, p->ways, L2_LG2_LINE};
+  l2->tags = cache_create(&cp);
+  uint64_t lines = cache_lines(l2->tags);
+  l2->waiters = xmalloc(lines * sizeof *l2->waiters);
+  l2->miss_cls = xcalloc(lines, 1);
+  l2->bank_free = xcalloc(p->banks, sizeof *l2->bank_free);
+  l2->req_free = NONE;
+  l2->stall_head = l2->stall_tail = NONE;
+  l2->stall_reason = -1;
+  return l2;
+}
+
+void l2_destroy(struct l2 *l2) {
+  if (!l2) return;
+  free(l2->miss_q.v);
+  free(l2->wb.v);
+  free(l2->reqs);
+  free(l2->bank_free);
+  free(l2->miss_cls);
+  free(l2->waiters);
+  cache_destroy(l2->tags);
+  free(l2);
+}
+
+bool l2_quiet(const struct l2 *l2) {
+  return l2->mshr_used == 0 && l2->stall_head == NONE && l2->miss_q.n == 0 && l2->wb.n == 0 &&
+         l2->wb_used == 0;
+}
+
+void l2_finish(struct l2 *l2, uint64_t end) {
+  qmeter_advance(&l2->st.stall_queue, end);
+  qmeter_advance(&l2->st.miss_queue, end);
+  qmeter_advance(&l2->st.write_buffer, end);
+}
+
+const struct l2_stats *l2_get_stats(const struct l2 *l2) { return &l2->st; }

@@ -1,0 +1,77 @@
+/* Rows grow by doubling up to TIMELINE_MAX_ROWS; past it, the window doubles
+ * and pairs of rows merge, so the counts stay exact sums whatever the length. */
+#include "sim/timeline.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim/err.h"
+
+void timeline_init(struct timeline *tl, unsigned cols, uint64_t window_cycles) {
+  CHECK(cols >= 1 && window_cycles >= 1);
+  memset(tl, 0, sizeof *tl);
+  tl->cols = cols;
+  tl->window = window_cycles;
+}
+
+void timeline_fini(struct timeline *tl) {
+  free(tl->v);
+  tl->v = NULL;
+}
+
+/* The row of window w, growing or coarsening the array as needed. */
+static double *row(struct timeline *tl, uint64_t w) {
+  const unsigned C = tl->cols;
+  while (w >= TIMELINE_MAX_ROWS) {
+    /* Coarsen: windows double, pairs of rows merge. */
+    uint64_t half = (tl->rows + 1) / 2;
+    for (uint64_t i = 0; i < half; i++)
+      for (unsigned c = 0; c < C; c++) {
+        double b = 2 * i + 1 < tl->rows ? tl->v[(2 * i + 1) * C + c] : 0.0;
+        tl->v[i * C + c] = tl->v[2 * i * C + c] + b;
+      }
+    if (tl->rows > half) /* (an empty timeline has no array yet) */
+      memset(tl->v + half * C, 0, (tl->rows - half) * C * sizeof *tl->v);
+    tl->rows = half;
+    tl->window *= 2;
+    w /= 2;
+  }
+  if (w >= tl->cap) {
+    uint64_t cap = tl->cap ? tl->cap : 256;
+    while (cap <= w) cap *= 2;
+    if (cap > TIMELINE_MAX_ROWS) cap = TIMELINE_MAX_ROWS;
+    tl->v = xrealloc(tl->v, cap * C * sizeof *tl->v);
+    memset(tl->v + tl->cap * C, 0, (cap - tl->cap) * C * sizeof *tl->v);
+    tl->cap = cap;
+  }
+  if (w >= tl->rows) tl->rows = w + 1;
+  return tl->v + w * C;
+}
+
+void timeline_point(struct timeline *tl, unsigned col, uint64_t t, double amount) {
+  CHECK_LT(col, tl->cols);
+  row(tl, t / tl->window)[col] += amount;
+}
+
+void timeline_span(struct timeline *tl, unsigned col, uint64_t a, uint64_t b, double per_cycle) {
+  CHECK_LT(col, tl->cols);
+  if (b <= a) return;
+  /* The row of the span's last window first: any coarsening happens now. */
+  row(tl, (b - 1) / tl->window);
+  const uint64_t win = tl->window;
+  for (uint64_t x = a; x < b;) {
+    uint64_t end = (x / win + 1) * win;
+    if (end > b) end = b;
+    row(tl, x / win)[col] += per_cycle * (double)(end - x);
+    x = end;
+  }
+}
+
+void timeline_cover(struct timeline *tl, uint64_t end) {
+  if (end > 0) row(tl, (end - 1) / tl->window);
+}
+
+const double *timeline_row(const struct timeline *tl, uint64_t i) {
+  CHECK_LT(i, tl->rows);
+  return tl->v + i * tl->cols;
+}

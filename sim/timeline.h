@@ -1,0 +1,33 @@
+/* A timeline: counts per window of simulated time, a fixed number of columns a
+ * row. Windows start at timeline.window cycles and double (pairs of rows merge)
+ * whenever a run would need more than TIMELINE_MAX_ROWS rows, so a run of any
+ * length costs a bounded array. Pure data: the machine and the L2 add to it,
+ * run_output writes it. */
+#ifndef RTSIM_SIM_TIMELINE_H
+#define RTSIM_SIM_TIMELINE_H
+
+#include <stdint.h>
+
+#define TIMELINE_MAX_ROWS 4096u
+
+struct timeline {
+  double *v; /* rows x cols, row-major */
+  uint64_t rows, cap, window;
+  unsigned cols;
+};
+
+/* window_cycles >= 1; cols >= 1. Nothing is allocated until the first add. */
+void timeline_init(struct timeline *tl, unsigned cols, uint64_t window_cycles);
+void timeline_fini(struct timeline *tl);
+
+/* Add amount to column col at cycle t. */
+void timeline_point(struct timeline *tl, unsigned col, uint64_t t, double amount);
+/* Add per_cycle for every cycle of [a, b), split between windows in proportion. */
+void timeline_span(struct timeline *tl, unsigned col, uint64_t a, uint64_t b, double per_cycle);
+/* Make sure the rows reach cycle end - 1 (a run's last window exists). */
+void timeline_cover(struct timeline *tl, uint64_t end);
+
+/* Row i (i < rows): cols values. */
+const double *timeline_row(const struct timeline *tl, uint64_t i);
+
+#endif
