@@ -149,6 +149,10 @@ const char *dram_banked_params_problem(const struct dram_banked_params *p) {
     return "dram.bus_bytes: bus_bytes x burst_length must be 64 (one line per burst)";
   if (!dram_banked_mapping_ok(p->mapping))
     return "dram.mapping: expected six two-letter fields, each of ro ch ra bg ba co once";
+  /* The fields must fit above the 6 offset bits of a 64-bit address. */
+  unsigned bits = lg2(p->channels) + lg2(p->ranks) + lg2(p->bank_groups) + lg2(p->banks_per_group) +
+                  lg2(p->rows) + lg2(p->columns / p->burst_length);
+  if (bits > 58) return "dram.rows: the address fields need more than 64 bits";
   if (p->page != DRAM_BANKED_OPEN_PAGE && p->page != DRAM_BANKED_CLOSE_PAGE)
     return "dram.page_policy: expected open or close";
   if (p->read_queue < 1 || p->read_queue > 4096) return "dram.read_queue: must be 1 to 4096";
@@ -328,8 +332,8 @@ static void consider(struct pick *pk, int64_t t, int64_t now, enum cmd_type type
   }
 }
 
-/* Candidates in priority order: refresh work (ranks in order: the first open
- * bank's PRE, or REF once all are closed), then the oldest row hit of the
+/* Candidates in priority order: refresh work (ranks in order: a PRE for each
+ * open bank, lowest bank first, or REF once all are closed), then the oldest row hit of the
  * served queue, then the oldest PRE or ACT. The first that can issue at `now`
  * is picked; next is the least earliest time of all of them. */
 static void scan(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {

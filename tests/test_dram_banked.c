@@ -599,6 +599,10 @@ static void test_problems(void) {
   BAD(p.tWTR_L = 1, "dram.tWTR_L");
   BAD((p.tREFI = 400, p.tRFC = 420), "dram.tREFI");
   BAD(p.tFAW = 1u << 21, "dram.tFAW");
+  /* 6 + ch 6 + ra 4 + bg 4 + ba 6 + ro 24 + co 17 = 67 bits. */
+  BAD((p.channels = 64, p.ranks = 16, p.bank_groups = 16, p.banks_per_group = 64, p.rows = 1u << 24,
+       p.columns = 1u << 20),
+      "dram.rows");
 #undef BAD
   EXPECT(dram_banked_mapping_ok("rochrababgco") && dram_banked_mapping_ok("chrobabgraco"));
   EXPECT(!dram_banked_mapping_ok("rochrababgc") && !dram_banked_mapping_ok("rorochrababg") &&
