@@ -1,0 +1,789 @@
+/* Banked DRAM: per-bank, per-rank and per-channel "earliest next" times, one
+ * scan of the served queue per handled cycle giving both the command to issue
+ * and the earliest cycle anything could, so the level sleeps exactly until
+ * then. Times inside are signed DRAM cycles; NEVER sits far enough below zero
+ * that adding any timing to it still constrains nothing. */
+#include "sim/dram_banked.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim/engine.h"
+#include "sim/err.h"
+#include "sim/stats.h"
+
+#define NEVER (-((int64_t)1 << 40))
+#define FAR INT64_MAX
+
+enum { RD_Q = 0, WR_Q = 1 };
+enum { KIND_HIT = 0, KIND_MISS = 1, KIND_CONFLICT = 2 };
+enum cmd_type { CMD_NONE, CMD_ACT, CMD_PRE, CMD_RD, CMD_WR, CMD_REF };
+
+struct bank {
+  int64_t act_ok; /* earliest ACT: PRE + tRP, ACT + tRC, REF + tRFC */
+  int64_t col_ok; /* ACT + tRCD */
+  int64_t pre_ok; /* ACT + tRAS, RD + tRTP, WR + tCWL + BL/2 + tWR */
+  int64_t ref_ok; /* its last precharge + tRP */
+  int64_t act_at, close_at; /* the current or last open interval (act_at < 0: none) */
+  uint64_t row;
+  uint32_t hits; /* column commands since ACT */
+  bool open;
+  /* Scan scratch, valid when stamp == the channel's scan number. */
+  uint64_t stamp;
+  bool conflict_seen, hit_held;
+};
+
+struct group {
+  int64_t act, rd, wr; /* last ACT, RD, WR in the bank group */
+};
+
+struct rank {
+  int64_t act, rd, wr; /* last ACT, RD, WR in the rank */
+  int64_t faw[4];      /* the last four ACTs, a ring from faw_i (oldest) */
+  unsigned faw_i;
+  int64_t ref_end;     /* REF + tRFC */
+  int64_t next_due;    /* the next refresh falls due (FAR: refresh off) */
+  uint32_t pending;    /* refreshes due and not yet issued */
+  uint32_t open;       /* banks with a row open */
+};
+
+struct req {
+  uint64_t tag, take_core, seq, row;
+  uint32_t rank, group, bank; /* bank: index within the channel */
+  uint8_t kind;
+};
+
+struct queue {
+  struct req *r; /* in age order */
+  uint32_t n, cap;
+};
+
+struct burst {
+  int64_t start;
+  uint32_t rank;
+};
+
+struct channel {
+  struct queue q[2];
+  bool writing;
+  int64_t rd; /* last RD on the channel (tRTW) */
+  struct burst *bursts; /* data bursts that may still matter, by start */
+  uint32_t nb, cap_b;
+  struct bank *banks;   /* ranks x groups x banks_per_group */
+  struct group *groups; /* ranks x groups */
+  struct rank *ranks;
+  int64_t next;         /* earliest cycle a command may issue or a refresh fall due */
+  uint64_t scan_no;
+};
+
+struct dram_banked {
+  struct dram_banked_params p;
+  struct dram_clock clk;
+  struct engine *e;
+  struct dram_client client;
+  struct channel *ch;
+  uint32_t banks_per_rank, banks_per_channel;
+  int64_t burst_cycles; /* BL / 2 */
+  int64_t refresh_step; /* tREFI / ranks */
+  /* Mapping: shift and mask of each field above the line offset. */
+  unsigned sh_ch, sh_ra, sh_bg, sh_ba, sh_ro, sh_co;
+  uint64_t mk_ch, mk_ra, mk_bg, mk_ba, mk_ro, mk_co;
+  int64_t cursor;   /* the first DRAM cycle not yet handled */
+  uint64_t wake_at; /* earliest wake pending (UINT64_MAX: none) */
+  uint64_t seq, inflight, queued;
+  /* Occupancy integrals by time, per queue kind. */
+  uint64_t q_len[2], q_last[2];
+  bool space_due;
+  struct dram_banked_stats st;
+};
+
+static int64_t max64(int64_t a, int64_t b) { return a > b ? a : b; }
+
+static bool pow2(uint64_t x) { return x && !(x & (x - 1)); }
+
+static unsigned lg2(uint64_t x) {
+  unsigned n = 0;
+  while (x > 1) {
+    x >>= 1;
+    n++;
+  }
+  return n;
+}
+
+static const char *const FIELDS[6] = {"ro", "ch", "ra", "bg", "ba", "co"};
+
+/* Index in FIELDS of the two letters at s, or -1. */
+static int field_of(const char *s) {
+  for (int i = 0; i < 6; i++)
+    if (s[0] == FIELDS[i][0] && s[1] == FIELDS[i][1]) return i;
+  return -1;
+}
+
+bool dram_banked_mapping_ok(const char *s) {
+  if (!s || strlen(s) != 12) return false;
+  unsigned seen = 0;
+  for (int i = 0; i < 6; i++) {
+    int f = field_of(s + 2 * i);
+    if (f < 0 || (seen & (1u << f))) return false;
+    seen |= 1u << f;
+  }
+  return true;
+}
+
+const char *dram_banked_params_problem(const struct dram_banked_params *p) {
+  if (p->clock_mhz < 1 || p->clock_mhz > (1u << 24) / 1000)
+    return "dram.clock_mhz: must be 1 to 16777";
+  if (!pow2(p->channels) || p->channels > 64) return "dram.channels: must be a power of two from 1 to 64";
+  if (!pow2(p->ranks) || p->ranks > 16) return "dram.ranks: must be a power of two from 1 to 16";
+  if (!pow2(p->bank_groups) || p->bank_groups > 16)
+    return "dram.bank_groups: must be a power of two from 1 to 16";
+  if (!pow2(p->banks_per_group) || p->banks_per_group > 64)
+    return "dram.banks_per_group: must be a power of two from 1 to 64";
+  if (!pow2(p->rows) || p->rows > (1u << 24)) return "dram.rows: must be a power of two up to 2^24";
+  if (p->burst_length < 2 || p->burst_length > 64 || !pow2(p->burst_length))
+    return "dram.burst_length: must be a power of two from 2 to 64";
+  if (!pow2(p->columns) || p->columns < p->burst_length || p->columns > (1u << 20))
+    return "dram.columns: must be a power of two from burst_length to 2^20";
+  if (!pow2(p->bus_bytes) || p->bus_bytes > 32) return "dram.bus_bytes: must be a power of two up to 32";
+  if (p->bus_bytes * p->burst_length != 64)
+    return "dram.bus_bytes: bus_bytes x burst_length must be 64 (one line per burst)";
+  if (!dram_banked_mapping_ok(p->mapping))
+    return "dram.mapping: expected six two-letter fields, each of ro ch ra bg ba co once";
+  /* The fields must fit above the 6 offset bits of a 64-bit address. */
+  unsigned bits = lg2(p->channels) + lg2(p->ranks) + lg2(p->bank_groups) + lg2(p->banks_per_group) +
+                  lg2(p->rows) + lg2(p->columns / p->burst_length);
+  if (bits > 58) return "dram.rows: the address fields need more than 64 bits";
+  if (p->page != DRAM_BANKED_OPEN_PAGE && p->page != DRAM_BANKED_CLOSE_PAGE)
+    return "dram.page_policy: expected open or close";
+  if (p->read_queue < 1 || p->read_queue > 4096) return "dram.read_queue: must be 1 to 4096";
+  if (p->write_queue < 1 || p->write_queue > 4096) return "dram.write_queue: must be 1 to 4096";
+  if (p->write_high < 1 || p->write_high > p->write_queue)
+    return "dram.write_high: must be 1 to write_queue";
+  if (p->write_low >= p->write_high) return "dram.write_low: must be below write_high";
+  const uint32_t lim = 1u << 20;
+  const struct {
+    uint32_t v;
+    bool pos;
+    const char *msg;
+  } t[] = {
+      {p->tCL, true, "dram.tCL: must be 1 to 2^20"},
+      {p->tCWL, true, "dram.tCWL: must be 1 to 2^20"},
+      {p->tRCD, true, "dram.tRCD: must be 1 to 2^20"},
+      {p->tRP, true, "dram.tRP: must be 1 to 2^20"},
+      {p->tRAS, true, "dram.tRAS: must be 1 to 2^20"},
+      {p->tRC, true, "dram.tRC: must be 1 to 2^20"},
+      {p->tCCD_S, true, "dram.tCCD_S: must be 1 to 2^20"},
+      {p->tCCD_L, true, "dram.tCCD_L: must be 1 to 2^20"},
+      {p->tRRD_S, true, "dram.tRRD_S: must be 1 to 2^20"},
+      {p->tRRD_L, true, "dram.tRRD_L: must be 1 to 2^20"},
+      {p->tFAW, false, "dram.tFAW: must be at most 2^20"},
+      {p->tWR, false, "dram.tWR: must be at most 2^20"},
+      {p->tWTR_S, false, "dram.tWTR_S: must be at most 2^20"},
+      {p->tWTR_L, false, "dram.tWTR_L: must be at most 2^20"},
+      {p->tRTW, false, "dram.tRTW: must be at most 2^20"},
+      {p->tRTP, true, "dram.tRTP: must be 1 to 2^20"},
+      {p->tREFI, false, "dram.tREFI: must be at most 2^20"},
+      {p->tRFC, true, "dram.tRFC: must be 1 to 2^20"},
+  };
+  for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++)
+    if (t[i].v > lim || (t[i].pos && t[i].v < 1)) return t[i].msg;
+  if (p->tRC < p->tRAS) return "dram.tRC: must be at least tRAS";
+  if (p->tCCD_L < p->tCCD_S) return "dram.tCCD_L: must be at least tCCD_S";
+  if (p->tRRD_L < p->tRRD_S) return "dram.tRRD_L: must be at least tRRD_S";
+  if (p->tWTR_L < p->tWTR_S) return "dram.tWTR_L: must be at least tWTR_S";
+  if (p->tREFI && p->tREFI / p->ranks <= p->tRFC)
+    return "dram.tREFI: tREFI / ranks must exceed tRFC (or tREFI 0: no refresh)";
+  return NULL;
+}
+
+/* ---- Time and events ---- */
+
+/* The first core cycle by which every request that may take part in DRAM
+ * cycle w has arrived, so w can be decided: floor(w num / den) + 1. */
+static uint64_t core_deciding(const struct dram_banked *d, int64_t w) {
+  return (uint64_t)(((unsigned __int128)(uint64_t)w * d->clk.num) / d->clk.den) + 1;
+}
+
+static void on_done(void *ctx, uint64_t tag) {
+  struct dram_banked *d = ctx;
+  CHECK_GT(d->inflight, 0);
+  d->inflight--;
+  d->client.done(d->client.ctx, tag);
+}
+
+static void on_space(void *ctx, uint64_t arg) {
+  (void)arg;
+  struct dram_banked *d = ctx;
+  if (d->client.space) d->client.space(d->client.ctx);
+}
+
+static void advance(struct dram_banked *d);
+
+static void on_wake(void *ctx, uint64_t at) {
+  struct dram_banked *d = ctx;
+  if (at == d->wake_at) d->wake_at = UINT64_MAX;
+  advance(d);
+}
+
+/* ---- Queue bookkeeping ---- */
+
+/* The occupancy integral of queue kind k up to core cycle t. */
+static void area_to(struct dram_banked *d, int k, uint64_t t) {
+  CHECK_GE(t, d->q_last[k]);
+  d->st.queue_area[k] += d->q_len[k] * (t - d->q_last[k]);
+  d->q_last[k] = t;
+}
+
+/* ---- Data bus ---- */
+
+/* The earliest start >= s0 of a burst of `rank` that overlaps no burst on the
+ * channel (one idle cycle between ranks). Bursts are disjoint and sorted by
+ * start, so moving past one can only meet later ones. */
+static int64_t bus_fit(const struct dram_banked *d, const struct channel *c, int64_t s0, uint32_t rank) {
+  const int64_t b = d->burst_cycles;
+  int64_t s = s0;
+  for (uint32_t i = 0; i < c->nb; i++) {
+    int64_t gap = c->bursts[i].rank != rank;
+    int64_t a = c->bursts[i].start;
+    if (s < a + b + gap && s + b + gap > a) s = a + b + gap;
+  }
+  return s;
+}
+
+/* Record a burst at `start`; forget those that end before any future burst
+ * could begin (a command at `now` or later puts data at now + min latency). */
+static void bus_add(struct dram_banked *d, struct channel *c, int64_t now, int64_t start, uint32_t rank) {
+  const int64_t b = d->burst_cycles;
+  int64_t horizon = now + (d->p.tCL < d->p.tCWL ? d->p.tCL : d->p.tCWL);
+  uint32_t k = 0;
+  for (uint32_t i = 0; i < c->nb; i++)
+    if (c->bursts[i].start + b + 1 > horizon) c->bursts[k++] = c->bursts[i];
+  c->nb = k;
+  CHECK_LT(c->nb, c->cap_b);
+  uint32_t i = c->nb;
+  while (i > 0 && c->bursts[i - 1].start > start) {
+    c->bursts[i] = c->bursts[i - 1];
+    i--;
+  }
+  c->bursts[i].start = start;
+  c->bursts[i].rank = rank;
+  c->nb++;
+  d->st.bus_busy_cycles += (uint64_t)b;
+}
+
+/* ---- Earliest times of each command ---- */
+
+static int64_t act_earliest(const struct dram_banked *d, const struct channel *c, const struct req *r,
+                            int64_t now) {
+  const struct bank *bk = &c->banks[r->bank];
+  const struct rank *rk = &c->ranks[r->rank];
+  const struct group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
+  int64_t t = max64(now, bk->act_ok);
+  t = max64(t, rk->ref_end);
+  t = max64(t, rk->act + d->p.tRRD_S);
+  t = max64(t, g->act + d->p.tRRD_L);
+  t = max64(t, rk->faw[rk->faw_i] + d->p.tFAW);
+  return t;
+}
+
+static int64_t col_earliest(const struct dram_banked *d, const struct channel *c, const struct req *r,
+                            bool write, int64_t now) {
+  const struct bank *bk = &c->banks[r->bank];
+  const struct rank *rk = &c->ranks[r->rank];
+  const struct group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
+  const int64_t b = d->burst_cycles;
+  int64_t t = max64(now, bk->col_ok);
+  int64_t lat;
+  if (write) {
+    t = max64(t, rk->wr + d->p.tCCD_S);
+    t = max64(t, g->wr + d->p.tCCD_L);
+    t = max64(t, c->rd + d->p.tRTW);
+    lat = d->p.tCWL;
+  } else {
+    t = max64(t, rk->rd + d->p.tCCD_S);
+    t = max64(t, g->rd + d->p.tCCD_L);
+    t = max64(t, rk->wr + d->p.tCWL + b + d->p.tWTR_S);
+    t = max64(t, g->wr + d->p.tCWL + b + d->p.tWTR_L);
+    lat = d->p.tCL;
+  }
+  return bus_fit(d, c, t + lat, r->rank) - lat;
+}
+
+/* ---- The scan: what issues at cycle `now`, and the earliest anything could ---- */
+
+struct pick {
+  enum cmd_type type;
+  uint32_t rank, bank; /* bank within the channel */
+  uint32_t qi;         /* request index in the served queue */
+  bool for_req;        /* a request's command (else refresh work) */
+  int64_t next;        /* earliest cycle >= now any candidate could issue (FAR: none) */
+};
+
+/* qi: the request's index in the served queue, or -1 for refresh work. */
+static void consider(struct pick *pk, int64_t t, int64_t now, enum cmd_type type, uint32_t rank,
+                     uint32_t bank, int64_t qi) {
+  if (t < pk->next) pk->next = t;
+  if (t == now && pk->type == CMD_NONE) {
+    pk->type = type;
+    pk->rank = rank;
+    pk->bank = bank;
+    pk->for_req = qi >= 0;
+    pk->qi = qi >= 0 ? (uint32_t)qi : 0;
+  }
+}
+
+/* Candidates in priority order: refresh work (ranks in order: a PRE for each
+ * open bank, lowest bank first, or REF once all are closed), then the oldest row hit of the
+ * served queue, then the oldest PRE or ACT. The first that can issue at `now`
+ * is picked; next is the least earliest time of all of them. */
+static void scan(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
+  pk->type = CMD_NONE;
+  pk->next = FAR;
+  const uint32_t bpr = d->banks_per_rank;
+  for (uint32_t k = 0; k < d->p.ranks; k++) {
+    struct rank *rk = &c->ranks[k];
+    if (rk->next_due < pk->next) pk->next = max64(rk->next_due, now);
+    if (!rk->pending) continue;
+    if (rk->open) {
+      for (uint32_t i = 0; i < bpr; i++) {
+        const struct bank *bk = &c->banks[k * bpr + i];
+        if (bk->open) consider(pk, max64(now, bk->pre_ok), now, CMD_PRE, k, k * bpr + i, -1);
+      }
+    } else {
+      int64_t t = max64(now, rk->ref_end);
+      for (uint32_t i = 0; i < bpr; i++) t = max64(t, c->banks[k * bpr + i].ref_ok);
+      consider(pk, t, now, CMD_REF, k, 0, -1);
+    }
+  }
+  const int qk = c->writing ? WR_Q : RD_Q;
+  const struct queue *q = &c->q[qk];
+  uint64_t no = ++c->scan_no;
+  /* Pass 1: row hits, oldest first; note per bank whether a hit that may
+   * still issue holds back a conflict's PRE. */
+  for (uint32_t i = 0; i < q->n; i++) {
+    const struct req *r = &q->r[i];
+    if (c->ranks[r->rank].pending) continue;
+    struct bank *bk = &c->banks[r->bank];
+    if (bk->stamp != no) {
+      bk->stamp = no;
+      bk->conflict_seen = false;
+      bk->hit_held = false;
+    }
+    if (!bk->open) continue;
+    if (bk->row != r->row) {
+      bk->conflict_seen = true;
+      continue;
+    }
+    if (bk->conflict_seen && bk->hits >= DRAM_BANKED_ROW_HIT_CAP) continue;
+    bk->hit_held = true;
+    consider(pk, col_earliest(d, c, r, qk == WR_Q, now), now, qk == WR_Q ? CMD_WR : CMD_RD, r->rank,
+             r->bank, i);
+  }
+  /* Pass 2: PRE for a conflict no hit holds back, ACT for a closed bank. */
+  for (uint32_t i = 0; i < q->n; i++) {
+    const struct req *r = &q->r[i];
+    if (c->ranks[r->rank].pending) continue;
+    const struct bank *bk = &c->banks[r->bank];
+    if (!bk->open)
+      consider(pk, act_earliest(d, c, r, now), now, CMD_ACT, r->rank, r->bank, i);
+    else if (bk->row != r->row && !bk->hit_held)
+      consider(pk, max64(now, bk->pre_ok), now, CMD_PRE, r->rank, r->bank, i);
+  }
+}
+
+/* ---- Issuing ---- */
+
+static void update_mode(struct dram_banked *d, struct channel *c) {
+  uint32_t nr = c->q[RD_Q].n, nw = c->q[WR_Q].n;
+  if (!c->writing) {
+    if (nw >= d->p.write_high || (nr == 0 && nw > 0)) {
+      c->writing = true;
+      d->st.write_drains++;
+    }
+  } else if (nw == 0 || (nw <= d->p.write_low && nr > 0)) {
+    c->writing = false;
+  }
+}
+
+static void bank_close(struct dram_banked *d, struct channel *c, struct bank *bk, uint32_t rank,
+                       int64_t at) {
+  bk->open = false;
+  bk->close_at = at;
+  bk->act_ok = max64(bk->act_ok, at + d->p.tRP);
+  bk->ref_ok = at + d->p.tRP;
+  c->ranks[rank].open--;
+  d->st.precharges++;
+}
+
+static void issue_column(struct dram_banked *d, struct channel *c, int qk, uint32_t qi, int64_t now) {
+  struct queue *q = &c->q[qk];
+  struct req r = q->r[qi];
+  memmove(&q->r[qi], &q->r[qi + 1], (q->n - qi - 1) * sizeof *q->r);
+  q->n--;
+  d->queued--;
+  struct bank *bk = &c->banks[r.bank];
+  struct rank *rk = &c->ranks[r.rank];
+  struct group *g = &c->groups[r.rank * d->p.bank_groups + r.group];
+  const int64_t b = d->burst_cycles;
+  int64_t end, pre;
+  bk->hits++;
+  if (qk == WR_Q) {
+    rk->wr = g->wr = now;
+    bus_add(d, c, now, now + d->p.tCWL, r.rank);
+    end = now + d->p.tCWL + b;
+    pre = end + d->p.tWR;
+    d->st.writes++;
+  } else {
+    rk->rd = g->rd = c->rd = now;
+    bus_add(d, c, now, now + d->p.tCL, r.rank);
+    end = now + d->p.tCL + b;
+    pre = now + d->p.tRTP;
+    d->st.reads++;
+  }
+  bk->pre_ok = max64(bk->pre_ok, pre);
+  if (d->p.page == DRAM_BANKED_CLOSE_PAGE) bank_close(d, c, bk, r.rank, bk->pre_ok);
+  if (r.kind == KIND_HIT) d->st.row_hits++;
+  else if (r.kind == KIND_MISS) d->st.row_misses++;
+  else d->st.row_conflicts++;
+  /* The place frees at the column command: queue time ends there. */
+  uint64_t left = dram_clock_to_core(d->clk, (uint64_t)now);
+  area_to(d, qk, left);
+  d->q_len[qk]--;
+  uint64_t wait = left - r.take_core;
+  d->st.queue_wait_sum_cycles[qk] += wait;
+  if (wait > d->st.queue_wait_max_cycles[qk]) d->st.queue_wait_max_cycles[qk] = wait;
+  d->space_due = true;
+  uint64_t done = dram_clock_to_core(d->clk, (uint64_t)end);
+  CHECK_GE(done, engine_now(d->e));
+  if (qk == RD_Q) d->st.read_latency_sum_cycles += done - r.take_core;
+  d->inflight++;
+  engine_at(d->e, done, on_done, d, r.tag);
+}
+
+static void issue(struct dram_banked *d, struct channel *c, const struct pick *pk, int64_t now) {
+  const int qk = c->writing ? WR_Q : RD_Q;
+  struct req *r = pk->for_req ? &c->q[qk].r[pk->qi] : NULL;
+  switch (pk->type) {
+  case CMD_PRE: {
+    struct bank *bk = &c->banks[pk->bank];
+    bank_close(d, c, bk, pk->rank, now);
+    if (r) r->kind = KIND_CONFLICT;
+    break;
+  }
+  case CMD_ACT: {
+    struct bank *bk = &c->banks[pk->bank];
+    struct rank *rk = &c->ranks[pk->rank];
+    struct group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
+    if (bk->act_at >= 0) d->st.bank_open_cycles += (uint64_t)(bk->close_at - bk->act_at);
+    bk->open = true;
+    bk->row = r->row;
+    bk->hits = 0;
+    bk->act_at = now;
+    bk->close_at = FAR;
+    bk->col_ok = now + d->p.tRCD;
+    bk->pre_ok = now + d->p.tRAS;
+    bk->act_ok = now + d->p.tRC;
+    rk->act = g->act = now;
+    rk->faw[rk->faw_i] = now;
+    rk->faw_i = (rk->faw_i + 1) & 3;
+    rk->open++;
+    d->st.activates++;
+    if (r->kind == KIND_HIT) r->kind = KIND_MISS;
+    break;
+  }
+  case CMD_RD:
+  case CMD_WR:
+    issue_column(d, c, qk, pk->qi, now);
+    break;
+  case CMD_REF: {
+    struct rank *rk = &c->ranks[pk->rank];
+    rk->pending--;
+    rk->ref_end = now + d->p.tRFC;
+    for (uint32_t i = 0; i < d->banks_per_rank; i++) {
+      struct bank *bk = &c->banks[pk->rank * d->banks_per_rank + i];
+      bk->act_ok = max64(bk->act_ok, rk->ref_end);
+    }
+    d->st.refreshes++;
+    d->st.refresh_cycles += d->p.tRFC;
+    break;
+  }
+  case CMD_NONE:
+    break;
+  }
+}
+
+/* Handle DRAM cycle `now` on channel c: refreshes falling due, the drain mode,
+ * at most one command; then c->next. */
+static void channel_cycle(struct dram_banked *d, struct channel *c, int64_t now) {
+  const int64_t period = d->refresh_step * (int64_t)d->p.ranks;
+  for (uint32_t k = 0; k < d->p.ranks; k++) {
+    struct rank *rk = &c->ranks[k];
+    while (rk->next_due <= now) {
+      rk->pending++;
+      rk->next_due += period;
+    }
+  }
+  update_mode(d, c);
+  struct pick pk;
+  scan(d, c, now, &pk);
+  if (pk.type == CMD_NONE) {
+    CHECK_GT(pk.next, now);
+    c->next = pk.next;
+    return;
+  }
+  issue(d, c, &pk, now);
+  update_mode(d, c);
+  scan(d, c, now + 1, &pk);
+  c->next = pk.next;
+}
+
+static bool channel_busy(const struct dram_banked *d, const struct channel *c) {
+  if (c->q[RD_Q].n || c->q[WR_Q].n) return true;
+  for (uint32_t k = 0; k < d->p.ranks; k++)
+    if (c->ranks[k].pending) return true;
+  return false;
+}
+
+/* The next DRAM cycle to handle (FAR: none). The oracle mode handles every
+ * cycle while any channel has work, and otherwise jumps to the next refresh. */
+static int64_t next_cycle(const struct dram_banked *d) {
+  int64_t w = FAR;
+  for (uint32_t i = 0; i < d->p.channels; i++) {
+    const struct channel *c = &d->ch[i];
+    if (d->p.tick_every_cycle) {
+      if (channel_busy(d, c)) return d->cursor;
+      for (uint32_t k = 0; k < d->p.ranks; k++)
+        if (c->ranks[k].next_due < w) w = c->ranks[k].next_due;
+    } else if (c->next < w) {
+      w = c->next;
+    }
+  }
+  return w < d->cursor ? d->cursor : w;
+}
+
+static void schedule_wake(struct dram_banked *d) {
+  if (d->space_due) {
+    d->space_due = false;
+    engine_at(d->e, engine_now(d->e), on_space, d, 0);
+  }
+  /* Idle (nothing queued): no wake; refreshes are caught up at the next call. */
+  if (!d->queued) return;
+  int64_t w = next_cycle(d);
+  CHECK_LT(w, FAR);
+  uint64_t t = core_deciding(d, w);
+  if (t >= d->wake_at) return;
+  d->wake_at = t;
+  engine_at(d->e, t, on_wake, d, t);
+}
+
+/* Handle every DRAM cycle that can be decided by now: those before the first
+ * one that begins at or after engine_now. */
+static void advance(struct dram_banked *d) {
+  const int64_t limit = (int64_t)dram_clock_from_core(d->clk, engine_now(d->e));
+  for (;;) {
+    int64_t w = next_cycle(d);
+    if (w >= limit) break;
+    for (uint32_t i = 0; i < d->p.channels; i++) {
+      struct channel *c = &d->ch[i];
+      if (d->p.tick_every_cycle || c->next <= w) channel_cycle(d, c, w);
+    }
+    d->cursor = w + 1;
+  }
+  if (d->cursor < limit) d->cursor = limit;
+  schedule_wake(d);
+}
+
+/* ---- The level ---- */
+
+void dram_banked_decode(const struct dram_banked *d, uint64_t addr, struct dram_banked_coord *out) {
+  uint64_t a = addr >> 6;
+  out->channel = (uint32_t)((a >> d->sh_ch) & d->mk_ch);
+  out->rank = (uint32_t)((a >> d->sh_ra) & d->mk_ra);
+  out->bank_group = (uint32_t)((a >> d->sh_bg) & d->mk_bg);
+  out->bank = (uint32_t)((a >> d->sh_ba) & d->mk_ba);
+  out->row = (a >> d->sh_ro) & d->mk_ro;
+  out->column = ((a >> d->sh_co) & d->mk_co) * d->p.burst_length;
+}
+
+static bool banked_can_take(const void *self, uint64_t addr, bool write) {
+  /* NOTE: const only in the interface's sense: answering needs the state as of
+   * now, so pending cycles are handled first (results are the same whenever
+   * that happens). */
+  struct dram_banked *d = (struct dram_banked *)self;
+  advance(d);
+  struct dram_banked_coord co;
+  dram_banked_decode(d, addr, &co);
+  const struct queue *q = &d->ch[co.channel].q[write ? WR_Q : RD_Q];
+  return q->n < q->cap;
+}
+
+static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
+  struct dram_banked *d = self;
+  CHECK_EQ(addr & 63, 0);
+  advance(d);
+  struct dram_banked_coord co;
+  dram_banked_decode(d, addr, &co);
+  struct channel *c = &d->ch[co.channel];
+  const int qk = write ? WR_Q : RD_Q;
+  struct queue *q = &c->q[qk];
+  CHECK_LT(q->n, q->cap);
+  struct req *r = &q->r[q->n++];
+  r->tag = tag;
+  r->take_core = engine_now(d->e);
+  r->seq = d->seq++;
+  r->row = co.row;
+  r->rank = co.rank;
+  r->group = co.bank_group;
+  r->bank = co.rank * d->banks_per_rank + co.bank_group * d->p.banks_per_group + co.bank;
+  r->kind = KIND_HIT;
+  d->queued++;
+  area_to(d, qk, r->take_core);
+  d->q_len[qk]++;
+  if (d->q_len[qk] > d->st.queue_max[qk]) d->st.queue_max[qk] = d->q_len[qk];
+  /* Cycles before the cursor are decided; the new request joins at it. */
+  update_mode(d, c);
+  struct pick pk;
+  scan(d, c, d->cursor, &pk);
+  if (pk.next < c->next) c->next = pk.next;
+  schedule_wake(d);
+}
+
+static void banked_finish(void *self) {
+  struct dram_banked *d = self;
+  advance(d);
+  CHECK_EQ(d->queued, 0);
+  CHECK_EQ(d->inflight, 0);
+  uint64_t now = engine_now(d->e);
+  area_to(d, RD_Q, now);
+  area_to(d, WR_Q, now);
+  for (uint32_t i = 0; i < d->p.channels; i++)
+    for (uint32_t j = 0; j < d->banks_per_channel; j++) {
+      struct bank *bk = &d->ch[i].banks[j];
+      if (bk->act_at < 0) continue;
+      int64_t end = bk->close_at < d->cursor ? bk->close_at : d->cursor;
+      if (end > bk->act_at) d->st.bank_open_cycles += (uint64_t)(end - bk->act_at);
+      bk->act_at = -1;
+    }
+  d->st.dram_cycles = (uint64_t)d->cursor;
+}
+
+static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
+
+static void banked_report(const void *self, struct stats_table *t, uint64_t cycles) {
+  const struct dram_banked *d = self;
+  const struct dram_banked_stats *s = &d->st;
+  const double dram_cycles = (double)cycles * (double)d->clk.den / (double)d->clk.num;
+  const uint64_t reqs = s->reads + s->writes;
+  stats_u64(t, "dram_row_hits", s->row_hits);
+  stats_u64(t, "dram_row_misses", s->row_misses);
+  stats_u64(t, "dram_row_conflicts", s->row_conflicts);
+  stats_f64(t, "dram_row_hit_rate", ratio((double)s->row_hits, (double)reqs));
+  stats_u64(t, "dram_activates", s->activates);
+  stats_u64(t, "dram_precharges", s->precharges);
+  stats_u64(t, "dram_refreshes", s->refreshes);
+  stats_u64(t, "dram_refresh_cycles", s->refresh_cycles);
+  stats_u64(t, "dram_write_drains", s->write_drains);
+  stats_f64(t, "dram_bus_utilization", ratio((double)s->bus_busy_cycles, dram_cycles * d->p.channels));
+  stats_f64(t, "dram_bank_active_fraction",
+            ratio((double)s->bank_open_cycles, dram_cycles * d->banks_per_channel * d->p.channels));
+  static const char *const names[2][4] = {
+      {"dram_read_queue_length_mean", "dram_read_queue_length_max", "dram_read_queue_wait_mean_cycles",
+       "dram_read_queue_wait_max_cycles"},
+      {"dram_write_queue_length_mean", "dram_write_queue_length_max",
+       "dram_write_queue_wait_mean_cycles", "dram_write_queue_wait_max_cycles"}};
+  const uint64_t n[2] = {s->reads, s->writes};
+  for (int k = 0; k < 2; k++) {
+    stats_f64(t, names[k][0], ratio((double)s->queue_area[k], (double)cycles));
+    stats_u64(t, names[k][1], s->queue_max[k]);
+    stats_f64(t, names[k][2], ratio((double)s->queue_wait_sum_cycles[k], (double)n[k]));
+    stats_u64(t, names[k][3], s->queue_wait_max_cycles[k]);
+  }
+  stats_f64(t, "dram_read_latency_mean_cycles", ratio((double)s->read_latency_sum_cycles, (double)s->reads));
+}
+
+static void banked_destroy(void *self) { dram_banked_destroy(self); }
+
+const struct dram_level_ops dram_banked_ops = {banked_can_take, banked_take, banked_finish,
+                                               banked_report, banked_destroy};
+
+const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d) { return &d->st; }
+
+struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint64_t core_khz,
+                                       struct engine *e, const struct dram_client *client) {
+  CHECK(dram_banked_params_problem(p) == NULL);
+  CHECK(client && client->done);
+  struct dram_banked *d = xcalloc(1, sizeof *d);
+  d->p = *p;
+  d->clk = dram_clock_make(core_khz, (uint64_t)p->clock_mhz * 1000);
+  d->e = e;
+  d->client = *client;
+  d->banks_per_rank = p->bank_groups * p->banks_per_group;
+  d->banks_per_channel = p->ranks * d->banks_per_rank;
+  d->burst_cycles = p->burst_length / 2;
+  d->refresh_step = p->tREFI / p->ranks;
+  d->wake_at = UINT64_MAX;
+  /* Field widths, then positions from the least significant (the last). */
+  unsigned width[6] = {lg2(p->rows), lg2(p->channels), lg2(p->ranks), lg2(p->bank_groups),
+                       lg2(p->banks_per_group), lg2(p->columns / p->burst_length)};
+  unsigned pos[6] = {0}, at = 0;
+  for (int i = 5; i >= 0; i--) {
+    int f = field_of(p->mapping + 2 * i);
+    pos[f] = at;
+    at += width[f];
+  }
+  d->sh_ro = pos[0], d->mk_ro = (1ull << width[0]) - 1;
+  d->sh_ch = pos[1], d->mk_ch = (1ull << width[1]) - 1;
+  d->sh_ra = pos[2], d->mk_ra = (1ull << width[2]) - 1;
+  d->sh_bg = pos[3], d->mk_bg = (1ull << width[3]) - 1;
+  d->sh_ba = pos[4], d->mk_ba = (1ull << width[4]) - 1;
+  d->sh_co = pos[5], d->mk_co = (1ull << width[5]) - 1;
+  d->ch = xcalloc(p->channels, sizeof *d->ch);
+  /* Bursts that can still matter lie within the spread of the two latencies
+   * plus a burst either side. */
+  uint32_t spread = p->tCL > p->tCWL ? p->tCL - p->tCWL : p->tCWL - p->tCL;
+  for (uint32_t i = 0; i < p->channels; i++) {
+    struct channel *c = &d->ch[i];
+    c->q[RD_Q].cap = p->read_queue;
+    c->q[RD_Q].r = xcalloc(p->read_queue, sizeof(struct req));
+    c->q[WR_Q].cap = p->write_queue;
+    c->q[WR_Q].r = xcalloc(p->write_queue, sizeof(struct req));
+    c->rd = NEVER;
+    c->cap_b = spread / (uint32_t)d->burst_cycles + 6;
+    c->bursts = xcalloc(c->cap_b, sizeof *c->bursts);
+    c->banks = xcalloc(d->banks_per_channel, sizeof *c->banks);
+    for (uint32_t j = 0; j < d->banks_per_channel; j++) {
+      struct bank *bk = &c->banks[j];
+      bk->act_ok = bk->col_ok = bk->pre_ok = bk->ref_ok = NEVER;
+      bk->act_at = -1;
+      bk->close_at = FAR;
+    }
+    c->groups = xcalloc(p->ranks * p->bank_groups, sizeof *c->groups);
+    for (uint32_t j = 0; j < p->ranks * p->bank_groups; j++)
+      c->groups[j].act = c->groups[j].rd = c->groups[j].wr = NEVER;
+    c->ranks = xcalloc(p->ranks, sizeof *c->ranks);
+    c->next = FAR;
+    for (uint32_t k = 0; k < p->ranks; k++) {
+      struct rank *rk = &c->ranks[k];
+      rk->act = rk->rd = rk->wr = rk->ref_end = NEVER;
+      for (int j = 0; j < 4; j++) rk->faw[j] = NEVER;
+      rk->next_due = p->tREFI ? (int64_t)(k + 1) * d->refresh_step : FAR;
+      if (rk->next_due < c->next) c->next = rk->next_due;
+    }
+  }
+  return d;
+}
+
+void dram_banked_destroy(struct dram_banked *d) {
+  if (!d) return;
+  for (uint32_t i = 0; i < d->p.channels; i++) {
+    struct channel *c = &d->ch[i];
+    free(c->q[RD_Q].r);
+    free(c->q[WR_Q].r);
+    free(c->bursts);
+    free(c->banks);
+    free(c->groups);
+    free(c->ranks);
+  }
+  free(d->ch);
+  free(d);
+}

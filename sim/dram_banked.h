@@ -1,0 +1,158 @@
+/* The banked DRAM level: DDR-style channels x ranks x bank groups x banks, each
+ * bank with one open row (or none), commands timed in the DRAM's own clock and
+ * scheduled FR-FCFS per channel, behind sim/dram_level.h.
+ *
+ * Policies, as modelled:
+ * - Time. A request taken at core cycle c may issue its first command in DRAM
+ *   cycle from_core(c), the first that begins at or after c (struct
+ *   dram_clock, exact). The decision for DRAM cycle d waits until every request
+ *   that could take part in it has arrived, i.e. until the first core cycle
+ *   with from_core > d; state is advanced lazily to the present at every call
+ *   and wake, so when a call lands within a core cycle never matters.
+ * - Queues. Per channel a read queue and a write queue, bounded (read_queue,
+ *   write_queue entries). A request holds its place from take until its column
+ *   command issues; then client->space is raised from an event.
+ * - Write draining. Reads are served; the channel turns to writes when the write
+ *   queue reaches write_high, or when no read is queued and writes are; it turns
+ *   back when the write queue empties, or falls to write_low with a read
+ *   waiting. Only the queue being served issues request commands.
+ * - FR-FCFS. Among the served queue: the oldest request whose column command
+ *   (a row hit) can issue this cycle; else the oldest whose PRE or ACT can.
+ *   Refresh commands go before both.
+ * - Open page: a row stays open after its column command. A PRE for a conflict
+ *   waits while a queued request of the served queue still hits the open row.
+ *   Starvation bound (DRAMsim3's cap of 4): once a row has served
+ *   DRAM_BANKED_ROW_HIT_CAP column commands since its ACT, hits younger than
+ *   the oldest conflicting request to that bank stop counting (and stop
+ *   issuing), so the conflict waits at most for the hits older than itself.
+ * - Close page: every column command auto-precharges (RDA/WRA): the bank
+ *   precharges at the earliest legal time, max(ACT + tRAS, RD + tRTP) or
+ *   max(ACT + tRAS, WR + tCWL + BL/2 + tWR), and may be activated tRP later.
+ * - One command per channel per DRAM cycle. Constraints: ACT->RD/WR tRCD,
+ *   ACT->ACT tRC, ACT->PRE tRAS, PRE->ACT tRP (same bank); RD->PRE tRTP,
+ *   WR->PRE tCWL + BL/2 + tWR; RD->RD, WR->WR tCCD_L same group, tCCD_S other
+ *   group (same rank); WR->RD tCWL + BL/2 + tWTR_L / tWTR_S (same rank);
+ *   RD->WR tRTW (channel); ACT->ACT tRRD_L / tRRD_S (same rank); at most 4
+ *   ACTs per rank in any tFAW window; data bursts (read [RD + tCL, + BL/2),
+ *   write [WR + tCWL, + BL/2)) never overlap on a channel, and bursts of two
+ *   different ranks are at least one idle cycle apart.
+ * - Service. A read is done when its last beat arrives (RD + tCL + BL/2), a
+ *   write at WR + tCWL + BL/2, each at the core cycle at or after that DRAM
+ *   cycle, from an engine event.
+ * - Refresh (DRAMsim3's RANK_LEVEL_STAGGERED). A refresh falls due every
+ *   floor(tREFI / ranks) DRAM cycles, ranks in turn: rank r's k-th (k >= 0) at
+ *   (k * ranks + r + 1) * floor(tREFI / ranks). Once due, the rank takes no
+ *   request command; its open banks are precharged (tRAS, tRTP, write recovery
+ *   respected), REF issues once all have been precharged for tRP, and the rank
+ *   takes no ACT for tRFC. tREFI = 0 turns refresh off.
+ * - Event-driven: after each handled DRAM cycle one wake is scheduled at the
+ *   earliest cycle any command could issue, computed from the timing state; an
+ *   idle level schedules nothing and catches up on refreshes at its next call.
+ *   tick_every_cycle (a test oracle) wakes every DRAM cycle instead; both give
+ *   the same results.
+ *
+ * Address mapping (DRAMsim3's): above the 6 line-offset bits, six fields from
+ * most to least significant, "ro" "ch" "ra" "bg" "ba" "co", each log2 of its
+ * count wide; co is log2(columns / burst_length) (one line per burst).
+ *
+ * Presets (DRAM clock cycles), from DRAMsim3's configs/:
+ * - DDR4_8Gb_x8_2400.ini (Micron MT40A1G8PM-083E, DDR4-2400, tCK 0.833 ns):
+ *   clock_mhz 1200; bank_groups 4, banks_per_group 4, rows 65536, columns 1024,
+ *   x8 devices on a 64-bit bus (bus_bytes 8), burst_length 8, 8 GB per channel
+ *   = 1 rank, channels 1, mapping "chrobabgraco". tCL 16, tCWL 16, tRCD 16,
+ *   tRP 16, tRAS 39, tRC 55 (= tRAS + tRP, as DRAMsim3 derives it), tCCD_S 4,
+ *   tCCD_L 6, tRRD_S 4, tRRD_L 6, tFAW 26, tWR 19, tWTR_S 3, tWTR_L 9,
+ *   tREFI 9364, tRFC 420. tRTP: absent from the ini, so DRAMsim3 runs with its
+ *   default 5; JEDEC's max(4 nCK, 7.5 ns) is 9, which a preset should use.
+ *   tRTW: DRAMsim3 derives read-to-write as RL + BL/2 - WL + tRTRS
+ *   (RL = AL + CL, WL = AL + CWL, AL 0, tRTRS 2) = 16 + 4 - 16 + 2 = 6.
+ * - HBM2_8Gb_x128.ini (1000 MHz): channels 8, 1 rank, bank_groups 4,
+ *   banks_per_group 4, rows 32768, columns 128 (the ini's 64, doubled by
+ *   DRAMsim3 for HBM's prefetch), bus_bytes 16, burst_length 4 (BL/2 = 2),
+ *   mapping "rorabgbachco"; tCL 14, tCWL 4, tRCD 14 (tRCDRD = tRCDWR), tRP 14,
+ *   tRAS 34, tRC 48, tCCD_S 1, tCCD_L 2, tRRD_S 4, tRRD_L 6, tFAW 30, tWR 16,
+ *   tWTR_S 6, tWTR_L 8, tREFI 3900, tRFC 260; tRTW = 14 + 2 - 4 + 2 = 14;
+ *   tRTP: the ini's tRTP_L 6 / tRTP_S 4 are not read by DRAMsim3 (default 5);
+ *   use 6. HBM's separate row and column command buses are not modelled here
+ *   (one command per channel per cycle). */
+#ifndef RTSIM_SIM_DRAM_BANKED_H
+#define RTSIM_SIM_DRAM_BANKED_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "sim/dram_level.h"
+
+struct engine;
+
+/* Column commands a row may serve since its ACT before younger hits stop
+ * holding back an older conflict (DRAMsim3's row-hit cap). */
+#define DRAM_BANKED_ROW_HIT_CAP 4u
+
+enum dram_banked_page { DRAM_BANKED_OPEN_PAGE, DRAM_BANKED_CLOSE_PAGE };
+
+struct dram_banked_params {
+  uint32_t clock_mhz; /* DRAM command clock (DDR4-2400: 1200) */
+  uint32_t channels, ranks, bank_groups, banks_per_group;
+  uint32_t rows, columns; /* per bank; columns in device columns, a burst covers
+                             burst_length of them */
+  uint32_t bus_bytes;     /* data bus width per channel; bus_bytes * burst_length = 64 */
+  uint32_t burst_length;  /* beats per burst (even); a burst takes burst_length / 2 cycles */
+  char mapping[16];       /* e.g. "rochrababgco" */
+  enum dram_banked_page page;
+  uint32_t read_queue, write_queue; /* entries per channel */
+  uint32_t write_high, write_low;   /* write drain watermarks (entries) */
+  /* Timing in DRAM clock cycles. */
+  uint32_t tCL, tCWL, tRCD, tRP, tRAS, tRC, tCCD_S, tCCD_L, tRRD_S, tRRD_L, tFAW, tWR, tWTR_S,
+      tWTR_L, tRTW, tRTP, tREFI, tRFC;
+  bool tick_every_cycle; /* test only: wake every DRAM cycle while work is queued */
+};
+
+/* NULL if p is usable, else "dram.KEY: what is wrong" (a constant string). */
+const char *dram_banked_params_problem(const struct dram_banked_params *p);
+
+/* Is s a usable mapping: six two-letter fields, each of ro ch ra bg ba co once? */
+bool dram_banked_mapping_ok(const char *s);
+
+struct dram_banked;
+
+/* A level on engine e calling back client (copied); core_khz: the core clock.
+ * p is CHECKed with dram_banked_params_problem. Caller destroys. */
+struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint64_t core_khz,
+                                       struct engine *e, const struct dram_client *client);
+void dram_banked_destroy(struct dram_banked *d); /* NULL ok */
+
+/* The level's operations; self is a struct dram_banked *. */
+extern const struct dram_level_ops dram_banked_ops;
+
+/* Counters over the run (complete after finish). Queue figures sum over
+ * channels; "queue time" runs from take to the request's column command. */
+struct dram_banked_stats {
+  uint64_t reads, writes;
+  uint64_t row_hits, row_misses, row_conflicts; /* per request, at its column command: found
+                                                   its row open / its bank closed / another
+                                                   row open */
+  uint64_t activates, precharges;               /* precharges include auto-precharges */
+  uint64_t refreshes, refresh_cycles;           /* refresh_cycles: rank-cycles (DRAM) in tRFC */
+  uint64_t write_drains;                        /* turns from reads to writes */
+  /* Per queue kind [0] reads, [1] writes: */
+  uint64_t queue_area[2];          /* time integral of the entries queued, core cycles x entries */
+  uint64_t queue_wait_sum_cycles[2]; /* sum over requests of their queue time (core cycles) */
+  uint64_t queue_wait_max_cycles[2];
+  uint64_t queue_max[2];           /* most entries queued at once, all channels together */
+  uint64_t read_latency_sum_cycles; /* take to done, reads, core cycles */
+  uint64_t bus_busy_cycles;        /* data bus cycles carrying a burst, summed over channels */
+  uint64_t bank_open_cycles;       /* DRAM cycles with a row open, summed over banks */
+  uint64_t dram_cycles;            /* DRAM cycles simulated when finished */
+};
+const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d);
+
+/* A line address's coordinates. column: the first device column of the
+ * line's burst (the co field times burst_length). */
+struct dram_banked_coord {
+  uint32_t channel, rank, bank_group, bank;
+  uint64_t row, column;
+};
+void dram_banked_decode(const struct dram_banked *d, uint64_t addr, struct dram_banked_coord *out);
+
+#endif
