@@ -14,6 +14,7 @@
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/err.h"
+#include "sim/machine_cfg.h"
 #include "sim/machine.h"
 
 int app_report(const struct err *e) {
@@ -122,7 +123,7 @@ static void cycle_progress(void *ctx, uint64_t cycle) {
 
 void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask, uint64_t seed,
                    uint32_t width, uint32_t height, enum policy_kind k,
-                   const struct machine_params *mp, bool progress) {
+                   const struct machine_params *mp, bool progress, FILE *dram_trace) {
   app_render_init(&t->ar, w, mask, seed, width, height);
   t->ar.setup.layout.node_cycles = mp->cost_node_cycles;
   t->ar.setup.layout.tri_cycles = mp->cost_triangle_cycles;
@@ -136,6 +137,7 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
   r.job = policy_job_create(k, &t->ar.setup, &pp, n, mp->cores);
   r.workers = xcalloc(n, sizeof *r.workers);
   t->m = machine_create(mp, 0);
+  if (dram_trace) dram_trace_to(machine_dram(t->m), dram_trace);
   r.t0 = app_now();
   machine_run(t->m, run_worker, &r, progress ? cycle_progress : NULL, &r);
   t->wall_s = app_now() - r.t0;
@@ -148,4 +150,19 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
 void app_timed_fini(struct app_timed *t) {
   machine_destroy(t->m);
   app_render_fini(&t->ar);
+}
+
+bool app_sets_add(const char *text, void *dst) {
+  struct app_sets *s = dst;
+  s->v[s->n++] = text;
+  return true;
+}
+
+bool app_machine_load(struct machine_cfg *mc, const char *path, const struct app_sets *sets,
+                      struct err *e) {
+  machine_cfg_defaults(mc);
+  if (!machine_cfg_load(mc, path, e)) return false;
+  for (unsigned i = 0; sets && i < sets->n; i++)
+    if (!machine_cfg_set(mc, sets->v[i], e)) return false;
+  return machine_cfg_check(mc, e);
 }

@@ -5,6 +5,7 @@
 
 #include <stdbool.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
@@ -26,6 +27,7 @@ int cmd_run(int argc, char **argv);
 int cmd_sweep(int argc, char **argv);
 int cmd_merge(int argc, char **argv);
 int cmd_plot(int argc, char **argv);
+int cmd_dram_replay(int argc, char **argv);
 
 /* Print "rtsim: <formatted err>" once to stderr; returns APP_EXIT_USAGE. */
 int app_report(const struct err *e);
@@ -102,7 +104,21 @@ struct app_timed {
  * mp. progress: a progress line on stderr. */
 void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask, uint64_t seed,
                    uint32_t width, uint32_t height, enum policy_kind k,
-                   const struct machine_params *mp, bool progress);
+                   const struct machine_params *mp, bool progress, FILE *dram_trace);
 void app_timed_fini(struct app_timed *t);
+
+/* Repeatable --set KEY=VALUE options, in order (argv's strings): an
+ * OPTS_PARSE destination (app_sets_add) sized for argc entries. */
+struct app_sets {
+  const char **v;
+  unsigned n;
+};
+bool app_sets_add(const char *text, void *dst);
+/* The default machine, then the config file at path, then the --set
+ * assignments, then the relations between keys: false (e filled) on the
+ * first problem. */
+struct machine_cfg;
+bool app_machine_load(struct machine_cfg *mc, const char *path, const struct app_sets *sets,
+                      struct err *e);
 
 #endif

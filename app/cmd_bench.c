@@ -168,7 +168,7 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
       struct machine_params p = mc.p;
       if (one) p.cores = p.threads_per_core = p.rays_per_thread = 1;
       struct app_timed t;
-      app_timed_run(&t, &w, mask, w.scene.seed, W, H, POLICY_RECURSIVE, &p, false);
+      app_timed_run(&t, &w, mask, w.scene.seed, W, H, POLICY_RECURSIVE, &p, false, NULL);
       const struct machine_stats *st = machine_get_stats(t.m);
       printf("%s,%u,%u,%llu,%s%s,%llu,%.4f,%.4f,%.2f,%llu,%llu,%.0f,%.4f,%.4f\n",
              w.scene.name[0] ? w.scene.name : argv[i], W, H, (unsigned long long)nrays, cfg_path,

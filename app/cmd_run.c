@@ -47,24 +47,11 @@ static const char HELP[] =
     "  --seed S            diffuse sampling seed (default: the scene's)\n"
     "  --set KEY=VALUE     override a machine config key (repeatable), e.g.\n"
     "                      --set l2.size=1MiB --set rays_per_thread=4; keys:\n"
-    "                      clock_ghz cores threads_per_core rays_per_thread l1.size\n"
-    "                      l1.ways l1.latency l2.size l2.ways l2.latency l2.banks\n"
-    "                      l2.mshrs dram.latency dram.bytes_per_cycle\n"
-    "                      dram.queue_depth costs.node costs.triangle costs.shade\n"
-    "                      costs.ray_switch timeline.window\n"
+    "                      every key of configs/default.yaml (README: Config keys)\n"
+    "  --dram-trace FILE   also write every DRAM request (address, READ or WRITE,\n"
+    "                      arrival in DRAM cycles, arrival and completion in core\n"
+    "                      cycles), in arrival order; README: DRAM traces\n"
     "  -h, --help          this text\n";
-
-/* The --set assignments, in order (argv's strings). */
-struct sets {
-  const char **v;
-  unsigned n;
-};
-
-static bool add_set(const char *text, void *dst) {
-  struct sets *s = dst;
-  s->v[s->n++] = text;
-  return true;
-}
 
 int cmd_run(int argc, char **argv) {
   const char *out = NULL;
@@ -72,11 +59,14 @@ int cmd_run(int argc, char **argv) {
   uint64_t width = 0, height = 0, seed = 0;
   bool have_seed = false;
   enum policy_kind policy = POLICY_RECURSIVE;
-  struct sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v), 0}; /* at most one an argument */
+  const char *trace_path = NULL;
+  struct outfile trace = {0};
+  struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v), 0}; /* at most one an argument */
   const struct opts_spec spec[] = {
       OPTS_STR("output", 'o', &out),
       APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy),
-      OPTS_PARSE("set", 0, &sets, add_set, "KEY=VALUE"),
+      OPTS_PARSE("set", 0, &sets, app_sets_add, "KEY=VALUE"),
+      OPTS_STR("dram-trace", 0, &trace_path),
       OPTS_END};
   struct opts_args args;
   int rc = opts_parse("run", HELP, spec, argc, argv, &args);
@@ -93,19 +83,9 @@ int cmd_run(int argc, char **argv) {
     goto done;
   }
   struct machine_cfg mc;
-  machine_cfg_defaults(&mc);
   struct err e;
   memset(&e, 0, sizeof e);
-  if (!machine_cfg_load(&mc, machine_path, &e)) {
-    app_report(&e);
-    goto done;
-  }
-  for (unsigned i = 0; i < sets.n; i++)
-    if (!machine_cfg_set(&mc, sets.v[i], &e)) {
-      app_report(&e);
-      goto done;
-    }
-  if (!machine_cfg_check(&mc, &e)) {
+  if (!app_machine_load(&mc, machine_path, &sets, &e)) {
     app_report(&e);
     goto done;
   }
@@ -120,10 +100,18 @@ int cmd_run(int argc, char **argv) {
 
   struct app_world w;
   if (!app_world_load(&w, scene_path)) goto done;
+  if (trace_path) {
+    if (!outfile_open(&trace, trace_path, "the DRAM trace", &e)) {
+      app_report(&e);
+      app_world_fini(&w);
+      goto done;
+    }
+  }
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   struct app_timed t;
-  app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, isatty(2));
+  app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, isatty(2),
+                trace.f);
   struct run_output_report rep = {
       .out_dir = out,
       .machine_path = machine_path,
@@ -143,11 +131,14 @@ int cmd_run(int argc, char **argv) {
       .fb = &t.ar.fb,
       .wall_s = t.wall_s,
   };
-  rc = run_output_write(&rep, &e) ? 0 : app_report(&e);
+  /* The trace first: stats.json, written last, marks the directory complete. */
+  bool ok = !trace_path || outfile_commit(&trace, &e);
+  rc = ok && run_output_write(&rep, &e) ? 0 : app_report(&e);
   if (rc == 0) run_output_summary(&rep, stdout);
   app_timed_fini(&t);
   app_world_fini(&w);
 done:
+  outfile_abort(&trace);
   free(sets.v);
   return rc;
 }

@@ -138,10 +138,11 @@ static bool check_workload(const struct priv *pv, enum wl k, const struct cfg_no
 /* A key that is neither a machine nor a workload key. */
 static bool unknown_key(const struct priv *pv, const struct cfg_node *v, const char *section,
                         struct err *e, bool workload_too) {
+  char keys[2048];
+  machine_cfg_key_list(keys, sizeof keys);
   return err_set(e, pv->doc.file, v->key_line, v->key_col,
                  "%s.%s: unknown key '%s' (expected a machine config key: %s%s)", section, v->key,
-                 v->key, machine_cfg_key_list(),
-                 workload_too ? "; or a workload key: " WL_LIST : "");
+                 v->key, keys, workload_too ? "; or a workload key: " WL_LIST : "");
 }
 
 /* Where else key `key` was given, if anywhere (section name and line). */

@@ -28,6 +28,7 @@ struct dram {
   const struct dram_level_ops *ops;
   void *level;
   struct dram_clock clock;
+  uint64_t core_khz;
   struct flight *ring; /* capacity a power of two, indexed by sequence */
   uint64_t cap, head, next;
   uint64_t inflight; /* taken, not yet served */
@@ -44,7 +45,11 @@ const char *dram_params_problem(const struct dram_params *p) {
     struct dram_channel_params c = {p->latency_cycles, p->bytes_per_cycle, p->queue_depth};
     return dram_channel_params_problem(&c);
   }
-  if (p->model == DRAM_MODEL_BANKED) return "dram.model: banked is not built yet";
+  if (p->model == DRAM_MODEL_BANKED) {
+    struct dram_banked_params b = p->banked;
+    b.clock_mhz = p->clock_mhz;
+    return dram_banked_params_problem(&b);
+  }
   return NULL;
 }
 
@@ -88,6 +93,7 @@ struct dram *dram_create(const struct dram_params *p, uint64_t core_khz, struct 
   d->eng = e;
   d->client = *client;
   d->clock = dram_clock_make(core_khz, (uint64_t)p->clock_mhz * 1000);
+  d->core_khz = core_khz;
   d->cap = 64;
   d->ring = xcalloc(d->cap, sizeof *d->ring);
   struct dram_client mine = {d, level_done, level_space};
@@ -100,6 +106,13 @@ struct dram *dram_create(const struct dram_params *p, uint64_t core_khz, struct 
     struct dram_channel_params c = {p->latency_cycles, p->bytes_per_cycle, p->queue_depth};
     d->ops = &dram_channel_ops;
     d->level = dram_channel_create(&c, e, &mine);
+    break;
+  }
+  case DRAM_MODEL_BANKED: {
+    struct dram_banked_params b = p->banked;
+    b.clock_mhz = p->clock_mhz;
+    d->ops = &dram_banked_ops;
+    d->level = dram_banked_create(&b, core_khz, e, &mine);
     break;
   }
   default: CHECK(false);
@@ -158,4 +171,12 @@ void dram_report(const struct dram *d, struct stats_table *t, uint64_t cycles) {
   d->ops->report(d->level, t, cycles);
 }
 
-void dram_trace_to(struct dram *d, FILE *f) { d->trace = f; }
+void dram_trace_to(struct dram *d, FILE *f) {
+  d->trace = f;
+  fprintf(f,
+          "# rtsim dram trace v1: address op arrival_dram_cycle arrival_cycle done_cycle "
+          "(dram.model %s, DRAM clock %u MHz, core clock %llu kHz; one line a 64-byte request, "
+          "in arrival order)\n",
+          dram_model_names[d->p.model], d->p.clock_mhz,
+          (unsigned long long)d->core_khz);
+}

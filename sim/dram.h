@@ -11,6 +11,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "sim/dram_banked.h"
 #include "sim/dram_channel.h"
 #include "sim/dram_level.h"
 #include "sim/hist.h"
@@ -24,6 +25,7 @@ struct dram_params {
   double bytes_per_cycle;  /* channel */
   uint32_t queue_depth;    /* channel */
   uint32_t clock_mhz;      /* the DRAM's own clock (banked timing; the trace's DRAM cycles) */
+  struct dram_banked_params banked; /* banked (its clock_mhz is taken from clock_mhz) */
 };
 
 /* NULL if usable, else what is wrong, naming the dram.* key. */
@@ -57,9 +59,10 @@ const struct dram_stats *dram_get_stats(const struct dram *d);
 /* The level's own numbers (names with units), for a run of `cycles`. */
 void dram_report(const struct dram *d, struct stats_table *t, uint64_t cycles);
 
-/* Write every request from now on to f, one line each in arrival order, as
- * soon as it and every earlier one are served (README "DRAM traces"); the
- * caller owns f and checks it for errors. */
+/* Write a header line (# ...: the format, the level, both clocks), then every
+ * request from now on to f, one line each in arrival order, as soon as it and
+ * every earlier one are served (README "DRAM traces"); the caller owns f and
+ * checks it for errors. */
 void dram_trace_to(struct dram *d, FILE *f);
 
 #endif

@@ -92,7 +92,8 @@ static struct l2_params l2_params_of(const struct machine_params *p) {
 
 static struct dram_params dram_params_of(const struct machine_params *p) {
   struct dram_params d = {(enum dram_model)p->dram_model, p->dram_latency_cycles,
-                          p->dram_bytes_per_cycle, p->dram_queue_depth, p->dram_clock_mhz};
+                          p->dram_bytes_per_cycle, p->dram_queue_depth, p->dram_clock_mhz,
+                          p->dram_banked};
   return d;
 }
 

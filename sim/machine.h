@@ -46,6 +46,7 @@ struct machine_params {
   double dram_bytes_per_cycle;
   uint32_t dram_queue_depth;
   uint32_t dram_clock_mhz;
+  struct dram_banked_params dram_banked; /* dram.model banked (its clock: dram_clock_mhz) */
   /* Compute the renderer announces (the machine charges what it is told). */
   uint32_t cost_node_cycles, cost_triangle_cycles, cost_shade_cycles;
   uint32_t cost_ray_switch_cycles;

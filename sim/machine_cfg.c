@@ -8,10 +8,11 @@
 #include <string.h>
 
 #include "sim/cfg.h"
+#include "sim/dram_banked.h"
 #include "sim/err.h"
 #include "sim/stats.h"
 
-enum kind { K_U32, K_U64, K_F64, K_SIZE, K_WAYS, K_ENUM };
+enum kind { K_U32, K_U64, K_F64, K_SIZE, K_WAYS, K_ENUM, K_MAPPING };
 
 struct key {
   const char *name; /* "section.key" or "key" */
@@ -22,6 +23,7 @@ struct key {
 };
 
 #define OFF(f) offsetof(struct machine_params, f), NULL
+static const char *const PAGE_NAMES[] = {"open", "close"};
 static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"clock_ghz", K_F64, 1e-3, 1e3, OFF(clock_ghz)},
     {"cores", K_U32, 1, 4096, OFF(cores)},
@@ -41,6 +43,41 @@ static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"dram.bytes_per_cycle", K_F64, 1e-6, 1e6, OFF(dram_bytes_per_cycle)},
     {"dram.queue_depth", K_U32, 1, 1u << 20, OFF(dram_queue_depth)},
     {"dram.clock_mhz", K_U32, 1, 16000, OFF(dram_clock_mhz)},
+#define BK(f) offsetof(struct machine_params, dram_banked.f), NULL
+    {"dram.channels", K_U32, 1, 64, BK(channels)},
+    {"dram.ranks", K_U32, 1, 16, BK(ranks)},
+    {"dram.bank_groups", K_U32, 1, 16, BK(bank_groups)},
+    {"dram.banks_per_group", K_U32, 1, 64, BK(banks_per_group)},
+    {"dram.rows", K_U32, 1, 1u << 24, BK(rows)},
+    {"dram.columns", K_U32, 1, 1u << 20, BK(columns)},
+    {"dram.bus_bytes", K_U32, 1, 64, BK(bus_bytes)},
+    {"dram.burst_length", K_U32, 1, 64, BK(burst_length)},
+    {"dram.mapping", K_MAPPING, 0, 0, BK(mapping)},
+    {"dram.page_policy", K_ENUM, 0, 1, offsetof(struct machine_params, dram_banked.page),
+     PAGE_NAMES},
+    {"dram.read_queue", K_U32, 1, 4096, BK(read_queue)},
+    {"dram.write_queue", K_U32, 1, 4096, BK(write_queue)},
+    {"dram.write_high", K_U32, 1, 4096, BK(write_high)},
+    {"dram.write_low", K_U32, 0, 4096, BK(write_low)},
+    {"dram.tCL", K_U32, 1, 1000, BK(tCL)},
+    {"dram.tCWL", K_U32, 1, 1000, BK(tCWL)},
+    {"dram.tRCD", K_U32, 1, 1000, BK(tRCD)},
+    {"dram.tRP", K_U32, 1, 1000, BK(tRP)},
+    {"dram.tRAS", K_U32, 1, 1000, BK(tRAS)},
+    {"dram.tRC", K_U32, 1, 2000, BK(tRC)},
+    {"dram.tCCD_S", K_U32, 1, 1000, BK(tCCD_S)},
+    {"dram.tCCD_L", K_U32, 1, 1000, BK(tCCD_L)},
+    {"dram.tRRD_S", K_U32, 1, 1000, BK(tRRD_S)},
+    {"dram.tRRD_L", K_U32, 1, 1000, BK(tRRD_L)},
+    {"dram.tFAW", K_U32, 1, 10000, BK(tFAW)},
+    {"dram.tWR", K_U32, 1, 1000, BK(tWR)},
+    {"dram.tWTR_S", K_U32, 1, 1000, BK(tWTR_S)},
+    {"dram.tWTR_L", K_U32, 1, 1000, BK(tWTR_L)},
+    {"dram.tRTW", K_U32, 1, 1000, BK(tRTW)},
+    {"dram.tRTP", K_U32, 1, 1000, BK(tRTP)},
+    {"dram.tREFI", K_U32, 0, 1u << 20, BK(tREFI)},
+    {"dram.tRFC", K_U32, 1, 100000, BK(tRFC)},
+#undef BK
     {"costs.node", K_U32, 0, 1e6, OFF(cost_node_cycles)},
     {"costs.triangle", K_U32, 0, 1e6, OFF(cost_triangle_cycles)},
     {"costs.shade", K_U32, 0, 1e6, OFF(cost_shade_cycles)},
@@ -53,11 +90,25 @@ static const char *const SECTIONS[] = {"l1", "l2", "dram", "costs", "timeline"};
 
 const char *machine_cfg_key(unsigned i) { return i < MACHINE_CFG_KEYS ? KEYS[i].name : NULL; }
 
-const char *machine_cfg_key_list(void) {
-  return "clock_ghz, cores, threads_per_core, rays_per_thread, l1.size, l1.ways, l1.latency, "
-         "l2.size, l2.ways, l2.latency, l2.banks, l2.mshrs, l2.write_buffer, dram.model, "
-         "dram.latency, dram.bytes_per_cycle, dram.queue_depth, dram.clock_mhz, costs.node, "
-         "costs.triangle, costs.shade, costs.ray_switch, timeline.window";
+/* Keys of section sec ("l2"; "" for the top level: plain keys), ", "-separated,
+ * after the prefix text. */
+static void list_keys(const char *sec, const char *prefix, char *buf, size_t cap) {
+  size_t n = (size_t)snprintf(buf, cap, "%s", prefix);
+  size_t len = strlen(sec);
+  for (unsigned i = 0; i < MACHINE_CFG_KEYS && n < cap; i++) {
+    const char *name = KEYS[i].name, *dot = strchr(name, '.');
+    const char *leaf = NULL;
+    if (len == 0 && !dot) leaf = name;
+    if (len && dot && (size_t)(dot - name) == len && !strncmp(name, sec, len)) leaf = dot + 1;
+    if (leaf) n += (size_t)snprintf(buf + n, cap - n, "%s%s", n ? ", " : "", leaf);
+  }
+}
+
+void machine_cfg_key_list(char *buf, size_t cap) {
+  size_t n = 0;
+  buf[0] = '\0';
+  for (unsigned i = 0; i < MACHINE_CFG_KEYS && n < cap; i++)
+    n += (size_t)snprintf(buf + n, cap - n, "%s%s", i ? ", " : "", KEYS[i].name);
 }
 
 void machine_cfg_defaults(struct machine_cfg *c) {
@@ -82,6 +133,41 @@ void machine_cfg_defaults(struct machine_cfg *c) {
   p->dram_bytes_per_cycle = 16;
   p->dram_queue_depth = 32;
   p->dram_clock_mhz = 1200;
+  /* dram.model banked: one DDR4-2400 channel (configs/dram/ddr4-2400.yaml
+   * gives each figure's source). */
+  struct dram_banked_params *b = &p->dram_banked;
+  b->channels = 1;
+  b->ranks = 2;
+  b->bank_groups = 4;
+  b->banks_per_group = 4;
+  b->rows = 65536;
+  b->columns = 1024;
+  b->bus_bytes = 8;
+  b->burst_length = 8;
+  snprintf(b->mapping, sizeof b->mapping, "rochrababgco");
+  b->page = DRAM_BANKED_OPEN_PAGE;
+  b->read_queue = 16;
+  b->write_queue = 16;
+  b->write_high = 16;
+  b->write_low = 0;
+  b->tCL = 17;
+  b->tCWL = 12;
+  b->tRCD = 17;
+  b->tRP = 17;
+  b->tRAS = 39;
+  b->tRC = 56;
+  b->tCCD_S = 4;
+  b->tCCD_L = 6;
+  b->tRRD_S = 4;
+  b->tRRD_L = 6;
+  b->tFAW = 26;
+  b->tWR = 18;
+  b->tWTR_S = 3;
+  b->tWTR_L = 9;
+  b->tRTW = 10;
+  b->tRTP = 9;
+  b->tREFI = 9360;
+  b->tRFC = 420;
   p->cost_node_cycles = 7;
   p->cost_triangle_cycles = 20;
   p->cost_shade_cycles = 50;
@@ -155,6 +241,15 @@ static bool read_value(const struct cfg_doc *d, const struct cfg_node *n, const 
     return cfg_fail(d, n, k->name, e, "unknown value (got '%s', expected one of: %s)",
                     n->kind == CFG_SCALAR ? n->text : "a list or map", list);
   }
+  case K_MAPPING: {
+    if (n->kind != CFG_SCALAR || !dram_banked_mapping_ok(n->text))
+      return cfg_fail(d, n, k->name, e,
+                      "not an address mapping (got '%s', expected six two-letter fields, each of "
+                      "ro ch ra bg ba co once, most significant first, e.g. rochrababgco)",
+                      n->kind == CFG_SCALAR ? n->text : "a list or map");
+    snprintf(dst, sizeof p->dram_banked.mapping, "%s", n->text);
+    return true;
+  }
   case K_WAYS: {
     uint32_t v = 0;
     if (n->kind == CFG_SCALAR && strcmp(n->text, "full") == 0) {
@@ -180,7 +275,45 @@ static void set_origin(struct machine_cfg *c, unsigned i, const char *file, int 
   c->at[i].col = col;
 }
 
-bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e) {
+#define INCLUDE_DEPTH 8
+
+static bool load(struct machine_cfg *c, const char *path, unsigned depth, struct err *e);
+
+/* include: FILE or [FILE, ...], each relative to the including file's folder,
+ * read before the including file's own keys (which override them). */
+static bool load_includes(struct machine_cfg *c, struct cfg_doc *d, const char *path,
+                          unsigned depth, struct err *e) {
+  struct cfg_node *inc = cfg_get(&d->root, "include");
+  if (!inc) return true;
+  uint32_t n = inc->kind == CFG_SEQ ? inc->count : 1;
+  if (inc->kind == CFG_MAP)
+    return cfg_fail(d, inc, "include", e, "expected a file name or a list of them");
+  if (depth >= INCLUDE_DEPTH)
+    return cfg_fail(d, inc, "include", e, "included files nest deeper than %d (a cycle?)",
+                    INCLUDE_DEPTH);
+  const char *slash = strrchr(path, '/');
+  int dir = slash ? (int)(slash - path) + 1 : 0;
+  for (uint32_t i = 0; i < n; i++) {
+    struct cfg_node *f = inc->kind == CFG_SEQ ? &inc->items[i] : inc;
+    if (f->kind != CFG_SCALAR || !f->text[0])
+      return cfg_fail(d, f, "include", e, "expected a file name");
+    char sub[1024];
+    if (f->text[0] == '/') snprintf(sub, sizeof sub, "%s", f->text);
+    else if ((size_t)snprintf(sub, sizeof sub, "%.*s%s", dir, path, f->text) >= sizeof sub)
+      return cfg_fail(d, f, "include", e, "the path is too long");
+    struct err sube;
+    memset(&sube, 0, sizeof sube);
+    if (!load(c, sub, depth + 1, &sube)) {
+      /* Say where the include was written, then what is wrong inside. */
+      char msg[ERR_MSG_MAX];
+      err_format(&sube, msg, sizeof msg);
+      return cfg_fail(d, f, "include", e, "%s", msg);
+    }
+  }
+  return true;
+}
+
+static bool load(struct machine_cfg *c, const char *path, unsigned depth, struct err *e) {
   struct cfg_doc d;
   memset(&d, 0, sizeof d);
   bool ok = cfg_load_file(&d, path, e) && cfg_expect_map(&d, &d.root, "(top level)", e);
@@ -188,6 +321,7 @@ bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e) {
     struct cfg_node *sec = cfg_get(&d.root, SECTIONS[s]);
     if (sec && !cfg_expect_map(&d, sec, SECTIONS[s], e)) ok = false;
   }
+  if (ok) ok = load_includes(c, &d, path, depth, e);
   for (unsigned i = 0; ok && i < MACHINE_CFG_KEYS; i++) {
     const char *name = KEYS[i].name, *dot = strchr(name, '.');
     struct cfg_node *n;
@@ -203,20 +337,26 @@ bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e) {
     if (!read_value(&d, n, &KEYS[i], &c->p, e)) ok = false;
     else set_origin(c, i, path, n->line, n->col);
   }
-  static const char *const expected[NSECTIONS] = {
-      "size, ways, latency", "size, ways, latency, banks, mshrs, write_buffer",
-      "model, latency, bytes_per_cycle, queue_depth, clock_mhz", "node, triangle, shade, ray_switch", "window"};
+  char expected[2048];
   for (unsigned s = 0; ok && s < NSECTIONS; s++) {
     struct cfg_node *sec = cfg_get(&d.root, SECTIONS[s]);
-    if (sec && !cfg_check_keys(&d, sec, SECTIONS[s], expected[s], e)) ok = false;
+    list_keys(SECTIONS[s], "", expected, sizeof expected);
+    if (sec && !cfg_check_keys(&d, sec, SECTIONS[s], expected, e)) ok = false;
   }
-  if (ok)
-    ok = cfg_check_keys(&d, &d.root, "",
-                        "clock_ghz, cores, threads_per_core, rays_per_thread, l1, l2, dram, "
-                        "costs, timeline",
-                        e);
+  if (ok) {
+    list_keys("", "", expected, sizeof expected);
+    for (unsigned s = 0; s < NSECTIONS; s++)
+      snprintf(expected + strlen(expected), sizeof expected - strlen(expected), ", %s",
+               SECTIONS[s]);
+    snprintf(expected + strlen(expected), sizeof expected - strlen(expected), ", include");
+    ok = cfg_check_keys(&d, &d.root, "", expected, e);
+  }
   cfg_free(&d);
   return ok;
+}
+
+bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e) {
+  return load(c, path, 0, e);
 }
 
 int machine_cfg_find(const char *name) {
@@ -248,13 +388,20 @@ bool machine_cfg_set(struct machine_cfg *c, const char *assignment, struct err *
   snprintf(where, sizeof where, "--set %s", assignment);
   const char *eq = strchr(assignment, '=');
   if (!eq)
-    return err_set(e, where, 0, 0, "expected KEY=VALUE (keys: %s)", machine_cfg_key_list());
+  {
+    char keys[2048];
+    machine_cfg_key_list(keys, sizeof keys);
+    return err_set(e, where, 0, 0, "expected KEY=VALUE (keys: %s)", keys);
+  }
   char key[64];
   snprintf(key, sizeof key, "%.*s", (int)(eq - assignment), assignment);
   int i = (size_t)(eq - assignment) < sizeof key ? machine_cfg_find(key) : -1;
-  if (i < 0)
+  if (i < 0) {
+    char keys[2048];
+    machine_cfg_key_list(keys, sizeof keys);
     return err_set(e, where, 0, 0, "unknown key '%.*s' (expected one of: %s)",
-                   (int)(eq - assignment), assignment, machine_cfg_key_list());
+                   (int)(eq - assignment), assignment, keys);
+  }
   return machine_cfg_set_at(c, (unsigned)i, eq + 1, where, 0, 0, e);
 }
 
@@ -299,7 +446,20 @@ bool machine_cfg_check(const struct machine_cfg *c, struct err *e) {
                    "cores x threads_per_core x rays_per_thread must be at most 1048576", got);
   }
   const char *why = machine_params_problem(p);
-  return why ? err_set(e, NULL, 0, 0, "machine config: %s", why) : true;
+  if (!why) return true;
+  /* A problem that names its key ("dram.tRC: ...") points where it was set. */
+  const char *colon = strchr(why, ':');
+  char key[64];
+  if (colon && (size_t)(colon - why) < sizeof key) {
+    snprintf(key, sizeof key, "%.*s", (int)(colon - why), why);
+    int i = machine_cfg_find(key);
+    if (i >= 0) {
+      char v[64];
+      machine_cfg_value(c, (unsigned)i, v, sizeof v);
+      return fail_at(c, key, e, colon + 2, v);
+    }
+  }
+  return err_set(e, NULL, 0, 0, "machine config: %s", why);
 }
 
 void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsigned cap) {
@@ -323,6 +483,7 @@ void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsig
     snprintf(buf, cap, "%s", k->names[v]);
     break;
   }
+  case K_MAPPING: snprintf(buf, cap, "%s", src); break;
   case K_U32:
   case K_WAYS: {
     uint32_t v;
@@ -348,7 +509,8 @@ void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *in
     fprintf(f, "%s%s", i ? ",\n" : "", indent);
     stats_write_json_str(f, KEYS[i].name);
     fputs(": ", f);
-    if (KEYS[i].kind == K_ENUM || !strcmp(v, "full")) stats_write_json_str(f, v);
+    if (KEYS[i].kind == K_ENUM || KEYS[i].kind == K_MAPPING || !strcmp(v, "full"))
+      stats_write_json_str(f, v);
     else fputs(v, f);
   }
 }

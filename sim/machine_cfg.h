@@ -8,6 +8,7 @@
 #define RTSIM_SIM_MACHINE_CFG_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdio.h>
 
 #include "sim/machine.h"
@@ -15,7 +16,7 @@
 struct err;
 struct stats_table;
 
-#define MACHINE_CFG_KEYS 23
+#define MACHINE_CFG_KEYS 55
 
 /* Where each key's value came from, for errors found after reading. */
 struct machine_cfg_origin {
@@ -30,8 +31,10 @@ struct machine_cfg {
 
 /* The default machine (configs/default.yaml). */
 void machine_cfg_defaults(struct machine_cfg *c);
-/* Read a YAML machine config over the values c holds. On bad input fills e
- * (file:line:col) and returns false. */
+/* Read a YAML machine config over the values c holds. A top-level
+ * `include: FILE` (or a list of files), relative to the file's folder, is read
+ * first, so the file's own keys override it (presets: configs/dram/). On bad
+ * input fills e (file:line:col) and returns false. */
 bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e);
 /* Apply one "key=value" (the value as it would be written in YAML). */
 bool machine_cfg_set(struct machine_cfg *c, const char *assignment, struct err *e);
@@ -49,8 +52,8 @@ bool machine_cfg_check(const struct machine_cfg *c, struct err *e);
 /* Key i's name (dotted) and its value as text ("4194304", "full", "0.5"). */
 const char *machine_cfg_key(unsigned i);
 void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsigned cap);
-/* "key, key, ...": every key, for messages. */
-const char *machine_cfg_key_list(void);
+/* "key, key, ...": every key, for messages (cut to cap). */
+void machine_cfg_key_list(char *buf, size_t cap);
 /* Every key as a JSON member `"key": value` (numbers, or "full"). */
 void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *indent);
 /* Every key as a column of t (numbers as numbers, "full" as text). */
