@@ -90,15 +90,14 @@ static struct l2_params l2_params_of(const struct machine_params *p) {
   return l;
 }
 
-static struct dram_params dram_params_of(const struct machine_params *p) {
+struct dram_params machine_dram_params(const struct machine_params *p) {
   struct dram_params d = {(enum dram_model)p->dram_model, p->dram_latency_cycles,
                           p->dram_bytes_per_cycle, p->dram_queue_depth, p->dram_clock_mhz,
                           p->dram_banked};
   return d;
 }
 
-/* The core clock in whole kHz, as the DRAM converts it. */
-static uint64_t core_khz(const struct machine_params *p) {
+uint64_t machine_core_khz(const struct machine_params *p) {
   return (uint64_t)llround(p->clock_ghz * 1e6);
 }
 
@@ -117,7 +116,7 @@ const char *machine_params_problem(const struct machine_params *p) {
   struct l2_params l2 = l2_params_of(p);
   const char *why = l2_params_problem(&l2);
   if (why) return why;
-  struct dram_params d = dram_params_of(p);
+  struct dram_params d = machine_dram_params(p);
   if ((why = dram_params_problem(&d))) return why;
   if (p->timeline_window_cycles < 1) return "timeline.window: must be at least 1";
   return NULL;
@@ -410,9 +409,9 @@ static struct machine *create(const struct machine_params *p, uint64_t stack_byt
                                                MACHINE_TL_DRAM_WRITE_BYTES};
   struct l2_client lc = {ev_line_done};
   m->l2 = l2_create(&lp, m->eng, &m->tl, &cols, &lc);
-  struct dram_params dp = dram_params_of(p);
+  struct dram_params dp = machine_dram_params(p);
   struct dram_client dc = l2_dram_client(m->l2);
-  m->dram = dram_create(&dp, core_khz(p), m->eng, &dc);
+  m->dram = dram_create(&dp, machine_core_khz(p), m->eng, &dc);
   l2_attach(m->l2, m->dram);
   m->nth = p->cores * p->threads_per_core;
   m->nctx = m->nth * p->rays_per_thread;

@@ -89,6 +89,11 @@ struct machine_stats {
  * without a position; the config reader checks each value where it is). */
 const char *machine_params_problem(const struct machine_params *p);
 
+/* The DRAM's parameters in p, and the core clock in whole kHz as the DRAM
+ * converts it (for a DRAM built alone: rtsim dram-replay). */
+struct dram_params machine_dram_params(const struct machine_params *p);
+uint64_t machine_core_khz(const struct machine_params *p);
+
 struct machine;
 
 /* What a worker is told about where it runs. */
