@@ -9,6 +9,7 @@
 #include "sim/coro.h"
 #include "sim/engine.h"
 #include "sim/machine.h"
+#include "sim/machine_cfg.h"
 #include "sim/mem.h"
 #include "sim/stats.h"
 #include "sim/timeline.h"
@@ -32,6 +33,9 @@ static struct machine_params base(void) {
   p.dram_bytes_per_cycle = 64; /* one line a cycle */
   p.dram_queue_depth = 4096;
   p.dram_clock_mhz = 1000;
+  struct machine_cfg c; /* the banked level's defaults (one DDR4-2400 channel) */
+  machine_cfg_defaults(&c);
+  p.dram_banked = c.p.dram_banked;
   p.timeline_window_cycles = 1000;
   return p;
 }

@@ -3,6 +3,7 @@
  * message naming file:line:col. */
 #include <string.h>
 
+#include "sim/dram.h"
 #include "sim/err.h"
 #include "sim/machine_cfg.h"
 #include "testing.h"
@@ -44,6 +45,14 @@ int main(void) {
       {"bad_ways_word.yaml", "bad_ways_word.yaml:2:9: error: l2.ways: not a number of ways (got 'all'"},
       {"bad_fraction.yaml", "bad_fraction.yaml:1:18: error: rays_per_thread: not a whole number (got '2.5'"},
       {"missing.yaml", "missing.yaml"},
+      {"bad_mapping.yaml", "bad_mapping.yaml:3:12: error: dram.mapping: not an address mapping (got 'rochrabagco'"},
+      {"bad_page.yaml", "bad_page.yaml:2:16: error: dram.page_policy: unknown value (got 'half', expected one of: open, close)"},
+      {"bad_model.yaml", "bad_model.yaml:2:10: error: dram.model: unknown value (got 'ddr5', expected one of: fixed, channel, banked)"},
+      {"bad_trc.yaml", "bad_trc.yaml:3:8: error: dram.tRC: must be at least tRAS (got 20)"},
+      {"bad_include_missing.yaml", "bad_include_missing.yaml:1:10: error: include: "},
+      {"bad_include_cycle.yaml", "error: include: included files nest deeper than 8"},
+      {"bad_include_inner.yaml", "bad_include_inner.yaml:2:25: error: include: "},
+      {"bad_include_map.yaml", "bad_include_map.yaml:2:3: error: include: expected a file name or a list of them"},
   };
   char buf[2048];
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
@@ -65,6 +74,10 @@ int main(void) {
       {"l1.size=0", ""},
       {"l2.ways=7", "--set l2.ways=7: error: l2.ways: the ways must divide the number of lines (got 7 ways for 65536 lines)"},
       {"l2.size=4000", "l2.size: not a whole number of 64-byte lines (got 4000 bytes)"},
+      {"dram.tRC=10", "--set dram.tRC=10: error: dram.tRC: must be at least tRAS (got 10)"},
+      {"dram.mapping=coco", "--set dram.mapping=coco: error: dram.mapping: not an address mapping"},
+      {"dram.page_policy=close", ""},
+      {"dram.model=banked", ""},
   };
   for (size_t i = 0; i < sizeof sets / sizeof sets[0]; i++) {
     set_err(sets[i].set, buf, sizeof buf);
@@ -93,6 +106,31 @@ int main(void) {
       }
     }
   }
+  /* An error inside an included file names that file too. */
+  load_err("bad_include_inner.yaml", buf, sizeof buf);
+  EXPECTF(strstr(buf, "bad_cores_zero.yaml:2:8: error: cores: out of range") != NULL, "got '%s'", buf);
+
+  /* Presets: include reads the fragment first, the file's own keys win. */
+  {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/configs/dram/ddr4-2400-2ch.yaml", RTSIM_SOURCE_DIR);
+    struct machine_cfg p2;
+    machine_cfg_defaults(&p2);
+    struct err pe;
+    memset(&pe, 0, sizeof pe);
+    EXPECTF(machine_cfg_load(&p2, path, &pe) && machine_cfg_check(&p2, &pe), "%s", pe.msg);
+    EXPECT(p2.p.dram_model == DRAM_MODEL_BANKED && p2.p.dram_banked.channels == 2 &&
+           p2.p.dram_banked.tCL == 17 && !strcmp(p2.p.dram_banked.mapping, "rorababgchco"));
+    const char *presets[] = {"ddr4-2400.yaml", "hbm2.yaml"};
+    for (int i = 0; i < 2; i++) {
+      snprintf(path, sizeof path, "%s/configs/dram/%s", RTSIM_SOURCE_DIR, presets[i]);
+      machine_cfg_defaults(&p2);
+      memset(&pe, 0, sizeof pe);
+      EXPECTF(machine_cfg_load(&p2, path, &pe) && machine_cfg_check(&p2, &pe), "%s: %s",
+              presets[i], pe.msg);
+    }
+  }
+
   /* A --set after the file wins, and is reported as the value. */
   struct machine_cfg c;
   machine_cfg_defaults(&c);

@@ -21,6 +21,7 @@
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/lru_stack.h"
+#include "sim/dram.h"
 #include "sim/machine.h"
 #include "sim/coro.h"
 #include "sim/err.h"
@@ -229,28 +230,44 @@ static void test_cross_check(struct world *w) {
   const uint32_t mask = RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_DIFFUSE);
   const enum policy_kind kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC};
   const unsigned sizes[] = {12, 16};
+  /* Every DRAM level: ideal memory (fixed, latency 0), channels from fast to
+   * starved, and banked DDR4 (open page, one channel; close page, two). */
   const struct {
+    enum dram_model model;
     uint64_t latency;
     double bw;
-    uint32_t mshrs, queue;
-  } drams[] = {{0, 1e4, 64, 32}, {200, 16, 64, 32}, {1000, 0.5, 2, 1}};
+    uint32_t mshrs, queue, write_buffer;
+    enum dram_banked_page page;
+    uint32_t channels;
+  } drams[] = {{DRAM_MODEL_FIXED, 0, 1, 64, 1, 16, 0, 1},
+               {DRAM_MODEL_CHANNEL, 0, 1e4, 64, 32, 16, 0, 1},
+               {DRAM_MODEL_CHANNEL, 200, 16, 64, 32, 16, 0, 1},
+               {DRAM_MODEL_CHANNEL, 1000, 0.5, 2, 1, 1, 0, 1},
+               {DRAM_MODEL_BANKED, 0, 1, 64, 1, 16, DRAM_BANKED_OPEN_PAGE, 1},
+               {DRAM_MODEL_BANKED, 0, 1, 4, 1, 2, DRAM_BANKED_CLOSE_PAGE, 2}};
+  const unsigned ndrams = sizeof drams / sizeof drams[0];
   for (unsigned k = 0; k < 3; k++)
     for (unsigned s = 0; s < 2; s++) {
       uint64_t fetch, wb;
       functional(w, kinds[k], mask, sizes[s], &fetch, &wb);
       EXPECT(fetch > 0);
-      for (unsigned d = 0; d < 3; d++) {
+      for (unsigned d = 0; d < ndrams; d++) {
         struct machine_params p = one_by_one(1ull << sizes[s]);
+        p.dram_model = drams[d].model;
         p.dram_latency_cycles = drams[d].latency;
         p.dram_bytes_per_cycle = drams[d].bw;
         p.l2_mshrs = drams[d].mshrs;
         p.dram_queue_depth = drams[d].queue;
+        p.l2_write_buffer = drams[d].write_buffer;
+        p.dram_banked.page = drams[d].page;
+        p.dram_banked.channels = drams[d].channels;
         struct machine_stats st;
         struct render r;
         timed(w, kinds[k], mask, &p, &st, &r);
         EXPECTF(st.l2.fetch_bytes == fetch && st.l2.writeback_bytes == wb,
-                "%s at 2^%u, DRAM %llu cycles %.1f B/c: timed %llu/%llu, functional %llu/%llu",
-                policy_name(kinds[k]), sizes[s], (unsigned long long)drams[d].latency, drams[d].bw,
+                "%s at 2^%u, DRAM %s %llu cycles %.1f B/c: timed %llu/%llu, functional %llu/%llu",
+                policy_name(kinds[k]), sizes[s], dram_model_names[drams[d].model],
+                (unsigned long long)drams[d].latency, drams[d].bw,
                 (unsigned long long)st.l2.fetch_bytes, (unsigned long long)st.l2.writeback_bytes,
                 (unsigned long long)fetch, (unsigned long long)wb);
         fb_fini(&r.fb);
@@ -278,6 +295,19 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
     timed(w, k ? POLICY_PACKET : POLICY_RECURSIVE, mask, &tiny, &st, &r);
     EXPECTF(same_image(&ref.fb, &r.fb), "%s on tiny.yaml: image differs", k ? "packet" : "recursive");
     EXPECT(st.l2.mshr_merges > 0 && st.l2.misses > 0 && st.issue_slots > 0);
+    fb_fini(&r.fb);
+  }
+  /* Every scene, every policy, on the banked DRAM: the same picture, and the
+   * DRAM bytes conserved. */
+  struct machine_params banked = tiny;
+  banked.dram_model = DRAM_MODEL_BANKED;
+  const enum policy_kind all_kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC};
+  for (unsigned k = 0; k < 3; k++) {
+    struct render r;
+    timed(w, all_kinds[k], mask, &banked, &st, &r);
+    EXPECTF(same_image(&ref.fb, &r.fb), "%s, %s on tiny.yaml with banked DRAM: image differs",
+            scene, policy_name(all_kinds[k]));
+    EXPECT(st.dram.reads > 0 && st.l2.fetch_bytes == st.dram.read_bytes);
     fb_fini(&r.fb);
   }
 
