@@ -49,6 +49,7 @@ struct rank {
 
 struct req {
   uint64_t tag, take_core, seq, row;
+  int64_t ready; /* the first DRAM cycle its commands may issue (controller_cycles after taken) */
   uint32_t rank, group, bank; /* bank: index within the channel */
   uint8_t kind;
 };
@@ -278,7 +279,7 @@ static int64_t act_earliest(const struct dram_banked *d, const struct channel *c
   const struct bank *bk = &c->banks[r->bank];
   const struct rank *rk = &c->ranks[r->rank];
   const struct group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
-  int64_t t = max64(now, bk->act_ok);
+  int64_t t = max64(max64(now, r->ready), bk->act_ok);
   t = max64(t, rk->ref_end);
   t = max64(t, rk->act + d->p.tRRD_S);
   t = max64(t, g->act + d->p.tRRD_L);
@@ -292,7 +293,7 @@ static int64_t col_earliest(const struct dram_banked *d, const struct channel *c
   const struct rank *rk = &c->ranks[r->rank];
   const struct group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
   const int64_t b = d->burst_cycles;
-  int64_t t = max64(now, bk->col_ok);
+  int64_t t = max64(max64(now, r->ready), bk->col_ok);
   int64_t lat;
   if (write) {
     t = max64(t, rk->wr + d->p.tCCD_S);
@@ -387,7 +388,7 @@ static void scan(struct dram_banked *d, struct channel *c, int64_t now, struct p
     if (!bk->open)
       consider(pk, act_earliest(d, c, r, now), now, CMD_ACT, r->rank, r->bank, i);
     else if (bk->row != r->row && !bk->hit_held)
-      consider(pk, max64(now, bk->pre_ok), now, CMD_PRE, r->rank, r->bank, i);
+      consider(pk, max64(max64(now, r->ready), bk->pre_ok), now, CMD_PRE, r->rank, r->bank, i);
   }
 }
 
@@ -630,6 +631,7 @@ static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   struct req *r = &q->r[q->n++];
   r->tag = tag;
   r->take_core = engine_now(d->e);
+  r->ready = d->cursor + (int64_t)d->p.controller_cycles;
   r->seq = d->seq++;
   r->row = co.row;
   r->rank = co.rank;

@@ -4,7 +4,9 @@
  *
  * Policies, as modelled:
  * - Time. A request taken at core cycle c may issue its first command in DRAM
- *   cycle from_core(c), the first that begins at or after c (struct
+ *   cycle from_core(c) + controller_cycles (the controller's front end:
+ *   queueing the request at its bank), from_core(c) being the first that
+ *   begins at or after c (struct
  *   dram_clock, exact). The decision for DRAM cycle d waits until every request
  *   that could take part in it has arrived, i.e. until the first core cycle
  *   with from_core > d; state is advanced lazily to the present at every call
@@ -102,6 +104,7 @@ struct dram_banked_params {
   enum dram_banked_page page;
   uint32_t read_queue, write_queue; /* entries per channel */
   uint32_t write_high, write_low;   /* write drain watermarks (entries) */
+  uint32_t controller_cycles;       /* DRAM cycles from taking a request to its first command */
   /* Timing in DRAM clock cycles. */
   uint32_t tCL, tCWL, tRCD, tRP, tRAS, tRC, tCCD_S, tCCD_L, tRRD_S, tRRD_L, tFAW, tWR, tWTR_S,
       tWTR_L, tRTW, tRTP, tREFI, tRFC;

@@ -59,6 +59,7 @@ static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"dram.write_queue", K_U32, 1, 4096, BK(write_queue)},
     {"dram.write_high", K_U32, 1, 4096, BK(write_high)},
     {"dram.write_low", K_U32, 0, 4096, BK(write_low)},
+    {"dram.controller_cycles", K_U32, 0, 1000, BK(controller_cycles)},
     {"dram.tCL", K_U32, 1, 1000, BK(tCL)},
     {"dram.tCWL", K_U32, 1, 1000, BK(tCWL)},
     {"dram.tRCD", K_U32, 1, 1000, BK(tRCD)},
@@ -150,6 +151,7 @@ void machine_cfg_defaults(struct machine_cfg *c) {
   b->write_queue = 16;
   b->write_high = 16;
   b->write_low = 0;
+  b->controller_cycles = 2;
   b->tCL = 17;
   b->tCWL = 12;
   b->tRCD = 17;
