@@ -23,6 +23,8 @@ static const char USAGE[] =
     "  merge DIR -o TABLE.csv           a sweep's complete points as one tidy table\n"
     "  plot TABLE.csv --x K --y M -o F  line plots of a merged table (PNG or SVG)\n"
     "  bench SCENE.yaml...              primary-ray throughput (rays/s) per scene\n"
+    "  dram-replay MACHINE.yaml TRACE   replay a trace of DRAM requests (rtsim's,\n"
+    "                                   DRAMsim3's or Ramulator's) on the DRAM alone\n"
     "\n"
     "Run 'rtsim COMMAND --help' for a command's options.\n";
 
@@ -46,7 +48,8 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "sweep")) return cmd_sweep(argc - 1, argv + 1);
   if (!strcmp(cmd, "merge")) return cmd_merge(argc - 1, argv + 1);
   if (!strcmp(cmd, "plot")) return cmd_plot(argc - 1, argv + 1);
-  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, traffic, trace, run, sweep, merge, plot, bench)\n",
+  if (!strcmp(cmd, "dram-replay")) return cmd_dram_replay(argc - 1, argv + 1);
+  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: render, export, hits, traffic, trace, run, sweep, merge, plot, bench, dram-replay)\n",
           cmd);
   return APP_EXIT_USAGE;
 }
