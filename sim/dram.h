@@ -42,7 +42,7 @@ struct dram_stats {
 struct dram;
 
 /* p must pass dram_params_problem (CHECKed); core_khz: the core clock in kHz
- * (1 to 2^24). client is told of each request served. Caller destroys. */
+ * (1 to 2^32). client is told of each request served. Caller destroys. */
 struct dram *dram_create(const struct dram_params *p, uint64_t core_khz, struct engine *e,
                          const struct dram_client *client);
 void dram_destroy(struct dram *d); /* NULL ok */

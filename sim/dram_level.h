@@ -64,9 +64,9 @@ static inline uint64_t dram_gcd(uint64_t a, uint64_t b) {
   return a;
 }
 
-/* Both clocks in kHz, each 1 to 2^24 (CHECKed). */
+/* Both clocks in kHz, each 1 to 2^32 (CHECKed; clock_ghz is at most 1000). */
 static inline struct dram_clock dram_clock_make(uint64_t core_khz, uint64_t dram_khz) {
-  CHECK(core_khz >= 1 && core_khz <= (1u << 24) && dram_khz >= 1 && dram_khz <= (1u << 24));
+  CHECK(core_khz >= 1 && core_khz <= (1ull << 32) && dram_khz >= 1 && dram_khz <= (1ull << 32));
   uint64_t g = dram_gcd(core_khz, dram_khz);
   struct dram_clock c = {core_khz / g, dram_khz / g};
   return c;

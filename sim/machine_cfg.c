@@ -129,10 +129,12 @@ void machine_cfg_defaults(struct machine_cfg *c) {
   p->l2_banks = 8;
   p->l2_mshrs = 64;
   p->l2_write_buffer = 16;
-  p->dram_model = DRAM_MODEL_CHANNEL;
-  p->dram_latency_cycles = 200;
-  p->dram_bytes_per_cycle = 16;
-  p->dram_queue_depth = 32;
+  p->dram_model = DRAM_MODEL_BANKED;
+  /* dram.model channel or fixed: fitted to the banked DDR4-2400 channel
+   * (configs/default.yaml says how). */
+  p->dram_latency_cycles = 50;
+  p->dram_bytes_per_cycle = 13;
+  p->dram_queue_depth = 16;
   p->dram_clock_mhz = 1200;
   /* dram.model banked: one DDR4-2400 channel (configs/dram/ddr4-2400.yaml
    * gives each figure's source). */
@@ -271,10 +273,25 @@ static bool read_value(const struct cfg_doc *d, const struct cfg_node *n, const 
   return false;
 }
 
-static void set_origin(struct machine_cfg *c, unsigned i, const char *file, int line, int col) {
+static void set_origin(struct machine_cfg *c, unsigned i, const char *file, int line, int col,
+                       bool included) {
   snprintf(c->at[i].file, sizeof c->at[i].file, "%s", file);
   c->at[i].line = line;
   c->at[i].col = col;
+  c->at[i].included = included;
+  c->at[i].seq = ++c->seq;
+}
+
+/* The DRAM levels that read key `name` (a mask of 1 << enum dram_model). */
+static unsigned key_models(const char *name) {
+  const unsigned all = (1u << DRAM_MODEL_COUNT) - 1;
+  if (strncmp(name, "dram.", 5)) return all;
+  name += 5;
+  if (!strcmp(name, "model") || !strcmp(name, "clock_mhz")) return all;
+  if (!strcmp(name, "latency")) return 1u << DRAM_MODEL_FIXED | 1u << DRAM_MODEL_CHANNEL;
+  if (!strcmp(name, "bytes_per_cycle") || !strcmp(name, "queue_depth"))
+    return 1u << DRAM_MODEL_CHANNEL;
+  return 1u << DRAM_MODEL_BANKED;
 }
 
 #define INCLUDE_DEPTH 8
@@ -337,7 +354,7 @@ static bool load(struct machine_cfg *c, const char *path, unsigned depth, struct
     }
     if (!n) continue;
     if (!read_value(&d, n, &KEYS[i], &c->p, e)) ok = false;
-    else set_origin(c, i, path, n->line, n->col);
+    else set_origin(c, i, path, n->line, n->col, depth > 0);
   }
   char expected[2048];
   for (unsigned s = 0; ok && s < NSECTIONS; s++) {
@@ -381,7 +398,7 @@ bool machine_cfg_set_at(struct machine_cfg *c, unsigned i, const char *value, co
   n.line = line;
   n.col = col;
   if (!read_value(&d, &n, &KEYS[i], &c->p, e)) return false;
-  set_origin(c, i, file, line, col);
+  set_origin(c, i, file, line, col, false);
   return true;
 }
 
@@ -446,6 +463,22 @@ bool machine_cfg_check(const struct machine_cfg *c, struct err *e) {
     snprintf(got, sizeof got, "%llu ray contexts", (unsigned long long)n);
     return fail_at(c, "rays_per_thread", e,
                    "cores x threads_per_core x rays_per_thread must be at most 1048576", got);
+  }
+  /* A key written for another DRAM level, after the level was chosen, would
+   * silently do nothing: refuse it. (Choosing the level last, as --set
+   * dram.model=fixed on a channel config does, sets the others aside; a
+   * preset's keys are a whole level.) */
+  const unsigned model_seq = c->at[key_index("dram.model")].seq;
+  for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++) {
+    const struct machine_cfg_origin *o = &c->at[i];
+    if (!o->file[0] || o->included || o->seq < model_seq ||
+        (key_models(KEYS[i].name) >> p->dram_model & 1u))
+      continue;
+    char v[64], msg[160];
+    machine_cfg_value(c, i, v, sizeof v);
+    snprintf(msg, sizeof msg, "not read by dram.model %s (set dram.model to a level that uses it)",
+             dram_model_names[p->dram_model]);
+    return fail_at(c, KEYS[i].name, e, msg, v);
   }
   const char *why = machine_params_problem(p);
   if (!why) return true;

@@ -22,11 +22,14 @@ struct stats_table;
 struct machine_cfg_origin {
   char file[320]; /* "" : the default */
   int line, col;
+  bool included; /* set by a file another one included (a preset) */
+  unsigned seq;  /* order of setting (0: the default) */
 };
 
 struct machine_cfg {
   struct machine_params p;
   struct machine_cfg_origin at[MACHINE_CFG_KEYS];
+  unsigned seq; /* settings so far */
 };
 
 /* The default machine (configs/default.yaml). */

@@ -227,10 +227,11 @@ static void test_channel(void) {
 /* ---- 3. banked DDR4 ---- */
 
 /* configs/dram/ddr4-2400.yaml at clock_ghz 1.2: core and DRAM cycles are one.
- * A read to an idle bank: ACT in cycle 0, RD tRCD = 17 later, its last beat
- * tCL + BL/2 = 17 + 4 after that: 38. A read to the same (open) row in cycle
- * 1000 (before the first refresh, due at tREFI / ranks = 4680): RD at once,
- * done tCL + BL/2 = 21 later. */
+ * A read to an idle bank: its first command controller_cycles = 2 after it is
+ * taken, ACT in cycle 2, RD tRCD = 17 later, its last beat tCL + BL/2 = 17 + 4
+ * after that: 40. A read to the same (open) row in cycle 1000 (before the
+ * first refresh, due at tREFI / ranks = 4680): RD at 1002, done tCL + BL/2 =
+ * 21 later, 1023. */
 static void test_banked(void) {
   const char *csv = TMP "banked.csv", *perf = TMP "banked.per";
   char msg[4096];
@@ -242,22 +243,22 @@ static void test_banked(void) {
   struct per *p = per_load(perf, &n);
   EXPECT(n == 2);
   if (n == 2) {
-    EXPECT(p[0].arrival == 0 && p[0].taken == 0 && p[0].done == 38);
-    EXPECT(p[1].arrival == 1000 && p[1].taken == 1000 && p[1].done == 1021);
+    EXPECT(p[0].arrival == 0 && p[0].taken == 0 && p[0].done == 40);
+    EXPECT(p[1].arrival == 1000 && p[1].taken == 1000 && p[1].done == 1023);
   }
   free(p);
   static struct csv c;
   EXPECT(csv_load(csv, &c));
   EXPECT_COL(&c, "trace_format", "dramsim3");
   EXPECT_COL(&c, "dram.model", "banked");
-  EXPECT_COL(&c, "read_latency_max", "38");
-  EXPECT_COL(&c, "read_latency_p50", "21");
-  EXPECT_COL(&c, "read_latency_mean", "29.5");
-  EXPECT_COL(&c, "read_latency_mean_dram_cycles", "29.5");
+  EXPECT_COL(&c, "read_latency_max", "40");
+  EXPECT_COL(&c, "read_latency_p50", "23");
+  EXPECT_COL(&c, "read_latency_mean", "31.5");
+  EXPECT_COL(&c, "read_latency_mean_dram_cycles", "31.5");
   EXPECT_COL(&c, "dram_row_misses", "1");
   EXPECT_COL(&c, "dram_row_hits", "1");
   EXPECT_COL(&c, "dram_row_conflicts", "0");
-  EXPECT_COL(&c, "cycles", "1021");
+  EXPECT_COL(&c, "cycles", "1023");
 }
 
 /* ---- 4. round trip through rtsim run ---- */

@@ -70,7 +70,7 @@ int main(void) {
       {"cores", "expected KEY=VALUE"},
       {"l2.ways=full", ""},
       {"l2.size=1MiB", ""},
-      {"dram.bytes_per_cycle=0.01", ""},
+      {"dram.bytes_per_cycle=0.01", "--set dram.bytes_per_cycle=0.01: error: dram.bytes_per_cycle: not read by dram.model banked (set dram.model to a level that uses it) (got 0.01)"},
       {"l1.size=0", ""},
       {"l2.ways=7", "--set l2.ways=7: error: l2.ways: the ways must divide the number of lines (got 7 ways for 65536 lines)"},
       {"l2.size=4000", "l2.size: not a whole number of 64-byte lines (got 4000 bytes)"},
