@@ -48,7 +48,7 @@ struct rank {
 };
 
 struct req {
-  uint64_t tag, take_core, seq, row;
+  uint64_t tag, take_core, seq, row, line;
   int64_t ready; /* the first DRAM cycle its commands may issue (controller_cycles after taken) */
   uint32_t rank, group, bank; /* bank: index within the channel */
   uint8_t kind;
@@ -628,9 +628,22 @@ static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   const int qk = write ? WR_Q : RD_Q;
   struct queue *q = &c->q[qk];
   CHECK_LT(q->n, q->cap);
+  /* A line waiting in the write queue answers a read of it, and takes a later
+   * write of it in its place (a controller's write queue is searched by
+   * address, as DRAMsim3's is): served the next DRAM cycle, no command. */
+  const struct queue *wq = &c->q[WR_Q];
+  for (uint32_t i = 0; i < wq->n; i++)
+    if (wq->r[i].line == addr >> 6) {
+      if (write) d->st.write_merges++;
+      else d->st.write_forwards++;
+      d->inflight++;
+      engine_at(d->e, dram_clock_to_core(d->clk, (uint64_t)d->cursor + 1), on_done, d, tag);
+      return;
+    }
   struct req *r = &q->r[q->n++];
   r->tag = tag;
   r->take_core = engine_now(d->e);
+  r->line = addr >> 6;
   r->ready = d->cursor + (int64_t)d->p.controller_cycles;
   r->seq = d->seq++;
   r->row = co.row;
@@ -685,6 +698,8 @@ static void banked_report(const void *self, struct stats_table *t, uint64_t cycl
   stats_u64(t, "dram_refreshes", s->refreshes);
   stats_u64(t, "dram_refresh_cycles", s->refresh_cycles);
   stats_u64(t, "dram_write_drains", s->write_drains);
+  stats_u64(t, "dram_write_forwards", s->write_forwards);
+  stats_u64(t, "dram_write_merges", s->write_merges);
   stats_f64(t, "dram_bus_utilization", ratio((double)s->bus_busy_cycles, dram_cycles * d->p.channels));
   stats_f64(t, "dram_bank_active_fraction",
             ratio((double)s->bank_open_cycles, dram_cycles * d->banks_per_channel * d->p.channels));

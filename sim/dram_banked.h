@@ -14,6 +14,9 @@
  * - Queues. Per channel a read queue and a write queue, bounded (read_queue,
  *   write_queue entries). A request holds its place from take until its column
  *   command issues; then client->space is raised from an event.
+ * - The write queue is searched by address: a read of a line waiting there is
+ *   answered from it, and a write of such a line takes its place, both served
+ *   the next DRAM cycle with no command (as DRAMsim3's controller does).
  * - Write draining. Reads are served; the channel turns to writes when the write
  *   queue reaches write_high, or when no read is queued and writes are; it turns
  *   back when the write queue empties, or falls to write_low with a read
@@ -138,6 +141,8 @@ struct dram_banked_stats {
   uint64_t activates, precharges;               /* precharges include auto-precharges */
   uint64_t refreshes, refresh_cycles;           /* refresh_cycles: rank-cycles (DRAM) in tRFC */
   uint64_t write_drains;                        /* turns from reads to writes */
+  uint64_t write_forwards; /* reads answered from the write queue (no command) */
+  uint64_t write_merges;   /* writes that found their line in the write queue */
   /* Per queue kind [0] reads, [1] writes: */
   uint64_t queue_area[2];          /* time integral of the entries queued, core cycles x entries */
   uint64_t queue_wait_sum_cycles[2]; /* sum over requests of their queue time (core cycles) */

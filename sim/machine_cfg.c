@@ -152,7 +152,7 @@ void machine_cfg_defaults(struct machine_cfg *c) {
   b->read_queue = 16;
   b->write_queue = 16;
   b->write_high = 16;
-  b->write_low = 0;
+  b->write_low = 8;
   b->controller_cycles = 2;
   b->tCL = 17;
   b->tCWL = 12;
