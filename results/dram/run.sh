@@ -11,6 +11,8 @@
 #   [DRAMSIM3=... DRAMSIM3_INI=...] sh results/dram/run.sh
 set -eu
 out=build/dram
+# A fresh directory: a sweep resumes, and points from an older build would stay.
+rm -rf "$out"
 mkdir -p "$out"
 build/rtsim sweep configs/sweeps/dram-levels.yaml -o "$out/levels"
 build/rtsim merge "$out/levels" -o results/dram/levels.csv
