@@ -394,16 +394,38 @@ static void scan(struct dram_banked *d, struct channel *c, int64_t now, struct p
 
 /* ---- Issuing ---- */
 
-static void update_mode(struct dram_banked *d, struct channel *c) {
+/* The cycle from which channel c's oldest read has waited too long
+ * (DRAM_BANKED_READ_AGE_CAP x tRC), or FAR with no read queued. */
+static int64_t starve_at(const struct dram_banked *d, const struct channel *c) {
+  if (!c->q[RD_Q].n) return FAR;
+  return c->q[RD_Q].r[0].ready + (int64_t)DRAM_BANKED_READ_AGE_CAP * (int64_t)d->p.tRC;
+}
+
+/* Turn the channel to writes or back to reads at DRAM cycle now. NOTE: a
+ * read that has waited too long (starve_at) turns the channel back to reads
+ * and keeps it there until it is served: under a heavy write stream the
+ * write queue never falls to write_low, or refills to write_high before a
+ * conflicting read's precharge, activate and read fit between drains, and
+ * such a read starved for 30,000 cycles. The moment a read starts starving is
+ * a wake of its own (next_of), so skipping ahead still equals ticking. */
+static void update_mode(struct dram_banked *d, struct channel *c, int64_t now) {
   uint32_t nr = c->q[RD_Q].n, nw = c->q[WR_Q].n;
+  bool starving = now >= starve_at(d, c);
   if (!c->writing) {
-    if (nw >= d->p.write_high || (nr == 0 && nw > 0)) {
+    if ((nw >= d->p.write_high && !starving) || (nr == 0 && nw > 0)) {
       c->writing = true;
       d->st.write_drains++;
     }
-  } else if (nw == 0 || (nw <= d->p.write_low && nr > 0)) {
+  } else if (nw == 0 || (nw <= d->p.write_low && nr > 0) || starving) {
     c->writing = false;
   }
+}
+
+/* The channel's next wake: its next command, or a read starting to starve
+ * while the channel serves writes. */
+static int64_t next_of(const struct dram_banked *d, const struct channel *c, int64_t next) {
+  int64_t s = c->writing ? starve_at(d, c) : FAR;
+  return s < next ? s : next;
 }
 
 static void bank_close(struct dram_banked *d, struct channel *c, struct bank *bk, uint32_t rank,
@@ -524,18 +546,20 @@ static void channel_cycle(struct dram_banked *d, struct channel *c, int64_t now)
       rk->next_due += period;
     }
   }
-  update_mode(d, c);
+  update_mode(d, c, now);
   struct pick pk;
   scan(d, c, now, &pk);
   if (pk.type == CMD_NONE) {
     CHECK_GT(pk.next, now);
-    c->next = pk.next;
+    c->next = next_of(d, c, pk.next);
+    if (c->next <= now) c->next = now + 1;
     return;
   }
   issue(d, c, &pk, now);
-  update_mode(d, c);
+  update_mode(d, c, now + 1);
   scan(d, c, now + 1, &pk);
-  c->next = pk.next;
+  c->next = next_of(d, c, pk.next);
+  if (c->next <= now) c->next = now + 1;
 }
 
 static bool channel_busy(const struct dram_banked *d, const struct channel *c) {
@@ -656,10 +680,12 @@ static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   d->q_len[qk]++;
   if (d->q_len[qk] > d->st.queue_max[qk]) d->st.queue_max[qk] = d->q_len[qk];
   /* Cycles before the cursor are decided; the new request joins at it. */
-  update_mode(d, c);
+  update_mode(d, c, d->cursor);
   struct pick pk;
   scan(d, c, d->cursor, &pk);
-  if (pk.next < c->next) c->next = pk.next;
+  int64_t nx = next_of(d, c, pk.next);
+  if (nx < d->cursor) nx = d->cursor;
+  if (nx < c->next) c->next = nx;
   schedule_wake(d);
 }
 

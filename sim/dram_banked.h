@@ -20,7 +20,9 @@
  * - Write draining. Reads are served; the channel turns to writes when the write
  *   queue reaches write_high, or when no read is queued and writes are; it turns
  *   back when the write queue empties, or falls to write_low with a read
- *   waiting. Only the queue being served issues request commands.
+ *   waiting; it does not turn to writes while the oldest read has waited
+ *   DRAM_BANKED_READ_AGE_CAP x tRC (a bound on starvation). Only the queue
+ *   being served issues request commands.
  * - FR-FCFS. Among the served queue: the oldest request whose column command
  *   (a row hit) can issue this cycle; else the oldest whose PRE or ACT can.
  *   Refresh commands go before both.
@@ -93,6 +95,9 @@ struct engine;
 /* Column commands a row may serve since its ACT before younger hits stop
  * holding back an older conflict (DRAMsim3's row-hit cap). */
 #define DRAM_BANKED_ROW_HIT_CAP 4u
+/* A read waiting longer than this many tRC holds the channel on reads (no
+ * turn to writes at write_high) until it is served: a bound on starvation. */
+#define DRAM_BANKED_READ_AGE_CAP 4u
 
 enum dram_banked_page { DRAM_BANKED_OPEN_PAGE, DRAM_BANKED_CLOSE_PAGE };
 

@@ -430,6 +430,34 @@ static void test_write_drain(void) {
   dram_banked_destroy(d);
 }
 
+/* A read does not starve behind a write stream that never lets the write
+ * queue fall to write_low: once it has waited DRAM_BANKED_READ_AGE_CAP x tRC
+ * (4 x 55 = 220 cycles) the channel turns to reads; then it needs at most a
+ * write's recovery before the precharge (tCWL + BL/2 + tWR = 39), tRP, tRCD,
+ * tCL and a burst (16 + 16 + 16 + 4): served by 100 + 220 + 91 + a few
+ * cycles for the command bus. Without the bound it waits for the stream's end
+ * (2000 writes, at least 4 cycles each). */
+static void test_starvation(void) {
+  struct dram_banked_params p = ddr4();
+  p.write_queue = 16;
+  p.write_high = 16;
+  p.write_low = 8;
+  enum { NW = 2000 };
+  struct rq r[NW + 1];
+  uint64_t done[NW + 1];
+  for (int i = 0; i < NW; i++) /* every write a new row of one bank: slow to serve */
+    r[i] = (struct rq){(uint64_t)i, addr_of(&p, 0, 0, 0, 0, 2 + (uint64_t)i % 64, 0), true};
+  r[NW] = (struct rq){100, addr_of(&p, 0, 0, 0, 0, 1, 0), false};
+  struct dram_banked *d = run(&p, 1200 * MHZ, r, NW + 1, done, 0);
+  uint64_t last_write = 0;
+  for (int i = 0; i < NW; i++)
+    if (done[i] > last_write) last_write = done[i];
+  EXPECTF(done[NW] <= 100 + 220 + 91 + 20 && last_write > 8000,
+          "the read was served at %llu, the last write at %llu", (unsigned long long)done[NW],
+          (unsigned long long)last_write);
+  dram_banked_destroy(d);
+}
+
 /* 12: decode, hand-computed bit positions. 2 channels, 2 ranks, 4 groups, 4
  * banks, 1024 rows, 1024 columns / BL 8 = 128 bursts: widths ch 1, ra 1, bg
  * 2, ba 2, ro 10, co 7, above 6 offset bits. */
@@ -620,6 +648,7 @@ int main(void) {
   test_page_policy();
   test_frfcfs();
   test_write_drain();
+  test_starvation();
   test_decode();
   test_oracle_and_little();
   test_problems();
