@@ -20,9 +20,9 @@ for scene in "$@"; do
     done
     [ -n "$plot" ] || { echo "plot.sh: no timeline for $scene in $dir" >&2; exit 2; }
     printf '%s\n' "$t" "set output '$out/$scene.$term.tmp'" "set datafile separator ','" \
-      "set title 'DRAM traffic per cycle: $scene, $cores cores, L2 $l2 (default machine: 16 bytes/cycle peak)'" \
+      "set title 'DRAM traffic per cycle: $scene, $cores cores, L2 $l2 (default machine: DDR4-2400, 13.7 bytes/cycle peak)'" \
       "set xlabel 'simulated time (million cycles)'" "set ylabel 'DRAM bytes per cycle (read + write)'" \
-      "set grid" "set key top right" "set yrange [0:17]" "plot $plot" | gnuplot
+      "set grid" "set key top right" "set yrange [0:14]" "plot $plot" | gnuplot
     mv "$out/$scene.$term.tmp" "$out/$scene.$term"
   done
 done
