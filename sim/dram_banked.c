@@ -741,7 +741,6 @@ static void banked_report(const void *self, struct stats_table *t, uint64_t cycl
     stats_f64(t, names[k][2], ratio((double)s->queue_wait_sum_cycles[k], (double)n[k]));
     stats_u64(t, names[k][3], s->queue_wait_max_cycles[k]);
   }
-  stats_f64(t, "dram_read_latency_mean_cycles", ratio((double)s->read_latency_sum_cycles, (double)s->reads));
 }
 
 static void banked_destroy(void *self) { dram_banked_destroy(self); }
