@@ -49,3 +49,24 @@ for scene in sphereflake grove room; do
   done
 done
 mv "$table.tmp" "$table"
+
+# 3. saturated.csv: the first 400,000 requests of two streams offered one a DRAM
+#    cycle (at clock_ghz 1.2 the core and DRAM cycles are one), faster than one
+#    channel serves: the bandwidth each controller sustains.
+sat=results/dram/saturated.csv
+echo "stream,rtsim_bytes_per_cycle,dramsim3_bytes_per_cycle,rtsim_row_hit_rate,dramsim3_row_hit_rate" > "$sat.tmp"
+for s in grove-recursive sphereflake-dynamic; do
+  awk '!/^#/ && NF { n++; if (n <= 400000) print $1, $2, n }' "$out/$s.trace" > "$out/$s.saturated.trace"
+  build/rtsim dram-replay configs/default.yaml "$out/$s.saturated.trace" --set clock_ghz=1.2 > "$out/$s.saturated.csv"
+  d3_bpc= d3_hit=
+  if [ -n "${DRAMSIM3:-}" ]; then
+    "$DRAMSIM3" "$DRAMSIM3_INI" "$out/$s.saturated.trace" --out-dir "$out/$s.saturated.dramsim3" \
+      --cycles-limit 20000000 > "$out/$s.saturated.dramsim3.txt" || true
+    d3_bpc=$(kvget "$out/$s.saturated.dramsim3.txt" bandwidth_bytes_per_cycle)
+    d3_hit=$(kvget "$out/$s.saturated.dramsim3.txt" row_hit_rate)
+  fi
+  r="$out/$s.saturated.csv"
+  printf '%s,%.3f,%s,%.4f,%s\n' "$s" "$(csvget "$r" bytes_per_cycle)" "$d3_bpc" \
+    "$(csvget "$r" dram_row_hit_rate)" "$d3_hit" >> "$sat.tmp"
+done
+mv "$sat.tmp" "$sat"
