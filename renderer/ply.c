@@ -482,7 +482,7 @@ static bool ply_read_ascii(struct ply_reader *r, enum ply_type t, const struct p
     }
     int64_t i = neg ? -(int64_t)u : (int64_t)u;
     if (!ok || i < ply_types[t].lo || i > ply_types[t].hi) {
-      snprintf(what, sizeof what, "not a %s (got '%s', expected a whole number from %lld to "
+      snprintf(what, sizeof what, "not a whole number of type %s (got '%s', expected %lld to "
                "%lld)", ply_types[t].name, tok, (long long)ply_types[t].lo,
                (long long)ply_types[t].hi);
       return ply_data_error(r, s, w, what);
