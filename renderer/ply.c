@@ -297,6 +297,12 @@ static bool ply_check_counts(struct ply_reader *r) {
   return true;
 }
 
+/* Whether the n bytes at p begin with the word w (then a blank or the end). */
+static bool ply_starts_word(const unsigned char *p, size_t n, const char *w) {
+  size_t k = strlen(w);
+  return n >= k && memcmp(p, w, k) == 0 && (n == k || p[k] == ' ' || p[k] == '\t');
+}
+
 static bool ply_parse_header(struct ply_reader *r) {
   const unsigned char *b = r->buf;
   size_t n = r->len;
@@ -323,13 +329,19 @@ static bool ply_parse_header(struct ply_reader *r) {
                      "before the end of the file; truncated?)");
     size_t end = (size_t)(nl - b), ll = end - pos;
     if (ll > 0 && b[end - 1] == '\r') ll--;
-    if (ll >= sizeof line)
-      return err_set(r->e, r->name, lineno, 0, "PLY header: line too long (got %zu bytes, "
-                     "expected at most %zu)", ll, sizeof line - 1);
     for (size_t i = 0; i < ll; i++)
       if ((b[pos + i] < 0x20 && b[pos + i] != '\t') || b[pos + i] == 0x7f)
         return err_set(r->e, r->name, lineno, (int)i + 1, "PLY header: byte 0x%02x is not text",
                        b[pos + i]);
+    if (ll >= sizeof line) {
+      /* Comments may be long; nothing else needs to be. */
+      bool remark = ply_starts_word(b + pos, ll, "comment") || ply_starts_word(b + pos, ll, "obj_info");
+      if (!remark || lineno == 1)
+        return err_set(r->e, r->name, lineno, 0, "PLY header: line too long (got %zu bytes, "
+                       "expected at most %zu)", ll, sizeof line - 1);
+      pos = end + 1;
+      continue;
+    }
     memcpy(line, b + pos, ll);
     line[ll] = '\0';
     pos = end + 1;

@@ -316,6 +316,23 @@ static void test_malformed_header(void) {
        "property float y\nproperty float z\nelement face 0\n" IDX "1\n",
        "element 'blob' has 5 instances but no properties", 3},
   };
+  /* A long comment is fine; a long line of anything else is not. */
+  struct bb b = {.n = 0};
+  bb_str(&b, "ply\nformat ascii 1.0\ncomment ");
+  for (int i = 0; i < 3000; i++) bb_str(&b, "c");
+  bb_str(&b, "\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+             "element face 1\n" IDX "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  struct ply_mesh m;
+  struct err e;
+  EXPECTF(read_bb("long_comment.ply", &b, &m, &e), "%s", e.msg);
+  EXPECT(m.tri_count == 1);
+  ply_mesh_fini(&m);
+  b.n = 0;
+  bb_str(&b, "ply\nformat ascii 1.0\nelement vertex 3");
+  for (int i = 0; i < 3000; i++) bb_str(&b, " ");
+  bb_str(&b, "\n");
+  expect_refused("long line", b.d, b.n, "line too long (got 3016 bytes, expected at most 1023)",
+                 3);
   printf("malformed headers:\n");
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++)
     expect_refused(cases[i].label, cases[i].text, strlen(cases[i].text), cases[i].want,
