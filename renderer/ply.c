@@ -3,8 +3,10 @@
  * before anything is allocated, then the data is read in one forward pass.
  * Face lists are fanned while they stream (only the first and previous index
  * are kept), so no face is buffered; the triangle array grows by doubling and
- * is bounded by the data actually read. No recursion, no whitespace skipping
- * between end_header and the data. */
+ * is bounded by the data actually read. Worst case (int8 coordinates and
+ * indices) that is under 30 bytes of memory per file byte: the file (up to 2x
+ * while read), 4x for positions, 4x for normals, under 24x for triangles. No
+ * recursion, no whitespace skipping between end_header and the data. */
 #include "renderer/ply.h"
 
 #include <errno.h>
