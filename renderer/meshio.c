@@ -1,7 +1,7 @@
-/* Mesh import through assimp's C API and PLY export of the scene's triangles.
- * Import is two passes over the assimp scene: the first counts triangles and
- * validates every vertex, the second appends, so a bad file never leaves half
- * a mesh in the scene. Export writes 3 unshared vertices per face so face i is
+/* Mesh import (PLY through renderer/ply.c, everything else through assimp's
+ * C API) and PLY export of the scene's triangles. Import is two passes over
+ * the loaded mesh: the first counts triangles and validates every vertex, the
+ * second appends, so a bad file never leaves half a mesh in the scene. Export writes 3 unshared vertices per face so face i is
  * primitive i with its vertices in stored order, byte for byte. */
 #include "renderer/meshio.h"
 
@@ -14,6 +14,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include "renderer/ply.h"
 #include "renderer/scene.h"
 #include "sim/err.h"
 #include "sim/outfile.h"
@@ -25,10 +26,10 @@
  * all the geometry there is. SortByPType and JoinIdenticalVertices are left
  * out: faces are filtered by index count here and copied per triangle, so
  * they would only cost time and add code paths that can assert.
- * NOTE: Debian's assimp 5.2 keeps ai_assert on, and a truncated ASCII PLY
- * yields faces with zero indices in a mesh flagged POLYGON, which makes
- * TriangulateProcess abort() the whole program; meshio_check_raw refuses
- * such meshes first. */
+ * NOTE: Debian's assimp 5.2 keeps ai_assert on, and a mesh whose faces have
+ * zero indices in a mesh flagged POLYGON makes TriangulateProcess abort() the
+ * whole program (its PLY reader produced those from truncated files);
+ * meshio_check_raw refuses such meshes first. */
 #define MESHIO_READ_FLAGS (aiProcess_ValidateDataStructure)
 #define MESHIO_POST_FLAGS (aiProcess_Triangulate | aiProcess_PreTransformVertices)
 
@@ -38,53 +39,26 @@ static vec3 meshio_place(const struct aiVector3D *p, const struct meshio_xform *
 
 static bool meshio_finite(vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
 
-/* Shading normals of one face from the file, or false to use the flat one
- * (no normals, or a zero / non-finite normal that would poison shading). */
-static bool meshio_face_normals(const struct aiMesh *m, const struct aiFace *f, vec3 out[3]) {
-  if (!m->mNormals) return false;
+/* Unit shading normals from three stored ones, or false to use the flat one
+ * (a zero or non-finite normal would poison shading). */
+static bool meshio_unit_normals(const vec3 in[3], vec3 out[3]) {
   for (int k = 0; k < 3; k++) {
-    const struct aiVector3D *n = &m->mNormals[f->mIndices[k]];
-    vec3 v = v3(n->x, n->y, n->z);
-    float l = v3_len(v);
+    float l = v3_len(in[k]);
     if (!(l > 0.0f) || !isfinite(l)) return false;
-    out[k] = v3_scale(v, 1.0f / l);
+    out[k] = v3_scale(in[k], 1.0f / l);
   }
   return true;
 }
 
-/* NOTE: assimp 5.2's PLY header parser loops forever when a file starts with
- * "ply" but has no "end_header" (it ignores the end-of-file signal while
- * skipping unknown header lines), so a truncated PLY would hang the run. Any
- * file assimp's PLY loader would accept (first line starting "ply", any case)
- * must contain "end_header" somewhere; the scan costs one read of the file at
- * worst, which assimp does anyway. Drop this when assimp is fixed. */
-static bool meshio_ply_guard(const char *path, struct err *e) {
-  FILE *f = fopen(path, "rb");
-  if (!f) return true; /* let assimp report it in its own words */
-  static const char token[] = "end_header";
-  const size_t tlen = sizeof token - 1;
-  char buf[65536];
-  size_t keep = 0, got;
-  bool is_ply = false, found = false, first = true;
-  while (!found && (got = fread(buf + keep, 1, sizeof buf - keep, f)) > 0) {
-    size_t have = keep + got;
-    if (first) {
-      first = false;
-      is_ply = have >= 3 && (buf[0] == 'p' || buf[0] == 'P') && (buf[1] == 'l' || buf[1] == 'L') &&
-               (buf[2] == 'y' || buf[2] == 'Y');
-      if (!is_ply) break;
-    }
-    for (size_t i = 0; !found && i + tlen <= have; i++)
-      found = memcmp(buf + i, token, tlen) == 0;
-    /* Carry the tail over so a token split across reads is still seen. */
-    keep = have < tlen - 1 ? have : tlen - 1;
-    memmove(buf, buf + have - keep, keep);
+/* Shading normals of one face from the file, or false to use the flat one. */
+static bool meshio_face_normals(const struct aiMesh *m, const struct aiFace *f, vec3 out[3]) {
+  if (!m->mNormals) return false;
+  vec3 in[3];
+  for (int k = 0; k < 3; k++) {
+    const struct aiVector3D *n = &m->mNormals[f->mIndices[k]];
+    in[k] = v3(n->x, n->y, n->z);
   }
-  fclose(f);
-  if (is_ply && !found)
-    return err_set(e, path, 0, 0, "cannot import mesh: PLY header is not terminated (no "
-                   "end_header line; truncated file?)");
-  return true;
+  return meshio_unit_normals(in, out);
 }
 
 /* Refuse what the post-processing steps would assert on or misread: faces
@@ -113,9 +87,70 @@ static bool meshio_check_raw(const struct aiScene *as, const char *path, struct 
   return true;
 }
 
+/* PLY goes through rtsim's own reader: assimp 5.2's crashes on some truncated
+ * files, loops forever on a header without end_header, and skips whitespace
+ * bytes after a binary end_header, shifting the data of about one binary PLY
+ * in 64. The result matches what the assimp path gives for a correct file:
+ * faces in file order, each fanned (a triangle as it is), normals from
+ * nx/ny/nz when present. */
+static bool meshio_import_ply(struct scene *s, const char *path, const struct meshio_xform *xf,
+                              uint32_t material, struct err *e) {
+  struct ply_mesh m;
+  struct err pe = {0};
+  if (!ply_read_file(path, &m, &pe))
+    return err_set(e, pe.file, pe.line, pe.col, "cannot import mesh: %s", pe.msg);
+  bool ok = false;
+  if (m.tri_count == 0) {
+    err_set(e, path, 0, 0, "cannot import mesh: file holds no triangles (its face element is "
+            "empty)");
+    goto done;
+  }
+  if (m.tri_count > UINT32_MAX - s->tri_count) {
+    err_set(e, path, 0, 0, "cannot import mesh: too many triangles (got %u, scene has %u)",
+            m.tri_count, s->tri_count);
+    goto done;
+  }
+  /* Pass 1: every placed vertex of every triangle is finite. */
+  for (uint32_t i = 0; i < m.tri_count; i++)
+    for (int k = 0; k < 3; k++) {
+      const float *p = m.pos + 3 * (size_t)m.tri[3 * (size_t)i + k];
+      struct aiVector3D a = {p[0], p[1], p[2]};
+      vec3 q = meshio_place(&a, xf);
+      if (!meshio_finite(q)) {
+        err_set(e, path, 0, 0, "cannot import mesh: triangle %u has a non-finite vertex after "
+                "placement (got %g %g %g)", i, (double)q.x, (double)q.y, (double)q.z);
+        goto done;
+      }
+    }
+  /* Pass 2: append in file order. */
+  for (uint32_t i = 0; i < m.tri_count; i++) {
+    const uint32_t *t = m.tri + 3 * (size_t)i;
+    vec3 v[3], n[3];
+    for (int k = 0; k < 3; k++) {
+      const float *p = m.pos + 3 * (size_t)t[k];
+      struct aiVector3D a = {p[0], p[1], p[2]};
+      v[k] = meshio_place(&a, xf);
+    }
+    bool has_n = false;
+    if (m.normal) {
+      vec3 in[3];
+      for (int k = 0; k < 3; k++) {
+        const float *q = m.normal + 3 * (size_t)t[k];
+        in[k] = v3(q[0], q[1], q[2]);
+      }
+      has_n = meshio_unit_normals(in, n);
+    }
+    scene_add_tri(s, v[0], v[1], v[2], has_n ? n : NULL, material);
+  }
+  ok = true;
+done:
+  ply_mesh_fini(&m);
+  return ok;
+}
+
 bool meshio_import(struct scene *s, const char *path, const struct meshio_xform *xf,
                    uint32_t material, struct err *e) {
-  if (!meshio_ply_guard(path, e)) return false;
+  if (ply_claims(path)) return meshio_import_ply(s, path, xf, material, e);
   const struct aiScene *as = aiImportFile(path, MESHIO_READ_FLAGS);
   if (!as) {
     const char *why = aiGetErrorString();

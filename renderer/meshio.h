@@ -1,4 +1,5 @@
-/* Mesh files in and out: import of any format assimp reads (OBJ, PLY, glTF, ...)
+/* Mesh files in and out: import of PLY through rtsim's own strict reader
+ * (renderer/ply.h) and of any other format assimp reads (OBJ, glTF, ...)
  * through its C API, and export of the scene's triangles as a PLY file whose
  * faces are in primitive-id order, so any other ray tracer loads exactly our
  * geometry. */

@@ -223,7 +223,11 @@ static bool load_mesh(const struct cfg_doc *d, struct cfg_node *g, const char *p
   memset(&me, 0, sizeof me);
   if (!meshio_import(s, full, &xf, (uint32_t)mat, &me)) {
     snprintf(mp, sizeof mp, "%s.mesh", p);
-    return cfg_fail(d, mn, mp, e, "%s: %s", me.file, me.msg);
+    /* Keep the mesh's own position (a PLY header line, an ASCII data line). */
+    char at[32] = "";
+    if (me.line > 0 && me.col > 0) snprintf(at, sizeof at, ":%d:%d", me.line, me.col);
+    else if (me.line > 0) snprintf(at, sizeof at, ":%d", me.line);
+    return cfg_fail(d, mn, mp, e, "%s%s: %s", me.file, at, me.msg);
   }
   return true;
 }

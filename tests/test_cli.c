@@ -93,7 +93,7 @@ int main(void) {
       {"bad_detail.yaml", "bad_detail.yaml:4:13: error: geometry[0].detail: out of range (got -1, expected 0.0001 to 200)"},
       {"bad_material_ref.yaml", "bad_material_ref.yaml:4:15: error: geometry[0].material: no material named 'gold'"},
       {"bad_mesh_missing.yaml", "bad_mesh_missing.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/no_such_mesh.obj: cannot import mesh: Unable to open file"},
-      {"bad_mesh_broken.yaml", "bad_mesh_broken.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/broken.ply: cannot import mesh: "},
+      {"bad_mesh_broken.yaml", "bad_mesh_broken.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/broken.ply:3: cannot import mesh: PLY header: element 'vertex': 3 instances of at least 12 bytes each cannot fit in the 2 bytes after the header"},
       {"bad_light_key.yaml", "bad_light_key.yaml:3:5: error: lights[0]: missing required key 'position'"},
       {"bad_camera_degenerate.yaml", "bad_camera_degenerate.yaml:1:31: error: camera.at: equals camera.from"},
       {"bad_kd_splits.yaml", "bad_kd_splits.yaml:2:19: error: kd_tree.splits: unknown value (got 'perfect', expected one of: whole, clipped)"},
