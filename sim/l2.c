@@ -24,18 +24,20 @@ struct req {
   uint32_t next;
 };
 
-/* A FIFO ring of (value, entered, ready) entries, growing by doubling. */
+/* A FIFO ring of (value, entered) pairs, growing by doubling. */
 struct ring {
-  uint64_t (*v)[3];
+  uint64_t (*v)[2];
   uint64_t cap, lo, n;
 };
 
-static void ring_push(struct ring *r, uint64_t value, uint64_t at, uint64_t ready) {
+static void ring_push(struct ring *r, uint64_t value, uint64_t at) {
   if (r->n == r->cap) {
     uint64_t cap = r->cap ? 2 * r->cap : 64;
-    uint64_t(*v)[3] = xmalloc(cap * sizeof *v);
-    for (uint64_t i = 0; i < r->n; i++)
-      for (int k = 0; k < 3; k++) v[i][k] = r->v[(r->lo + i) % r->cap][k];
+    uint64_t(*v)[2] = xmalloc(cap * sizeof *v);
+    for (uint64_t i = 0; i < r->n; i++) {
+      v[i][0] = r->v[(r->lo + i) % r->cap][0];
+      v[i][1] = r->v[(r->lo + i) % r->cap][1];
+    }
     free(r->v);
     r->v = v;
     r->cap = cap;
@@ -43,7 +45,6 @@ static void ring_push(struct ring *r, uint64_t value, uint64_t at, uint64_t read
   }
   r->v[(r->lo + r->n) % r->cap][0] = value;
   r->v[(r->lo + r->n) % r->cap][1] = at;
-  r->v[(r->lo + r->n) % r->cap][2] = ready;
   r->n++;
 }
 
@@ -66,6 +67,7 @@ struct l2 {
   uint32_t *waiters; /* per slot: head of its waiter list (reqs), newest first */
   uint8_t *miss_cls; /* per slot: class of the access that missed */
   uint32_t mshr_used;
+  uint32_t wb_used; /* write-buffer places taken (reserved at eviction) */
   struct req *reqs;
   uint32_t req_free, req_cap;
   uint32_t stall_head, stall_tail;
@@ -109,7 +111,7 @@ static uint64_t tag_read(uint32_t slot) { return (uint64_t)slot << 1; }
 #define TAG_WRITE 1u
 
 static void ev_to_dram(void *ctx, uint64_t slot);
-static void ev_pump(void *ctx, uint64_t arg);
+static void ev_to_write_buffer(void *ctx, uint64_t line);
 static void ev_held_merge(void *ctx, uint64_t r);
 static void pump(struct l2 *l2);
 
@@ -134,7 +136,7 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
       return false;
     }
     if (cache_valid(l2->tags, victim) && cache_dirty(l2->tags, victim) &&
-        l2->wb.n >= l2->p.write_buffer) {
+        l2->wb_used >= l2->p.write_buffer) {
       l2->last_refusal = L2_STALL_WRITE_BUFFER;
       return false;
     }
@@ -166,12 +168,9 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
     return true;
   }
   if (cache_valid(l2->tags, victim) && cache_dirty(l2->tags, victim)) {
-    /* The victim takes its write-buffer place now; the DRAM may have it once
-     * it has left the array, at ready. */
+    l2->wb_used++;
     l2->st.writeback_bytes += LINE_BYTES;
-    ring_push(&l2->wb, cache_line(l2->tags, victim), t, ready);
-    qmeter_enter(&l2->st.write_buffer, t);
-    engine_at(l2->eng, ready, ev_pump, l2, 0);
+    engine_at(l2->eng, ready, ev_to_write_buffer, l2, cache_line(l2->tags, victim));
   }
   if (r->op == L2_STORE_LINE) {
     /* Nothing of the old line survives: allocate without a fetch. */
@@ -261,11 +260,12 @@ static bool try_read(struct l2 *l2, uint64_t t) {
 }
 
 static bool try_write(struct l2 *l2, uint64_t t) {
-  if (!l2->wb.n || ring_head(&l2->wb)[2] > t) return false;
+  if (!l2->wb.n) return false;
   uint64_t addr = ring_head(&l2->wb)[0] << L2_LG2_LINE;
   if (!dram_can_take(l2->dram, addr, true)) return false;
   qmeter_leave(&l2->st.write_buffer, t, ring_head(&l2->wb)[1]);
   ring_pop(&l2->wb);
+  l2->wb_used--;
   dram_take(l2->dram, addr, true, TAG_WRITE);
   return true;
 }
@@ -276,7 +276,7 @@ static void pump(struct l2 *l2) {
   const uint64_t t = engine_now(l2->eng);
   bool moved = false;
   for (;;) {
-    bool writes_first = l2->wb.n >= l2->p.write_buffer;
+    bool writes_first = l2->wb_used >= l2->p.write_buffer;
     if (writes_first && try_write(l2, t)) {
       moved = true;
       continue;
@@ -297,14 +297,17 @@ static void pump(struct l2 *l2) {
 static void ev_to_dram(void *ctx, uint64_t slot) {
   struct l2 *l2 = ctx;
   const uint64_t t = engine_now(l2->eng);
-  ring_push(&l2->miss_q, slot, t, t);
+  ring_push(&l2->miss_q, slot, t);
   qmeter_enter(&l2->st.miss_queue, t);
   pump(l2);
 }
 
-static void ev_pump(void *ctx, uint64_t arg) {
-  (void)arg;
-  pump(ctx);
+static void ev_to_write_buffer(void *ctx, uint64_t line) {
+  struct l2 *l2 = ctx;
+  const uint64_t t = engine_now(l2->eng);
+  ring_push(&l2->wb, line, t);
+  qmeter_enter(&l2->st.write_buffer, t);
+  pump(l2);
 }
 
 static void ev_held_merge(void *ctx, uint64_t r) {
@@ -402,7 +405,8 @@ void l2_destroy(struct l2 *l2) {
 }
 
 bool l2_quiet(const struct l2 *l2) {
-  return l2->mshr_used == 0 && l2->stall_head == NONE && l2->miss_q.n == 0 && l2->wb.n == 0;
+  return l2->mshr_used == 0 && l2->stall_head == NONE && l2->miss_q.n == 0 && l2->wb.n == 0 &&
+         l2->wb_used == 0;
 }
 
 void l2_finish(struct l2 *l2, uint64_t end) {
