@@ -146,7 +146,7 @@ void dram_take(struct dram *d, uint64_t addr, bool write, uint64_t tag) {
   f->at = engine_now(d->eng);
   f->write = write;
   f->done = false;
-  if (++d->inflight > d->st.in_flight_max) d->st.in_flight_max = d->inflight;
+  d->inflight++;
   if (write) {
     d->st.writes++;
     d->st.write_bytes += 64;

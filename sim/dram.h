@@ -36,7 +36,6 @@ struct dram_stats {
   uint64_t reads, writes, read_bytes, write_bytes;
   struct hist read_latency;  /* cycles from taken to data delivered */
   struct hist write_latency; /* cycles from taken to written */
-  uint64_t in_flight_max;
 };
 
 struct dram;

@@ -185,7 +185,3 @@ struct dram_channel *dram_channel_create(const struct dram_channel_params *p, st
   d->starts = xcalloc(p->queue_depth, sizeof *d->starts);
   return d;
 }
-
-const struct dram_channel_stats *dram_channel_get_stats(const struct dram_channel *d) {
-  return &d->st;
-}

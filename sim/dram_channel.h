@@ -43,7 +43,6 @@ struct dram_channel;
 struct dram_channel *dram_channel_create(const struct dram_channel_params *p, struct engine *e,
                                          const struct dram_client *client);
 extern const struct dram_level_ops dram_channel_ops; /* self: a struct dram_channel * */
-const struct dram_channel_stats *dram_channel_get_stats(const struct dram_channel *d);
 
 static inline uint64_t dram_ticks_to_cycles_ceil(uint64_t ticks) {
   return (ticks + ((1ull << DRAM_TICK_BITS) - 1)) >> DRAM_TICK_BITS;

@@ -167,6 +167,10 @@ int main(void) {
       {"render " SCN "good_room_tiny.yaml -o x.exr --seed -1", "--seed: got '-1', expected a whole number from 0 to 18446744073709551615"},
       {"export " SCN "good_room_tiny.yaml " SCN "good_room_tiny.yaml -o x.ply", "expected one scene file, got 2"},
       {"hits --rays primary", "unknown option '--rays'"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --width 4 --height 4 --dram-trace /nonexistent/dir/t.trace", "/nonexistent/dir/t.trace: error: cannot write the DRAM trace"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --dram-trace", "option --dram-trace needs a value"},
+      {"run " RTSIM_SOURCE_DIR "/configs/default.yaml " SCN "good_room_tiny.yaml -o xrun --set dram.latency=100", "--set dram.latency=100: error: dram.latency: not read by dram.model banked"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set dram.mapping=rorororororo", "--set dram.mapping=rorororororo: error: dram.mapping: not an address mapping"},
   };
   for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {
     snprintf(cmd, sizeof cmd, "cd %s && %s %s", RTSIM_TMP, RTSIM_BINARY, usage[i].args);
@@ -181,6 +185,9 @@ int main(void) {
       snprintf(f, sizeof f, "%s/%s", RTSIM_TMP, outs[k]);
       EXPECTF(access(f, F_OK) != 0, "'%s': %s left behind", usage[i].args, outs[k]);
     }
+    char st[512];
+    snprintf(st, sizeof st, "%s/xrun/stats.json", RTSIM_TMP);
+    EXPECTF(access(st, F_OK) != 0, "'%s': a run directory marked complete", usage[i].args);
   }
 
   /* --help and -h of every command succeed and print its own usage. */
