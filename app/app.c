@@ -134,22 +134,49 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
   struct timed_ctx r = {0};
   t->ar.setup.progress = work_progress;
   t->ar.setup.progress_ctx = &r;
+  t->sampled = mp->sample_fraction < 1;
+  if (t->sampled) {
+    t->ar.setup.item = sample_item;
+    t->ar.setup.item_done = sample_item_done;
+    t->ar.setup.item_ctx = &t->sample;
+  }
   r.job = policy_job_create(k, &t->ar.setup, &pp, n, mp->cores);
   r.workers = xcalloc(n, sizeof *r.workers);
   t->m = machine_create(mp, 0);
+  if (t->sampled) {
+    char why[512];
+    CHECK(sample_problem(mp, k, policy_job_total(r.job), n, why, sizeof why) == NULL);
+    sample_init(&t->sample, mp, policy_job_total(r.job), n);
+    t->sample.m = t->m;
+    t->sample.workers = r.workers;
+    t->sample.nworkers = n;
+  }
   if (dram_trace) dram_trace_to(machine_dram(t->m), dram_trace);
   r.t0 = app_now();
   machine_run(t->m, run_worker, &r, progress ? cycle_progress : NULL, &r);
   t->wall_s = app_now() - r.t0;
   if (progress) fputc('\n', stderr);
   policy_job_finish(r.job, &t->st, &t->ts);
+  if (t->sampled) {
+    t->sample.workers = NULL;
+    sample_finish(&t->sample, render_stats_total(&t->st));
+  }
   free(r.workers);
   policy_job_destroy(r.job);
 }
 
 void app_timed_fini(struct app_timed *t) {
+  if (t->sampled) sample_fini(&t->sample);
   machine_destroy(t->m);
   app_render_fini(&t->ar);
+}
+
+uint64_t app_work_items(enum policy_kind k, uint32_t width, uint32_t height) {
+  if (k != POLICY_PACKET) return (uint64_t)width * height;
+  struct policy_params pp;
+  policy_params_default(&pp);
+  const uint32_t d = pp.packet_dim;
+  return (uint64_t)((width + d - 1) / d) * ((height + d - 1) / d);
 }
 
 bool app_sets_add(const char *text, void *dst) {

@@ -12,6 +12,7 @@
 #include "renderer/policy.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
+#include "app/sample.h"
 
 struct err;
 
@@ -95,6 +96,8 @@ struct machine_params;
 struct app_timed {
   struct app_render ar;
   struct machine *m;
+  struct sampler sample; /* mp->sample_fraction < 1 (sampled): the plan and probes */
+  bool sampled;
   struct render_stats st;
   struct trace_stats ts;
   double wall_s;
@@ -106,6 +109,9 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
                    uint32_t width, uint32_t height, enum policy_kind k,
                    const struct machine_params *mp, bool progress, FILE *dram_trace);
 void app_timed_fini(struct app_timed *t);
+/* The work items a render of policy k at width x height takes (sampling's
+ * population: pixels, or tiles for packet). */
+uint64_t app_work_items(enum policy_kind k, uint32_t width, uint32_t height);
 
 /* Repeatable --set KEY=VALUE options, in order (argv's strings): an
  * OPTS_PARSE destination (app_sets_add) sized for argc entries. */

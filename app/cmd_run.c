@@ -109,6 +109,19 @@ int cmd_run(int argc, char **argv) {
   }
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
+  char whybuf[512];
+  const uint32_t contexts = mc.p.cores * mc.p.threads_per_core * mc.p.rays_per_thread;
+  const char *why = sample_problem(&mc.p, policy, app_work_items(policy, W, H), contexts, whybuf,
+                                   sizeof whybuf);
+  if (!why && mc.p.sample_fraction < 1 && trace_path)
+    why = "sample.fraction: --dram-trace records a whole run; a sampled run skips most of the work";
+  if (why) {
+    const struct machine_cfg_origin *o = &mc.at[machine_cfg_find("sample.fraction")];
+    err_set(&e, o->file[0] ? o->file : machine_path, o->line, o->col, "%s", why);
+    app_report(&e);
+    app_world_fini(&w);
+    goto done;
+  }
   struct app_timed t;
   app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, isatty(2),
                 trace.f);
@@ -126,6 +139,7 @@ int cmd_run(int argc, char **argv) {
       .kd_splits = w.scene.kd_clip ? "clipped" : "whole",
       .cfg = &mc,
       .machine = t.m,
+      .sample = t.sampled ? &t.sample : NULL,
       .rstats = &t.st,
       .tstats = &t.ts,
       .fb = &t.ar.fb,

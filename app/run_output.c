@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "app/app.h"
+#include "app/sample.h"
 #include "renderer/framebuffer.h"
 #include "renderer/image.h"
 #include "renderer/render.h"
@@ -65,6 +66,15 @@ static void queue(struct stats_table *t, const char *prefix, const struct qmeter
 static void measured(const struct run_output_report *r, struct stats_table *t) {
   const struct machine_stats *s = machine_get_stats(r->machine);
   const struct machine_params *p = &r->cfg->p;
+  const double peak = machine_dram_peak_bytes_per_cycle(p);
+  if (r->sample) {
+    /* Estimates with their intervals; the machine's own counters cover only
+     * the detailed units, so they are not written. */
+    stats_u64(t, "ray_contexts", s->contexts);
+    stats_u64(t, "threads", s->threads);
+    sample_stats(r->sample, p, peak, t);
+    return;
+  }
   const double cyc = (double)s->cycles;
   const uint64_t rays = render_stats_total(r->rstats);
   const double seconds = cyc / (p->clock_ghz * 1e9);
@@ -127,7 +137,10 @@ static void measured(const struct run_output_report *r, struct stats_table *t) {
   stats_u64(t, "dram_writes", d->writes);
   stats_u64(t, "dram_read_bytes", d->read_bytes);
   stats_u64(t, "dram_write_bytes", d->write_bytes);
+  stats_u64(t, "dram_bytes", d->read_bytes + d->write_bytes);
   stats_f64(t, "dram_bytes_per_cycle", ratio((double)(d->read_bytes + d->write_bytes), cyc));
+  if (peak > 0)
+    stats_f64(t, "dram_utilization", ratio((double)(d->read_bytes + d->write_bytes), cyc) / peak);
   stats_f64(t, "dram_read_latency_mean", hist_mean(&d->read_latency));
   stats_u64(t, "dram_read_latency_p50", hist_quantile(&d->read_latency, 0.50));
   stats_u64(t, "dram_read_latency_p95", hist_quantile(&d->read_latency, 0.95));
@@ -242,12 +255,14 @@ static bool write_json(const struct run_output_report *r, struct err *e) {
   measured(r, &t);
   stats_write_json_members(&t, f, "  ");
   stats_fini(&t);
-  fprintf(f, ",\n  \"timeline_window_cycles\": %llu",
-          (unsigned long long)machine_timeline(r->machine)->window);
-  fputs(",\n  \"load_latency_histogram_cycles\": ", f);
-  hist_write_json(&s->load_latency, f);
-  fputs(",\n  \"dram_read_latency_histogram_cycles\": ", f);
-  hist_write_json(&s->dram.read_latency, f);
+  if (!r->sample) {
+    fprintf(f, ",\n  \"timeline_window_cycles\": %llu",
+            (unsigned long long)machine_timeline(r->machine)->window);
+    fputs(",\n  \"load_latency_histogram_cycles\": ", f);
+    hist_write_json(&s->load_latency, f);
+    fputs(",\n  \"dram_read_latency_histogram_cycles\": ", f);
+    hist_write_json(&s->dram.read_latency, f);
+  }
   fputs(",\n  \"revision\": ", f);
   stats_write_json_str(f, app_revision);
   fputs(",\n  \"wall_s\": ", f);
@@ -260,6 +275,9 @@ static bool write_json(const struct run_output_report *r, struct err *e) {
 }
 
 bool run_output_write(const struct run_output_report *r, struct err *e) {
+  /* A sampled run drew only its units' pixels and its timeline is the
+   * detailed units' time: no image, no timeline. */
+  if (r->sample) return write_csv(r, e) && write_json(r, e);
   char path[4200];
   snprintf(path, sizeof path, "%s/image.exr", r->out_dir);
   struct image im;
@@ -273,7 +291,8 @@ bool run_output_write(const struct run_output_report *r, struct err *e) {
 void run_output_summary(const struct run_output_report *r, FILE *f) {
   struct stats_table t = {0};
   measured(r, &t);
-  static const char *const show[] = {"cycles", "rays_traced", "rays_per_second", "core_utilization",
+  static const char *const show[] = {"cycles", "cycles_ci95_low", "cycles_ci95_high",
+                                     "sample_detailed_fraction", "rays_traced", "rays_per_second", "core_utilization",
                                      "thread_idle_fraction", "l2_miss_rate", "dram_bytes_per_cycle",
                                      "dram_read_latency_mean", "load_latency_mean", "events"};
   for (unsigned i = 0; i < sizeof show / sizeof show[0]; i++)

@@ -11,6 +11,7 @@
 struct err;
 struct machine;
 struct machine_cfg;
+struct sampler;
 struct render_stats;
 struct trace_stats;
 struct framebuffer;
@@ -23,6 +24,7 @@ struct run_output_report {
   const char *kd_splits; /* "whole" or "clipped": how the k-d tree was built */
   const struct machine_cfg *cfg;
   const struct machine *machine;
+  const struct sampler *sample; /* a sampled run's estimates (NULL: a full run) */
   const struct render_stats *rstats;
   const struct trace_stats *tstats;
   const struct framebuffer *fb;

@@ -67,6 +67,28 @@ void policy_job_done(struct policy_job *job, uint64_t n) {
     s->progress(s->progress_ctx, job->done, job->total);
 }
 
+bool policy_item_begin(struct policy_job *job, struct policy_worker *w, uint64_t k,
+                       struct mem_port *own) {
+  const struct policy_setup *s = &job->setup;
+  *own = w->tr.mem;
+  if (!s->item) return true;
+  for (uint64_t wait = 64;; wait = wait < 4096 ? 2 * wait : wait) {
+    struct mem_port other = {0};
+    switch (s->item(s->item_ctx, k, w->core, &other)) {
+    case POLICY_ITEM_DETAIL: return true;
+    case POLICY_ITEM_PORT: w->tr.mem = other; return false;
+    default: mem_wait(own, wait); break;
+    }
+  }
+}
+
+void policy_item_end(struct policy_job *job, struct policy_worker *w, uint64_t k,
+                     const struct mem_port *own, bool detail) {
+  w->tr.mem = *own;
+  const struct policy_setup *s = &job->setup;
+  if (detail && s->item_done) s->item_done(s->item_ctx, k);
+}
+
 void policy_primary(const struct policy_job *job, struct policy_worker *w, uint32_t x, uint32_t y,
                     struct ray *r) {
   const struct trace_ctx *tr = &w->tr;
@@ -96,6 +118,7 @@ struct policy_job *policy_job_create(enum policy_kind k, const struct policy_set
   CHECK(policy_workers_supported(k, workers));
   CHECK_GE(cores, 1);
   CHECK_EQ(s->sc->scene, s->scene);
+  CHECK(!s->item || k != POLICY_DYNAMIC);
   struct policy_job *job = xcalloc(1, sizeof *job);
   job->mod = MODULES[k];
   job->setup = *s;

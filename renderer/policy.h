@@ -38,6 +38,9 @@ struct framebuffer;
 
 enum policy_kind { POLICY_RECURSIVE = 0, POLICY_PACKET = 1, POLICY_DYNAMIC = 2, POLICY_COUNT = 3 };
 
+/* What to do with a claimed work item (policy_setup.item). */
+enum policy_item { POLICY_ITEM_DETAIL, POLICY_ITEM_PORT, POLICY_ITEM_HOLD };
+
 struct policy_params {
   uint32_t packet_dim;   /* packet: packets are packet_dim x packet_dim pixels (8) */
   uint64_t cache_bytes;  /* dynamic: the cache size the schedule is made for */
@@ -126,6 +129,19 @@ struct policy_setup {
    * recursive and packet, rays terminated of rays spawned so far for dynamic. */
   render_progress_fn progress;
   void *progress_ctx;
+  /* Sampling (optional; NULL: every item through the worker's own port).
+   * Asked when a worker has claimed work item k and before its first access,
+   * with the worker's core: POLICY_ITEM_DETAIL does the item through the
+   * worker's port; POLICY_ITEM_PORT through *port instead (a backend that
+   * takes no time and never suspends: it warms caches or only counts);
+   * POLICY_ITEM_HOLD: the worker waits (mem_wait, 64 cycles, doubling up to
+   * 4096) and asks again about the same item. Every item is traced and drawn
+   * in the end. Items are claimed in order, one a claim. item_done (may be
+   * NULL) hears when a POLICY_ITEM_DETAIL item is finished. Recursive and packet only: the
+   * dynamic policy claims a whole batch at once (policy_job_create CHECKs). */
+  enum policy_item (*item)(void *ctx, uint64_t k, uint32_t core, struct mem_port *port);
+  void (*item_done)(void *ctx, uint64_t k);
+  void *item_ctx;
 };
 
 /* One render's shared work list and whatever the policy shares between its

@@ -52,6 +52,14 @@ struct policy_job {
  * and the first in *first. Makes no access: call it before the item's first. */
 uint64_t policy_job_claim(struct policy_job *job, uint64_t n, uint64_t *first);
 
+/* Sampling (policy_setup.item): before item k's first access (it may wait
+ * first); w's port may be swapped for the item, *own keeps w's own for
+ * policy_item_end. True when the item goes through w's own port. */
+bool policy_item_begin(struct policy_job *job, struct policy_worker *w, uint64_t k,
+                       struct mem_port *own);
+void policy_item_end(struct policy_job *job, struct policy_worker *w, uint64_t k,
+                     const struct mem_port *own, bool detail);
+
 /* n claimed items are done: reports progress every progress_every items and
  * at the last one. */
 void policy_job_done(struct policy_job *job, uint64_t n);

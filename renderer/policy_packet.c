@@ -115,6 +115,8 @@ static void pkt_scratch_free(void *scratch) {
 static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
   uint64_t k;
   if (policy_job_claim(job, 1, &k) == 0) return false;
+  struct mem_port own;
+  const bool detail = policy_item_begin(job, wk, k, &own);
   if (!wk->scratch) {
     struct pkt_scratch *n = xmalloc(sizeof *n);
     n->pk = trace_packet_create();
@@ -192,6 +194,7 @@ static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
       fb->cost_tris[cur->r[i].pixel] += x->cost.tris[i];
     }
   }
+  policy_item_end(job, wk, k, &own, detail);
   policy_job_done(job, 1);
   return true;
 }

@@ -44,6 +44,8 @@ static void rec_scratch_free(void *scratch) { free(scratch); }
 static bool rec_step(struct policy_job *job, struct policy_worker *wk) {
   uint64_t k;
   if (policy_job_claim(job, 1, &k) == 0) return false;
+  struct mem_port own;
+  const bool detail = policy_item_begin(job, wk, k, &own);
   if (!wk->scratch) wk->scratch = xmalloc(sizeof(struct rec_scratch));
   struct rec_scratch *x = wk->scratch;
   struct ray *stack = x->stack;
@@ -88,6 +90,7 @@ static bool rec_step(struct policy_job *job, struct policy_worker *wk) {
   }
   fb->cost_nodes[pix] += (uint32_t)(tr->stats.node_visits - nodes0);
   fb->cost_tris[pix] += (uint32_t)(tr->stats.tri_tests - tris0);
+  policy_item_end(job, wk, k, &own, detail);
   policy_job_done(job, 1);
   return true;
 }

@@ -197,6 +197,17 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
   return true;
 }
 
+void l2_warm(struct l2 *l2, uint64_t line, bool write) {
+  uint32_t slot = cache_find(l2->tags, line);
+  if (slot != CACHE_NONE) {
+    cache_touch(l2->tags, slot);
+    if (write) cache_set_dirty(l2->tags, slot);
+    return;
+  }
+  uint32_t victim = cache_victim(l2->tags, line);
+  if (victim != CACHE_NONE) cache_install(l2->tags, victim, line, write, false);
+}
+
 /* Attribute the stall time so far to the current reason; then take `reason`
  * (-1: not stalled) from cycle t. */
 static void stall_reason_set(struct l2 *l2, int reason, uint64_t t) {

@@ -89,6 +89,14 @@ void l2_attach(struct l2 *l2, struct dram *d);
  * client->ready; NULL for a store (posted: nobody waits). */
 void l2_access(struct l2 *l2, uint64_t line, enum l2_op op, unsigned cls, void *waiter);
 
+/* Warm the L2 with one access of a line, no time (sampling's fast-forward):
+ * a line it holds (or is fetching) becomes the most recently used, dirty on a
+ * write; else it is installed in its set's victim slot, valid and not pending
+ * (dirty on a write). A dirty victim is dropped, not written back, and nothing
+ * is counted: warming only keeps the tags as the skipped work would have left
+ * them. With every way of the set pending it does nothing. */
+void l2_warm(struct l2 *l2, uint64_t line, bool write);
+
 /* Nothing in flight, stalled or buffered (CHECKed at the end of a run). */
 bool l2_quiet(const struct l2 *l2);
 /* Close the meters at cycle end. */

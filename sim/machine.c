@@ -78,6 +78,15 @@ struct machine {
   uint64_t loads_out, loads_back; /* conservation: L2 load requests and answers */
   struct timeline tl;
   struct machine_stats st;
+  struct mctx *running;      /* the ray inside a block, if any (machine_probe) */
+  struct mwarm *warm;        /* one warming port context a core (machine_warm_port) */
+  uint64_t warm_slots, count_slots;
+};
+
+/* A core's warming port (machine_warm_port). */
+struct mwarm {
+  struct machine *m;
+  uint32_t core;
 };
 
 static const struct mem_ops timed_ops;
@@ -99,6 +108,16 @@ struct dram_params machine_dram_params(const struct machine_params *p) {
 
 uint64_t machine_core_khz(const struct machine_params *p) {
   return (uint64_t)llround(p->clock_ghz * 1e6);
+}
+
+double machine_dram_peak_bytes_per_cycle(const struct machine_params *p) {
+  switch (p->dram_model) {
+  case DRAM_MODEL_CHANNEL: return p->dram_bytes_per_cycle;
+  case DRAM_MODEL_BANKED:
+    return (double)p->dram_banked.channels * p->dram_banked.bus_bytes * 2.0 * p->dram_clock_mhz /
+           (p->clock_ghz * 1e3);
+  default: return 0;
+  }
 }
 
 const char *machine_params_problem(const struct machine_params *p) {
@@ -282,7 +301,9 @@ static void ev_issue(void *ctx, uint64_t core) {
     c->co = coro_create(m->pool, ctx_main, c);
     if (++m->stacks_live > m->st.stacks_max) m->st.stacks_max = m->stacks_live;
   }
+  m->running = c;
   coro_resume(c->co);
+  m->running = NULL;
   m->st.blocks++;
   k->port_free = t + c->slots;
   m->st.issue_slots += c->slots;
@@ -394,6 +415,88 @@ static void t_wait(void *ctx, uint64_t cycles) {
 
 static const struct mem_ops timed_ops = {t_load, t_store, t_compute, t_wait};
 
+/* ---- the warming door (sampling's fast-forward) ---- */
+
+static void w_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  struct mwarm *w = ctx;
+  struct machine *m = w->m;
+  (void)cls;
+  m->warm_slots++;
+  struct cache *l1 = m->core[w->core].l1;
+  for (uint64_t line = addr >> MACHINE_LG2_LINE, end = (addr + size - 1) >> MACHINE_LG2_LINE;
+       line <= end; line++) {
+    if (l1) {
+      uint32_t s = cache_find(l1, line);
+      if (s != CACHE_NONE) {
+        cache_touch(l1, s);
+        continue;
+      }
+      s = cache_victim(l1, line);
+      if (s != CACHE_NONE) cache_install(l1, s, line, false, false);
+    }
+    l2_warm(m->l2, line, false);
+  }
+}
+
+static void w_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  struct mwarm *w = ctx;
+  struct machine *m = w->m;
+  (void)cls;
+  m->warm_slots++;
+  struct cache *l1 = m->core[w->core].l1;
+  for (uint64_t line = addr >> MACHINE_LG2_LINE, end = (addr + size - 1) >> MACHINE_LG2_LINE;
+       line <= end; line++) {
+    if (l1) {
+      uint32_t s = cache_find(l1, line);
+      if (s != CACHE_NONE) cache_touch(l1, s);
+    }
+    l2_warm(m->l2, line, true);
+  }
+}
+
+static void w_compute(void *ctx, uint64_t cycles) {
+  struct mwarm *w = ctx;
+  w->m->warm_slots += cycles;
+}
+
+static const struct mem_ops warm_ops = {w_load, w_store, w_compute, NULL};
+
+struct mem_port machine_warm_port(struct machine *m, uint32_t core) {
+  CHECK_LT(core, m->p.cores);
+  struct mem_port p = {&warm_ops, &m->warm[core]};
+  return p;
+}
+
+uint64_t machine_warm_slots(const struct machine *m) { return m->warm_slots; }
+
+static void n_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  (void)addr;
+  (void)size;
+  (void)cls;
+  ((struct machine *)ctx)->count_slots++;
+}
+
+static void n_compute(void *ctx, uint64_t cycles) { ((struct machine *)ctx)->count_slots += cycles; }
+
+static const struct mem_ops count_ops = {n_access, n_access, n_compute, NULL};
+
+struct mem_port machine_count_port(struct machine *m) {
+  struct mem_port p = {&count_ops, m};
+  return p;
+}
+
+uint64_t machine_count_slots(const struct machine *m) { return m->count_slots; }
+
+void machine_probe(const struct machine *m, struct machine_probe *out) {
+  const struct mctx *c = m->running;
+  out->cycle = c ? c->t : engine_now(m->eng);
+  out->issue_slots = m->st.issue_slots + (c ? c->slots : 0);
+  const struct l2_stats *l = l2_get_stats(m->l2);
+  out->dram_bytes = l->fetch_bytes + l->writeback_bytes;
+  out->load_latency_sum = m->st.load_latency.sum;
+  out->loads_timed = m->st.load_latency.count;
+}
+
 /* ---- machine ---- */
 
 static struct machine *create(const struct machine_params *p, uint64_t stack_bytes, bool paint) {
@@ -418,7 +521,10 @@ static struct machine *create(const struct machine_params *p, uint64_t stack_byt
   m->core = xcalloc(p->cores, sizeof *m->core);
   m->th = xcalloc(m->nth, sizeof *m->th);
   m->ctx = xcalloc(m->nctx, sizeof *m->ctx);
+  m->warm = xcalloc(p->cores, sizeof *m->warm);
   for (uint32_t i = 0; i < p->cores; i++) {
+    m->warm[i].m = m;
+    m->warm[i].core = i;
     m->core[i].rr = p->threads_per_core - 1;
     if (p->l1_size_bytes) {
       struct cache_params l1 = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE};
@@ -469,6 +575,7 @@ void machine_destroy(struct machine *m) {
   for (uint32_t i = 0; i < m->nctx; i++) coro_destroy(m->ctx[i].co);
   for (uint32_t i = 0; i < m->p.cores; i++) cache_destroy(m->core[i].l1);
   free(m->core);
+  free(m->warm);
   free(m->th);
   free(m->ctx);
   timeline_fini(&m->tl);

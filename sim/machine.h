@@ -51,6 +51,14 @@ struct machine_params {
   uint32_t cost_node_cycles, cost_triangle_cycles, cost_shade_cycles;
   uint32_t cost_ray_switch_cycles;
   uint64_t timeline_window_cycles;
+  /* Sampling (README "Sampling"; the run reads these, the machine does not):
+   * the share of work items simulated in detail (1: all, no sampling), the
+   * strata (one detailed unit each), the items warmed functionally before a
+   * unit as a multiple of its detailed items, the seed of the units' places. */
+  double sample_fraction;
+  uint32_t sample_units;
+  double sample_warming;
+  uint64_t sample_seed;
 };
 
 /* Columns of a timeline row (values are per window; see machine.c). */
@@ -93,6 +101,10 @@ const char *machine_params_problem(const struct machine_params *p);
  * converts it (for a DRAM built alone: rtsim dram-replay). */
 struct dram_params machine_dram_params(const struct machine_params *p);
 uint64_t machine_core_khz(const struct machine_params *p);
+/* The DRAM's peak bytes a core cycle: the channel's bytes_per_cycle; for the
+ * banked level every channel's data bus busy (bus_bytes, twice a DRAM clock);
+ * 0 for the fixed latency, which has no limit. */
+double machine_dram_peak_bytes_per_cycle(const struct machine_params *p);
 
 struct machine;
 
@@ -117,6 +129,29 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
                  void *progress_ctx);
 
 const struct machine_stats *machine_get_stats(const struct machine *m);
+
+/* ---- sampling (README "Sampling") ----
+ * The counters of a running machine at the current cycle: what a window of
+ * the run did is the difference of two probes. */
+struct machine_probe {
+  uint64_t cycle;       /* the running ray's clock (inside a block), else the engine's */
+  uint64_t issue_slots; /* used so far, the running block's included */
+  uint64_t dram_bytes;  /* asked of the DRAM so far: L2 fetches and write-backs */
+  uint64_t load_latency_sum, loads_timed; /* the load latency histogram's sum and count */
+};
+void machine_probe(const struct machine *m, struct machine_probe *out);
+
+/* A port that warms the caches instead of timing (sampling's fast-forward):
+ * a load or store updates `core`'s L1 (a load that misses fills it) and the
+ * L2's tags (l2_warm), takes no time and never suspends; compute and wait do
+ * nothing. Its issue slots (computes + loads + stores) are counted apart,
+ * machine_warm_slots. Valid while m lives. */
+struct mem_port machine_warm_port(struct machine *m, uint32_t core);
+uint64_t machine_warm_slots(const struct machine *m);
+/* A port that only counts issue slots (computes + loads + stores), apart:
+ * machine_count_slots. No cache sees the accesses; no time passes. */
+struct mem_port machine_count_port(struct machine *m);
+uint64_t machine_count_slots(const struct machine *m);
 
 /* The timeline: rows of MACHINE_TL_COLS values (sim/timeline.h). */
 const struct timeline *machine_timeline(const struct machine *m);

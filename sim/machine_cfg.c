@@ -84,9 +84,13 @@ static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"costs.shade", K_U32, 0, 1e6, OFF(cost_shade_cycles)},
     {"costs.ray_switch", K_U32, 0, 1e6, OFF(cost_ray_switch_cycles)},
     {"timeline.window", K_U64, 1, 1e12, OFF(timeline_window_cycles)},
+    {"sample.fraction", K_F64, 1e-6, 1, OFF(sample_fraction)},
+    {"sample.units", K_U32, 0, 1u << 20, OFF(sample_units)},
+    {"sample.warming", K_F64, 0, 1e6, OFF(sample_warming)},
+    {"sample.seed", K_U64, 0, 1e15, OFF(sample_seed)},
 };
 
-static const char *const SECTIONS[] = {"l1", "l2", "dram", "costs", "timeline"};
+static const char *const SECTIONS[] = {"l1", "l2", "dram", "costs", "timeline", "sample"};
 #define NSECTIONS (sizeof SECTIONS / sizeof SECTIONS[0])
 
 const char *machine_cfg_key(unsigned i) { return i < MACHINE_CFG_KEYS ? KEYS[i].name : NULL; }
@@ -177,6 +181,10 @@ void machine_cfg_defaults(struct machine_cfg *c) {
   p->cost_shade_cycles = 50;
   p->cost_ray_switch_cycles = 2;
   p->timeline_window_cycles = 10000;
+  p->sample_fraction = 1;
+  p->sample_units = 0;
+  p->sample_warming = 4;
+  p->sample_seed = 1;
 }
 
 /* "512KiB", "4MiB", "1GiB", "64B" or a plain number of bytes. */

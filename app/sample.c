@@ -1,0 +1,318 @@
+/* Sampling a timed run: the plan, the claim hook, the probes and the
+ * estimates (sample.h says the design; README "Sampling" says why). */
+#include "app/sample.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "renderer/rng.h"
+#include "sim/err.h"
+#include "sim/stats.h"
+
+/* Units when sample.units is 0: as many as the detailed items allow, each
+ * at least two pipelines long, at most this many. */
+#define SAMPLE_AUTO_UNITS_MAX 40
+
+uint32_t sample_units(const struct machine_params *p, uint64_t total, uint32_t contexts) {
+  if (p->sample_units) return p->sample_units;
+  double n = p->sample_fraction * (double)total / (2.0 * contexts);
+  return n >= SAMPLE_AUTO_UNITS_MAX ? SAMPLE_AUTO_UNITS_MAX : (uint32_t)n;
+}
+
+const char *sample_problem(const struct machine_params *p, enum policy_kind k, uint64_t total,
+                           uint32_t contexts, char *buf, size_t cap) {
+  if (p->sample_fraction >= 1) return NULL;
+  if (k == POLICY_DYNAMIC)
+    return "sample.fraction: sampling needs a policy that takes its work item by item "
+           "(recursive or packet); the dynamic policy traces every primary ray as one batch";
+  /* A unit warms the pipeline with one item a ray context, then measures at
+   * least as many: the measured window then holds the unit's own items. */
+  uint32_t n = sample_units(p, total, contexts);
+  if (n < 4 || p->sample_fraction * (double)total / n < 2.0 * contexts) {
+    snprintf(buf, cap,
+             "sample.fraction: too few detailed items: %.0f of %llu work items in %u unit%s, and "
+             "a unit needs 2 x %u (the ray contexts: one pipeline to warm, one to measure) and "
+             "there must be at least 4 units; a larger fraction or image, fewer units or "
+             "contexts",
+             p->sample_fraction * (double)total, (unsigned long long)total, n, n == 1 ? "" : "s",
+             contexts);
+    return buf;
+  }
+  return NULL;
+}
+
+void sample_init(struct sampler *s, const struct machine_params *p, uint64_t total,
+                 uint32_t contexts) {
+  memset(s, 0, sizeof *s);
+  s->total = total;
+  s->n = sample_units(p, total, contexts);
+  CHECK_GE(s->n, 4);
+  s->cores = p->cores;
+  s->hz = p->clock_ghz * 1e9;
+  s->u = xcalloc(s->n, sizeof *s->u);
+  s->drained = xcalloc(s->n, sizeof *s->drained);
+  uint64_t prev_end = 0;
+  for (uint32_t h = 0; h < s->n; h++) {
+    struct sample_unit *u = &s->u[h];
+    u->stratum_lo = total * h / s->n;
+    u->stratum_hi = total * (h + 1) / s->n;
+    const uint64_t size = u->stratum_hi - u->stratum_lo;
+    uint64_t d = (uint64_t)llround(p->sample_fraction * (double)size);
+    if (d > size) d = size;
+    /* One item a ray context warms the pipeline (every context has taken an
+     * item of the unit before the window opens). The first unit starts the
+     * run as the full run starts it (cold, at cycle 0) and is measured from
+     * there; the last ends the run. */
+    uint64_t warm = h == 0 ? 0 : contexts < d / 2 ? contexts : d / 2;
+    uint64_t off = h == 0 ? 0 : size - d;
+    if (h > 0 && h + 1 < s->n) off = rng_hash2(p->sample_seed, h) % (size - d + 1);
+    u->start = u->stratum_lo + off;
+    u->measure = u->start + warm;
+    u->end = u->start + d;
+    CHECK_GT(u->end, u->measure);
+    uint64_t w = (uint64_t)llround(p->sample_warming * (double)d);
+    u->warm_from = u->start - (w < u->start - prev_end ? w : u->start - prev_end);
+    prev_end = u->end;
+    s->detailed += d;
+    s->measured += d - warm;
+    s->warmed += u->start - u->warm_from;
+  }
+  CHECK_EQ(s->u[s->n - 1].end, total);
+}
+
+void sample_fini(struct sampler *s) {
+  free(s->u);
+  free(s->drained);
+  s->u = NULL;
+  s->drained = NULL;
+}
+
+static void probe(struct sampler *s, uint64_t *at) {
+  struct machine_probe p;
+  machine_probe(s->m, &p);
+  at[SQ_CYCLES] = p.cycle;
+  at[SQ_SLOTS] = p.issue_slots;
+  at[SQ_DRAM_BYTES] = p.dram_bytes;
+  at[SQ_LAT_SUM] = p.load_latency_sum;
+  at[SQ_LAT_N] = p.loads_timed;
+  uint64_t rays = 0;
+  for (uint32_t i = 0; i < s->nworkers; i++) rays += render_stats_total(&s->workers[i].st);
+  at[SQ_RAYS] = rays;
+}
+
+enum policy_item sample_item(void *ctx, uint64_t k, uint32_t core, struct mem_port *port) {
+  struct sampler *s = ctx;
+  if (s->cur < s->n && k == s->u[s->cur].end) {
+    /* (asked again while the worker holds: the unit is closed already) */
+    probe(s, s->u[s->cur].at1);
+    s->u[s->cur].have1 = true;
+    s->cur++;
+  }
+  CHECK_LT(s->cur, s->n); /* (the last unit ends at the last item) */
+  struct sample_unit *u = &s->u[s->cur];
+  CHECK_LT(k, u->end);
+  if (k >= u->start) {
+    if (k == u->measure) {
+      probe(s, u->at0);
+      u->have0 = true;
+    }
+    s->in_flight++;
+    return POLICY_ITEM_DETAIL;
+  }
+  /* Between units the pipeline drains before the fast-forward: the unit's
+   * last items must not run on caches warmed for the next one. */
+  if (s->in_flight > 0 && !s->drained[s->cur]) return POLICY_ITEM_HOLD;
+  s->drained[s->cur] = true;
+  *port = k >= u->warm_from ? machine_warm_port(s->m, core) : machine_count_port(s->m);
+  return POLICY_ITEM_PORT;
+}
+
+void sample_item_done(void *ctx, uint64_t k) {
+  struct sampler *s = ctx;
+  (void)k;
+  CHECK_GT(s->in_flight, 0);
+  s->in_flight--;
+}
+
+void sample_finish(struct sampler *s, uint64_t rays_total) {
+  CHECK_EQ(s->cur, s->n - 1);
+  struct sample_unit *u = &s->u[s->n - 1];
+  const struct machine_stats *st = machine_get_stats(s->m);
+  u->at1[SQ_CYCLES] = st->cycles;
+  u->at1[SQ_SLOTS] = st->issue_slots;
+  u->at1[SQ_DRAM_BYTES] = st->l2.fetch_bytes + st->l2.writeback_bytes;
+  u->at1[SQ_LAT_SUM] = st->load_latency.sum;
+  u->at1[SQ_LAT_N] = st->load_latency.count;
+  u->at1[SQ_RAYS] = rays_total;
+  u->have1 = true;
+  s->rays_total = rays_total;
+  s->slots_detailed = st->issue_slots;
+  s->slots_total = st->issue_slots + machine_warm_slots(s->m) + machine_count_slots(s->m);
+  for (uint32_t h = 0; h < s->n; h++) CHECK(s->u[h].have0 && s->u[h].have1);
+  if (getenv("RTSIM_SAMPLE_DEBUG"))
+    for (uint32_t h = 1; h < s->n; h++) {
+      const struct sample_unit *x = &s->u[h], *y = &s->u[h - 1];
+      fprintf(stderr, "unit %2u items %4llu win: cyc %8llu slots %9llu bytes %8llu | gap: cyc %8llu slots %9llu bytes %8llu\n", h,
+              (unsigned long long)(x->end - x->measure),
+              (unsigned long long)(x->at1[SQ_CYCLES] - x->at0[SQ_CYCLES]),
+              (unsigned long long)(x->at1[SQ_SLOTS] - x->at0[SQ_SLOTS]),
+              (unsigned long long)(x->at1[SQ_DRAM_BYTES] - x->at0[SQ_DRAM_BYTES]),
+              (unsigned long long)(x->at0[SQ_CYCLES] - y->at1[SQ_CYCLES]),
+              (unsigned long long)(x->at0[SQ_SLOTS] - y->at1[SQ_SLOTS]),
+              (unsigned long long)(x->at0[SQ_DRAM_BYTES] - y->at1[SQ_DRAM_BYTES]));
+    }
+  if (getenv("RTSIM_SAMPLE_DEBUG"))
+    for (uint32_t h = 0; h < s->n; h++) {
+      const struct sample_unit *x = &s->u[h];
+      fprintf(stderr, "unit %u [%llu %llu %llu %llu) items %llu cyc %llu rays %llu slots %llu\n", h,
+              (unsigned long long)x->warm_from, (unsigned long long)x->start,
+              (unsigned long long)x->measure, (unsigned long long)x->end,
+              (unsigned long long)(x->end - x->measure),
+              (unsigned long long)(x->at1[SQ_CYCLES] - x->at0[SQ_CYCLES]),
+              (unsigned long long)(x->at1[SQ_RAYS] - x->at0[SQ_RAYS]),
+              (unsigned long long)(x->at1[SQ_SLOTS] - x->at0[SQ_SLOTS]));
+    }
+}
+
+double sample_t975(unsigned dof) {
+  /* Exact for the smallest; the Cornish-Fisher expansion (error < 1e-4 from 8 on). */
+  static const double small[] = {0, 12.7062, 4.3027, 3.1824, 2.7764, 2.5706, 2.4469, 2.3646};
+  CHECK_GE(dof, 1);
+  if (dof < sizeof small / sizeof small[0]) return small[dof];
+  const double z = 1.959963985, v = dof, z3 = z * z * z, z5 = z3 * z * z, z7 = z5 * z * z;
+  return z + (z3 + z) / (4 * v) + (5 * z5 + 16 * z3 + 3 * z) / (96 * v * v) +
+         (3 * z7 + 19 * z5 + 17 * z3 - 15 * z) / (384 * v * v * v);
+}
+
+/* A unit's measured value of q, and its measured items. */
+static double delta(const struct sample_unit *u, enum sample_q q) {
+  return (double)(u->at1[q] - u->at0[q]);
+}
+static double items(const struct sample_unit *u) { return (double)(u->end - u->measure); }
+
+/* What the estimates are made of: the first and last units' own values
+ * (certain), the middle units' per-item values weighted by their strata's
+ * sizes (S, random), and the work the middle stands for: every issue slot of
+ * the run (counted exactly: every item is traced) less the first and last
+ * windows'. */
+struct parts {
+  double edge[SQ_COUNT]; /* first + last units' deltas */
+  double S[SQ_COUNT];    /* sum over middle units of W_h x q_h / M_h */
+  double slots_mid;      /* issue slots the middle stands for */
+};
+
+enum sample_fig { SF_CYCLES, SF_DRAM_BYTES, SF_BYTES_PER_CYCLE, SF_UTIL, SF_RAYS_PER_S, SF_LOAD_LAT, SF_COUNT };
+
+/* A middle quantity's total: its ratio to issue slots over the middle units,
+ * times the issue slots the middle stands for. */
+static double mid(const struct parts *p, enum sample_q q) {
+  return p->S[SQ_SLOTS] > 0 ? p->S[q] / p->S[SQ_SLOTS] * p->slots_mid : 0;
+}
+
+static double figure(const struct sampler *s, const struct parts *p, enum sample_fig f) {
+  double cycles = p->edge[SQ_CYCLES] + mid(p, SQ_CYCLES);
+  double bytes = p->edge[SQ_DRAM_BYTES] + mid(p, SQ_DRAM_BYTES);
+  switch (f) {
+  case SF_CYCLES: return cycles;
+  case SF_DRAM_BYTES: return bytes;
+  case SF_BYTES_PER_CYCLE: return cycles > 0 ? bytes / cycles : 0;
+  case SF_UTIL: return cycles > 0 ? (double)s->slots_total / (cycles * s->cores) : 0;
+  case SF_RAYS_PER_S: return cycles > 0 ? (double)s->rays_total / (cycles / s->hz) : 0;
+  default: {
+    double n = p->edge[SQ_LAT_N] + mid(p, SQ_LAT_N);
+    return n > 0 ? (p->edge[SQ_LAT_SUM] + mid(p, SQ_LAT_SUM)) / n : 0;
+  }
+  }
+}
+
+static double weight(const struct sampler *s, uint32_t h) {
+  return (double)(s->u[h].stratum_hi - s->u[h].stratum_lo);
+}
+
+static void parts_of(const struct sampler *s, struct parts *p) {
+  memset(p, 0, sizeof *p);
+  const struct sample_unit *f = &s->u[0], *l = &s->u[s->n - 1];
+  for (unsigned q = 0; q < SQ_COUNT; q++) {
+    p->edge[q] = delta(f, q) + delta(l, q);
+    for (uint32_t h = 1; h + 1 < s->n; h++) p->S[q] += weight(s, h) * delta(&s->u[h], q) / items(&s->u[h]);
+  }
+  p->slots_mid = (double)s->slots_total - p->edge[SQ_SLOTS];
+}
+
+struct est {
+  double v, lo, hi;
+};
+
+/* Figure f with its 95% interval. Linearization: f's gradient in the middle
+ * sums S (numerically) turns each middle unit into one value l_h, and the
+ * variance of sum W_h l_h comes from successive differences of l_h: the
+ * units are a systematic sample along the work list, one a stratum, so
+ * neighbours differ by less than any two at random, and this keeps what the
+ * strata gain (it is the simple variance when the values are in random
+ * order). */
+static struct est estimate(const struct sampler *s, enum sample_fig f) {
+  struct parts p;
+  parts_of(s, &p);
+  const double v = figure(s, &p, f);
+  double grad[SQ_COUNT];
+  for (unsigned q = 0; q < SQ_COUNT; q++) {
+    struct parts d = p;
+    double eps = fabs(p.S[q]) * 1e-7 + 1e-9;
+    d.S[q] += eps;
+    grad[q] = (figure(s, &d, f) - v) / eps;
+  }
+  const uint32_t r = s->n - 2; /* middle units */
+  double prev = 0, ss = 0, w2 = 0;
+  for (uint32_t h = 1; h + 1 < s->n; h++) {
+    double l = 0;
+    for (unsigned q = 0; q < SQ_COUNT; q++) l += grad[q] * delta(&s->u[h], q) / items(&s->u[h]);
+    if (h > 1) ss += (l - prev) * (l - prev);
+    prev = l;
+    w2 += weight(s, h) * weight(s, h);
+  }
+  double var = r > 1 ? ss / (2.0 * (r - 1)) * w2 : 0;
+  double half = sample_t975(r > 1 ? r - 1 : 1) * sqrt(var);
+  struct est e = {v, v - half, v + half};
+  return e;
+}
+
+static void put(struct stats_table *t, const char *name, struct est e) {
+  char n[96];
+  stats_f64(t, name, e.v);
+  snprintf(n, sizeof n, "%s_ci95_low", name);
+  stats_f64(t, n, e.lo);
+  snprintf(n, sizeof n, "%s_ci95_high", name);
+  stats_f64(t, n, e.hi);
+}
+
+void sample_stats(const struct sampler *s, const struct machine_params *p,
+                  double peak_bytes_per_cycle, struct stats_table *t) {
+  const double hz = p->clock_ghz * 1e9;
+  struct est c = estimate(s, SF_CYCLES);
+  put(t, "cycles", c);
+  struct est sec = {c.v / hz, c.lo / hz, c.hi / hz};
+  put(t, "seconds", sec);
+  stats_u64(t, "rays_traced", s->rays_total);
+  put(t, "rays_per_second", estimate(s, SF_RAYS_PER_S));
+  stats_u64(t, "issue_slots", s->slots_total);
+  put(t, "core_utilization", estimate(s, SF_UTIL));
+  put(t, "dram_bytes", estimate(s, SF_DRAM_BYTES));
+  struct est bpc = estimate(s, SF_BYTES_PER_CYCLE);
+  put(t, "dram_bytes_per_cycle", bpc);
+  if (peak_bytes_per_cycle > 0) {
+    struct est u = {bpc.v / peak_bytes_per_cycle, bpc.lo / peak_bytes_per_cycle,
+                    bpc.hi / peak_bytes_per_cycle};
+    put(t, "dram_utilization", u);
+  }
+  put(t, "load_latency_mean", estimate(s, SF_LOAD_LAT));
+  const double n = (double)s->total;
+  stats_u64(t, "sample_work_items", s->total);
+  stats_u64(t, "sample_units_measured", s->n);
+  stats_f64(t, "sample_detailed_fraction", (double)s->detailed / n);
+  stats_f64(t, "sample_measured_fraction", (double)s->measured / n);
+  stats_f64(t, "sample_warmed_fraction", (double)s->warmed / n);
+  stats_f64(t, "sample_detailed_slots_fraction",
+            (double)s->slots_detailed / (double)(s->slots_total ? s->slots_total : 1));
+}

@@ -1,0 +1,95 @@
+/* Sampling a timed run (README "Sampling"): the work list (pixels or tiles in
+ * the policy's order) is cut into sample.units strata of equal size; in each,
+ * one unit of detailed items: its first items warm the machine's pipeline
+ * (rays in flight, MSHRs, DRAM queues), the rest are measured. The first
+ * unit starts the run (measured from cycle 0, as the full run starts cold),
+ * the last ends it (its drain measured, not guessed); the others fall at a
+ * seeded random place in their strata. After a unit the machine drains (a
+ * worker that claims an item outside the units waits until no detailed item
+ * is left in flight: the unit's last items run on caches as they were, not
+ * warmed for the next unit). Then, before the next unit, sample.warming times
+ * its detailed items go through the warming port (caches updated, no time);
+ * every other item through a port that only counts issue slots. So every
+ * item is traced: the image, the rays and the issue slots are exact, and the
+ * time is what is estimated. A unit's measurement is the difference of two
+ * machine probes: at the claim of its first measured item and at the claim of
+ * the first item after it (the end of the run for the last unit).
+ *
+ * Estimates: the first and last units' own values plus, for the rest of the
+ * run, the middle units' cycles (DRAM bytes, load latencies) per issue slot
+ * times the issue slots the rest takes (a ratio estimator on an exactly known
+ * total). The 95% intervals: linearization, the middle units' variance from
+ * successive differences (a systematic sample), Student's t with
+ * middle units - 1 degrees of freedom. */
+#ifndef RTSIM_APP_SAMPLE_H
+#define RTSIM_APP_SAMPLE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "renderer/policy.h"
+#include "sim/machine.h"
+
+struct stats_table;
+struct err;
+
+/* What a unit measured, per quantity (differences of two probes). */
+enum sample_q { SQ_CYCLES, SQ_SLOTS, SQ_DRAM_BYTES, SQ_RAYS, SQ_LAT_SUM, SQ_LAT_N, SQ_COUNT };
+
+struct sample_unit {
+  uint64_t stratum_lo, stratum_hi; /* the stratum's items [lo, hi) */
+  uint64_t warm_from, start, measure, end; /* warmed [warm_from, start), detailed [start, end), measured [measure, end) */
+  uint64_t at0[SQ_COUNT], at1[SQ_COUNT];
+  bool have0, have1;
+};
+
+struct sampler {
+  struct machine *m;
+  const struct policy_worker *workers; /* for the rays traced so far */
+  uint32_t nworkers;
+  uint64_t total; /* work items */
+  uint32_t n;     /* units */
+  struct sample_unit *u;
+  uint32_t cur;   /* the unit the next claims belong to (claims come in order) */
+  uint64_t detailed, warmed, measured; /* items */
+  uint64_t in_flight; /* detailed items claimed and not finished */
+  bool *drained;      /* [h]: the gap before unit h has seen the pipeline empty */
+  uint32_t cores;
+  double hz;
+  /* After the run (sample_finish): exact totals. */
+  uint64_t rays_total, slots_total, slots_detailed;
+};
+
+/* The units a job of `total` items gets on a machine of `contexts` ray
+ * contexts (sample.units, or when 0 as many as fit, at most 40). */
+uint32_t sample_units(const struct machine_params *p, uint64_t total, uint32_t contexts);
+
+/* NULL if a job of `total` items can be sampled with p's sample.* keys on a
+ * machine of `contexts` ray contexts by policy k, else why not (naming the
+ * key; may be written into buf). */
+const char *sample_problem(const struct machine_params *p, enum policy_kind k, uint64_t total,
+                           uint32_t contexts, char *buf, size_t cap);
+
+/* Plan the units (sample_problem must have said yes; CHECKed). */
+void sample_init(struct sampler *s, const struct machine_params *p, uint64_t total,
+                 uint32_t contexts);
+void sample_fini(struct sampler *s);
+
+/* The policy_setup.item and item_done hooks: ctx is the sampler. */
+enum policy_item sample_item(void *ctx, uint64_t k, uint32_t core, struct mem_port *port);
+void sample_item_done(void *ctx, uint64_t k);
+
+/* After machine_run: the last unit's end is the end of the run. */
+void sample_finish(struct sampler *s, uint64_t rays_total);
+
+/* The estimates as stats members (name, name_ci95_low, name_ci95_high) and the
+ * sampling's own figures. peak_bytes_per_cycle: the DRAM's peak (0: none, no
+ * utilization). */
+void sample_stats(const struct sampler *s, const struct machine_params *p,
+                  double peak_bytes_per_cycle, struct stats_table *t);
+
+/* Student's t quantile for probability 0.975 and dof degrees of freedom (>= 1). */
+double sample_t975(unsigned dof);
+
+#endif
