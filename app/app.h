@@ -12,6 +12,7 @@
 #include "renderer/policy.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
+#include "sim/analytic.h"
 
 struct err;
 
@@ -106,6 +107,23 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
                    uint32_t width, uint32_t height, enum policy_kind k,
                    const struct machine_params *mp, bool progress, FILE *dram_trace);
 void app_timed_fini(struct app_timed *t);
+
+/* The fidelity ladder's analytic rung (app/run_analytic.c): the same render
+ * with one worker through sim/analytic.h's counting backend (the dynamic
+ * policy's queue points made for mp's L2 and cores, as app_timed_run makes
+ * them), then the estimate. No machine is built. */
+struct app_analytic {
+  struct app_render ar;
+  struct analytic_counts counts;
+  struct analytic_estimate est;
+  struct render_stats st;
+  struct trace_stats ts;
+  double wall_s;
+};
+void app_analytic_run(struct app_analytic *a, const struct app_world *w, uint32_t mask,
+                      uint64_t seed, uint32_t width, uint32_t height, enum policy_kind k,
+                      const struct machine_params *mp);
+void app_analytic_fini(struct app_analytic *a);
 
 /* Repeatable --set KEY=VALUE options, in order (argv's strings): an
  * OPTS_PARSE destination (app_sets_add) sized for argc entries. */
