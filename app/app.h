@@ -109,9 +109,9 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
 void app_timed_fini(struct app_timed *t);
 
 /* The fidelity ladder's analytic rung (app/run_analytic.c): the same render
- * with one worker through sim/analytic.h's counting backend (the dynamic
- * policy's queue points made for mp's L2 and cores, as app_timed_run makes
- * them), then the estimate. No machine is built. */
+ * with one worker on one core through sim/analytic.h's counting backend (the
+ * dynamic policy's queue points made for mp's L2), then the estimate. No
+ * machine is built. */
 struct app_analytic {
   struct app_render ar;
   struct analytic_counts counts;

@@ -21,10 +21,11 @@ void app_analytic_run(struct app_analytic *a, const struct app_world *w, uint32_
   struct policy_params pp;
   policy_params_machine(&pp, mp->l2_size_bytes,
                         (uint64_t)mp->l2_latency_cycles + mp->dram_latency_cycles);
-  /* One worker, but the dynamic policy's queue points made for the machine's
-   * cores (g_max divided among them), so that it does the work the timed run
-   * does; recursive and packet ignore the cores. */
-  struct policy_job *job = policy_job_create(k, &a->ar.setup, &pp, 1, mp->cores);
+  /* One worker on one core. NOTE: the dynamic policy's queue points are then
+   * made for the whole L2 (g_max not divided among the cores, a one-ray ray
+   * buffer), so it may do somewhat different work than on the timed machine;
+   * a plan for C cores needs at least C workers. */
+  struct policy_job *job = policy_job_create(k, &a->ar.setup, &pp, 1, 1);
   struct analytic *be = analytic_create(mp);
   double t0 = app_now();
   struct policy_worker wk;
