@@ -333,8 +333,13 @@ bool run_output_write(const struct run_output_report *r, struct err *e) {
   image_fini(&im);
   /* stats.json last: it marks the directory complete. */
   ok = ok && write_csv(r, e);
-  /* At fidelity analytic there is no time line to write or plot. */
+  /* At fidelity analytic there is no time line to write or plot; a timed
+   * run's left in the same directory would pass for this run's. */
   if (ok && r->machine) ok = write_timeline(r, e) && write_plot(r, e);
+  for (int i = 0; ok && !r->machine && i < 2; i++) {
+    snprintf(path, sizeof path, "%s/%s", r->out_dir, i ? "traffic.png" : "timeline.csv");
+    unlink(path);
+  }
   return ok && write_json(r, e);
 }
 

@@ -328,6 +328,13 @@ static void test_refusals(void) {
   int rc = testing_run(cmd, out, sizeof out);
   EXPECTF(rc == 2 && strstr(out, "--dram-trace: fidelity analytic makes no DRAM requests"),
           "exit %d: %s", rc, out);
+  /* An analytic run into a timed run's directory leaves no timeline behind
+   * that would pass for its own. */
+  if (!run("tiny", "room", "recursive", "fixed", "", 8, 8, dir, out, sizeof out) &&
+      !run("tiny", "room", "recursive", "analytic", "", 8, 8, dir, out, sizeof out))
+    EXPECTF(!exists(dir, "timeline.csv") && !exists(dir, "traffic.png") &&
+                exists(dir, "stats.json"),
+            "%s: a timed run's timeline left beside an analytic run's stats", dir);
   snprintf(cmd, sizeof cmd,
            "%s run %s/configs/tiny.yaml %s/scenes/small/room.yaml --set dram.model=fixed -o %s",
            RTSIM_BINARY, RTSIM_SOURCE_DIR, RTSIM_SOURCE_DIR, dir);
