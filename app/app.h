@@ -13,6 +13,7 @@
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "app/sample.h"
+#include "sim/analytic.h"
 
 struct err;
 
@@ -112,6 +113,23 @@ void app_timed_fini(struct app_timed *t);
 /* The work items a render of policy k at width x height takes (sampling's
  * population: pixels, or tiles for packet). */
 uint64_t app_work_items(enum policy_kind k, uint32_t width, uint32_t height);
+
+/* The fidelity ladder's analytic rung (app/run_analytic.c): the same render
+ * with one worker on one core through sim/analytic.h's counting backend (the
+ * dynamic policy's queue points made for mp's L2), then the estimate. No
+ * machine is built. */
+struct app_analytic {
+  struct app_render ar;
+  struct analytic_counts counts;
+  struct analytic_estimate est;
+  struct render_stats st;
+  struct trace_stats ts;
+  double wall_s;
+};
+void app_analytic_run(struct app_analytic *a, const struct app_world *w, uint32_t mask,
+                      uint64_t seed, uint32_t width, uint32_t height, enum policy_kind k,
+                      const struct machine_params *mp);
+void app_analytic_fini(struct app_analytic *a);
 
 /* Repeatable --set KEY=VALUE options, in order (argv's strings): an
  * OPTS_PARSE destination (app_sets_add) sized for argc entries. */

@@ -25,10 +25,11 @@
 static const char HELP[] =
     "usage: rtsim dram-replay MACHINE.yaml TRACE [options]\n"
     "\n"
-    "Replay a trace of DRAM requests on the DRAM of MACHINE.yaml alone (dram.model\n"
-    "and its keys; no cores, no L2), open loop as DRAMsim3's trace CPU: requests\n"
-    "are offered in trace order at their arrival cycle; one the DRAM refuses (its\n"
-    "queue is full) waits, with every later one, until the DRAM has space.\n"
+    "Replay a trace of DRAM requests on the DRAM of MACHINE.yaml alone (fidelity:\n"
+    "fixed, channel or banked, and its dram keys; no cores, no L2), open loop as\n"
+    "DRAMsim3's trace CPU: requests are offered in trace order at their arrival\n"
+    "cycle; one the DRAM refuses (its queue is full) waits, with every later one,\n"
+    "until the DRAM has space.\n"
     "\n"
     "TRACE: one request a line, fields separated by blanks; '#' lines and blank\n"
     "lines are skipped; every request line has the same number of fields:\n"
@@ -54,7 +55,7 @@ static const char HELP[] =
     "\n"
     "options:\n"
     "  --set KEY=VALUE       override a machine config key (repeatable), e.g.\n"
-    "                        --set dram.model=banked --set clock_ghz=1.2\n"
+    "                        --set fidelity=banked --set clock_ghz=1.2\n"
     "  --per-request FILE    also write 'index arrival_cycle taken_cycle done_cycle'\n"
     "                        (core cycles) for every request, in trace order\n"
     "  -h, --help            this text\n";
@@ -379,7 +380,7 @@ static void report(const struct replay *p, const char *path, const char *format,
   const double bpc = ratio((double)REPLAY_LINE_BYTES * (double)requests, (double)cycles);
   stats_str(t, "trace", path);
   stats_str(t, "trace_format", format);
-  stats_str(t, "dram.model", dram_model_names[mp->dram_model]);
+  stats_str(t, "fidelity", dram_model_names[machine_fidelity_dram(mp->fidelity)]);
   stats_f64(t, "clock_ghz", mp->clock_ghz);
   stats_u64(t, "dram.clock_mhz", mp->dram_clock_mhz);
   stats_u64(t, "requests", requests);
@@ -431,6 +432,14 @@ int cmd_dram_replay(int argc, char **argv) {
   struct err e;
   memset(&e, 0, sizeof e);
   if (!app_machine_load(&mc, machine_path, &sets, &e)) {
+    rc = app_report(&e);
+    goto done;
+  }
+  if (mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC) {
+    const struct machine_cfg_origin *o = &mc.at[machine_cfg_find("fidelity")];
+    err_set(&e, o->file, o->line, o->col,
+            "fidelity: analytic has no DRAM to replay a trace on (got analytic, expected "
+            "fixed, channel or banked)");
     rc = app_report(&e);
     goto done;
   }

@@ -25,8 +25,12 @@ static const char HELP[] =
     "\n"
     "Render SCENE.yaml on the timed many-core machine MACHINE.yaml: every ray\n"
     "context runs the policy's worker as a coroutine; loads wait for the L1, the\n"
-    "shared L2 and the DRAM channel. Writes into OUTDIR (created if needed), each\n"
-    "file whole or not at all, stats.json last:\n"
+    "shared L2 and the DRAM. The config's fidelity key picks the rung: fixed,\n"
+    "channel or banked (the DRAM's detail; default banked), or analytic: no\n"
+    "timed machine, one worker's counts and a closed-form estimate of the cycles\n"
+    "(seconds; no timeline.csv or traffic.png, and only the numbers it knows).\n"
+    "Writes into OUTDIR (created if needed), each file whole or not at all,\n"
+    "stats.json last:\n"
     "  image.exr     the picture, bit-identical in RGB to rtsim render's\n"
     "  stats.json    resolved config, scene, seed, wall time, every measured number\n"
     "  stats.csv     the same numbers as one tidy row (no wall time: bit-identical\n"
@@ -50,7 +54,8 @@ static const char HELP[] =
     "                      every key of configs/default.yaml (README: Config keys)\n"
     "  --dram-trace FILE   also write every DRAM request (address, READ or WRITE,\n"
     "                      arrival in DRAM cycles, arrival and completion in core\n"
-    "                      cycles), in arrival order; README: DRAM traces\n"
+    "                      cycles), in arrival order; README: DRAM traces (not at\n"
+    "                      fidelity analytic: it makes no requests)\n"
     "  -h, --help          this text\n";
 
 int cmd_run(int argc, char **argv) {
@@ -89,6 +94,11 @@ int cmd_run(int argc, char **argv) {
     app_report(&e);
     goto done;
   }
+  if (trace_path && mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC) {
+    app_usage_error("run", "--dram-trace: fidelity analytic makes no DRAM requests (choose a "
+                    "timed rung: --set fidelity=fixed, channel or banked)");
+    goto done;
+  }
   if (mkdir(out, 0777) != 0 && errno != EEXIST) {
     app_usage_error("run", "-o %s: cannot create the directory (%s)", out, strerror(errno));
     goto done;
@@ -109,10 +119,14 @@ int cmd_run(int argc, char **argv) {
   }
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
+  const bool analytic = mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC;
   char whybuf[512];
   const uint32_t contexts = mc.p.cores * mc.p.threads_per_core * mc.p.rays_per_thread;
   const char *why = sample_problem(&mc.p, policy, app_work_items(policy, W, H), contexts, whybuf,
                                    sizeof whybuf);
+  if (!why && mc.p.sample_fraction < 1 && analytic)
+    why = "sample.fraction: sampling simulates units in time: a timed fidelity (fixed, channel or "
+          "banked), not analytic";
   if (!why && mc.p.sample_fraction < 1 && trace_path)
     why = "sample.fraction: --dram-trace records a whole run; a sampled run skips most of the work";
   if (why) {
@@ -122,9 +136,13 @@ int cmd_run(int argc, char **argv) {
     app_world_fini(&w);
     goto done;
   }
-  struct app_timed t;
-  app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, isatty(2),
-                trace.f);
+  struct app_timed t = {0};
+  struct app_analytic a;
+  if (analytic)
+    app_analytic_run(&a, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p);
+  else
+    app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, isatty(2),
+                  trace.f);
   struct run_output_report rep = {
       .out_dir = out,
       .machine_path = machine_path,
@@ -134,22 +152,24 @@ int cmd_run(int argc, char **argv) {
       .mask = mask,
       .width = W,
       .height = H,
-      .seed = t.ar.sc.seed,
+      .seed = analytic ? a.ar.sc.seed : t.ar.sc.seed,
       .scene_hash = scene_hash(&w.scene),
       .kd_splits = w.scene.kd_clip ? "clipped" : "whole",
       .cfg = &mc,
       .machine = t.m,
       .sample = t.sampled ? &t.sample : NULL,
-      .rstats = &t.st,
-      .tstats = &t.ts,
-      .fb = &t.ar.fb,
-      .wall_s = t.wall_s,
+      .analytic = analytic ? &a : NULL,
+      .rstats = analytic ? &a.st : &t.st,
+      .tstats = analytic ? &a.ts : &t.ts,
+      .fb = analytic ? &a.ar.fb : &t.ar.fb,
+      .wall_s = analytic ? a.wall_s : t.wall_s,
   };
   /* The trace first: stats.json, written last, marks the directory complete. */
   bool ok = !trace_path || outfile_commit(&trace, &e);
   rc = ok && run_output_write(&rep, &e) ? 0 : app_report(&e);
   if (rc == 0) run_output_summary(&rep, stdout);
-  app_timed_fini(&t);
+  if (analytic) app_analytic_fini(&a);
+  else app_timed_fini(&t);
   app_world_fini(&w);
 done:
   outfile_abort(&trace);

@@ -14,6 +14,7 @@
 #include "renderer/render.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
+#include "sim/analytic.h"
 #include "sim/dram.h"
 #include "sim/err.h"
 #include "sim/hist.h"
@@ -62,8 +63,70 @@ static void queue(struct stats_table *t, const char *prefix, const struct qmeter
   stats_u64(t, name, q->max);
 }
 
+/* Fidelity analytic: what its counts and estimate know, under the timed
+ * rungs' names and in their order; what only time tells (threads' idle
+ * time, switches, waits, merges, stalls, queues, latencies, events) is
+ * absent. Then its own numbers, analytic_* (README "Fidelity ladder"). */
+static void measured_analytic(const struct run_output_report *r, struct stats_table *t) {
+  const struct analytic_counts *n = &r->analytic->counts;
+  const struct analytic_estimate *a = &r->analytic->est;
+  const struct machine_params *p = &r->cfg->p;
+  const double cyc = (double)a->cycles;
+  const uint64_t rays = render_stats_total(r->rstats);
+  const double seconds = cyc / (p->clock_ghz * 1e9);
+  const uint64_t threads = (uint64_t)p->cores * p->threads_per_core;
+  stats_u64(t, "cycles", a->cycles);
+  stats_f64(t, "seconds", seconds);
+  stats_u64(t, "rays_traced", rays);
+  stats_f64(t, "rays_per_second", ratio((double)rays, seconds));
+  stats_u64(t, "kd_node_visits", r->tstats->node_visits);
+  stats_u64(t, "triangle_tests", r->tstats->tri_tests);
+  stats_u64(t, "ray_contexts", threads * p->rays_per_thread);
+  stats_u64(t, "threads", threads);
+  stats_u64(t, "issue_slots", n->issue_slots);
+  stats_f64(t, "core_utilization", ratio((double)n->issue_slots, (double)p->cores * cyc));
+  stats_u64(t, "loads", n->loads);
+  stats_u64(t, "stores", n->stores);
+  stats_u64(t, "blocking_loads", n->blocking_loads);
+  stats_f64(t, "issue_slots_per_blocking_load",
+            ratio((double)n->issue_slots, (double)n->blocking_loads));
+  uint64_t geo_misses = (n->fetch_bytes_by_class[TRACE_CLASS_GEOMETRY] +
+                         n->fetch_bytes_by_class[TRACE_CLASS_NODE]) / 64;
+  stats_f64(t, "issue_slots_per_geometry_miss", ratio((double)n->issue_slots, (double)geo_misses));
+  stats_u64(t, "l1_accesses", n->l1_accesses);
+  stats_u64(t, "l1_hits", n->l1_hits);
+  stats_u64(t, "l2_accesses", n->l2_accesses);
+  stats_u64(t, "l2_hits", n->l2_hits);
+  stats_u64(t, "l2_misses", n->l2_misses);
+  stats_f64(t, "l2_miss_rate", ratio((double)n->l2_misses, (double)n->l2_accesses));
+  stats_u64(t, "l2_whole_line_allocs", n->l2_whole_line_allocs);
+  stats_u64(t, "l2_fetch_bytes", n->fetch_bytes);
+  stats_u64(t, "l2_writeback_bytes", n->writeback_bytes);
+  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) {
+    char name[64];
+    snprintf(name, sizeof name, "fetch_%s_bytes", trace_class_names[c]);
+    stats_u64(t, name, n->fetch_bytes_by_class[c]);
+  }
+  stats_u64(t, "dram_reads", n->fetch_bytes / 64);
+  stats_u64(t, "dram_writes", n->writeback_bytes / 64);
+  stats_u64(t, "dram_read_bytes", n->fetch_bytes);
+  stats_u64(t, "dram_write_bytes", n->writeback_bytes);
+  stats_f64(t, "dram_bytes_per_cycle",
+            ratio((double)(n->fetch_bytes + n->writeback_bytes), cyc));
+  stats_f64(t, "analytic_slots_per_blocking_load", a->slots_per_blocking);
+  stats_f64(t, "analytic_blocking_miss_rate", a->blocking_miss_rate);
+  stats_f64(t, "analytic_load_latency_cycles", a->load_latency_cycles);
+  stats_f64(t, "analytic_core_utilization", a->core_utilization);
+  stats_f64(t, "analytic_latency_bound_cycles", a->latency_bound_cycles);
+  stats_f64(t, "analytic_bandwidth_bound_cycles", a->bandwidth_bound_cycles);
+}
+
 /* Every measured scalar, units in the names. */
 static void measured(const struct run_output_report *r, struct stats_table *t) {
+  if (r->analytic) {
+    measured_analytic(r, t);
+    return;
+  }
   const struct machine_stats *s = machine_get_stats(r->machine);
   const struct machine_params *p = &r->cfg->p;
   const double peak = machine_dram_peak_bytes_per_cycle(p);
@@ -139,7 +202,8 @@ static void measured(const struct run_output_report *r, struct stats_table *t) {
   stats_u64(t, "dram_write_bytes", d->write_bytes);
   stats_u64(t, "dram_bytes", d->read_bytes + d->write_bytes);
   stats_f64(t, "dram_bytes_per_cycle", ratio((double)(d->read_bytes + d->write_bytes), cyc));
-  if (peak > 0)
+  /* (the channel level reports its own, the same share: dram_report) */
+  if (peak > 0 && machine_fidelity_dram(p->fidelity) != DRAM_MODEL_CHANNEL)
     stats_f64(t, "dram_utilization", ratio((double)(d->read_bytes + d->write_bytes), cyc) / peak);
   stats_f64(t, "dram_read_latency_mean", hist_mean(&d->read_latency));
   stats_u64(t, "dram_read_latency_p50", hist_quantile(&d->read_latency, 0.50));
@@ -239,7 +303,6 @@ static bool write_json(const struct run_output_report *r, struct err *e) {
   struct outfile o;
   if (!open_out(&o, r, "stats.json", e)) return false;
   FILE *f = o.f;
-  const struct machine_stats *s = machine_get_stats(r->machine);
   struct stats_table t = {0};
   identity(r, &t);
   fputs("{\n  \"tool\": \"rtsim run\",\n  \"machine_file\": ", f);
@@ -255,7 +318,8 @@ static bool write_json(const struct run_output_report *r, struct err *e) {
   measured(r, &t);
   stats_write_json_members(&t, f, "  ");
   stats_fini(&t);
-  if (!r->sample) {
+  if (r->machine && !r->sample) { /* a whole timed run: its timeline and latency histograms */
+    const struct machine_stats *s = machine_get_stats(r->machine);
     fprintf(f, ",\n  \"timeline_window_cycles\": %llu",
             (unsigned long long)machine_timeline(r->machine)->window);
     fputs(",\n  \"load_latency_histogram_cycles\": ", f);
@@ -275,9 +339,6 @@ static bool write_json(const struct run_output_report *r, struct err *e) {
 }
 
 bool run_output_write(const struct run_output_report *r, struct err *e) {
-  /* A sampled run drew only its units' pixels and its timeline is the
-   * detailed units' time: no image, no timeline. */
-  if (r->sample) return write_csv(r, e) && write_json(r, e);
   char path[4200];
   snprintf(path, sizeof path, "%s/image.exr", r->out_dir);
   struct image im;
@@ -285,7 +346,17 @@ bool run_output_write(const struct run_output_report *r, struct err *e) {
   bool ok = image_write_exr(&im, path, false, e);
   image_fini(&im);
   /* stats.json last: it marks the directory complete. */
-  return ok && write_csv(r, e) && write_timeline(r, e) && write_plot(r, e) && write_json(r, e);
+  ok = ok && write_csv(r, e);
+  /* At fidelity analytic there is no time line to write or plot, and a
+   * sampled run's is the detailed units' time only; a whole timed run's left
+   * in the same directory would pass for this run's. */
+  const bool timeline = r->machine && !r->sample;
+  if (ok && timeline) ok = write_timeline(r, e) && write_plot(r, e);
+  for (int i = 0; ok && !timeline && i < 2; i++) {
+    snprintf(path, sizeof path, "%s/%s", r->out_dir, i ? "traffic.png" : "timeline.csv");
+    unlink(path);
+  }
+  return ok && write_json(r, e);
 }
 
 void run_output_summary(const struct run_output_report *r, FILE *f) {

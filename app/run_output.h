@@ -1,6 +1,8 @@
 /* What rtsim run writes: image.exr, stats.csv, timeline.csv, traffic.png and,
  * last, stats.json (its presence marks the directory complete). Each file is
- * written under a temporary name and renamed when whole. */
+ * written under a temporary name and renamed when whole. At fidelity analytic
+ * there is no timeline.csv or traffic.png, and the stats hold only the
+ * numbers the estimate knows, under the timed rungs' names. */
 #ifndef RTSIM_APP_RUN_OUTPUT_H
 #define RTSIM_APP_RUN_OUTPUT_H
 
@@ -15,6 +17,7 @@ struct sampler;
 struct render_stats;
 struct trace_stats;
 struct framebuffer;
+struct app_analytic;
 
 struct run_output_report {
   const char *out_dir, *machine_path, *scene_path, *scene_name, *policy;
@@ -23,7 +26,8 @@ struct run_output_report {
   uint64_t scene_hash; /* scene_hash() of the loaded scene */
   const char *kd_splits; /* "whole" or "clipped": how the k-d tree was built */
   const struct machine_cfg *cfg;
-  const struct machine *machine;
+  const struct machine *machine;       /* a timed rung's; NULL at fidelity analytic */
+  const struct app_analytic *analytic; /* fidelity analytic's counts and estimate, else NULL */
   const struct sampler *sample; /* a sampled run's estimates (NULL: a full run) */
   const struct render_stats *rstats;
   const struct trace_stats *tstats;

@@ -140,6 +140,9 @@ static bool unknown_key(const struct priv *pv, const struct cfg_node *v, const c
                         struct err *e, bool workload_too) {
   char keys[2048];
   machine_cfg_key_list(keys, sizeof keys);
+  if (machine_cfg_renamed(v->key))
+    return err_set(e, pv->doc.file, v->key_line, v->key_col, "%s.%s: %s", section, v->key,
+                   machine_cfg_renamed(v->key));
   return err_set(e, pv->doc.file, v->key_line, v->key_col,
                  "%s.%s: unknown key '%s' (expected a machine config key: %s%s)", section, v->key,
                  v->key, keys, workload_too ? "; or a workload key: " WL_LIST : "");

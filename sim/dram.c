@@ -37,7 +37,7 @@ struct dram {
 };
 
 const char *dram_params_problem(const struct dram_params *p) {
-  if (p->model >= DRAM_MODEL_COUNT) return "dram.model: expected fixed, channel or banked";
+  if (p->model >= DRAM_MODEL_COUNT) return "fidelity: expected fixed, channel or banked";
   if (p->clock_mhz < 1 || p->clock_mhz > 16000) return "dram.clock_mhz: must be 1 to 16000";
   if (p->model == DRAM_MODEL_FIXED && p->latency_cycles > (1ull << 40))
     return "dram.latency: must be at most 2^40 cycles";
@@ -173,7 +173,7 @@ void dram_trace_to(struct dram *d, FILE *f) {
   d->trace = f;
   fprintf(f,
           "# rtsim dram trace v1: address op arrival_dram_cycle arrival_cycle done_cycle "
-          "(dram.model %s, DRAM clock %u MHz, core clock %llu kHz; one line a 64-byte request, "
+          "(fidelity %s, DRAM clock %u MHz, core clock %llu kHz; one line a 64-byte request, "
           "in arrival order)\n",
           dram_model_names[d->p.model], d->p.clock_mhz,
           (unsigned long long)d->core_khz);

@@ -1,4 +1,4 @@
-/* The DRAM behind the L2: one level of detail chosen by dram.model (fixed
+/* The DRAM behind the L2: one level of detail chosen by fidelity (fixed
  * latency, the FIFO channel, or banked DDR; sim/dram_level.h is what each
  * implements), wrapped so that every level is counted, timed and traced the
  * same way: reads and writes, bytes, the latency of each request from the

@@ -1,4 +1,4 @@
-/* The FIFO channel level (dram.model: channel): requests wait in a FIFO of
+/* The FIFO channel level (fidelity: channel): requests wait in a FIFO of
  * queue_depth places, cross the channel one at a time at bytes_per_cycle
  * (fractional allowed), and a read's data is delivered latency_cycles after
  * its transfer ends; a write is served when its transfer ends. Reads and

@@ -1,4 +1,4 @@
-/* The fixed-latency level (dram.model: fixed): every request is served
+/* The fixed-latency level (fidelity: fixed): every request is served
  * latency_cycles after it is taken, however many are in flight. No bandwidth
  * limit, no queue, never refuses: the cheapest timed rung of the ladder, and
  * the ideal memory of the cross-checks (latency 0). */

@@ -100,7 +100,7 @@ static struct l2_params l2_params_of(const struct machine_params *p) {
 }
 
 struct dram_params machine_dram_params(const struct machine_params *p) {
-  struct dram_params d = {(enum dram_model)p->dram_model, p->dram_latency_cycles,
+  struct dram_params d = {machine_fidelity_dram(p->fidelity), p->dram_latency_cycles,
                           p->dram_bytes_per_cycle, p->dram_queue_depth, p->dram_clock_mhz,
                           p->dram_banked};
   return d;
@@ -111,7 +111,7 @@ uint64_t machine_core_khz(const struct machine_params *p) {
 }
 
 double machine_dram_peak_bytes_per_cycle(const struct machine_params *p) {
-  switch (p->dram_model) {
+  switch (machine_fidelity_dram(p->fidelity)) {
   case DRAM_MODEL_CHANNEL: return p->dram_bytes_per_cycle;
   case DRAM_MODEL_BANKED:
     return (double)p->dram_banked.channels * p->dram_banked.bus_bytes * 2.0 * p->dram_clock_mhz /
@@ -123,6 +123,8 @@ double machine_dram_peak_bytes_per_cycle(const struct machine_params *p) {
 const char *machine_params_problem(const struct machine_params *p) {
   if (!(p->clock_ghz > 0) || !isfinite(p->clock_ghz) || p->clock_ghz > 1000)
     return "clock_ghz: must be above 0 and at most 1000";
+  if (p->fidelity >= MACHINE_FIDELITY_COUNT)
+    return "fidelity: expected analytic, fixed, channel or banked";
   if (p->cores < 1 || p->cores > 4096) return "cores: must be 1 to 4096";
   if (p->threads_per_core < 1 || p->threads_per_core > 256) return "threads_per_core: must be 1 to 256";
   if (p->rays_per_thread < 1 || p->rays_per_thread > 256) return "rays_per_thread: must be 1 to 256";
@@ -501,6 +503,7 @@ void machine_probe(const struct machine *m, struct machine_probe *out) {
 
 static struct machine *create(const struct machine_params *p, uint64_t stack_bytes, bool paint) {
   CHECK(machine_params_problem(p) == NULL);
+  CHECK(p->fidelity != MACHINE_FIDELITY_ANALYTIC);
   struct machine *m = xcalloc(1, sizeof *m);
   m->p = *p;
   m->eng = engine_create();

@@ -16,7 +16,8 @@
  *   free); with none ready it idles. Resuming the ray it last ran is free.
  * - Stores are posted: they take their slot and go on to the L1 (write-through,
  *   no allocation) and the L2; the ray does not wait.
- * - L2: sim/l2.h. DRAM: sim/dram.h (one level of detail, dram.model). */
+ * - L2: sim/l2.h. DRAM: sim/dram.h (one level of detail: the fidelity key's
+ *   timed rungs; its cheapest rung, analytic, is sim/analytic.h, no machine). */
 #ifndef RTSIM_SIM_MACHINE_H
 #define RTSIM_SIM_MACHINE_H
 
@@ -32,6 +33,25 @@ struct timeline;
 
 #define MACHINE_LG2_LINE 6 /* 64-byte lines everywhere */
 
+/* The fidelity ladder's rungs, cheapest first (README "Fidelity ladder"): an
+ * analytic estimate from a functional pass (sim/analytic.h: no machine is
+ * built), then the timed machine with each DRAM level of sim/dram.h. */
+enum machine_fidelity {
+  MACHINE_FIDELITY_ANALYTIC,
+  MACHINE_FIDELITY_FIXED,
+  MACHINE_FIDELITY_CHANNEL,
+  MACHINE_FIDELITY_BANKED,
+  MACHINE_FIDELITY_COUNT
+};
+
+/* The DRAM level of a timed rung; for analytic the channel, whose figures
+ * (dram.latency, dram.bytes_per_cycle) its bounds read. */
+static inline enum dram_model machine_fidelity_dram(uint32_t fidelity) {
+  return fidelity == MACHINE_FIDELITY_FIXED    ? DRAM_MODEL_FIXED
+         : fidelity == MACHINE_FIDELITY_BANKED ? DRAM_MODEL_BANKED
+                                               : DRAM_MODEL_CHANNEL;
+}
+
 struct machine_params {
   double clock_ghz;
   uint32_t cores, threads_per_core, rays_per_thread;
@@ -41,12 +61,12 @@ struct machine_params {
   uint64_t l2_size_bytes;
   uint32_t l2_ways; /* 0: fully associative */
   uint32_t l2_latency_cycles, l2_banks, l2_mshrs, l2_write_buffer;
-  uint32_t dram_model; /* enum dram_model */
+  uint32_t fidelity; /* enum machine_fidelity; a timed rung picks the DRAM level */
   uint64_t dram_latency_cycles;
   double dram_bytes_per_cycle;
   uint32_t dram_queue_depth;
   uint32_t dram_clock_mhz;
-  struct dram_banked_params dram_banked; /* dram.model banked (its clock: dram_clock_mhz) */
+  struct dram_banked_params dram_banked; /* fidelity banked (its clock: dram_clock_mhz) */
   /* Compute the renderer announces (the machine charges what it is told). */
   uint32_t cost_node_cycles, cost_triangle_cycles, cost_shade_cycles;
   uint32_t cost_ray_switch_cycles;
@@ -97,7 +117,8 @@ struct machine_stats {
  * without a position; the config reader checks each value where it is). */
 const char *machine_params_problem(const struct machine_params *p);
 
-/* The DRAM's parameters in p, and the core clock in whole kHz as the DRAM
+/* The DRAM's parameters in p (for fidelity analytic, the channel's: the
+ * figures its bounds read), and the core clock in whole kHz as the DRAM
  * converts it (for a DRAM built alone: rtsim dram-replay). */
 struct dram_params machine_dram_params(const struct machine_params *p);
 uint64_t machine_core_khz(const struct machine_params *p);
@@ -118,7 +139,8 @@ typedef void (*machine_worker_fn)(void *arg, const struct machine_worker_info *i
 /* Called now and then (about every 2^16 blocks) with the current cycle. */
 typedef void (*machine_progress_fn)(void *ctx, uint64_t cycle);
 
-/* p must pass machine_params_problem (CHECKed). stack_bytes: coroutine stack
+/* p must pass machine_params_problem and be a timed rung (fidelity not
+ * analytic), both CHECKed. stack_bytes: coroutine stack
  * size (0: coro_default_stack_bytes). Caller destroys. */
 struct machine *machine_create(const struct machine_params *p, uint64_t stack_bytes);
 void machine_destroy(struct machine *m); /* NULL ok */

@@ -24,6 +24,8 @@ struct key {
 
 #define OFF(f) offsetof(struct machine_params, f), NULL
 static const char *const PAGE_NAMES[] = {"open", "close"};
+static const char *const FIDELITY_NAMES[MACHINE_FIDELITY_COUNT] = {"analytic", "fixed", "channel",
+                                                                   "banked"};
 static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"clock_ghz", K_F64, 1e-3, 1e3, OFF(clock_ghz)},
     {"cores", K_U32, 1, 4096, OFF(cores)},
@@ -38,7 +40,9 @@ static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"l2.banks", K_U32, 1, 4096, OFF(l2_banks)},
     {"l2.mshrs", K_U32, 1, 1u << 20, OFF(l2_mshrs)},
     {"l2.write_buffer", K_U32, 1, 1u << 20, OFF(l2_write_buffer)},
-    {"dram.model", K_ENUM, 0, DRAM_MODEL_COUNT - 1, offsetof(struct machine_params, dram_model), dram_model_names},
+    /* Where dram.model stood (its successor), so columns keep their order. */
+    {"fidelity", K_ENUM, 0, MACHINE_FIDELITY_COUNT - 1, offsetof(struct machine_params, fidelity),
+     FIDELITY_NAMES},
     {"dram.latency", K_U64, 0, 1e9, OFF(dram_latency_cycles)},
     {"dram.bytes_per_cycle", K_F64, 1e-6, 1e6, OFF(dram_bytes_per_cycle)},
     {"dram.queue_depth", K_U32, 1, 1u << 20, OFF(dram_queue_depth)},
@@ -133,14 +137,14 @@ void machine_cfg_defaults(struct machine_cfg *c) {
   p->l2_banks = 8;
   p->l2_mshrs = 64;
   p->l2_write_buffer = 16;
-  p->dram_model = DRAM_MODEL_BANKED;
-  /* dram.model channel or fixed: fitted to the banked DDR4-2400 channel
+  p->fidelity = MACHINE_FIDELITY_BANKED;
+  /* fidelity channel, fixed or analytic: fitted to the banked DDR4-2400 channel
    * (configs/default.yaml says how). */
   p->dram_latency_cycles = 50;
   p->dram_bytes_per_cycle = 13;
   p->dram_queue_depth = 16;
   p->dram_clock_mhz = 1200;
-  /* dram.model banked: one DDR4-2400 channel (configs/dram/ddr4-2400.yaml
+  /* fidelity banked: one DDR4-2400 channel (configs/dram/ddr4-2400.yaml
    * gives each figure's source). */
   struct dram_banked_params *b = &p->dram_banked;
   b->channels = 1;
@@ -290,16 +294,29 @@ static void set_origin(struct machine_cfg *c, unsigned i, const char *file, int 
   c->at[i].seq = ++c->seq;
 }
 
-/* The DRAM levels that read key `name` (a mask of 1 << enum dram_model). */
+/* The rungs whose DRAM reads key `name` (a mask of 1 << enum machine_fidelity).
+ * The analytic rung reads the channel's latency and bandwidth for its bounds.
+ * NOTE: only dram keys are held to this: a rung that ignores another key
+ * (analytic and l2.mshrs, say) does not refuse it. */
 static unsigned key_models(const char *name) {
-  const unsigned all = (1u << DRAM_MODEL_COUNT) - 1;
+  const unsigned all = (1u << MACHINE_FIDELITY_COUNT) - 1;
   if (strncmp(name, "dram.", 5)) return all;
   name += 5;
-  if (!strcmp(name, "model") || !strcmp(name, "clock_mhz")) return all;
-  if (!strcmp(name, "latency")) return 1u << DRAM_MODEL_FIXED | 1u << DRAM_MODEL_CHANNEL;
-  if (!strcmp(name, "bytes_per_cycle") || !strcmp(name, "queue_depth"))
-    return 1u << DRAM_MODEL_CHANNEL;
-  return 1u << DRAM_MODEL_BANKED;
+  if (!strcmp(name, "clock_mhz")) return all;
+  if (!strcmp(name, "latency"))
+    return 1u << MACHINE_FIDELITY_ANALYTIC | 1u << MACHINE_FIDELITY_FIXED |
+           1u << MACHINE_FIDELITY_CHANNEL;
+  if (!strcmp(name, "bytes_per_cycle"))
+    return 1u << MACHINE_FIDELITY_ANALYTIC | 1u << MACHINE_FIDELITY_CHANNEL;
+  if (!strcmp(name, "queue_depth")) return 1u << MACHINE_FIDELITY_CHANNEL;
+  return 1u << MACHINE_FIDELITY_BANKED;
+}
+
+const char *machine_cfg_renamed(const char *name) {
+  if (!strcmp(name, "dram.model"))
+    return "renamed to fidelity, a top-level key (fidelity: analytic, fixed, channel or "
+           "banked; README: Fidelity ladder)";
+  return NULL;
 }
 
 #define INCLUDE_DEPTH 8
@@ -349,6 +366,10 @@ static bool load(struct machine_cfg *c, const char *path, unsigned depth, struct
     if (sec && !cfg_expect_map(&d, sec, SECTIONS[s], e)) ok = false;
   }
   if (ok) ok = load_includes(c, &d, path, depth, e);
+  struct cfg_node *dm = cfg_get(&d.root, "dram");
+  if (ok && dm && (dm = cfg_get(dm, "model")))
+    ok = err_set(e, d.file, dm->key_line, dm->key_col, "dram.model: %s",
+                 machine_cfg_renamed("dram.model"));
   for (unsigned i = 0; ok && i < MACHINE_CFG_KEYS; i++) {
     const char *name = KEYS[i].name, *dot = strchr(name, '.');
     struct cfg_node *n;
@@ -423,6 +444,8 @@ bool machine_cfg_set(struct machine_cfg *c, const char *assignment, struct err *
   char key[64];
   snprintf(key, sizeof key, "%.*s", (int)(eq - assignment), assignment);
   int i = (size_t)(eq - assignment) < sizeof key ? machine_cfg_find(key) : -1;
+  if (i < 0 && machine_cfg_renamed(key))
+    return err_set(e, where, 0, 0, "%s: %s", key, machine_cfg_renamed(key));
   if (i < 0) {
     char keys[2048];
     machine_cfg_key_list(keys, sizeof keys);
@@ -472,20 +495,20 @@ bool machine_cfg_check(const struct machine_cfg *c, struct err *e) {
     return fail_at(c, "rays_per_thread", e,
                    "cores x threads_per_core x rays_per_thread must be at most 1048576", got);
   }
-  /* A key written for another DRAM level, after the level was chosen, would
-   * silently do nothing: refuse it. (Choosing the level last, as --set
-   * dram.model=fixed on a channel config does, sets the others aside; a
+  /* A key written for another DRAM level, after the rung was chosen, would
+   * silently do nothing: refuse it. (Choosing the rung last, as --set
+   * fidelity=fixed on a channel config does, sets the others aside; a
    * preset's keys are a whole level.) */
-  const unsigned model_seq = c->at[key_index("dram.model")].seq;
+  const unsigned model_seq = c->at[key_index("fidelity")].seq;
   for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++) {
     const struct machine_cfg_origin *o = &c->at[i];
     if (!o->file[0] || o->included || o->seq < model_seq ||
-        (key_models(KEYS[i].name) >> p->dram_model & 1u))
+        (key_models(KEYS[i].name) >> p->fidelity & 1u))
       continue;
     char v[64], msg[160];
     machine_cfg_value(c, i, v, sizeof v);
-    snprintf(msg, sizeof msg, "not read by dram.model %s (set dram.model to a level that uses it)",
-             dram_model_names[p->dram_model]);
+    snprintf(msg, sizeof msg, "not read by fidelity %s (set fidelity to a rung that uses it)",
+             FIDELITY_NAMES[p->fidelity]);
     return fail_at(c, KEYS[i].name, e, msg, v);
   }
   const char *why = machine_params_problem(p);

@@ -169,7 +169,7 @@ int main(void) {
       {"hits --rays primary", "unknown option '--rays'"},
       {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --width 4 --height 4 --dram-trace /nonexistent/dir/t.trace", "/nonexistent/dir/t.trace: error: cannot write the DRAM trace"},
       {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --dram-trace", "option --dram-trace needs a value"},
-      {"run " RTSIM_SOURCE_DIR "/configs/default.yaml " SCN "good_room_tiny.yaml -o xrun --set dram.latency=100", "--set dram.latency=100: error: dram.latency: not read by dram.model banked"},
+      {"run " RTSIM_SOURCE_DIR "/configs/default.yaml " SCN "good_room_tiny.yaml -o xrun --set dram.latency=100", "--set dram.latency=100: error: dram.latency: not read by fidelity banked"},
       {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set dram.mapping=rorororororo", "--set dram.mapping=rorororororo: error: dram.mapping: not an address mapping"},
   };
   for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {

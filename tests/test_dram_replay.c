@@ -142,14 +142,14 @@ static char *slurp(const char *path) {
 static void test_fixed(void) {
   const char *csv = TMP "fixed.csv", *perf = TMP "fixed.per";
   char msg[4096];
-  int rc = replay(SRC "configs/tiny.yaml " DT "fixed.trace --set dram.model=fixed "
+  int rc = replay(SRC "configs/tiny.yaml " DT "fixed.trace --set fidelity=fixed "
                       "--set dram.latency=100 --per-request " TMP "fixed.per",
                   csv, msg, sizeof msg);
   EXPECTF(rc == 0, "exit %d: %s", rc, msg);
   static struct csv c;
   EXPECT(csv_load(csv, &c));
   EXPECT_COL(&c, "trace_format", "rtsim");
-  EXPECT_COL(&c, "dram.model", "fixed");
+  EXPECT_COL(&c, "fidelity", "fixed");
   EXPECT_COL(&c, "requests", "5");
   EXPECT_COL(&c, "reads", "4");
   EXPECT_COL(&c, "writes", "1");
@@ -194,7 +194,7 @@ static void test_fixed(void) {
 static void test_channel(void) {
   const char *csv = TMP "channel.csv", *perf = TMP "channel.per";
   char msg[4096];
-  int rc = replay(SRC "configs/tiny.yaml " DT "channel.trace --set dram.model=channel "
+  int rc = replay(SRC "configs/tiny.yaml " DT "channel.trace --set fidelity=channel "
                       "--set dram.bytes_per_cycle=64 --set dram.latency=50 "
                       "--set dram.queue_depth=2 --per-request " TMP "channel.per",
                   csv, msg, sizeof msg);
@@ -250,7 +250,7 @@ static void test_banked(void) {
   static struct csv c;
   EXPECT(csv_load(csv, &c));
   EXPECT_COL(&c, "trace_format", "dramsim3");
-  EXPECT_COL(&c, "dram.model", "banked");
+  EXPECT_COL(&c, "fidelity", "banked");
   EXPECT_COL(&c, "read_latency_max", "40");
   EXPECT_COL(&c, "read_latency_p50", "23");
   EXPECT_COL(&c, "read_latency_mean", "31.5");
@@ -273,11 +273,11 @@ static void test_round_trip(void) {
   char cmd[4096], msg[8192];
   snprintf(cmd, sizeof cmd,
            "%s run " SRC "configs/tiny.yaml " SRC "scenes/small/room.yaml --width 16 --height 12 "
-           "--set dram.model=banked --dram-trace %s -o %s > /dev/null",
+           "--set fidelity=banked --dram-trace %s -o %s > /dev/null",
            RTSIM_BINARY, trace, dir);
   int rc = testing_run(cmd, msg, sizeof msg);
   EXPECTF(rc == 0, "run: exit %d: %s", rc, msg);
-  rc = replay(SRC "configs/tiny.yaml " TMP "run.trace --set dram.model=banked --per-request " TMP
+  rc = replay(SRC "configs/tiny.yaml " TMP "run.trace --set fidelity=banked --per-request " TMP
                   "run.per",
               csv, msg, sizeof msg);
   EXPECTF(rc == 0, "replay: exit %d: %s", rc, msg);
@@ -336,7 +336,7 @@ static void test_round_trip(void) {
   EXPECT_COL(&c, "writes", csv_get(&run, "dram_writes"));
 
   /* Deterministic: the same inputs give the same bytes. */
-  rc = replay(SRC "configs/tiny.yaml " TMP "run.trace --set dram.model=banked --per-request " TMP
+  rc = replay(SRC "configs/tiny.yaml " TMP "run.trace --set fidelity=banked --per-request " TMP
                   "run2.per",
               TMP "run2.csv", msg, sizeof msg);
   EXPECT(rc == 0);
@@ -412,7 +412,7 @@ static void test_formats(void) {
   for (size_t k = 0; k < 2; k++) {
     char args[2048];
     snprintf(args, sizeof args,
-             SRC "configs/tiny.yaml " DT "%s --set dram.model=fixed --per-request " TMP "clock.per",
+             SRC "configs/tiny.yaml " DT "%s --set fidelity=fixed --per-request " TMP "clock.per",
              clocks[k].file);
     rc = replay(args, TMP "clock.csv", msg, sizeof msg);
     EXPECTF(rc == 0, "%s: exit %d: %s", clocks[k].file, rc, msg);
@@ -450,9 +450,13 @@ static void test_bad(void) {
                                  "than 4096 bytes, expected at most 4096)"},
       {DT "empty.trace", "empty.trace: error: no request in the trace"},
       {DT "no_such.trace", "no_such.trace: error: cannot open: No such file or directory"},
-      {DT "fixed.trace --set dram.model=dimm",
-       "--set dram.model=dimm: error: dram.model: unknown value (got 'dimm', expected one of: "
-       "fixed, channel, banked)"},
+      {DT "fixed.trace --set fidelity=dimm",
+       "--set fidelity=dimm: error: fidelity: unknown value (got 'dimm', expected one of: "
+       "analytic, fixed, channel, banked)"},
+      {DT "fixed.trace --set dram.model=fixed",
+       "--set dram.model=fixed: error: dram.model: renamed to fidelity"},
+      {DT "fixed.trace --set fidelity=analytic",
+       "--set fidelity=analytic: error: fidelity: analytic has no DRAM to replay a trace on"},
       {DT "fixed.trace --set dram.latency=-1", "--set dram.latency=-1: error: dram.latency"},
   };
   const char *perf = TMP "bad.per";

@@ -28,7 +28,7 @@ static struct machine_params base(void) {
   p.l2_banks = 8;
   p.l2_mshrs = 4096;
   p.l2_write_buffer = 4096;
-  p.dram_model = DRAM_MODEL_CHANNEL;
+  p.fidelity = MACHINE_FIDELITY_CHANNEL;
   p.dram_latency_cycles = 200;
   p.dram_bytes_per_cycle = 64; /* one line a cycle */
   p.dram_queue_depth = 4096;
@@ -383,7 +383,7 @@ static void shared_worker(void *arg, const struct machine_worker_info *info, str
 static void test_merge_latency(void) {
   struct machine_params p = base();
   p.threads_per_core = 4;
-  p.dram_model = DRAM_MODEL_FIXED;
+  p.fidelity = MACHINE_FIDELITY_FIXED;
   p.dram_latency_cycles = 0;
   struct miss_kernel k = {500, 2};
   struct machine *m = machine_create(&p, 0);

@@ -47,7 +47,8 @@ int main(void) {
       {"missing.yaml", "missing.yaml"},
       {"bad_mapping.yaml", "bad_mapping.yaml:3:12: error: dram.mapping: not an address mapping (got 'rochrabagco'"},
       {"bad_page.yaml", "bad_page.yaml:2:16: error: dram.page_policy: unknown value (got 'half', expected one of: open, close)"},
-      {"bad_model.yaml", "bad_model.yaml:2:10: error: dram.model: unknown value (got 'ddr5', expected one of: fixed, channel, banked)"},
+      {"bad_model.yaml", "bad_model.yaml:2:11: error: fidelity: unknown value (got 'ddr5', expected one of: analytic, fixed, channel, banked)"},
+      {"bad_renamed_model.yaml", "bad_renamed_model.yaml:2:3: error: dram.model: renamed to fidelity, a top-level key"},
       {"bad_trc.yaml", "bad_trc.yaml:3:8: error: dram.tRC: must be at least tRAS (got 20)"},
       {"bad_include_missing.yaml", "bad_include_missing.yaml:1:10: error: include: "},
       {"bad_include_cycle.yaml", "error: include: included files nest deeper than 8"},
@@ -70,14 +71,17 @@ int main(void) {
       {"cores", "expected KEY=VALUE"},
       {"l2.ways=full", ""},
       {"l2.size=1MiB", ""},
-      {"dram.bytes_per_cycle=0.01", "--set dram.bytes_per_cycle=0.01: error: dram.bytes_per_cycle: not read by dram.model banked (set dram.model to a level that uses it) (got 0.01)"},
+      {"dram.bytes_per_cycle=0.01", "--set dram.bytes_per_cycle=0.01: error: dram.bytes_per_cycle: not read by fidelity banked (set fidelity to a rung that uses it) (got 0.01)"},
       {"l1.size=0", ""},
       {"l2.ways=7", "--set l2.ways=7: error: l2.ways: the ways must divide the number of lines (got 7 ways for 65536 lines)"},
       {"l2.size=4000", "l2.size: not a whole number of 64-byte lines (got 4000 bytes)"},
       {"dram.tRC=10", "--set dram.tRC=10: error: dram.tRC: must be at least tRAS (got 10)"},
       {"dram.mapping=coco", "--set dram.mapping=coco: error: dram.mapping: not an address mapping"},
       {"dram.page_policy=close", ""},
-      {"dram.model=banked", ""},
+      {"fidelity=banked", ""},
+      {"fidelity=analytic", ""},
+      {"fidelity=lazy", "--set fidelity=lazy: error: fidelity: unknown value (got 'lazy', expected one of: analytic, fixed, channel, banked)"},
+      {"dram.model=banked", "--set dram.model=banked: error: dram.model: renamed to fidelity, a top-level key"},
   };
   for (size_t i = 0; i < sizeof sets / sizeof sets[0]; i++) {
     set_err(sets[i].set, buf, sizeof buf);
@@ -119,7 +123,7 @@ int main(void) {
     struct err pe;
     memset(&pe, 0, sizeof pe);
     EXPECTF(machine_cfg_load(&p2, path, &pe) && machine_cfg_check(&p2, &pe), "%s", pe.msg);
-    EXPECT(p2.p.dram_model == DRAM_MODEL_BANKED && p2.p.dram_banked.channels == 2 &&
+    EXPECT(p2.p.fidelity == MACHINE_FIDELITY_BANKED && p2.p.dram_banked.channels == 2 &&
            p2.p.dram_banked.tCL == 17 && !strcmp(p2.p.dram_banked.mapping, "rorababgchco"));
     const char *presets[] = {"ddr4-2400.yaml", "hbm2.yaml"};
     for (int i = 0; i < 2; i++) {
@@ -128,6 +132,33 @@ int main(void) {
       memset(&pe, 0, sizeof pe);
       EXPECTF(machine_cfg_load(&p2, path, &pe) && machine_cfg_check(&p2, &pe), "%s: %s",
               presets[i], pe.msg);
+    }
+  }
+
+  /* The analytic rung reads the channel's latency and bandwidth for its
+   * bounds, nothing else of the DRAM: a dram key for another rung, set after
+   * fidelity, is refused where it was written. */
+  {
+    static const struct {
+      const char *second, *want;
+    } after[] = {
+        {"dram.latency=100", ""},
+        {"dram.bytes_per_cycle=4", ""},
+        {"dram.queue_depth=4", "--set dram.queue_depth=4: error: dram.queue_depth: not read by fidelity analytic"},
+        {"dram.tRC=60", "--set dram.tRC=60: error: dram.tRC: not read by fidelity analytic"},
+    };
+    for (size_t i = 0; i < sizeof after / sizeof after[0]; i++) {
+      struct machine_cfg a;
+      machine_cfg_defaults(&a);
+      struct err ae;
+      memset(&ae, 0, sizeof ae);
+      bool ok = machine_cfg_set(&a, "fidelity=analytic", &ae) &&
+                machine_cfg_set(&a, after[i].second, &ae) && machine_cfg_check(&a, &ae);
+      buf[0] = '\0';
+      if (!ok) err_format(&ae, buf, sizeof buf);
+      if (!after[i].want[0]) EXPECTF(ok, "%s after fidelity=analytic: got '%s'", after[i].second, buf);
+      else EXPECTF(!ok && strstr(buf, after[i].want), "%s after fidelity=analytic: got '%s'",
+                   after[i].second, buf);
     }
   }
 

@@ -233,18 +233,18 @@ static void test_cross_check(struct world *w) {
   /* Every DRAM level: ideal memory (fixed, latency 0), channels from fast to
    * starved, and banked DDR4 (open page, one channel; close page, two). */
   const struct {
-    enum dram_model model;
+    enum machine_fidelity model;
     uint64_t latency;
     double bw;
     uint32_t mshrs, queue, write_buffer;
     enum dram_banked_page page;
     uint32_t channels;
-  } drams[] = {{DRAM_MODEL_FIXED, 0, 1, 64, 1, 16, 0, 1},
-               {DRAM_MODEL_CHANNEL, 0, 1e4, 64, 32, 16, 0, 1},
-               {DRAM_MODEL_CHANNEL, 200, 16, 64, 32, 16, 0, 1},
-               {DRAM_MODEL_CHANNEL, 1000, 0.5, 2, 1, 1, 0, 1},
-               {DRAM_MODEL_BANKED, 0, 1, 64, 1, 16, DRAM_BANKED_OPEN_PAGE, 1},
-               {DRAM_MODEL_BANKED, 0, 1, 4, 1, 2, DRAM_BANKED_CLOSE_PAGE, 2}};
+  } drams[] = {{MACHINE_FIDELITY_FIXED, 0, 1, 64, 1, 16, 0, 1},
+               {MACHINE_FIDELITY_CHANNEL, 0, 1e4, 64, 32, 16, 0, 1},
+               {MACHINE_FIDELITY_CHANNEL, 200, 16, 64, 32, 16, 0, 1},
+               {MACHINE_FIDELITY_CHANNEL, 1000, 0.5, 2, 1, 1, 0, 1},
+               {MACHINE_FIDELITY_BANKED, 0, 1, 64, 1, 16, DRAM_BANKED_OPEN_PAGE, 1},
+               {MACHINE_FIDELITY_BANKED, 0, 1, 4, 1, 2, DRAM_BANKED_CLOSE_PAGE, 2}};
   const unsigned ndrams = sizeof drams / sizeof drams[0];
   for (unsigned k = 0; k < 3; k++)
     for (unsigned s = 0; s < 2; s++) {
@@ -253,7 +253,7 @@ static void test_cross_check(struct world *w) {
       EXPECT(fetch > 0);
       for (unsigned d = 0; d < ndrams; d++) {
         struct machine_params p = one_by_one(1ull << sizes[s]);
-        p.dram_model = drams[d].model;
+        p.fidelity = drams[d].model;
         p.dram_latency_cycles = drams[d].latency;
         p.dram_bytes_per_cycle = drams[d].bw;
         p.l2_mshrs = drams[d].mshrs;
@@ -266,7 +266,7 @@ static void test_cross_check(struct world *w) {
         timed(w, kinds[k], mask, &p, &st, &r);
         EXPECTF(st.l2.fetch_bytes == fetch && st.l2.writeback_bytes == wb,
                 "%s at 2^%u, DRAM %s %llu cycles %.1f B/c: timed %llu/%llu, functional %llu/%llu",
-                policy_name(kinds[k]), sizes[s], dram_model_names[drams[d].model],
+                policy_name(kinds[k]), sizes[s], dram_model_names[machine_fidelity_dram(drams[d].model)],
                 (unsigned long long)drams[d].latency, drams[d].bw,
                 (unsigned long long)st.l2.fetch_bytes, (unsigned long long)st.l2.writeback_bytes,
                 (unsigned long long)fetch, (unsigned long long)wb);
@@ -300,7 +300,7 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
   /* Every scene, every policy, on the banked DRAM: the same picture, and the
    * DRAM bytes conserved. */
   struct machine_params banked = tiny;
-  banked.dram_model = DRAM_MODEL_BANKED;
+  banked.fidelity = MACHINE_FIDELITY_BANKED;
   const enum policy_kind all_kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC};
   for (unsigned k = 0; k < 3; k++) {
     struct render r;
