@@ -12,12 +12,12 @@
 #include "sim/stats.h"
 
 /* Units when sample.units is 0: as many as the detailed items allow, each
- * at least two pipelines long, at most this many. */
+ * at least three pipelines long (3 x the ray contexts), at most this many. */
 #define SAMPLE_AUTO_UNITS_MAX 40
 
 uint32_t sample_units(const struct machine_params *p, uint64_t total, uint32_t contexts) {
   if (p->sample_units) return p->sample_units;
-  double n = p->sample_fraction * (double)total / (2.0 * contexts);
+  double n = p->sample_fraction * (double)total / (3.0 * contexts);
   return n >= SAMPLE_AUTO_UNITS_MAX ? SAMPLE_AUTO_UNITS_MAX : (uint32_t)n;
 }
 
@@ -27,13 +27,14 @@ const char *sample_problem(const struct machine_params *p, enum policy_kind k, u
   if (k == POLICY_DYNAMIC)
     return "sample.fraction: sampling needs a policy that takes its work item by item "
            "(recursive or packet); the dynamic policy traces every primary ray as one batch";
-  /* A unit warms the pipeline with one item a ray context, then measures at
-   * least as many: the measured window then holds the unit's own items. */
+  /* A unit warms the pipeline with two items a ray context, then measures
+   * at least one a context: the measured window then holds the unit's own
+   * items, started at spread times. */
   uint32_t n = sample_units(p, total, contexts);
-  if (n < 4 || p->sample_fraction * (double)total / n < 2.0 * contexts) {
+  if (n < 4 || p->sample_fraction * (double)total / n < 3.0 * contexts) {
     snprintf(buf, cap,
              "sample.fraction: too few detailed items: %.0f of %llu work items in %u unit%s, and "
-             "a unit needs 2 x %u (the ray contexts: one pipeline to warm, one to measure) and "
+             "a unit needs 3 x %u (the ray contexts: two pipelines to warm, one to measure) and "
              "there must be at least 4 units; a larger fraction or image, fewer units or "
              "contexts",
              p->sample_fraction * (double)total, (unsigned long long)total, n, n == 1 ? "" : "s",
@@ -61,11 +62,13 @@ void sample_init(struct sampler *s, const struct machine_params *p, uint64_t tot
     const uint64_t size = u->stratum_hi - u->stratum_lo;
     uint64_t d = (uint64_t)llround(p->sample_fraction * (double)size);
     if (d > size) d = size;
-    /* One item a ray context warms the pipeline (every context has taken an
-     * item of the unit before the window opens). The first unit starts the
-     * run as the full run starts it (cold, at cycle 0) and is measured from
-     * there; the last ends the run. */
-    uint64_t warm = h == 0 ? 0 : contexts < d / 2 ? contexts : d / 2;
+    /* Two items a ray context warm the pipeline: after the drain every
+     * context starts at once, and by the second round their items' starts
+     * have spread as in the full run's steady state. The first unit starts
+     * the run as the full run starts it (cold, at cycle 0) and is measured
+     * from there; the last ends the run. */
+    uint64_t wc = 2 * (uint64_t)contexts;
+    uint64_t warm = h == 0 ? 0 : wc < d - contexts ? wc : d - contexts;
     uint64_t off = h == 0 ? 0 : size - d;
     if (h > 0 && h + 1 < s->n) off = rng_hash2(p->sample_seed, h) % (size - d + 1);
     u->start = u->stratum_lo + off;
@@ -151,29 +154,6 @@ void sample_finish(struct sampler *s, uint64_t rays_total) {
   s->slots_detailed = st->issue_slots;
   s->slots_total = st->issue_slots + machine_warm_slots(s->m) + machine_count_slots(s->m);
   for (uint32_t h = 0; h < s->n; h++) CHECK(s->u[h].have0 && s->u[h].have1);
-  if (getenv("RTSIM_SAMPLE_DEBUG"))
-    for (uint32_t h = 1; h < s->n; h++) {
-      const struct sample_unit *x = &s->u[h], *y = &s->u[h - 1];
-      fprintf(stderr, "unit %2u items %4llu win: cyc %8llu slots %9llu bytes %8llu | gap: cyc %8llu slots %9llu bytes %8llu\n", h,
-              (unsigned long long)(x->end - x->measure),
-              (unsigned long long)(x->at1[SQ_CYCLES] - x->at0[SQ_CYCLES]),
-              (unsigned long long)(x->at1[SQ_SLOTS] - x->at0[SQ_SLOTS]),
-              (unsigned long long)(x->at1[SQ_DRAM_BYTES] - x->at0[SQ_DRAM_BYTES]),
-              (unsigned long long)(x->at0[SQ_CYCLES] - y->at1[SQ_CYCLES]),
-              (unsigned long long)(x->at0[SQ_SLOTS] - y->at1[SQ_SLOTS]),
-              (unsigned long long)(x->at0[SQ_DRAM_BYTES] - y->at1[SQ_DRAM_BYTES]));
-    }
-  if (getenv("RTSIM_SAMPLE_DEBUG"))
-    for (uint32_t h = 0; h < s->n; h++) {
-      const struct sample_unit *x = &s->u[h];
-      fprintf(stderr, "unit %u [%llu %llu %llu %llu) items %llu cyc %llu rays %llu slots %llu\n", h,
-              (unsigned long long)x->warm_from, (unsigned long long)x->start,
-              (unsigned long long)x->measure, (unsigned long long)x->end,
-              (unsigned long long)(x->end - x->measure),
-              (unsigned long long)(x->at1[SQ_CYCLES] - x->at0[SQ_CYCLES]),
-              (unsigned long long)(x->at1[SQ_RAYS] - x->at0[SQ_RAYS]),
-              (unsigned long long)(x->at1[SQ_SLOTS] - x->at0[SQ_SLOTS]));
-    }
 }
 
 double sample_t975(unsigned dof) {

@@ -1,7 +1,8 @@
 /* Sampling a timed run (README "Sampling"): the work list (pixels or tiles in
  * the policy's order) is cut into sample.units strata of equal size; in each,
- * one unit of detailed items: its first items warm the machine's pipeline
- * (rays in flight, MSHRs, DRAM queues), the rest are measured. The first
+ * one unit of detailed items: its first items (two a ray context) warm the
+ * machine's pipeline (rays in flight, MSHRs, DRAM queues), the rest (at
+ * least one a context) are measured. The first
  * unit starts the run (measured from cycle 0, as the full run starts cold),
  * the last ends it (its drain measured, not guessed); the others fall at a
  * seeded random place in their strata. After a unit the machine drains (a

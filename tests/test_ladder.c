@@ -41,22 +41,6 @@ static bool exists(const char *dir, const char *name) {
   return stat(p, &sb) == 0;
 }
 
-/* The whole of a file (caller frees), or NULL. */
-static char *slurp(const char *dir, const char *name, size_t *len) {
-  char p[2048];
-  snprintf(p, sizeof p, "%s/%s", dir, name);
-  FILE *f = fopen(p, "rb");
-  if (!f) return NULL;
-  size_t cap = 1 << 16, n = 0;
-  char *b = malloc(cap + 1);
-  for (size_t k; (k = fread(b + n, 1, cap - n, f)) > 0;)
-    if ((n += k) == cap) b = realloc(b, (cap *= 2) + 1);
-  fclose(f);
-  b[n] = '\0';
-  if (len) *len = n;
-  return b;
-}
-
 /* stats.json's top-level member names (two-space indent), '\n'-separated
  * in keys: the set a rung writes. */
 struct keys {
@@ -66,7 +50,7 @@ struct keys {
 
 static void json_keys(const char *dir, struct keys *k) {
   memset(k, 0, sizeof *k);
-  char *j = slurp(dir, "stats.json", NULL);
+  char *j = testing_slurp(dir, "stats.json", NULL);
   EXPECTF(j != NULL, "%s/stats.json missing", dir);
   if (!j) return;
   size_t o = 0;
@@ -88,18 +72,6 @@ static bool has_key(const struct keys *k, const char *name) {
     p = nl + 1;
   }
   return false;
-}
-
-/* A number member of stats.json ("cycles"); NAN when absent. */
-static double json_num(const char *dir, const char *name) {
-  char *j = slurp(dir, "stats.json", NULL);
-  if (!j) return NAN;
-  char pat[128];
-  snprintf(pat, sizeof pat, "\n  \"%s\": ", name);
-  const char *at = strstr(j, pat);
-  double v = at ? strtod(at + strlen(pat), NULL) : NAN;
-  free(j);
-  return v;
 }
 
 /* The keys of a that b lacks, each of which must satisfy ok (NULL: none may
@@ -129,28 +101,6 @@ static bool dram_own(const char *name) {
   for (size_t i = 0; i < sizeof own / sizeof own[0]; i++)
     if (!strncmp(name, own[i], strlen(own[i]))) return true;
   return false;
-}
-
-/* RGB planes of two EXR files are equal, bit for bit. */
-static bool same_rgb(const char *a, const char *b) {
-  struct image x, y;
-  struct err e;
-  memset(&e, 0, sizeof e);
-  if (!image_read_exr(&x, a, &e)) return false;
-  if (!image_read_exr(&y, b, &e)) {
-    image_fini(&x);
-    return false;
-  }
-  bool same = x.width == y.width && x.height == y.height;
-  const char *ch[] = {"R", "G", "B"};
-  for (int i = 0; i < 3 && same; i++) {
-    int cx = image_channel(&x, ch[i]), cy = image_channel(&y, ch[i]);
-    same = cx >= 0 && cy >= 0 &&
-           !memcmp(x.planes[cx], y.planes[cy], (size_t)x.width * x.height * sizeof(float));
-  }
-  image_fini(&x);
-  image_fini(&y);
-  return same;
 }
 
 /* What the analytic rung knows and must write, and what only time tells and
@@ -190,7 +140,7 @@ static void test_images_and_keys(void) {
           return;
         char img[2100];
         snprintf(img, sizeof img, "%s/image.exr", dir[r]);
-        EXPECTF(same_rgb(ref, img), "%s, %s, %s: RGB differs from rtsim render's", SCENES[s],
+        EXPECTF(testing_same_rgb(ref, img), "%s, %s, %s: RGB differs from rtsim render's", SCENES[s],
                 POLICIES[p], RUNGS[r]);
         json_keys(dir[r], &k[r]);
         const bool timed = r > 0;
@@ -203,9 +153,9 @@ static void test_images_and_keys(void) {
        * (its per-pixel costs differ from the timed rungs': RGB only). */
       size_t n0, n1;
       const unsigned first = p == 2 ? 1 : 0;
-      char *a = slurp(dir[first], "image.exr", &n0);
+      char *a = testing_slurp(dir[first], "image.exr", &n0);
       for (unsigned r = first + 1; r < 4; r++) {
-        char *b = slurp(dir[r], "image.exr", &n1);
+        char *b = testing_slurp(dir[r], "image.exr", &n1);
         EXPECTF(a && b && n0 == n1 && !memcmp(a, b, n0), "%s, %s: image.exr of %s and %s differ",
                 SCENES[s], POLICIES[p], RUNGS[first], RUNGS[r]);
         free(b);
@@ -227,7 +177,7 @@ static void test_images_and_keys(void) {
       EXPECT(!has_key(&k[1], "dram_utilization") && has_key(&k[2], "dram_utilization") &&
              has_key(&k[3], "dram_row_hits"));
       /* stats.csv: analytic's columns are fixed's, less what it cannot know. */
-      char *ca = slurp(dir[0], "stats.csv", NULL), *cf = slurp(dir[1], "stats.csv", NULL);
+      char *ca = testing_slurp(dir[0], "stats.csv", NULL), *cf = testing_slurp(dir[1], "stats.csv", NULL);
       if (ca && cf) {
         ca[strcspn(ca, "\n")] = cf[strcspn(cf, "\n")] = '\0';
         char fixed_cols[16384];
@@ -271,13 +221,13 @@ static void test_exact(void) {
         static const char *const same[] = {"issue_slots", "loads", "stores", "blocking_loads",
                                            "l1_hits", "l2_misses", "dram_read_bytes"};
         for (size_t i = 0; i < sizeof same / sizeof *same; i++)
-          EXPECTF(json_num(da, same[i]) == json_num(df, same[i]), "%s, %s: %s %.0f, timed %.0f",
-                  SCENES[s], POLICIES[p], same[i], json_num(da, same[i]), json_num(df, same[i]));
-        EXPECT(json_num(df, "dram_write_bytes") == 0);
-        const double fixed = json_num(df, "cycles"), est = json_num(da, "cycles");
-        const double b = json_num(da, "blocking_loads");
-        const double hand = json_num(da, "issue_slots") + (json_num(da, "loads") - b) * 3 +
-                            b * 20 + round(json_num(da, "analytic_blocking_miss_rate") * b) * lat[l];
+          EXPECTF(testing_json_num(da, same[i]) == testing_json_num(df, same[i]), "%s, %s: %s %.0f, timed %.0f",
+                  SCENES[s], POLICIES[p], same[i], testing_json_num(da, same[i]), testing_json_num(df, same[i]));
+        EXPECT(testing_json_num(df, "dram_write_bytes") == 0);
+        const double fixed = testing_json_num(df, "cycles"), est = testing_json_num(da, "cycles");
+        const double b = testing_json_num(da, "blocking_loads");
+        const double hand = testing_json_num(da, "issue_slots") + (testing_json_num(da, "loads") - b) * 3 +
+                            b * 20 + round(testing_json_num(da, "analytic_blocking_miss_rate") * b) * lat[l];
         printf("1x1x1 fixed %u: %s, %s: timed %.0f, analytic %.0f, by hand %.0f\n", lat[l],
                SCENES[s], POLICIES[p], fixed, est, hand);
         /* Within 2 cycles: the estimate rounds a quotient of doubles up. */
@@ -307,9 +257,9 @@ static void test_default_machine(void) {
       if (run("default", SCENES[s], POLICIES[p], "analytic", "", 32, 32, da, out, sizeof out) ||
           run("default", SCENES[s], POLICIES[p], "banked", "", 32, 32, db, out, sizeof out))
         return;
-      const double a = json_num(da, "cycles"), t = json_num(db, "cycles");
+      const double a = testing_json_num(da, "cycles"), t = testing_json_num(db, "cycles");
       printf("default.yaml 32x32 %s, %s: analytic %.0f, banked %.0f (%.3f); host %.3f s, %.3f s\n",
-             SCENES[s], POLICIES[p], a, t, a / t, json_num(da, "wall_s"), json_num(db, "wall_s"));
+             SCENES[s], POLICIES[p], a, t, a / t, testing_json_num(da, "wall_s"), testing_json_num(db, "wall_s"));
       EXPECTF(a <= 1.05 * t && a >= lo[p] * t, "%s, %s: analytic %.0f, banked %.0f (%.3f)",
               SCENES[s], POLICIES[p], a, t, a / t);
     }

@@ -1,10 +1,13 @@
 #include "testing.h"
 
 #include <dirent.h>
+#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
 
+#include "renderer/image.h"
 #include "renderer/kdtree.h"
 #include "renderer/policy.h"
 #include "renderer/ray.h"
@@ -112,4 +115,54 @@ uint64_t testing_slots_left(const struct testing_slots *t) {
 void testing_slots_fini(struct testing_slots *t) {
   free(t->pending);
   memset(t, 0, sizeof *t);
+}
+
+/* The whole of a file (caller frees), or NULL. */
+char *testing_slurp(const char *dir, const char *name, size_t *len) {
+  char p[2048];
+  snprintf(p, sizeof p, "%s/%s", dir, name);
+  FILE *f = fopen(p, "rb");
+  if (!f) return NULL;
+  size_t cap = 1 << 16, n = 0;
+  char *b = malloc(cap + 1);
+  for (size_t k; (k = fread(b + n, 1, cap - n, f)) > 0;)
+    if ((n += k) == cap) b = realloc(b, (cap *= 2) + 1);
+  fclose(f);
+  b[n] = '\0';
+  if (len) *len = n;
+  return b;
+}
+
+/* A number member of stats.json ("cycles"); NAN when absent. */
+double testing_json_num(const char *dir, const char *name) {
+  char *j = testing_slurp(dir, "stats.json", NULL);
+  if (!j) return NAN;
+  char pat[128];
+  snprintf(pat, sizeof pat, "\n  \"%s\": ", name);
+  const char *at = strstr(j, pat);
+  double v = at ? strtod(at + strlen(pat), NULL) : NAN;
+  free(j);
+  return v;
+}
+
+/* RGB planes of two EXR files are equal, bit for bit. */
+bool testing_same_rgb(const char *a, const char *b) {
+  struct image x, y;
+  struct err e;
+  memset(&e, 0, sizeof e);
+  if (!image_read_exr(&x, a, &e)) return false;
+  if (!image_read_exr(&y, b, &e)) {
+    image_fini(&x);
+    return false;
+  }
+  bool same = x.width == y.width && x.height == y.height;
+  const char *ch[] = {"R", "G", "B"};
+  for (int i = 0; i < 3 && same; i++) {
+    int cx = image_channel(&x, ch[i]), cy = image_channel(&y, ch[i]);
+    same = cx >= 0 && cy >= 0 &&
+           !memcmp(x.planes[cx], y.planes[cy], (size_t)x.width * x.height * sizeof(float));
+  }
+  image_fini(&x);
+  image_fini(&y);
+  return same;
 }

@@ -73,4 +73,11 @@ unsigned testing_temps_of(const char *path);
  * (or -1 if it did not exit normally). */
 int testing_run(const char *cmd, char *buf, unsigned buf_size);
 
+/* The whole of dir/name (caller frees; *len its length if len), or NULL. */
+char *testing_slurp(const char *dir, const char *name, size_t *len);
+/* A number member of dir/stats.json ("cycles"); NAN when absent. */
+double testing_json_num(const char *dir, const char *name);
+/* The RGB planes of two EXR files are equal, bit for bit. */
+bool testing_same_rgb(const char *a, const char *b);
+
 #endif
