@@ -124,9 +124,6 @@ int cmd_run(int argc, char **argv) {
   const uint32_t contexts = mc.p.cores * mc.p.threads_per_core * mc.p.rays_per_thread;
   const char *why = sample_problem(&mc.p, policy, app_work_items(policy, W, H), contexts, whybuf,
                                    sizeof whybuf);
-  if (!why && mc.p.sample_fraction < 1 && analytic)
-    why = "sample.fraction: sampling simulates units in time: a timed fidelity (fixed, channel or "
-          "banked), not analytic";
   if (!why && mc.p.sample_fraction < 1 && trace_path)
     why = "sample.fraction: --dram-trace records a whole run; a sampled run skips most of the work";
   if (why) {

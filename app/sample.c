@@ -24,6 +24,9 @@ uint32_t sample_units(const struct machine_params *p, uint64_t total, uint32_t c
 const char *sample_problem(const struct machine_params *p, enum policy_kind k, uint64_t total,
                            uint32_t contexts, char *buf, size_t cap) {
   if (p->sample_fraction >= 1) return NULL;
+  if (p->fidelity == MACHINE_FIDELITY_ANALYTIC)
+    return "sample.fraction: sampling simulates units in time: a timed fidelity (fixed, channel "
+           "or banked), not analytic";
   if (k == POLICY_DYNAMIC)
     return "sample.fraction: sampling needs a policy that takes its work item by item "
            "(recursive or packet); the dynamic policy traces every primary ray as one batch";

@@ -16,6 +16,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "app/app.h"
+#include "app/sample.h"
 #include "renderer/policy.h"
 #include "renderer/ray.h"
 #include "renderer/scene.h"
@@ -528,6 +530,18 @@ static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *
   /* Checked values: whole numbers in range (cfg_u64 takes 0x.. and 0.. too). */
   uint64_t w = width ? strtoull(width, NULL, 0) : si->width;
   uint64_t h = height ? strtoull(height, NULL, 0) : si->height;
+  /* Sampling's own limits need the point's policy and image size. */
+  enum policy_kind pk;
+  CHECK(policy_parse(policy ? policy : "recursive", &pk));
+  char whybuf[512];
+  const char *why = sample_problem(&c.p, pk, app_work_items(pk, (uint32_t)w, (uint32_t)h),
+                                   c.p.cores * c.p.threads_per_core * c.p.rays_per_thread, whybuf,
+                                   sizeof whybuf);
+  if (why) {
+    const struct machine_cfg_origin *o = &c.at[machine_cfg_find("sample.fraction")];
+    return err_set(e, o->file[0] ? o->file : pv->doc.file, o->line, o->col, "%s [point %s]", why,
+                   p->name);
+  }
 
   struct args a = {0};
   arg(&a, "run");

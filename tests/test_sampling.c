@@ -139,6 +139,21 @@ static void test_refusals(void) {
   char *left = testing_slurp(RTSIM_TMP "/smp_bad", "stats.json", NULL);
   EXPECTF(left == NULL, "a refused run left stats.json");
   free(left);
+  /* A sweep checks every point's sampling before anything runs. */
+  FILE *f = fopen(RTSIM_TMP "/smp_sweep.yaml", "w");
+  EXPECT(f != NULL);
+  if (!f) return;
+  fprintf(f,
+          "machine: %s/configs/tiny.yaml\nworkload:\n  scene: %s/scenes/small/room.yaml\n"
+          "  width: 32\n  height: 32\nset:\n  sample.fraction: 0.5\naxes:\n"
+          "  policy: [recursive, dynamic]\n",
+          RTSIM_SOURCE_DIR, RTSIM_SOURCE_DIR);
+  fclose(f);
+  int rc = testing_run(RTSIM_BINARY " sweep " RTSIM_TMP "/smp_sweep.yaml -o " RTSIM_TMP "/smp_sw",
+                       out, sizeof out);
+  EXPECTF(rc == 2 && strstr(out, "smp_sweep.yaml:7:20: error: sample.fraction: sampling needs") &&
+              strstr(out, "[point policy=dynamic]"),
+          "sweep with a dynamic point sampled: exit %d: %s", rc, out);
 }
 
 int main(void) {
