@@ -3,6 +3,8 @@
  * same workload, and the one-pass analyser's own speed. */
 #include "app/app.h"
 
+#include <ctype.h>
+#include <errno.h>
 #include <getopt.h> /* optind: the scenes are argv[optind..argc) */
 #include <stdio.h>
 #include <stdlib.h>
@@ -67,6 +69,10 @@ static const char HELP[] =
     "                         prints scene, width, height, rays, machine, contexts,\n"
     "                         native_s, timed_s, slowdown, cycles, events,\n"
     "                         events_per_s, core_utilization, dram_bytes_per_cycle\n"
+    "  --sample F             with --timed: also the machine as configured sampled\n"
+    "                         at sample.fraction F (README: Sampling) against its\n"
+    "                         full run: adds cycles_ci95_low, cycles_ci95_high,\n"
+    "                         speedup_vs_full (host time) and cycles_error_vs_full\n"
     "  -h, --help             this text\n";
 
 static double render_once(const struct app_world *w, uint32_t mask, uint32_t W, uint32_t H,
@@ -144,39 +150,71 @@ static struct bench_embree *embree_from_ply(const struct app_world *w, double *b
   return be;
 }
 
-/* The timed machine against the native render of the same image. */
+/* The timed machine against the native render of the same image; with
+ * sample < 1, also the machine as configured, sampled at that fraction,
+ * against its full run. */
 static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint64_t height,
-                       uint64_t repeat, int argc, char **argv) {
+                       uint64_t repeat, double sample, int argc, char **argv) {
   struct machine_cfg mc;
   machine_cfg_defaults(&mc);
   struct err e = {0};
   if (!machine_cfg_load(&mc, cfg_path, &e) || !machine_cfg_check(&mc, &e)) return app_report(&e);
   printf("scene,width,height,rays,machine,contexts,native_s,timed_s,slowdown,cycles,events,"
-         "events_per_s,core_utilization,dram_bytes_per_cycle\n");
+         "events_per_s,core_utilization,dram_bytes_per_cycle,cycles_ci95_low,cycles_ci95_high,"
+         "speedup_vs_full,cycles_error_vs_full\n");
   for (int i = optind; i < argc; i++) {
     struct app_world w;
     if (!app_world_load(&w, argv[i])) return 2;
     uint32_t W = width ? (uint32_t)width : w.scene.width;
     uint32_t H = height ? (uint32_t)height : w.scene.height;
-    double best = 0;
+    if (sample < 1) {
+      struct machine_params p = mc.p;
+      p.sample_fraction = sample;
+      char why[512];
+      const char *bad = sample_problem(&p, POLICY_RECURSIVE, app_work_items(POLICY_RECURSIVE, W, H),
+                                       p.cores * p.threads_per_core * p.rays_per_thread, why,
+                                       sizeof why);
+      if (bad) {
+        app_world_fini(&w);
+        return app_usage_error("bench", "--sample %g on %s at %ux%u: %s", sample, argv[i], W, H, bad);
+      }
+    }
+    double best = 0, full_s = 0, full_cycles = 0;
     uint64_t nrays = 0;
     for (uint64_t k = 0; k < repeat; k++) {
       double s = render_once(&w, mask, W, H, mem_port_native(), &nrays);
       if (k == 0 || s < best) best = s;
     }
-    for (int one = 1; one >= 0; one--) {
+    for (int run = 0; run < (sample < 1 ? 3 : 2); run++) {
+      const bool one = run == 0, sampled = run == 2;
       struct machine_params p = mc.p;
+      p.sample_fraction = sampled ? sample : 1;
       if (one) p.cores = p.threads_per_core = p.rays_per_thread = 1;
       struct app_timed t;
       app_timed_run(&t, &w, mask, w.scene.seed, W, H, POLICY_RECURSIVE, &p, false, NULL);
       const struct machine_stats *st = machine_get_stats(t.m);
-      printf("%s,%u,%u,%llu,%s%s,%llu,%.4f,%.4f,%.2f,%llu,%llu,%.0f,%.4f,%.4f\n",
-             w.scene.name[0] ? w.scene.name : argv[i], W, H, (unsigned long long)nrays, cfg_path,
-             one ? " at 1x1x1" : "", (unsigned long long)st->contexts, best, t.wall_s,
-             best > 0 ? t.wall_s / best : 0.0, (unsigned long long)st->cycles,
-             (unsigned long long)st->events, t.wall_s > 0 ? (double)st->events / t.wall_s : 0.0,
-             (double)st->issue_slots / ((double)p.cores * (double)st->cycles),
-             (double)(st->dram.read_bytes + st->dram.write_bytes) / (double)st->cycles);
+      double cycles = (double)st->cycles, lo = 0, hi = 0;
+      if (sampled) cycles = sample_cycles(&t.sample, &lo, &hi);
+      char name[600];
+      snprintf(name, sizeof name, "%s%s", cfg_path,
+               one ? " at 1x1x1" : sampled ? " sampled" : "");
+      printf("%s,%u,%u,%llu,%s,%llu,%.4f,%.4f,%.2f,%.0f,%llu,%.0f,%.4f,%.4f",
+             w.scene.name[0] ? w.scene.name : argv[i], W, H, (unsigned long long)nrays, name,
+             (unsigned long long)st->contexts, best, t.wall_s, best > 0 ? t.wall_s / best : 0.0,
+             cycles, (unsigned long long)st->events,
+             t.wall_s > 0 ? (double)st->events / t.wall_s : 0.0,
+             sampled ? (double)t.sample.slots_total / ((double)p.cores * cycles)
+                     : (double)st->issue_slots / ((double)p.cores * cycles),
+             sampled ? 0.0 : (double)(st->dram.read_bytes + st->dram.write_bytes) / cycles);
+      if (sampled)
+        printf(",%.0f,%.0f,%.2f,%+.4f\n", lo, hi, t.wall_s > 0 ? full_s / t.wall_s : 0.0,
+               full_cycles > 0 ? (cycles - full_cycles) / full_cycles : 0.0);
+      else
+        printf(",,,,\n");
+      if (run == 1) {
+        full_s = t.wall_s;
+        full_cycles = cycles;
+      }
       fflush(stdout);
       app_timed_fini(&t);
     }
@@ -185,8 +223,20 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
   return 0;
 }
 
+/* A sampling fraction: a plain decimal number above 0 and at most 1. */
+static bool parse_fraction(const char *text, void *dst) {
+  char *end;
+  errno = 0;
+  double v = strtod(text, &end);
+  if (end == text || *end || errno || !(v > 0 && v <= 1) || isspace((unsigned char)text[0]))
+    return false;
+  *(double *)dst = v;
+  return true;
+}
+
 int cmd_bench(int argc, char **argv) {
   uint64_t width = 0, height = 0, repeat = 3, analyser = 0;
+  double sample = 1;
   uint32_t mask = RAY_MASK(RAY_PRIMARY);
   bool functional = false, engine = false, embree = false;
   const char *timed = NULL;
@@ -199,6 +249,7 @@ int cmd_bench(int argc, char **argv) {
       OPTS_U64("analyser", 0, &analyser, 1, 1ull << 40),
       OPTS_FLAG("engine", 0, &engine),
       OPTS_STR("timed", 0, &timed),
+      OPTS_PARSE("sample", 0, &sample, parse_fraction, "a fraction above 0 and at most 1"),
       OPTS_FLAG("embree", 0, &embree),
       OPTS_END};
   struct opts_args args;
@@ -221,7 +272,7 @@ int cmd_bench(int argc, char **argv) {
     return 0;
   }
   if (args.n == 0) return app_usage_error("bench", "missing SCENE.yaml");
-  if (timed) return bench_timed(timed, mask, width, height, repeat, argc, argv);
+  if (timed) return bench_timed(timed, mask, width, height, repeat, sample, argc, argv);
   if (embree && !bench_embree_available())
     return app_usage_error("bench", "--embree: this rtsim was built without Embree (install "
                                     "libembree-dev and configure with -DRTSIM_EMBREE=ON)");

@@ -261,6 +261,13 @@ static struct est estimate(const struct sampler *s, enum sample_fig f) {
   return e;
 }
 
+double sample_cycles(const struct sampler *s, double *lo, double *hi) {
+  struct est e = estimate(s, SF_CYCLES);
+  *lo = e.lo;
+  *hi = e.hi;
+  return e.v;
+}
+
 static void put(struct stats_table *t, const char *name, struct est e) {
   char n[96];
   stats_f64(t, name, e.v);

@@ -90,6 +90,9 @@ void sample_finish(struct sampler *s, uint64_t rays_total);
 void sample_stats(const struct sampler *s, const struct machine_params *p,
                   double peak_bytes_per_cycle, struct stats_table *t);
 
+/* The estimate of the run's cycles and its 95% interval (after sample_finish). */
+double sample_cycles(const struct sampler *s, double *lo, double *hi);
+
 /* Student's t quantile for probability 0.975 and dof degrees of freedom (>= 1). */
 double sample_t975(unsigned dof);
 
