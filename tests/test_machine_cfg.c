@@ -47,6 +47,7 @@ int main(void) {
       {"missing.yaml", "missing.yaml"},
       {"bad_mapping.yaml", "bad_mapping.yaml:3:12: error: dram.mapping: not an address mapping (got 'rochrabagco'"},
       {"bad_page.yaml", "bad_page.yaml:2:16: error: dram.page_policy: unknown value (got 'half', expected one of: open, close)"},
+      {"bad_queue_structure.yaml", "bad_queue_structure.yaml:2:20: error: dram.queue_structure: unknown value (got 'per_channel', expected one of: shared, per_bank, per_rank)"},
       {"bad_model.yaml", "bad_model.yaml:2:10: error: dram.model: unknown value (got 'ddr5', expected one of: fixed, channel, banked)"},
       {"bad_trc.yaml", "bad_trc.yaml:3:8: error: dram.tRC: must be at least tRAS (got 20)"},
       {"bad_include_missing.yaml", "bad_include_missing.yaml:1:10: error: include: "},
@@ -77,6 +78,9 @@ int main(void) {
       {"dram.tRC=10", "--set dram.tRC=10: error: dram.tRC: must be at least tRAS (got 10)"},
       {"dram.mapping=coco", "--set dram.mapping=coco: error: dram.mapping: not an address mapping"},
       {"dram.page_policy=close", ""},
+      {"dram.queue_structure=shared", ""},
+      {"dram.command_queue=0", "--set dram.command_queue=0: error: dram.command_queue: out of range (got 0, expected 1 to 4096)"},
+      {"dram.controller_cycles=0", "--set dram.controller_cycles=0: error: dram.controller_cycles: must be at least 1 with queue_structure per_bank or per_rank"},
       {"dram.model=banked", ""},
   };
   for (size_t i = 0; i < sizeof sets / sizeof sets[0]; i++) {
