@@ -158,7 +158,7 @@ void machine_cfg_defaults(struct machine_cfg *c) {
   b->write_high = 16;
   b->write_low = 8;
   b->controller_cycles = 2;
-  b->queue_structure = DRAM_BANKED_SHARED;
+  b->queue_structure = DRAM_BANKED_PER_BANK;
   b->command_queue = 8;
   b->tCL = 17;
   b->tCWL = 12;
