@@ -1,8 +1,11 @@
 /* Banked DRAM: per-bank, per-rank and per-channel "earliest next" times, one
- * scan of the served queue per handled cycle giving both the command to issue
- * and the earliest cycle anything could, so the level sleeps exactly until
- * then. Times inside are signed DRAM cycles; NEVER sits far enough below zero
- * that adding any timing to it still constrains nothing. */
+ * scan of the queues per handled cycle giving both the command to issue and
+ * the earliest cycle anything could, so the level sleeps exactly until then.
+ * Two controller structures share the timing state and the refresh: shared
+ * (FR-FCFS over a read and a write queue) and per_bank / per_rank
+ * (transaction queues feeding command queues, the functions named _cq).
+ * Times inside are signed DRAM cycles; NEVER sits far enough below zero that
+ * adding any timing to it still constrains nothing. */
 #include "sim/dram_banked.h"
 
 #include <stdlib.h>
@@ -48,10 +51,19 @@ struct rank {
 };
 
 struct req {
-  uint64_t tag, take_core, seq, row, line;
-  int64_t ready; /* the first DRAM cycle its commands may issue (controller_cycles after taken) */
+  uint64_t tag, take_core, seq, row, line, column;
+  /* The first DRAM cycle its commands may issue (controller_cycles after
+   * taken). per_bank: a transaction may move at the end of cycle ready - 1;
+   * moved at the end of m, its command may issue from m + 1. */
+  int64_t ready;
   uint32_t rank, group, bank; /* bank: index within the channel */
   uint8_t kind;
+  bool write;
+};
+
+/* A read served by another queued read of its line (per_bank). */
+struct follower {
+  uint64_t line, tag;
 };
 
 struct queue {
@@ -62,6 +74,7 @@ struct queue {
 struct burst {
   int64_t start;
   uint32_t rank;
+  bool write;
 };
 
 struct channel {
@@ -75,6 +88,15 @@ struct channel {
   struct rank *ranks;
   int64_t next;         /* earliest cycle a command may issue or a refresh fall due */
   uint64_t scan_no;
+  /* per_bank / per_rank: */
+  struct queue *cq;     /* command queues, by bank within the channel or by rank */
+  uint32_t ncq, cq_n;   /* command queues; commands in them all */
+  uint32_t rr;          /* the command queue probed last (round robin) */
+  uint32_t draining;    /* writes still to move in the current drain */
+  int64_t last_busy;    /* the last cycle a request arrived or a request command issued */
+  int64_t took_at;      /* the arrival cycle of the last request taken */
+  struct follower *fol; /* reads waiting for another read's RD */
+  uint32_t nfol, cap_fol;
 };
 
 struct dram_banked {
@@ -86,11 +108,13 @@ struct dram_banked {
   uint32_t banks_per_rank, banks_per_channel;
   int64_t burst_cycles; /* BL / 2 */
   int64_t refresh_step; /* tREFI / ranks */
+  bool cq_mode;         /* queue_structure per_bank or per_rank */
   /* Mapping: shift and mask of each field above the line offset. */
   unsigned sh_ch, sh_ra, sh_bg, sh_ba, sh_ro, sh_co;
   uint64_t mk_ch, mk_ra, mk_bg, mk_ba, mk_ro, mk_co;
   int64_t cursor;   /* the first DRAM cycle not yet handled */
   uint64_t wake_at; /* earliest wake pending (UINT64_MAX: none) */
+  uint64_t space_at; /* per_bank: the latest space callback scheduled for a refused second request */
   uint64_t seq, inflight, queued;
   /* Occupancy integrals by time, per queue kind. */
   uint64_t q_len[2], q_last[2];
@@ -161,6 +185,15 @@ const char *dram_banked_params_problem(const struct dram_banked_params *p) {
   if (p->write_high < 1 || p->write_high > p->write_queue)
     return "dram.write_high: must be 1 to write_queue";
   if (p->write_low >= p->write_high) return "dram.write_low: must be below write_high";
+  if (p->queue_structure != DRAM_BANKED_SHARED && p->queue_structure != DRAM_BANKED_PER_BANK &&
+      p->queue_structure != DRAM_BANKED_PER_RANK)
+    return "dram.queue_structure: expected shared, per_bank or per_rank";
+  if (p->queue_structure != DRAM_BANKED_SHARED) {
+    if (p->command_queue < 1 || p->command_queue > 4096) return "dram.command_queue: must be 1 to 4096";
+    if (p->controller_cycles < 1)
+      return "dram.controller_cycles: must be at least 1 with queue_structure per_bank or per_rank "
+             "(a request reaches its command queue at the end of a cycle)";
+  }
   const uint32_t lim = 1u << 20;
   const struct {
     uint32_t v;
@@ -202,6 +235,13 @@ const char *dram_banked_params_problem(const struct dram_banked_params *p) {
 /* The first core cycle by which every request that may take part in DRAM
  * cycle w has arrived, so w can be decided: floor(w num / den) + 1. */
 static uint64_t core_deciding(const struct dram_banked *d, int64_t w) {
+  /* per_bank: a request arriving in cycle w takes no part in it (it arrives
+   * after w's tick), so w is decided once the core reaches cycle w's arrivals:
+   * the first core cycle with from_core >= w. */
+  if (d->cq_mode) {
+    if (w <= 0) return 0;
+    w--;
+  }
   return (uint64_t)(((unsigned __int128)(uint64_t)w * d->clk.num) / d->clk.den) + 1;
 }
 
@@ -240,11 +280,12 @@ static void area_to(struct dram_banked *d, int k, uint64_t t) {
 /* The earliest start >= s0 of a burst of `rank` that overlaps no burst on the
  * channel (one idle cycle between ranks). Bursts are disjoint and sorted by
  * start, so moving past one can only meet later ones. */
-static int64_t bus_fit(const struct dram_banked *d, const struct channel *c, int64_t s0, uint32_t rank) {
+static int64_t bus_fit(const struct dram_banked *d, const struct channel *c, int64_t s0, uint32_t rank,
+                       bool write) {
   const int64_t b = d->burst_cycles;
   int64_t s = s0;
   for (uint32_t i = 0; i < c->nb; i++) {
-    int64_t gap = c->bursts[i].rank != rank;
+    int64_t gap = c->bursts[i].rank != rank && !(d->cq_mode && write && c->bursts[i].write);
     int64_t a = c->bursts[i].start;
     if (s < a + b + gap && s + b + gap > a) s = a + b + gap;
   }
@@ -253,7 +294,8 @@ static int64_t bus_fit(const struct dram_banked *d, const struct channel *c, int
 
 /* Record a burst at `start`; forget those that end before any future burst
  * could begin (a command at `now` or later puts data at now + min latency). */
-static void bus_add(struct dram_banked *d, struct channel *c, int64_t now, int64_t start, uint32_t rank) {
+static void bus_add(struct dram_banked *d, struct channel *c, int64_t now, int64_t start, uint32_t rank,
+                    bool write) {
   const int64_t b = d->burst_cycles;
   int64_t horizon = now + (d->p.tCL < d->p.tCWL ? d->p.tCL : d->p.tCWL);
   uint32_t k = 0;
@@ -268,6 +310,7 @@ static void bus_add(struct dram_banked *d, struct channel *c, int64_t now, int64
   }
   c->bursts[i].start = start;
   c->bursts[i].rank = rank;
+  c->bursts[i].write = write;
   c->nb++;
   d->st.bus_busy_cycles += (uint64_t)b;
 }
@@ -307,7 +350,7 @@ static int64_t col_earliest(const struct dram_banked *d, const struct channel *c
     t = max64(t, g->wr + d->p.tCWL + b + d->p.tWTR_L);
     lat = d->p.tCL;
   }
-  return bus_fit(d, c, t + lat, r->rank) - lat;
+  return bus_fit(d, c, t + lat, r->rank, write) - lat;
 }
 
 /* ---- The scan: what issues at cycle `now`, and the earliest anything could ---- */
@@ -315,7 +358,8 @@ static int64_t col_earliest(const struct dram_banked *d, const struct channel *c
 struct pick {
   enum cmd_type type;
   uint32_t rank, bank; /* bank within the channel */
-  uint32_t qi;         /* request index in the served queue */
+  uint32_t qi;         /* request index in the served queue (per_bank: in command queue cq) */
+  uint32_t cq;
   bool for_req;        /* a request's command (else refresh work) */
   int64_t next;        /* earliest cycle >= now any candidate could issue (FAR: none) */
 };
@@ -337,9 +381,7 @@ static void consider(struct pick *pk, int64_t t, int64_t now, enum cmd_type type
  * open bank, lowest bank first, or REF once all are closed), then the oldest row hit of the
  * served queue, then the oldest PRE or ACT. The first that can issue at `now`
  * is picked; next is the least earliest time of all of them. */
-static void scan(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
-  pk->type = CMD_NONE;
-  pk->next = FAR;
+static void scan_refresh(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
   const uint32_t bpr = d->banks_per_rank;
   for (uint32_t k = 0; k < d->p.ranks; k++) {
     struct rank *rk = &c->ranks[k];
@@ -356,6 +398,12 @@ static void scan(struct dram_banked *d, struct channel *c, int64_t now, struct p
       consider(pk, t, now, CMD_REF, k, 0, -1);
     }
   }
+}
+
+static void scan(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
+  pk->type = CMD_NONE;
+  pk->next = FAR;
+  scan_refresh(d, c, now, pk);
   const int qk = c->writing ? WR_Q : RD_Q;
   const struct queue *q = &c->q[qk];
   uint64_t no = ++c->scan_no;
@@ -438,43 +486,66 @@ static void bank_close(struct dram_banked *d, struct channel *c, struct bank *bk
   d->st.precharges++;
 }
 
-static void issue_column(struct dram_banked *d, struct channel *c, int qk, uint32_t qi, int64_t now) {
-  struct queue *q = &c->q[qk];
-  struct req r = q->r[qi];
-  memmove(&q->r[qi], &q->r[qi + 1], (q->n - qi - 1) * sizeof *q->r);
-  q->n--;
-  d->queued--;
+/* The bank, rank, group and bus state of r's column command at now; returns
+ * the cycle its data transfer ends. */
+static int64_t column_state(struct dram_banked *d, struct channel *c, const struct req *rq, bool write,
+                            int64_t now) {
+  const struct req r = *rq;
   struct bank *bk = &c->banks[r.bank];
   struct rank *rk = &c->ranks[r.rank];
   struct group *g = &c->groups[r.rank * d->p.bank_groups + r.group];
   const int64_t b = d->burst_cycles;
   int64_t end, pre;
   bk->hits++;
-  if (qk == WR_Q) {
+  if (write) {
     rk->wr = g->wr = now;
-    bus_add(d, c, now, now + d->p.tCWL, r.rank);
+    bus_add(d, c, now, now + d->p.tCWL, r.rank, true);
     end = now + d->p.tCWL + b;
     pre = end + d->p.tWR;
     d->st.writes++;
   } else {
     rk->rd = g->rd = c->rd = now;
-    bus_add(d, c, now, now + d->p.tCL, r.rank);
+    bus_add(d, c, now, now + d->p.tCL, r.rank, false);
     end = now + d->p.tCL + b;
     pre = now + d->p.tRTP;
     d->st.reads++;
   }
   bk->pre_ok = max64(bk->pre_ok, pre);
   if (d->p.page == DRAM_BANKED_CLOSE_PAGE) bank_close(d, c, bk, r.rank, bk->pre_ok);
-  if (r.kind == KIND_HIT) d->st.row_hits++;
-  else if (r.kind == KIND_MISS) d->st.row_misses++;
+  return end;
+}
+
+static void count_kind(struct dram_banked *d, uint8_t kind) {
+  if (kind == KIND_HIT) d->st.row_hits++;
+  else if (kind == KIND_MISS) d->st.row_misses++;
   else d->st.row_conflicts++;
-  /* The place frees at the column command: queue time ends there. */
-  uint64_t left = dram_clock_to_core(d->clk, (uint64_t)now);
+}
+
+static uint64_t core_deciding(const struct dram_banked *d, int64_t w);
+
+/* Queue time of r, of queue kind qk, ends at its column command at now: in
+ * the core cycle DRAM cycle now begins (per_bank: the first core cycle whose
+ * arrivals come after cycle now, which is when now may be handled, so that
+ * the occupancy integral runs forward). */
+static void queue_leave(struct dram_banked *d, int qk, const struct req *r, int64_t now) {
+  uint64_t left = d->cq_mode ? core_deciding(d, now) : dram_clock_to_core(d->clk, (uint64_t)now);
   area_to(d, qk, left);
   d->q_len[qk]--;
-  uint64_t wait = left - r.take_core;
+  uint64_t wait = left - r->take_core;
   d->st.queue_wait_sum_cycles[qk] += wait;
   if (wait > d->st.queue_wait_max_cycles[qk]) d->st.queue_wait_max_cycles[qk] = wait;
+}
+
+static void issue_column(struct dram_banked *d, struct channel *c, int qk, uint32_t qi, int64_t now) {
+  struct queue *q = &c->q[qk];
+  struct req r = q->r[qi];
+  memmove(&q->r[qi], &q->r[qi + 1], (q->n - qi - 1) * sizeof *q->r);
+  q->n--;
+  d->queued--;
+  int64_t end = column_state(d, c, &r, qk == WR_Q, now);
+  count_kind(d, r.kind);
+  /* The place frees at the column command: queue time ends there. */
+  queue_leave(d, qk, &r, now);
   d->space_due = true;
   uint64_t done = dram_clock_to_core(d->clk, (uint64_t)end);
   CHECK_GE(done, engine_now(d->e));
@@ -483,9 +554,11 @@ static void issue_column(struct dram_banked *d, struct channel *c, int qk, uint3
   engine_at(d->e, done, on_done, d, r.tag);
 }
 
+static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t qi, uint32_t j, int64_t now);
+
 static void issue(struct dram_banked *d, struct channel *c, const struct pick *pk, int64_t now) {
   const int qk = c->writing ? WR_Q : RD_Q;
-  struct req *r = pk->for_req ? &c->q[qk].r[pk->qi] : NULL;
+  struct req *r = !pk->for_req ? NULL : d->cq_mode ? &c->cq[pk->cq].r[pk->qi] : &c->q[qk].r[pk->qi];
   switch (pk->type) {
   case CMD_PRE: {
     struct bank *bk = &c->banks[pk->bank];
@@ -516,7 +589,8 @@ static void issue(struct dram_banked *d, struct channel *c, const struct pick *p
   }
   case CMD_RD:
   case CMD_WR:
-    issue_column(d, c, qk, pk->qi, now);
+    if (d->cq_mode) issue_column_cq(d, c, pk->cq, pk->qi, now);
+    else issue_column(d, c, qk, pk->qi, now);
     break;
   case CMD_REF: {
     struct rank *rk = &c->ranks[pk->rank];
@@ -535,6 +609,214 @@ static void issue(struct dram_banked *d, struct channel *c, const struct pick *p
   }
 }
 
+/* ---- per_bank / per_rank: transaction queues feeding command queues ---- */
+
+static uint32_t cq_of(const struct dram_banked *d, const struct req *r) {
+  return d->p.queue_structure == DRAM_BANKED_PER_RANK ? r->rank : r->bank;
+}
+
+static uint32_t cq_rank(const struct dram_banked *d, uint32_t qi) {
+  return d->p.queue_structure == DRAM_BANKED_PER_RANK ? qi : qi / d->banks_per_rank;
+}
+
+/* Entries of transaction queue q that may take part in cycle t (a prefix:
+ * ready grows with arrival). */
+static uint32_t visible(const struct queue *q, int64_t t) {
+  uint32_t n = 0;
+  while (n < q->n && q->r[n].ready - 1 <= t) n++;
+  return n;
+}
+
+/* Does a request of line `line` wait, as a write (write) or a read, in the
+ * transaction queue or in command queue cq (the one its line maps to)? */
+static bool line_waits(const struct channel *c, const struct queue *cq, bool write, uint64_t line) {
+  const struct queue *q = &c->q[write ? WR_Q : RD_Q];
+  for (uint32_t i = 0; i < q->n; i++)
+    if (q->r[i].line == line) return true;
+  for (uint32_t i = 0; i < cq->n; i++)
+    if (cq->r[i].write == write && cq->r[i].line == line) return true;
+  return false;
+}
+
+/* The end of cycle t: maybe start a write drain, then move at most one
+ * transaction to its command queue. apply false: change nothing, only say
+ * whether anything would change. */
+static bool schedule_cq(struct dram_banked *d, struct channel *c, int64_t t, bool apply) {
+  const uint32_t nw = visible(&c->q[WR_Q], t), nr = visible(&c->q[RD_Q], t);
+  uint32_t draining = c->draining;
+  if (!draining && nw > 0 &&
+      (nw >= d->p.write_high || (nw > d->p.write_low && c->cq_n == 0) ||
+       (nr == 0 && c->cq_n == 0 && t >= c->last_busy + DRAM_BANKED_IDLE_DRAIN_CYCLES)))
+    draining = nw;
+  int k = draining ? WR_Q : RD_Q;
+  uint32_t mi = UINT32_MAX; /* the transaction to move */
+  for (uint32_t i = 0; i < (k == WR_Q ? nw : nr); i++) {
+    const struct queue *cq = &c->cq[cq_of(d, &c->q[k].r[i])];
+    if (cq->n >= cq->cap) continue;
+    if (k == WR_Q && line_waits(c, cq, false, c->q[k].r[i].line)) {
+      /* A read of the line still waits: writing first would lose its data;
+       * the drain ends (and may start again next cycle). With every command
+       * queue empty and that read still in the read queue nothing would
+       * ever change: the read queue is served this cycle instead ([ours];
+       * DRAMsim3 deadlocks there). */
+      draining = 0;
+      if (c->cq_n) break; /* (else the read is in the read queue) */
+      k = RD_Q;
+      i = UINT32_MAX; /* the loop's increment makes it 0 */
+      continue;
+    }
+    mi = i;
+    break;
+  }
+  struct queue *q = &c->q[k];
+  const bool changed = mi != UINT32_MAX || draining != c->draining;
+  if (!apply) return changed;
+  if (mi != UINT32_MAX) {
+    struct req m = q->r[mi];
+    struct queue *cq = &c->cq[cq_of(d, &m)];
+    memmove(&q->r[mi], &q->r[mi + 1], (q->n - mi - 1) * sizeof *q->r);
+    q->n--;
+    m.ready = t + 1;
+    cq->r[cq->n++] = m;
+    c->cq_n++;
+    d->space_due = true;
+    if (k == WR_Q) draining--;
+  }
+  if (!c->draining && k == WR_Q && (mi != UINT32_MAX || draining)) d->st.write_drains++;
+  c->draining = draining;
+  return changed;
+}
+
+/* May the PRE at entry j of command queue q (for a conflict in bank bk) issue?
+ * Not before an older request of its queue for the same bank, nor while one
+ * of its queue still hits the open row, unless the row has served the cap. */
+static bool pre_allowed(const struct queue *q, uint32_t j, const struct bank *bk) {
+  const struct req *r = &q->r[j];
+  for (uint32_t i = 0; i < j; i++)
+    if (q->r[i].bank == r->bank) return false;
+  if (bk->hits >= DRAM_BANKED_ROW_HIT_CAP) return true;
+  for (uint32_t i = j + 1; i < q->n; i++)
+    if (q->r[i].bank == r->bank && q->r[i].row == bk->row) return false;
+  return true;
+}
+
+/* Does the write at entry j of q wait behind an older read of its place in
+ * the DRAM? NOTE: its place (bank, row, column), not its address: addresses
+ * above the DRAM's capacity alias, and DRAMsim3 compares places here though
+ * it forwards and merges by address. */
+static bool write_behind_read(const struct queue *q, uint32_t j) {
+  const struct req *w = &q->r[j];
+  for (uint32_t i = 0; i < j; i++) {
+    const struct req *r = &q->r[i];
+    if (!r->write && r->bank == w->bank && r->row == w->row && r->column == w->column) return true;
+  }
+  return false;
+}
+
+/* Refresh work, then the command queues round robin from the one after the
+ * last that issued; in each, the oldest command that can issue now. next:
+ * the earliest any candidate could. */
+static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
+  pk->type = CMD_NONE;
+  pk->next = FAR;
+  scan_refresh(d, c, now, pk);
+  for (uint32_t k = 1; k <= c->ncq; k++) {
+    const uint32_t qi = (c->rr + k) % c->ncq;
+    const struct queue *q = &c->cq[qi];
+    if (!q->n || c->ranks[cq_rank(d, qi)].pending) continue;
+    for (uint32_t j = 0; j < q->n; j++) {
+      const struct req *r = &q->r[j];
+      const struct bank *bk = &c->banks[r->bank];
+      int64_t t;
+      enum cmd_type type;
+      if (!bk->open) {
+        t = act_earliest(d, c, r, now);
+        type = CMD_ACT;
+      } else if (bk->row == r->row) {
+        if (r->write && write_behind_read(q, j)) continue;
+        t = col_earliest(d, c, r, r->write, now);
+        type = r->write ? CMD_WR : CMD_RD;
+      } else {
+        if (!pre_allowed(q, j, bk)) continue;
+        t = max64(max64(now, r->ready), bk->pre_ok);
+        type = CMD_PRE;
+      }
+      if (t < pk->next) pk->next = t;
+      if (t == now && pk->type == CMD_NONE) {
+        pk->type = type;
+        pk->rank = r->rank;
+        pk->bank = r->bank;
+        pk->cq = qi;
+        pk->qi = j;
+        pk->for_req = true;
+      }
+    }
+  }
+}
+
+static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t qi, uint32_t j, int64_t now) {
+  struct queue *q = &c->cq[qi];
+  struct req r = q->r[j];
+  memmove(&q->r[j], &q->r[j + 1], (q->n - j - 1) * sizeof *q->r);
+  q->n--;
+  c->cq_n--;
+  d->queued--;
+  /* DRAMsim3's row hit: the row has served a column command since its ACT. */
+  count_kind(d, c->banks[r.bank].hits ? KIND_HIT : r.kind == KIND_CONFLICT ? KIND_CONFLICT : KIND_MISS);
+  int64_t end = column_state(d, c, &r, r.write, now);
+  queue_leave(d, r.write ? WR_Q : RD_Q, &r, now);
+  if (r.write) return; /* posted: served when it arrived */
+  uint64_t done = dram_clock_to_core(d->clk, (uint64_t)end);
+  CHECK_GE(done, engine_now(d->e));
+  d->st.read_latency_sum_cycles += done - r.take_core;
+  d->inflight++;
+  engine_at(d->e, done, on_done, d, r.tag);
+  /* Reads of the same line that arrived while it waited. */
+  uint32_t k = 0;
+  for (uint32_t i = 0; i < c->nfol; i++) {
+    if (c->fol[i].line != r.line) {
+      c->fol[k++] = c->fol[i];
+      continue;
+    }
+    d->inflight++;
+    engine_at(d->e, done, on_done, d, c->fol[i].tag);
+  }
+  c->nfol = k;
+}
+
+/* The earliest cycle >= t at which channel c's state may change. */
+static int64_t next_cq(struct dram_banked *d, struct channel *c, int64_t t) {
+  struct pick pk;
+  scan_cq(d, c, t, &pk);
+  int64_t nx = pk.next;
+  if (schedule_cq(d, c, t, false)) return t;
+  for (int k = 0; k < 2; k++) {
+    const struct queue *q = &c->q[k];
+    uint32_t v = visible(q, t);
+    if (v < q->n && q->r[v].ready - 1 < nx) nx = q->r[v].ready - 1;
+  }
+  if (!c->draining && c->q[WR_Q].n && !c->cq_n && !visible(&c->q[RD_Q], t)) {
+    int64_t idle = c->last_busy + DRAM_BANKED_IDLE_DRAIN_CYCLES;
+    if (idle < nx) nx = idle;
+  }
+  return nx < t ? t : nx;
+}
+
+/* Handle DRAM cycle `now` on channel c (per_bank / per_rank). */
+static void channel_cycle_cq(struct dram_banked *d, struct channel *c, int64_t now) {
+  struct pick pk;
+  scan_cq(d, c, now, &pk);
+  if (pk.type != CMD_NONE) {
+    issue(d, c, &pk, now);
+    if (pk.for_req) {
+      c->rr = pk.cq;
+      c->last_busy = now;
+    }
+  }
+  schedule_cq(d, c, now, true);
+  c->next = next_cq(d, c, now + 1);
+}
+
 /* Handle DRAM cycle `now` on channel c: refreshes falling due, the drain mode,
  * at most one command; then c->next. */
 static void channel_cycle(struct dram_banked *d, struct channel *c, int64_t now) {
@@ -545,6 +827,10 @@ static void channel_cycle(struct dram_banked *d, struct channel *c, int64_t now)
       rk->pending++;
       rk->next_due += period;
     }
+  }
+  if (d->cq_mode) {
+    channel_cycle_cq(d, c, now);
+    return;
   }
   update_mode(d, c, now);
   struct pick pk;
@@ -563,7 +849,7 @@ static void channel_cycle(struct dram_banked *d, struct channel *c, int64_t now)
 }
 
 static bool channel_busy(const struct dram_banked *d, const struct channel *c) {
-  if (c->q[RD_Q].n || c->q[WR_Q].n) return true;
+  if (c->q[RD_Q].n || c->q[WR_Q].n || c->cq_n) return true;
   for (uint32_t k = 0; k < d->p.ranks; k++)
     if (c->ranks[k].pending) return true;
   return false;
@@ -602,9 +888,10 @@ static void schedule_wake(struct dram_banked *d) {
 }
 
 /* Handle every DRAM cycle that can be decided by now: those before the first
- * one that begins at or after engine_now. */
+ * one that begins at or after engine_now (per_bank: that one too, since what
+ * arrives in it arrives after its tick). */
 static void advance(struct dram_banked *d) {
-  const int64_t limit = (int64_t)dram_clock_from_core(d->clk, engine_now(d->e));
+  const int64_t limit = (int64_t)dram_clock_from_core(d->clk, engine_now(d->e)) + d->cq_mode;
   for (;;) {
     int64_t w = next_cycle(d);
     if (w >= limit) break;
@@ -638,8 +925,89 @@ static bool banked_can_take(const void *self, uint64_t addr, bool write) {
   advance(d);
   struct dram_banked_coord co;
   dram_banked_decode(d, addr, &co);
-  const struct queue *q = &d->ch[co.channel].q[write ? WR_Q : RD_Q];
+  struct channel *c = &d->ch[co.channel];
+  const struct queue *q = &c->q[write ? WR_Q : RD_Q];
+  if (d->cq_mode && c->took_at == d->cursor - 1) {
+    /* One request a channel a DRAM cycle: ask again in the next. */
+    uint64_t t = core_deciding(d, d->cursor);
+    if (d->space_at != t) {
+      d->space_at = t;
+      engine_at(d->e, t, on_space, d, 0);
+    }
+    return false;
+  }
   return q->n < q->cap;
+}
+
+/* Serve tag at DRAM cycle at, with no command. */
+static void serve_at(struct dram_banked *d, int64_t at, uint64_t tag) {
+  d->inflight++;
+  engine_at(d->e, dram_clock_to_core(d->clk, (uint64_t)at), on_done, d, tag);
+}
+
+/* Queue a request in its channel's queue qk (the request's fields but tag,
+ * line and ready from co); the level's counters follow. */
+static struct req *enqueue(struct dram_banked *d, struct channel *c, int qk, const struct dram_banked_coord *co,
+                           uint64_t addr, uint64_t tag, int64_t ready) {
+  struct queue *q = &c->q[qk];
+  CHECK_LT(q->n, q->cap);
+  struct req *r = &q->r[q->n++];
+  r->tag = tag;
+  r->take_core = engine_now(d->e);
+  r->line = addr >> 6;
+  r->ready = ready;
+  r->seq = d->seq++;
+  r->row = co->row;
+  r->column = co->column;
+  r->rank = co->rank;
+  r->group = co->bank_group;
+  r->bank = co->rank * d->banks_per_rank + co->bank_group * d->p.banks_per_group + co->bank;
+  r->kind = KIND_HIT;
+  r->write = qk == WR_Q;
+  d->queued++;
+  area_to(d, qk, r->take_core);
+  d->q_len[qk]++;
+  if (d->q_len[qk] > d->st.queue_max[qk]) d->st.queue_max[qk] = d->q_len[qk];
+  return r;
+}
+
+/* per_bank / per_rank: the request arrives after DRAM cycle cursor - 1. */
+static void take_cq(struct dram_banked *d, struct channel *c, const struct dram_banked_coord *co, uint64_t addr,
+                    bool write, uint64_t tag) {
+  const int64_t arr = d->cursor - 1, ready = arr + (int64_t)d->p.controller_cycles;
+  const uint64_t line = addr >> 6;
+  CHECK_LT(c->took_at, arr);
+  c->took_at = arr;
+  struct req probe;
+  probe.rank = co->rank;
+  probe.bank = co->rank * d->banks_per_rank + co->bank_group * d->p.banks_per_group + co->bank;
+  const struct queue *cq = &c->cq[cq_of(d, &probe)];
+  if (line_waits(c, cq, true, line)) {
+    /* Its line's write has not issued: a read is answered from it, a write
+     * replaces it. */
+    if (write) d->st.write_merges++;
+    else d->st.write_forwards++;
+    serve_at(d, ready, tag);
+    return;
+  }
+  if (!write && line_waits(c, cq, false, line)) {
+    if (c->nfol == c->cap_fol) {
+      c->cap_fol = c->cap_fol ? 2 * c->cap_fol : 8;
+      c->fol = xrealloc(c->fol, c->cap_fol * sizeof *c->fol);
+    }
+    c->fol[c->nfol].line = line;
+    c->fol[c->nfol].tag = tag;
+    c->nfol++;
+    d->st.read_merges++;
+    return;
+  }
+  enqueue(d, c, write ? WR_Q : RD_Q, co, addr, tag, ready);
+  if (write) serve_at(d, ready, tag); /* posted */
+  if (arr > c->last_busy) c->last_busy = arr;
+  /* It may move at the end of cycle ready - 1 (never before the cursor). */
+  int64_t nx = max64(d->cursor, ready - 1);
+  if (nx < c->next) c->next = nx;
+  schedule_wake(d);
 }
 
 static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
@@ -649,9 +1017,11 @@ static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   struct dram_banked_coord co;
   dram_banked_decode(d, addr, &co);
   struct channel *c = &d->ch[co.channel];
+  if (d->cq_mode) {
+    take_cq(d, c, &co, addr, write, tag);
+    return;
+  }
   const int qk = write ? WR_Q : RD_Q;
-  struct queue *q = &c->q[qk];
-  CHECK_LT(q->n, q->cap);
   /* A line waiting in the write queue answers a read of it, and takes a later
    * write of it in its place (a controller's write queue is searched by
    * address, as DRAMsim3's is): served the next DRAM cycle, no command. */
@@ -664,21 +1034,7 @@ static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
       engine_at(d->e, dram_clock_to_core(d->clk, (uint64_t)d->cursor + 1), on_done, d, tag);
       return;
     }
-  struct req *r = &q->r[q->n++];
-  r->tag = tag;
-  r->take_core = engine_now(d->e);
-  r->line = addr >> 6;
-  r->ready = d->cursor + (int64_t)d->p.controller_cycles;
-  r->seq = d->seq++;
-  r->row = co.row;
-  r->rank = co.rank;
-  r->group = co.bank_group;
-  r->bank = co.rank * d->banks_per_rank + co.bank_group * d->p.banks_per_group + co.bank;
-  r->kind = KIND_HIT;
-  d->queued++;
-  area_to(d, qk, r->take_core);
-  d->q_len[qk]++;
-  if (d->q_len[qk] > d->st.queue_max[qk]) d->st.queue_max[qk] = d->q_len[qk];
+  enqueue(d, c, qk, &co, addr, tag, d->cursor + (int64_t)d->p.controller_cycles);
   /* Cycles before the cursor are decided; the new request joins at it. */
   update_mode(d, c, d->cursor);
   struct pick pk;
@@ -726,6 +1082,7 @@ static void banked_report(const void *self, struct stats_table *t, uint64_t cycl
   stats_u64(t, "dram_write_drains", s->write_drains);
   stats_u64(t, "dram_write_forwards", s->write_forwards);
   stats_u64(t, "dram_write_merges", s->write_merges);
+  stats_u64(t, "dram_read_merges", s->read_merges);
   stats_f64(t, "dram_bus_utilization", ratio((double)s->bus_busy_cycles, dram_cycles * d->p.channels));
   stats_f64(t, "dram_bank_active_fraction",
             ratio((double)s->bank_open_cycles, dram_cycles * d->banks_per_channel * d->p.channels));
@@ -763,6 +1120,7 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
   d->banks_per_channel = p->ranks * d->banks_per_rank;
   d->burst_cycles = p->burst_length / 2;
   d->refresh_step = p->tREFI / p->ranks;
+  d->cq_mode = p->queue_structure != DRAM_BANKED_SHARED;
   d->wake_at = UINT64_MAX;
   /* Field widths, then positions from the least significant (the last). */
   unsigned width[6] = {lg2(p->rows), lg2(p->channels), lg2(p->ranks), lg2(p->bank_groups),
@@ -803,6 +1161,15 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
     for (uint32_t j = 0; j < p->ranks * p->bank_groups; j++)
       c->groups[j].act = c->groups[j].rd = c->groups[j].wr = NEVER;
     c->ranks = xcalloc(p->ranks, sizeof *c->ranks);
+    if (d->cq_mode) {
+      c->ncq = p->queue_structure == DRAM_BANKED_PER_RANK ? p->ranks : d->banks_per_channel;
+      c->cq = xcalloc(c->ncq, sizeof *c->cq);
+      for (uint32_t j = 0; j < c->ncq; j++) {
+        c->cq[j].cap = p->command_queue;
+        c->cq[j].r = xcalloc(p->command_queue, sizeof(struct req));
+      }
+      c->last_busy = c->took_at = NEVER;
+    }
     c->next = FAR;
     for (uint32_t k = 0; k < p->ranks; k++) {
       struct rank *rk = &c->ranks[k];
@@ -825,6 +1192,9 @@ void dram_banked_destroy(struct dram_banked *d) {
     free(c->banks);
     free(c->groups);
     free(c->ranks);
+    for (uint32_t j = 0; j < c->ncq; j++) free(c->cq[j].r);
+    free(c->cq);
+    free(c->fol);
   }
   free(d->ch);
   free(d);

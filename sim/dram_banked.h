@@ -1,8 +1,59 @@
 /* The banked DRAM level: DDR-style channels x ranks x bank groups x banks, each
  * bank with one open row (or none), commands timed in the DRAM's own clock and
- * scheduled FR-FCFS per channel, behind sim/dram_level.h.
+ * scheduled by one of two controller structures per channel (queue_structure),
+ * behind sim/dram_level.h.
  *
- * Policies, as modelled:
+ * Structure `shared`: one FR-FCFS scheduler over a read queue and a write
+ * queue. Structure `per_bank` (or `per_rank`): DRAMsim3's controller, a
+ * transaction queue feeding command queues served round robin. The timing of
+ * commands (below, "One command per channel...") and refresh are the same for
+ * both.
+ *
+ * Structure per_bank / per_rank, as modelled:
+ * - Queues. Per channel a read queue (read_queue entries) and a write buffer
+ *   (write_queue entries) of transactions, and command queues of
+ *   command_queue entries: one per bank (per_bank) or per rank (per_rank).
+ *   A full transaction queue refuses, and so does a channel that has taken
+ *   a request in the same DRAM cycle (one a cycle, as DRAMsim3's controller
+ *   is fed); client->space is raised when a transaction leaves its queue for
+ *   its command queue, and in the next cycle after a second request.
+ * - Time. A request taken in core cycle c arrives after DRAM cycle
+ *   a = from_core(c) has been decided (as DRAMsim3's trace driver adds a
+ *   request after that cycle's tick); it may move to its command queue at the
+ *   end of cycle a + controller_cycles - 1 and issue from the cycle after.
+ * - Moving. At the end of each DRAM cycle at most one transaction moves: the
+ *   oldest of the served transaction queue whose command queue has room. The
+ *   read queue is served, except during a write drain, which starts when the
+ *   write buffer holds write_high writes, or more than write_low with every
+ *   command queue empty, and moves as many writes as the buffer held then
+ *   (reads already in command queues keep issuing meanwhile). A write whose
+ *   line a queued read still waits for ends the drain.
+ * - Issue. Refresh work first; else the command queues are probed round
+ *   robin from the one after the last that issued, and the first command
+ *   queue with a command that can issue now issues the oldest such command
+ *   (in order with readiness skipping: row hits are not promoted past an
+ *   older ready ACT or PRE of the same queue). A PRE for a queued request
+ *   needs no older request of its queue for the same bank, and no request of
+ *   its queue left to hit the open row unless the row has served
+ *   DRAM_BANKED_ROW_HIT_CAP column commands. A write waits behind an older
+ *   read of its line in its queue. The queues of a rank with a refresh due
+ *   are skipped.
+ * - Writes are posted: a write is served controller_cycles after it arrives
+ *   (it waits in the write buffer). A read of a line whose write has not
+ *   issued is answered from it, and a write of such a line replaces it, both
+ *   served controller_cycles after arrival; a read of a line another queued
+ *   read waits for is served with it (one RD).
+ * - Leftover writes ([ours]: DRAMsim3 leaves up to write_low writes buffered
+ *   for ever): once no request has arrived and no request command issued for
+ *   DRAM_BANKED_IDLE_DRAIN_CYCLES, with no read queued and every command
+ *   queue empty, the buffered writes drain, so a run ends with them written.
+ * - Row hits (DRAMsim3's count): a column command is a hit when its row has
+ *   served one since its ACT.
+ * - A write burst may follow another rank's write burst with no idle cycle
+ *   (DRAMsim3's write-to-write across ranks is BL/2); every other pair of
+ *   bursts of two ranks keeps the idle cycle.
+ *
+ * Structure shared, as modelled:
  * - Time. A request taken at core cycle c may issue its first command in DRAM
  *   cycle from_core(c) + controller_cycles (the controller's front end:
  *   queueing the request at its bank), from_core(c) being the first that
@@ -95,11 +146,17 @@ struct engine;
 /* Column commands a row may serve since its ACT before younger hits stop
  * holding back an older conflict (DRAMsim3's row-hit cap). */
 #define DRAM_BANKED_ROW_HIT_CAP 4u
+/* per_bank / per_rank: DRAM cycles without an arrival or a request command,
+ * with no read queued, after which buffered writes drain (see above). */
+#define DRAM_BANKED_IDLE_DRAIN_CYCLES 1000
 /* A read waiting longer than this many tRC holds the channel on reads (no
  * turn to writes at write_high) until it is served: a bound on starvation. */
 #define DRAM_BANKED_READ_AGE_CAP 4u
 
 enum dram_banked_page { DRAM_BANKED_OPEN_PAGE, DRAM_BANKED_CLOSE_PAGE };
+/* The controller's structure (see above): shared FR-FCFS queues, or
+ * DRAMsim3's transaction queue feeding command queues per bank or per rank. */
+enum dram_banked_queues { DRAM_BANKED_SHARED, DRAM_BANKED_PER_BANK, DRAM_BANKED_PER_RANK };
 
 struct dram_banked_params {
   uint32_t clock_mhz; /* DRAM command clock (DDR4-2400: 1200) */
@@ -113,6 +170,8 @@ struct dram_banked_params {
   uint32_t read_queue, write_queue; /* entries per channel */
   uint32_t write_high, write_low;   /* write drain watermarks (entries) */
   uint32_t controller_cycles;       /* DRAM cycles from taking a request to its first command */
+  enum dram_banked_queues queue_structure;
+  uint32_t command_queue;           /* per_bank / per_rank: entries a command queue */
   /* Timing in DRAM clock cycles. */
   uint32_t tCL, tCWL, tRCD, tRP, tRAS, tRC, tCCD_S, tCCD_L, tRRD_S, tRRD_L, tFAW, tWR, tWTR_S,
       tWTR_L, tRTW, tRTP, tREFI, tRFC;
@@ -148,6 +207,7 @@ struct dram_banked_stats {
   uint64_t write_drains;                        /* turns from reads to writes */
   uint64_t write_forwards; /* reads answered from the write queue (no command) */
   uint64_t write_merges;   /* writes that found their line in the write queue */
+  uint64_t read_merges;    /* per_bank / per_rank: reads served by another queued read's RD */
   /* Per queue kind [0] reads, [1] writes: */
   uint64_t queue_area[2];          /* time integral of the entries queued, core cycles x entries */
   uint64_t queue_wait_sum_cycles[2]; /* sum over requests of their queue time (core cycles) */

@@ -26,6 +26,7 @@ struct key {
 static const char *const PAGE_NAMES[] = {"open", "close"};
 static const char *const FIDELITY_NAMES[MACHINE_FIDELITY_COUNT] = {"analytic", "fixed", "channel",
                                                                    "banked"};
+static const char *const QUEUE_NAMES[] = {"shared", "per_bank", "per_rank"}; /* enum dram_banked_queues */
 static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"clock_ghz", K_F64, 1e-3, 1e3, OFF(clock_ghz)},
     {"cores", K_U32, 1, 4096, OFF(cores)},
@@ -64,6 +65,9 @@ static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"dram.write_high", K_U32, 1, 4096, BK(write_high)},
     {"dram.write_low", K_U32, 0, 4096, BK(write_low)},
     {"dram.controller_cycles", K_U32, 0, 1000, BK(controller_cycles)},
+    {"dram.queue_structure", K_ENUM, 0, 2, offsetof(struct machine_params, dram_banked.queue_structure),
+     QUEUE_NAMES},
+    {"dram.command_queue", K_U32, 1, 4096, BK(command_queue)},
     {"dram.tCL", K_U32, 1, 1000, BK(tCL)},
     {"dram.tCWL", K_U32, 1, 1000, BK(tCWL)},
     {"dram.tRCD", K_U32, 1, 1000, BK(tRCD)},
@@ -162,6 +166,8 @@ void machine_cfg_defaults(struct machine_cfg *c) {
   b->write_high = 16;
   b->write_low = 8;
   b->controller_cycles = 2;
+  b->queue_structure = DRAM_BANKED_PER_BANK;
+  b->command_queue = 8;
   b->tCL = 17;
   b->tCWL = 12;
   b->tRCD = 17;

@@ -171,6 +171,7 @@ int main(void) {
       {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --dram-trace", "option --dram-trace needs a value"},
       {"run " RTSIM_SOURCE_DIR "/configs/default.yaml " SCN "good_room_tiny.yaml -o xrun --set dram.latency=100", "--set dram.latency=100: error: dram.latency: not read by fidelity banked"},
       {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set dram.mapping=rorororororo", "--set dram.mapping=rorororororo: error: dram.mapping: not an address mapping"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set dram.queue_structure=fifo", "--set dram.queue_structure=fifo: error: dram.queue_structure: unknown value (got 'fifo', expected one of: shared, per_bank, per_rank)"},
   };
   for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {
     snprintf(cmd, sizeof cmd, "cd %s && %s %s", RTSIM_TMP, RTSIM_BINARY, usage[i].args);

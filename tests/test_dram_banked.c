@@ -1,6 +1,7 @@
 /* The banked DRAM level against hand-computed command timelines (DDR4-2400
  * figures, 1:1 clocks unless said), bandwidth bounds, the per-cycle oracle on
- * random traffic, Little's law, address decoding and parameter checks. */
+ * random traffic, Little's law, address decoding and parameter checks; both
+ * controller structures (shared FR-FCFS, per-bank command queues). */
 #include <stdlib.h>
 #include <string.h>
 
@@ -33,6 +34,15 @@ static struct dram_banked_params ddr4(void) {
   p.tCCD_S = 4, p.tCCD_L = 6, p.tRRD_S = 4, p.tRRD_L = 6, p.tFAW = 26;
   p.tWR = 19, p.tWTR_S = 3, p.tWTR_L = 9, p.tRTW = 6, p.tRTP = 9;
   p.tREFI = 0, p.tRFC = 420;
+  return p;
+}
+
+/* The same with DRAMsim3's structure: command queues per bank of 8. */
+static struct dram_banked_params ddr4_per_bank(void) {
+  struct dram_banked_params p = ddr4();
+  p.queue_structure = DRAM_BANKED_PER_BANK;
+  p.command_queue = 8;
+  p.controller_cycles = 2;
   return p;
 }
 
@@ -458,6 +468,132 @@ static void test_starvation(void) {
   dram_banked_destroy(d);
 }
 
+/* 16: per_bank, one request alone: it arrives after DRAM cycle 100, moves
+ * to its bank's command queue at the end of 101, ACT 102, RD 102 + tRCD 16 =
+ * 118, last beat 118 + tCL 16 + B 4 = 138: 2 + tRCD + tCL + B after arrival.
+ * A row hit at 300: RD 302, done 322 (2 + tCL + B). Another row of the bank
+ * at 500: PRE 502, ACT 518 (tRP), RD 534, done 554. Row hits counted as
+ * DRAMsim3 does (the first column command after an ACT is not one). */
+static void test_cq_latencies(void) {
+  struct dram_banked_params p = ddr4_per_bank();
+  uint64_t done[3];
+  struct rq a[] = {{100, addr_of(&p, 0, 0, 0, 0, 7, 0), false},
+                   {300, addr_of(&p, 0, 0, 0, 0, 7, 1), false},
+                   {500, addr_of(&p, 0, 0, 0, 0, 9, 0), false}};
+  struct dram_banked *d = run(&p, 1200 * MHZ, a, 3, done, 0);
+  EXPECTF(done[0] == 138 && done[1] == 322 && done[2] == 554,
+          "per_bank idle read, row hit, conflict: %llu %llu %llu, expected 138 322 554",
+          (unsigned long long)done[0], (unsigned long long)done[1], (unsigned long long)done[2]);
+  const struct dram_banked_stats *s = dram_banked_get_stats(d);
+  EXPECT(s->row_hits == 1 && s->row_misses == 1 && s->row_conflicts == 1 && s->activates == 2);
+  dram_banked_destroy(d);
+  /* Two requests in one DRAM cycle: the channel takes one a cycle, the second
+   * in the next (refused, then asked again): done 138 and 138 + 6 (its RD
+   * tCCD_L after the first, its line the next column of the open row). */
+  struct rq b[] = {{100, addr_of(&p, 0, 0, 0, 0, 7, 0), false}, {100, addr_of(&p, 0, 0, 0, 0, 7, 1), false}};
+  d = run(&p, 1200 * MHZ, b, 2, done, 0);
+  EXPECTF(done[0] == 138 && done[1] == 144, "one a cycle: %llu %llu, expected 138 144",
+          (unsigned long long)done[0], (unsigned long long)done[1]);
+  dram_banked_destroy(d);
+}
+
+/* 17: per_bank, the command queues are served round robin from the one after
+ * the last that issued, not oldest first. Reads R0-R3 arriving at 0, 1, 2, 3
+ * to bank 1 of groups 0-3 (queues 1, 5, 9, 13), A at 4 to bank 0 of group 0
+ * (queue 0), B at 5 to bank 0 of group 3 (queue 12); each may issue 2 cycles
+ * after it arrives. ACTs: R0 at 2, R1 at 6 (tRRD_S), R2 at 10 (the probe from
+ * queue 6 reaches 9 first), and at 14 the probe from 10 reaches B (queue 12)
+ * before R3 (13) and A (0, the probe's last), though B is the youngest. Then
+ * tFAW holds ACTs to 2 + 26 = 28. RDs R0 18, R1 22, R2 26 (tRCD). At 28 the
+ * probe from 10 finds R3's ACT (B's RD waits for tRCD to 30); B's RD 30 (from
+ * 13 the probe wraps to 12); A's ACT at 32 (tFAW from 6, tRRD_S from 28); R3's
+ * RD 44, A's 48. Done: RD + tCL 16 + B 4. */
+static void test_cq_round_robin(void) {
+  struct dram_banked_params p = ddr4_per_bank();
+  struct rq r[6];
+  uint64_t done[6];
+  for (uint32_t g = 0; g < 4; g++) r[g] = (struct rq){g, addr_of(&p, 0, 0, g, 1, 3, 0), false};
+  r[4] = (struct rq){4, addr_of(&p, 0, 0, 0, 0, 3, 0), false}; /* A */
+  r[5] = (struct rq){5, addr_of(&p, 0, 0, 3, 0, 3, 0), false}; /* B */
+  struct dram_banked *d = run(&p, 1200 * MHZ, r, 6, done, 0);
+  const uint64_t want[6] = {38, 42, 46, 64, 68, 50};
+  for (int i = 0; i < 6; i++)
+    EXPECTF(done[i] == want[i], "round robin, read %d: done %llu, expected %llu", i,
+            (unsigned long long)done[i], (unsigned long long)want[i]);
+  dram_banked_destroy(d);
+  /* The shared FR-FCFS structure serves the older A first. */
+  p = ddr4();
+  d = run(&p, 1200 * MHZ, r, 6, done, 0);
+  EXPECTF(done[4] < done[5], "shared: A done %llu, B %llu, expected A first", (unsigned long long)done[4],
+          (unsigned long long)done[5]);
+  dram_banked_destroy(d);
+}
+
+/* 18: per_bank write drain and posted writes. write_queue 4, write_high 4,
+ * write_low 2. Writes W0-W2 at 0, 1, 2 to bank 0 of group 0, row 1: each is
+ * served 2 cycles after it arrives (posted). At the end of cycle 3 the buffer
+ * holds 3 > write_low with every command queue empty: a drain of 3 moves them
+ * at the ends of 3, 4 and 5. A read R at 3 to the same row waits in the read
+ * queue meanwhile (moves at the end of 6, behind the writes in the bank's
+ * queue). ACT 4; WR 20, 26, 32 (tCCD_L); R's RD after the last write's burst
+ * and tWTR_L: 32 + tCWL 16 + B 4 + 9 = 61, done 81. A read at 4 of W1's line
+ * is answered from the write buffer: done 6. */
+static void test_cq_write_drain(void) {
+  struct dram_banked_params p = ddr4_per_bank();
+  p.write_queue = 4;
+  p.write_high = 4;
+  p.write_low = 2;
+  struct rq r[5];
+  uint64_t done[5];
+  for (int i = 0; i < 3; i++) r[i] = (struct rq){(uint64_t)i, addr_of(&p, 0, 0, 0, 0, 1, (uint64_t)i), true};
+  r[3] = (struct rq){3, addr_of(&p, 0, 0, 0, 0, 1, 5), false};
+  r[4] = (struct rq){4, addr_of(&p, 0, 0, 0, 0, 1, 1), false};
+  struct dram_banked *d = run(&p, 1200 * MHZ, r, 5, done, 0);
+  const uint64_t want[5] = {2, 3, 4, 81, 6};
+  for (int i = 0; i < 5; i++)
+    EXPECTF(done[i] == want[i], "write drain, request %d: done %llu, expected %llu", i,
+            (unsigned long long)done[i], (unsigned long long)want[i]);
+  const struct dram_banked_stats *s = dram_banked_get_stats(d);
+  EXPECT(s->write_drains == 1 && s->writes == 3 && s->reads == 1 && s->write_forwards == 1);
+  dram_banked_destroy(d);
+  /* Two writes (not more than write_low) and no other traffic stay buffered
+   * until the channel has been idle DRAM_BANKED_IDLE_DRAIN_CYCLES: a read of
+   * another row of their bank at 500 finds it closed (ACT 502, done 538);
+   * they are written by the end (finish checks nothing is left queued). */
+  struct rq b[] = {{0, addr_of(&p, 0, 0, 0, 0, 1, 0), true},
+                   {1, addr_of(&p, 0, 0, 0, 0, 1, 1), true},
+                   {500, addr_of(&p, 0, 0, 0, 0, 2, 0), false}};
+  d = run(&p, 1200 * MHZ, b, 3, done, 0);
+  EXPECTF(done[0] == 2 && done[1] == 3 && done[2] == 538, "idle writes: %llu %llu %llu, expected 2 3 538",
+          (unsigned long long)done[0], (unsigned long long)done[1], (unsigned long long)done[2]);
+  s = dram_banked_get_stats(d);
+  EXPECT(s->writes == 2 && s->write_drains == 1 && s->row_conflicts == 1);
+  EXPECT(s->dram_cycles >= 500 + DRAM_BANKED_IDLE_DRAIN_CYCLES);
+  dram_banked_destroy(d);
+}
+
+/* 19: per_bank, a row hit does not pass an older request's ready ACT or PRE
+ * in its own queue unless the PRE would close a row the queue still hits:
+ * A (row 1) at 0, B (row 2) at 1, C (row 1) at 2, one bank. ACT (A) 2, RD A
+ * 18; B's PRE waits while C hits: C's RD at 24 (tCCD_L), done 44; PRE at
+ * max(2 + tRAS 39, 24 + tRTP 9) = 41, ACT 57, RD 73, done 93. A read D at 3
+ * of A's line is served with A (one RD): done 38. */
+static void test_cq_in_order(void) {
+  struct dram_banked_params p = ddr4_per_bank();
+  struct rq a[] = {{0, addr_of(&p, 0, 0, 0, 0, 1, 0), false},
+                   {1, addr_of(&p, 0, 0, 0, 0, 2, 0), false},
+                   {2, addr_of(&p, 0, 0, 0, 0, 1, 1), false},
+                   {3, addr_of(&p, 0, 0, 0, 0, 1, 0), false}};
+  uint64_t done[4];
+  struct dram_banked *d = run(&p, 1200 * MHZ, a, 4, done, 0);
+  EXPECTF(done[0] == 38 && done[1] == 93 && done[2] == 44 && done[3] == 38,
+          "per_bank order: %llu %llu %llu %llu, expected 38 93 44 38", (unsigned long long)done[0],
+          (unsigned long long)done[1], (unsigned long long)done[2], (unsigned long long)done[3]);
+  const struct dram_banked_stats *s = dram_banked_get_stats(d);
+  EXPECT(s->reads == 3 && s->read_merges == 1 && s->row_hits == 1);
+  dram_banked_destroy(d);
+}
+
 /* 12: decode, hand-computed bit positions. 2 channels, 2 ranks, 4 groups, 4
  * banks, 1024 rows, 1024 columns / BL 8 = 128 bursts: widths ch 1, ra 1, bg
  * 2, ba 2, ro 10, co 7, above 6 offset bits. */
@@ -515,11 +651,17 @@ static void test_oracle_and_little(void) {
     uint32_t channels, ranks, groups, banks, rq, wq, hi, lo;
     enum dram_banked_page page;
     uint64_t core_mhz;
+    enum dram_banked_queues qs;
+    uint32_t cmdq, cc;
   } cfgs[] = {
-      {"rochrababgco", 1, 1, 4, 4, 32, 32, 24, 8, DRAM_BANKED_OPEN_PAGE, 1200},
-      {"chrobabgraco", 2, 2, 4, 4, 16, 16, 12, 4, DRAM_BANKED_CLOSE_PAGE, 1400},
-      {"rorabgbachco", 4, 4, 2, 2, 4, 4, 3, 1, DRAM_BANKED_OPEN_PAGE, 1000},
-      {"robgbarachco", 2, 2, 4, 2, 8, 8, 6, 0, DRAM_BANKED_OPEN_PAGE, 2000},
+      {"rochrababgco", 1, 1, 4, 4, 32, 32, 24, 8, DRAM_BANKED_OPEN_PAGE, 1200, DRAM_BANKED_SHARED, 0, 0},
+      {"chrobabgraco", 2, 2, 4, 4, 16, 16, 12, 4, DRAM_BANKED_CLOSE_PAGE, 1400, DRAM_BANKED_SHARED, 0, 0},
+      {"rorabgbachco", 4, 4, 2, 2, 4, 4, 3, 1, DRAM_BANKED_OPEN_PAGE, 1000, DRAM_BANKED_SHARED, 0, 0},
+      {"robgbarachco", 2, 2, 4, 2, 8, 8, 6, 0, DRAM_BANKED_OPEN_PAGE, 2000, DRAM_BANKED_SHARED, 0, 0},
+      {"rochrababgco", 1, 2, 4, 4, 16, 16, 16, 8, DRAM_BANKED_OPEN_PAGE, 1400, DRAM_BANKED_PER_BANK, 8, 2},
+      {"chrobabgraco", 2, 2, 4, 4, 8, 8, 6, 2, DRAM_BANKED_CLOSE_PAGE, 1000, DRAM_BANKED_PER_BANK, 2, 1},
+      {"rorabgbachco", 2, 1, 4, 4, 16, 16, 12, 4, DRAM_BANKED_OPEN_PAGE, 2000, DRAM_BANKED_PER_RANK, 32, 3},
+      {"robgbarachco", 2, 4, 2, 2, 4, 4, 4, 0, DRAM_BANKED_OPEN_PAGE, 1200, DRAM_BANKED_PER_RANK, 3, 2},
   };
   enum { N = 1500, SEEDS = 6 };
   struct rq *r = xcalloc(N, sizeof *r);
@@ -538,6 +680,9 @@ static void test_oracle_and_little(void) {
     p.write_high = cfgs[ci].hi;
     p.write_low = cfgs[ci].lo;
     p.page = cfgs[ci].page;
+    p.queue_structure = cfgs[ci].qs;
+    p.command_queue = cfgs[ci].cmdq;
+    if (cfgs[ci].cc) p.controller_cycles = cfgs[ci].cc;
     p.tREFI = 2400; /* frequent, to exercise refresh */
     p.tRFC = 120;
     for (uint64_t seed = 1; seed <= SEEDS; seed++) {
@@ -556,7 +701,7 @@ static void test_oracle_and_little(void) {
                 (unsigned long long)seed);
       }
       /* Every request is served by a column command, or from the write queue. */
-      EXPECT(sa->reads + sa->writes + sa->write_forwards + sa->write_merges == N);
+      EXPECT(sa->reads + sa->writes + sa->write_forwards + sa->write_merges + sa->read_merges == N);
       EXPECT(sa->row_hits + sa->row_misses + sa->row_conflicts == sa->reads + sa->writes);
       /* Little: the occupancy integral by time equals the waits by request. */
       for (int k = 0; k < 2; k++) little_bad += sa->queue_area[k] != sa->queue_wait_sum_cycles[k];
@@ -616,6 +761,11 @@ static void test_problems(void) {
   BAD(strcpy(p.mapping, "rochrababgba"), "dram.mapping");
   BAD(strcpy(p.mapping, "rochrababgxx"), "dram.mapping");
   BAD(p.page = (enum dram_banked_page)7, "dram.page_policy");
+  BAD(p.queue_structure = (enum dram_banked_queues)7, "dram.queue_structure");
+  BAD((p.queue_structure = DRAM_BANKED_PER_BANK, p.command_queue = 0), "dram.command_queue");
+  BAD((p.queue_structure = DRAM_BANKED_PER_RANK, p.command_queue = 4097), "dram.command_queue");
+  BAD((p.queue_structure = DRAM_BANKED_PER_BANK, p.command_queue = 8, p.controller_cycles = 0),
+      "dram.controller_cycles");
   BAD(p.read_queue = 0, "dram.read_queue");
   BAD(p.write_queue = 0, "dram.write_queue");
   BAD(p.write_high = 40, "dram.write_high");
@@ -649,6 +799,10 @@ int main(void) {
   test_frfcfs();
   test_write_drain();
   test_starvation();
+  test_cq_latencies();
+  test_cq_round_robin();
+  test_cq_write_drain();
+  test_cq_in_order();
   test_decode();
   test_oracle_and_little();
   test_problems();

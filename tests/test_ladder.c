@@ -95,7 +95,7 @@ static bool analytic_own(const char *name) { return !strncmp(name, "analytic_", 
 static bool dram_own(const char *name) {
   static const char *const own[] = {"dram_utilization", "dram_fifo_", "dram_row_", "dram_activates",
                                     "dram_precharges", "dram_refresh", "dram_write_drains",
-                                    "dram_write_forwards", "dram_write_merges",
+                                    "dram_write_forwards", "dram_write_merges", "dram_read_merges",
                                     "dram_bus_utilization", "dram_bank_active_fraction",
                                     "dram_read_queue_", "dram_write_queue_"};
   for (size_t i = 0; i < sizeof own / sizeof own[0]; i++)

@@ -49,6 +49,7 @@ int main(void) {
       {"bad_page.yaml", "bad_page.yaml:2:16: error: dram.page_policy: unknown value (got 'half', expected one of: open, close)"},
       {"bad_model.yaml", "bad_model.yaml:2:11: error: fidelity: unknown value (got 'ddr5', expected one of: analytic, fixed, channel, banked)"},
       {"bad_renamed_model.yaml", "bad_renamed_model.yaml:2:3: error: dram.model: renamed to fidelity, a top-level key"},
+      {"bad_queue_structure.yaml", "bad_queue_structure.yaml:2:20: error: dram.queue_structure: unknown value (got 'per_channel', expected one of: shared, per_bank, per_rank)"},
       {"bad_trc.yaml", "bad_trc.yaml:3:8: error: dram.tRC: must be at least tRAS (got 20)"},
       {"bad_include_missing.yaml", "bad_include_missing.yaml:1:10: error: include: "},
       {"bad_include_cycle.yaml", "error: include: included files nest deeper than 8"},
@@ -82,6 +83,9 @@ int main(void) {
       {"fidelity=analytic", ""},
       {"fidelity=lazy", "--set fidelity=lazy: error: fidelity: unknown value (got 'lazy', expected one of: analytic, fixed, channel, banked)"},
       {"dram.model=banked", "--set dram.model=banked: error: dram.model: renamed to fidelity, a top-level key"},
+      {"dram.queue_structure=shared", ""},
+      {"dram.command_queue=0", "--set dram.command_queue=0: error: dram.command_queue: out of range (got 0, expected 1 to 4096)"},
+      {"dram.controller_cycles=0", "--set dram.controller_cycles=0: error: dram.controller_cycles: must be at least 1 with queue_structure per_bank or per_rank"},
   };
   for (size_t i = 0; i < sizeof sets / sizeof sets[0]; i++) {
     set_err(sets[i].set, buf, sizeof buf);

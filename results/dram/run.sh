@@ -31,12 +31,19 @@ for scene in sphereflake grove room; do
     d3_mean= d3_p50= d3_p95= d3_p99= d3_gbs= d3_hit=
     if [ -n "${DRAMSIM3:-}" ]; then
       awk '!/^#/ && NF { print $1, $2, $3 }' "$t.trace" > "$t.dramsim3.trace"
-      "$DRAMSIM3" "$DRAMSIM3_INI" "$t.dramsim3.trace" --out-dir "$t.dramsim3" > "$t.dramsim3.txt"
+      # DRAMsim3's controller can deadlock (a write drain that a queued read of
+      # the same line blocks, with that read never moved): bound its run at
+      # twice the stream's span and leave its columns empty if it stalls.
+      limit=$(awk 'END { print 2 * $3 + 1000000 }' "$t.dramsim3.trace")
+      "$DRAMSIM3" "$DRAMSIM3_INI" "$t.dramsim3.trace" --out-dir "$t.dramsim3" \
+        --cycles-limit "$limit" > "$t.dramsim3.txt" || true
       d3="$t.dramsim3.txt"
-      d3_mean=$(kvget "$d3" read_latency_mean) d3_p50=$(kvget "$d3" read_latency_p50)
-      d3_p95=$(kvget "$d3" read_latency_p95) d3_p99=$(kvget "$d3" read_latency_p99)
-      d3_gbs=$(awk -v b="$(kvget "$d3" bandwidth_bytes_per_cycle)" 'BEGIN { printf "%.3f", b * 1.2 }')
-      d3_hit=$(kvget "$d3" row_hit_rate)
+      if [ "$(kvget "$d3" finished)" = 1 ]; then
+        d3_mean=$(kvget "$d3" read_latency_mean) d3_p50=$(kvget "$d3" read_latency_p50)
+        d3_p95=$(kvget "$d3" read_latency_p95) d3_p99=$(kvget "$d3" read_latency_p99)
+        d3_gbs=$(awk -v b="$(kvget "$d3" bandwidth_bytes_per_cycle)" 'BEGIN { printf "%.3f", b * 1.2 }')
+        d3_hit=$(kvget "$d3" row_hit_rate)
+      fi
     fi
     r="$t.rtsim.csv"
     printf '%s,%s,%s,%s,%.2f,%s,%.0f,%s,%.1f,%s,%.1f,%s,%.3f,%s,%.4f,%s\n' "$scene" "$policy" \
@@ -62,8 +69,10 @@ for s in grove-recursive sphereflake-dynamic; do
   if [ -n "${DRAMSIM3:-}" ]; then
     "$DRAMSIM3" "$DRAMSIM3_INI" "$out/$s.saturated.trace" --out-dir "$out/$s.saturated.dramsim3" \
       --cycles-limit 20000000 > "$out/$s.saturated.dramsim3.txt" || true
-    d3_bpc=$(kvget "$out/$s.saturated.dramsim3.txt" bandwidth_bytes_per_cycle)
-    d3_hit=$(kvget "$out/$s.saturated.dramsim3.txt" row_hit_rate)
+    if [ "$(kvget "$out/$s.saturated.dramsim3.txt" finished)" = 1 ]; then
+      d3_bpc=$(kvget "$out/$s.saturated.dramsim3.txt" bandwidth_bytes_per_cycle)
+      d3_hit=$(kvget "$out/$s.saturated.dramsim3.txt" row_hit_rate)
+    fi
   fi
   r="$out/$s.saturated.csv"
   printf '%s,%.3f,%s,%.4f,%s\n' "$s" "$(csvget "$r" bytes_per_cycle)" "$d3_bpc" \
