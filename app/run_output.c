@@ -175,6 +175,7 @@ static void measured(const struct run_output_report *r, struct stats_table *t) {
   stats_f64(t, "l2_miss_rate", ratio((double)l2->misses, (double)l2->accesses));
   stats_u64(t, "l2_mshr_merges", l2->mshr_merges);
   stats_u64(t, "l2_merges_held", l2->merges_held);
+  stats_u64(t, "l2_write_buffer_hits", l2->write_buffer_hits);
   stats_u64(t, "l2_whole_line_allocs", l2->whole_line_allocs);
   stats_u64(t, "l2_stalls", l2->stalls);
   static const char *const why[L2_STALL_COUNT] = {"mshr", "set", "write_buffer", "dram"};

@@ -270,7 +270,11 @@ static bool try_read(struct l2 *l2, uint64_t t) {
   return true;
 }
 
+/* A write-buffer entry whose line a miss took back (ev_to_dram). */
+#define WB_TAKEN_BACK UINT64_MAX
+
 static bool try_write(struct l2 *l2, uint64_t t) {
+  while (l2->wb.n && ring_head(&l2->wb)[0] == WB_TAKEN_BACK) ring_pop(&l2->wb);
   if (!l2->wb.n) return false;
   uint64_t addr = ring_head(&l2->wb)[0] << L2_LG2_LINE;
   if (!dram_can_take(l2->dram, addr, true)) return false;
@@ -305,9 +309,38 @@ static void pump(struct l2 *l2) {
   if (moved && l2->stall_head != NONE) stall_retry(l2, t);
 }
 
+static void fill(struct l2 *l2, uint32_t s, uint64_t t, bool from_dram);
+
+/* A miss whose line still waits in the write buffer (evicted dirty, not yet
+ * taken by the DRAM) takes it back from there: no read, no write reaches the
+ * DRAM, and the line is dirty again. (Without this the DRAM would see a read
+ * of a line and then its older data written over it.) */
+static bool take_back(struct l2 *l2, uint32_t slot, uint64_t t) {
+  const uint64_t line = cache_line(l2->tags, slot);
+  for (uint64_t i = 0; i < l2->wb.n; i++) {
+    uint64_t *e = l2->wb.v[(l2->wb.lo + i) % l2->wb.cap];
+    if (e[0] != line) continue;
+    qmeter_leave(&l2->st.write_buffer, t, e[1]);
+    e[0] = WB_TAKEN_BACK;
+    l2->wb_used--;
+    l2->st.writeback_bytes -= LINE_BYTES;
+    l2->st.fetch_bytes -= LINE_BYTES;
+    l2->st.fetch_bytes_by_class[l2->miss_cls[slot]] -= LINE_BYTES;
+    l2->st.write_buffer_hits++;
+    cache_set_dirty(l2->tags, slot);
+    fill(l2, slot, t, false);
+    return true;
+  }
+  return false;
+}
+
 static void ev_to_dram(void *ctx, uint64_t slot) {
   struct l2 *l2 = ctx;
   const uint64_t t = engine_now(l2->eng);
+  if (take_back(l2, (uint32_t)slot, t)) {
+    pump(l2); /* (a place in the write buffer is free) */
+    return;
+  }
   ring_push(&l2->miss_q, slot, t);
   qmeter_enter(&l2->st.miss_queue, t);
   pump(l2);
@@ -330,12 +363,14 @@ static void ev_held_merge(void *ctx, uint64_t r) {
 
 /* ---- from the DRAM ---- */
 
-static void fill(struct l2 *l2, uint32_t s, uint64_t t) {
+static void fill(struct l2 *l2, uint32_t s, uint64_t t, bool from_dram) {
   cache_set_pending(l2->tags, s, false);
   l2->mshr_used--;
   unsigned cls = l2->miss_cls[s];
-  timeline_point(l2->tl, l2->col.read_bytes, t, LINE_BYTES);
-  timeline_point(l2->tl, l2->col.read_class0 + cls, t, LINE_BYTES);
+  if (from_dram) {
+    timeline_point(l2->tl, l2->col.read_bytes, t, LINE_BYTES);
+    timeline_point(l2->tl, l2->col.read_class0 + cls, t, LINE_BYTES);
+  }
   uint32_t w = l2->waiters[s];
   l2->waiters[s] = NONE;
   /* Waiters were pushed newest first: answer them oldest first. */
@@ -368,7 +403,7 @@ static void dram_done(void *ctx, uint64_t tag) {
     timeline_point(l2->tl, l2->col.write_bytes, t, LINE_BYTES);
     return;
   }
-  fill(l2, (uint32_t)(tag >> 1), t);
+  fill(l2, (uint32_t)(tag >> 1), t, true);
 }
 
 static void dram_space(void *ctx) { pump(ctx); }

@@ -12,7 +12,8 @@
  *   it is offered to the DRAM l2.latency cycles after its bank took it, and
  *   waits at the L2, in order, while the DRAM refuses it (back-pressure).
  * - A dirty victim enters the write buffer (l2.write_buffer entries); the
- *   buffer drains to the DRAM, oldest first. Reads go to the DRAM first; a
+ *   buffer drains to the DRAM, oldest first. A miss to a line still in the
+ *   buffer takes it back when it would leave for the DRAM (no DRAM access). Reads go to the DRAM first; a
  *   write goes when no read is waiting, or first when the buffer is full.
  * - The input stalls in order (every later access queues behind) while the
  *   oldest access cannot proceed: MSHRs full, every way of its set pending,
@@ -53,6 +54,7 @@ enum l2_stall { L2_STALL_MSHR, L2_STALL_SET, L2_STALL_WRITE_BUFFER, L2_STALL_DRA
 struct l2_stats {
   uint64_t accesses, hits, misses, mshr_merges, whole_line_allocs;
   uint64_t merges_held;      /* merged loads answered after the fill, to honour l2.latency */
+  uint64_t write_buffer_hits; /* misses served from the write buffer (no DRAM read or write) */
   uint64_t bank_wait_cycles; /* accesses waiting for their bank */
   uint64_t stalls;           /* accesses that queued behind a stall */
   uint64_t stall_cycles[L2_STALL_COUNT];

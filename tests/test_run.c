@@ -264,7 +264,16 @@ static void test_cross_check(struct world *w) {
         struct machine_stats st;
         struct render r;
         timed(w, kinds[k], mask, &p, &st, &r);
-        EXPECTF(st.l2.fetch_bytes == fetch && st.l2.writeback_bytes == wb,
+        /* A miss that takes its line back from the write buffer (the DRAM
+         * slow to drain it) saves the fetch the functional model makes, and
+         * the write-back too unless the line, dirty again, is evicted again
+         * before the end. With ideal memory nothing waits to be taken back. */
+        const uint64_t back = st.l2.write_buffer_hits * 64;
+        EXPECTF(drams[d].latency > 0 || drams[d].model != MACHINE_FIDELITY_FIXED || back == 0,
+                "ideal memory, yet %llu lines taken back from the write buffer",
+                (unsigned long long)st.l2.write_buffer_hits);
+        EXPECTF(st.l2.fetch_bytes + back == fetch && st.l2.writeback_bytes <= wb &&
+                    wb <= st.l2.writeback_bytes + back,
                 "%s at 2^%u, DRAM %s %llu cycles %.1f B/c: timed %llu/%llu, functional %llu/%llu",
                 policy_name(kinds[k]), sizes[s], dram_model_names[machine_fidelity_dram(drams[d].model)],
                 (unsigned long long)drams[d].latency, drams[d].bw,
