@@ -8,7 +8,7 @@
 set -eu
 dat=$1 out=$2
 printf '%s\n' "set terminal pngcairo size 1200,520 noenhanced" "set output '$out.tmp'" \
-  "set multiplot layout 1,2 title 'Speed against accuracy: the default machine (16 cores, DDR4-2400), banked full run = 1x and 0% error'" \
+  "set multiplot layout 1,2 title 'Speed against accuracy on the default machine (banked full run = 1x, 0% error): rungs at 128x128, every policy; samples at 256x256, recursive'" \
   "set logscale xy" "set grid" "set xrange [0.5:200]" "set yrange [0.01:300]" \
   "set xlabel 'speed-up over the banked full run (host time)'" "set key bottom right" \
   "R = 'analytic fixed channel sample-0.2 sample-0.1 sample-0.05'" \

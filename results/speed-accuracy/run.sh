@@ -4,7 +4,8 @@
 # repository top, after sh .ci/setup:
 #   sh results/speed-accuracy/run.sh
 # Three sweeps into build/speed-accuracy (the first two one point at a time,
-# since their host times are results), then points.csv and coverage.csv (one
+# since their host times are results; the coverage sweep's host times are not
+# used), then points.csv and coverage.csv (one
 # row a point), table.md (summary.sh) and error-vs-speedup.png (plot.sh).
 set -eu
 out=build/speed-accuracy res=results/speed-accuracy

@@ -55,11 +55,11 @@ END {
     printf "sample-%s %s-recursive %.4g %s %s\n", P[i, c["sample_fraction"]], S[s], sp, err(P[i, c["cycles"]], P[b, c["cycles"]]), err(P[i, c["dram_bytes"]], P[b, c["dram_bytes"]]) >> plot
   }
   print "\n### Coverage of the 95% intervals (recursive, 256x256, banked, 20 seeds)\n"
-  print "| scene | sample.fraction | runs | cycles inside | DRAM bytes inside | core utilization inside | load latency inside | cycles error: mean, largest | speed-up (mean) |"
-  print "|---|---|---|---|---|---|---|---|---|"
+  print "| scene | sample.fraction | runs | cycles inside | DRAM bytes inside | core utilization inside | load latency inside | cycles error: mean, largest |"
+  print "|---|---|---|---|---|---|---|---|"
   nf = split("0.1 0.05", F, " ")
   for (s = 1; s <= 3; s++) for (f = 1; f <= nf; f++) {
-    runs = 0; for (j = 1; j <= nq; j++) in_[j] = 0; se = 0; mx = 0; spsum = 0
+    runs = 0; for (j = 1; j <= nq; j++) in_[j] = 0; se = 0; mx = 0
     for (i = 1; i <= m; i++) {
       if (C[i, c["scene"]] != S[s] || C[i, c["sample_fraction"]] != F[f] || !(key(C, i) in ref)) continue
       b = ref[key(C, i)]; runs++
@@ -68,18 +68,16 @@ END {
         if (C[i, c[Q[j] "_lo"]] + 0 <= x + 0 && x + 0 <= C[i, c[Q[j] "_hi"]] + 0) in_[j]++
       }
       e = err(C[i, c["cycles"]], P[b, c["cycles"]]); if (e < 0) e = -e; se += e; if (e > mx) mx = e
-      spsum += P[b, c["wall_s"]] / C[i, c["wall_s"]]
-      all_runs++; for (j = 1; j <= nq; j++) if (C[i, c[Q[j] "_lo"]] + 0 <= x + 0) {}
     }
     if (!runs) continue
     line = sprintf("| %s | %s | %d", S[s], F[f], runs)
     for (j = 1; j <= nq; j++) { line = line sprintf(" | %d%%", 100 * in_[j] / runs); tot[j] += in_[j] }
-    print line sprintf(" | %.2f%%, %.2f%% | %.1fx |", se / runs, mx, spsum / runs)
+    print line sprintf(" | %.2f%%, %.2f%% |", se / runs, mx)
     totruns += runs
   }
   if (totruns) {
     line = sprintf("| all | | %d", totruns)
     for (j = 1; j <= nq; j++) line = line sprintf(" | %.0f%%", 100 * tot[j] / totruns)
-    print line " | | |"
+    print line " | |"
   }
 }' "$1" "$2"
