@@ -16,30 +16,31 @@ struct dram_channel {
   struct engine *eng;
   struct dram_client client;
   double ticks_per_byte;
-  uint64_t *starts; /* ring: start ticks of the last queue_depth requests */
+  dram_tick *starts; /* ring: start ticks of the last queue_depth requests */
   uint64_t k;       /* requests so far */
   uint64_t space_at; /* cycle of the pending space event, or UINT64_MAX */
   /* Occupancy sweep: entry and start ticks of requests not yet started at
    * sweep_t (a ring of capacity sw_cap from sw_lo, sw_n long); sw_e: how many
    * of them have entered by sweep_t. */
-  uint64_t (*sw)[2];
+  dram_tick (*sw)[2];
   uint64_t sw_cap, sw_lo, sw_n, sw_e;
-  uint64_t sweep_t;
+  dram_tick sweep_t;
   double occ;
   struct dram_channel_stats st;
 };
 
 #define LINE_BYTES 64u
+#define TICK_FOREVER (~(dram_tick)0)
 
 /* Advance the occupancy integral to tick x: entries and starts are each
  * non-decreasing, so two pointers merge them in time order. */
-static void sweep_to(struct dram_channel *d, uint64_t x) {
+static void sweep_to(struct dram_channel *d, dram_tick x) {
   const double tick = 1.0 / (double)(1ull << DRAM_TICK_BITS);
   while (d->sw_n) {
-    uint64_t *head = d->sw[d->sw_lo % d->sw_cap];
-    uint64_t next_entry = d->sw_e < d->sw_n ? d->sw[(d->sw_lo + d->sw_e) % d->sw_cap][0] : UINT64_MAX;
-    uint64_t next_start = head[1];
-    uint64_t ev = next_entry < next_start ? next_entry : next_start;
+    dram_tick *head = d->sw[d->sw_lo % d->sw_cap];
+    dram_tick next_entry = d->sw_e < d->sw_n ? d->sw[(d->sw_lo + d->sw_e) % d->sw_cap][0] : TICK_FOREVER;
+    dram_tick next_start = head[1];
+    dram_tick ev = next_entry < next_start ? next_entry : next_start;
     if (ev > x) break;
     d->st.fifo_area += d->occ * (double)(ev - d->sweep_t) * tick;
     d->sweep_t = ev;
@@ -58,16 +59,16 @@ static void sweep_to(struct dram_channel *d, uint64_t x) {
       d->occ -= 1.0;
     }
   }
-  if (x != UINT64_MAX && x > d->sweep_t) {
+  if (x != TICK_FOREVER && x > d->sweep_t) {
     d->st.fifo_area += d->occ * (double)(x - d->sweep_t) * tick;
     d->sweep_t = x;
   }
 }
 
-static void sweep_add(struct dram_channel *d, uint64_t entry, uint64_t start) {
+static void sweep_add(struct dram_channel *d, dram_tick entry, dram_tick start) {
   if (d->sw_n == d->sw_cap) {
     uint64_t cap = d->sw_cap ? 2 * d->sw_cap : 64;
-    uint64_t(*n)[2] = xmalloc(cap * sizeof *n);
+    dram_tick(*n)[2] = xmalloc(cap * sizeof *n);
     for (uint64_t i = 0; i < d->sw_n; i++) {
       n[i][0] = d->sw[(d->sw_lo + i) % d->sw_cap][0];
       n[i][1] = d->sw[(d->sw_lo + i) % d->sw_cap][1];
@@ -77,7 +78,7 @@ static void sweep_add(struct dram_channel *d, uint64_t entry, uint64_t start) {
     d->sw_cap = cap;
     d->sw_lo = 0;
   }
-  uint64_t *r = d->sw[(d->sw_lo + d->sw_n) % d->sw_cap];
+  dram_tick *r = d->sw[(d->sw_lo + d->sw_n) % d->sw_cap];
   r[0] = entry;
   r[1] = start;
   d->sw_n++;
@@ -105,7 +106,7 @@ static void ev_space(void *ctx, uint64_t arg) {
 }
 
 /* Is a FIFO place free at tick now? The request queue_depth ahead has started. */
-static bool place_free(const struct dram_channel *d, uint64_t now_ticks) {
+static bool place_free(const struct dram_channel *d, dram_tick now_ticks) {
   return d->k < d->p.queue_depth || d->starts[d->k % d->p.queue_depth] <= now_ticks;
 }
 
@@ -113,23 +114,22 @@ static bool ch_can_take(const void *self, uint64_t addr, bool write) {
   const struct dram_channel *d = self;
   (void)addr;
   (void)write;
-  return place_free(d, engine_now(d->eng) << DRAM_TICK_BITS);
+  return place_free(d, (dram_tick)engine_now(d->eng) << DRAM_TICK_BITS);
 }
 
 static void ch_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   struct dram_channel *d = self;
   (void)addr;
   const uint64_t now = engine_now(d->eng);
-  CHECK_LT(now, (1ull << (64 - DRAM_TICK_BITS - 1)));
-  const uint64_t arrive = now << DRAM_TICK_BITS;
+  const dram_tick arrive = (dram_tick)now << DRAM_TICK_BITS;
   CHECK(place_free(d, arrive));
   sweep_to(d, arrive);
   uint32_t slot = (uint32_t)(d->k % d->p.queue_depth);
-  uint64_t start = arrive > d->st.last_end_ticks ? arrive : d->st.last_end_ticks;
+  dram_tick start = arrive > d->st.last_end_ticks ? arrive : d->st.last_end_ticks;
   /* At least one tick, so a transfer always takes time. */
   uint64_t dur = (uint64_t)llround((double)LINE_BYTES * d->ticks_per_byte);
   if (dur == 0) dur = 1;
-  uint64_t end = start + dur;
+  dram_tick end = start + dur;
   d->starts[slot] = start;
   d->k++;
   d->st.requests++;
@@ -150,7 +150,7 @@ static void ch_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   }
 }
 
-static void ch_finish(void *self) { sweep_to(self, UINT64_MAX); }
+static void ch_finish(void *self) { sweep_to(self, TICK_FOREVER); }
 
 static void ch_report(const void *self, struct stats_table *t, uint64_t cycles) {
   const struct dram_channel *d = self;

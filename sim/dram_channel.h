@@ -7,15 +7,20 @@
  *
  * The FIFO is deterministic, so a request's whole timing is known when it is
  * taken. Time inside the channel is kept in ticks of 2^-DRAM_TICK_BITS cycle,
- * so fractional transfer times add up without drift. */
+ * so fractional transfer times add up without drift; ticks are 128-bit, so
+ * any cycle the engine can reach (a 64-bit count) has its tick. */
 #ifndef RTSIM_SIM_DRAM_CHANNEL_H
 #define RTSIM_SIM_DRAM_CHANNEL_H
 
 #include <stdint.h>
 
 #include "sim/dram_level.h"
+#include "sim/err.h"
 
 #define DRAM_TICK_BITS 20
+
+/* A time in ticks. */
+typedef unsigned __int128 dram_tick;
 
 struct dram_channel_params {
   uint64_t latency_cycles;
@@ -28,13 +33,13 @@ const char *dram_channel_params_problem(const struct dram_channel_params *p);
 
 struct dram_channel_stats {
   uint64_t requests;
-  uint64_t busy_ticks;     /* transfer time */
-  uint64_t wait_ticks_sum; /* from take to the start of the transfer (the FIFO wait), exact */
+  dram_tick busy_ticks;     /* transfer time */
+  dram_tick wait_ticks_sum; /* from take to the start of the transfer (the FIFO wait), exact */
   /* The FIFO's occupancy integral, by time (in cycles x requests), apart from
    * the waits, for Little's law; complete after finish. */
   double fifo_area;
   uint32_t fifo_max;
-  uint64_t last_end_ticks; /* when the channel is next free */
+  dram_tick last_end_ticks; /* when the channel is next free */
 };
 
 struct dram_channel;
@@ -44,8 +49,10 @@ struct dram_channel *dram_channel_create(const struct dram_channel_params *p, st
                                          const struct dram_client *client);
 extern const struct dram_level_ops dram_channel_ops; /* self: a struct dram_channel * */
 
-static inline uint64_t dram_ticks_to_cycles_ceil(uint64_t ticks) {
-  return (ticks + ((1ull << DRAM_TICK_BITS) - 1)) >> DRAM_TICK_BITS;
+static inline uint64_t dram_ticks_to_cycles_ceil(dram_tick ticks) {
+  dram_tick c = (ticks + ((1ull << DRAM_TICK_BITS) - 1)) >> DRAM_TICK_BITS;
+  CHECK(c <= (dram_tick)UINT64_MAX);
+  return (uint64_t)c;
 }
 
 #endif

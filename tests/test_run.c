@@ -604,6 +604,9 @@ static void test_command_extremes(void) {
       "--set dram.latency=0 --set dram.bytes_per_cycle=10000",
       "--set dram.latency=1000000 --set timeline.window=1",
       "--set dram.bytes_per_cycle=0.01 --set l2.size=64 --set l2.ways=full --set l2.mshrs=1",
+      /* Simulated time past 2^43 cycles (the channel's ticks were 64-bit). */
+      "--set dram.latency=1000000000",
+      "--set dram.bytes_per_cycle=0.000001",
       "--policy dynamic --set cores=1 --set threads_per_core=1 --set rays_per_thread=1",
       "--policy dynamic --set cores=16 --set threads_per_core=8 --set rays_per_thread=8",
       "--policy dynamic --set dram.latency=0 --set dram.bytes_per_cycle=10000",
