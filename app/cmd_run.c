@@ -15,6 +15,7 @@
 #include "renderer/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
+#include "sim/coro.h"
 #include "sim/err.h"
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
@@ -126,6 +127,20 @@ int cmd_run(int argc, char **argv) {
                                    sizeof whybuf);
   if (!why && mc.p.sample_fraction < 1 && trace_path)
     why = "sample.fraction: --dram-trace records a whole run; a sampled run skips most of the work";
+  /* Every ray context may hold a coroutine stack at once (the timed rungs). */
+  const uint64_t stack_limit = coro_host_stack_limit();
+  if (!why && !analytic && contexts > stack_limit) {
+    snprintf(whybuf, sizeof whybuf,
+             "cores x threads_per_core x rays_per_thread = %u ray contexts, and this host lets "
+             "a process map the stacks of at most %llu (vm.max_map_count: two mappings a "
+             "stack); fewer contexts, or raise the limit (sysctl vm.max_map_count)",
+             contexts, (unsigned long long)stack_limit);
+    const struct machine_cfg_origin *o = &mc.at[machine_cfg_find("cores")];
+    err_set(&e, o->file[0] ? o->file : machine_path, o->line, o->col, "%s", whybuf);
+    app_report(&e);
+    app_world_fini(&w);
+    goto done;
+  }
   if (why) {
     const struct machine_cfg_origin *o = &mc.at[machine_cfg_find("sample.fraction")];
     err_set(&e, o->file[0] ? o->file : machine_path, o->line, o->col, "%s", why);

@@ -4,6 +4,7 @@
 #include "sim/coro.h"
 
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -90,6 +91,16 @@ void coro_pool_destroy(struct coro_pool *p) {
     free(s);
   }
   free(p);
+}
+
+uint64_t coro_host_stack_limit(void) {
+  FILE *f = fopen("/proc/sys/vm/max_map_count", "r");
+  if (!f) return UINT64_MAX;
+  unsigned long long n = 0;
+  int ok = fscanf(f, "%llu", &n);
+  fclose(f);
+  if (ok != 1) return UINT64_MAX;
+  return n > 4096 ? (n - 4096) / 2 : 0;
 }
 
 static struct stack *stack_get(struct coro_pool *p) {

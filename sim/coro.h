@@ -10,6 +10,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 typedef void (*coro_fn)(void *arg);
 
@@ -26,6 +27,13 @@ void coro_pool_destroy(struct coro_pool *p); /* NULL ok */
 /* The default stack size: the deepest measured use of the renderer's workers
  * with a wide margin (see coro.c); larger under the sanitizers. */
 size_t coro_default_stack_bytes(void);
+
+/* How many coroutine stacks this host lets a process map at once: each takes
+ * two memory mappings (its guard page and the stack), and the kernel allows
+ * vm.max_map_count of them (/proc/sys/vm/max_map_count), some of which the
+ * program, its libraries and its heap hold (a reserve of 4096 is kept).
+ * UINT64_MAX when the limit cannot be read. */
+uint64_t coro_host_stack_limit(void);
 
 /* A coroutine that will run fn(arg) when first resumed. */
 struct coro *coro_create(struct coro_pool *p, coro_fn fn, void *arg);

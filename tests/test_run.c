@@ -575,6 +575,18 @@ static void test_command(void) {
       {"run CFG SCN -o DIR --width 0", "--width: got '0'"},
       {"run CFG " RTSIM_TEST_DATA "/scenes/bad_color.yaml -o DIR", "bad_color.yaml:"},
   };
+  /* More ray contexts than this host can map coroutine stacks for: refused
+   * before the run, not a crash inside it (4096 x 4 x 4 = 65,536 stacks). */
+  if (coro_host_stack_limit() < 65536) {
+    snprintf(cmd, sizeof cmd,
+             "%s run %s %s -o %s/run_many --width 8 --height 8 --set cores=4096 "
+             "--set threads_per_core=4 --set rays_per_thread=4",
+             RTSIM_BINARY, tiny, scene, RTSIM_TMP);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 2 && strstr(out, "--set cores=4096: error: cores x threads_per_core x "
+                                   "rays_per_thread = 65536 ray contexts, and this host"),
+            "too many contexts for the host: exit %d, '%s'", rc, out);
+  }
   const char *bad_dir = RTSIM_TMP "/run_bad";
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
     char args[2048] = "", *o = args;
