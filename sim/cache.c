@@ -80,6 +80,16 @@ static void table_del(struct cache *c, uint64_t line) {
   }
 }
 
+uint64_t cache_host_bytes(const struct cache_params *p) {
+  const uint64_t lines = p->size_bytes >> p->lg2_line, ways = p->ways ? p->ways : lines;
+  const uint64_t sets = lines / ways;
+  uint64_t b = sizeof(struct cache) + lines * sizeof(struct slot) + 2 * sets * sizeof(uint32_t);
+  if (ways <= SCAN_WAYS) return b;
+  uint64_t tsize = 16;
+  while (tsize < 2 * lines) tsize *= 2;
+  return b + tsize * sizeof(uint32_t); /* the table */
+}
+
 struct cache *cache_create(const struct cache_params *p) {
   CHECK(cache_params_problem(p) == NULL);
   struct cache *c = xcalloc(1, sizeof *c);

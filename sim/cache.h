@@ -20,6 +20,9 @@ const char *cache_params_problem(const struct cache_params *p);
 
 struct cache;
 
+/* The host bytes cache_create(p) allocates (p usable). */
+uint64_t cache_host_bytes(const struct cache_params *p);
+
 /* p must pass cache_params_problem (CHECKed). Caller destroys. */
 struct cache *cache_create(const struct cache_params *p);
 void cache_destroy(struct cache *c); /* NULL ok */
