@@ -148,8 +148,6 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
     CHECK(sample_problem(mp, k, policy_job_total(r.job), n, why, sizeof why) == NULL);
     sample_init(&t->sample, mp, policy_job_total(r.job), n);
     t->sample.m = t->m;
-    t->sample.workers = r.workers;
-    t->sample.nworkers = n;
   }
   if (dram_trace) dram_trace_to(machine_dram(t->m), dram_trace);
   r.t0 = app_now();
@@ -158,7 +156,6 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
   if (progress) fputc('\n', stderr);
   policy_job_finish(r.job, &t->st, &t->ts);
   if (t->sampled) {
-    t->sample.workers = NULL;
     sample_finish(&t->sample, render_stats_total(&t->st));
   }
   free(r.workers);

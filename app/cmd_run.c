@@ -121,7 +121,10 @@ int cmd_run(int argc, char **argv) {
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   const bool analytic = mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC;
+  /* What the config asks that cannot run here, refused at the key that asks
+   * it before anything runs. */
   char whybuf[512];
+  const char *key = "sample.fraction";
   const uint32_t contexts = mc.p.cores * mc.p.threads_per_core * mc.p.rays_per_thread;
   const char *why = sample_problem(&mc.p, policy, app_work_items(policy, W, H), contexts, whybuf,
                                    sizeof whybuf);
@@ -135,13 +138,10 @@ int cmd_run(int argc, char **argv) {
              "a process map the stacks of at most %llu (vm.max_map_count: two mappings a "
              "stack); fewer contexts, or raise the limit (sysctl vm.max_map_count)",
              contexts, (unsigned long long)stack_limit);
-    const struct machine_cfg_origin *o = &mc.at[machine_cfg_find("cores")];
-    err_set(&e, o->file[0] ? o->file : machine_path, o->line, o->col, "%s", whybuf);
-    app_report(&e);
-    app_world_fini(&w);
-    goto done;
+    why = whybuf;
+    key = "cores";
   }
-  /* The caches' tags are allocated whole (README: what a run costs the host). */
+  /* The caches' tags are allocated whole (README: Config keys). */
   const uint64_t tag_bytes = machine_cache_host_bytes(&mc.p);
   const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
   const uint64_t host_bytes = pages > 0 && page > 0 ? (uint64_t)pages * (uint64_t)page : UINT64_MAX;
@@ -151,16 +151,11 @@ int cmd_run(int argc, char **argv) {
              "cores; about 24 bytes a line), more than three quarters of this host's %.1f GB: "
              "smaller caches or fewer cores",
              (double)tag_bytes / 1e9, (double)host_bytes / 1e9);
-    const struct machine_cfg_origin *o =
-        &mc.at[machine_cfg_find(mc.p.l1_size_bytes * mc.p.cores > mc.p.l2_size_bytes ? "l1.size"
-                                                                                      : "l2.size")];
-    err_set(&e, o->file[0] ? o->file : machine_path, o->line, o->col, "%s", whybuf);
-    app_report(&e);
-    app_world_fini(&w);
-    goto done;
+    why = whybuf;
+    key = mc.p.l1_size_bytes * mc.p.cores > mc.p.l2_size_bytes ? "l1.size" : "l2.size";
   }
   if (why) {
-    const struct machine_cfg_origin *o = &mc.at[machine_cfg_find("sample.fraction")];
+    const struct machine_cfg_origin *o = &mc.at[machine_cfg_find(key)];
     err_set(&e, o->file[0] ? o->file : machine_path, o->line, o->col, "%s", why);
     app_report(&e);
     app_world_fini(&w);

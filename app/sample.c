@@ -103,9 +103,6 @@ static void probe(struct sampler *s, uint64_t *at) {
   at[SQ_DRAM_BYTES] = p.dram_bytes;
   at[SQ_LAT_SUM] = p.load_latency_sum;
   at[SQ_LAT_N] = p.loads_timed;
-  uint64_t rays = 0;
-  for (uint32_t i = 0; i < s->nworkers; i++) rays += render_stats_total(&s->workers[i].st);
-  at[SQ_RAYS] = rays;
 }
 
 enum policy_item sample_item(void *ctx, uint64_t k, uint32_t core, struct mem_port *port) {
@@ -151,7 +148,6 @@ void sample_finish(struct sampler *s, uint64_t rays_total) {
   u->at1[SQ_DRAM_BYTES] = st->l2.fetch_bytes + st->l2.writeback_bytes;
   u->at1[SQ_LAT_SUM] = st->load_latency.sum;
   u->at1[SQ_LAT_N] = st->load_latency.count;
-  u->at1[SQ_RAYS] = rays_total;
   u->have1 = true;
   s->rays_total = rays_total;
   s->slots_detailed = st->issue_slots;

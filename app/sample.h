@@ -38,7 +38,7 @@ struct stats_table;
 struct err;
 
 /* What a unit measured, per quantity (differences of two probes). */
-enum sample_q { SQ_CYCLES, SQ_SLOTS, SQ_DRAM_BYTES, SQ_RAYS, SQ_LAT_SUM, SQ_LAT_N, SQ_COUNT };
+enum sample_q { SQ_CYCLES, SQ_SLOTS, SQ_DRAM_BYTES, SQ_LAT_SUM, SQ_LAT_N, SQ_COUNT };
 
 struct sample_unit {
   uint64_t stratum_lo, stratum_hi; /* the stratum's items [lo, hi) */
@@ -49,8 +49,6 @@ struct sample_unit {
 
 struct sampler {
   struct machine *m;
-  const struct policy_worker *workers; /* for the rays traced so far */
-  uint32_t nworkers;
   uint64_t total; /* work items */
   uint32_t n;     /* units */
   struct sample_unit *u;

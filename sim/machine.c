@@ -430,10 +430,11 @@ static const struct mem_ops timed_ops = {t_load, t_store, t_compute, t_wait};
 
 /* ---- the warming door (sampling's fast-forward) ---- */
 
-static void w_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
-  struct mwarm *w = ctx;
+/* One access through core's warming port: a load fills the L1 on a miss, a
+ * store (write-through, no allocation) only refreshes a line it holds; what
+ * the L1 did not hold warms the L2 (a store always reaches it). */
+static void warm_access(struct mwarm *w, uint64_t addr, uint32_t size, bool store) {
   struct machine *m = w->m;
-  (void)cls;
   m->warm_slots++;
   struct cache *l1 = m->core[w->core].l1;
   for (uint64_t line = addr >> MACHINE_LG2_LINE, end = (addr + size - 1) >> MACHINE_LG2_LINE;
@@ -442,29 +443,24 @@ static void w_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
       uint32_t s = cache_find(l1, line);
       if (s != CACHE_NONE) {
         cache_touch(l1, s);
-        continue;
+        if (!store) continue;
+      } else if (!store) {
+        s = cache_victim(l1, line);
+        if (s != CACHE_NONE) cache_install(l1, s, line, false, false);
       }
-      s = cache_victim(l1, line);
-      if (s != CACHE_NONE) cache_install(l1, s, line, false, false);
     }
-    l2_warm(m->l2, line, false);
+    l2_warm(m->l2, line, store);
   }
 }
 
-static void w_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
-  struct mwarm *w = ctx;
-  struct machine *m = w->m;
+static void w_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   (void)cls;
-  m->warm_slots++;
-  struct cache *l1 = m->core[w->core].l1;
-  for (uint64_t line = addr >> MACHINE_LG2_LINE, end = (addr + size - 1) >> MACHINE_LG2_LINE;
-       line <= end; line++) {
-    if (l1) {
-      uint32_t s = cache_find(l1, line);
-      if (s != CACHE_NONE) cache_touch(l1, s);
-    }
-    l2_warm(m->l2, line, true);
-  }
+  warm_access(ctx, addr, size, false);
+}
+
+static void w_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  (void)cls;
+  warm_access(ctx, addr, size, true);
 }
 
 static void w_compute(void *ctx, uint64_t cycles) {

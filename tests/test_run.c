@@ -448,28 +448,6 @@ static void test_machine_plan(void) {
   }
 }
 
-/* RGB planes of two EXR files are equal, bit for bit. */
-static int same_rgb(const char *a, const char *b) {
-  struct image x, y;
-  struct err e;
-  memset(&e, 0, sizeof e);
-  if (!image_read_exr(&x, a, &e)) return 0;
-  if (!image_read_exr(&y, b, &e)) {
-    image_fini(&x);
-    return 0;
-  }
-  int same = x.width == y.width && x.height == y.height;
-  const char *ch[] = {"R", "G", "B"};
-  for (int i = 0; i < 3 && same; i++) {
-    int cx = image_channel(&x, ch[i]), cy = image_channel(&y, ch[i]);
-    same = cx >= 0 && cy >= 0 &&
-           !memcmp(x.planes[cx], y.planes[cy], (size_t)x.width * x.height * sizeof(float));
-  }
-  image_fini(&x);
-  image_fini(&y);
-  return same;
-}
-
 static int same_file(const char *a, const char *b, int skip_wall) {
   FILE *fa = fopen(a, "rb"), *fb = fopen(b, "rb");
   int same = fa && fb;
@@ -519,7 +497,7 @@ static void test_command(void) {
     for (int f = 0; f < 5; f++) EXPECTF(exists(dirs[i], files[f]), "%s/%s missing", dirs[i], files[f]);
     char img[2048];
     snprintf(img, sizeof img, "%s/image.exr", dirs[i]);
-    EXPECTF(same_rgb(ref, img), "%s: RGB differs from rtsim render's", dirs[i]);
+    EXPECTF(testing_same_rgb(ref, img), "%s: RGB differs from rtsim render's", dirs[i]);
   }
   const char *names[] = {"stats.csv", "timeline.csv", "image.exr", "stats.json"};
   for (int d = 0; d < 2; d++) /* recursive, then dynamic: the same bytes twice */
