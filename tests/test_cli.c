@@ -145,6 +145,9 @@ int main(void) {
       {"bench --analyser 0", "--analyser: got '0'"},
       {"bench --timed " RTSIM_TEST_DATA "/configs/bad_size_unit.yaml " SCN "good_room_tiny.yaml", "bad_size_unit.yaml:2:9: error: l2.size: not a size"},
       {"bench --timed", "option --timed needs a value"},
+      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --sample 0 " SCN "good_room_tiny.yaml", "--sample: got '0', expected a fraction above 0 and at most 1"},
+      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --sample ' 0.5' " SCN "good_room_tiny.yaml", "--sample: got ' 0.5'"},
+      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --sample 0.01 --width 8 --height 8 " SCN "good_room_tiny.yaml", "--sample 0.01 on"},
       {"bench --rays primary,glossy " SCN "good_room_tiny.yaml", "--rays: got 'primary,glossy'"},
 #ifndef RTSIM_HAVE_EMBREE
       {"bench --embree " SCN "good_room_tiny.yaml", "--embree: this rtsim was built without Embree"},
