@@ -1,10 +1,10 @@
 /* SAH k-d tree builder with PBRT-v3 KdTreeAccel's cost model and leaf rules,
  * over presorted bound events: each axis's events are radix-sorted once and
  * split stably at every node, so a build is O(N log N) instead of PBRT's
- * per-node sort. Split positions are trimmed to an even mantissa BEFORE the
- * triangles are classified, so the stored split is exactly the plane they were
- * classified against (conservative: no ray can miss a triangle because the
- * split moved). Children and their lists are indices and arena offsets. */
+ * per-node sort. Candidate planes are the triangle bounds themselves and are
+ * stored exactly, so the tree depends only on the order of coordinates and on
+ * SAH costs, both unchanged (up to rounding) when the scene is scaled.
+ * Children and their lists are indices and arena offsets. */
 #include "renderer/kdtree.h"
 
 #include <float.h>
@@ -50,32 +50,6 @@ struct kd_builder {
   struct kd_ev *sev[2][3];
   uint32_t sev_len[2][3], sev_cap;
 };
-
-float kd_trim_split(float s) {
-  uint32_t u;
-  memcpy(&u, &s, sizeof u);
-  u &= ~1u;
-  memcpy(&s, &u, sizeof s);
-  return s;
-}
-
-static bool mantissa_odd(float s) {
-  uint32_t u;
-  memcpy(&u, &s, sizeof u);
-  return (u & 1u) != 0;
-}
-
-/* The float next to an odd-mantissa (hence finite, nonzero) s, toward +inf if
- * up, else toward -inf: nextafterf without the call. May give +-inf for
- * +-FLT_MAX; callers keep only values strictly inside a finite box. */
-static float odd_step(float s, bool up) {
-  uint32_t u;
-  memcpy(&u, &s, sizeof u);
-  bool neg = (u & 0x80000000u) != 0;
-  u = (up != neg) ? u + 1 : u - 1;
-  memcpy(&s, &u, sizeof s);
-  return s;
-}
 
 void kd_build_params_default(struct kd_build_params *p) {
   p->cost_traversal = 1.0f;
@@ -132,7 +106,7 @@ static void sort_events(struct kd_ev *ev, size_t n) {
 static uint32_t new_node(struct kd_builder *b) {
   struct kd_tree *t = b->t;
   if (t->node_count == b->node_cap) {
-    CHECK_LT(b->node_cap, 1u << 30);
+    CHECK_LT(b->node_cap, KD_MAX_NODES);
     b->node_cap = b->node_cap ? 2 * b->node_cap : 1024;
     t->nodes = xrealloc(t->nodes, (unsigned long long)b->node_cap * sizeof *t->nodes);
   }
@@ -223,10 +197,13 @@ static inline void consider(const struct kd_builder *b, const struct kd_box *bx,
   }
 }
 
-/* Sweep axis a's sorted events. Candidates are the event values trimmed to an
- * even mantissa in both directions (for an odd value v: the floats just below
- * and just above v), and the counts are exact for the trimmed plane s:
- *   below = #(lower bound < s) + #(flat at s),  above = #(upper bound > s) + #(flat at s). */
+/* Sweep axis a's sorted events. Each distinct event value v is a candidate,
+ * with counts exact for the plane s = v:
+ *   below = #(lower bound < s) + #(flat at s),  above = #(upper bound > s) + #(flat at s).
+ * NOTE: every candidate must be treated alike, whatever its bits: the builder
+ * once allowed only even mantissas (to free a flag bit) and stepped odd values
+ * one float aside, which made the choice depend on the float grid and so on
+ * the scene's units. */
 static void sweep_axis(const struct kd_builder *b, const struct kd_lists *l, const struct kd_box *bx,
                        double inv_area, int a, struct kd_plane *best) {
   const struct kd_ev *ev = b->arena + l->off;
@@ -253,19 +230,8 @@ static void sweep_axis(const struct kd_builder *b, const struct kd_lists *l, con
       g_p += ty == KD_EV_PLANAR;
       k++;
     }
-    if (!mantissa_odd(v)) {
-      consider(b, bx, inv_area, a, v, lt_s + lt_p + g_p, (n_end - lt_e - g_e) + (n_planar - lt_p),
-               best);
-    } else {
-      float dn = odd_step(v, false), up = odd_step(v, true);
-      /* dn equal to the previous group's value was evaluated there, with its events. */
-      if (j == 0 || dn != ev[j - 1].t)
-        consider(b, bx, inv_area, a, dn, lt_s + lt_p, (n_end - lt_e) + (n_planar - lt_p), best);
-      /* up equal to the next group's value is evaluated there. */
-      if (k == m || up != ev[k].t)
-        consider(b, bx, inv_area, a, up, lt_s + g_s + lt_p + g_p,
-                 (n_end - lt_e - g_e) + (n_planar - lt_p - g_p), best);
-    }
+    consider(b, bx, inv_area, a, v, lt_s + lt_p + g_p, (n_end - lt_e - g_e) + (n_planar - lt_p),
+             best);
     lt_s += g_s;
     lt_e += g_e;
     lt_p += g_p;
@@ -448,13 +414,11 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
     return;
   }
 
-  /* Classify against the trimmed plane (best.s has an even mantissa already),
-   * from the split axis's events, i.e. the node's own (clipped) bounds: below
-   * if the lower bound is < s, above if the upper bound is > s, both if flat
-   * at s. Triangles on both sides are the straddlers. */
+  /* Classify against the plane, from the split axis's events, i.e. the node's
+   * own (clipped) bounds: below if the lower bound is < s, above if the upper
+   * bound is > s, both if flat at s. Triangles on both sides are the straddlers. */
   int a = best.axis;
   float s = best.s;
-  CHECK(!mantissa_odd(s) && kd_trim_split(s) == s);
   size_t base_a = 0;
   for (int k = 0; k < a; k++) base_a += l->len[k];
   const struct kd_ev *ea = b->arena + l->off + base_a;
@@ -522,12 +486,12 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
 
   build_node(b, &below, &lb, nb, depth + 1, depth_left - 1, bad_refines);
   uint32_t above_idx = t->node_count;
-  CHECK_LT(above_idx, 1u << 30);
+  CHECK_LT(above_idx, KD_MAX_NODES);
   build_node(b, &above, &la, na, depth + 1, depth_left - 1, bad_refines);
   uint32_t bits;
   memcpy(&bits, &s, sizeof bits);
   t->nodes[i].w0 = bits;
-  t->nodes[i].w1 = (above_idx << 2) | (uint32_t)a;
+  t->nodes[i].w1 = (above_idx << 3) | (uint32_t)a;
   b->arena_top = l->off;
 }
 

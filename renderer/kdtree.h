@@ -1,11 +1,14 @@
 /* SAH k-d tree over a scene's triangles, in the spirit of PBRT's KdTreeAccel,
- * with the paper's 8-byte nodes. The split position's lowest mantissa bit is
- * trimmed at build time (triangles are classified against the trimmed value,
- * so trimming is conservative) and the freed bit marks a queue point.
+ * with the paper's 8-byte nodes. Splits are stored exactly; the queue-point
+ * flag lives in bit 2 of w1 in both node kinds. (The split's lowest mantissa
+ * bit used to hold it; trimming every split to an even mantissa made the
+ * candidate planes depend on the float grid, so a scene scaled by 3 or 0.1
+ * built a different tree.)
  *
  * Node layout (two 32-bit words, children by index):
- *   interior: w0 = split as float bits, bit 0 = queue-point flag
- *             w1 = (above_child << 2) | axis (0,1,2); below child = this + 1
+ *   interior: w0 = split as float bits
+ *             w1 = (above_child << 3) | (queue_flag << 2) | axis (0,1,2);
+ *             below child = this + 1
  *   leaf:     w0 = offset of its first entry in the primitive index list
  *             w1 = (prim_count << 3) | (queue_flag << 2) | 3                     */
 #ifndef RTSIM_RENDERER_KDTREE_H
@@ -26,28 +29,21 @@ _Static_assert(sizeof(struct kd_node) == 8, "the paper's 8-byte k-d node");
 
 static inline bool kd_is_leaf(struct kd_node n) { return (n.w1 & 3u) == 3u; }
 static inline int kd_axis(struct kd_node n) { return (int)(n.w1 & 3u); }
-static inline uint32_t kd_above(struct kd_node n) { return n.w1 >> 2; }
+static inline uint32_t kd_above(struct kd_node n) { return n.w1 >> 3; }
 static inline uint32_t kd_leaf_count(struct kd_node n) { return n.w1 >> 3; }
 static inline uint32_t kd_leaf_offset(struct kd_node n) { return n.w0; }
 static inline float kd_split(struct kd_node n) {
-  uint32_t u = n.w0 & ~1u;
   float f;
-  memcpy(&f, &u, sizeof f);
+  memcpy(&f, &n.w0, sizeof f);
   return f;
 }
-static inline bool kd_is_queue_point(struct kd_node n) {
-  return kd_is_leaf(n) ? ((n.w1 >> 2) & 1u) != 0 : (n.w0 & 1u) != 0;
-}
+static inline bool kd_is_queue_point(struct kd_node n) { return ((n.w1 >> 2) & 1u) != 0; }
 static inline void kd_set_queue_point(struct kd_node *n, bool on) {
-  if (kd_is_leaf(*n))
-    n->w1 = on ? (n->w1 | 4u) : (n->w1 & ~4u);
-  else
-    n->w0 = on ? (n->w0 | 1u) : (n->w0 & ~1u);
+  n->w1 = on ? (n->w1 | 4u) : (n->w1 & ~4u);
 }
 
-/* Trim a split position to a float whose lowest mantissa bit is 0 (exactly the
- * value kd_split returns for a node built with it). */
-float kd_trim_split(float s);
+/* Most nodes a tree may have: a child index takes 29 bits of w1. */
+#define KD_MAX_NODES (1u << 29)
 
 struct kd_build_params {
   float cost_traversal; /* SAH cost of one traversal step (PBRT: 1) */

@@ -36,8 +36,8 @@ static void figure1_tree(struct kd_tree *kd) {
   uint32_t leaf = 0;
   for (uint32_t i = 0; i < 15; i++) {
     if (FIG_ABOVE[i]) {
-      kd->nodes[i].w0 = 0x3f800000u; /* split 1.0f: its low bit is free */
-      kd->nodes[i].w1 = (FIG_ABOVE[i] << 2) | 0u;
+      kd->nodes[i].w0 = 0x3f800000u; /* split 1.0f */
+      kd->nodes[i].w1 = (FIG_ABOVE[i] << 3) | 0u;
     } else {
       uint32_t lo = FIG_LEAF[leaf][0], hi = FIG_LEAF[leaf][1], n = hi - lo + 1;
       kd->nodes[i].w0 = kd->prim_ref_count;
