@@ -89,6 +89,9 @@ static inline __attribute__((always_inline)) bool isect_perm(const struct trace_
   float det = e0 + e1 + e2;
   if (det == 0.0f || isnan(det)) return false;
 
+  /* The sheared z in scene units, for the error bounds of x and y below. */
+  float max_z = max_nonnan(fabsf(az), max_nonnan(fabsf(bz), fabsf(cz)));
+
   /* Scaled distance; compare against the range times det before dividing. The
    * scaled test is loosened by a few ulps so it never rejects a t that the
    * exact test on the divided value below would accept. */
@@ -112,8 +115,13 @@ static inline __attribute__((always_inline)) bool isect_perm(const struct trace_
   float max_xt = max_nonnan(fabsf(ax), max_nonnan(fabsf(bx), fabsf(cx)));
   float max_yt = max_nonnan(fabsf(ay), max_nonnan(fabsf(by), fabsf(cy)));
   float delta_z = gamma_f(3) * max_zt;
-  float delta_x = gamma_f(5) * (max_xt + max_zt);
-  float delta_y = gamma_f(5) * (max_yt + max_zt);
+  /* x - sx z is off by at most gamma5 (|x| + |z|) (|sx| <= 1), z in scene units
+   * like x. PBRT-v3 adds the z already divided by the ray's main direction
+   * component (max_zt), which mixes units: with a direction not of unit length
+   * (a shadow ray to a light) the bound then shrinks or grows with the scene's
+   * scale, and at 1/1000 of it rejected hits up to 3e-4 of the ray away. */
+  float delta_x = gamma_f(5) * (max_xt + max_z);
+  float delta_y = gamma_f(5) * (max_yt + max_z);
   float delta_e = 2.0f * (gamma_f(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
   float max_e = max_nonnan(fabsf(e0), max_nonnan(fabsf(e1), fabsf(e2)));
   float delta_t =
