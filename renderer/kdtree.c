@@ -165,6 +165,20 @@ static void make_leaf(struct kd_builder *b, uint32_t i, const struct kd_lists *l
   t->stats.leaf_prim_refs += n;
 }
 
+/* Relative margin within which two box extents or two SAH costs count as a
+ * tie: the axis rule below decides as if equal, and a plane keeps the best
+ * found first.
+ * Scaling a scene rounds its coordinates by up to 2^-24 of their size, and
+ * with a strict comparison that decides exact and near ties (cubes, symmetric
+ * objects) differently at every scale. Cost: a plane must beat the best by
+ * 1e-6 of its cost, far below anything the SAH can see. Ties closer than the
+ * rounding to the margin itself still flip; on a box much smaller than its
+ * distance to the origin the rounding is relatively larger and can exceed it. */
+#define KD_TIE 1e-6
+
+/* Extent x is longer than y by more than a tie. */
+static bool longer(float x, float y) { return (double)x > (double)y * (1.0 + KD_TIE); }
+
 /* The best split plane found so far: its SAH cost, position and axis (-1: none). */
 struct kd_plane {
   double cost;
@@ -179,7 +193,8 @@ static double box_area(const struct kd_box *bx) {
 }
 
 /* SAH cost of splitting bx at s on axis a with nb triangles below, na above
- * (PBRT-v3's formula, evaluated in double). */
+ * (PBRT-v3's formula, evaluated in double); kept if it beats the best by more
+ * than a tie. */
 static inline void consider(const struct kd_builder *b, const struct kd_box *bx, double inv_area, int a,
                      float s, uint32_t nb, uint32_t na, struct kd_plane *best) {
   if (!(s > bx->lo[a] && s < bx->hi[a])) return;
@@ -190,7 +205,7 @@ static inline void consider(const struct kd_builder *b, const struct kd_box *bx,
   double eb = (na == 0 || nb == 0) ? b->p->empty_bonus : 0.0;
   double cost = b->p->cost_traversal +
                 b->p->cost_isect * (1.0 - eb) * (below * inv_area * nb + above * inv_area * na);
-  if (cost < best->cost) {
+  if (cost < best->cost * (1.0 - KD_TIE)) {
     best->cost = cost;
     best->s = s;
     best->axis = a;
@@ -396,13 +411,14 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
     return;
   }
 
-  /* Choose the split: the box's longest axis first, the others if it has no candidate. */
+  /* Choose the split: the box's longest axis first (ties: the later axis, as PBRT), the
+   * others if it has no candidate. */
   struct kd_plane best = {INFINITY, 0.0f, -1};
   double area = box_area(bx);
   if (area > 0.0) {
     double inv_area = 1.0 / area;
     float d[3] = {bx->hi[0] - bx->lo[0], bx->hi[1] - bx->lo[1], bx->hi[2] - bx->lo[2]};
-    int axis = (d[0] > d[1] && d[0] > d[2]) ? 0 : (d[1] > d[2] ? 1 : 2);
+    int axis = (longer(d[0], d[1]) && longer(d[0], d[2])) ? 0 : (longer(d[1], d[2]) ? 1 : 2);
     for (int retries = 0; retries < 3 && best.axis < 0; retries++, axis = (axis + 1) % 3)
       sweep_axis(b, l, bx, inv_area, axis, &best);
   }
