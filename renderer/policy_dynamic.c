@@ -16,10 +16,26 @@
  * batch goes through phases: its primary rays are admitted (each worker takes
  * the next), then each phase (closest hits, shadow rays) drains its own queue
  * set (the store's active set); a phase ends when no ray of it is queued or
- * being traced, and the worker that finds it over starts the next. A worker
- * with nothing to take meanwhile waits dyn_wait_cycles (mem_wait) and looks
- * again. With one worker all this is the single loop it always was: the same
- * accesses in the same order.
+ * being traced, and the worker that finds it over starts the next. With one
+ * worker all this is the single loop it always was: the same accesses in the
+ * same order.
+ *
+ * A worker with nothing to take parks (mem_park: no events, no issue slots,
+ * no stack while parked) and is woken by the worker whose action makes work
+ * for it, as many as the new work can feed:
+ * - an enqueue that gives the active set a new free queue wakes one idle
+ *   worker (to take it), once its table store has published the ray;
+ * - a take or a new pass (qdrain STARTED) wakes up to one worker a claim it
+ *   offers, besides the starter: first the core's own workers waiting for its
+ *   pass, then idle ones (they join);
+ * - the end of a pass that another follows wakes the core's workers waiting
+ *   for it (one of them starts the next);
+ * - a new phase wakes one idle worker a free queue; the end of a batch wakes
+ *   every parked worker (they go on to the next batch, or finish).
+ * - a ray's store wakes the worker whose claim waits for it: a claim is
+ *   traced once all its rays are stored (qstore.h's hazards).
+ * A woken worker that finds the work gone (someone running took it) parks
+ * again.
  *
  * Same image as the recursive policy, bit for bit: every ray tests the same
  * triangles as under trace.c (qwalk.h says why), the hit rule (trav.h) does
@@ -58,13 +74,7 @@
 #include "renderer/trace.h"
 #include "sim/err.h"
 
-/* A worker that keeps finding nothing to take doubles its wait, up to
- * 2^DYN_WAIT_DOUBLINGS x dyn_wait_cycles (dyn_step). Measured against a fixed
- * wait (tiny and default configs, small grove and room at 64x48): cycles
- * within 0.1%, 3% on default/grove; 11x to 43x fewer waits, and a 64 x 8 x 8
- * machine on a 6x4 image in 1.2 s instead of 13. 3 doublings: cycles within
- * 0.4% but 6x the waits of 6; 9: 8% more cycles on default/grove. */
-#define DYN_WAIT_DOUBLINGS 6u
+#define DYN_NONE UINT32_MAX
 /* Host-only mark of a ray that ended during a blocked pass (never simulated). */
 #define DYN_FLAG_DEAD 0x80u
 
@@ -81,6 +91,17 @@ struct ray_buf {
 
 enum dyn_phase { DYN_ADMIT, DYN_CLOSEST, DYN_SHADOW };
 
+/* A list of parked workers (by worker id), first parked first woken. */
+struct dyn_parked {
+  uint32_t head, tail;
+};
+
+/* Worker id waits for the ray in slot to be stored. */
+struct dyn_slot_wait {
+  uint64_t slot;
+  uint32_t id;
+};
+
 /* The job's shared state: queue points, the queue store and the drains, the
  * primary rays' order, the batch and its phase. */
 struct dyn {
@@ -88,7 +109,6 @@ struct dyn {
   struct qwalk_tree wt; /* the tree with qs's queue-point bits */
   struct qstore st;
   struct qdrain_set ds;
-  uint64_t wait_cycles;
   uint32_t *order;  /* primary rays (work items) in Hilbert order */
   uint64_t batch;   /* primary rays a work item admits */
   /* The batch being traced: primary rays [lo, hi), the next to admit, the
@@ -101,6 +121,14 @@ struct dyn {
   uint64_t pending;
   /* Rays spawned and terminated by all workers, for progress. */
   uint64_t spawned, terminated, progress_at;
+  /* Parked workers: those with nothing to do (idle), per core those waiting
+   * for the end of its pass (pass[core]), linked by park_next; and those
+   * whose claim waits for a ray's store (slot_wait, slot_waits of them). */
+  struct dyn_parked idle, *pass;
+  uint32_t *park_next;
+  struct dyn_slot_wait *slot_wait;
+  uint32_t slot_waits, slot_wait_cap;
+  uint32_t parked, parked_busy; /* all, and those that are not idle */
 };
 
 /* A worker's own (its scratch): where its accesses and counts go, the rays
@@ -114,11 +142,71 @@ struct dyn_worker {
   struct render_stats *st;
   struct ray_buf pend;
   struct qdrain_claim cl;
+  struct dyn_parked *wait; /* where work() found nothing: the list to park in
+                              (NULL: it waits for a ray's store) */
+  bool holding;            /* cl is claimed and not yet traced */
 };
+
+/* ---- parking ------------------------------------------------------------------ */
+
+/* Park x in list l (NULL: x is in slot_wait): its worker function returns now
+ * (dyn_step), and runs again when woken. */
+static void park(struct dyn_worker *x, struct dyn_parked *l) {
+  struct dyn *d = x->d;
+  const uint32_t id = x->wk->id;
+  if (l) {
+    d->park_next[id] = DYN_NONE;
+    if (l->tail == DYN_NONE)
+      l->head = id;
+    else
+      d->park_next[l->tail] = id;
+    l->tail = id;
+  }
+  d->parked++;
+  d->parked_busy += l != &d->idle;
+  /* A parked worker holds no host memory it does not need: its spawned rays
+   * are all started (a machine of thousands of mostly parked contexts). */
+  CHECK_EQ(x->pend.n, 0);
+  free(x->pend.r);
+  x->pend = (struct ray_buf){0};
+  /* One worker always has something to do while its batch goes on. */
+  CHECK(mem_park(&x->tr->mem));
+  x->wk->parked = true;
+}
+
+/* Wake up to n workers of list l, first parked first, at x's time. Returns
+ * how many. */
+static uint64_t wake(struct dyn_worker *x, struct dyn_parked *l, uint64_t n) {
+  struct dyn *d = x->d;
+  uint64_t k = 0;
+  for (; k < n && l->head != DYN_NONE; k++) {
+    const uint32_t id = l->head;
+    l->head = d->park_next[id];
+    if (l->head == DYN_NONE) l->tail = DYN_NONE;
+    d->parked--;
+    d->parked_busy -= l != &d->idle;
+    mem_wake(&x->tr->mem, id);
+  }
+  return k;
+}
+
+/* The ray in slot is stored: wake the worker whose claim waits for it. */
+static void wake_slot(struct dyn_worker *x, uint64_t slot) {
+  struct dyn *d = x->d;
+  for (uint32_t i = 0; i < d->slot_waits; i++) {
+    if (d->slot_wait[i].slot != slot) continue;
+    const uint32_t id = d->slot_wait[i].id;
+    d->slot_wait[i] = d->slot_wait[--d->slot_waits];
+    d->parked--;
+    d->parked_busy--;
+    mem_wake(&x->tr->mem, id);
+    return;
+  }
+}
 
 static void buf_push(struct ray_buf *b, const struct ray *r) {
   if (b->n == b->cap) {
-    b->cap = b->cap ? 2 * b->cap : 4096;
+    b->cap = b->cap ? 2 * b->cap : 2 * SHADE_MAX_SPAWN; /* a ray's children, mostly */
     b->r = xrealloc(b->r, b->cap * sizeof *b->r);
   }
   b->r[b->n++] = *r;
@@ -130,9 +218,13 @@ static void buf_push(struct ray_buf *b, const struct ray *r) {
 static void enqueue(struct dyn_worker *x, uint32_t qi, const struct ray *r, uint32_t set) {
   struct dyn *d = x->d;
   CHECK(!(r->flags & DYN_FLAG_DEAD));
+  const uint32_t free0 = qstore_free_queues(&d->st);
   const uint64_t slot = qstore_push(&d->st, set, qi, r);
+  const bool fresh = qstore_free_queues(&d->st) > free0; /* a queue to take */
   if (set == DYN_SET_NOW) d->pending++;
   qstore_write(&d->st, &x->tr->mem, qi, slot);
+  if (d->slot_waits) wake_slot(x, slot);
+  if (fresh) wake(x, &d->idle, 1);
 }
 
 /* ---- ray ends ---------------------------------------------------------------- */
@@ -249,20 +341,10 @@ static void process_subtree(struct dyn_worker *x, struct ray *r, uint32_t node) 
   flush(x);
 }
 
-/* Wait until the ray in slot has been stored by its enqueue (qstore.h's
- * hazards). One worker never waits: its enqueues are over before it drains. */
-static void wait_stored(struct dyn_worker *x, uint64_t slot) {
-  while (!qstore_stored(&x->d->st, slot)) {
-    CHECK_GT(x->d->wait_cycles, 0);
-    mem_wait(&x->tr->mem, x->d->wait_cycles);
-  }
-}
-
 /* The claimed ray of an interior queue point: its subtree, then onward. */
 static void trace_subtree_claim(struct dyn_worker *x) {
   struct dyn *d = x->d;
   const uint64_t slot = x->cl.slot[0];
-  wait_stored(x, slot);
   struct ray r = *qstore_ray(&d->st, slot);
   mem_load(&x->tr->mem, qstore_slot_addr(&d->st, slot), sizeof r, TRACE_CLASS_RAY);
   process_subtree(x, &r, x->cl.node);
@@ -291,8 +373,7 @@ static void trace_leaf_claim(struct dyn_worker *x) {
       qdrain_slot_done(&d->ds, cl, t);
       continue;
     }
-    wait_stored(x, slot);
-    struct ray r = *qstore_ray(&d->st, slot); /* NOTE: re-read: a wait may grow the pool */
+    struct ray r = *qstore_ray(&d->st, slot);
     uint64_t n0 = tr->stats.node_visits, t0 = tr->stats.tri_tests;
     mem_load(mem, qstore_slot_addr(&d->st, slot), sizeof r, TRACE_CLASS_RAY);
     struct qwalk w;
@@ -336,23 +417,58 @@ static bool admit(struct dyn_worker *x) {
   return true;
 }
 
-/* Do one thing for the batch: admit a primary ray, or what the drain gives
- * x's core to do (take a queue point, start a pass, trace claimed rays).
- * False when there is nothing to do now. */
-static bool work(struct dyn_worker *x) {
+/* Trace x's claim once all its rays are stored (a ray that ended in an
+ * earlier pass is never read again); until then x waits in slot_wait for the
+ * first that is not (qstore.h's hazards: its enqueuer wakes x). One worker
+ * never waits: its enqueues are over before it drains. False when x must
+ * wait. */
+static bool trace_claim(struct dyn_worker *x) {
   struct dyn *d = x->d;
-  if (d->phase == DYN_ADMIT) return admit(x);
-  switch (qdrain_work(&d->ds, x->wk->core, x->tr, &x->cl)) {
-  case QDRAIN_NOTHING: return false;
-  case QDRAIN_STARTED: return true;
-  case QDRAIN_CLAIMED: break;
+  for (uint32_t t = 0; t < x->cl.n; t++) {
+    const uint64_t slot = x->cl.slot[t];
+    if ((qstore_ray(&d->st, slot)->flags & DYN_FLAG_DEAD) || qstore_stored(&d->st, slot)) continue;
+    if (d->slot_waits == d->slot_wait_cap) {
+      d->slot_wait_cap = d->slot_wait_cap ? 2 * d->slot_wait_cap : 16;
+      d->slot_wait = xrealloc(d->slot_wait, (uint64_t)d->slot_wait_cap * sizeof *d->slot_wait);
+    }
+    d->slot_wait[d->slot_waits++] = (struct dyn_slot_wait){slot, x->wk->id};
+    x->wait = NULL;
+    return false;
   }
+  x->holding = false;
   if (x->cl.leaf)
     trace_leaf_claim(x);
   else
     trace_subtree_claim(x);
-  qdrain_claim_done(&d->ds, &x->cl);
+  if (qdrain_claim_done(&d->ds, &x->cl)) wake(x, &d->pass[x->cl.drain], UINT64_MAX);
   return true;
+}
+
+/* Do one thing for the batch: admit a primary ray, or what the drain gives
+ * x's core to do (take a queue point, start a pass, trace claimed rays), and
+ * wake the parked workers the work it made can feed. False when there is
+ * nothing to do now (x->wait: where to park). */
+static bool work(struct dyn_worker *x) {
+  struct dyn *d = x->d;
+  const uint32_t core = x->wk->core;
+  x->wait = &d->idle;
+  if (x->holding) return trace_claim(x); /* woken by the store it waited for */
+  if (d->phase == DYN_ADMIT) return admit(x);
+  switch (qdrain_work(&d->ds, core, x->tr, &x->cl)) {
+  case QDRAIN_NOTHING: return false;
+  case QDRAIN_PASS_WAIT: x->wait = &d->pass[core]; return false;
+  case QDRAIN_STARTED: {
+    /* x takes one of the new pass's claims itself. */
+    uint64_t n = qdrain_claims_left(&d->ds, core);
+    n = n > 0 ? n - 1 : 0;
+    n -= wake(x, &d->pass[core], n);
+    wake(x, &d->idle, n);
+    return true;
+  }
+  case QDRAIN_CLAIMED: break;
+  }
+  x->holding = true;
+  return trace_claim(x);
 }
 
 /* ---- phases and generations ------------------------------------------------- */
@@ -424,7 +540,6 @@ static void dyn_create(struct policy_job *job) {
   const struct policy_params *p = &job->params;
   const struct trace_layout *l = &job->setup.layout;
   struct dyn *d = xcalloc(1, sizeof *d);
-  d->wait_cycles = p->dyn_wait_cycles;
 
   /* Queue points for the cache and the machine (policy.h). */
   struct qpoint_budget bud;
@@ -432,6 +547,10 @@ static void dyn_create(struct policy_job *job) {
   policy_dynamic_plan(p, job->workers, job->cores, job->setup.kd, l->tri_bytes, &d->qs, &bud,
                       &block_tris, &group);
   d->wt = (struct qwalk_tree){job->setup.kd, job->setup.scene, d->qs.nodes};
+  d->idle.head = d->idle.tail = DYN_NONE;
+  d->pass = xmalloc((uint64_t)job->cores * sizeof *d->pass);
+  for (uint32_t c = 0; c < job->cores; c++) d->pass[c] = d->idle;
+  d->park_next = xmalloc((uint64_t)job->workers * sizeof *d->park_next);
   qstore_init(&d->st, d->qs.count, DYN_SETS, l->qtable_base, l->queue_base);
   qdrain_init(&d->ds, &d->st, &d->qs, job->cores, block_tris, group);
 
@@ -450,6 +569,9 @@ static void dyn_destroy(struct policy_job *job) {
   struct dyn *d = job->shared;
   if (!d) return;
   free(d->order);
+  free(d->pass);
+  free(d->park_next);
+  free(d->slot_wait);
   qdrain_fini(&d->ds);
   qstore_fini(&d->st);
   qpoint_fini(&d->qs);
@@ -477,10 +599,10 @@ static void batch_end(struct policy_job *job, struct dyn *d) {
 /* Take part in a batch of primary rays until it is done: the first worker to
  * find none under way claims the next (before any access), every worker then
  * does what work() finds, starts the next phase when it finds the phase over,
- * and otherwise waits (longer each time in a row: DYN_WAIT_DOUBLINGS). One
- * worker does the whole batch in the order the single loop did: each primary
- * ray to its first queue, then every generation: closest-hit rays, their
- * shadow rays, the next generation. */
+ * and otherwise parks (and comes back here when woken). One worker does the
+ * whole batch in the order the single loop did: each primary ray to its first
+ * queue, then every generation: closest-hit rays, their shadow rays, the next
+ * generation. */
 static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
   struct dyn *d = job->shared;
   if (!d->active) {
@@ -506,21 +628,24 @@ static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
   x->tr = &wk->tr;
   x->st = &wk->st;
   const uint64_t seq = d->batch_seq;
-  uint32_t idle = 0; /* waits in a row */
   while (d->batch_seq == seq) {
-    if (work(x)) {
-      idle = 0;
-      continue;
-    }
-    if (phase_over(d)) {
-      if (advance(d)) batch_end(job, d);
+    if (work(x)) continue;
+    if (!x->holding && phase_over(d)) {
+      /* No worker waits for a pass between phases (a pass left is no phase
+       * over): the idle ones get a free queue each, or all go on at the end. */
+      CHECK_EQ(d->parked_busy, 0);
+      if (advance(d)) {
+        batch_end(job, d);
+        wake(x, &d->idle, UINT64_MAX);
+      } else {
+        wake(x, &d->idle, qstore_free_queues(&d->st));
+      }
       continue;
     }
     /* Others are still tracing rays of this phase (or testing the last rays
      * of this core's pass): their rays may make work for this one. */
-    CHECK_GT(d->wait_cycles, 0);
-    mem_wait(&x->tr->mem, d->wait_cycles << idle);
-    if (idle < DYN_WAIT_DOUBLINGS) idle++;
+    park(x, x->wait);
+    return true;
   }
   return true;
 }
@@ -531,6 +656,7 @@ static void dyn_finish(struct policy_job *job, struct render_stats *st) {
   const struct dyn *d = job->shared;
   CHECK(!d->active);
   CHECK_EQ(d->pending, 0);
+  CHECK_EQ(d->parked, 0);
   qstore_check_empty(&d->st);
   qdrain_check_done(&d->ds);
   st->ray_slots_max += (uint64_t)qstore_chunks(&d->st) * QSTORE_CHUNK_RAYS;

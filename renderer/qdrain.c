@@ -177,7 +177,7 @@ enum qdrain_did qdrain_work(struct qdrain_set *ds, uint32_t core, struct trace_c
       }
       /* Its last rays are still being tested: the core that took it waits for
        * them (and starts the next pass); a core that joined looks elsewhere. */
-      if (dr == &ds->drain[core]) return QDRAIN_NOTHING;
+      if (dr == &ds->drain[core]) return QDRAIN_PASS_WAIT;
     } else {
       release(ds, dr); /* whichever core sees it first lets it go */
     }
@@ -202,12 +202,19 @@ void qdrain_slot_done(struct qdrain_set *ds, const struct qdrain_claim *cl, uint
   if (cl->last) qstore_chunk_drop(ds->st, qstore_slot_chunk(cl->slot[t]));
 }
 
-void qdrain_claim_done(struct qdrain_set *ds, const struct qdrain_claim *cl) {
+bool qdrain_claim_done(struct qdrain_set *ds, const struct qdrain_claim *cl) {
   struct qdrain *dr = &ds->drain[cl->drain];
-  if (dr->seq == cl->seq) {
-    CHECK_GT(dr->busy, 0);
-    dr->busy--;
-  }
+  if (dr->seq != cl->seq) return false;
+  CHECK_GT(dr->busy, 0);
+  dr->busy--;
+  return dr->busy == 0 && dr->k.left == 0 && !pass_last(dr);
+}
+
+uint64_t qdrain_claims_left(struct qdrain_set *ds, uint32_t core) {
+  const struct qdrain *dr = core_drain(ds, core);
+  if (!dr) return 0;
+  if (!kd_is_leaf(ds->qs->nodes[dr->node])) return dr->k.left;
+  return (dr->k.left + ds->group - 1) / ds->group;
 }
 
 bool qdrain_idle(const struct qdrain_set *ds) {

@@ -76,9 +76,12 @@ void qdrain_claim_fini(struct qdrain_claim *cl);
 
 /* What qdrain_work did. */
 enum qdrain_did {
-  QDRAIN_NOTHING, /* nothing to do now for this core */
-  QDRAIN_STARTED, /* took a queue or started a pass (accesses made, no rays) */
-  QDRAIN_CLAIMED  /* *cl holds rays to trace, then qdrain_claim_done */
+  QDRAIN_NOTHING,   /* nothing to do now for this core */
+  QDRAIN_PASS_WAIT, /* nothing until the core's own pass is done (its last
+                       claims are being traced: qdrain_claim_done says) */
+  QDRAIN_STARTED,   /* took a queue or started a pass (accesses made, no rays
+                       handed out yet: qdrain_claims_left) */
+  QDRAIN_CLAIMED    /* *cl holds rays to trace, then qdrain_claim_done */
 };
 
 /* One scheduling step for a worker of `core` whose accesses go through tr:
@@ -91,8 +94,14 @@ enum qdrain_did qdrain_work(struct qdrain_set *ds, uint32_t core, struct trace_c
 
 /* The claim's ray t is done (a releasing pass frees behind it). */
 void qdrain_slot_done(struct qdrain_set *ds, const struct qdrain_claim *cl, uint32_t t);
-/* The claim is done: its pass may move on once all of its claims are. */
-void qdrain_claim_done(struct qdrain_set *ds, const struct qdrain_claim *cl);
+/* The claim is done: its pass may move on once all of its claims are. True
+ * when that is now: the pass is handed out and done, and another follows
+ * (its drain's core, cl->drain, may start it). */
+bool qdrain_claim_done(struct qdrain_set *ds, const struct qdrain_claim *cl);
+
+/* Claims the drain core's workers take from could still hand out: its rays
+ * left in this pass, in groups at a leaf. 0 when the core has none. */
+uint64_t qdrain_claims_left(struct qdrain_set *ds, uint32_t core);
 
 /* No drain has rays to hand out or passes left (passes go on over rays that
  * all ended, as one worker's loop did). */

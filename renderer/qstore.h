@@ -108,8 +108,9 @@ static inline uint32_t qstore_count(const struct qstore *st, uint32_t set, uint3
 
 static inline bool qstore_held(const struct qstore *st, uint32_t qi) { return st->set[0][qi].held; }
 
-/* Set 0 has a non-empty queue that nobody holds. */
+/* Set 0 has a non-empty queue that nobody holds (how many). */
 static inline bool qstore_any_free(const struct qstore *st) { return st->heap_n > 0; }
+static inline uint32_t qstore_free_queues(const struct qstore *st) { return st->heap_n; }
 
 /* Take set 0's fullest free queue (ties: the lower index): it is held, its
  * rays detached, and *first is a cursor at its newest ray. Returns its index.

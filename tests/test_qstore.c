@@ -108,7 +108,7 @@ static void rec_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls, in
 }
 static void rec_load(void *c, uint64_t a, uint32_t s, unsigned k) { rec_access(c, a, s, k, 0); }
 static void rec_store(void *c, uint64_t a, uint32_t s, unsigned k) { rec_access(c, a, s, k, 1); }
-static const struct mem_ops REC_OPS = {rec_load, rec_store, NULL, NULL};
+static const struct mem_ops REC_OPS = {rec_load, rec_store, NULL, NULL, NULL, NULL};
 
 #define TABLE 0x1000000ull
 #define BUFS 0x8000000ull
