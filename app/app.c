@@ -131,6 +131,7 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
   t->ar.sc.shade_cycles = mp->cost_shade_cycles;
   struct policy_params pp;
   policy_params_machine(&pp, mp->l2_size_bytes);
+  pp.dyn_sharing = mp->dyn_sharing;
   const uint32_t n = mp->cores * mp->threads_per_core * mp->rays_per_thread;
   struct timed_ctx r = {0};
   t->ar.setup.progress = work_progress;

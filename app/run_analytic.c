@@ -20,6 +20,7 @@ void app_analytic_run(struct app_analytic *a, const struct app_world *w, uint32_
   a->ar.sc.shade_cycles = mp->cost_shade_cycles;
   struct policy_params pp;
   policy_params_machine(&pp, mp->l2_size_bytes);
+  pp.dyn_sharing = mp->dyn_sharing; /* one core: either way the same */
   /* One worker on one core. NOTE: the dynamic policy's queue points are then
    * made for the whole L2 (g_max not divided among the cores, a one-ray ray
    * buffer), so it may do somewhat different work than on the timed machine;

@@ -39,6 +39,9 @@ struct framebuffer;
 
 enum policy_kind { POLICY_RECURSIVE = 0, POLICY_PACKET = 1, POLICY_DYNAMIC = 2, POLICY_COUNT = 3 };
 
+/* How the dynamic policy's cores share its queue points (policy_params). */
+enum policy_dyn_sharing { POLICY_DYN_PARTITION = 0, POLICY_DYN_CHIP = 1 };
+
 /* What to do with a claimed work item (policy_setup.item). */
 enum policy_item { POLICY_ITEM_DETAIL, POLICY_ITEM_PORT, POLICY_ITEM_HOLD };
 
@@ -80,6 +83,16 @@ struct policy_params {
    * tracing). 0 (default): every primary ray at once, as the paper's section 2
    * reads. */
   uint64_t dyn_batch_rays;
+  /* dynamic on several cores (enum policy_dyn_sharing): POLICY_DYN_PARTITION
+   * (the rules above: each core drains its own queue point, g_max divided
+   * among the cores) or POLICY_DYN_CHIP (the paper's section 3: "threads will
+   * collaboratively process the rays at a single queue point"). In chip mode
+   * queue points are made for the whole L2 (g_max not divided), and every core
+   * works on the fullest queue point being drained; a core takes another queue
+   * only while the queue points being drained have fewer rays left to hand out
+   * than the contexts can take at once (workers x group): a few at once when
+   * a queue holds too few rays to feed every context. One core: both the same. */
+  uint32_t dyn_sharing;
 };
 
 void policy_params_default(struct policy_params *p);

@@ -528,8 +528,10 @@ void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32
   qpoint_subtree_tris(kd, tris);
   const uint64_t rays = p->dyn_ray_buffer_bytes ? p->dyn_ray_buffer_bytes
                                                 : (uint64_t)workers * sizeof(struct ray);
+  /* Geometry resident at once: one queue point a core, or one for the chip. */
+  const uint32_t holders = p->dyn_sharing == POLICY_DYN_CHIP ? 1 : cores;
   struct qpoint_reserve res = {p->cache_bytes, p->dyn_node_share, p->dyn_table_share,
-                               p->dyn_ray_share, rays, cores};
+                               p->dyn_ray_share, rays, holders};
   qpoint_plan(qs, b, kd, tris, tri_bytes, &res);
   free(tris);
   *block_tris = clamp_u32(b->gmax_bytes / tri_bytes);
@@ -553,6 +555,7 @@ static void dyn_create(struct policy_job *job) {
   d->park_next = xmalloc((uint64_t)job->workers * sizeof *d->park_next);
   qstore_init(&d->st, d->qs.count, DYN_SETS, l->qtable_base, l->queue_base);
   qdrain_init(&d->ds, &d->st, &d->qs, job->cores, block_tris, group);
+  if (p->dyn_sharing == POLICY_DYN_CHIP) qdrain_share_chip(&d->ds, (uint64_t)job->workers * group);
 
   /* The work items: primary rays in Hilbert order, admitted a batch at a time. */
   const uint32_t w = job->setup.fb->width, h = job->setup.fb->height;

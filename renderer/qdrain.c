@@ -25,6 +25,11 @@ void qdrain_init(struct qdrain_set *ds, struct qstore *st, const struct qpoint_s
   for (uint32_t c = 0; c < cores; c++) ds->drain[c].qi = ds->core[c].drain = QSTORE_NONE;
 }
 
+void qdrain_share_chip(struct qdrain_set *ds, uint64_t feed) {
+  ds->chip = true;
+  ds->feed = feed ? feed : 1;
+}
+
 void qdrain_fini(struct qdrain_set *ds) {
   free(ds->drain);
   free(ds->core);
@@ -69,6 +74,7 @@ static void pass_begin(struct qdrain_set *ds, struct qdrain *dr, uint32_t block)
   dr->k = dr->first;
   dr->busy = 0;
   dr->seq++;
+  ds->handout += dr->k.left;
   if (pass_last(dr)) qstore_chunk_hold(ds->st, dr->k.c); /* the last pass frees behind it */
 }
 
@@ -163,6 +169,7 @@ static void claim(struct qdrain_set *ds, struct qdrain *dr, struct qdrain_claim 
     if (cl->last) qstore_chunk_hold(ds->st, dr->k.c);
     cl->slot[cl->n++] = qstore_cur_slot(&dr->k);
   }
+  ds->handout -= cl->n;
   dr->busy++;
 }
 
@@ -185,7 +192,8 @@ enum qdrain_did qdrain_work(struct qdrain_set *ds, uint32_t core, struct trace_c
     dr = NULL;
   }
   if (!dr) {
-    if (qstore_any_free(ds->st) && ds->drain[core].qi == QSTORE_NONE) {
+    if (qstore_any_free(ds->st) && ds->drain[core].qi == QSTORE_NONE &&
+        (!ds->chip || ds->handout < ds->feed)) {
       take(ds, core, tr);
       return QDRAIN_STARTED;
     }

@@ -57,6 +57,10 @@ struct qdrain_set {
   uint32_t cores;
   struct qdrain *drain;         /* one a core */
   struct qdrain_core *core;
+  /* Chip-wide sharing (qdrain_share_chip): a core takes a free queue only
+   * while the drains have fewer than feed rays left to hand out (handout). */
+  bool chip;
+  uint64_t feed, handout;
 };
 
 /* The rays a worker took at once from a drain (slot indices: qstore_ray). */
@@ -70,6 +74,12 @@ struct qdrain_claim {
 void qdrain_init(struct qdrain_set *ds, struct qstore *st, const struct qpoint_set *qs,
                  uint32_t cores, uint32_t block_tris, uint32_t group);
 void qdrain_fini(struct qdrain_set *ds);
+
+/* Share the queues chip-wide instead of a queue point a core: a core with
+ * nothing to do joins the fullest drain, and takes a free queue only while
+ * all drains together have fewer than feed rays left to hand out in their
+ * passes (feed: what the contexts take at once). */
+void qdrain_share_chip(struct qdrain_set *ds, uint64_t feed);
 
 void qdrain_claim_init(const struct qdrain_set *ds, struct qdrain_claim *cl);
 void qdrain_claim_fini(struct qdrain_claim *cl);

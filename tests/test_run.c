@@ -174,6 +174,7 @@ static void timed_q(struct world *w, enum policy_kind k, uint32_t mask,
   r->sc.shade_cycles = p->cost_shade_cycles;
   struct policy_params pp;
   policy_params_machine(&pp, p->l2_size_bytes);
+  pp.dyn_sharing = p->dyn_sharing;
   uint32_t n = p->cores * p->threads_per_core * p->rays_per_thread;
   struct timed_ctx t = {policy_job_create(k, &r->setup, &pp, n, p->cores), NULL, NULL};
   t.workers = calloc(n, sizeof *t.workers);
@@ -328,18 +329,25 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
   many.threads_per_core = 3;
   many.rays_per_thread = 3;
   many.l2_size_bytes = 16384;
+  /* Chip-wide sharing (dynamic.sharing: chip): the cores on one queue point,
+   * and with a 4 KiB L2 on the blocks of oversized leaves together. */
+  struct machine_params chip = tiny, chip_small = many;
+  chip.dyn_sharing = chip_small.dyn_sharing = POLICY_DYN_CHIP;
+  chip_small.l2_size_bytes = 4096;
   const struct {
     const char *name;
     const struct machine_params *p;
   } dyn[] = {{"tiny.yaml", &tiny}, {"tiny.yaml, 4 KiB L2", &small_l2},
-             {"tiny.yaml, 3 x 3 x 3, 16 KiB L2", &many}, {"1 x 1 x 1", &one}};
+             {"tiny.yaml, 3 x 3 x 3, 16 KiB L2", &many}, {"1 x 1 x 1", &one},
+             {"tiny.yaml, chip", &chip}, {"tiny.yaml, 3 x 3 x 3, 4 KiB L2, chip", &chip_small}};
   for (unsigned i = 0; i < sizeof dyn / sizeof dyn[0]; i++) {
     const struct machine_params *p = dyn[i].p;
-    if (!all && p != &tiny && p != &one) continue;
+    if (!all && p != &tiny && p != &one && p != &chip) continue;
     const uint32_t workers = p->cores * p->threads_per_core * p->rays_per_thread;
     /* The plan it runs with: with a 4 KiB L2, some leaves exceed g_max. */
     struct policy_params pp;
     policy_params_machine(&pp, p->l2_size_bytes);
+    pp.dyn_sharing = p->dyn_sharing;
     struct qpoint_set qs;
     struct qpoint_budget b;
     uint32_t bt, group;
@@ -349,7 +357,7 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
       struct kd_node nd = qs.nodes[qs.qnode[q]];
       oversized += kd_is_leaf(nd) && kd_leaf_count(nd) > bt;
     }
-    if (p == &small_l2) EXPECTF(oversized > 0, "%s: no leaf over g_max (%u queue points)", dyn[i].name, qs.count);
+    if (p == &small_l2 || p == &chip_small) EXPECTF(oversized > 0, "%s: no leaf over g_max (%u queue points)", dyn[i].name, qs.count);
     EXPECT(group == 1);
     const uint32_t queues = qs.count;
     qpoint_fini(&qs);
@@ -431,6 +439,21 @@ static void test_machine_plan(void) {
                 (unsigned long long)b.gmax_bytes);
         /* Every core's queue point resident at once, besides the reservations. */
         EXPECT(C * b.gmax_bytes + b.node_bytes + b.table_bytes + b.ray_bytes <= S);
+        /* Chip-wide sharing: one queue point's geometry for the whole chip. */
+        {
+          struct policy_params pc = pp;
+          pc.dyn_sharing = POLICY_DYN_CHIP;
+          struct qpoint_set qc;
+          struct qpoint_budget bc;
+          uint32_t btc, gc;
+          policy_dynamic_plan(&pc, workers, C, &w.kd, 128, &qc, &bc, &btc, &gc);
+          const uint64_t usedc = bc.node_bytes + bc.table_bytes + bc.ray_bytes;
+          EXPECTF(bc.node_bytes == nodes && bc.ray_bytes == rays &&
+                      bc.gmax_bytes == (S > usedc ? S - usedc : 0) && qc.count <= qs.count,
+                  "%s, %s, L2 %llu, chip: g_max %llu, %u queue points (partition %u)", scenes[si],
+                  cfgs[ci], (unsigned long long)S, (unsigned long long)bc.gmax_bytes, qc.count, qs.count);
+          qpoint_fini(&qc);
+        }
         EXPECT(bt == (b.gmax_bytes / 128 ? b.gmax_bytes / 128 : 1) && group == 1);
         uint32_t over = 0;
         for (uint32_t q = 0; q < qs.count; q++) {
