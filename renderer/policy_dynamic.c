@@ -538,16 +538,14 @@ void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32
   *group = clamp_u32(b->ray_bytes / sizeof(struct ray) / workers);
 }
 
-static void dyn_create(struct policy_job *job) {
+/* The job's shared state around a selection of queue points (d->qs, whose
+ * node array marks them): the walk, the store, the drains, the parking lists
+ * and the work items. Everything after the selection is the same for any set
+ * of subtree roots that holds every leaf with geometry (a treelet policy's
+ * selection would come in here with its own block_tris and group). */
+static void dyn_setup(struct policy_job *job, struct dyn *d, uint32_t block_tris, uint32_t group) {
   const struct policy_params *p = &job->params;
   const struct trace_layout *l = &job->setup.layout;
-  struct dyn *d = xcalloc(1, sizeof *d);
-
-  /* Queue points for the cache and the machine (policy.h). */
-  struct qpoint_budget bud;
-  uint32_t block_tris, group;
-  policy_dynamic_plan(p, job->workers, job->cores, job->setup.kd, l->tri_bytes, &d->qs, &bud,
-                      &block_tris, &group);
   d->wt = (struct qwalk_tree){job->setup.kd, job->setup.scene, d->qs.nodes};
   d->idle.head = d->idle.tail = DYN_NONE;
   d->pass = xmalloc((uint64_t)job->cores * sizeof *d->pass);
@@ -566,6 +564,16 @@ static void dyn_create(struct policy_job *job) {
   d->batch = p->dyn_batch_rays ? p->dyn_batch_rays : job->total;
   d->phase = DYN_CLOSEST;
   job->shared = d;
+}
+
+static void dyn_create(struct policy_job *job) {
+  struct dyn *d = xcalloc(1, sizeof *d);
+  /* Queue points for the cache and the machine (policy.h). */
+  struct qpoint_budget bud;
+  uint32_t block_tris, group;
+  policy_dynamic_plan(&job->params, job->workers, job->cores, job->setup.kd,
+                      job->setup.layout.tri_bytes, &d->qs, &bud, &block_tris, &group);
+  dyn_setup(job, d, block_tris, group);
 }
 
 static void dyn_destroy(struct policy_job *job) {
