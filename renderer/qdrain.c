@@ -126,6 +126,7 @@ static void take(struct qdrain_set *ds, uint32_t core, struct trace_ctx *tr) {
   const uint32_t cnt = kd_is_leaf(nd) ? kd_leaf_count(nd) : 0;
   dr->blocks = cnt == 0 ? 1 : (cnt + ds->block_tris - 1) / ds->block_tris;
   pass_begin(ds, dr, 0);
+  ds->open++;
   core_join(ds, core, core);
   qstore_touch(ds->st, &tr->mem, qi);
   if (kd_is_leaf(nd)) {
@@ -170,6 +171,7 @@ static void claim(struct qdrain_set *ds, struct qdrain *dr, struct qdrain_claim 
     cl->slot[cl->n++] = qstore_cur_slot(&dr->k);
   }
   ds->handout -= cl->n;
+  if (dr->k.left == 0 && cl->last) ds->open--; /* all handed out, no pass after */
   dr->busy++;
 }
 
@@ -225,15 +227,20 @@ uint64_t qdrain_claims_left(struct qdrain_set *ds, uint32_t core) {
   return (dr->k.left + ds->group - 1) / ds->group;
 }
 
-bool qdrain_idle(const struct qdrain_set *ds) {
+/* Drains with rays to hand out or passes left, counted the slow way. */
+static uint32_t count_open(const struct qdrain_set *ds) {
+  uint32_t n = 0;
   for (uint32_t c = 0; c < ds->cores; c++) {
     const struct qdrain *dr = &ds->drain[c];
-    if (dr->qi != QSTORE_NONE && (dr->k.left > 0 || !pass_last(dr))) return false;
+    n += dr->qi != QSTORE_NONE && (dr->k.left > 0 || !pass_last(dr));
   }
-  return true;
+  return n;
 }
 
+bool qdrain_idle(const struct qdrain_set *ds) { return ds->open == 0; }
+
 void qdrain_release_all(struct qdrain_set *ds) {
+  CHECK_EQ(ds->open, count_open(ds)); /* once a phase: the count kept is the count */
   for (uint32_t c = 0; c < ds->cores; c++) {
     struct qdrain *dr = &ds->drain[c];
     ds->core[c].drain = QSTORE_NONE;
@@ -244,5 +251,6 @@ void qdrain_release_all(struct qdrain_set *ds) {
 }
 
 void qdrain_check_done(const struct qdrain_set *ds) {
+  CHECK_EQ(ds->open, 0);
   for (uint32_t c = 0; c < ds->cores; c++) CHECK_EQ(ds->drain[c].qi, QSTORE_NONE);
 }

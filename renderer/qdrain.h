@@ -61,6 +61,9 @@ struct qdrain_set {
    * while the drains have fewer than feed rays left to hand out (handout). */
   bool chip;
   uint64_t feed, handout;
+  /* Drains with rays to hand out or passes left (qdrain_idle: none), kept
+   * as they change so that a worker about to park does not scan the cores. */
+  uint32_t open;
 };
 
 /* The rays a worker took at once from a drain (slot indices: qstore_ray). */
