@@ -141,19 +141,6 @@ int cmd_run(int argc, char **argv) {
     why = whybuf;
     key = "cores";
   }
-  /* The caches' tags are allocated whole (README: Config keys). */
-  const uint64_t tag_bytes = machine_cache_host_bytes(&mc.p);
-  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-  const uint64_t host_bytes = pages > 0 && page > 0 ? (uint64_t)pages * (uint64_t)page : UINT64_MAX;
-  if (!why && !analytic && tag_bytes > host_bytes / 4 * 3) {
-    snprintf(whybuf, sizeof whybuf,
-             "the caches' tags would take %.1f GB of host memory (l2.size, and l1.size x "
-             "cores; about 24 bytes a line), more than three quarters of this host's %.1f GB: "
-             "smaller caches or fewer cores",
-             (double)tag_bytes / 1e9, (double)host_bytes / 1e9);
-    why = whybuf;
-    key = mc.p.l1_size_bytes * mc.p.cores > mc.p.l2_size_bytes ? "l1.size" : "l2.size";
-  }
   if (why) {
     const struct machine_cfg_origin *o = &mc.at[machine_cfg_find(key)];
     err_set(&e, o->file[0] ? o->file : machine_path, o->line, o->col, "%s", why);
