@@ -525,7 +525,7 @@ static void run_scene(const char *name, const struct scene *s, const struct kd_b
   EXPECTF(s->tri_count > 0, "%s: empty scene", name);
   if (s->tri_count == 0) return;
   struct kd_tree kd;
-  kd_build(&kd, s, bp);
+  kd_build(&kd, s, bp, NULL);
   int md = bp->max_depth < 0 ? pbrt_max_depth(s->tri_count) : bp->max_depth;
   check_structure(name, s, &kd, md, bp->clip);
   check_rays(name, s, &kd, nrays, seed);
@@ -560,7 +560,7 @@ static void test_small_cases(void) {
   struct scene s;
   scene_init(&s);
   struct kd_tree kd;
-  kd_build(&kd, &s, &bp);
+  kd_build(&kd, &s, &bp, NULL);
   EXPECT(kd.node_count == 1 && kd_is_leaf(kd.nodes[0]) && kd_leaf_count(kd.nodes[0]) == 0);
   EXPECT(kd.stats.nodes == 1 && kd.stats.leaves == 1 && kd.stats.empty_leaves == 1);
   struct trace_ctx tr;
@@ -575,7 +575,7 @@ static void test_small_cases(void) {
   kd_fini(&kd);
   /* One triangle. */
   scene_add_tri(&s, v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0), NULL, 0);
-  kd_build(&kd, &s, &bp);
+  kd_build(&kd, &s, &bp, NULL);
   EXPECT(kd.node_count == 1 && kd_leaf_count(kd.nodes[0]) == 1);
   trace_init(&tr, &s, &kd, mem_port_native(), NULL);
   r.o = v3(0.25f, 0.25f, -1);
@@ -596,7 +596,7 @@ static void test_odd_mantissas(void) {
   /* Whole bounds (no clipping): every candidate is a vertex coordinate, all odd. */
   bp.clip = false;
   struct kd_tree kd;
-  kd_build(&kd, &s, &bp);
+  kd_build(&kd, &s, &bp, NULL);
   uint32_t interior = kd.stats.nodes - kd.stats.leaves;
   uint32_t trimmed = check_structure("odd soup", &s, &kd, pbrt_max_depth(s.tri_count), false);
   EXPECTF(interior > 100 && trimmed == interior, "odd soup: %u of %u splits trimmed", trimmed,
@@ -617,12 +617,12 @@ static void compare_clip(const char *name, const struct scene *s, int nrays, uin
   bp.clip = true;
   run_scene(name, s, &bp, nrays, seed);
   struct kd_tree kc, kw;
-  kd_build(&kc, s, &bp);
+  kd_build(&kc, s, &bp, NULL);
   bp.clip = false;
   char wname[96];
   snprintf(wname, sizeof wname, "%s whole bounds", name);
   run_scene(wname, s, &bp, nrays, seed + 1);
-  kd_build(&kw, s, &bp);
+  kd_build(&kw, s, &bp, NULL);
   EXPECTF(kc.stats.leaf_prim_refs < kw.stats.leaf_prim_refs,
           "%s: clipping gave %llu references, whole bounds %llu", name,
           (unsigned long long)kc.stats.leaf_prim_refs, (unsigned long long)kw.stats.leaf_prim_refs);
