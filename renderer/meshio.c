@@ -94,7 +94,7 @@ static bool meshio_check_raw(const struct aiScene *as, const char *path, struct 
  * faces in file order, each fanned (a triangle as it is), normals from
  * nx/ny/nz when present. */
 static bool meshio_import_ply(struct scene *s, const char *path, const struct meshio_xform *xf,
-                              uint32_t material, struct err *e) {
+                              uint32_t material, uint64_t max_tris, struct err *e) {
   struct ply_mesh m;
   struct err pe = {0};
   if (!ply_read_file(path, &m, &pe))
@@ -105,9 +105,9 @@ static bool meshio_import_ply(struct scene *s, const char *path, const struct me
             "empty)");
     goto done;
   }
-  if (m.tri_count > UINT32_MAX - s->tri_count) {
-    err_set(e, path, 0, 0, "cannot import mesh: too many triangles (got %u, scene has %u)",
-            m.tri_count, s->tri_count);
+  if (m.tri_count > max_tris || m.tri_count > UINT32_MAX - s->tri_count) {
+    err_set(e, path, 0, 0, "cannot import mesh: too many triangles (got %u, the scene has room "
+            "for %llu)", m.tri_count, (unsigned long long)max_tris);
     goto done;
   }
   /* Pass 1: every placed vertex of every triangle is finite. */
@@ -148,9 +148,22 @@ done:
   return ok;
 }
 
+bool meshio_estimate(const char *path, uint64_t *least, uint64_t *most, struct err *e) {
+  *least = 0;
+  *most = UINT64_MAX;
+  if (!ply_claims(path)) return true;
+  struct ply_counts c;
+  struct err pe = {0};
+  if (!ply_read_header_file(path, &c, &pe))
+    return err_set(e, pe.file, pe.line, pe.col, "cannot import mesh: %s", pe.msg);
+  *least = c.faces;
+  *most = c.tri_max;
+  return true;
+}
+
 bool meshio_import(struct scene *s, const char *path, const struct meshio_xform *xf,
-                   uint32_t material, struct err *e) {
-  if (ply_claims(path)) return meshio_import_ply(s, path, xf, material, e);
+                   uint32_t material, uint64_t max_tris, struct err *e) {
+  if (ply_claims(path)) return meshio_import_ply(s, path, xf, material, max_tris, e);
   const struct aiScene *as = aiImportFile(path, MESHIO_READ_FLAGS);
   if (!as) {
     const char *why = aiGetErrorString();
@@ -196,9 +209,9 @@ bool meshio_import(struct scene *s, const char *path, const struct meshio_xform 
             as->mNumMeshes);
     goto done;
   }
-  if (count > (uint64_t)UINT32_MAX - s->tri_count) {
-    err_set(e, path, 0, 0, "cannot import mesh: too many triangles (got %llu, scene has %u)",
-            (unsigned long long)count, s->tri_count);
+  if (count > max_tris || count > (uint64_t)UINT32_MAX - s->tri_count) {
+    err_set(e, path, 0, 0, "cannot import mesh: too many triangles (got %llu, the scene has "
+            "room for %llu)", (unsigned long long)count, (unsigned long long)max_tris);
     goto done;
   }
 
