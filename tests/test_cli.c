@@ -152,8 +152,44 @@ static void test_huge_scenes(void) {
   unlink(ply);
 }
 
+/* assimp runs in a child process: a file that crashes it, or makes it ask
+ * for more memory than exists, is one line and exit 2 naming the file. The
+ * files are assimp's own regression models (assimp-testmodels). */
+static void test_importer_child(void) {
+  static const struct {
+    const char *mesh, *want;
+  } cases[] = {
+      {"/usr/share/assimp/models/AC/nosurfaces.ac", "nosurfaces.ac: cannot import mesh: the "
+       "importer (assimp, in a child process) gave no answer: it crashed (signal 11"},
+      {"/usr/share/assimp/models/invalid/OutOfMemory.off", "OutOfMemory.off: cannot import mesh: "
+       "std::bad_alloc"},
+  };
+  const char *scene = RTSIM_TMP "/importer_child.yaml", *img = RTSIM_TMP "/importer_child.exr";
+  char cmd[2048], out[8192], item[512];
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    if (access(cases[i].mesh, R_OK) != 0) {
+      printf("note: %s not installed (assimp-testmodels); case skipped\n", cases[i].mesh);
+      continue;
+    }
+    snprintf(item, sizeof item, "  - {mesh: \"%s\"}\n", cases[i].mesh);
+    write_file(scene, "camera: {from: [0, -5, 1], at: [0, 0, 0]}\ngeometry:\n", item, 1, "");
+    unlink(img);
+    snprintf(cmd, sizeof cmd, "timeout 60 %s render %s -o %s --width 8 --height 8", RTSIM_BINARY,
+             scene, img);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 2, "%s: exit %d (124: timed out), output: %s", cases[i].mesh, rc, out);
+    EXPECTF(strstr(out, "importer_child.yaml:3:12: error: geometry[0].mesh: ") != NULL &&
+                strstr(out, cases[i].want) != NULL,
+            "%s: got '%s', want '%s'", cases[i].mesh, out, cases[i].want);
+    EXPECTF(count_lines(out) == 1, "%s: expected one line, got: %s", cases[i].mesh, out);
+    EXPECTF(access(img, F_OK) != 0, "%s: output file left behind", cases[i].mesh);
+  }
+  unlink(scene);
+}
+
 int main(void) {
   test_huge_scenes();
+  test_importer_child();
   static const struct {
     const char *file, *want;
   } bad[] = {
