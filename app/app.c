@@ -57,7 +57,15 @@ bool app_world_load(struct app_world *w, const char *path) {
   struct kd_build_params p;
   kd_build_params_default(&p);
   p.clip = w->scene.kd_clip;
-  kd_build(&w->kd, &w->scene, &p);
+  unsigned long long bytes = 0;
+  if (!kd_build(&w->kd, &w->scene, &p, &bytes)) {
+    err_set(&e, path, 0, 0, "out of host memory building the k-d tree over the scene's %u "
+            "triangles (an allocation of %llu bytes failed; README: Limits)",
+            w->scene.tri_count, bytes);
+    app_report(&e);
+    scene_fini(&w->scene);
+    return false;
+  }
   w->load_s = t1 - t0;
   w->build_s = app_now() - t1;
   return true;

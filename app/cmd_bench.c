@@ -135,7 +135,7 @@ static struct bench_embree *embree_from_ply(const struct app_world *w, double *b
   scene_init(&back);
   struct meshio_xform xf = {1.0f, v3(0, 0, 0)};
   struct bench_embree *be = NULL;
-  if (meshio_export_ply(&w->scene, ply, &e) && meshio_import(&back, ply, &xf, 0, &e)) {
+  if (meshio_export_ply(&w->scene, ply, &e) && meshio_import(&back, ply, &xf, 0, UINT32_MAX, &e)) {
     if (back.tri_count != w->scene.tri_count)
       fprintf(stderr, "rtsim bench: %s: read back %u triangles, wrote %u\n", ply, back.tri_count,
               w->scene.tri_count);

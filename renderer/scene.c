@@ -51,6 +51,12 @@ uint32_t scene_material_or_default(struct scene *s, const char *name, vec3 color
   return scene_add_material(s, &m);
 }
 
+void scene_reserve(struct scene *s, uint32_t n) {
+  if (n <= s->tri_cap) return;
+  s->tri_cap = n;
+  s->tris = xrealloc(s->tris, (unsigned long long)n * sizeof *s->tris);
+}
+
 uint32_t scene_add_tri(struct scene *s, vec3 a, vec3 b, vec3 c, const vec3 *normals,
                        uint32_t material) {
   if (s->tri_count == s->tri_cap) {

@@ -66,6 +66,10 @@ uint32_t scene_add_material(struct scene *s, const struct scene_material *m);
 uint32_t scene_material_or_default(struct scene *s, const char *name, vec3 color, float diffuse,
                                    float mirror);
 
+/* Make room for n triangles in all (no-op if there is): a scene whose size is
+ * known ahead takes n * 76 bytes, not up to twice that from doubling. */
+void scene_reserve(struct scene *s, uint32_t n);
+
 /* Append a triangle. Normals may be NULL: all three become the geometric normal
  * (or +Z for a zero-area triangle). Returns the new primitive id. */
 uint32_t scene_add_tri(struct scene *s, vec3 a, vec3 b, vec3 c, const vec3 *normals,

@@ -3,6 +3,7 @@
  * code 2, and no output file. Fixtures live in tests/data/scenes. */
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "testing.h"
@@ -80,7 +81,115 @@ static void test_hostile_yaml(void) {
   unlink(big);
 }
 
+/* Scenes past the triangle cap (README: Limits) are refused from their
+ * counts, before anything is built: quickly, in little memory, exit 2 and one
+ * line at the entry that crosses the cap with its figures. Every case is
+ * past the cap's hard maximum (100M), so it is refused on any host. */
+static void test_huge_scenes(void) {
+#ifdef __SANITIZE_ADDRESS__
+  const char *guard = "";
+#else
+  const char *guard = "ulimit -v 1048576; ";
+#endif
+  const char *room = RTSIM_TMP "/huge_room.yaml", *grove = RTSIM_TMP "/huge_grove.yaml",
+             *flake = RTSIM_TMP "/huge_flake.yaml", *mesh = RTSIM_TMP "/huge_mesh.yaml",
+             *ply = RTSIM_TMP "/huge_faces.ply";
+  const char *cam = "camera: {from: [0, -5, 1], at: [0, 0, 0]}\ngeometry:\n";
+  write_file(room, cam, "  - {generator: room, detail: 200}\n", 23, ""); /* 102M */
+  write_file(grove, cam, "  - {generator: grove, detail: 200}\n", 4, ""); /* 131M */
+  write_file(flake, cam, "  - {generator: sphereflake, detail: 6, tessellation: 64}\n", 1, "");
+  write_file(mesh, cam, "  - {mesh: huge_faces.ply}\n", 1, "");
+  /* 120M faces of at least 4 bytes: a sparse file of 480 MB the header's
+   * counts fit in, so only the triangle cap refuses it. */
+  const char *head = "ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
+                     "property uchar x\nproperty uchar y\nproperty uchar z\n"
+                     "element face 120000000\nproperty list uchar uchar vertex_indices\n"
+                     "end_header\n";
+  write_file(ply, head, "", 0, "");
+  EXPECT(truncate(ply, (off_t)(strlen(head) + 9 + 480000000ull)) == 0);
+  static const struct {
+    const char *path, *want;
+  } cases[] = {
+      {RTSIM_TMP "/huge_room.yaml", "error: geometry[%u]: too many triangles: this entry builds "
+       "4446498, the scene would have "},
+      {RTSIM_TMP "/huge_grove.yaml", "error: geometry[%u]: too many triangles: this entry builds "
+       "32808512, the scene would have "},
+      {RTSIM_TMP "/huge_flake.yaml", "huge_flake.yaml:3:5: error: geometry[0]: too many "
+       "triangles: this entry builds 29386555394, the scene would have 29386555394, expected at "
+       "most "},
+      {RTSIM_TMP "/huge_mesh.yaml", "huge_mesh.yaml:3:5: error: geometry[0]: too many "
+       "triangles: this entry holds at least 120000000, the scene would have at least "
+       "120000000, expected at most "},
+  };
+  char cmd[2048], out[8192], want[256];
+  const char *img = RTSIM_TMP "/cli_huge.exr";
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    unlink(img);
+    snprintf(cmd, sizeof cmd, "%stimeout 20 %s render %s -o %s --width 8 --height 8", guard,
+             RTSIM_BINARY, cases[i].path, img);
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    int rc = testing_run(cmd, out, sizeof out);
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    double s = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    EXPECTF(rc == 2, "%s: exit %d (124: timed out), output: %s", cases[i].path, rc, out);
+    /* The entry that crosses the cap depends on the host's memory. */
+    bool found = false;
+    for (unsigned k = 0; k < 23 && !found; k++) {
+      snprintf(want, sizeof want, cases[i].want, k);
+      found = strstr(out, want) != NULL;
+    }
+    EXPECTF(found, "%s: got '%s', want '%s'", cases[i].path, out, cases[i].want);
+    EXPECTF(count_lines(out) == 1, "%s: expected one line, got: %s", cases[i].path, out);
+    EXPECTF(access(img, F_OK) != 0, "%s: output file left behind", cases[i].path);
+    EXPECTF(s < 5.0, "%s: refused after %.1f s (expected before building anything)",
+            cases[i].path, s);
+  }
+  unlink(room);
+  unlink(grove);
+  unlink(flake);
+  unlink(mesh);
+  unlink(ply);
+}
+
+/* assimp runs in a child process: a file that crashes it, or makes it ask
+ * for more memory than exists, is one line and exit 2 naming the file. The
+ * files are assimp's own regression models (assimp-testmodels). */
+static void test_importer_child(void) {
+  static const struct {
+    const char *mesh, *want;
+  } cases[] = {
+      {"/usr/share/assimp/models/AC/nosurfaces.ac", "nosurfaces.ac: cannot import mesh: the "
+       "importer (assimp, in a child process) gave no answer: it crashed (signal 11"},
+      {"/usr/share/assimp/models/invalid/OutOfMemory.off", "OutOfMemory.off: cannot import mesh: "
+       "std::bad_alloc"},
+  };
+  const char *scene = RTSIM_TMP "/importer_child.yaml", *img = RTSIM_TMP "/importer_child.exr";
+  char cmd[2048], out[8192], item[512];
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    if (access(cases[i].mesh, R_OK) != 0) {
+      printf("note: %s not installed (assimp-testmodels); case skipped\n", cases[i].mesh);
+      continue;
+    }
+    snprintf(item, sizeof item, "  - {mesh: \"%s\"}\n", cases[i].mesh);
+    write_file(scene, "camera: {from: [0, -5, 1], at: [0, 0, 0]}\ngeometry:\n", item, 1, "");
+    unlink(img);
+    snprintf(cmd, sizeof cmd, "timeout 60 %s render %s -o %s --width 8 --height 8", RTSIM_BINARY,
+             scene, img);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 2, "%s: exit %d (124: timed out), output: %s", cases[i].mesh, rc, out);
+    EXPECTF(strstr(out, "importer_child.yaml:3:12: error: geometry[0].mesh: ") != NULL &&
+                strstr(out, cases[i].want) != NULL,
+            "%s: got '%s', want '%s'", cases[i].mesh, out, cases[i].want);
+    EXPECTF(count_lines(out) == 1, "%s: expected one line, got: %s", cases[i].mesh, out);
+    EXPECTF(access(img, F_OK) != 0, "%s: output file left behind", cases[i].mesh);
+  }
+  unlink(scene);
+}
+
 int main(void) {
+  test_huge_scenes();
+  test_importer_child();
   static const struct {
     const char *file, *want;
   } bad[] = {
