@@ -83,7 +83,8 @@ static void test_hostile_yaml(void) {
 
 /* #17's reproducers that need generated input: a hits row longer than the
  * 4095 bytes the reader used to split rows at, read whole; a plot table with
- * a NUL byte or a padded number, refused where it stands. */
+ * a NUL byte or a padded number, refused where it stands; a camera whose up
+ * is tiny but valid, accepted and the same image as a unit up. */
 static void test_strict_inputs(void) {
   char cmd[2048], out[8192];
   /* A long origin (0.5 and 5000 zeros) and a long tmax (1000 and 5000
@@ -162,6 +163,17 @@ static void test_strict_inputs(void) {
     EXPECTF(access(png, F_OK) != 0, "plot table %zu: a plot was written", i);
   }
   unlink(table);
+
+  /* up: [0, 0, 1e-30] is a valid up: the image is the unit up's, bit for bit. */
+  const char *a = RTSIM_TMP "/cli_up_unit.exr", *b = RTSIM_TMP "/cli_up_tiny.exr";
+  snprintf(cmd, sizeof cmd, "%s render %sgood_room_tiny.yaml -o %s --width 16 --height 12 && "
+           "%s render %sgood_camera_tiny_up.yaml -o %s --width 16 --height 12",
+           RTSIM_BINARY, SCN, a, RTSIM_BINARY, SCN, b);
+  rc = testing_run(cmd, out, sizeof out);
+  EXPECTF(rc == 0, "tiny up: exit %d: %s", rc, out);
+  EXPECT(rc == 0 && testing_same_rgb(a, b));
+  unlink(a);
+  unlink(b);
 }
 
 int main(void) {
@@ -187,11 +199,13 @@ int main(void) {
       {"bad_generator_key.yaml", "bad_generator_key.yaml:5:5: error: geometry[0].tesselation: unknown key 'tesselation' (expected one of: generator, detail, tessellation, seed)"},
       {"bad_both.yaml", "bad_both.yaml:3:5: error: geometry[0]: expected exactly one of 'generator' or 'mesh'"},
       {"no_such_scene.yaml", "no_such_scene.yaml: error: cannot open: No such file or directory"},
-      /* Strict numbers and strings (sim/scalar.h), a NUL escape. */
+      /* Strict numbers and strings (sim/scalar.h), a NUL escape, an up
+       * parallel to the view however small. */
       {"bad_width_leading_zero.yaml", "bad_width_leading_zero.yaml:1:16: error: image.width: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 16384)"},
       {"bad_number_space.yaml", "bad_number_space.yaml:1:52: error: camera.fov_deg: not a number: whitespace before or after it (got ' 50', expected a decimal number)"},
       {"bad_nul.yaml", "bad_nul.yaml:1:7: error: a NUL character (\\0) in a value (got 'room\\0...', expected text without one)"},
       {"bad_mesh_space.yaml", "bad_mesh_space.yaml:3:11: error: geometry[0].mesh: whitespace before or after it (got 'tri.obj '"},
+      {"bad_camera_up_parallel.yaml", "bad_camera_up_parallel.yaml:1:47: error: camera.up: zero or parallel to the view direction"},
   };
   char cmd[2048], out[8192];
   const char *img = RTSIM_TMP "/cli_out.exr";
