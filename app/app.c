@@ -25,11 +25,12 @@ int app_report(const struct err *e) {
 }
 
 int app_usage_error(const char *cmd, const char *fmt, ...) {
-  char msg[1024];
+  char raw[1024], msg[1024];
   va_list ap;
   va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
+  vsnprintf(raw, sizeof raw, fmt, ap);
   va_end(ap);
+  err_escape(msg, sizeof msg, raw); /* one line, whatever the user typed */
   fprintf(stderr, "rtsim %s: error: %s (see 'rtsim %s --help')\n", cmd, msg, cmd);
   return APP_EXIT_USAGE;
 }

@@ -3,8 +3,6 @@
  * same workload, and the one-pass analyser's own speed. */
 #include "app/app.h"
 
-#include <ctype.h>
-#include <errno.h>
 #include <getopt.h> /* optind: the scenes are argv[optind..argc) */
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,6 +24,7 @@
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
 #include "sim/mem_functional.h"
+#include "sim/scalar.h"
 
 static const char HELP[] =
     "usage: rtsim bench [options] SCENE.yaml...\n"
@@ -225,11 +224,8 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
 
 /* A sampling fraction: a plain decimal number above 0 and at most 1. */
 static bool parse_fraction(const char *text, void *dst) {
-  char *end;
-  errno = 0;
-  double v = strtod(text, &end);
-  if (end == text || *end || errno || !(v > 0 && v <= 1) || isspace((unsigned char)text[0]))
-    return false;
+  double v;
+  if (scalar_f64(text, &v) != SCALAR_OK || !(v > 0 && v <= 1)) return false;
   *(double *)dst = v;
   return true;
 }

@@ -15,6 +15,7 @@
 #include "app/opts.h"
 #include "sim/err.h"
 #include "sim/outfile.h"
+#include "sim/scalar.h"
 
 static const char HELP[] =
     "usage: rtsim plot TABLE.csv --x KEY --y METRIC -o FILE.png|FILE.svg [options]\n"
@@ -92,8 +93,13 @@ static int column(const struct csv_table *t, const char *opt, const char *name) 
   size_t len = 0;
   FILE *f = open_memstream(&msg, &len);
   CHECK(f);
-  fprintf(f, "%s:1: error: %s: no column '%s' (columns: ", t->file, opt, name);
-  for (unsigned i = 0; i < t->ncols; i++) fprintf(f, "%s%s", i ? ", " : "", t->names[i]);
+  char esc[1024];
+  err_escape(esc, sizeof esc, name);
+  fprintf(f, "%s:1: error: %s: no column '%s' (columns: ", t->file, opt, esc);
+  for (unsigned i = 0; i < t->ncols; i++) {
+    err_escape(esc, sizeof esc, t->names[i]); /* a quoted name may hold a line break */
+    fprintf(f, "%s%s", i ? ", " : "", esc);
+  }
   fputs(")\n", f);
   CHECK(fclose(f) == 0);
   fputs(msg, stderr);
@@ -218,9 +224,8 @@ struct marks {
 
 static bool add_mark(const char *text, void *dst) {
   struct marks *m = dst;
-  char *end = NULL;
-  double v = strtod(text, &end);
-  if (m->n == PLOT_WHERE_MAX || end == text || *end || !isfinite(v)) return false;
+  double v;
+  if (m->n == PLOT_WHERE_MAX || scalar_f64(text, &v) != SCALAR_OK) return false;
   m->v[m->n++] = v;
   return true;
 }
@@ -327,10 +332,13 @@ int cmd_plot(int argc, char **argv) {
       unsigned k = (size_t)r * t.ncols + (unsigned)cs[a];
       const char *s = t.cells[k];
       if (!csv_number(s, dst[a])) {
+        double ignored;
+        enum scalar_why why = scalar_f64(s, &ignored);
         err_set(&e, t.file, t.lines[k], t.cols[k],
-                "%s %s: not a number (got '%s'); --x and --y need numeric columns (use a text "
-                "column for --lines or --panels)",
-                a ? "--y" : "--x", t.names[cs[a]], s);
+                "%s %s: not a number%s%s (got '%s'); --x and --y need numeric columns (use a "
+                "text column for --lines or --panels)",
+                a ? "--y" : "--x", t.names[cs[a]], why == SCALAR_SYNTAX ? "" : ": ",
+                scalar_why_text(why), s);
         goto fail;
       }
       if (lg[a] && *dst[a] <= 0) {

@@ -26,6 +26,7 @@
 #include "sim/cfg.h"
 #include "sim/err.h"
 #include "sim/machine_cfg.h"
+#include "sim/scalar.h"
 
 /* Workload keys; machine keys are machine_cfg's. */
 enum wl { WL_SCENE, WL_POLICY, WL_RAYS, WL_WIDTH, WL_HEIGHT, WL_SEED, WL_COUNT };
@@ -527,9 +528,10 @@ static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *
   CHECK(shade_parse_rays(rays ? rays : "primary,shadow,specular,diffuse", &mask));
   char rays_name[128];
   shade_rays_name(mask, rays_name, sizeof rays_name);
-  /* Checked values: whole numbers in range (cfg_u64 takes 0x.. and 0.. too). */
-  uint64_t w = width ? strtoull(width, NULL, 0) : si->width;
-  uint64_t h = height ? strtoull(height, NULL, 0) : si->height;
+  /* Checked values: whole numbers in range (cfg_u64 read them already). */
+  uint64_t w = si->width, h = si->height;
+  CHECK(!width || scalar_u64(width, &w) == SCALAR_OK);
+  CHECK(!height || scalar_u64(height, &h) == SCALAR_OK);
   /* Sampling's own limits need the point's policy and image size. */
   enum policy_kind pk;
   CHECK(policy_parse(policy ? policy : "recursive", &pk));
@@ -558,8 +560,10 @@ static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *
   arg(&a, "--height");
   arg(&a, "%llu", (unsigned long long)h);
   if (seed) {
+    uint64_t sv = 0;
+    CHECK(scalar_u64(seed, &sv) == SCALAR_OK);
     arg(&a, "--seed");
-    arg(&a, "%llu", (unsigned long long)strtoull(seed, NULL, 0));
+    arg(&a, "%llu", (unsigned long long)sv);
   }
   for (uint32_t i = 0; pv->sets && i < pv->sets->count; i++) {
     arg(&a, "--set");

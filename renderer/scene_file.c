@@ -7,6 +7,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "renderer/camera.h"
 #include "renderer/gen.h"
 #include "renderer/meshio.h"
 #include "renderer/scene.h"
@@ -74,12 +75,15 @@ static bool load_camera(const struct cfg_doc *d, struct cfg_node *n, struct scen
       !cfg_check_keys(d, n, "camera", "from, at, up, fov_deg", e))
     return false;
   c->fov_deg = (float)fov;
-  vec3 dir = v3_sub(c->at, c->from);
-  if (v3_len(dir) == 0.0f)
+  switch (camera_check(c)) {
+  case CAMERA_OK: return true;
+  case CAMERA_NO_VIEW:
     return cfg_fail(d, cfg_get(n, "at"), "camera.at", e, "equals camera.from (no view direction)");
-  if (v3_len(v3_cross(dir, c->up)) == 0.0f)
-    return cfg_fail(d, n, "camera", e, "up is zero or parallel to the view direction");
-  return true;
+  case CAMERA_BAD_UP:
+    return cfg_fail(d, cfg_get(n, "up") ? cfg_get(n, "up") : n, "camera.up", e,
+                    "zero or parallel to the view direction (as far as 32-bit floats can tell)");
+  }
+  return false;
 }
 
 static bool load_image(const struct cfg_doc *d, struct cfg_node *n, struct scene *s,

@@ -6,16 +6,38 @@
 #include <stdlib.h>
 #include <string.h>
 
+void err_escape(char *out, size_t cap, const char *s) {
+  static const char hex[] = "0123456789abcdef";
+  size_t n = 0;
+  for (; *s && n + 1 < cap; s++) {
+    unsigned char c = (unsigned char)*s;
+    char esc[5] = {(char)c, 0};
+    if (c == '\n') memcpy(esc, "\\n", 3);
+    else if (c == '\r') memcpy(esc, "\\r", 3);
+    else if (c == '\t') memcpy(esc, "\\t", 3);
+    else if (c < 0x20 || c == 0x7f)
+      esc[0] = '\\', esc[1] = 'x', esc[2] = hex[c >> 4], esc[3] = hex[c & 15];
+    size_t k = strlen(esc);
+    if (n + k >= cap) break;
+    memcpy(out + n, esc, k);
+    n += k;
+  }
+  if (cap) out[n] = '\0';
+}
+
 bool err_set(struct err *e, const char *file, int line, int col, const char *fmt, ...) {
   if (!e || e->set) return false;
   e->set = true;
-  snprintf(e->file, sizeof e->file, "%s", file ? file : "");
+  err_escape(e->file, sizeof e->file, file ? file : "");
   e->line = line;
   e->col = col;
+  /* The message as formatted, then made one line. */
+  char raw[ERR_MSG_MAX];
   va_list ap;
   va_start(ap, fmt);
-  vsnprintf(e->msg, sizeof e->msg, fmt, ap);
+  vsnprintf(raw, sizeof raw, fmt, ap);
   va_end(ap);
+  err_escape(e->msg, sizeof e->msg, raw);
   return false;
 }
 

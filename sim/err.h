@@ -5,6 +5,7 @@
 #define RTSIM_SIM_ERR_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 #define ERR_FILE_MAX 512
 #define ERR_MSG_MAX 1024
@@ -21,6 +22,11 @@ struct err {
  * Always returns false so callers can write `return err_set(...)`. */
 bool err_set(struct err *e, const char *file, int line, int col, const char *fmt, ...)
     __attribute__((format(printf, 5, 6)));
+
+/* Copy s into out (cap bytes, cut short to fit) with its control characters
+ * written as escapes (\n, \r, \t, \xNN), so that a message quoting user
+ * text stays one line. err_set does it to every file name and message. */
+void err_escape(char *out, size_t cap, const char *s);
 
 /* Format as "file:line:col: error: msg" (parts omitted when unknown). */
 void err_format(const struct err *e, char *buf, unsigned buf_size);

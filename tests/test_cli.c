@@ -2,6 +2,7 @@
  * command line gets one line naming file:line:col (where there is one), exit
  * code 2, and no output file. Fixtures live in tests/data/scenes. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 #include <unistd.h>
@@ -187,6 +188,101 @@ static void test_importer_child(void) {
   unlink(scene);
 }
 
+/* #17's reproducers that need generated input: a hits row longer than the
+ * 4095 bytes the reader used to split rows at, read whole; a plot table with
+ * a NUL byte or a padded number, refused where it stands; a camera whose up
+ * is tiny but valid, accepted and the same image as a unit up. */
+static void test_strict_inputs(void) {
+  char cmd[2048], out[8192];
+  /* A long origin (0.5 and 5000 zeros) and a long tmax (1000 and 5000
+   * zeros): split at 4095 bytes, the row was an error or, worse, two rows. */
+  const char *rays = RTSIM_TMP "/cli_long_rows.csv";
+  char *zeros = malloc(5001);
+  EXPECT(zeros != NULL);
+  if (!zeros) return;
+  memset(zeros, '0', 5000);
+  zeros[5000] = '\0';
+  FILE *f = fopen(rays, "w");
+  EXPECT(f != NULL);
+  if (f) {
+    fprintf(f, "id,ox,oy,oz,dx,dy,dz,tmin,tmax\n");
+    fprintf(f, "1,0.5%s,0.5,3,0,0,-1,0,inf\n", zeros);
+    fprintf(f, "2,0.5,0.5,3,0,0,-1,0,1000.%s\n", zeros);
+    fprintf(f, "3,0.5,0.5,3,0,0,-1,0,2.%s\n", zeros);
+    fclose(f);
+  }
+  free(zeros);
+  snprintf(cmd, sizeof cmd, "%s hits %sgood_mesh.yaml < %s", RTSIM_BINARY, SCN, rays);
+  int rc = testing_run(cmd, out, sizeof out);
+  EXPECTF(rc == 0 && !strcmp(out, "id,t,prim\n1,3,0\n2,3,0\n3,inf,-1\n"), "long rows: exit %d: %s",
+          rc, out);
+  /* A row of 18 fields whose first 4095 bytes are a row of 9: it used to be
+   * answered as two rays with exit 0. */
+  f = fopen(rays, "w");
+  EXPECT(f != NULL);
+  if (f) {
+    const char *head = "1,0.5,0.5,3,0,0,-1,0,1.";
+    fprintf(f, "id,ox,oy,oz,dx,dy,dz,tmin,tmax\n%s", head);
+    for (size_t i = strlen(head); i < 4095; i++) fputc('0', f);
+    fprintf(f, "2,0.5,0.5,3,0,0,-1,0,inf\n");
+    fclose(f);
+  }
+  rc = testing_run(cmd, out, sizeof out);
+  EXPECTF(rc == 2 &&
+              strstr(out, "<stdin>:2:4097: error: unexpected text after tmax (expected 9 fields)\n") &&
+              !strstr(out, ",-1\n") && !strstr(out, ",0\n") && count_lines(out) == 2,
+          "a row split in two: exit %d: %s", rc, out);
+  /* A row past the 1 MiB bound is refused, not read without end. */
+  unlink(rays);
+  snprintf(cmd, sizeof cmd,
+           "(printf 'id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,'; head -c 2000000 /dev/zero | tr '\\0' 5) "
+           "| %s hits %sgood_mesh.yaml",
+           RTSIM_BINARY, SCN);
+  rc = testing_run(cmd, out, sizeof out);
+  EXPECTF(rc == 2 && strstr(out, "<stdin>:2:1048577: error: row too long (got more than 1048576 "
+                                  "bytes, expected at most 1048576)"),
+          "huge row: exit %d: %s", rc, out);
+
+  /* rtsim plot's table: a NUL byte cut the table short with exit 0. */
+#define TABLE(text) text, sizeof text - 1 /* the texts hold a NUL */
+  static const struct {
+    const char *text;
+    size_t len;
+    const char *want;
+  } tables[] = {
+      {TABLE("x,y\n1,2\n2,3\0\n3,4\n"), "cli_plot.csv:3:4: error: a NUL byte (expected text: a CSV holds none)"},
+      {TABLE("x,y\n1,2\n 2,3\n"), "cli_plot.csv:3:1: error: --x x: not a number: whitespace before or after it (got ' 2')"},
+      {TABLE("x,y\n1,2\n2,03\n"), "cli_plot.csv:3:3: error: --y y: not a number: a leading zero"},
+  };
+#undef TABLE
+  const char *table = RTSIM_TMP "/cli_plot.csv", *png = RTSIM_TMP "/cli_plot.png";
+  for (size_t i = 0; i < sizeof tables / sizeof tables[0]; i++) {
+    f = fopen(table, "wb");
+    EXPECT(f != NULL);
+    if (!f) continue;
+    fwrite(tables[i].text, 1, tables[i].len, f);
+    fclose(f);
+    unlink(png);
+    snprintf(cmd, sizeof cmd, "%s plot %s --x x --y y -o %s", RTSIM_BINARY, table, png);
+    rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 2 && strstr(out, tables[i].want) && count_lines(out) == 1,
+            "plot table %zu: exit %d: %s", i, rc, out);
+    EXPECTF(access(png, F_OK) != 0, "plot table %zu: a plot was written", i);
+  }
+  unlink(table);
+
+  /* up: [0, 0, 1e-30] is a valid up: the image is the unit up's, bit for bit. */
+  const char *a = RTSIM_TMP "/cli_up_unit.exr", *b = RTSIM_TMP "/cli_up_tiny.exr";
+  snprintf(cmd, sizeof cmd, "%s render %sgood_room_tiny.yaml -o %s --width 16 --height 12 && "
+           "%s render %sgood_camera_tiny_up.yaml -o %s --width 16 --height 12",
+           RTSIM_BINARY, SCN, a, RTSIM_BINARY, SCN, b);
+  rc = testing_run(cmd, out, sizeof out);
+  EXPECTF(rc == 0, "tiny up: exit %d: %s", rc, out);
+  EXPECT(rc == 0 && testing_same_rgb(a, b));
+  unlink(a);
+  unlink(b);
+}
+
 int main(void) {
   test_huge_scenes();
   test_importer_child();
@@ -212,6 +308,13 @@ int main(void) {
       {"bad_generator_key.yaml", "bad_generator_key.yaml:5:5: error: geometry[0].tesselation: unknown key 'tesselation' (expected one of: generator, detail, tessellation, seed)"},
       {"bad_both.yaml", "bad_both.yaml:3:5: error: geometry[0]: expected exactly one of 'generator' or 'mesh'"},
       {"no_such_scene.yaml", "no_such_scene.yaml: error: cannot open: No such file or directory"},
+      /* Strict numbers and strings (sim/scalar.h), a NUL escape, an up
+       * parallel to the view however small. */
+      {"bad_width_leading_zero.yaml", "bad_width_leading_zero.yaml:1:16: error: image.width: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 16384)"},
+      {"bad_number_space.yaml", "bad_number_space.yaml:1:52: error: camera.fov_deg: not a number: whitespace before or after it (got ' 50', expected a decimal number)"},
+      {"bad_nul.yaml", "bad_nul.yaml:1:7: error: a NUL character (\\0) in a value (got 'room\\0...', expected text without one)"},
+      {"bad_mesh_space.yaml", "bad_mesh_space.yaml:3:11: error: geometry[0].mesh: whitespace before or after it (got 'tri.obj '"},
+      {"bad_camera_up_parallel.yaml", "bad_camera_up_parallel.yaml:1:47: error: camera.up: zero or parallel to the view direction"},
   };
   char cmd[2048], out[8192];
   const char *img = RTSIM_TMP "/cli_out.exr";
@@ -303,6 +406,39 @@ int main(void) {
     EXPECTF(access(st, F_OK) != 0, "'%s': a run directory marked complete", usage[i].args);
   }
 
+  /* #17: strict numbers everywhere, one rule for leading zeros: exit 2,
+   * one line naming where, nothing written. */
+  static const struct {
+    const char *args, *want;
+  } strict[] = {
+      {"render " SCN "good_room_tiny.yaml -o x.exr --width 010", "--width: got '010' (a leading zero, ambiguous between octal and decimal), expected a whole number from 1 to 16384"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --width ' 8'", "--width: got ' 8' (whitespace before or after it)"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --seed 00", "--seed: got '00' (a leading zero"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --rays primary,", "--rays: got 'primary,'"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --rays ''", "--rays: got ''"},
+      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --sample 00.5 " SCN "good_room_tiny.yaml", "--sample: got '00.5'"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set cores=010", "--set cores=010: error: cores: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 4096)"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set l2.size=010KiB", "--set l2.size=010KiB: error: l2.size: not a size: a leading zero"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set 'clock_ghz=\n1.5'", "--set clock_ghz=\\n1.5: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5', expected a decimal number)"},
+      {"run " RTSIM_TEST_DATA "/configs/bad_nul.yaml " SCN "good_room_tiny.yaml -o xrun", "bad_nul.yaml:2:8: error: a NUL character (\\0) in a value (got '4\\0...'"},
+      {"run " RTSIM_TEST_DATA "/configs/bad_count_leading_zero.yaml " SCN "good_room_tiny.yaml -o xrun", "bad_count_leading_zero.yaml:2:8: error: cores: not a whole number: a leading zero"},
+      {"run " RTSIM_TEST_DATA "/configs/bad_size_leading_zero.yaml " SCN "good_room_tiny.yaml -o xrun", "bad_size_leading_zero.yaml:2:9: error: l2.size: not a size: a leading zero"},
+  };
+  for (size_t i = 0; i < sizeof strict / sizeof strict[0]; i++) {
+    snprintf(cmd, sizeof cmd, "cd %s && rm -rf xrun x.exr && %s %s", RTSIM_TMP, RTSIM_BINARY,
+             strict[i].args);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 2, "'%s': exit %d, output: %s", strict[i].args, rc, out);
+    EXPECTF(strstr(out, strict[i].want) != NULL, "'%s': got '%s', want '%s'", strict[i].args, out,
+            strict[i].want);
+    EXPECTF(count_lines(out) == 1, "'%s': expected one line, got: %s", strict[i].args, out);
+    char f[512];
+    snprintf(f, sizeof f, "%s/xrun/stats.json", RTSIM_TMP);
+    EXPECTF(access(f, F_OK) != 0, "'%s': a run directory marked complete", strict[i].args);
+    snprintf(f, sizeof f, "%s/x.exr", RTSIM_TMP);
+    EXPECTF(access(f, F_OK) != 0, "'%s': an image written", strict[i].args);
+  }
+
   /* --help and -h of every command succeed and print its own usage. */
   static const char *const helps[] = {"render", "export", "hits",  "bench", "traffic",
                                       "trace",  "run",    "sweep", "merge", "plot"};
@@ -321,7 +457,20 @@ int main(void) {
   } csv[] = {
       {"id,ox,oy\\n", "<stdin>:1:1: error: header: got 'id,ox,oy'"},
       {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0\\n", "<stdin>:2:"},
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,x,1,0,0,0,inf\\n", "<stdin>:2:7: error: field 4: not a number"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,x,1,0,0,0,inf\\n", "<stdin>:2:7: error: field 4 (oz): not a number (got 'x', expected a decimal number)"},
+      /* Strict fields: no whitespace, no leading zero, in range; inf only
+       * as tmax; a NUL byte refused where it stands (it used to end the
+       * row there, exit 0). */
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0, 0,0,1,0,0,0,inf\\n", "<stdin>:2:5: error: field 3 (oy): not a number: whitespace before or after it (got ' 0'"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,inf \\n", "<stdin>:2:17: error: field 9 (tmax): not a number: whitespace before or after it (got 'inf '"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n01,0,0,0,1,0,0,0,inf\\n", "<stdin>:2:1: error: id: not a whole number: a leading zero, ambiguous between octal and decimal (got '01'"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,00.5,0,0,1,0,0,0,inf\\n", "<stdin>:2:3: error: field 2 (ox): not a number: a leading zero"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,1e39\\n", "<stdin>:2:17: error: field 9 (tmax): not a number: too large (got '1e39', expected a decimal number or inf)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,inf,0,0,1,0,0,0,inf\\n", "<stdin>:2:3: error: field 2 (ox): not a number (got 'inf', expected a decimal number)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,nan\\n", "<stdin>:2:17: error: field 9 (tmax): not a number (got 'nan'"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,inf,\\n", "<stdin>:2:20: error: unexpected text after tmax (expected 9 fields)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0.5,0.5,3,0,0,-1,0,inf\\0garbage\\n", "<stdin>:2:25: error: a NUL byte (expected text: a CSV holds none)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\0\\n", "<stdin>:1:31: error: a NUL byte"},
       {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n7,0,0,0,0,0,0,0,inf\\n", "<stdin>:2:1: error: ray 7: direction is zero"},
       {"", "<stdin>: error: no input"},
   };
@@ -331,7 +480,12 @@ int main(void) {
     int rc = testing_run(cmd, out, sizeof out);
     EXPECTF(rc == 2, "csv %zu: exit %d: %s", i, rc, out);
     EXPECTF(strstr(out, csv[i].want) != NULL, "csv %zu: got '%s', want '%s'", i, out, csv[i].want);
+    /* The header line, if it was read, then the one error line. */
+    EXPECTF(count_lines(out) <= 2 && !strstr(out, "\n1,") && strncmp(out, "1,", 2),
+            "csv %zu: a row answered before the error, or more than one message: %s", i, out);
   }
+
+  test_strict_inputs();
 
   /* hits on a one-triangle mesh: exact, hand-computed answers. The mesh is the
    * triangle (0,0,0) (1,0,0) (0,1,0) scaled by 2. */

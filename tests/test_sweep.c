@@ -170,6 +170,10 @@ static void test_bad_files(void) {
       {"bad_set_key.yaml", "bad_set_key.yaml:4:3: error: set.policy: unknown key 'policy'"},
       {"bad_nested.yaml", "bad_nested.yaml:4:14: error: axes.cores[1]: wrong type (got a list, expected one value)"},
       {"bad_machine.yaml", "configs/bad_size_unit.yaml:2:9: error: l2.size: not a size"},
+      /* #17: "\n1.5" was taken as 1.5 and broke --emit-jobs' one line a point. */
+      {"bad_value_newline.yaml", "bad_value_newline.yaml:4:18: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5', expected a decimal number)"},
+      {"bad_width_leading_zero.yaml", "bad_width_leading_zero.yaml:2:59: error: width: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 16384)"},
+      {"bad_path_space.yaml", "bad_path_space.yaml:1:10: error: machine: whitespace before or after it (got '../../../configs/tiny.yaml '"},
   };
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
     run("rm -rf %s/sw_bad", RTSIM_TMP);
