@@ -10,9 +10,10 @@
 
 #include "sim/err.h"
 
-/* Read a whole file into a NUL-terminated buffer (caller frees); NULL on failure. */
-static char *slurp(const char *path) {
-  FILE *f = fopen(path, "rb");
+/* Read a whole regular file into a NUL-terminated buffer (caller frees); NULL
+ * on failure, with the reason in *why. */
+static char *slurp(const char *path, const char **why) {
+  FILE *f = err_fopen_regular(path, why);
   if (!f) return NULL;
   size_t cap = 1 << 14, n = 0;
   char *buf = xmalloc(cap);
@@ -22,6 +23,7 @@ static char *slurp(const char *path) {
     if (cap - n - 1 == 0) buf = xrealloc(buf, cap *= 2);
   }
   bool bad = ferror(f);
+  if (bad) *why = strerror(errno);
   fclose(f);
   if (bad) {
     free(buf);
@@ -54,8 +56,9 @@ static void push(struct builder *b, char *cell, int line, int col) {
 bool csv_read(struct csv_table *t, const char *path, struct err *e) {
   memset(t, 0, sizeof *t);
   snprintf(t->file, sizeof t->file, "%s", path);
-  char *text = slurp(path);
-  if (!text) return err_set(e, path, 0, 0, "cannot read: %s", strerror(errno));
+  const char *why;
+  char *text = slurp(path, &why);
+  if (!text) return err_set(e, path, 0, 0, "cannot read: %s", why);
   struct builder all = {0};
   bool ok = true;
   unsigned row_start = 0, width = 0, rows = 0;

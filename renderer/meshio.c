@@ -150,6 +150,10 @@ done:
 
 bool meshio_import(struct scene *s, const char *path, const struct meshio_xform *xf,
                    uint32_t material, struct err *e) {
+  /* assimp opens the file by name: a pipe or device is refused first (a pipe
+   * would block it forever). */
+  const char *irregular = err_not_regular(path);
+  if (irregular) return err_set(e, path, 0, 0, "cannot import mesh: %s", irregular);
   if (ply_claims(path)) return meshio_import_ply(s, path, xf, material, e);
   const struct aiScene *as = aiImportFile(path, MESHIO_READ_FLAGS);
   if (!as) {
