@@ -32,7 +32,7 @@ static const char HELP[] =
     "  --x KEY            the x axis (a numeric column)\n"
     "  --y METRIC         the y axis (a numeric column)\n"
     "  --lines KEY        one line per value of this column, with a legend\n"
-    "  --panels KEY       one panel per value of this column\n"
+    "  --panels KEY       one panel per value of this column (at most 100)\n"
     "  --where KEY=VALUE  keep only rows where KEY is VALUE (numbers compare as\n"
     "                     numbers); repeatable. Every other column that varies\n"
     "                     must be fixed so, or be --lines or --panels: two rows\n"
@@ -44,6 +44,11 @@ static const char HELP[] =
     "  -h, --help         this text\n";
 
 #define PLOT_WHERE_MAX 32
+/* Most panels a plot may have: the picture grows with them (a square grid of
+ * 620x420-pixel panels: 100 make 6200x4200 pixels, about 100 MB for gnuplot;
+ * 2,500 took gnuplot a minute and 2.5 GB), and past a hundred no panel can
+ * be read anyway. */
+#define PLOT_PANELS_MAX 100
 
 /* The unit a column's name states, or "" (a count or a label). */
 static const char *unit_of(const char *name) {
@@ -315,6 +320,13 @@ int cmd_plot(int argc, char **argv) {
   }
   distinct(&t, lc, kept, nkept, &lines);
   distinct(&t, pc, kept, nkept, &panels);
+  if (panels.n > PLOT_PANELS_MAX) {
+    err_set(&e, t.file, 1, 0,
+            "--panels %s: %u values would make %u panels (expected at most %d: keep fewer "
+            "with --where KEY=VALUE, or draw the column with --lines)",
+            pk, panels.n, panels.n, PLOT_PANELS_MAX);
+    goto fail;
+  }
   rows = xcalloc(nkept, sizeof *rows);
   for (unsigned i = 0; i < nkept; i++) {
     unsigned r = kept[i];

@@ -27,7 +27,7 @@
 #include "sim/stats.h"
 
 static const char HELP[] =
-    "usage: rtsim sweep SWEEP.yaml -o DIR [-j N] [--emit-jobs]\n"
+    "usage: rtsim sweep SWEEP.yaml -o DIR [-j N] [--max-points N] [--emit-jobs]\n"
     "\n"
     "Run every point of a sweep file (a base machine config, a workload, and axes\n"
     "over config or workload keys: see README.md, Sweeps) as an 'rtsim run' into\n"
@@ -44,6 +44,8 @@ static const char HELP[] =
     "options:\n"
     "  -o, --output DIR  where the points go (created if needed)\n"
     "  -j, --jobs N      points at a time (default: the number of cores)\n"
+    "  --max-points N    refuse a sweep of more than N points (default 10000, at\n"
+    "                    most 1000000), before anything is written\n"
     "  --emit-jobs       run nothing: print one shell command per incomplete point\n"
     "                    on stdout (absolute paths, one line each), for\n"
     "                    'rtsim sweep S -o D --emit-jobs | parallel' or a Slurm\n"
@@ -384,8 +386,10 @@ int cmd_sweep(int argc, char **argv) {
   long cores = sysconf(_SC_NPROCESSORS_ONLN);
   uint64_t jobs = cores > 0 ? (uint64_t)cores : 1;
   bool emit = false;
+  uint64_t max_points = SWEEP_POINTS_DEFAULT;
   const struct opts_spec spec[] = {OPTS_STR("output", 'o', &out),
                                    OPTS_U64("jobs", 'j', &jobs, 1, 4096),
+                                   OPTS_U64("max-points", 0, &max_points, 1, SWEEP_POINTS_MAX),
                                    OPTS_FLAG("emit-jobs", 0, &emit), OPTS_END};
   struct opts_args args;
   int rc = opts_parse("sweep", HELP, spec, argc, argv, &args);
@@ -410,7 +414,7 @@ int cmd_sweep(int argc, char **argv) {
 
   struct sweep s;
   struct err e = {0};
-  if (!sweep_load(&s, sweep_path, dir, &e)) {
+  if (!sweep_load_capped(&s, sweep_path, dir, (unsigned)max_points, &e)) {
     sweep_free(&s);
     return app_report(&e);
   }
