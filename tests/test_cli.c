@@ -144,6 +144,42 @@ static void test_not_regular(void) {
   unlink(RTSIM_TMP "/cli_mesh_obj.yaml");
 }
 
+/* rtsim run's refusals come before -o DIR is touched: a complete directory
+ * keeps its stats.json (the same file), a new one is not made. */
+static void test_run_refuses_first(void) {
+  char cmd[4096], out[8192];
+  const char *dir = RTSIM_TMP "/cli_refuse";
+  snprintf(cmd, sizeof cmd, "rm -rf %s && %s run %s/configs/tiny.yaml %sgood_room_tiny.yaml -o %s "
+           "--width 4 --height 4 --rays primary",
+           dir, RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, dir);
+  EXPECTF(testing_run(cmd, out, sizeof out) == 0, "the first run: %s", out);
+  struct stat before, after;
+  EXPECT(stat(RTSIM_TMP "/cli_refuse/stats.json", &before) == 0);
+  static const char *const refused[] = {
+      /* sampling's own limit: too few work items for the fraction */
+      "--width 8 --height 8 --set sample.fraction=0.01",
+      /* more ray contexts than any host maps stacks for */
+      "--width 8 --height 8 --set cores=4096 --set threads_per_core=16 --set rays_per_thread=16",
+      /* a sampled run cannot record a whole run's DRAM trace */
+      "--width 64 --height 64 --set sample.fraction=0.5 --dram-trace " RTSIM_TMP "/cli_refuse.trace",
+  };
+  for (size_t i = 0; i < sizeof refused / sizeof refused[0]; i++)
+    for (int fresh = 0; fresh < 2; fresh++) {
+      const char *d = fresh ? RTSIM_TMP "/cli_refuse_new" : dir;
+      snprintf(cmd, sizeof cmd, "rm -rf %s/cli_refuse_new && %s run %s/configs/tiny.yaml "
+               "%sgood_room_tiny.yaml -o %s %s",
+               RTSIM_TMP, RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, d, refused[i]);
+      int rc = testing_run(cmd, out, sizeof out);
+      EXPECTF(rc == 2 && count_lines(out) == 1, "'%s': exit %d: %s", refused[i], rc, out);
+      if (fresh)
+        EXPECTF(access(d, F_OK) != 0, "'%s': the directory was made", refused[i]);
+      else
+        EXPECTF(stat(RTSIM_TMP "/cli_refuse/stats.json", &after) == 0 &&
+                    after.st_ino == before.st_ino && after.st_mtim.tv_nsec == before.st_mtim.tv_nsec,
+                "'%s': the complete directory was touched", refused[i]);
+    }
+}
+
 int main(void) {
   static const struct {
     const char *file, *want;
@@ -189,6 +225,7 @@ int main(void) {
 
   test_hostile_yaml();
   test_not_regular();
+  test_run_refuses_first();
 
   /* Command-line mistakes: exit 2 and a message naming the problem. */
   static const struct {
