@@ -539,22 +539,47 @@ static void test_bounded(void) {
   unlink(fifo);
   unlink(file);
 
-  /* A plot of 101 panels is refused before gnuplot starts. */
+  /* A plot of 101 panels, or of 101 lines, is refused before gnuplot starts;
+   * 100 lines in 2 panels are drawn. */
   const char *csv = RTSIM_TMP "/sw_panels.csv";
   f = fopen(csv, "w");
   if (f) {
-    fputs("x,y,p\n", f);
-    for (int i = 0; i < 101; i++) fprintf(f, "1,2,%d\n", i);
+    fputs("x,y,p,q\n", f);
+    for (int i = 0; i < 101; i++) fprintf(f, "1,2,%d,%d\n", i, i % 2);
     fclose(f);
   }
-  run("rm -f %s/sw_panels.png", RTSIM_TMP);
-  rc = run("%s plot %s --x x --y y --panels p -o %s/sw_panels.png", RTSIM_BINARY, csv, RTSIM_TMP);
-  EXPECTF(rc == 2 && count_lines(out) == 1 &&
-              strstr(out, "sw_panels.csv:1: error: --panels p: 101 values would make 101 panels "
-                          "(expected at most 100"),
-          "101 panels: exit %d: %s", rc, out);
-  EXPECT(!exists(RTSIM_TMP "/sw_panels.png"));
+  static const struct {
+    const char *args, *want;
+  } caps[] = {
+      {"--panels p", "sw_panels.csv:1: error: --panels p: more than 100 values (expected at most "
+                     "100 panels"},
+      {"--lines p", "sw_panels.csv:1: error: --lines p: more than 100 values (expected at most 100 "
+                    "lines"},
+  };
+  for (int i = 0; i < 2; i++) {
+    run("rm -f %s/sw_panels.png", RTSIM_TMP);
+    rc = run("%s plot %s --x x --y y %s -o %s/sw_panels.png", RTSIM_BINARY, csv, caps[i].args,
+             RTSIM_TMP);
+    EXPECTF(rc == 2 && count_lines(out) == 1 && strstr(out, caps[i].want), "'%s': exit %d: %s",
+            caps[i].args, rc, out);
+    EXPECT(!exists(RTSIM_TMP "/sw_panels.png"));
+  }
+  f = fopen(csv, "w");
+  if (f) {
+    fputs("x,y,p,q\n", f);
+    for (int i = 0; i < 200; i++) fprintf(f, "%d,%d,%d,%d\n", i % 2, i, i / 2, i / 100);
+    fclose(f);
+  }
+  rc = run("%s plot %s --x x --y y --lines p --panels q -o %s/sw_panels.svg", RTSIM_BINARY, csv,
+           RTSIM_TMP);
+  EXPECTF(rc == 0 && strstr(out, "200 points, 100 lines, 2 panels"), "100 lines: exit %d: %s", rc,
+          out);
+  char *svg = read_all(RTSIM_TMP "/sw_panels.svg");
+  EXPECTF(svg && strstr(svg, "p = 0") && strstr(svg, "p = 99") && strstr(svg, "q = 1"),
+          "the 100-line plot lacks its legend or titles");
+  free(svg);
   unlink(csv);
+  unlink(RTSIM_TMP "/sw_panels.svg");
 }
 
 int main(void) {
