@@ -10,10 +10,10 @@
 #include "sim/err.h"
 #include "sim/scalar.h"
 
-/* Read a whole file into a NUL-terminated buffer (caller frees), its length in
- * *len; NULL on failure. */
-static char *slurp(const char *path, size_t *len) {
-  FILE *f = fopen(path, "rb");
+/* Read a whole regular file into a NUL-terminated buffer (caller frees), its
+ * length in *len; NULL on failure, with the reason in *why. */
+static char *slurp(const char *path, size_t *len, const char **why) {
+  FILE *f = err_fopen_regular(path, why);
   if (!f) return NULL;
   size_t cap = 1 << 14, n = 0;
   char *buf = xmalloc(cap);
@@ -23,6 +23,7 @@ static char *slurp(const char *path, size_t *len) {
     if (cap - n - 1 == 0) buf = xrealloc(buf, cap *= 2);
   }
   bool bad = ferror(f);
+  if (bad) *why = strerror(errno);
   fclose(f);
   if (bad) {
     free(buf);
@@ -57,8 +58,9 @@ bool csv_read(struct csv_table *t, const char *path, struct err *e) {
   memset(t, 0, sizeof *t);
   snprintf(t->file, sizeof t->file, "%s", path);
   size_t size = 0;
-  char *text = slurp(path, &size);
-  if (!text) return err_set(e, path, 0, 0, "cannot read: %s", strerror(errno));
+  const char *why;
+  char *text = slurp(path, &size, &why);
+  if (!text) return err_set(e, path, 0, 0, "cannot read: %s", why);
   /* A NUL byte would end the text there, and the rows after it with it. */
   const char *nul = memchr(text, '\0', size);
   if (nul) {

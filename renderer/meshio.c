@@ -156,6 +156,8 @@ done:
 bool meshio_estimate(const char *path, uint64_t *least, uint64_t *most, struct err *e) {
   *least = 0;
   *most = UINT64_MAX;
+  const char *irregular = err_not_regular(path);
+  if (irregular) return err_set(e, path, 0, 0, "cannot import mesh: %s", irregular);
   if (!ply_claims(path)) return true;
   struct ply_counts c;
   struct err pe = {0};
@@ -354,6 +356,10 @@ static void meshio_child_death(int status, char *out, size_t cap) {
 
 bool meshio_import(struct scene *s, const char *path, const struct meshio_xform *xf,
                    uint32_t material, uint64_t max_tris, struct err *e) {
+  /* assimp opens the file by name: a pipe or device is refused first (a pipe
+   * would block it forever). */
+  const char *irregular = err_not_regular(path);
+  if (irregular) return err_set(e, path, 0, 0, "cannot import mesh: %s", irregular);
   if (ply_claims(path)) return meshio_import_ply(s, path, xf, material, max_tris, e);
   int fds[2];
   if (pipe(fds) != 0)

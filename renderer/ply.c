@@ -666,8 +666,9 @@ bool ply_read_memory(const unsigned char *buf, size_t len, const char *name, str
 
 bool ply_read_file(const char *path, struct ply_mesh *m, struct err *e) {
   memset(m, 0, sizeof *m);
-  FILE *f = fopen(path, "rb");
-  if (!f) return err_set(e, path, 0, 0, "cannot open: %s", strerror(errno));
+  const char *why;
+  FILE *f = err_fopen_regular(path, &why);
+  if (!f) return err_set(e, path, 0, 0, "cannot open: %s", why);
   /* Grow by doubling as bytes arrive: the buffer is at most twice the file. */
   size_t cap = 65536, len = 0, got;
   unsigned char *buf = xmalloc(cap);
@@ -705,8 +706,9 @@ static bool ply_header_complete(const unsigned char *b, size_t n) {
 
 bool ply_read_header_file(const char *path, struct ply_counts *c, struct err *e) {
   memset(c, 0, sizeof *c);
-  FILE *f = fopen(path, "rb");
-  if (!f) return err_set(e, path, 0, 0, "cannot open: %s", strerror(errno));
+  const char *why;
+  FILE *f = err_fopen_regular(path, &why);
+  if (!f) return err_set(e, path, 0, 0, "cannot open: %s", why);
   /* Read until the header is whole: headers are short, but comments may be
    * long, so up to PLY_HEADER_SCAN_MAX bytes. */
   size_t cap = 4096, len = 0, got;
@@ -759,7 +761,8 @@ bool ply_claims(const char *path) {
   if (n >= 4 && path[n - 4] == '.' && (path[n - 3] | 0x20) == 'p' &&
       (path[n - 2] | 0x20) == 'l' && (path[n - 1] | 0x20) == 'y')
     return true;
-  FILE *f = fopen(path, "rb");
+  const char *why;
+  FILE *f = err_fopen_regular(path, &why);
   if (!f) return false;
   char head[3];
   bool ply = fread(head, 1, 3, f) == 3 && (head[0] | 0x20) == 'p' && (head[1] | 0x20) == 'l' &&

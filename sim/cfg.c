@@ -409,9 +409,10 @@ static bool size_ok(const struct cfg_doc *d, const char *text, size_t len, struc
 bool cfg_load_file(struct cfg_doc *d, const char *path, struct err *e) {
   memset(d, 0, sizeof *d);
   snprintf(d->file, sizeof d->file, "%s", path);
-  FILE *f = fopen(path, "rb");
-  if (!f) return err_set(e, path, 0, 0, "cannot open: %s", strerror(errno));
-  /* Read at most one byte past the limit: a device or pipe that never ends
+  const char *why;
+  FILE *f = err_fopen_regular(path, &why); /* a pipe or device is refused unopened */
+  if (!f) return err_set(e, path, 0, 0, "cannot open: %s", why);
+  /* Read at most one byte past the limit: a file that grows as it is read
    * is refused like a large file. */
   char *buf = xmalloc(CFG_MAX_FILE_BYTES + 2);
   size_t n = fread(buf, 1, CFG_MAX_FILE_BYTES + 1, f);

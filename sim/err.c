@@ -1,10 +1,14 @@
 /* User-error records and the fatal paths for broken invariants and allocation. */
 #include "sim/err.h"
 
+#include <errno.h>
+#include <fcntl.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 void err_escape(char *out, size_t cap, const char *s) {
   static const char hex[] = "0123456789abcdef";
@@ -95,4 +99,44 @@ void *xcalloc(unsigned long long n, unsigned long long size) {
 void *xrealloc(void *p, unsigned long long size) {
   void *q = realloc(p, size ? size : 1);
   return q ? q : oom(size);
+}
+
+/* What a file that is not regular is, for messages. */
+static const char *irregular(mode_t m) {
+  if (S_ISFIFO(m)) return "not a regular file (a named pipe)";
+  if (S_ISCHR(m)) return "not a regular file (a character device)";
+  if (S_ISBLK(m)) return "not a regular file (a block device)";
+  if (S_ISDIR(m)) return "not a regular file (a directory)";
+  if (S_ISSOCK(m)) return "not a regular file (a socket)";
+  return "not a regular file";
+}
+
+const char *err_not_regular(const char *path) {
+  struct stat sb;
+  if (stat(path, &sb) != 0) return strerror(errno);
+  return S_ISREG(sb.st_mode) ? NULL : irregular(sb.st_mode);
+}
+
+FILE *err_fopen_regular(const char *path, const char **why) {
+  if ((*why = err_not_regular(path))) return NULL;
+  int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    *why = strerror(errno);
+    return NULL;
+  }
+  struct stat sb;
+  int flags;
+  if (fstat(fd, &sb) != 0) {
+    *why = strerror(errno);
+  } else if (!S_ISREG(sb.st_mode)) {
+    *why = irregular(sb.st_mode);
+  } else if ((flags = fcntl(fd, F_GETFL)) < 0 || fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0) {
+    *why = strerror(errno);
+  } else {
+    FILE *f = fdopen(fd, "rb");
+    if (f) return f;
+    *why = strerror(errno);
+  }
+  close(fd);
+  return NULL;
 }

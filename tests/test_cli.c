@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "testing.h"
@@ -62,7 +63,7 @@ static void test_hostile_yaml(void) {
       {RTSIM_TMP "/hostile_big.yaml",
        "hostile_big.yaml:1:1048577: error: file too large (got more than 1048576 bytes, expected at "
        "most 1048576)"},
-      {"/dev/zero", "/dev/zero:1:1048577: error: file too large"},
+      {"/dev/zero", "/dev/zero: error: cannot open: not a regular file (a character device)"},
   };
   char cmd[2048], out[8192];
   const char *img = RTSIM_TMP "/cli_hostile.exr";
@@ -283,6 +284,105 @@ static void test_strict_inputs(void) {
   unlink(b);
 }
 
+/* Inputs that are not regular files (a named pipe, a device, a directory)
+ * are refused before they are opened for reading: exit 2, one line, at once.
+ * A pipe nobody writes would block a reader forever; each command runs under
+ * `timeout` so that a regression fails (exit 124) instead of hanging. */
+static void test_not_regular(void) {
+  const char *fifo_yaml = RTSIM_TMP "/cli_fifo.yaml", *fifo_ply = RTSIM_TMP "/cli_fifo.ply",
+             *fifo_obj = RTSIM_TMP "/cli_fifo.obj", *fifo_csv = RTSIM_TMP "/cli_fifo.csv",
+             *fifo_trace = RTSIM_TMP "/cli_fifo.trace";
+  const char *const fifos[] = {fifo_yaml, fifo_ply, fifo_obj, fifo_csv, fifo_trace};
+  for (size_t i = 0; i < 5; i++) {
+    unlink(fifos[i]);
+    EXPECTF(mkfifo(fifos[i], 0600) == 0, "mkfifo %s", fifos[i]);
+  }
+  /* Scenes whose mesh is a pipe: one read by rtsim's PLY reader, one by assimp. */
+  write_file(RTSIM_TMP "/cli_mesh_ply.yaml",
+             "camera: {from: [0, -5, 1], at: [0, 0, 0]}\ngeometry:\n  - mesh: cli_fifo.ply\n", "",
+             0, "");
+  write_file(RTSIM_TMP "/cli_mesh_obj.yaml",
+             "camera: {from: [0, -5, 1], at: [0, 0, 0]}\ngeometry:\n  - mesh: cli_fifo.obj\n", "",
+             0, "");
+  const char *pipe = "not a regular file (a named pipe)";
+  static const struct {
+    const char *args, *want, *why;
+  } cases[] = {
+      {"render " RTSIM_TMP "/cli_fifo.yaml -o x.exr", "cli_fifo.yaml: error: cannot open: ", NULL},
+      {"run " RTSIM_TMP "/cli_fifo.yaml " SCN "good_room_tiny.yaml -o xfifo",
+       "cli_fifo.yaml: error: cannot open: ", NULL},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " RTSIM_TMP "/cli_fifo.yaml -o xfifo",
+       "cli_fifo.yaml: error: cannot open: ", NULL},
+      {"render " RTSIM_TMP "/cli_mesh_ply.yaml -o x.exr",
+       "cli_mesh_ply.yaml:3:11: error: geometry[0].mesh: " RTSIM_TMP
+       "/cli_fifo.ply: cannot import mesh: ",
+       NULL},
+      {"render " RTSIM_TMP "/cli_mesh_obj.yaml -o x.exr",
+       "cli_mesh_obj.yaml:3:11: error: geometry[0].mesh: " RTSIM_TMP
+       "/cli_fifo.obj: cannot import mesh: ",
+       NULL},
+      {"plot " RTSIM_TMP "/cli_fifo.csv --x a --y b -o x.png", "cli_fifo.csv: error: cannot read: ",
+       NULL},
+      {"dram-replay " RTSIM_SOURCE_DIR "/configs/tiny.yaml " RTSIM_TMP "/cli_fifo.trace",
+       "cli_fifo.trace: error: cannot open: ", NULL},
+      {"render /dev/null -o x.exr", "/dev/null: error: cannot open: ",
+       "not a regular file (a character device)"},
+      {"render " SCN " -o x.exr", "/scenes/: error: cannot open: ", "not a regular file (a directory)"},
+  };
+  char cmd[2048], out[8192];
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    snprintf(cmd, sizeof cmd, "cd %s && rm -rf xfifo && timeout 20 %s %s", RTSIM_TMP, RTSIM_BINARY,
+             cases[i].args);
+    int rc = testing_run(cmd, out, sizeof out);
+    char want[1024];
+    snprintf(want, sizeof want, "%s%s", cases[i].want, cases[i].why ? cases[i].why : pipe);
+    EXPECTF(rc == 2, "'%s': exit %d (124: it blocked), output: %s", cases[i].args, rc, out);
+    EXPECTF(strstr(out, want) != NULL, "'%s': got '%s', want '%s'", cases[i].args, out, want);
+    EXPECTF(count_lines(out) == 1, "'%s': expected one line, got: %s", cases[i].args, out);
+    EXPECTF(access(RTSIM_TMP "/x.exr", F_OK) != 0 && access(RTSIM_TMP "/xfifo", F_OK) != 0,
+            "'%s': output left behind", cases[i].args);
+  }
+  for (size_t i = 0; i < 5; i++) unlink(fifos[i]);
+  unlink(RTSIM_TMP "/cli_mesh_ply.yaml");
+  unlink(RTSIM_TMP "/cli_mesh_obj.yaml");
+}
+
+/* rtsim run's refusals come before -o DIR is touched: a complete directory
+ * keeps its stats.json (the same file), a new one is not made. */
+static void test_run_refuses_first(void) {
+  char cmd[4096], out[8192];
+  const char *dir = RTSIM_TMP "/cli_refuse";
+  snprintf(cmd, sizeof cmd, "rm -rf %s && %s run %s/configs/tiny.yaml %sgood_room_tiny.yaml -o %s "
+           "--width 4 --height 4 --rays primary",
+           dir, RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, dir);
+  EXPECTF(testing_run(cmd, out, sizeof out) == 0, "the first run: %s", out);
+  struct stat before, after;
+  EXPECT(stat(RTSIM_TMP "/cli_refuse/stats.json", &before) == 0);
+  static const char *const refused[] = {
+      /* sampling's own limit: too few work items for the fraction */
+      "--width 8 --height 8 --set sample.fraction=0.01",
+      /* more ray contexts than any host maps stacks for */
+      "--width 8 --height 8 --set cores=4096 --set threads_per_core=16 --set rays_per_thread=16",
+      /* a sampled run cannot record a whole run's DRAM trace */
+      "--width 64 --height 64 --set sample.fraction=0.5 --dram-trace " RTSIM_TMP "/cli_refuse.trace",
+  };
+  for (size_t i = 0; i < sizeof refused / sizeof refused[0]; i++)
+    for (int fresh = 0; fresh < 2; fresh++) {
+      const char *d = fresh ? RTSIM_TMP "/cli_refuse_new" : dir;
+      snprintf(cmd, sizeof cmd, "rm -rf %s/cli_refuse_new && %s run %s/configs/tiny.yaml "
+               "%sgood_room_tiny.yaml -o %s %s",
+               RTSIM_TMP, RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, d, refused[i]);
+      int rc = testing_run(cmd, out, sizeof out);
+      EXPECTF(rc == 2 && count_lines(out) == 1, "'%s': exit %d: %s", refused[i], rc, out);
+      if (fresh)
+        EXPECTF(access(d, F_OK) != 0, "'%s': the directory was made", refused[i]);
+      else
+        EXPECTF(stat(RTSIM_TMP "/cli_refuse/stats.json", &after) == 0 &&
+                    after.st_ino == before.st_ino && after.st_mtim.tv_nsec == before.st_mtim.tv_nsec,
+                "'%s': the complete directory was touched", refused[i]);
+    }
+}
+
 int main(void) {
   test_huge_scenes();
   test_importer_child();
@@ -297,7 +397,7 @@ int main(void) {
       {"bad_generator.yaml", "bad_generator.yaml:3:16: error: geometry[0].generator: unknown value (got 'teapot', expected one of: sphereflake, grove, room)"},
       {"bad_detail.yaml", "bad_detail.yaml:4:13: error: geometry[0].detail: out of range (got -1, expected 0.0001 to 200)"},
       {"bad_material_ref.yaml", "bad_material_ref.yaml:4:15: error: geometry[0].material: no material named 'gold'"},
-      {"bad_mesh_missing.yaml", "bad_mesh_missing.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/no_such_mesh.obj: cannot import mesh: Unable to open file"},
+      {"bad_mesh_missing.yaml", "bad_mesh_missing.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/no_such_mesh.obj: cannot import mesh: No such file or directory"},
       {"bad_mesh_broken.yaml", "bad_mesh_broken.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/broken.ply:3: cannot import mesh: PLY header: element 'vertex': 3 instances of at least 12 bytes each cannot fit in the 2 bytes after the header"},
       {"bad_light_key.yaml", "bad_light_key.yaml:3:5: error: lights[0]: missing required key 'position'"},
       {"bad_camera_degenerate.yaml", "bad_camera_degenerate.yaml:1:31: error: camera.at: equals camera.from"},
@@ -336,6 +436,8 @@ int main(void) {
   }
 
   test_hostile_yaml();
+  test_not_regular();
+  test_run_refuses_first();
 
   /* Command-line mistakes: exit 2 and a message naming the problem. */
   static const struct {
