@@ -108,8 +108,9 @@ struct timed_ctx {
 static void run_worker(void *arg, const struct machine_worker_info *info, struct mem_port port) {
   struct timed_ctx *r = arg;
   struct policy_worker *w = &r->workers[info->id];
-  policy_worker_init(w, r->job, info->id, info->core, info->thread, port);
-  policy_job_work(r->job, w);
+  /* Called again after a wake when the worker parked (policy_job_work). */
+  if (!w->parked) policy_worker_init(w, r->job, info->id, info->core, info->thread, port);
+  if (policy_job_work(r->job, w)) return;
   policy_worker_fini(r->job, w);
 }
 
@@ -138,7 +139,8 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
   t->ar.setup.layout.tri_cycles = mp->cost_triangle_cycles;
   t->ar.sc.shade_cycles = mp->cost_shade_cycles;
   struct policy_params pp;
-  policy_params_machine(&pp, mp->l2_size_bytes, (uint64_t)mp->l2_latency_cycles + mp->dram_latency_cycles);
+  policy_params_machine(&pp, mp->l2_size_bytes);
+  pp.dyn_sharing = mp->dyn_sharing;
   const uint32_t n = mp->cores * mp->threads_per_core * mp->rays_per_thread;
   struct timed_ctx r = {0};
   t->ar.setup.progress = work_progress;

@@ -19,8 +19,8 @@ void app_analytic_run(struct app_analytic *a, const struct app_world *w, uint32_
   a->ar.setup.layout.tri_cycles = mp->cost_triangle_cycles;
   a->ar.sc.shade_cycles = mp->cost_shade_cycles;
   struct policy_params pp;
-  policy_params_machine(&pp, mp->l2_size_bytes,
-                        (uint64_t)mp->l2_latency_cycles + mp->dram_latency_cycles);
+  policy_params_machine(&pp, mp->l2_size_bytes);
+  pp.dyn_sharing = mp->dyn_sharing; /* one core: either way the same */
   /* One worker on one core. NOTE: the dynamic policy's queue points are then
    * made for the whole L2 (g_max not divided among the cores, a one-ray ray
    * buffer), so it may do somewhat different work than on the timed machine;
@@ -30,7 +30,7 @@ void app_analytic_run(struct app_analytic *a, const struct app_world *w, uint32_
   double t0 = app_now();
   struct policy_worker wk;
   policy_worker_init(&wk, job, 0, 0, 0, analytic_port(be));
-  policy_job_work(job, &wk);
+  CHECK(!policy_job_work(job, &wk)); /* one worker never parks */
   policy_worker_fini(job, &wk);
   policy_job_finish(job, &a->st, &a->ts);
   a->counts = *analytic_get_counts(be);

@@ -150,13 +150,16 @@ static void measured(const struct run_output_report *r, struct stats_table *t) {
   stats_f64(t, "core_utilization", ratio((double)s->issue_slots, (double)p->cores * cyc));
   double tc = (double)s->threads * cyc;
   stats_f64(t, "thread_idle_fraction",
-            ratio((double)(s->thread_wait_cycles + s->thread_done_cycles), tc));
+            ratio((double)(s->thread_wait_cycles + s->thread_parked_cycles + s->thread_done_cycles), tc));
   stats_f64(t, "thread_wait_fraction", ratio((double)s->thread_wait_cycles, tc));
+  stats_f64(t, "thread_parked_fraction", ratio((double)s->thread_parked_cycles, tc));
   stats_f64(t, "thread_done_fraction", ratio((double)s->thread_done_cycles, tc));
   stats_u64(t, "ray_switches", s->ray_switches);
   stats_u64(t, "ray_switch_cycles", s->switch_cycles);
   stats_u64(t, "waits", s->waits);
   stats_u64(t, "wait_cycles", s->wait_cycles);
+  stats_u64(t, "parks", s->parks);
+  stats_u64(t, "wakes", s->wakes);
   stats_u64(t, "loads", s->loads);
   stats_u64(t, "stores", s->stores);
   stats_u64(t, "blocking_loads", s->blocking_loads);

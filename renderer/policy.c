@@ -26,14 +26,12 @@ void policy_params_default(struct policy_params *p) {
   p->dyn_ray_share = 16;
   p->dyn_ray_buffer_bytes = 4096;
   p->dyn_batch_rays = 0;
-  p->dyn_wait_cycles = 0;
 }
 
-void policy_params_machine(struct policy_params *p, uint64_t l2_bytes, uint64_t miss_cycles) {
+void policy_params_machine(struct policy_params *p, uint64_t l2_bytes) {
   policy_params_default(p);
   p->cache_bytes = l2_bytes;
   p->dyn_ray_buffer_bytes = 0;
-  p->dyn_wait_cycles = miss_cycles ? miss_cycles : 1;
 }
 
 const char *policy_name(enum policy_kind k) { return (unsigned)k < POLICY_COUNT ? NAMES[k] : "?"; }
@@ -157,9 +155,11 @@ bool policy_job_step(struct policy_job *job, struct policy_worker *w) {
   return job->mod->step(job, w);
 }
 
-void policy_job_work(struct policy_job *job, struct policy_worker *w) {
-  while (policy_job_step(job, w)) {
-  }
+bool policy_job_work(struct policy_job *job, struct policy_worker *w) {
+  w->parked = false;
+  while (policy_job_step(job, w))
+    if (w->parked) return true;
+  return false;
 }
 
 void policy_worker_fini(struct policy_job *job, struct policy_worker *w) {
@@ -187,7 +187,7 @@ void policy_run(enum policy_kind k, const struct policy_setup *s, const struct p
   struct policy_job *job = policy_job_create(k, s, p, 1, 1);
   struct policy_worker w;
   policy_worker_init(&w, job, 0, 0, 0, port);
-  policy_job_work(job, &w);
+  CHECK(!policy_job_work(job, &w)); /* one worker never waits for another */
   policy_worker_fini(job, &w);
   policy_job_finish(job, st, ts);
   policy_job_destroy(job);

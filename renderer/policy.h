@@ -19,8 +19,9 @@
  *   dynamic policy's wait in the job's queues, each slot claimed before its
  *   accesses) and counts its own work (per-pixel costs are differences of its
  *   own counters);
- * - a worker with nothing to do until others make it waits (mem_wait) rather
- *   than spin: the dynamic policy's workers share one batch.
+ * - a worker with nothing to do until others make it some parks (mem_park)
+ *   rather than spin, and whoever makes the work wakes it (mem_wake): the
+ *   dynamic policy's workers share one batch.
  * With one worker every policy makes exactly the accesses it always made. */
 #ifndef RTSIM_RENDERER_POLICY_H
 #define RTSIM_RENDERER_POLICY_H
@@ -37,6 +38,9 @@ struct shade_ctx;
 struct framebuffer;
 
 enum policy_kind { POLICY_RECURSIVE = 0, POLICY_PACKET = 1, POLICY_DYNAMIC = 2, POLICY_COUNT = 3 };
+
+/* How the dynamic policy's cores share its queue points (policy_params). */
+enum policy_dyn_sharing { POLICY_DYN_PARTITION = 0, POLICY_DYN_CHIP = 1 };
 
 /* What to do with a claimed work item (policy_setup.item). */
 enum policy_item { POLICY_ITEM_DETAIL, POLICY_ITEM_PORT, POLICY_ITEM_HOLD };
@@ -79,26 +83,24 @@ struct policy_params {
    * tracing). 0 (default): every primary ray at once, as the paper's section 2
    * reads. */
   uint64_t dyn_batch_rays;
-  /* dynamic with several workers: a worker with nothing to take (its core's
-   * queue point handed out, no other free, the phase not over) waits this many
-   * cycles (mem_wait) before it looks again, twice as long each time it finds
-   * nothing again, up to 64 times this; finding work starts it over. Work for
-   * it appears only when a ray of another worker reaches a queue point or a
-   * phase ends, and rays in flight move at the pace of their misses:
-   * policy_params_machine starts at one L2 miss to an idle DRAM (l2.latency +
-   * dram.latency). The doubling keeps the host from polling for long idle
-   * stretches (a machine of thousands of contexts on a small image). 0: never
-   * waits (one worker never needs to; a CHECK holds it to that). */
-  uint64_t dyn_wait_cycles;
+  /* dynamic on several cores (enum policy_dyn_sharing): POLICY_DYN_PARTITION
+   * (the rules above: each core drains its own queue point, g_max divided
+   * among the cores) or POLICY_DYN_CHIP (the paper's section 3: "threads will
+   * collaboratively process the rays at a single queue point"). In chip mode
+   * queue points are made for the whole L2 (g_max not divided), and every core
+   * works on the fullest queue point being drained; a core takes another queue
+   * only while the queue points being drained have fewer rays left to hand out
+   * than the contexts can take at once (workers x group): a few at once when
+   * a queue holds too few rays to feed every context. One core: both the same. */
+  uint32_t dyn_sharing;
 };
 
 void policy_params_default(struct policy_params *p);
 
 /* The defaults, then what the dynamic policy is made for on a machine (the
- * rules above): cache_bytes = l2_bytes, one ray of buffer per worker, waits of
- * miss_cycles (the L2 latency plus the DRAM latency; at least 1). Plain
+ * rules above): cache_bytes = l2_bytes, one ray of buffer per worker. Plain
  * integers: the renderer does not know the machine. */
-void policy_params_machine(struct policy_params *p, uint64_t l2_bytes, uint64_t miss_cycles);
+void policy_params_machine(struct policy_params *p, uint64_t l2_bytes);
 
 struct qpoint_set;
 struct qpoint_budget;
@@ -161,6 +163,9 @@ struct policy_worker {
   uint32_t id;                    /* 0 .. workers-1: selects its ray region */
   uint32_t core, thread;          /* where it runs (plain integers; core < cores) */
   void *scratch;                  /* the policy's, allocated on its first work item */
+  /* Set by a step that parked w (mem_park: it has nothing to do until another
+   * worker wakes it); policy_job_work returns then. */
+  bool parked;
 };
 
 /* Create a render of policy k for up to `workers` workers on `cores` cores.
@@ -191,12 +196,16 @@ void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_
  * when no work was left. Recursive: one pixel, in Hilbert order, its ray tree
  * depth first; packet: one tile; dynamic: one batch of primary rays
  * (dyn_batch_rays, by default all) through all its generations, which all
- * workers take part in (it returns when the batch is done; a worker may wait
- * meanwhile, dyn_wait_cycles). Any access through w's port may suspend w. */
+ * workers take part in (it returns when the batch is done, or when it parks w
+ * with nothing to do: w->parked). Any access through w's port may suspend w. */
 bool policy_job_step(struct policy_job *job, struct policy_worker *w);
 
-/* The worker loop: policy_job_step until no work is left. */
-void policy_job_work(struct policy_job *job, struct policy_worker *w);
+/* The worker loop: policy_job_step until no work is left (false), or until a
+ * step parks w (true: the dynamic policy on the machine, sim/mem.h). A parked
+ * worker's function returns; when it is woken the backend calls it again,
+ * which calls policy_job_work again on the same w (not policy_worker_init:
+ * w->parked tells it) and goes on where it stopped. */
+bool policy_job_work(struct policy_job *job, struct policy_worker *w);
 
 /* Release w's scratch and add its counters to the job. Every initialised
  * worker must be finished before policy_job_finish. */

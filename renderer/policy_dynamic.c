@@ -1,84 +1,63 @@
 /* The dynamic policy (the paper's section 2): rays wait in queues at queue
  * points, nodes whose subtree geometry fits the cache (qpoint.h), and a queue
  * is processed as a whole so that its subtree's geometry is loaded once for
- * all its rays. Rays are traced in generations (section 2.1.2): the closest
- * hits of a generation, then its shadow rays (traced from the light toward the
- * points), then the next generation's reflection rays, until none are left.
- * Primary rays are admitted all at once, or dyn_batch_rays at a time with each
- * batch traced through all its generations (policy.h); a batch is a work
- * item. A queue is read newest ray first (cur_newest).
+ * all its rays. This file holds phases and generations and the rays' lives;
+ * the parts it is built from are each their own module:
+ * - the resumable walk (qwalk.h): a traversal cut at queue points;
+ * - the queue store (qstore.h): queues in simulated memory, the chunk arena,
+ *   the order in which queues are taken (the fullest first);
+ * - the multi-core drain (qdrain.h): how the cores' workers share the queues.
  *
- * Many workers (ray contexts of the machine's cores) share one batch: the
- * queues are the job's (struct dyn). A core takes one queue point at a time,
- * the fullest queue no other core holds, into its drain (struct dyn_drain),
- * and its workers hand out the drain's rays among themselves, a ray (or a
- * group of rays, against an oversized leaf's geometry block) at a time; when
- * they are all handed out the core takes the next. A core that finds no free
- * queue joins the drain with the most rays left (its geometry is resident
- * already), so that a scene with fewer queue points than cores (at the
- * extreme, the root alone: Whitted) still keeps every core busy. A batch goes
- * through phases: its primary rays are admitted (each worker takes the next),
- * then each phase (closest hits, shadow rays) drains its own queue set; a
- * phase ends when no ray of it is queued or being traced, and the worker that
- * finds it over starts the next. A worker with nothing to take meanwhile waits
- * dyn_wait_cycles (mem_wait) and looks again. With one worker all this is the
- * single loop it always was: the same accesses in the same order.
+ * Rays are traced in generations (section 2.1.2): the closest hits of a
+ * generation, then its shadow rays (traced from the light toward the points),
+ * then the next generation's reflection rays, until none are left. Primary
+ * rays are admitted all at once, or dyn_batch_rays at a time with each batch
+ * traced through all its generations (policy.h); a batch is a work item. A
+ * batch goes through phases: its primary rays are admitted (each worker takes
+ * the next), then each phase (closest hits, shadow rays) drains its own queue
+ * set (the store's active set); a phase ends when no ray of it is queued or
+ * being traced, and the worker that finds it over starts the next. With one
+ * worker all this is the single loop it always was: the same accesses in the
+ * same order.
  *
- * Same image as the recursive policy, bit for bit:
- * - A closest-hit ray makes exactly the traversal trace_closest makes, only
- *   cut into pieces at queue points. A k-d traversal's pending stack is a
- *   function of the path from the root to the current node (the far children
- *   of the ancestors where it went near), so a dequeued ray rebuilds it by
- *   re-descending from the root to its queue point with the same arithmetic;
- *   its best hit so far travels in the record (hit_prim). So every ray tests
- *   the same triangles as under trace_closest, and the hit rule (trav.h) does
- *   not depend on their order.
- * - A shadow ray's record keeps the canonical ray that shade_hit made; the
- *   schedule and the memory accesses follow the same segment reversed (from
- *   its end at the light back to the point, widened like trace.c), but every
- *   triangle is tested with the canonical ray. Occlusion is whether any
- *   triangle crossing the segment is hit, and the reversed traversal visits
- *   every leaf the segment crosses, so the answer is trace_any's.
- * - Which worker traces a ray, and when, changes nothing: a ray's record is
- *   the host's, written whole when it is queued, and the framebuffer sums
- *   contributions in fixed point.
+ * A worker with nothing to take parks (mem_park: no events, no issue slots,
+ * no stack while parked) and is woken by the worker whose action makes work
+ * for it, as many as the new work can feed:
+ * - an enqueue that gives the active set a new free queue wakes one idle
+ *   worker (to take it), once its table store has published the ray;
+ * - a take or a new pass (qdrain STARTED) wakes up to one worker a claim it
+ *   offers, besides the starter: first the core's own workers waiting for its
+ *   pass, then idle ones (they join);
+ * - the end of a pass that another follows wakes the core's workers waiting
+ *   for it (one of them starts the next);
+ * - a new phase wakes one idle worker a free queue; the end of a batch wakes
+ *   every parked worker (they go on to the next batch, or finish).
+ * - a ray's store wakes the worker whose claim waits for it: a claim is
+ *   traced once all its rays are stored (qstore.h's hazards).
+ * A woken worker that finds the work gone (someone running took it) parks
+ * again.
+ *
+ * Same image as the recursive policy, bit for bit: every ray tests the same
+ * triangles as under trace.c (qwalk.h says why), the hit rule (trav.h) does
+ * not depend on their order, and which worker traces a ray, and when, changes
+ * nothing: a ray's record is the host's, written whole when it is queued, and
+ * the framebuffer sums contributions in fixed point.
  *
  * A ray that ends is shaded at once (section 2.1.1: "shade the intersection
  * point immediately"), and the rays it spawns are taken down to their first
  * queue point and queued for their phase: each queue point has a queue for
- * this generation's closest-hit rays, one for its shadow rays (drained once
- * all closest-hit rays are done, so they queue up in full before any is
- * traced) and one for the next generation. So a ray waits in memory only in a
- * queue, and the picture is still the recursive policy's: shading is linear
- * and the framebuffer sums in fixed point, so order does not matter.
+ * this generation's closest-hit rays (store set DYN_SET_NOW), one for its
+ * shadow rays (DYN_SET_SHADOW: drained once all closest-hit rays are done, so
+ * they queue up in full before any is traced) and one for the next generation
+ * (DYN_SET_NEXT). So a ray waits in memory only in a queue, and the picture is
+ * still the recursive policy's: shading is linear and the framebuffer sums in
+ * fixed point, so order does not matter.
  *
- * Simulated memory (besides nodes, leaf lists and triangles, as trace.c):
- * - primary rays are read from the camera's array (policy_primary);
- * - queue table at qtable_base: entry q (8 bytes: its buffer's tail) is loaded
- *   and stored on each enqueue, and when a core takes the queue;
- * - queue buffers at queue_base: chunks of DYN_CHUNK_RAYS 64-byte rays,
- *   chunk c at queue_base + 4096 c; a queue is a list of chunks, drained
- *   chunks go to a last-in-first-out free list, new chunks come from it first
- *   (so the arena stays as small as the most rays ever queued at once). An
- *   enqueue writes a whole line, which the cache allocates without a fetch.
- *
- * Two hazards of interleaved workers, and how they are settled:
- * - An enqueue claims its slot (and writes the host record) before its
- *   accesses, so a core may take the queue and a worker reach the slot while
- *   the enqueuer still waits for its table load, before its store. The image
- *   cannot change (values come from the host record, complete at the claim),
- *   but the load would precede the store it reads: the slot is marked stored
- *   only once its store is issued, and a worker that reaches an unstored slot
- *   waits for it, so every queued ray is loaded after its store.
- * - Work on a ray may suspend, and meanwhile other workers hand out and finish
- *   the rest of its chunk: a chunk is freed (and may be reused by any enqueue)
- *   only when the last ray handed out from it is done (chunk_refs), so the
- *   writes a blocked leaf pass makes into a ray's slot after its accesses (its
- *   best hit, or its end) always land in the ray's own record. */
+ * Simulated memory besides nodes, leaf lists and triangles (as trace.c) and
+ * the queues (qstore.h): primary rays are read from the camera's array
+ * (policy_primary). */
 #include "renderer/policy_impl.h"
 
-#include <float.h>
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -86,98 +65,50 @@
 #include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
 #include "renderer/policy.h"
+#include "renderer/qdrain.h"
 #include "renderer/qpoint.h"
+#include "renderer/qstore.h"
+#include "renderer/qwalk.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
-#include "renderer/trav.h"
 #include "sim/err.h"
 
-#define DYN_CHUNK_RAYS 64u
 #define DYN_NONE UINT32_MAX
-/* A worker that keeps finding nothing to take doubles its wait, up to
- * 2^DYN_WAIT_DOUBLINGS x dyn_wait_cycles (dyn_step). Measured against a fixed
- * wait (tiny and default configs, small grove and room at 64x48): cycles
- * within 0.1%, 3% on default/grove; 11x to 43x fewer waits, and a 64 x 8 x 8
- * machine on a 6x4 image in 1.2 s instead of 13. 3 doublings: cycles within
- * 0.4% but 6x the waits of 6; 9: 8% more cycles on default/grove. */
-#define DYN_WAIT_DOUBLINGS 6u
 /* Host-only mark of a ray that ended during a blocked pass (never simulated). */
 #define DYN_FLAG_DEAD 0x80u
 
-/* Traversal steps (trav_setup, trav_interior, trav_announce_*) come from
- * renderer/trav.h, shared with trace.c: the same arithmetic gives the same hits. */
+/* The store's queue sets: the phase being drained (the active set), this
+ * generation's shadow rays, the next generation. */
+enum { DYN_SET_NOW = 0, DYN_SET_SHADOW = 1, DYN_SET_NEXT = 2, DYN_SETS = 3 };
 
 /* ---- policy state ---------------------------------------------------------- */
-
-struct dyn_queue {
-  uint32_t head, tail;  /* chunks, DYN_NONE when empty */
-  uint32_t tail_fill;   /* rays in the tail chunk */
-  uint32_t count;       /* rays queued */
-  int64_t heap_pos;     /* position in the heap, -1 when not in it */
-  bool held;            /* a drain has what was queued here (the queue is not in the heap) */
-};
 
 struct ray_buf {
   struct ray *r;
   uint64_t n, cap;
 };
 
-/* Step a cursor over a detached queue's slots, newest first: the tail chunk
- * from its last ray down, then each earlier chunk from its last slot down. The
- * newest rays are the likeliest to be still in the cache, so they are read
- * before the queue's own work evicts them. */
-struct slot_cur {
-  uint32_t c, i;
-  uint64_t left; /* slots from here to the end of the queue */
-};
-
-/* A queue point being drained: the rays detached from its queue, handed out
- * pass by pass (a leaf over g_max takes one pass per block of geometry; any
- * other queue point one pass) to the workers of the core that took it and of
- * any cores that joined it. Drain c is the one core c took (at most one a
- * core: so at most `cores` queue points are drained at once). */
-struct dyn_drain {
-  uint32_t qi;             /* queue held, DYN_NONE when none */
-  uint32_t node;           /* its node */
-  uint32_t block, blocks;  /* the pass (geometry block) and how many */
-  struct slot_cur first;   /* the held rays' newest: each pass starts there */
-  struct slot_cur k;       /* the next slot to hand out in this pass */
-  uint32_t busy;           /* claims of this pass not yet done */
-  uint32_t seq;            /* bumped by each pass: tells a claim of an earlier one */
-  uint32_t take_seq;       /* bumped by each take: tells a core that joined an earlier one */
-};
-
-/* Where a core's workers take rays from: drain `drain` as of its take take_seq
- * (DYN_NONE: none). */
-struct dyn_core {
-  uint32_t drain, take_seq;
-};
-
 enum dyn_phase { DYN_ADMIT, DYN_CLOSEST, DYN_SHADOW };
 
-/* The job's shared state: queue points, queues and their arena, the heap,
- * the primary rays' order, the batch and its phase, the cores' queue points. */
+/* A list of parked workers (by worker id), first parked first woken. */
+struct dyn_parked {
+  uint32_t head, tail;
+};
+
+/* Worker id waits for the ray in slot to be stored. */
+struct dyn_slot_wait {
+  uint64_t slot;
+  uint32_t id;
+};
+
+/* The job's shared state: queue points, the queue store and the drains, the
+ * primary rays' order, the batch and its phase. */
 struct dyn {
-  const struct trace_layout *l; /* the job's layout (queue and table addresses) */
-  const struct kd_tree *kd;
-  const struct scene *s;
   struct qpoint_set qs;
-  uint32_t block_tris; /* triangles of an oversized leaf processed at once */
-  uint32_t group;      /* rays a worker streams at once against such a block */
-  uint64_t wait_cycles;
-  /* Queues: the phase being drained (q, ordered by the heap), this
-   * generation's shadow rays (qsh), the next generation (qn); and their chunk
-   * arena. */
-  struct dyn_queue *q, *qsh, *qn;
-  struct ray *pool;      /* chunk c: pool[c * DYN_CHUNK_RAYS ...] */
-  uint8_t *stored;       /* per slot: its enqueue has issued its store */
-  uint32_t *chunk_next;  /* next chunk of the same queue, or of the free list */
-  uint32_t *chunk_refs;  /* a draining cursor in it + its rays handed out, not done */
-  uint32_t chunks, chunk_cap, free_head;
-  /* Non-empty queues no core holds: a max-heap on (count, -index). */
-  uint32_t *heap;
-  uint32_t heap_n;
+  struct qwalk_tree wt; /* the tree with qs's queue-point bits */
+  struct qstore st;
+  struct qdrain_set ds;
   uint32_t *order;  /* primary rays (work items) in Hilbert order */
   uint64_t batch;   /* primary rays a work item admits */
   /* The batch being traced: primary rays [lo, hi), the next to admit, the
@@ -188,24 +119,21 @@ struct dyn {
   uint32_t admitting;
   enum dyn_phase phase;
   uint64_t pending;
-  struct dyn_drain *drain; /* one a core */
-  struct dyn_core *core;
-  uint32_t cores;
   /* Rays spawned and terminated by all workers, for progress. */
   uint64_t spawned, terminated, progress_at;
+  /* Parked workers: those with nothing to do (idle), per core those waiting
+   * for the end of its pass (pass[core]), linked by park_next; and those
+   * whose claim waits for a ray's store (slot_wait, slot_waits of them). */
+  struct dyn_parked idle, *pass;
+  uint32_t *park_next;
+  struct dyn_slot_wait *slot_wait;
+  uint32_t slot_waits, slot_wait_cap;
+  uint32_t parked, parked_busy; /* all, and those that are not idle */
 };
 
-/* The rays a worker took at once from a drain (slot indices, pool[slot]). */
-struct dyn_claim {
-  uint32_t drain, seq, node, j0, j1;
-  bool leaf, last; /* last: the last pass, which lets the rays go on */
-  uint32_t n;
-  uint64_t *slot;  /* group entries */
-};
-
-/* A worker's own (its scratch): where its accesses and counts go, and the
- * rays its shading spawned, started once the ray that spawned them is done
- * (so each ray's cost is its own). */
+/* A worker's own (its scratch): where its accesses and counts go, the rays
+ * its shading spawned, started once the ray that spawned them is done (so
+ * each ray's cost is its own), and its claim. */
 struct dyn_worker {
   struct dyn *d;
   struct policy_job *job;
@@ -213,277 +141,90 @@ struct dyn_worker {
   struct trace_ctx *tr;
   struct render_stats *st;
   struct ray_buf pend;
-  struct dyn_claim cl;
+  struct qdrain_claim cl;
+  struct dyn_parked *wait; /* where work() found nothing: the list to park in
+                              (NULL: it waits for a ray's store) */
+  bool holding;            /* cl is claimed and not yet traced */
 };
 
-/* One ray's traversal state: the scheduling traversal (for a shadow ray the
- * reversed segment), the canonical ray's test, the best hit so far. */
-struct walk {
-  struct trav_ray tv;
-  struct trace_isect_ray ir;
-  float tmin;
-  int32_t ignore;
-  bool any;
-  struct trav_best best;
-  uint32_t ni;
-  float t0, t1;
-  int sp;
-  struct trav_entry stack[KD_DEPTH_LIMIT];
-};
+/* ---- parking ------------------------------------------------------------------ */
 
-enum walk_end { WALK_DONE, WALK_QUEUED, WALK_HIT };
+/* Park x in list l (NULL: x is in slot_wait): its worker function returns now
+ * (dyn_step), and runs again when woken. */
+static void park(struct dyn_worker *x, struct dyn_parked *l) {
+  struct dyn *d = x->d;
+  const uint32_t id = x->wk->id;
+  if (l) {
+    d->park_next[id] = DYN_NONE;
+    if (l->tail == DYN_NONE)
+      l->head = id;
+    else
+      d->park_next[l->tail] = id;
+    l->tail = id;
+  }
+  d->parked++;
+  d->parked_busy += l != &d->idle;
+  /* A parked worker holds no host memory it does not need: its spawned rays
+   * are all started (a machine of thousands of mostly parked contexts). */
+  CHECK_EQ(x->pend.n, 0);
+  free(x->pend.r);
+  x->pend = (struct ray_buf){0};
+  /* One worker always has something to do while its batch goes on. */
+  CHECK(mem_park(&x->tr->mem));
+  x->wk->parked = true;
+}
+
+/* Wake up to n workers of list l, first parked first, at x's time. Returns
+ * how many. */
+static uint64_t wake(struct dyn_worker *x, struct dyn_parked *l, uint64_t n) {
+  struct dyn *d = x->d;
+  uint64_t k = 0;
+  for (; k < n && l->head != DYN_NONE; k++) {
+    const uint32_t id = l->head;
+    l->head = d->park_next[id];
+    if (l->head == DYN_NONE) l->tail = DYN_NONE;
+    d->parked--;
+    d->parked_busy -= l != &d->idle;
+    mem_wake(&x->tr->mem, id);
+  }
+  return k;
+}
+
+/* The ray in slot is stored: wake the worker whose claim waits for it. */
+static void wake_slot(struct dyn_worker *x, uint64_t slot) {
+  struct dyn *d = x->d;
+  for (uint32_t i = 0; i < d->slot_waits; i++) {
+    if (d->slot_wait[i].slot != slot) continue;
+    const uint32_t id = d->slot_wait[i].id;
+    d->slot_wait[i] = d->slot_wait[--d->slot_waits];
+    d->parked--;
+    d->parked_busy--;
+    mem_wake(&x->tr->mem, id);
+    return;
+  }
+}
 
 static void buf_push(struct ray_buf *b, const struct ray *r) {
   if (b->n == b->cap) {
-    b->cap = b->cap ? 2 * b->cap : 4096;
+    b->cap = b->cap ? 2 * b->cap : 2 * SHADE_MAX_SPAWN; /* a ray's children, mostly */
     b->r = xrealloc(b->r, b->cap * sizeof *b->r);
   }
   b->r[b->n++] = *r;
 }
 
-/* The segment of shadow ray r reversed: from its end (at the light) back to
- * its origin, stretched by a relative 2^-16 at both ends to absorb the
- * rounding of the end point. False when that is not a valid ray (an infinite
- * segment): the canonical direction is used then. */
-static bool reversed(const struct ray *r, struct ray *rv) {
-  *rv = *r;
-  rv->o = v3_add(r->o, v3_scale(r->d, r->tmax));
-  rv->d = v3_scale(r->d, -1.0f);
-  float m = r->tmax * (1.0f / 65536.0f);
-  rv->tmin = -m;
-  rv->tmax = r->tmax + m;
-  return isfinite(m) && trav_ray_valid(rv);
-}
-
-/* Recompute the hit a record carries (hit_prim) with its canonical ray: the
- * test is deterministic and its t does not depend on the range it is given,
- * so this is the very hit found earlier (t, b1, b2 bit for bit).
- * NOTE: not announced as a load: the host record has no room for t, where a
- * real one would carry it (the paper's rays have spare bytes). */
-static void restore_hit(const struct dyn *d, const struct trace_isect_ray *ir, const struct ray *r,
-                        struct trace_hit *h) {
-  CHECK_GE(r->hit_prim, 0);
-  CHECK_LT((uint32_t)r->hit_prim, d->s->tri_count);
-  const struct scene_tri *tri = &d->s->tris[r->hit_prim];
-  bool ok = trace_isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, r->tmax, &h->t, &h->b1,
-                            &h->b2);
-  CHECK(ok);
-  h->prim = r->hit_prim;
-}
-
-/* Prepare r's traversal at the root. False when r ends without one, exactly
- * when trace.c's would (invalid ray, empty tree, root box missed). */
-static bool walk_init(const struct dyn *d, struct walk *w, const struct ray *r) {
-  const struct kd_tree *kd = d->kd;
-  w->any = r->type == RAY_SHADOW;
-  trav_best_init(&w->best, r->tmax);
-  w->tmin = r->tmin;
-  w->ignore = r->ignore_prim;
-  if (!trav_ray_valid(r) || kd->node_count == 0) return false;
-  if (!trav_setup(&w->tv, kd, r)) return false;
-  trace_isect_prepare(&w->ir, r->o, r->d);
-  if (w->any) {
-    struct ray rv;
-    if (reversed(r, &rv) && !trav_setup(&w->tv, kd, &rv)) return false;
-  } else if (r->hit_prim >= 0) {
-    struct trace_hit h;
-    restore_hit(d, &w->ir, r, &h);
-    trav_best_offer(&w->best, h.t, (uint32_t)h.prim, h.b1, h.b2);
-  }
-  w->ni = 0;
-  w->t0 = w->tv.t0;
-  w->t1 = w->tv.t1;
-  w->sp = 0;
-  return true;
-}
-
-/* Test entries [j0, j1) of leaf nd as trace.c does. True: a shadow ray is
- * occluded. */
-static bool walk_leaf(struct trace_ctx *tr, struct walk *w, struct kd_node nd, uint32_t j0,
-                      uint32_t j1) {
-  return trav_leaf(tr, &w->ir, w->tmin, w->ignore, w->any, nd, j0, j1, &w->best);
-}
-
-/* Pop the next pending node above stack depth floor, skipping those entirely
- * beyond the best hit (trace.c's rule). False when none is left. */
-static bool walk_pop(struct walk *w, int floor) {
-  return trav_pop(w->stack, &w->sp, floor, &w->best, &w->ni, &w->t0, &w->t1);
-}
-
-/* Traverse from the current node. In a queue point's subtree (to_queue false)
- * run until its pending nodes (those above floor) are done; above the queue
- * points (to_queue true) stop at the first queue point reached. */
-static enum walk_end walk_run(const struct dyn *d, struct trace_ctx *tr, struct walk *w, int floor,
-                              bool to_queue) {
-  for (;;) {
-    trav_announce_node(tr, w->ni, 1);
-    struct kd_node nd = d->qs.nodes[w->ni];
-    if (to_queue && kd_is_queue_point(nd)) return WALK_QUEUED;
-    if (!kd_is_leaf(nd)) {
-      if (trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &w->ni, w->stack, &w->sp)) continue;
-    } else {
-      CHECK(!to_queue || kd_leaf_count(nd) == 0); /* geometry is below queue points */
-      if (walk_leaf(tr, w, nd, 0, kd_leaf_count(nd))) return WALK_HIT;
-    }
-    if (!walk_pop(w, floor)) return WALK_DONE;
-  }
-}
-
-/* Rebuild the traversal state at queue point q: descend from the root along
- * the path to q, pushing what the original traversal pushed there. Where the
- * path goes to the far child, the traversal had pushed it, finished the near
- * side, and popped it: so pop it here. */
-static void walk_to(const struct dyn *d, struct trace_ctx *tr, struct walk *w, uint32_t q) {
-  while (w->ni != q) {
-    trav_announce_node(tr, w->ni, 1);
-    struct kd_node nd = d->qs.nodes[w->ni];
-    CHECK(!kd_is_leaf(nd));
-    uint32_t c = q >= kd_above(nd) ? kd_above(nd) : w->ni + 1, next;
-    bool ok = trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &next, w->stack, &w->sp);
-    CHECK(ok);
-    if (next != c) {
-      CHECK_GT(w->sp, 0);
-      CHECK_EQ(w->stack[w->sp - 1].node, c);
-      w->sp--;
-      w->t0 = w->stack[w->sp].t0;
-      w->t1 = w->stack[w->sp].t1;
-    }
-    w->ni = c;
-  }
-}
-
-/* After a queue point's subtree: on to the next queue point, or the end. */
-static enum walk_end walk_leave(const struct dyn *d, struct trace_ctx *tr, struct walk *w) {
-  if (!walk_pop(w, 0)) return WALK_DONE;
-  return walk_run(d, tr, w, 0, true);
-}
-
-/* ---- queues ---------------------------------------------------------------- */
-
-static bool heap_above(const struct dyn *d, uint32_t a, uint32_t b) {
-  uint32_t ca = d->q[a].count, cb = d->q[b].count;
-  return ca > cb || (ca == cb && a < b);
-}
-
-static void heap_set(struct dyn *d, uint32_t pos, uint32_t qi) {
-  d->heap[pos] = qi;
-  d->q[qi].heap_pos = pos;
-}
-
-static void heap_up(struct dyn *d, uint32_t pos) {
-  uint32_t qi = d->heap[pos];
-  while (pos > 0) {
-    uint32_t parent = (pos - 1) / 2;
-    if (!heap_above(d, qi, d->heap[parent])) break;
-    heap_set(d, pos, d->heap[parent]);
-    pos = parent;
-  }
-  heap_set(d, pos, qi);
-}
-
-static uint32_t heap_pop(struct dyn *d) {
-  uint32_t top = d->heap[0];
-  d->q[top].heap_pos = -1;
-  uint32_t last = d->heap[--d->heap_n];
-  if (d->heap_n > 0) {
-    uint32_t pos = 0;
-    for (;;) {
-      uint32_t c = 2 * pos + 1;
-      if (c >= d->heap_n) break;
-      if (c + 1 < d->heap_n && heap_above(d, d->heap[c + 1], d->heap[c])) c++;
-      if (!heap_above(d, d->heap[c], last)) break;
-      heap_set(d, pos, d->heap[c]);
-      pos = c;
-    }
-    heap_set(d, pos, last);
-  }
-  return top;
-}
-
-/* Put queue qi (not held, not empty) into the heap, or move it up after its
- * count grew. */
-static void heap_offer(struct dyn *d, uint32_t qi) {
-  struct dyn_queue *q = &d->q[qi];
-  if (q->heap_pos < 0) {
-    d->heap[d->heap_n] = qi;
-    q->heap_pos = d->heap_n++;
-  }
-  heap_up(d, (uint32_t)q->heap_pos);
-}
-
-static uint32_t chunk_alloc(struct dyn *d) {
-  uint32_t c;
-  if (d->free_head != DYN_NONE) {
-    c = d->free_head;
-    d->free_head = d->chunk_next[c];
-  } else {
-    if (d->chunks == d->chunk_cap) {
-      d->chunk_cap = d->chunk_cap ? 2 * d->chunk_cap : 256;
-      d->pool = xrealloc(d->pool, (uint64_t)d->chunk_cap * DYN_CHUNK_RAYS * sizeof *d->pool);
-      d->stored = xrealloc(d->stored, (uint64_t)d->chunk_cap * DYN_CHUNK_RAYS);
-      d->chunk_next = xrealloc(d->chunk_next, (uint64_t)d->chunk_cap * sizeof *d->chunk_next);
-      d->chunk_refs = xrealloc(d->chunk_refs, (uint64_t)d->chunk_cap * sizeof *d->chunk_refs);
-    }
-    c = d->chunks++;
-  }
-  d->chunk_next[c] = DYN_NONE;
-  d->chunk_refs[c] = 0;
-  return c;
-}
-
-/* Chunk c is wanted by one more (a draining cursor in it, or a ray handed out
- * from it), or one less: freed at none. Only the last pass over a held queue
- * counts (it frees the chunks behind it); earlier passes keep them all. */
-static void chunk_hold(struct dyn *d, uint32_t c) { d->chunk_refs[c]++; }
-
-static void chunk_drop(struct dyn *d, uint32_t c) {
-  CHECK_GT(d->chunk_refs[c], 0);
-  if (--d->chunk_refs[c] > 0) return;
-  d->chunk_next[c] = d->free_head;
-  d->free_head = c;
-}
-
-static uint64_t slot_addr(const struct dyn *d, uint64_t slot) {
-  return d->l->queue_base + slot * sizeof(struct ray);
-}
-
-static uint64_t table_addr(const struct dyn *d, uint32_t qi) {
-  return d->l->qtable_base + 8ull * qi;
-}
-
-/* Append r to queue qi of queue set qset (d->q, d->qsh or d->qn): the table
- * entry is loaded, the ray stored in its slot, the entry stored. The slot is
- * claimed (counts, host copy, heap) before the first access, as any of them
- * may suspend this worker and the next enqueue must find the slot taken; it is
- * marked stored once its store is issued (see the hazards above). */
-static void enqueue(struct dyn_worker *x, uint32_t qi, const struct ray *r,
-                    struct dyn_queue *qset) {
+/* Append r to queue qi of store set `set`: the slot is claimed (counts, host
+ * copy, heap) before the accesses, as any of them may suspend this worker
+ * (qstore.h's hazards); a ray of the phase being drained counts as pending. */
+static void enqueue(struct dyn_worker *x, uint32_t qi, const struct ray *r, uint32_t set) {
   struct dyn *d = x->d;
-  const struct mem_port *mem = &x->tr->mem;
-  struct dyn_queue *q = &qset[qi];
   CHECK(!(r->flags & DYN_FLAG_DEAD));
-  if (q->tail == DYN_NONE || q->tail_fill == DYN_CHUNK_RAYS) {
-    uint32_t c = chunk_alloc(d);
-    if (q->tail == DYN_NONE)
-      q->head = c;
-    else
-      d->chunk_next[q->tail] = c;
-    q->tail = c;
-    q->tail_fill = 0;
-  }
-  const uint64_t slot = (uint64_t)q->tail * DYN_CHUNK_RAYS + q->tail_fill;
-  d->pool[slot] = *r;
-  d->stored[slot] = 0;
-  q->tail_fill++;
-  q->count++;
-  if (qset == d->q) { /* the phase being drained: its heap and its count */
-    d->pending++;
-    if (!q->held) heap_offer(d, qi);
-  }
-  mem_load(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
-  mem_store(mem, slot_addr(d, slot), sizeof *r, TRACE_CLASS_RAY);
-  d->stored[slot] = 1;
-  mem_store(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
+  const uint32_t free0 = qstore_free_queues(&d->st);
+  const uint64_t slot = qstore_push(&d->st, set, qi, r);
+  const bool fresh = qstore_free_queues(&d->st) > free0; /* a queue to take */
+  if (set == DYN_SET_NOW) d->pending++;
+  qstore_write(&d->st, &x->tr->mem, qi, slot);
+  if (d->slot_waits) wake_slot(x, slot);
+  if (fresh) wake(x, &d->idle, 1);
 }
 
 /* ---- ray ends ---------------------------------------------------------------- */
@@ -501,13 +242,13 @@ static void progress(struct dyn_worker *x) {
 /* A ray ends: a shadow ray adds its light, any other is shaded now (its hit
  * is the walk's best; a miss has t = tmax, as trace_closest gives it) and its
  * children wait in pend until this ray's work is counted. */
-static void terminate(struct dyn_worker *x, struct ray *r, const struct walk *w, enum walk_end e) {
+static void terminate(struct dyn_worker *x, struct ray *r, const struct qwalk *w, enum qwalk_end e) {
   const struct policy_setup *s = &x->job->setup;
   x->st->rays[r->type]++;
   x->st->terminated++;
   x->d->terminated++;
   if (r->type == RAY_SHADOW) {
-    shade_shadow(r, e == WALK_HIT, s->fb, &x->tr->mem);
+    shade_shadow(r, e == QWALK_HIT, s->fb, &x->tr->mem);
   } else {
     struct trace_hit h;
     trav_best_hit(&w->best, &h);
@@ -521,14 +262,14 @@ static void terminate(struct dyn_worker *x, struct ray *r, const struct walk *w,
   progress(x);
 }
 
-/* Where a ray goes after a walk: a queue of set qset, or its end. */
-static void route(struct dyn_worker *x, struct ray *r, const struct walk *w, enum walk_end e,
-                  struct dyn_queue *qset) {
-  if (e == WALK_QUEUED) {
+/* Where a ray goes after a walk: a queue of store set `set`, or its end. */
+static void route(struct dyn_worker *x, struct ray *r, const struct qwalk *w, enum qwalk_end e,
+                  uint32_t set) {
+  if (e == QWALK_QUEUED) {
     int64_t qi = qpoint_index(&x->d->qs, w->ni);
     CHECK_GE(qi, 0);
-    r->hit_prim = w->best.found ? (int32_t)w->best.p : -1;
-    enqueue(x, (uint32_t)qi, r, qset);
+    r->hit_prim = qwalk_best_prim(w);
+    enqueue(x, (uint32_t)qi, r, set);
   } else {
     terminate(x, r, w, e);
   }
@@ -549,7 +290,7 @@ static void cost_add(const struct dyn_worker *x, uint32_t pixel, uint64_t nodes0
  * generation's shadow queues, reflection rays the next generation's.
  * The walk that finds the queue point is not charged to memory: it follows
  * the path from the root to that queue point, which the ray loads when it is
- * dequeued there (walk_to), so charging it here would count the path twice.
+ * dequeued there (qwalk_to), so charging it here would count the path twice.
  * It runs on a native copy of the worker's tracer (its counts are kept), so
  * the worker's port is never changed. (The paper starts a new ray at the
  * queue point holding its origin.) */
@@ -557,16 +298,18 @@ static void start(struct dyn_worker *x, struct ray *r) {
   struct dyn *d = x->d;
   struct trace_ctx *tr = x->tr;
   uint64_t n0 = tr->stats.node_visits, t0 = tr->stats.tri_tests;
-  struct walk w;
-  struct dyn_queue *qset = r->type == RAY_PRIMARY ? d->q : r->type == RAY_SHADOW ? d->qsh : d->qn;
-  if (!walk_init(d, &w, r)) {
-    terminate(x, r, &w, WALK_DONE);
+  struct qwalk w;
+  const uint32_t set = r->type == RAY_PRIMARY  ? DYN_SET_NOW
+                       : r->type == RAY_SHADOW ? DYN_SET_SHADOW
+                                               : DYN_SET_NEXT;
+  if (!qwalk_init(&d->wt, &w, r)) {
+    terminate(x, r, &w, QWALK_DONE);
   } else {
     struct trace_ctx quiet = *tr;
     quiet.mem = mem_port_native();
-    enum walk_end e = walk_run(d, &quiet, &w, 0, true);
+    enum qwalk_end e = qwalk_run(&d->wt, &quiet, &w, 0, true);
     tr->stats = quiet.stats;
-    route(x, r, &w, e, qset);
+    route(x, r, &w, e, set);
   }
   cost_add(x, r->pixel, n0, t0);
 }
@@ -581,226 +324,32 @@ static void flush(struct dyn_worker *x) {
   x->pend.n = 0;
 }
 
-/* ---- draining a queue ---------------------------------------------------------- */
+/* ---- tracing a claim ------------------------------------------------------------ */
 
 /* A ray of interior queue point node: its subtree, then onward. */
 static void process_subtree(struct dyn_worker *x, struct ray *r, uint32_t node) {
   struct dyn *d = x->d;
   struct trace_ctx *tr = x->tr;
   uint64_t n0 = tr->stats.node_visits, t0 = tr->stats.tri_tests;
-  struct walk w;
-  CHECK(walk_init(d, &w, r));
-  walk_to(d, tr, &w, node);
-  enum walk_end e = walk_run(d, tr, &w, w.sp, false);
-  if (e == WALK_DONE) e = walk_leave(d, tr, &w);
-  route(x, r, &w, e, d->q);
+  struct qwalk w;
+  CHECK(qwalk_init(&d->wt, &w, r));
+  qwalk_to(&d->wt, tr, &w, node);
+  enum qwalk_end e = qwalk_run(&d->wt, tr, &w, w.sp, false);
+  if (e == QWALK_DONE) e = qwalk_leave(&d->wt, tr, &w);
+  route(x, r, &w, e, DYN_SET_NOW);
   cost_add(x, r->pixel, n0, t0);
   flush(x);
-}
-
-/* Load (announce) entries [j0, j1) of a leaf's geometry, as the paper does on
- * opening a queue at a leaf: it will all be tested. */
-static void preload_leaf(struct trace_ctx *tr, struct kd_node nd, uint32_t j0, uint32_t j1) {
-  uint32_t off = kd_leaf_offset(nd);
-  for (uint32_t j = j0; j < j1; j++) {
-    uint32_t p = trav_leaf_prim(tr, off + j);
-    mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p, tr->layout.tri_bytes,
-             TRACE_CLASS_GEOMETRY);
-  }
-}
-
-static uint64_t cur_index(const struct slot_cur *k) { return (uint64_t)k->c * DYN_CHUNK_RAYS + k->i; }
-
-/* Reverse a detached queue's chunk list (host bookkeeping only) and return a
- * cursor at its newest ray. */
-static struct slot_cur cur_newest(struct dyn *d, uint32_t head, uint32_t tail_fill, uint64_t count) {
-  uint32_t prev = DYN_NONE;
-  for (uint32_t c = head; c != DYN_NONE;) {
-    uint32_t nc = d->chunk_next[c];
-    d->chunk_next[c] = prev;
-    prev = c;
-    c = nc;
-  }
-  struct slot_cur k = {prev, tail_fill - 1, count};
-  return k;
-}
-
-/* Advance. In a releasing pass (the last over a held queue) the cursor holds
- * the chunk it is in and lets it go when it leaves (chunk_drop). */
-static void cur_next(struct dyn *d, struct slot_cur *k, bool release) {
-  k->left--;
-  if (k->i == 0 || k->left == 0) {
-    const uint32_t c = k->c;
-    k->c = d->chunk_next[c];
-    k->i = DYN_CHUNK_RAYS - 1;
-    if (release) {
-      if (k->left > 0) chunk_hold(d, k->c);
-      chunk_drop(d, c);
-    }
-  } else {
-    k->i--;
-  }
-}
-
-/* Entries [*j0, *j1) of leaf nd that pass `block` tests. */
-static void block_range(const struct dyn *d, struct kd_node nd, uint32_t block, uint32_t *j0,
-                        uint32_t *j1) {
-  const uint32_t cnt = kd_leaf_count(nd), bt = d->block_tris;
-  *j0 = block * bt;
-  *j1 = cnt - *j0 > bt ? *j0 + bt : cnt;
-}
-
-/* Start pass `block` over the rays of drain dr: from the newest again. */
-static void pass_begin(struct dyn *d, struct dyn_drain *dr, uint32_t block) {
-  dr->block = block;
-  dr->k = dr->first;
-  dr->busy = 0;
-  dr->seq++;
-  if (block + 1 == dr->blocks) chunk_hold(d, dr->k.c); /* the last pass frees behind it */
-}
-
-static bool pass_last(const struct dyn_drain *dr) { return dr->block + 1 == dr->blocks; }
-
-/* The drain x's core takes rays from, or NULL: a drain it joined is left
- * once it is over (let go, or taken again by its core). */
-static struct dyn_drain *core_drain(struct dyn *d, uint32_t core) {
-  struct dyn_core *co = &d->core[core];
-  if (co->drain == DYN_NONE) return NULL;
-  struct dyn_drain *dr = &d->drain[co->drain];
-  if (dr->qi != DYN_NONE && dr->take_seq == co->take_seq) return dr;
-  co->drain = DYN_NONE;
-  return NULL;
-}
-
-static void core_join(struct dyn *d, uint32_t core, uint32_t drain) {
-  d->core[core].drain = drain;
-  d->core[core].take_seq = d->drain[drain].take_seq;
-}
-
-/* x's core takes the fullest queue no core holds into its drain: its rays are
- * detached (rays that arrive meanwhile start a new list, which goes back to
- * the heap when the drain lets go; no ray comes back to a queue point it has
- * left, since a traversal visits a node once), then its table entry is read
- * and written, and at a leaf the first block of geometry is loaded (it will
- * all be tested). The core's workers hand out the rays meanwhile. */
-static void take(struct dyn_worker *x) {
-  struct dyn *d = x->d;
-  const uint32_t core = x->wk->core;
-  struct dyn_drain *dr = &d->drain[core];
-  CHECK_EQ(dr->qi, DYN_NONE);
-  const uint32_t qi = heap_pop(d);
-  struct dyn_queue *q = &d->q[qi];
-  q->held = true;
-  dr->qi = qi;
-  dr->node = d->qs.qnode[qi];
-  dr->take_seq++;
-  dr->first = cur_newest(d, q->head, q->tail_fill, q->count);
-  q->head = q->tail = DYN_NONE;
-  q->tail_fill = q->count = 0;
-  const struct kd_node nd = d->qs.nodes[dr->node];
-  const uint32_t cnt = kd_is_leaf(nd) ? kd_leaf_count(nd) : 0;
-  dr->blocks = cnt == 0 ? 1 : (cnt + d->block_tris - 1) / d->block_tris;
-  pass_begin(d, dr, 0);
-  core_join(d, core, core);
-  const struct mem_port *mem = &x->tr->mem;
-  mem_load(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
-  mem_store(mem, table_addr(d, qi), 8, TRACE_CLASS_QUEUE);
-  if (kd_is_leaf(nd)) {
-    uint32_t j0, j1;
-    block_range(d, nd, 0, &j0, &j1);
-    preload_leaf(x->tr, nd, j0, j1);
-  }
-}
-
-/* Every ray of the pass is handed out and done: start the next pass (the next
- * block of an oversized leaf's geometry, loaded at once). */
-static void next_pass(struct dyn_worker *x, struct dyn_drain *dr) {
-  struct dyn *d = x->d;
-  pass_begin(d, dr, dr->block + 1);
-  const struct kd_node nd = d->qs.nodes[dr->node];
-  uint32_t j0, j1;
-  block_range(d, nd, dr->block, &j0, &j1);
-  preload_leaf(x->tr, nd, j0, j1);
-}
-
-/* Drain dr's rays are all handed out (their last pass): let the queue point
- * go, back into the heap if rays arrived meanwhile. The cores that take part
- * in it notice (core_drain). */
-static void release(struct dyn *d, struct dyn_drain *dr) {
-  struct dyn_queue *q = &d->q[dr->qi];
-  q->held = false;
-  if (q->count > 0) heap_offer(d, dr->qi);
-  dr->qi = DYN_NONE;
-}
-
-/* A drain with rays to hand out in its current pass, the most of them (ties:
- * the lower core), or DYN_NONE: one that x's core, having nothing of its own
- * and no free queue to take, may join. Its queue point's geometry is resident
- * already, so joining asks nothing more of the L2. */
-static uint32_t fullest_drain(const struct dyn *d) {
-  uint32_t best = DYN_NONE;
-  for (uint32_t c = 0; c < d->cores; c++) {
-    const struct dyn_drain *dr = &d->drain[c];
-    if (dr->qi != DYN_NONE && dr->k.left > 0 && (best == DYN_NONE || dr->k.left > d->drain[best].k.left))
-      best = c;
-  }
-  return best;
-}
-
-/* Hand the next rays of drain dr's pass to x: a group at a leaf (loaded,
- * tested and stored back together), one ray at an interior queue point. */
-static void claim(struct dyn_worker *x, struct dyn_drain *dr) {
-  struct dyn *d = x->d;
-  struct dyn_claim *cl = &x->cl;
-  const struct kd_node nd = d->qs.nodes[dr->node];
-  cl->drain = (uint32_t)(dr - d->drain);
-  cl->seq = dr->seq;
-  cl->node = dr->node;
-  cl->leaf = kd_is_leaf(nd);
-  cl->last = pass_last(dr);
-  cl->j0 = cl->j1 = 0;
-  if (cl->leaf) block_range(d, nd, dr->block, &cl->j0, &cl->j1);
-  const uint32_t n = cl->leaf ? d->group : 1;
-  for (cl->n = 0; cl->n < n && dr->k.left > 0; cur_next(d, &dr->k, cl->last)) {
-    if (cl->last) chunk_hold(d, dr->k.c);
-    cl->slot[cl->n++] = cur_index(&dr->k);
-  }
-  dr->busy++;
-}
-
-/* x is done with its claim's slot t (a last pass frees behind it). */
-static void slot_done(struct dyn_worker *x, uint32_t t) {
-  if (x->cl.last) chunk_drop(x->d, (uint32_t)(x->cl.slot[t] / DYN_CHUNK_RAYS));
-}
-
-/* x is done with its claim: the pass may move on once all of its claims are. */
-static void claim_done(struct dyn_worker *x) {
-  struct dyn_drain *dr = &x->d->drain[x->cl.drain];
-  if (dr->seq == x->cl.seq) {
-    CHECK_GT(dr->busy, 0);
-    dr->busy--;
-  }
-}
-
-/* Wait until the ray in slot has been stored by its enqueue (the hazards
- * above). One worker never waits: its enqueues are over before it drains. */
-static void wait_stored(struct dyn_worker *x, uint64_t slot) {
-  while (!x->d->stored[slot]) {
-    CHECK_GT(x->d->wait_cycles, 0);
-    mem_wait(&x->tr->mem, x->d->wait_cycles);
-  }
 }
 
 /* The claimed ray of an interior queue point: its subtree, then onward. */
 static void trace_subtree_claim(struct dyn_worker *x) {
   struct dyn *d = x->d;
   const uint64_t slot = x->cl.slot[0];
-  wait_stored(x, slot);
-  struct ray r = d->pool[slot];
-  mem_load(&x->tr->mem, slot_addr(d, slot), sizeof r, TRACE_CLASS_RAY);
+  struct ray r = *qstore_ray(&d->st, slot);
+  mem_load(&x->tr->mem, qstore_slot_addr(&d->st, slot), sizeof r, TRACE_CLASS_RAY);
   process_subtree(x, &r, x->cl.node);
   d->pending--;
-  slot_done(x, 0);
+  qdrain_slot_done(&d->ds, &x->cl, 0);
 }
 
 /* The claimed rays of a leaf queue point against the pass's block of its
@@ -808,45 +357,47 @@ static void trace_subtree_claim(struct dyn_worker *x) {
  * scheduling problem"): each is loaded and tested; before the last pass it is
  * stored back with its best hit (or marked ended), after the last it goes on.
  * Every ray still tests all of the leaf's triangles, so its hit is the one a
- * single traversal finds (the hit rule does not depend on their order). */
+ * single traversal finds (the hit rule does not depend on their order).
+ * NOTE: a pass's writes into a ray's slot after its accesses (its best hit,
+ * or its end) land in the ray's own record: its chunk is not freed while the
+ * ray is handed out (qstore.h). */
 static void trace_leaf_claim(struct dyn_worker *x) {
   struct dyn *d = x->d;
   struct trace_ctx *tr = x->tr;
   const struct mem_port *mem = &tr->mem;
-  const struct dyn_claim *cl = &x->cl;
+  const struct qdrain_claim *cl = &x->cl;
   const struct kd_node nd = d->qs.nodes[cl->node];
   for (uint32_t t = 0; t < cl->n; t++) {
     const uint64_t slot = cl->slot[t];
-    if (d->pool[slot].flags & DYN_FLAG_DEAD) {
-      slot_done(x, t);
+    if (qstore_ray(&d->st, slot)->flags & DYN_FLAG_DEAD) {
+      qdrain_slot_done(&d->ds, cl, t);
       continue;
     }
-    wait_stored(x, slot);
-    struct ray r = d->pool[slot];
+    struct ray r = *qstore_ray(&d->st, slot);
     uint64_t n0 = tr->stats.node_visits, t0 = tr->stats.tri_tests;
-    mem_load(mem, slot_addr(d, slot), sizeof r, TRACE_CLASS_RAY);
-    struct walk w;
-    CHECK(walk_init(d, &w, &r));
+    mem_load(mem, qstore_slot_addr(&d->st, slot), sizeof r, TRACE_CLASS_RAY);
+    struct qwalk w;
+    CHECK(qwalk_init(&d->wt, &w, &r));
     bool over = true;
-    if (walk_leaf(tr, &w, nd, cl->j0, cl->j1)) {
-      terminate(x, &r, &w, WALK_HIT);
-      if (!cl->last) d->pool[slot].flags |= DYN_FLAG_DEAD; /* later passes skip it */
+    if (qwalk_leaf(tr, &w, nd, cl->j0, cl->j1)) {
+      terminate(x, &r, &w, QWALK_HIT);
+      if (!cl->last) qstore_ray(&d->st, slot)->flags |= DYN_FLAG_DEAD; /* later passes skip it */
     } else if (!cl->last) {
-      d->pool[slot].hit_prim = w.best.found ? (int32_t)w.best.p : -1;
+      qstore_ray(&d->st, slot)->hit_prim = qwalk_best_prim(&w);
       over = false;
     } else {
-      walk_to(d, tr, &w, cl->node);
-      route(x, &r, &w, walk_leave(d, tr, &w), d->q);
+      qwalk_to(&d->wt, tr, &w, cl->node);
+      route(x, &r, &w, qwalk_leave(&d->wt, tr, &w), DYN_SET_NOW);
     }
     cost_add(x, r.pixel, n0, t0);
     flush(x);
     if (over) d->pending--;
-    slot_done(x, t);
+    qdrain_slot_done(&d->ds, cl, t);
   }
   /* Store the group back with its best hits (the last pass moved them on). */
   for (uint32_t t = 0; !cl->last && t < cl->n; t++)
-    if (!(d->pool[cl->slot[t]].flags & DYN_FLAG_DEAD))
-      mem_store(mem, slot_addr(d, cl->slot[t]), sizeof(struct ray), TRACE_CLASS_RAY);
+    if (!(qstore_ray(&d->st, cl->slot[t])->flags & DYN_FLAG_DEAD))
+      mem_store(mem, qstore_slot_addr(&d->st, cl->slot[t]), sizeof(struct ray), TRACE_CLASS_RAY);
 }
 
 /* Admit the batch's next primary ray: read it, take it to its first queue. */
@@ -866,47 +417,58 @@ static bool admit(struct dyn_worker *x) {
   return true;
 }
 
-/* Do one thing for the batch: admit a primary ray; trace rays of the drain
- * x's core takes part in; start its next pass; take the fullest free queue
- * point for the core; or join the drain with the most rays left. False when
- * there is nothing to do now. */
-static bool work(struct dyn_worker *x) {
+/* Trace x's claim once all its rays are stored (a ray that ended in an
+ * earlier pass is never read again); until then x waits in slot_wait for the
+ * first that is not (qstore.h's hazards: its enqueuer wakes x). One worker
+ * never waits: its enqueues are over before it drains. False when x must
+ * wait. */
+static bool trace_claim(struct dyn_worker *x) {
   struct dyn *d = x->d;
-  if (d->phase == DYN_ADMIT) return admit(x);
-  const uint32_t core = x->wk->core;
-  struct dyn_drain *dr = core_drain(d, core);
-  if (dr && dr->k.left == 0) { /* this pass is all handed out */
-    if (!pass_last(dr)) {
-      if (dr->busy == 0) {
-        next_pass(x, dr);
-        return true;
-      }
-      /* Its last rays are still being tested: the core that took it waits for
-       * them (and starts the next pass); a core that joined looks elsewhere. */
-      if (dr == &d->drain[core]) return false;
-    } else {
-      release(d, dr); /* whichever core sees it first lets it go */
+  for (uint32_t t = 0; t < x->cl.n; t++) {
+    const uint64_t slot = x->cl.slot[t];
+    if ((qstore_ray(&d->st, slot)->flags & DYN_FLAG_DEAD) || qstore_stored(&d->st, slot)) continue;
+    if (d->slot_waits == d->slot_wait_cap) {
+      d->slot_wait_cap = d->slot_wait_cap ? 2 * d->slot_wait_cap : 16;
+      d->slot_wait = xrealloc(d->slot_wait, (uint64_t)d->slot_wait_cap * sizeof *d->slot_wait);
     }
-    d->core[core].drain = DYN_NONE;
-    dr = NULL;
+    d->slot_wait[d->slot_waits++] = (struct dyn_slot_wait){slot, x->wk->id};
+    x->wait = NULL;
+    return false;
   }
-  if (!dr) {
-    if (d->heap_n > 0 && d->drain[core].qi == DYN_NONE) {
-      take(x);
-      return true;
-    }
-    const uint32_t j = fullest_drain(d);
-    if (j == DYN_NONE) return false;
-    core_join(d, core, j);
-    dr = &d->drain[j];
-  }
-  claim(x, dr);
+  x->holding = false;
   if (x->cl.leaf)
     trace_leaf_claim(x);
   else
     trace_subtree_claim(x);
-  claim_done(x);
+  if (qdrain_claim_done(&d->ds, &x->cl)) wake(x, &d->pass[x->cl.drain], UINT64_MAX);
   return true;
+}
+
+/* Do one thing for the batch: admit a primary ray, or what the drain gives
+ * x's core to do (take a queue point, start a pass, trace claimed rays), and
+ * wake the parked workers the work it made can feed. False when there is
+ * nothing to do now (x->wait: where to park). */
+static bool work(struct dyn_worker *x) {
+  struct dyn *d = x->d;
+  const uint32_t core = x->wk->core;
+  x->wait = &d->idle;
+  if (x->holding) return trace_claim(x); /* woken by the store it waited for */
+  if (d->phase == DYN_ADMIT) return admit(x);
+  switch (qdrain_work(&d->ds, core, x->tr, &x->cl)) {
+  case QDRAIN_NOTHING: return false;
+  case QDRAIN_PASS_WAIT: x->wait = &d->pass[core]; return false;
+  case QDRAIN_STARTED: {
+    /* x takes one of the new pass's claims itself. */
+    uint64_t n = qdrain_claims_left(&d->ds, core);
+    n = n > 0 ? n - 1 : 0;
+    n -= wake(x, &d->pass[core], n);
+    wake(x, &d->idle, n);
+    return true;
+  }
+  case QDRAIN_CLAIMED: break;
+  }
+  x->holding = true;
+  return trace_claim(x);
 }
 
 /* ---- phases and generations ------------------------------------------------- */
@@ -916,35 +478,18 @@ static bool work(struct dyn_worker *x) {
  * point (passes go on over rays that all ended, as one worker's loop did). */
 static bool phase_over(const struct dyn *d) {
   if (d->phase == DYN_ADMIT) return d->admit_next == d->hi && d->admitting == 0;
-  if (d->pending > 0 || d->heap_n > 0) return false;
-  for (uint32_t c = 0; c < d->cores; c++) {
-    const struct dyn_drain *dr = &d->drain[c];
-    if (dr->qi != DYN_NONE && (dr->k.left > 0 || !pass_last(dr))) return false;
-  }
-  return true;
+  if (d->pending > 0 || qstore_any_free(&d->st)) return false;
+  return qdrain_idle(&d->ds);
 }
 
-/* Make queue set *other the one being drained (the drained set, empty now,
+/* Make store set `set` the one being drained (the drained set, empty now,
  * takes its place): the cores let their queue points go, and the set's
- * non-empty queues are ordered in the heap. */
-static void activate(struct dyn *d, struct dyn_queue **other) {
-  CHECK_EQ(d->heap_n, 0);
+ * non-empty queues are ordered in the store's heap. */
+static void activate(struct dyn *d, uint32_t set) {
+  CHECK(!qstore_any_free(&d->st));
   CHECK_EQ(d->pending, 0);
-  for (uint32_t c = 0; c < d->cores; c++) {
-    struct dyn_drain *dr = &d->drain[c];
-    d->core[c].drain = DYN_NONE;
-    if (dr->qi == DYN_NONE) continue;
-    CHECK_EQ(d->q[dr->qi].count, 0);
-    release(d, dr);
-  }
-  struct dyn_queue *t = d->q;
-  d->q = *other;
-  *other = t;
-  for (uint32_t i = 0; i < d->qs.count; i++)
-    if (d->q[i].count > 0) {
-      heap_offer(d, i);
-      d->pending += d->q[i].count;
-    }
+  qdrain_release_all(&d->ds);
+  d->pending += qstore_activate(&d->st, set);
 }
 
 /* Start the phase after the one that is over: closest hits, their shadow rays,
@@ -955,13 +500,13 @@ static bool advance(struct dyn *d) {
     switch (d->phase) {
     case DYN_ADMIT: d->phase = DYN_CLOSEST; break;
     case DYN_CLOSEST:
-      activate(d, &d->qsh);
+      activate(d, DYN_SET_SHADOW);
       d->phase = DYN_SHADOW;
       break;
     case DYN_SHADOW:
-      activate(d, &d->qn);
+      activate(d, DYN_SET_NEXT);
       d->phase = DYN_CLOSEST;
-      if (d->heap_n == 0) return true; /* no next generation */
+      if (!qstore_any_free(&d->st)) return true; /* no next generation */
       break;
     }
     if (!phase_over(d)) return false;
@@ -983,42 +528,32 @@ void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32
   qpoint_subtree_tris(kd, tris);
   const uint64_t rays = p->dyn_ray_buffer_bytes ? p->dyn_ray_buffer_bytes
                                                 : (uint64_t)workers * sizeof(struct ray);
+  /* Geometry resident at once: one queue point a core, or one for the chip. */
+  const uint32_t holders = p->dyn_sharing == POLICY_DYN_CHIP ? 1 : cores;
   struct qpoint_reserve res = {p->cache_bytes, p->dyn_node_share, p->dyn_table_share,
-                               p->dyn_ray_share, rays, cores};
+                               p->dyn_ray_share, rays, holders};
   qpoint_plan(qs, b, kd, tris, tri_bytes, &res);
   free(tris);
   *block_tris = clamp_u32(b->gmax_bytes / tri_bytes);
   *group = clamp_u32(b->ray_bytes / sizeof(struct ray) / workers);
 }
 
-static void dyn_create(struct policy_job *job) {
+/* The job's shared state around a selection of queue points (d->qs, whose
+ * node array marks them): the walk, the store, the drains, the parking lists
+ * and the work items. Everything after the selection is the same for any set
+ * of subtree roots that holds every leaf with geometry (a treelet policy's
+ * selection would come in here with its own block_tris and group). */
+static void dyn_setup(struct policy_job *job, struct dyn *d, uint32_t block_tris, uint32_t group) {
   const struct policy_params *p = &job->params;
-  struct dyn *d = xcalloc(1, sizeof *d);
-  d->l = &job->setup.layout;
-  d->kd = job->setup.kd;
-  d->s = job->setup.scene;
-  d->free_head = DYN_NONE;
-  d->wait_cycles = p->dyn_wait_cycles;
-
-  /* Queue points for the cache and the machine (policy.h). */
-  struct qpoint_budget bud;
-  policy_dynamic_plan(p, job->workers, job->cores, d->kd, d->l->tri_bytes, &d->qs, &bud,
-                      &d->block_tris, &d->group);
-  d->q = xmalloc((uint64_t)d->qs.count * sizeof *d->q + 1);
-  d->qsh = xmalloc((uint64_t)d->qs.count * sizeof *d->qsh + 1);
-  d->qn = xmalloc((uint64_t)d->qs.count * sizeof *d->qn + 1);
-  for (uint32_t i = 0; i < d->qs.count; i++) {
-    d->q[i].head = d->q[i].tail = DYN_NONE;
-    d->q[i].tail_fill = d->q[i].count = 0;
-    d->q[i].heap_pos = -1;
-    d->q[i].held = false;
-    d->qsh[i] = d->qn[i] = d->q[i];
-  }
-  d->heap = xmalloc((uint64_t)d->qs.count * sizeof *d->heap + 1);
-  d->cores = job->cores;
-  d->drain = xcalloc(d->cores, sizeof *d->drain);
-  d->core = xcalloc(d->cores, sizeof *d->core);
-  for (uint32_t c = 0; c < d->cores; c++) d->drain[c].qi = d->core[c].drain = DYN_NONE;
+  const struct trace_layout *l = &job->setup.layout;
+  d->wt = (struct qwalk_tree){job->setup.kd, job->setup.scene, d->qs.nodes};
+  d->idle.head = d->idle.tail = DYN_NONE;
+  d->pass = xmalloc((uint64_t)job->cores * sizeof *d->pass);
+  for (uint32_t c = 0; c < job->cores; c++) d->pass[c] = d->idle;
+  d->park_next = xmalloc((uint64_t)job->workers * sizeof *d->park_next);
+  qstore_init(&d->st, d->qs.count, DYN_SETS, l->qtable_base, l->queue_base);
+  qdrain_init(&d->ds, &d->st, &d->qs, job->cores, block_tris, group);
+  if (p->dyn_sharing == POLICY_DYN_CHIP) qdrain_share_chip(&d->ds, (uint64_t)job->workers * group);
 
   /* The work items: primary rays in Hilbert order, admitted a batch at a time. */
   const uint32_t w = job->setup.fb->width, h = job->setup.fb->height;
@@ -1031,20 +566,25 @@ static void dyn_create(struct policy_job *job) {
   job->shared = d;
 }
 
+static void dyn_create(struct policy_job *job) {
+  struct dyn *d = xcalloc(1, sizeof *d);
+  /* Queue points for the cache and the machine (policy.h). */
+  struct qpoint_budget bud;
+  uint32_t block_tris, group;
+  policy_dynamic_plan(&job->params, job->workers, job->cores, job->setup.kd,
+                      job->setup.layout.tri_bytes, &d->qs, &bud, &block_tris, &group);
+  dyn_setup(job, d, block_tris, group);
+}
+
 static void dyn_destroy(struct policy_job *job) {
   struct dyn *d = job->shared;
   if (!d) return;
   free(d->order);
-  free(d->heap);
-  free(d->drain);
-  free(d->core);
-  free(d->q);
-  free(d->qsh);
-  free(d->qn);
-  free(d->pool);
-  free(d->stored);
-  free(d->chunk_next);
-  free(d->chunk_refs);
+  free(d->pass);
+  free(d->park_next);
+  free(d->slot_wait);
+  qdrain_fini(&d->ds);
+  qstore_fini(&d->st);
   qpoint_fini(&d->qs);
   free(d);
 }
@@ -1053,7 +593,7 @@ static void dyn_scratch_free(void *scratch) {
   struct dyn_worker *x = scratch;
   if (!x) return;
   free(x->pend.r);
-  free(x->cl.slot);
+  qdrain_claim_fini(&x->cl);
   free(x);
 }
 
@@ -1070,17 +610,17 @@ static void batch_end(struct policy_job *job, struct dyn *d) {
 /* Take part in a batch of primary rays until it is done: the first worker to
  * find none under way claims the next (before any access), every worker then
  * does what work() finds, starts the next phase when it finds the phase over,
- * and otherwise waits (longer each time in a row: DYN_WAIT_DOUBLINGS). One
- * worker does the whole batch in the order the single loop did: each primary
- * ray to its first queue, then every generation: closest-hit rays, their
- * shadow rays, the next generation. */
+ * and otherwise parks (and comes back here when woken). One worker does the
+ * whole batch in the order the single loop did: each primary ray to its first
+ * queue, then every generation: closest-hit rays, their shadow rays, the next
+ * generation. */
 static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
   struct dyn *d = job->shared;
   if (!d->active) {
     uint64_t k0, n = policy_job_claim(job, d->batch, &k0);
     if (n == 0) return false;
     CHECK_EQ(d->pending, 0);
-    CHECK_EQ(d->heap_n, 0);
+    CHECK(!qstore_any_free(&d->st));
     d->active = true;
     d->lo = d->admit_next = k0;
     d->hi = k0 + n;
@@ -1089,7 +629,7 @@ static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
   }
   if (!wk->scratch) {
     struct dyn_worker *nx = xcalloc(1, sizeof *nx);
-    nx->cl.slot = xmalloc((uint64_t)d->group * sizeof *nx->cl.slot);
+    qdrain_claim_init(&d->ds, &nx->cl);
     wk->scratch = nx;
   }
   struct dyn_worker *x = wk->scratch;
@@ -1099,21 +639,24 @@ static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
   x->tr = &wk->tr;
   x->st = &wk->st;
   const uint64_t seq = d->batch_seq;
-  uint32_t idle = 0; /* waits in a row */
   while (d->batch_seq == seq) {
-    if (work(x)) {
-      idle = 0;
-      continue;
-    }
-    if (phase_over(d)) {
-      if (advance(d)) batch_end(job, d);
+    if (work(x)) continue;
+    if (!x->holding && phase_over(d)) {
+      /* No worker waits for a pass between phases (a pass left is no phase
+       * over): the idle ones get a free queue each, or all go on at the end. */
+      CHECK_EQ(d->parked_busy, 0);
+      if (advance(d)) {
+        batch_end(job, d);
+        wake(x, &d->idle, UINT64_MAX);
+      } else {
+        wake(x, &d->idle, qstore_free_queues(&d->st));
+      }
       continue;
     }
     /* Others are still tracing rays of this phase (or testing the last rays
      * of this core's pass): their rays may make work for this one. */
-    CHECK_GT(d->wait_cycles, 0);
-    mem_wait(&x->tr->mem, d->wait_cycles << idle);
-    if (idle < DYN_WAIT_DOUBLINGS) idle++;
+    park(x, x->wait);
+    return true;
   }
   return true;
 }
@@ -1123,22 +666,11 @@ static bool dyn_step(struct policy_job *job, struct policy_worker *wk) {
 static void dyn_finish(struct policy_job *job, struct render_stats *st) {
   const struct dyn *d = job->shared;
   CHECK(!d->active);
-  CHECK_EQ(d->heap_n, 0);
   CHECK_EQ(d->pending, 0);
-  for (uint32_t i = 0; i < d->qs.count; i++) {
-    CHECK_EQ(d->q[i].count, 0);
-    CHECK_EQ(d->qsh[i].count, 0);
-    CHECK_EQ(d->qn[i].count, 0);
-    CHECK(!d->q[i].held);
-  }
-  for (uint32_t c = 0; c < d->cores; c++) CHECK_EQ(d->drain[c].qi, DYN_NONE);
-  uint32_t free_chunks = 0;
-  for (uint32_t c = d->free_head; c != DYN_NONE; c = d->chunk_next[c]) {
-    CHECK_EQ(d->chunk_refs[c], 0);
-    free_chunks++;
-  }
-  CHECK_EQ(free_chunks, d->chunks);
-  st->ray_slots_max += (uint64_t)d->chunks * DYN_CHUNK_RAYS;
+  CHECK_EQ(d->parked, 0);
+  qstore_check_empty(&d->st);
+  qdrain_check_done(&d->ds);
+  st->ray_slots_max += (uint64_t)qstore_chunks(&d->st) * QSTORE_CHUNK_RAYS;
 }
 
 const struct policy_module policy_dynamic_module = {

@@ -114,7 +114,7 @@ static void a_wait(void *ctx, uint64_t cycles) {
   CHECK(!"a single worker waits for no one");
 }
 
-static const struct mem_ops analytic_ops = {a_load, a_store, a_compute, a_wait};
+static const struct mem_ops analytic_ops = {a_load, a_store, a_compute, a_wait, NULL, NULL};
 
 struct analytic *analytic_create(const struct machine_params *p) {
   CHECK(machine_params_problem(p) == NULL);

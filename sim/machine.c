@@ -24,8 +24,8 @@
 #define NONE UINT32_MAX
 #define LINE_BYTES (1u << MACHINE_LG2_LINE)
 
-enum ctx_state { CTX_READY, CTX_WAIT, CTX_DONE };
-enum th_state { TH_BUSY, TH_WAIT, TH_DONE };
+enum ctx_state { CTX_READY, CTX_WAIT, CTX_PARKED, CTX_DONE };
+enum th_state { TH_BUSY, TH_WAIT, TH_PARKED, TH_DONE };
 
 struct mctx {
   struct machine *m;
@@ -33,6 +33,7 @@ struct mctx {
   struct machine_worker_info info;
   uint32_t thread; /* global thread index */
   uint8_t state;
+  bool parking;       /* asked to park: its worker function is returning */
   uint32_t pending;   /* lines of the current load not yet back */
   uint64_t t;         /* the ray's own clock inside a block */
   uint64_t slots;     /* issue slots of the current block */
@@ -47,6 +48,7 @@ struct mthread {
   uint64_t ready_at;
   uint32_t q_head, q_tail; /* rays ready to run, besides cur */
   uint32_t live;           /* rays not done */
+  uint32_t parked;         /* of those, parked (mem_park) */
   uint8_t state;
   uint64_t since;
 };
@@ -154,6 +156,7 @@ static void th_account(struct machine *m, struct mthread *th, uint64_t t) {
     timeline_span(&m->tl, MACHINE_TL_BUSY_THREAD_CYCLES, th->since, t, 1.0);
     break;
   case TH_WAIT: m->st.thread_wait_cycles += d; break;
+  case TH_PARKED: m->st.thread_parked_cycles += d; break;
   default: m->st.thread_done_cycles += d; break;
   }
   th->since = t;
@@ -195,7 +198,7 @@ static void th_next(struct machine *m, struct mthread *th, uint64_t t) {
     return;
   }
   th->cur = NONE;
-  th_set(m, th, th->live ? TH_WAIT : TH_DONE, t);
+  th_set(m, th, !th->live ? TH_DONE : th->parked == th->live ? TH_PARKED : TH_WAIT, t);
 }
 
 /* Ray c's data is back at cycle t. */
@@ -311,12 +314,18 @@ static void ev_issue(void *ctx, uint64_t core) {
   m->st.issue_slots += c->slots;
   timeline_span(&m->tl, MACHINE_TL_ISSUED_OPS, t, t + c->slots, 1.0);
   if (coro_finished(c->co)) {
-    c->state = CTX_DONE;
     if (m->painted_max < coro_stack_used(c->co)) m->painted_max = coro_stack_used(c->co);
     coro_destroy(c->co);
     c->co = NULL;
     m->stacks_live--;
-    th->live--;
+    if (c->parking) { /* its stack is back in the pool until a wake */
+      c->parking = false;
+      c->state = CTX_PARKED;
+      th->parked++;
+    } else {
+      c->state = CTX_DONE;
+      th->live--;
+    }
     th_next(m, th, c->t);
   } else {
     CHECK_EQ(c->state, CTX_WAIT);
@@ -337,6 +346,7 @@ static void t_compute(void *ctx, uint64_t cycles) {
 
 /* What a load and a store pay first: one issue slot at the context's time. */
 static struct machine *door_issue(struct mctx *c, uint32_t size, unsigned cls) {
+  CHECK(!c->parking); /* a parking worker returns without another access */
   CHECK_GT(size, 0);
   CHECK_LT(cls, MEM_CLASS_MAX);
   c->t++;
@@ -408,6 +418,7 @@ static void ev_wake(void *ctx, uint64_t arg) {
 static void t_wait(void *ctx, uint64_t cycles) {
   struct mctx *c = ctx;
   struct machine *m = c->m;
+  CHECK(!c->parking);
   m->st.waits++;
   m->st.wait_cycles += cycles;
   c->state = CTX_WAIT;
@@ -415,7 +426,34 @@ static void t_wait(void *ctx, uint64_t cycles) {
   coro_suspend(c->co);
 }
 
-static const struct mem_ops timed_ops = {t_load, t_store, t_compute, t_wait};
+/* Park (sim/mem.h): the worker function returns next; ev_issue then gives its
+ * stack back and leaves the context off the machine until t_wake. */
+static void t_park(void *ctx) {
+  struct mctx *c = ctx;
+  CHECK(!c->parking);
+  c->parking = true;
+  c->m->st.parks++;
+}
+
+/* Wake parked context id at the waker's time: it is ready like a ray whose
+ * line came back (its thread takes it, or queues it behind the running one).
+ * A wake takes no issue slot: a hardware thread scheduler would flip the
+ * context's ready bit, as a line fill does. */
+static void t_wake(void *ctx, uint32_t id) {
+  struct mctx *c = ctx;
+  struct machine *m = c->m;
+  CHECK(!c->parking);
+  CHECK_LT(id, m->nctx);
+  struct mctx *o = &m->ctx[id];
+  CHECK_EQ(o->state, CTX_PARKED);
+  m->st.wakes++;
+  struct mthread *th = &m->th[o->thread];
+  CHECK_GT(th->parked, 0);
+  th->parked--;
+  ray_ready(m, o, c->t);
+}
+
+static const struct mem_ops timed_ops = {t_load, t_store, t_compute, t_wait, t_park, t_wake};
 
 /* ---- the warming door (sampling's fast-forward) ---- */
 
@@ -457,7 +495,7 @@ static void w_compute(void *ctx, uint64_t cycles) {
   w->m->warm_slots += cycles;
 }
 
-static const struct mem_ops warm_ops = {w_load, w_store, w_compute, NULL};
+static const struct mem_ops warm_ops = {w_load, w_store, w_compute, NULL, NULL, NULL};
 
 struct mem_port machine_warm_port(struct machine *m, uint32_t core) {
   CHECK_LT(core, m->p.cores);
@@ -476,7 +514,7 @@ static void n_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
 
 static void n_compute(void *ctx, uint64_t cycles) { ((struct machine *)ctx)->count_slots += cycles; }
 
-static const struct mem_ops count_ops = {n_access, n_access, n_compute, NULL};
+static const struct mem_ops count_ops = {n_access, n_access, n_compute, NULL, NULL, NULL};
 
 struct mem_port machine_count_port(struct machine *m) {
   struct mem_port p = {&count_ops, m};
@@ -595,7 +633,9 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   m->progress_ctx = progress_ctx;
   for (uint32_t i = 0; i < m->p.cores; i++) kick(m, i);
   engine_run(m->eng);
-  /* Everything must be over: every ray returned, no miss outstanding. */
+  /* Everything must be over: every ray returned (none parked with nobody left
+   * to wake it), no miss outstanding. */
+  for (uint32_t i = 0; i < m->nctx; i++) CHECK_NE(m->ctx[i].state, CTX_PARKED);
   for (uint32_t i = 0; i < m->nctx; i++) CHECK_EQ(m->ctx[i].state, CTX_DONE);
   CHECK(l2_quiet(m->l2));
   CHECK_EQ(m->loads_out, m->loads_back);
@@ -618,7 +658,8 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   /* Conservation: bytes asked of DRAM are the bytes it moved. */
   CHECK_EQ(st->dram.read_bytes, st->l2.fetch_bytes);
   CHECK_EQ(st->dram.write_bytes, st->l2.writeback_bytes);
-  CHECK_EQ(st->thread_busy_cycles + st->thread_wait_cycles + st->thread_done_cycles,
+  CHECK_EQ(st->thread_busy_cycles + st->thread_wait_cycles + st->thread_parked_cycles +
+               st->thread_done_cycles,
            (uint64_t)m->nth * end);
   /* The timeline covers the whole run. */
   timeline_cover(&m->tl, end);

@@ -16,6 +16,9 @@
  *   free); with none ready it idles. Resuming the ray it last ran is free.
  * - Stores are posted: they take their slot and go on to the L1 (write-through,
  *   no allocation) and the L2; the ray does not wait.
+ * - A ray context with no work may park (sim/mem.h): it leaves the machine,
+ *   its stack goes back to the pool, and it makes no event and takes no slot
+ *   until another context wakes it; its worker function then starts again.
  * - L2: sim/l2.h. DRAM: sim/dram.h (one level of detail: the fidelity key's
  *   timed rungs; its cheapest rung, analytic, is sim/analytic.h, no machine). */
 #ifndef RTSIM_SIM_MACHINE_H
@@ -71,6 +74,10 @@ struct machine_params {
   uint32_t cost_node_cycles, cost_triangle_cycles, cost_shade_cycles;
   uint32_t cost_ray_switch_cycles;
   uint64_t timeline_window_cycles;
+  /* How the dynamic policy's cores share its queue points (renderer/policy.h:
+   * 0 partition, 1 chip). The machine does not read it: a workload setting
+   * kept with the machine it is made for, as the costs are. */
+  uint32_t dyn_sharing;
   /* Sampling (README "Sampling"; the run reads these, the machine does not):
    * the share of work items simulated in detail (1: all, no sampling), the
    * strata (one detailed unit each), the items warmed functionally before a
@@ -98,19 +105,21 @@ struct machine_stats {
   uint64_t contexts, threads;
   uint64_t issue_slots;         /* used, of cores x cycles */
   uint64_t thread_busy_cycles;  /* a ray ready, running or being switched to */
-  uint64_t thread_wait_cycles;  /* live rays, all waiting on memory */
+  uint64_t thread_wait_cycles;  /* live rays, all waiting on memory (or mem_wait) */
+  uint64_t thread_parked_cycles; /* live rays, all parked (mem_park: no work) */
   uint64_t thread_done_cycles;  /* no work left */
   uint64_t ray_switches, switch_cycles;
   uint64_t blocks;              /* runs of a ray between waits */
   uint64_t loads, stores, computes;
   uint64_t blocking_loads;      /* loads that left the L1 and suspended their ray */
   uint64_t waits, wait_cycles;  /* mem_wait: a worker idle by its own choice */
+  uint64_t parks, wakes;        /* mem_park and mem_wake */
   uint64_t l1_accesses, l1_hits;
   struct l2_stats l2;       /* sim/l2.h, as of the end of the run */
   struct dram_stats dram;   /* sim/dram.h, likewise (the level's own: machine_dram) */
   struct hist load_latency; /* cycles from a load's issue to its data (L1 hits too) */
   uint64_t events;
-  uint64_t stacks_max;      /* coroutine stacks alive at once */
+  uint64_t stacks_max;      /* coroutine stacks alive at once (parked contexts hold none) */
 };
 
 /* NULL if p is usable, else a description naming the key (for config errors
@@ -146,7 +155,9 @@ struct machine *machine_create(const struct machine_params *p, uint64_t stack_by
 void machine_destroy(struct machine *m); /* NULL ok */
 
 /* Run fn on every ray context until all have returned and memory is quiet.
- * Once per machine. */
+ * A context that parked (mem_park) before returning runs fn again, from the
+ * start, when another wakes it; one still parked at the end is a CHECK
+ * failure (nobody was left to wake it). Once per machine. */
 void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_progress_fn progress,
                  void *progress_ctx);
 

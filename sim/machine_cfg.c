@@ -27,6 +27,7 @@ static const char *const PAGE_NAMES[] = {"open", "close"};
 static const char *const FIDELITY_NAMES[MACHINE_FIDELITY_COUNT] = {"analytic", "fixed", "channel",
                                                                    "banked"};
 static const char *const QUEUE_NAMES[] = {"shared", "per_bank", "per_rank"}; /* enum dram_banked_queues */
+static const char *const SHARING_NAMES[] = {"partition", "chip"}; /* renderer/policy.h */
 static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"clock_ghz", K_F64, 1e-3, 1e3, OFF(clock_ghz)},
     {"cores", K_U32, 1, 4096, OFF(cores)},
@@ -92,13 +93,14 @@ static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"costs.shade", K_U32, 0, 1e6, OFF(cost_shade_cycles)},
     {"costs.ray_switch", K_U32, 0, 1e6, OFF(cost_ray_switch_cycles)},
     {"timeline.window", K_U64, 1, 1e12, OFF(timeline_window_cycles)},
+    {"dynamic.sharing", K_ENUM, 0, 1, offsetof(struct machine_params, dyn_sharing), SHARING_NAMES},
     {"sample.fraction", K_F64, 1e-6, 1, OFF(sample_fraction)},
     {"sample.units", K_U32, 0, 1u << 20, OFF(sample_units)},
     {"sample.warming", K_F64, 0, 1e6, OFF(sample_warming)},
     {"sample.seed", K_U64, 0, 1e15, OFF(sample_seed)},
 };
 
-static const char *const SECTIONS[] = {"l1", "l2", "dram", "costs", "timeline", "sample"};
+static const char *const SECTIONS[] = {"l1", "l2", "dram", "costs", "timeline", "dynamic", "sample"};
 #define NSECTIONS (sizeof SECTIONS / sizeof SECTIONS[0])
 
 const char *machine_cfg_key(unsigned i) { return i < MACHINE_CFG_KEYS ? KEYS[i].name : NULL; }
@@ -191,6 +193,7 @@ void machine_cfg_defaults(struct machine_cfg *c) {
   p->cost_shade_cycles = 50;
   p->cost_ray_switch_cycles = 2;
   p->timeline_window_cycles = 10000;
+  p->dyn_sharing = 0;
   p->sample_fraction = 1;
   p->sample_units = 0;
   p->sample_warming = 4;

@@ -16,7 +16,7 @@
 struct err;
 struct stats_table;
 
-#define MACHINE_CFG_KEYS 62
+#define MACHINE_CFG_KEYS 63
 
 /* Where each key's value came from, for errors found after reading. */
 struct machine_cfg_origin {

@@ -98,7 +98,7 @@ static void fn_store(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls
 }
 
 /* compute and wait are NULL: skipped without an indirect call. */
-static const struct mem_ops fn_ops = {fn_load, fn_store, NULL, NULL};
+static const struct mem_ops fn_ops = {fn_load, fn_store, NULL, NULL, NULL, NULL};
 
 struct mem_functional *mem_functional_create(const struct lru_stack_params *p,
                                              struct din_writer *din) {

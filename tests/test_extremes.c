@@ -12,7 +12,7 @@
  *    of one line and the largest accepted, DRAM latency and bandwidth at both
  *    ends together.
  * Invariants of a finished run (stats.json): the image is the reference
- * render's, bit for bit in RGB; 0 <= core_utilization <= 1; idle = wait + done;
+ * render's, bit for bit in RGB; 0 <= core_utilization <= 1; idle = wait + parked + done;
  * l2_miss_rate = misses / accesses; DRAM bytes = 64 x requests, and their
  * per-cycle figure; the timeline's DRAM bytes add up to the totals; no nan or
  * inf in any output. */
@@ -86,9 +86,11 @@ static void check_finished(const char *what, bool image) {
   EXPECTF(u >= 0 && u <= 1, "%s: core_utilization %g", what, u);
   double idle = testing_json_num(DIR, "thread_idle_fraction"),
          wait = testing_json_num(DIR, "thread_wait_fraction"),
+         parked = testing_json_num(DIR, "thread_parked_fraction"),
          done = testing_json_num(DIR, "thread_done_fraction");
   if (timed)
-    EXPECTF(fabs(idle - wait - done) < 1e-9, "%s: idle %g != wait %g + done %g", what, idle, wait, done);
+    EXPECTF(fabs(idle - wait - parked - done) < 1e-9, "%s: idle %g != wait %g + parked %g + done %g",
+            what, idle, wait, parked, done);
   else
     EXPECTF(isnan(idle) && isnan(wait) && isnan(done), "%s: analytic states thread figures", what);
   double acc = testing_json_num(DIR, "l2_accesses"), miss = testing_json_num(DIR, "l2_misses"),

@@ -397,6 +397,89 @@ static void test_merge_latency(void) {
   machine_destroy(m);
 }
 
+/* Park and wake (sim/mem.h). Kernel: context 0 misses `iters` times, then
+ * wakes every other context; each other parks in its first call and, woken,
+ * computes 10 cycles and returns. calls counts each context's calls. */
+struct park_kernel {
+  uint64_t iters;
+  uint32_t contexts;
+  uint32_t *calls;
+};
+
+static void park_worker(void *arg, const struct machine_worker_info *info, struct mem_port port) {
+  struct park_kernel *k = arg;
+  const uint32_t call = k->calls[info->id]++;
+  if (info->id == 0) {
+    for (uint64_t i = 0; i < k->iters; i++) mem_load(&port, (i + 1) << 6, 4, 0);
+    mem_compute(&port, 100);
+    for (uint32_t i = 1; i < k->contexts; i++) mem_wake(&port, i);
+    return;
+  }
+  if (call == 0) {
+    mem_compute(&port, 1);
+    CHECK(mem_park(&port));
+    return;
+  }
+  mem_compute(&port, 10);
+}
+
+static struct machine_stats park_run(const struct machine_params *p, uint64_t iters, uint32_t **calls) {
+  struct park_kernel k = {iters, p->cores * p->threads_per_core * p->rays_per_thread, NULL};
+  k.calls = calloc(k.contexts, sizeof *k.calls);
+  struct machine *m = machine_create(p, 0);
+  machine_run(m, park_worker, &k, NULL, NULL);
+  struct machine_stats st = *machine_get_stats(m);
+  machine_destroy(m);
+  *calls = k.calls;
+  return st;
+}
+
+static void test_park(void) {
+  /* By hand, one core of two threads, one context each (a miss takes 211
+   * cycles: l2.latency 10 + one transfer cycle + dram.latency 200): cycle 0
+   * context 0 issues its load; cycle 1 context 1 computes and parks (thread
+   * 1 parked from cycle 2); the line is back at 1 + 211 = 212, context 0
+   * computes 100 and wakes context 1 at 312, which computes 10: 322 cycles,
+   * thread 1 parked 310 of them, context 1 called twice. */
+  struct machine_params p = base();
+  p.threads_per_core = 2;
+  uint32_t *calls;
+  struct machine_stats st = park_run(&p, 1, &calls);
+  EXPECTF(st.cycles == 322 && st.thread_parked_cycles == 310 && st.issue_slots == 112 &&
+              st.parks == 1 && st.wakes == 1 && calls[0] == 1 && calls[1] == 2,
+          "cycles %llu, parked %llu, slots %llu, parks %llu, wakes %llu, calls %u %u",
+          (unsigned long long)st.cycles, (unsigned long long)st.thread_parked_cycles,
+          (unsigned long long)st.issue_slots, (unsigned long long)st.parks,
+          (unsigned long long)st.wakes, calls[0], calls[1]);
+  free(calls);
+
+  /* Many parked contexts make no events while parked: 16 cores x 4 x 4 = 256
+   * contexts, context 0 missing 200 times (over 42,000 cycles) while 255
+   * are parked. Each parked context costs two issue events (its first call,
+   * its call after the wake) and nothing in between, whatever the run's
+   * length; the wakes may leave one stale issue event a core. And a parked
+   * context holds no stack: at most context 0's (suspended in a miss) and the
+   * running one's are alive at once. */
+  struct machine_params one = base(), many = base();
+  many.cores = 16;
+  many.threads_per_core = 4;
+  many.rays_per_thread = 4;
+  const uint32_t n = 256;
+  struct machine_stats s1 = park_run(&one, 200, &calls);
+  free(calls);
+  struct machine_stats sn = park_run(&many, 200, &calls);
+  uint32_t twice = 0;
+  for (uint32_t i = 1; i < n; i++) twice += calls[i] == 2;
+  free(calls);
+  EXPECTF(sn.events >= s1.events + 2 * (n - 1) && sn.events <= s1.events + 2 * (n - 1) + many.cores,
+          "%llu events with 255 parked contexts, %llu alone", (unsigned long long)sn.events,
+          (unsigned long long)s1.events);
+  EXPECTF(sn.parks == n - 1 && sn.wakes == n - 1 && twice == n - 1, "parks %llu wakes %llu, %u called twice",
+          (unsigned long long)sn.parks, (unsigned long long)sn.wakes, twice);
+  EXPECTF(sn.stacks_max <= 2, "%llu stacks alive at once", (unsigned long long)sn.stacks_max);
+  EXPECT(sn.cycles >= s1.cycles && sn.thread_parked_cycles > 0);
+}
+
 int main(void) {
   test_queue_depth();
   test_merge_latency();
@@ -407,5 +490,6 @@ int main(void) {
   test_extremes();
   test_determinism();
   test_wait();
+  test_park();
   return testing_done("test_machine");
 }

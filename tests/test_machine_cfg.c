@@ -50,6 +50,7 @@ int main(void) {
       {"bad_model.yaml", "bad_model.yaml:2:11: error: fidelity: unknown value (got 'ddr5', expected one of: analytic, fixed, channel, banked)"},
       {"bad_renamed_model.yaml", "bad_renamed_model.yaml:2:3: error: dram.model: renamed to fidelity, a top-level key"},
       {"bad_queue_structure.yaml", "bad_queue_structure.yaml:2:20: error: dram.queue_structure: unknown value (got 'per_channel', expected one of: shared, per_bank, per_rank)"},
+      {"bad_dyn_sharing.yaml", "bad_dyn_sharing.yaml:2:12: error: dynamic.sharing: unknown value (got 'both', expected one of: partition, chip)"},
       {"bad_trc.yaml", "bad_trc.yaml:3:8: error: dram.tRC: must be at least tRAS (got 20)"},
       {"bad_include_missing.yaml", "bad_include_missing.yaml:1:10: error: include: "},
       {"bad_include_cycle.yaml", "error: include: included files nest deeper than 8"},

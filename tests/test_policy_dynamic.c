@@ -68,7 +68,7 @@ static void on_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls, int
 static void on_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) { on_access(ctx, addr, size, cls, 0); }
 static void on_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) { on_access(ctx, addr, size, cls, 1); }
 
-static const struct mem_ops COUNTER_OPS = {on_load, on_store, NULL, NULL};
+static const struct mem_ops COUNTER_OPS = {on_load, on_store, NULL, NULL, NULL, NULL};
 
 struct result {
   struct framebuffer fb;

@@ -65,7 +65,7 @@ static void count_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   if (cls == TRACE_CLASS_RAY && (addr < c->ray_lo || addr + size > c->ray_hi)) c->ray_outside++;
 }
 
-static const struct mem_ops COUNT_OPS = {count_load, count_store, NULL, NULL};
+static const struct mem_ops COUNT_OPS = {count_load, count_store, NULL, NULL, NULL, NULL};
 
 static int same_hit(const struct trace_hit *a, const struct trace_hit *b) {
   return a->prim == b->prim && memcmp(&a->t, &b->t, sizeof a->t) == 0 &&

@@ -65,7 +65,7 @@ static void on_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
 static void on_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   on_access(ctx, addr, size, cls, 1);
 }
-static const struct mem_ops REC_OPS = {on_load, on_store, NULL, NULL};
+static const struct mem_ops REC_OPS = {on_load, on_store, NULL, NULL, NULL, NULL};
 
 struct world {
   struct scene s;

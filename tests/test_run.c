@@ -80,7 +80,7 @@ static void functional(struct world *w, enum policy_kind k, uint32_t mask, unsig
   struct render r;
   render_init(&r, w, mask);
   struct policy_params pp;
-  policy_params_machine(&pp, 1ull << lg2, 1);
+  policy_params_machine(&pp, 1ull << lg2);
   struct render_stats st;
   policy_run(k, &r.setup, &pp, mem_functional_port(b), &st, NULL);
   struct lru_stack_results res;
@@ -139,7 +139,9 @@ static void w_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
 }
 static void w_compute(void *ctx, uint64_t cycles) { mem_compute(&((struct wport *)ctx)->in, cycles); }
 static void w_wait(void *ctx, uint64_t cycles) { mem_wait(&((struct wport *)ctx)->in, cycles); }
-static const struct mem_ops WPORT_OPS = {w_load, w_store, w_compute, w_wait};
+static void w_park(void *ctx) { CHECK(mem_park(&((struct wport *)ctx)->in)); }
+static void w_wake(void *ctx, uint32_t id) { mem_wake(&((struct wport *)ctx)->in, id); }
+static const struct mem_ops WPORT_OPS = {w_load, w_store, w_compute, w_wait, w_park, w_wake};
 
 struct timed_ctx {
   struct policy_job *job;
@@ -154,8 +156,8 @@ static void timed_worker(void *arg, const struct machine_worker_info *info, stru
     t->ports[info->id].in = port;
     port = (struct mem_port){&WPORT_OPS, &t->ports[info->id]};
   }
-  policy_worker_init(w, t->job, info->id, info->core, info->thread, port);
-  policy_job_work(t->job, w);
+  if (!w->parked) policy_worker_init(w, t->job, info->id, info->core, info->thread, port);
+  if (policy_job_work(t->job, w)) return; /* parked: called again when woken */
   policy_worker_fini(t->job, w);
 }
 
@@ -171,7 +173,8 @@ static void timed_q(struct world *w, enum policy_kind k, uint32_t mask,
   r->setup.layout.tri_cycles = p->cost_triangle_cycles;
   r->sc.shade_cycles = p->cost_shade_cycles;
   struct policy_params pp;
-  policy_params_machine(&pp, p->l2_size_bytes, (uint64_t)p->l2_latency_cycles + p->dram_latency_cycles);
+  policy_params_machine(&pp, p->l2_size_bytes);
+  pp.dyn_sharing = p->dyn_sharing;
   uint32_t n = p->cores * p->threads_per_core * p->rays_per_thread;
   struct timed_ctx t = {policy_job_create(k, &r->setup, &pp, n, p->cores), NULL, NULL};
   t.workers = calloc(n, sizeof *t.workers);
@@ -326,18 +329,25 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
   many.threads_per_core = 3;
   many.rays_per_thread = 3;
   many.l2_size_bytes = 16384;
+  /* Chip-wide sharing (dynamic.sharing: chip): the cores on one queue point,
+   * and with a 4 KiB L2 on the blocks of oversized leaves together. */
+  struct machine_params chip = tiny, chip_small = many;
+  chip.dyn_sharing = chip_small.dyn_sharing = POLICY_DYN_CHIP;
+  chip_small.l2_size_bytes = 4096;
   const struct {
     const char *name;
     const struct machine_params *p;
   } dyn[] = {{"tiny.yaml", &tiny}, {"tiny.yaml, 4 KiB L2", &small_l2},
-             {"tiny.yaml, 3 x 3 x 3, 16 KiB L2", &many}, {"1 x 1 x 1", &one}};
+             {"tiny.yaml, 3 x 3 x 3, 16 KiB L2", &many}, {"1 x 1 x 1", &one},
+             {"tiny.yaml, chip", &chip}, {"tiny.yaml, 3 x 3 x 3, 4 KiB L2, chip", &chip_small}};
   for (unsigned i = 0; i < sizeof dyn / sizeof dyn[0]; i++) {
     const struct machine_params *p = dyn[i].p;
-    if (!all && p != &tiny && p != &one) continue;
+    if (!all && p != &tiny && p != &one && p != &chip) continue;
     const uint32_t workers = p->cores * p->threads_per_core * p->rays_per_thread;
     /* The plan it runs with: with a 4 KiB L2, some leaves exceed g_max. */
     struct policy_params pp;
-    policy_params_machine(&pp, p->l2_size_bytes, 1);
+    policy_params_machine(&pp, p->l2_size_bytes);
+    pp.dyn_sharing = p->dyn_sharing;
     struct qpoint_set qs;
     struct qpoint_budget b;
     uint32_t bt, group;
@@ -347,7 +357,7 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
       struct kd_node nd = qs.nodes[qs.qnode[q]];
       oversized += kd_is_leaf(nd) && kd_leaf_count(nd) > bt;
     }
-    if (p == &small_l2) EXPECTF(oversized > 0, "%s: no leaf over g_max (%u queue points)", dyn[i].name, qs.count);
+    if (p == &small_l2 || p == &chip_small) EXPECTF(oversized > 0, "%s: no leaf over g_max (%u queue points)", dyn[i].name, qs.count);
     EXPECT(group == 1);
     const uint32_t queues = qs.count;
     qpoint_fini(&qs);
@@ -376,13 +386,15 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
             (unsigned long long)(sl->bad + q.bad), (unsigned long long)left);
     EXPECTF(q.table_max <= queues, "dynamic on %s: table entry %llu of %u queue points", dyn[i].name,
             (unsigned long long)q.table_max, queues);
-    /* Several contexts share the work: some wait for it; one never does. */
-    EXPECTF(workers == 1 ? st.waits == 0 : st.waits > 0, "dynamic on %s: %llu waits", dyn[i].name,
-            (unsigned long long)st.waits);
-    printf("%s, dynamic on %s: %llu cycles, core utilization %.3f, %llu waits (%llu cycles)\n", scene,
+    /* Several contexts share the work: some park until there is some for
+     * them, and every one parked is woken; one never parks. Nobody polls. */
+    EXPECTF(st.waits == 0 && (workers == 1 ? st.parks == 0 : st.parks > 0) && st.wakes == st.parks,
+            "dynamic on %s: %llu waits, %llu parks, %llu wakes", dyn[i].name,
+            (unsigned long long)st.waits, (unsigned long long)st.parks, (unsigned long long)st.wakes);
+    printf("%s, dynamic on %s: %llu cycles, core utilization %.3f, %llu parks, %llu events\n", scene,
            dyn[i].name,
            (unsigned long long)st.cycles, (double)st.issue_slots / ((double)p->cores * (double)st.cycles),
-           (unsigned long long)st.waits, (unsigned long long)st.wait_cycles);
+           (unsigned long long)st.parks, (unsigned long long)st.events);
     testing_slots_fini(&q.slots);
     fb_fini(&r.fb);
   }
@@ -409,7 +421,7 @@ static void test_machine_plan(void) {
         const uint64_t S = l2s[li] ? l2s[li] : p->l2_size_bytes;
         const uint32_t C = p->cores, workers = C * p->threads_per_core * p->rays_per_thread;
         struct policy_params pp;
-        policy_params_machine(&pp, S, (uint64_t)p->l2_latency_cycles + p->dram_latency_cycles);
+        policy_params_machine(&pp, S);
         struct qpoint_set qs;
         struct qpoint_budget b;
         uint32_t bt, group;
@@ -427,6 +439,21 @@ static void test_machine_plan(void) {
                 (unsigned long long)b.gmax_bytes);
         /* Every core's queue point resident at once, besides the reservations. */
         EXPECT(C * b.gmax_bytes + b.node_bytes + b.table_bytes + b.ray_bytes <= S);
+        /* Chip-wide sharing: one queue point's geometry for the whole chip. */
+        {
+          struct policy_params pc = pp;
+          pc.dyn_sharing = POLICY_DYN_CHIP;
+          struct qpoint_set qc;
+          struct qpoint_budget bc;
+          uint32_t btc, gc;
+          policy_dynamic_plan(&pc, workers, C, &w.kd, 128, &qc, &bc, &btc, &gc);
+          const uint64_t usedc = bc.node_bytes + bc.table_bytes + bc.ray_bytes;
+          EXPECTF(bc.node_bytes == nodes && bc.ray_bytes == rays &&
+                      bc.gmax_bytes == (S > usedc ? S - usedc : 0) && qc.count <= qs.count,
+                  "%s, %s, L2 %llu, chip: g_max %llu, %u queue points (partition %u)", scenes[si],
+                  cfgs[ci], (unsigned long long)S, (unsigned long long)bc.gmax_bytes, qc.count, qs.count);
+          qpoint_fini(&qc);
+        }
         EXPECT(bt == (b.gmax_bytes / 128 ? b.gmax_bytes / 128 : 1) && group == 1);
         uint32_t over = 0;
         for (uint32_t q = 0; q < qs.count; q++) {
@@ -583,10 +610,44 @@ static void test_command(void) {
   }
 }
 
+/* Idle ray contexts cost nothing while they are parked: the dynamic policy
+ * on one pixel (one primary ray) with 32 cores of 1 x 1 and of 4 x 4 ray
+ * contexts, no L1 (the ray's accesses reach the L2 alike, whichever context
+ * runs it) and a tiny L2 (the same queue points: the ray buffer is capped at
+ * 1/16 of the L2 both ways). Each of the 480 more contexts costs two issue
+ * events, its first call (it parks) and its call after the wake at the end of
+ * the batch, and nothing in between; the wakes may leave one stale issue event
+ * a core. Polling contexts would cost events in proportion to the run's
+ * length (14,000 cycles here). */
+static void test_idle_contexts(void) {
+  char cmd[4096], out[8192];
+  double ev[2], parks[2], cycles[2];
+  const char *shape[2] = {"1", "4"};
+  for (int i = 0; i < 2; i++) {
+    char dir[1024];
+    snprintf(dir, sizeof dir, "%s/run_idle_%d", RTSIM_TMP, i);
+    snprintf(cmd, sizeof cmd,
+             "%s run %s/configs/tiny.yaml %s/scenes/small/room.yaml --policy dynamic --rays primary "
+             "--width 1 --height 1 --set cores=32 --set threads_per_core=%s --set rays_per_thread=%s "
+             "--set l1.size=0 -o %s",
+             RTSIM_BINARY, RTSIM_SOURCE_DIR, RTSIM_SOURCE_DIR, shape[i], shape[i], dir);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 0, "exit %d: %s", rc, out);
+    ev[i] = testing_json_num(dir, "events");
+    parks[i] = testing_json_num(dir, "parks");
+    cycles[i] = testing_json_num(dir, "cycles");
+  }
+  const double more = 512 - 32;
+  EXPECTF(ev[1] - ev[0] >= 2 * more && ev[1] - ev[0] <= 2 * more + 32,
+          "%.0f events with 512 contexts, %.0f with 32", ev[1], ev[0]);
+  EXPECTF(parks[1] - parks[0] == more, "%.0f parks with 512 contexts, %.0f with 32", parks[1], parks[0]);
+  EXPECT(cycles[0] > 10000 && cycles[1] > 10000);
+}
+
 /* Whole runs at the machine's extremes: every output written, no nan or inf.
- * The dynamic policy too (its contexts all stay for the batch, so the most
- * contexts it is given are 16 x 8 x 8; the 64-byte L2 leaves g_max 0: every
- * leaf a queue point, its triangles one block each). */
+ * The dynamic policy too (16,384 contexts on 24 pixels, nearly all parked;
+ * the 64-byte L2 leaves g_max 0: every leaf a queue point, its triangles one
+ * block each). */
 static void test_command_extremes(void) {
   static const char *const sets[] = {
       "--set cores=1 --set threads_per_core=1 --set rays_per_thread=1",
@@ -598,7 +659,7 @@ static void test_command_extremes(void) {
       "--set dram.latency=1000000000",
       "--set dram.bytes_per_cycle=0.000001",
       "--policy dynamic --set cores=1 --set threads_per_core=1 --set rays_per_thread=1",
-      "--policy dynamic --set cores=16 --set threads_per_core=8 --set rays_per_thread=8",
+      "--policy dynamic --set cores=256 --set threads_per_core=8 --set rays_per_thread=8",
       "--policy dynamic --set dram.latency=0 --set dram.bytes_per_cycle=10000",
       "--policy dynamic --set dram.latency=1000000 --set timeline.window=1",
       "--policy dynamic --set dram.bytes_per_cycle=0.01 --set l2.size=64 --set l2.ways=full --set l2.mshrs=1",
@@ -637,6 +698,7 @@ int main(void) {
   test_machine_plan();
   test_command();
   test_command_extremes();
+  test_idle_contexts();
   /* The kernels' deepest stack, against the size the machine gives them: the
    * margin coro.c states (at least 4x) must hold. */
   printf("deepest coroutine stack: %llu bytes of %zu\n", (unsigned long long)stack_used_max,

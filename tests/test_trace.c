@@ -428,7 +428,7 @@ static void test_memory_announcements(void) {
   struct count_ctx c;
   memset(&c, 0, sizeof c);
   trace_layout_default(&c.l);
-  static const struct mem_ops ops = {count_load, NULL, count_compute, NULL};
+  static const struct mem_ops ops = {count_load, NULL, count_compute, NULL, NULL, NULL};
   struct mem_port port = {&ops, &c};
   struct trace_ctx tr;
   trace_init(&tr, &s, &kd, port, NULL);

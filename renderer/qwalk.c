@@ -1,0 +1,115 @@
+/* The resumable walk (qwalk.h): trace.c's traversal steps (renderer/trav.h),
+ * paused at queue points and rebuilt there. */
+#include "renderer/qwalk.h"
+
+#include <math.h>
+
+#include "renderer/ray.h"
+#include "renderer/scene.h"
+#include "sim/err.h"
+
+/* The segment of shadow ray r reversed: from its end (at the light) back to
+ * its origin, stretched by a relative 2^-16 at both ends to absorb the
+ * rounding of the end point. False when that is not a valid ray (an infinite
+ * segment): the canonical direction is used then. */
+static bool reversed(const struct ray *r, struct ray *rv) {
+  *rv = *r;
+  rv->o = v3_add(r->o, v3_scale(r->d, r->tmax));
+  rv->d = v3_scale(r->d, -1.0f);
+  float m = r->tmax * (1.0f / 65536.0f);
+  rv->tmin = -m;
+  rv->tmax = r->tmax + m;
+  return isfinite(m) && trav_ray_valid(rv);
+}
+
+/* Recompute the hit a record carries (hit_prim) with its canonical ray: the
+ * test is deterministic and its t does not depend on the range it is given,
+ * so this is the very hit found earlier (t, b1, b2 bit for bit).
+ * NOTE: not announced as a load: the host record has no room for t, where a
+ * real one would carry it (the paper's rays have spare bytes). */
+static void restore_hit(const struct qwalk_tree *t, const struct trace_isect_ray *ir,
+                        const struct ray *r, struct trace_hit *h) {
+  CHECK_GE(r->hit_prim, 0);
+  CHECK_LT((uint32_t)r->hit_prim, t->s->tri_count);
+  const struct scene_tri *tri = &t->s->tris[r->hit_prim];
+  bool ok = trace_isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, r->tmax, &h->t, &h->b1,
+                            &h->b2);
+  CHECK(ok);
+  h->prim = r->hit_prim;
+}
+
+bool qwalk_init(const struct qwalk_tree *t, struct qwalk *w, const struct ray *r) {
+  const struct kd_tree *kd = t->kd;
+  w->any = r->type == RAY_SHADOW;
+  trav_best_init(&w->best, r->tmax);
+  w->tmin = r->tmin;
+  w->ignore = r->ignore_prim;
+  if (!trav_ray_valid(r) || kd->node_count == 0) return false;
+  if (!trav_setup(&w->tv, kd, r)) return false;
+  trace_isect_prepare(&w->ir, r->o, r->d);
+  if (w->any) {
+    struct ray rv;
+    if (reversed(r, &rv) && !trav_setup(&w->tv, kd, &rv)) return false;
+  } else if (r->hit_prim >= 0) {
+    struct trace_hit h;
+    restore_hit(t, &w->ir, r, &h);
+    trav_best_offer(&w->best, h.t, (uint32_t)h.prim, h.b1, h.b2);
+  }
+  w->ni = 0;
+  w->t0 = w->tv.t0;
+  w->t1 = w->tv.t1;
+  w->sp = 0;
+  return true;
+}
+
+bool qwalk_leaf(struct trace_ctx *tr, struct qwalk *w, struct kd_node nd, uint32_t j0, uint32_t j1) {
+  return trav_leaf(tr, &w->ir, w->tmin, w->ignore, w->any, nd, j0, j1, &w->best);
+}
+
+/* Pop the next pending node above stack depth floor, skipping those entirely
+ * beyond the best hit (trace.c's rule). False when none is left. */
+static bool walk_pop(struct qwalk *w, int floor) {
+  return trav_pop(w->stack, &w->sp, floor, &w->best, &w->ni, &w->t0, &w->t1);
+}
+
+enum qwalk_end qwalk_run(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w, int floor,
+                         bool to_queue) {
+  for (;;) {
+    trav_announce_node(tr, w->ni, 1);
+    struct kd_node nd = t->nodes[w->ni];
+    if (to_queue && kd_is_queue_point(nd)) return QWALK_QUEUED;
+    if (!kd_is_leaf(nd)) {
+      if (trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &w->ni, w->stack, &w->sp)) continue;
+    } else {
+      CHECK(!to_queue || kd_leaf_count(nd) == 0); /* geometry is below queue points */
+      if (qwalk_leaf(tr, w, nd, 0, kd_leaf_count(nd))) return QWALK_HIT;
+    }
+    if (!walk_pop(w, floor)) return QWALK_DONE;
+  }
+}
+
+/* Where the path goes to the far child, the uncut traversal had pushed it,
+ * finished the near side, and popped it: so pop it here. */
+void qwalk_to(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w, uint32_t q) {
+  while (w->ni != q) {
+    trav_announce_node(tr, w->ni, 1);
+    struct kd_node nd = t->nodes[w->ni];
+    CHECK(!kd_is_leaf(nd));
+    uint32_t c = q >= kd_above(nd) ? kd_above(nd) : w->ni + 1, next;
+    bool ok = trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &next, w->stack, &w->sp);
+    CHECK(ok);
+    if (next != c) {
+      CHECK_GT(w->sp, 0);
+      CHECK_EQ(w->stack[w->sp - 1].node, c);
+      w->sp--;
+      w->t0 = w->stack[w->sp].t0;
+      w->t1 = w->stack[w->sp].t1;
+    }
+    w->ni = c;
+  }
+}
+
+enum qwalk_end qwalk_leave(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w) {
+  if (!walk_pop(w, 0)) return QWALK_DONE;
+  return qwalk_run(t, tr, w, 0, true);
+}

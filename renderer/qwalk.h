@@ -1,0 +1,93 @@
+/* The resumable walk: a k-d traversal that pauses at queue points and resumes
+ * there later, possibly on another worker, with exactly the arithmetic of
+ * trace.c's (renderer/trav.h), so that a ray cut into pieces tests the same
+ * triangles and finds the same hit as the ray traced in one go.
+ *
+ * Queue points are the nodes whose queue-point bit is set in the node array
+ * the walk is given (kd_is_queue_point): the dynamic policy's (qpoint.h), or
+ * any other set of subtree roots that holds every leaf with geometry below it
+ * (a treelet policy marks its treelet roots). Nothing here queues a ray: the
+ * walk only says where it stopped.
+ *
+ * - A closest-hit walk's pending stack is a function of the path from the
+ *   root to the current node (the far children of the ancestors where it went
+ *   near), so a walk resumed at queue point q rebuilds it by descending from
+ *   the root to q with the same arithmetic (qwalk_to); its best hit so far
+ *   travels in the ray record (hit_prim) and is recomputed bit for bit.
+ * - A shadow ray's walk follows its segment reversed (from its end at the
+ *   light back to the point, widened by 2^-16 at both ends), but every
+ *   triangle is tested with the canonical ray: occlusion is whether any
+ *   triangle crossing the segment is hit, and the reversed walk visits every
+ *   leaf the segment crosses, so the answer is trace_any's. Private to
+ *   renderer/. */
+#ifndef RTSIM_RENDERER_QWALK_H
+#define RTSIM_RENDERER_QWALK_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "renderer/kdtree.h"
+#include "renderer/trace.h"
+#include "renderer/trav.h"
+
+struct ray;
+struct scene;
+
+/* What a walk reads: the tree, the scene (to recompute a carried hit) and the
+ * node array with the queue-point bits (the tree's own nodes, marked).
+ * Borrowed. */
+struct qwalk_tree {
+  const struct kd_tree *kd;
+  const struct scene *s;
+  const struct kd_node *nodes;
+};
+
+/* One ray's walk: the scheduling traversal (for a shadow ray the reversed
+ * segment), the canonical ray's test, the best hit so far, the current node
+ * and its pending stack. */
+struct qwalk {
+  struct trav_ray tv;
+  struct trace_isect_ray ir;
+  float tmin;
+  int32_t ignore;
+  bool any;
+  struct trav_best best;
+  uint32_t ni;
+  float t0, t1;
+  int sp;
+  struct trav_entry stack[KD_DEPTH_LIMIT];
+};
+
+/* Where a walk stopped: it left the tree (or its subtree's pending nodes are
+ * done), it reached a queue point (ni), or a shadow ray is occluded / a leaf
+ * pass found the ray's end. */
+enum qwalk_end { QWALK_DONE, QWALK_QUEUED, QWALK_HIT };
+
+/* Prepare r's walk at the root, its carried hit (hit_prim) restored. False
+ * when r ends without a traversal, exactly when trace.c's would (invalid ray,
+ * empty tree, root box missed). */
+bool qwalk_init(const struct qwalk_tree *t, struct qwalk *w, const struct ray *r);
+
+/* Test entries [j0, j1) of leaf nd as trace.c does (announced through tr).
+ * True: a shadow ray is occluded. */
+bool qwalk_leaf(struct trace_ctx *tr, struct qwalk *w, struct kd_node nd, uint32_t j0, uint32_t j1);
+
+/* Walk on from the current node. In a queue point's subtree (to_queue false)
+ * run until its pending nodes (those above stack depth floor) are done; above
+ * the queue points (to_queue true) stop at the first queue point reached. */
+enum qwalk_end qwalk_run(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w, int floor,
+                         bool to_queue);
+
+/* Rebuild the walk at queue point q: descend from the root along the path to
+ * q, pushing (and popping) what the uncut traversal did there. */
+void qwalk_to(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w, uint32_t q);
+
+/* After a queue point's subtree: on to the next queue point, or the end. */
+enum qwalk_end qwalk_leave(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w);
+
+/* The best hit so far as a record carries it (hit_prim): -1 when none. */
+static inline int32_t qwalk_best_prim(const struct qwalk *w) {
+  return w->best.found ? (int32_t)w->best.p : -1;
+}
+
+#endif
