@@ -25,11 +25,12 @@ int app_report(const struct err *e) {
 }
 
 int app_usage_error(const char *cmd, const char *fmt, ...) {
-  char msg[1024];
+  char raw[1024], msg[1024];
   va_list ap;
   va_start(ap, fmt);
-  vsnprintf(msg, sizeof msg, fmt, ap);
+  vsnprintf(raw, sizeof raw, fmt, ap);
   va_end(ap);
+  err_escape(msg, sizeof msg, raw); /* one line, whatever the user typed */
   fprintf(stderr, "rtsim %s: error: %s (see 'rtsim %s --help')\n", cmd, msg, cmd);
   return APP_EXIT_USAGE;
 }
@@ -57,7 +58,15 @@ bool app_world_load(struct app_world *w, const char *path) {
   struct kd_build_params p;
   kd_build_params_default(&p);
   p.clip = w->scene.kd_clip;
-  kd_build(&w->kd, &w->scene, &p);
+  unsigned long long bytes = 0;
+  if (!kd_build(&w->kd, &w->scene, &p, &bytes)) {
+    err_set(&e, path, 0, 0, "out of host memory building the k-d tree over the scene's %u "
+            "triangles (an allocation of %llu bytes failed; README: Limits)",
+            w->scene.tri_count, bytes);
+    app_report(&e);
+    scene_fini(&w->scene);
+    return false;
+  }
   w->load_s = t1 - t0;
   w->build_s = app_now() - t1;
   return true;

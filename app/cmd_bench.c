@@ -3,8 +3,6 @@
  * same workload, and the one-pass analyser's own speed. */
 #include "app/app.h"
 
-#include <ctype.h>
-#include <errno.h>
 #include <getopt.h> /* optind: the scenes are argv[optind..argc) */
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,6 +24,7 @@
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
 #include "sim/mem_functional.h"
+#include "sim/scalar.h"
 
 static const char HELP[] =
     "usage: rtsim bench [options] SCENE.yaml...\n"
@@ -135,7 +134,7 @@ static struct bench_embree *embree_from_ply(const struct app_world *w, double *b
   scene_init(&back);
   struct meshio_xform xf = {1.0f, v3(0, 0, 0)};
   struct bench_embree *be = NULL;
-  if (meshio_export_ply(&w->scene, ply, &e) && meshio_import(&back, ply, &xf, 0, &e)) {
+  if (meshio_export_ply(&w->scene, ply, &e) && meshio_import(&back, ply, &xf, 0, UINT32_MAX, &e)) {
     if (back.tri_count != w->scene.tri_count)
       fprintf(stderr, "rtsim bench: %s: read back %u triangles, wrote %u\n", ply, back.tri_count,
               w->scene.tri_count);
@@ -225,11 +224,8 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
 
 /* A sampling fraction: a plain decimal number above 0 and at most 1. */
 static bool parse_fraction(const char *text, void *dst) {
-  char *end;
-  errno = 0;
-  double v = strtod(text, &end);
-  if (end == text || *end || errno || !(v > 0 && v <= 1) || isspace((unsigned char)text[0]))
-    return false;
+  double v;
+  if (scalar_f64(text, &v) != SCALAR_OK || !(v > 0 && v <= 1)) return false;
   *(double *)dst = v;
   return true;
 }

@@ -446,9 +446,10 @@ int cmd_dram_replay(int argc, char **argv) {
   const struct dram_params dp = machine_dram_params(&mc.p);
   const uint64_t core_khz = machine_core_khz(&mc.p);
 
-  in = fopen(trace_path, "r");
+  const char *why;
+  in = err_fopen_regular(trace_path, &why);
   if (!in) {
-    err_set(&e, trace_path, 0, 0, "cannot open: %s", strerror(errno));
+    err_set(&e, trace_path, 0, 0, "cannot open: %s", why);
     rc = app_report(&e);
     goto done;
   }

@@ -12,12 +12,14 @@
 #include "renderer/ray.h"
 #include "renderer/trace.h"
 #include "sim/err.h"
+#include "sim/scalar.h"
 
 static const char HELP[] =
     "usage: rtsim hits SCENE.yaml < rays.csv > hits.csv\n"
     "\n"
     "Read rays as CSV on stdin, header 'id,ox,oy,oz,dx,dy,dz,tmin,tmax' (id a whole\n"
-    "number; the others decimal numbers, tmax may be 'inf'), and write 'id,t,prim':\n"
+    "number; the others decimal numbers, tmax may be 'inf'; no spaces, no leading\n"
+    "zeros such as 01.5; rows of up to 1 MiB), and write 'id,t,prim':\n"
     "the nearest hit with tmin < t < tmax (ties to the smaller prim), prim being the\n"
     "face index in 'rtsim export' order; a miss is 'id,inf,-1'. t is printed with 9\n"
     "significant digits, which round-trips a 32-bit float.\n"
@@ -27,28 +29,79 @@ static const char HELP[] =
 
 static const char HEADER[] = "id,ox,oy,oz,dx,dy,dz,tmin,tmax";
 
-/* Parse one data line; on error fill e at (line, column). */
+/* Bytes a row may have, its line break not counted: far above any row of
+ * nine numbers, low enough that a stream without line breaks is refused
+ * before it takes the host's memory. */
+#define HITS_ROW_MAX (1u << 20)
+
+/* Read the next row of f, whole, into *buf (grown as needed; its line break
+ * not kept): 1, 0 at the end of the input, -1 with e set on a NUL byte, a
+ * row longer than HITS_ROW_MAX or a read error. lineno is the row's line. */
+static int read_row(FILE *f, char **buf, size_t *cap, size_t *len, unsigned long lineno,
+                    struct err *e) {
+  size_t n = 0;
+  int c;
+  while ((c = getc(f)) != EOF && c != '\n') {
+    if (c == '\0')
+      return err_set(e, "<stdin>", (int)lineno, (int)n + 1,
+                     "a NUL byte (expected text: a CSV holds none)"),
+             -1;
+    if (n == HITS_ROW_MAX)
+      return err_set(e, "<stdin>", (int)lineno, (int)n + 1,
+                     "row too long (got more than %u bytes, expected at most %u)", HITS_ROW_MAX,
+                     HITS_ROW_MAX),
+             -1;
+    if (n + 1 >= *cap) {
+      *cap = *cap ? 2 * *cap : 256;
+      *buf = xrealloc(*buf, *cap);
+    }
+    (*buf)[n++] = (char)c;
+  }
+  if (c == EOF && ferror(f))
+    return err_set(e, "<stdin>", (int)lineno, 0, "cannot read: %s", strerror(errno)), -1;
+  if (c == EOF && n == 0) return 0;
+  if (n + 1 > *cap) {
+    *cap = 256;
+    *buf = xrealloc(*buf, *cap);
+  }
+  (*buf)[n] = '\0';
+  *len = n;
+  return 1;
+}
+
+/* Parse one data line (its fields cut apart in place); on error fill e at
+ * (line, column). Numbers are strict (sim/scalar.h); tmax may be inf. */
 static bool parse_line(char *line, unsigned long lineno, unsigned long long *id, float v[8],
                        struct err *e) {
+  static const char *const names[9] = {"id", "ox", "oy", "oz", "dx", "dy", "dz", "tmin", "tmax"};
   char *p = line;
   for (int f = 0; f < 9; f++) {
     int col = (int)(p - line) + 1;
-    char *end = NULL;
-    errno = 0;
-    if (f == 0) {
-      *id = (*p >= '0' && *p <= '9') ? strtoull(p, &end, 10) : 0;
-      if (!end || end == p || errno)
-        return err_set(e, "<stdin>", (int)lineno, col, "id: not a whole number (expected 0 or more)");
-    } else {
-      v[f - 1] = strtof(p, &end);
-      if (end == p || isnan(v[f - 1]))
-        return err_set(e, "<stdin>", (int)lineno, col, "field %d: not a number", f + 1);
-    }
-    char want = f == 8 ? '\0' : ',';
-    if (*end != want)
+    char *end = p + strcspn(p, ",");
+    if (f < 8 && *end != ',')
       return err_set(e, "<stdin>", (int)lineno, (int)(end - line) + 1,
-                     f == 8 ? "unexpected text after tmax (expected 9 fields)"
-                            : "expected ',' (a row has 9 fields: %s)", HEADER);
+                     "expected ',' (a row has 9 fields: %s)", HEADER);
+    if (f == 8 && *end)
+      return err_set(e, "<stdin>", (int)lineno, (int)(end - line) + 1,
+                     "unexpected text after tmax (expected 9 fields)");
+    *end = '\0';
+    enum scalar_why w;
+    if (f == 0) {
+      uint64_t u = 0;
+      w = scalar_u64(p, &u);
+      *id = u;
+      if (w != SCALAR_OK)
+        return err_set(e, "<stdin>", (int)lineno, col,
+                       "id: not a whole number%s%s (got '%.60s', expected 0 to 2^64-1)",
+                       w == SCALAR_SYNTAX ? "" : ": ", scalar_why_text(w), p);
+    } else if (f == 8 && !strcmp(p, "inf")) {
+      v[7] = INFINITY;
+    } else if ((w = scalar_f32(p, &v[f - 1])) != SCALAR_OK) {
+      return err_set(e, "<stdin>", (int)lineno, col,
+                     "field %d (%s): not a number%s%s (got '%.60s', expected a decimal number%s)",
+                     f + 1, names[f], w == SCALAR_SYNTAX ? "" : ": ", scalar_why_text(w), p,
+                     f == 8 ? " or inf" : "");
+    }
     p = end + 1;
   }
   return true;
@@ -70,13 +123,15 @@ int cmd_hits(int argc, char **argv) {
 
   struct err e;
   memset(&e, 0, sizeof e);
-  char line[4096];
+  char *line = NULL;
+  size_t cap = 0, len = 0;
   unsigned long lineno = 0;
   rc = 0;
-  while (fgets(line, sizeof line, stdin)) {
+  for (;;) {
+    int got = read_row(stdin, &line, &cap, &len, lineno + 1, &e);
+    if (got < 0) rc = app_report(&e);
+    if (got <= 0) break;
     lineno++;
-    size_t len = strlen(line);
-    if (len && line[len - 1] == '\n') line[--len] = '\0';
     if (len && line[len - 1] == '\r') line[--len] = '\0';
     if (lineno == 1) {
       if (strcmp(line, HEADER) != 0) {
@@ -88,7 +143,7 @@ int cmd_hits(int argc, char **argv) {
       continue;
     }
     if (len == 0) continue;
-    unsigned long long id;
+    unsigned long long id = 0;
     float v[8];
     if (!parse_line(line, lineno, &id, v, &e)) {
       rc = app_report(&e);
@@ -112,6 +167,7 @@ int cmd_hits(int argc, char **argv) {
     else
       printf("%llu,inf,-1\n", id);
   }
+  free(line);
   if (rc == 0 && lineno == 0) {
     err_set(&e, "<stdin>", 0, 0, "no input (expected the header '%s')", HEADER);
     rc = app_report(&e);

@@ -15,6 +15,7 @@
 #include "app/opts.h"
 #include "sim/err.h"
 #include "sim/outfile.h"
+#include "sim/scalar.h"
 
 static const char HELP[] =
     "usage: rtsim plot TABLE.csv --x KEY --y METRIC -o FILE.png|FILE.svg [options]\n"
@@ -31,8 +32,9 @@ static const char HELP[] =
     "options:\n"
     "  --x KEY            the x axis (a numeric column)\n"
     "  --y METRIC         the y axis (a numeric column)\n"
-    "  --lines KEY        one line per value of this column, with a legend\n"
-    "  --panels KEY       one panel per value of this column\n"
+    "  --lines KEY        one line per value of this column, with a legend (at\n"
+    "                     most 100)\n"
+    "  --panels KEY       one panel per value of this column (at most 100)\n"
     "  --where KEY=VALUE  keep only rows where KEY is VALUE (numbers compare as\n"
     "                     numbers); repeatable. Every other column that varies\n"
     "                     must be fixed so, or be --lines or --panels: two rows\n"
@@ -44,6 +46,14 @@ static const char HELP[] =
     "  -h, --help         this text\n";
 
 #define PLOT_WHERE_MAX 32
+/* Most panels a plot may have: the picture grows with them (a square grid of
+ * 620x420-pixel panels: 100 make 6200x4200 pixels, about 100 MB for gnuplot;
+ * 2,500 took gnuplot a minute and 2.5 GB), and past a hundred no panel can
+ * be read anyway. */
+#define PLOT_PANELS_MAX 100
+/* Most lines a panel may have: a legend of more cannot be read, and the
+ * colours repeat long before. */
+#define PLOT_LINES_MAX 100
 
 /* The unit a column's name states, or "" (a count or a label). */
 static const char *unit_of(const char *name) {
@@ -92,8 +102,13 @@ static int column(const struct csv_table *t, const char *opt, const char *name) 
   size_t len = 0;
   FILE *f = open_memstream(&msg, &len);
   CHECK(f);
-  fprintf(f, "%s:1: error: %s: no column '%s' (columns: ", t->file, opt, name);
-  for (unsigned i = 0; i < t->ncols; i++) fprintf(f, "%s%s", i ? ", " : "", t->names[i]);
+  char esc[1024];
+  err_escape(esc, sizeof esc, name);
+  fprintf(f, "%s:1: error: %s: no column '%s' (columns: ", t->file, opt, esc);
+  for (unsigned i = 0; i < t->ncols; i++) {
+    err_escape(esc, sizeof esc, t->names[i]); /* a quoted name may hold a line break */
+    fprintf(f, "%s%s", i ? ", " : "", esc);
+  }
   fputs(")\n", f);
   CHECK(fclose(f) == 0);
   fputs(msg, stderr);
@@ -126,8 +141,11 @@ static int cmp_nat(const void *a, const void *b) {
   return csv_natural_cmp(*(const char *const *)a, *(const char *const *)b);
 }
 
+/* At most limit + 1 values are collected (the caller refuses more than
+ * limit): the search for a seen value is linear, so the work stays bounded by
+ * rows x limit. */
 static void distinct(const struct csv_table *t, int c, const unsigned *rows, unsigned nrows,
-                     struct values *out) {
+                     unsigned limit, struct values *out) {
   out->v = xcalloc(nrows ? nrows : 1, sizeof *out->v);
   out->n = 0;
   if (c < 0) {
@@ -135,7 +153,7 @@ static void distinct(const struct csv_table *t, int c, const unsigned *rows, uns
     return;
   }
   bool numeric = true;
-  for (unsigned i = 0; i < nrows; i++) {
+  for (unsigned i = 0; i < nrows && out->n <= limit; i++) {
     const char *s = csv_cell(t, rows[i], (unsigned)c);
     bool seen = false;
     for (unsigned k = 0; k < out->n && !seen; k++) seen = same_value(out->v[k], s);
@@ -218,9 +236,8 @@ struct marks {
 
 static bool add_mark(const char *text, void *dst) {
   struct marks *m = dst;
-  char *end = NULL;
-  double v = strtod(text, &end);
-  if (m->n == PLOT_WHERE_MAX || end == text || *end || !isfinite(v)) return false;
+  double v;
+  if (m->n == PLOT_WHERE_MAX || scalar_f64(text, &v) != SCALAR_OK) return false;
   m->v[m->n++] = v;
   return true;
 }
@@ -298,7 +315,7 @@ int cmd_plot(int argc, char **argv) {
       unsigned *all = xcalloc(t.nrows ? t.nrows : 1, sizeof *all);
       for (unsigned r = 0; r < t.nrows; r++) all[r] = r;
       struct values v;
-      distinct(&t, wcol[w], all, t.nrows, &v);
+      distinct(&t, wcol[w], all, t.nrows, 64, &v);
       char list[512] = "";
       for (unsigned k = 0; k < v.n && strlen(list) + 64 < sizeof list; k++) {
         size_t l = strlen(list);
@@ -313,8 +330,22 @@ int cmd_plot(int argc, char **argv) {
               nwhere ? "no row matches every --where together" : "the columns are empty");
     goto fail;
   }
-  distinct(&t, lc, kept, nkept, &lines);
-  distinct(&t, pc, kept, nkept, &panels);
+  distinct(&t, lc, kept, nkept, PLOT_LINES_MAX, &lines);
+  distinct(&t, pc, kept, nkept, PLOT_PANELS_MAX, &panels);
+  if (panels.n > PLOT_PANELS_MAX) {
+    err_set(&e, t.file, 1, 0,
+            "--panels %s: more than %d values (expected at most %d panels: keep fewer with "
+            "--where KEY=VALUE, or draw the column with --lines)",
+            pk, PLOT_PANELS_MAX, PLOT_PANELS_MAX);
+    goto fail;
+  }
+  if (lines.n > PLOT_LINES_MAX) {
+    err_set(&e, t.file, 1, 0,
+            "--lines %s: more than %d values (expected at most %d lines: keep fewer with "
+            "--where KEY=VALUE, or spread them with --panels)",
+            lk, PLOT_LINES_MAX, PLOT_LINES_MAX);
+    goto fail;
+  }
   rows = xcalloc(nkept, sizeof *rows);
   for (unsigned i = 0; i < nkept; i++) {
     unsigned r = kept[i];
@@ -327,10 +358,13 @@ int cmd_plot(int argc, char **argv) {
       unsigned k = (size_t)r * t.ncols + (unsigned)cs[a];
       const char *s = t.cells[k];
       if (!csv_number(s, dst[a])) {
+        double ignored;
+        enum scalar_why why = scalar_f64(s, &ignored);
         err_set(&e, t.file, t.lines[k], t.cols[k],
-                "%s %s: not a number (got '%s'); --x and --y need numeric columns (use a text "
-                "column for --lines or --panels)",
-                a ? "--y" : "--x", t.names[cs[a]], s);
+                "%s %s: not a number%s%s (got '%s'); --x and --y need numeric columns (use a "
+                "text column for --lines or --panels)",
+                a ? "--y" : "--x", t.names[cs[a]], why == SCALAR_SYNTAX ? "" : ": ",
+                scalar_why_text(why), s);
         goto fail;
       }
       if (lg[a] && *dst[a] <= 0) {
@@ -399,17 +433,20 @@ int cmd_plot(int argc, char **argv) {
   fprintf(gp, "set multiplot layout %u,%u title ", prow, cols);
   gp_str(gp, title);
   fputc('\n', gp);
+  /* rows are sorted by panel, line and x: each panel is one run of rows, each
+   * of its lines a run within it, so the script takes one pass. */
+  unsigned at = 0;
   for (unsigned p = 0; p < panels.n; p++) {
     char pt[512] = "";
     if (pc >= 0) snprintf(pt, sizeof pt, "%s = %s", pk, panels.v[p]);
     fputs("set title ", gp);
     gp_str(gp, pt);
     fputs("\nplot ", gp);
-    unsigned nplotted = 0;
-    for (unsigned l = 0; l < lines.n; l++) {
-      bool any = false;
-      for (unsigned i = 0; i < nkept && !any; i++) any = rows[i].panel == p && rows[i].line == l;
-      if (!any) continue;
+    unsigned nplotted = 0, end = at;
+    while (end < nkept && rows[end].panel == p) end++;
+    for (unsigned i = at; i < end; i++) {
+      if (i > at && rows[i].line == rows[i - 1].line) continue;
+      const unsigned l = rows[i].line;
       char lt[512];
       if (lc >= 0) snprintf(lt, sizeof lt, "%s = %s", lk, lines.v[l]);
       else snprintf(lt, sizeof lt, "%s", yk);
@@ -419,15 +456,11 @@ int cmd_plot(int argc, char **argv) {
       nplotted++;
     }
     fputc('\n', gp);
-    for (unsigned l = 0; l < lines.n; l++) {
-      bool any = false;
-      for (unsigned i = 0; i < nkept; i++)
-        if (rows[i].panel == p && rows[i].line == l) {
-          fprintf(gp, "%.17g %.17g\n", rows[i].x, rows[i].y);
-          any = true;
-        }
-      if (any) fputs("e\n", gp);
+    for (unsigned i = at; i < end; i++) {
+      fprintf(gp, "%.17g %.17g\n", rows[i].x, rows[i].y);
+      if (i + 1 == end || rows[i + 1].line != rows[i].line) fputs("e\n", gp);
     }
+    at = end;
   }
   fputs("unset multiplot\n", gp);
   if (pclose(gp) != 0) {

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "app/opts.h"
+#include "app/outdir.h"
 #include "app/run_output.h"
 #include "renderer/policy.h"
 #include "renderer/shade.h"
@@ -31,7 +32,9 @@ static const char HELP[] =
     "timed machine, one worker's counts and a closed-form estimate of the cycles\n"
     "(seconds; no timeline.csv or traffic.png, and only the numbers it knows).\n"
     "Writes into OUTDIR (created if needed), each file whole or not at all,\n"
-    "stats.json last:\n"
+    "stats.json last; a complete OUTDIR is rewritten through a fresh sibling\n"
+    "swapped in at the end, so it is the old run or the new one, never a mix, and\n"
+    "SIGINT or SIGTERM leaves no temporary behind (README: Output directories):\n"
     "  image.exr     the picture, bit-identical in RGB to rtsim render's\n"
     "  stats.json    resolved config, scene, seed, wall time, every measured number\n"
     "  stats.csv     the same numbers as one tidy row (no wall time: bit-identical\n"
@@ -68,6 +71,7 @@ int cmd_run(int argc, char **argv) {
   enum policy_kind policy = POLICY_RECURSIVE;
   const char *trace_path = NULL;
   struct outfile trace = {0};
+  struct outdir od = {0};
   struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v), 0}; /* at most one an argument */
   const struct opts_spec spec[] = {
       OPTS_STR("output", 'o', &out),
@@ -101,24 +105,10 @@ int cmd_run(int argc, char **argv) {
                     "timed rung: --set fidelity=fixed, channel or banked)");
     goto done;
   }
-  if (mkdir(out, 0777) != 0 && errno != EEXIST) {
-    app_usage_error("run", "-o %s: cannot create the directory (%s)", out, strerror(errno));
-    goto done;
-  }
-  /* An earlier run's stats.json would mark this directory complete; a killed
-   * run's temporaries would stay forever. */
-  run_output_invalidate(out);
-  outfile_remove_stale(out);
-
+  /* Everything that can refuse the run is checked before OUTDIR is touched:
+   * the config, the scene, then what the host cannot run. */
   struct app_world w;
   if (!app_world_load(&w, scene_path)) goto done;
-  if (trace_path) {
-    if (!outfile_open(&trace, trace_path, "the DRAM trace", &e)) {
-      app_report(&e);
-      app_world_fini(&w);
-      goto done;
-    }
-  }
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   const bool analytic = mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC;
@@ -142,25 +132,27 @@ int cmd_run(int argc, char **argv) {
     why = whybuf;
     key = "cores";
   }
-  /* The caches' tags are allocated whole (README: Config keys). */
-  const uint64_t tag_bytes = machine_cache_host_bytes(&mc.p);
-  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-  const uint64_t host_bytes = pages > 0 && page > 0 ? (uint64_t)pages * (uint64_t)page : UINT64_MAX;
-  if (!why && !analytic && tag_bytes > host_bytes / 4 * 3) {
-    snprintf(whybuf, sizeof whybuf,
-             "the caches' tags would take %.1f GB of host memory (l2.size, and l1.size x "
-             "cores; about 24 bytes a line), more than three quarters of this host's %.1f GB: "
-             "smaller caches or fewer cores",
-             (double)tag_bytes / 1e9, (double)host_bytes / 1e9);
-    why = whybuf;
-    key = mc.p.l1_size_bytes * mc.p.cores > mc.p.l2_size_bytes ? "l1.size" : "l2.size";
-  }
   if (why) {
     const struct machine_cfg_origin *o = &mc.at[machine_cfg_find(key)];
     err_set(&e, o->file[0] ? o->file : machine_path, o->line, o->col, "%s", why);
     app_report(&e);
     app_world_fini(&w);
     goto done;
+  }
+  /* A complete OUTDIR is rewritten through a fresh sibling swapped in at the
+   * end; a signal from here on removes what the run leaves half done. */
+  if (!outdir_begin(&od, out, run_output_files, &e)) {
+    app_report(&e);
+    app_world_fini(&w);
+    goto done;
+  }
+  if (trace_path) {
+    if (!outfile_open(&trace, trace_path, "the DRAM trace", &e)) {
+      app_report(&e);
+      app_world_fini(&w);
+      goto done;
+    }
+    outdir_watch(trace.tmp);
   }
   struct app_timed t = {0};
   struct app_analytic a;
@@ -170,7 +162,7 @@ int cmd_run(int argc, char **argv) {
     app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, isatty(2),
                   trace.f);
   struct run_output_report rep = {
-      .out_dir = out,
+      .out_dir = od.write,
       .machine_path = machine_path,
       .scene_path = scene_path,
       .scene_name = w.scene.name[0] ? w.scene.name : "unnamed",
@@ -192,13 +184,15 @@ int cmd_run(int argc, char **argv) {
   };
   /* The trace first: stats.json, written last, marks the directory complete. */
   bool ok = !trace_path || outfile_commit(&trace, &e);
-  rc = ok && run_output_write(&rep, &e) ? 0 : app_report(&e);
+  rc = ok && run_output_write(&rep, &e) && outdir_commit(&od, &e) ? 0 : app_report(&e);
+  rep.out_dir = out;
   if (rc == 0) run_output_summary(&rep, stdout);
   if (analytic) app_analytic_fini(&a);
   else app_timed_fini(&t);
   app_world_fini(&w);
 done:
   outfile_abort(&trace);
+  outdir_abort(&od);
   free(sets.v);
   return rc;
 }

@@ -15,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/prctl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <time.h>
@@ -27,7 +28,7 @@
 #include "sim/stats.h"
 
 static const char HELP[] =
-    "usage: rtsim sweep SWEEP.yaml -o DIR [-j N] [--emit-jobs]\n"
+    "usage: rtsim sweep SWEEP.yaml -o DIR [-j N] [--max-points N] [--emit-jobs]\n"
     "\n"
     "Run every point of a sweep file (a base machine config, a workload, and axes\n"
     "over config or workload keys: see README.md, Sweeps) as an 'rtsim run' into\n"
@@ -39,11 +40,15 @@ static const char HELP[] =
     "failed point does not stop the others: its stderr is kept in\n"
     "DIR/<point>/error.txt and summarised at the end (exit code 1). Every point's\n"
     "exact command is in DIR/<point>/command.sh. A progress line (done, failed,\n"
-    "ETA) goes to stderr when it is a terminal.\n"
+    "ETA) goes to stderr when it is a terminal. SIGINT or SIGTERM stops the\n"
+    "running points (they stay incomplete); a point also stops when its sweep\n"
+    "is killed outright.\n"
     "\n"
     "options:\n"
     "  -o, --output DIR  where the points go (created if needed)\n"
     "  -j, --jobs N      points at a time (default: the number of cores)\n"
+    "  --max-points N    refuse a sweep of more than N points (default 10000, at\n"
+    "                    most 1000000), before anything is written\n"
     "  --emit-jobs       run nothing: print one shell command per incomplete point\n"
     "                    on stdout (absolute paths, one line each), for\n"
     "                    'rtsim sweep S -o D --emit-jobs | parallel' or a Slurm\n"
@@ -170,7 +175,8 @@ static bool prepare(const struct sweep *s, const struct job *j, struct err *e) {
 static bool same_command(const struct job *j) {
   char path[8192], line[65536];
   snprintf(path, sizeof path, "%s/command.sh", j->dir);
-  FILE *f = fopen(path, "r");
+  const char *why;
+  FILE *f = err_fopen_regular(path, &why);
   if (!f) return true; /* made by hand with rtsim run: nothing to compare */
   bool same = false;
   while (fgets(line, sizeof line, f))
@@ -188,7 +194,8 @@ static void first_error(const char *dir, char *out, size_t cap) {
   char path[8192], line[1024];
   snprintf(path, sizeof path, "%s/error.txt", dir);
   snprintf(out, cap, "(no message)");
-  FILE *f = fopen(path, "r");
+  const char *why;
+  FILE *f = err_fopen_regular(path, &why);
   if (!f) return;
   bool have = false;
   while (fgets(line, sizeof line, f)) {
@@ -218,9 +225,16 @@ struct running {
 
 /* Start job j: stdout to /dev/null, stderr to err_path. */
 static pid_t launch(const char *bin, struct job *j, const char *err_path, const sigset_t *mask) {
+  const pid_t parent = getpid();
   pid_t pid = fork();
   if (pid != 0) return pid;
-  /* The child: the parent's signal mask must not outlive exec. */
+  /* The child. If the sweep dies, even by SIGKILL (no chance to stop its
+   * points), the kernel sends the point SIGTERM, which rtsim run takes as an
+   * interruption (app/outdir.h); the setting survives exec. A parent that
+   * died before the setting took effect is caught by the pid check (the
+   * orphan's parent is then another process). */
+  if (prctl(PR_SET_PDEATHSIG, SIGTERM) != 0 || getppid() != parent) _exit(127);
+  /* The parent's signal mask must not outlive exec. */
   signal(SIGCHLD, SIG_DFL);
   sigprocmask(SIG_SETMASK, mask, NULL);
   int fd = open(err_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -240,9 +254,11 @@ static pid_t launch(const char *bin, struct job *j, const char *err_path, const 
 }
 
 /* A finished point: complete, or failed with its stderr (err) kept as
- * error.txt. */
+ * error.txt. Complete means its stats.json exists, however it ended: rtsim
+ * run writes it last and whole, so a point stopped by a signal just after
+ * is complete all the same (and must not keep an earlier error.txt). */
 static bool settle(struct job *j, int status, struct outfile *err) {
-  j->complete = WIFEXITED(status) && WEXITSTATUS(status) == 0 && exists(j->dir, "stats.json");
+  j->complete = exists(j->dir, "stats.json");
   if (j->complete) {
     unlink(err->path); /* an earlier attempt's */
     outfile_abort(err);
@@ -356,14 +372,29 @@ static int run_jobs(const char *bin, struct job **todo, unsigned n, unsigned job
       }
   }
   if (*sig) {
-    /* Stop the running points; they stay incomplete, to be retried. */
+    /* Stop the running points: they remove their temporaries and stay
+     * incomplete, to be retried. One that ignores SIGTERM for 10 s gets
+     * SIGKILL. A point whose stats.json was written meanwhile is complete
+     * however it ended (see settle): an earlier attempt's error.txt goes. */
     for (unsigned k = 0; k < jobs; k++)
       if (run[k].pid) kill(run[k].pid, SIGTERM);
-    for (unsigned k = 0; k < jobs; k++)
-      if (run[k].pid) {
-        waitpid(run[k].pid, NULL, 0);
-        outfile_abort(&run[k].err);
+    const double deadline = app_now() + 10;
+    for (unsigned k = 0; k < jobs; k++) {
+      if (!run[k].pid) continue;
+      int status;
+      pid_t got;
+      struct timespec nap = {0, 5000000};
+      while ((got = waitpid(run[k].pid, &status, WNOHANG)) == 0 && app_now() < deadline)
+        nanosleep(&nap, NULL);
+      if (got == 0) {
+        kill(run[k].pid, SIGKILL);
+        got = waitpid(run[k].pid, &status, 0);
       }
+      if (exists(run[k].j->dir, "stats.json"))
+        settle(run[k].j, status, &run[k].err);
+      else
+        outfile_abort(&run[k].err);
+    }
   }
   if (tty) fputs("\r\033[K", stderr);
   sigprocmask(SIG_SETMASK, &old, NULL);
@@ -384,8 +415,10 @@ int cmd_sweep(int argc, char **argv) {
   long cores = sysconf(_SC_NPROCESSORS_ONLN);
   uint64_t jobs = cores > 0 ? (uint64_t)cores : 1;
   bool emit = false;
+  uint64_t max_points = SWEEP_POINTS_DEFAULT;
   const struct opts_spec spec[] = {OPTS_STR("output", 'o', &out),
                                    OPTS_U64("jobs", 'j', &jobs, 1, 4096),
+                                   OPTS_U64("max-points", 0, &max_points, 1, SWEEP_POINTS_MAX),
                                    OPTS_FLAG("emit-jobs", 0, &emit), OPTS_END};
   struct opts_args args;
   int rc = opts_parse("sweep", HELP, spec, argc, argv, &args);
@@ -410,7 +443,7 @@ int cmd_sweep(int argc, char **argv) {
 
   struct sweep s;
   struct err e = {0};
-  if (!sweep_load(&s, sweep_path, dir, &e)) {
+  if (!sweep_load_capped(&s, sweep_path, dir, (unsigned)max_points, &e)) {
     sweep_free(&s);
     return app_report(&e);
   }
@@ -427,6 +460,10 @@ int cmd_sweep(int argc, char **argv) {
     j->line = command_line(bin, j->p, &at);
     j->args_text = j->line + at;
     j->complete = exists(j->dir, "stats.json");
+    /* A sweep killed outright cannot remove its temporaries (a point's
+     * stderr, kept as .error.txt.<pid>.<n>.tmp), even in a point that
+     * completed just before. */
+    if (j->complete) outfile_remove_stale(j->dir);
     if (j->complete && !same_command(j)) {
       fprintf(stderr,
               "rtsim sweep: error: %s is complete but was made by another command (see its "

@@ -3,16 +3,17 @@
 #include "app/csv.h"
 
 #include <errno.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "sim/err.h"
+#include "sim/scalar.h"
 
-/* Read a whole file into a NUL-terminated buffer (caller frees); NULL on failure. */
-static char *slurp(const char *path) {
-  FILE *f = fopen(path, "rb");
+/* Read a whole regular file into a NUL-terminated buffer (caller frees), its
+ * length in *len; NULL on failure, with the reason in *why. */
+static char *slurp(const char *path, size_t *len, const char **why) {
+  FILE *f = err_fopen_regular(path, why);
   if (!f) return NULL;
   size_t cap = 1 << 14, n = 0;
   char *buf = xmalloc(cap);
@@ -22,12 +23,14 @@ static char *slurp(const char *path) {
     if (cap - n - 1 == 0) buf = xrealloc(buf, cap *= 2);
   }
   bool bad = ferror(f);
+  if (bad) *why = strerror(errno);
   fclose(f);
   if (bad) {
     free(buf);
     return NULL;
   }
   buf[n] = '\0';
+  *len = n;
   return buf;
 }
 
@@ -54,8 +57,21 @@ static void push(struct builder *b, char *cell, int line, int col) {
 bool csv_read(struct csv_table *t, const char *path, struct err *e) {
   memset(t, 0, sizeof *t);
   snprintf(t->file, sizeof t->file, "%s", path);
-  char *text = slurp(path);
-  if (!text) return err_set(e, path, 0, 0, "cannot read: %s", strerror(errno));
+  size_t size = 0;
+  const char *why;
+  char *text = slurp(path, &size, &why);
+  if (!text) return err_set(e, path, 0, 0, "cannot read: %s", why);
+  /* A NUL byte would end the text there, and the rows after it with it. */
+  const char *nul = memchr(text, '\0', size);
+  if (nul) {
+    int nl = 1, nc = 1;
+    for (const char *q = text; q < nul; q++) {
+      if (*q == '\n') nl++, nc = 1;
+      else nc++;
+    }
+    free(text);
+    return err_set(e, path, nl, nc, "a NUL byte (expected text: a CSV holds none)");
+  }
   struct builder all = {0};
   bool ok = true;
   unsigned row_start = 0, width = 0, rows = 0;
@@ -194,11 +210,4 @@ int csv_natural_cmp(const char *a, const char *b) {
   return *a ? 1 : *b ? -1 : 0;
 }
 
-bool csv_number(const char *s, double *out) {
-  char *end = NULL;
-  errno = 0;
-  double v = strtod(s, &end);
-  if (!*s || end == s || *end || errno == ERANGE || !isfinite(v)) return false;
-  *out = v;
-  return true;
-}
+bool csv_number(const char *s, double *out) { return scalar_f64(s, out) == SCALAR_OK; }

@@ -18,9 +18,10 @@ struct csv_table {
   unsigned nrows;
 };
 
-/* Read the CSV file at path. A missing or empty file, an unterminated quote, a
- * duplicate or empty column name, or a row whose field count differs from the
- * header's fails with file:line:col in e; t is then empty (safe to free). */
+/* Read the CSV file at path. A missing or empty file, a NUL byte, an
+ * unterminated quote, a duplicate or empty column name, or a row whose field
+ * count differs from the header's fails with file:line:col in e; t is then
+ * empty (safe to free). Rows are read whole, however long. */
 bool csv_read(struct csv_table *t, const char *path, struct err *e);
 void csv_free(struct csv_table *t);
 
@@ -32,7 +33,8 @@ const char *csv_cell(const struct csv_table *t, unsigned row, unsigned col);
 /* Natural order of two texts: digit runs compare as numbers, so
  * rays_per_thread=2 comes before rays_per_thread=16. */
 int csv_natural_cmp(const char *a, const char *b);
-/* The whole of s as a finite number. */
+/* The whole of s as a finite decimal number (sim/scalar.h: no whitespace
+ * around it, no leading zero). */
 bool csv_number(const char *s, double *out);
 
 #endif

@@ -2,7 +2,6 @@
  * turned into getopt_long's, values checked and stored by kind. */
 #include "app/opts.h"
 
-#include <errno.h>
 #include <getopt.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -10,15 +9,14 @@
 
 #include "app/app.h"
 #include "sim/err.h"
+#include "sim/scalar.h"
 
 /* getopt_long's value for options without a letter: past every char. */
 enum { OPTS_LONG_ONLY = 256 };
 
 bool opts_u64(const char *text, uint64_t lo, uint64_t hi, uint64_t *out) {
-  char *end = NULL;
-  errno = 0;
-  unsigned long long v = (text[0] >= '0' && text[0] <= '9') ? strtoull(text, &end, 10) : 0;
-  if (!end || *end || errno || v < lo || v > hi) return false;
+  uint64_t v;
+  if (scalar_u64(text, &v) != SCALAR_OK || v < lo || v > hi) return false;
   *out = v;
   return true;
 }
@@ -31,7 +29,11 @@ static bool take(const char *cmd, const struct opts_spec *s, const char *opt, co
   case OPTS_KIND_STR: *(const char **)s->dst = text; break;
   case OPTS_KIND_U64:
     if (!opts_u64(text, s->lo, s->hi, s->dst)) {
-      app_usage_error(cmd, "%s: got '%s', expected a whole number from %llu to %llu", opt, text,
+      uint64_t v;
+      enum scalar_why w = scalar_u64(text, &v);
+      const bool why = w != SCALAR_OK && w != SCALAR_SYNTAX;
+      app_usage_error(cmd, "%s: got '%s'%s%s%s, expected a whole number from %llu to %llu", opt,
+                      text, why ? " (" : "", scalar_why_text(w), why ? ")" : "",
                       (unsigned long long)s->lo, (unsigned long long)s->hi);
       return false;
     }

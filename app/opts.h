@@ -64,7 +64,8 @@ struct opts_args {
 int opts_parse(const char *cmd, const char *help, const struct opts_spec *spec, int argc,
                char **argv, struct opts_args *rest);
 
-/* text as a whole number (decimal digits only) in [lo, hi]. */
+/* text as a whole number in [lo, hi]: decimal digits only, no leading zero
+ * (sim/scalar.h). */
 bool opts_u64(const char *text, uint64_t lo, uint64_t hi, uint64_t *out);
 
 /* Exactly one operand: it, or NULL after printing "missing WHAT" or "expected

@@ -35,8 +35,9 @@ struct run_output_report {
   double wall_s;
 };
 
-/* Remove a previous run's stats.json from dir (ignore its absence). */
-void run_output_invalidate(const char *dir);
+/* The names run_output_write writes or removes in out_dir, NULL-terminated
+ * (app/outdir.h: what a signal removes, what a rerun does not carry over). */
+extern const char *const run_output_files[];
 /* Write every output; on failure fills e (file = the one that failed). */
 bool run_output_write(const struct run_output_report *r, struct err *e);
 /* A few "key: value" lines for a person. */

@@ -26,6 +26,7 @@
 #include "sim/cfg.h"
 #include "sim/err.h"
 #include "sim/machine_cfg.h"
+#include "sim/scalar.h"
 
 /* Workload keys; machine keys are machine_cfg's. */
 enum wl { WL_SCENE, WL_POLICY, WL_RAYS, WL_WIDTH, WL_HEIGHT, WL_SEED, WL_COUNT };
@@ -66,6 +67,7 @@ struct priv {
   char *scene_fixed; /* absolute (owned) */
   struct cfg_node *sets;
   struct machine_cfg base; /* the base config with the fixed overrides */
+  struct machine_cfg scratch; /* for checking axis values one at a time */
   char machine_path[4096];
   struct scene_info *scenes;
   unsigned nscenes;
@@ -173,6 +175,43 @@ static bool given_before(const struct priv *pv, const char *key, const char **wh
   return false;
 }
 
+struct by_text {
+  const char *text;
+  uint32_t i;
+};
+
+static int cmp_text(const void *a, const void *b) {
+  const struct by_text *x = a, *y = b;
+  int c = strcmp(x->text, y->text);
+  return c ? c : (x->i > y->i) - (x->i < y->i);
+}
+
+/* The index of the first value of list v (in file order) that repeats an
+ * earlier one, and in *first that earlier one's; UINT32_MAX when all differ.
+ * By sorting, n log n: an axis may hold a hundred thousand values. Non-scalar
+ * items (refused later, where they stand) count as no value. */
+static uint32_t first_repeat(const struct cfg_node *v, uint32_t *first) {
+  struct by_text *r = xmalloc((v->count ? v->count : 1ull) * sizeof *r);
+  uint32_t n = 0;
+  for (uint32_t i = 0; i < v->count; i++)
+    if (v->items[i].kind == CFG_SCALAR) r[n++] = (struct by_text){v->items[i].text, i};
+  qsort(r, n, sizeof *r, cmp_text);
+  uint32_t dup = UINT32_MAX, group = 0;
+  *first = 0;
+  for (uint32_t k = 1; k < n; k++) {
+    if (strcmp(r[k].text, r[k - 1].text)) {
+      group = k;
+      continue;
+    }
+    if (r[k].i < dup) {
+      dup = r[k].i;
+      *first = r[group].i;
+    }
+  }
+  free(r);
+  return dup;
+}
+
 /* Add map entry v (key: [values]) of section as an axis; check every value. */
 static bool add_axis(struct priv *pv, struct cfg_node *v, const char *section, struct err *e) {
   const struct cfg_doc *d = &pv->doc;
@@ -198,6 +237,13 @@ static bool add_axis(struct priv *pv, struct cfg_node *v, const char *section, s
   if (wk == WL_SCENE) a.resolved = xcalloc(v->count, sizeof *a.resolved);
   pv->axes = xrealloc(pv->axes, (pv->naxes + 1ull) * sizeof *pv->axes);
   pv->axes[pv->naxes++] = a;
+  /* The first value that repeats an earlier one is refused where the old
+   * one-by-one check refused it: after the values before it are checked. */
+  uint32_t first, dup = first_repeat(v, &first);
+  /* One scratch config for every value: a value sets only its own key (and a
+   * refused one ends the read), so the others' are never seen. */
+  struct machine_cfg *scratch = &pv->scratch;
+  *scratch = pv->base;
   for (uint32_t i = 0; i < v->count; i++) {
     struct cfg_node *n = &v->items[i];
     char sub[160];
@@ -205,19 +251,17 @@ static bool add_axis(struct priv *pv, struct cfg_node *v, const char *section, s
     if (n->kind != CFG_SCALAR)
       return cfg_fail(d, n, sub, e, "wrong type (got a %s, expected one value)",
                       n->kind == CFG_MAP ? "map" : "list");
+    if (i == dup)
+      return cfg_fail(d, n, sub, e, "'%s' is listed twice (first at line %d)", n->text,
+                      v->items[first].line);
     if (mk >= 0) {
-      struct machine_cfg scratch = pv->base;
-      if (!machine_cfg_set_at(&scratch, (unsigned)mk, n->text, d->file, n->line, n->col, e))
+      if (!machine_cfg_set_at(scratch, (unsigned)mk, n->text, d->file, n->line, n->col, e))
         return false;
     } else if (!check_workload(pv, a.wl, n, e)) {
       return false;
     } else if (a.wl == WL_SCENE && !resolve(pv, n, sub, &a.resolved[i], e)) {
       return false;
     }
-    for (uint32_t j = 0; j < i; j++)
-      if (!strcmp(v->items[j].text, n->text))
-        return cfg_fail(d, n, sub, e, "'%s' is listed twice (first at line %d)", n->text,
-                        v->items[j].line);
   }
   return true;
 }
@@ -433,31 +477,25 @@ static double rays_per_pixel(uint32_t mask, uint32_t lights) {
   return r;
 }
 
-static const struct scene_info *find_scene(const struct priv *pv, const char *path) {
-  for (unsigned i = 0; i < pv->nscenes; i++)
-    if (!strcmp(pv->scenes[i].path, path)) return &pv->scenes[i];
-  return NULL;
-}
-
-/* Load each distinct scene once: a bad scene is refused now, and a point
- * takes its default image size and the estimate's numbers from it. */
+/* Load each scene once: a bad scene is refused now, and a point takes its
+ * default image size and the estimate's numbers from it. Scenes come from
+ * workload.scene or from one axis (a key is given once); an axis's values are
+ * distinct paths, since two values naming one file have one stem and so one
+ * point name, refused before this (check_unique). So scene i is the axis's
+ * value i, found by index: a long scene axis costs no search per point. */
 static bool load_scenes(struct priv *pv, struct err *e) {
-  unsigned cap = 1;
+  unsigned axis = UINT_MAX;
   for (unsigned a = 0; a < pv->naxes; a++)
-    if (pv->axes[a].wl == WL_SCENE) cap += pv->axes[a].node->count;
-  pv->scenes = xcalloc(cap, sizeof *pv->scenes);
-  for (unsigned a = 0; a <= pv->naxes; a++) {
-    bool axis = a < pv->naxes && pv->axes[a].wl == WL_SCENE;
-    unsigned n = axis ? pv->axes[a].node->count : (a == pv->naxes && pv->scene_fixed ? 1 : 0);
-    for (unsigned i = 0; i < n; i++) {
-      const char *path = axis ? pv->axes[a].resolved[i] : pv->scene_fixed;
-      if (find_scene(pv, path)) continue;
-      struct scene sc;
-      if (!scene_file_load(&sc, path, e)) return false;
-      pv->scenes[pv->nscenes++] = (struct scene_info){dup_str(path), sc.width, sc.height,
-                                                      sc.tri_count, sc.light_count};
-      scene_fini(&sc);
-    }
+    if (pv->axes[a].wl == WL_SCENE) axis = a;
+  const unsigned n = axis == UINT_MAX ? 1 : pv->axes[axis].node->count;
+  pv->scenes = xcalloc(n, sizeof *pv->scenes);
+  for (unsigned i = 0; i < n; i++) {
+    const char *path = axis == UINT_MAX ? pv->scene_fixed : pv->axes[axis].resolved[i];
+    struct scene sc;
+    if (!scene_file_load(&sc, path, e)) return false;
+    pv->scenes[pv->nscenes++] = (struct scene_info){dup_str(path), sc.width, sc.height,
+                                                    sc.tri_count, sc.light_count};
+    scene_fini(&sc);
   }
   return true;
 }
@@ -514,10 +552,10 @@ static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *
   }
   unsigned ax;
   const char *scene_text = workload_value(pv, choice, WL_SCENE, &ax);
-  const char *scene = ax == UINT_MAX ? pv->scene_fixed : pv->axes[ax].resolved[choice[dim_of(pv, ax)]];
-  CHECK(scene_text && scene);
-  const struct scene_info *si = find_scene(pv, scene);
-  CHECK(si);
+  const unsigned si_index = ax == UINT_MAX ? 0 : choice[dim_of(pv, ax)];
+  CHECK(scene_text && si_index < pv->nscenes);
+  const struct scene_info *si = &pv->scenes[si_index];
+  const char *scene = si->path;
   const char *policy = workload_value(pv, choice, WL_POLICY, &ax);
   const char *rays = workload_value(pv, choice, WL_RAYS, &ax);
   const char *width = workload_value(pv, choice, WL_WIDTH, &ax);
@@ -527,9 +565,10 @@ static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *
   CHECK(shade_parse_rays(rays ? rays : "primary,shadow,specular,diffuse", &mask));
   char rays_name[128];
   shade_rays_name(mask, rays_name, sizeof rays_name);
-  /* Checked values: whole numbers in range (cfg_u64 takes 0x.. and 0.. too). */
-  uint64_t w = width ? strtoull(width, NULL, 0) : si->width;
-  uint64_t h = height ? strtoull(height, NULL, 0) : si->height;
+  /* Checked values: whole numbers in range (cfg_u64 read them already). */
+  uint64_t w = si->width, h = si->height;
+  CHECK(!width || scalar_u64(width, &w) == SCALAR_OK);
+  CHECK(!height || scalar_u64(height, &h) == SCALAR_OK);
   /* Sampling's own limits need the point's policy and image size. */
   enum policy_kind pk;
   CHECK(policy_parse(policy ? policy : "recursive", &pk));
@@ -558,8 +597,10 @@ static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *
   arg(&a, "--height");
   arg(&a, "%llu", (unsigned long long)h);
   if (seed) {
+    uint64_t sv = 0;
+    CHECK(scalar_u64(seed, &sv) == SCALAR_OK);
     arg(&a, "--seed");
-    arg(&a, "%llu", (unsigned long long)strtoull(seed, NULL, 0));
+    arg(&a, "%llu", (unsigned long long)sv);
   }
   for (uint32_t i = 0; pv->sets && i < pv->sets->count; i++) {
     arg(&a, "--set");
@@ -584,21 +625,34 @@ static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *
 }
 
 bool sweep_load(struct sweep *s, const char *path, const char *out_dir, struct err *e) {
+  return sweep_load_capped(s, path, out_dir, SWEEP_POINTS_DEFAULT, e);
+}
+
+bool sweep_load_capped(struct sweep *s, const char *path, const char *out_dir,
+                       unsigned max_points, struct err *e) {
   memset(s, 0, sizeof *s);
   snprintf(s->file, sizeof s->file, "%s", path);
   struct priv *pv = xcalloc(1, sizeof *pv);
   s->priv = pv;
+  CHECK(max_points >= 1 && max_points <= SWEEP_POINTS_MAX);
   if (!read_file(pv, path, e)) return false;
 
-  /* The product's size, before anything is allocated for it. */
+  /* The product's size, before anything is allocated for it: refused at the
+   * dimension that takes it past the cap (the whole count is named, saturated
+   * at 2^64 - 1, a count no sweep file can reach in 1 MiB anyway). */
   uint64_t total = 1;
+  unsigned over = UINT_MAX;
   for (unsigned d = 0; d < pv->ndims; d++) {
-    total *= pv->dims[d].count;
-    if (total > SWEEP_POINTS_MAX) {
-      const struct cfg_node *n = pv->axes[pv->dims[d].first].node;
-      return err_set(e, pv->doc.file, n->key_line, n->key_col,
-                     "%s: the sweep has more than %u points", n->key, SWEEP_POINTS_MAX);
-    }
+    const uint64_t c = pv->dims[d].count;
+    total = total > UINT64_MAX / c ? UINT64_MAX : total * c;
+    if (total > max_points && over == UINT_MAX) over = d;
+  }
+  if (over != UINT_MAX) {
+    const struct cfg_node *n = pv->axes[pv->dims[over].first].node;
+    return err_set(e, pv->doc.file, n->key_line, n->key_col,
+                   "%s: the sweep has %llu points (expected at most %u: fewer values, or raise "
+                   "the cap with rtsim sweep --max-points N, up to %u)",
+                   n->key, (unsigned long long)total, max_points, SWEEP_POINTS_MAX);
   }
   s->nkeys = pv->naxes;
   s->keys = xcalloc(pv->naxes, sizeof *s->keys);

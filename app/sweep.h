@@ -14,7 +14,12 @@ struct err;
 
 /* Longest point directory name; longer names are cut and end in a hash. */
 #define SWEEP_NAME_MAX 200
-/* Most points one sweep may have. */
+/* Most points a sweep may have unless raised (rtsim sweep --max-points), and
+ * the most it can be raised to. The cap is checked before any point is
+ * expanded or any file written: a few lines of axes multiply into millions of
+ * points, each a directory and an `rtsim run`. Expanded, a point takes about
+ * 2 KB of memory here (its name and arguments). */
+#define SWEEP_POINTS_DEFAULT 10000u
 #define SWEEP_POINTS_MAX 1000000u
 
 struct sweep_point {
@@ -40,6 +45,11 @@ struct sweep {
  * points' commands as given). On bad input fills e and returns false (s is
  * then empty, safe to free). */
 bool sweep_load(struct sweep *s, const char *path, const char *out_dir, struct err *e);
+/* The same with a cap on the points other than SWEEP_POINTS_DEFAULT (1 to
+ * SWEEP_POINTS_MAX): a sweep with more is refused, at the axis or group that
+ * takes the count past the cap. */
+bool sweep_load_capped(struct sweep *s, const char *path, const char *out_dir,
+                       unsigned max_points, struct err *e);
 void sweep_free(struct sweep *s);
 
 #endif

@@ -1,6 +1,7 @@
 /* Pinhole camera and Hilbert-curve pixel order. */
 #include "renderer/camera.h"
 
+#include <float.h>
 #include <math.h>
 
 #include "renderer/ray.h"
@@ -8,13 +9,45 @@
 #include "renderer/scene.h"
 #include "sim/err.h"
 
+/* The view direction and the unnormalized right vector: up is scaled by a
+ * power of two first (exact), so a tiny or huge up gives the frame a unit up
+ * would, without squares that underflow or overflow. */
+static void camera_axes(const struct scene_camera *c, vec3 *forward, vec3 *up, vec3 *right) {
+  *forward = v3_unit(v3_sub(c->at, c->from));
+  *up = v3_pow2_scaled(c->up);
+  *right = v3_cross(*forward, *up);
+}
+
+enum camera_fault camera_check(const struct scene_camera *c) {
+  vec3 f, u, r;
+  camera_axes(c, &f, &u, &r);
+  if (f.x == 0.0f && f.y == 0.0f && f.z == 0.0f) return CAMERA_NO_VIEW;
+  /* Each component of the cross product against a bound on its rounding
+   * error (the view direction's normalization, the products and the
+   * difference: a few units in the last place of the larger product, 8
+   * FLT_EPSILON taken). Where the whole vector is not far above its bound,
+   * right's direction, the image's roll, would be rounding noise: up is
+   * parallel to the view as far as floats can tell. An exactly parallel or
+   * zero up gives a zero cross product, always refused; an up merely tiny or
+   * huge is scaled first and passes. */
+  /* In double, where no product or square of these floats underflows. */
+  const double eps = 8.0 * FLT_EPSILON;
+  double bx = eps * (fabs((double)f.y * u.z) + fabs((double)f.z * u.y));
+  double by = eps * (fabs((double)f.z * u.x) + fabs((double)f.x * u.z));
+  double bz = eps * (fabs((double)f.x * u.y) + fabs((double)f.y * u.x));
+  double r2 = (double)r.x * r.x + (double)r.y * r.y + (double)r.z * r.z;
+  double b2 = bx * bx + by * by + bz * bz;
+  return r2 > 64.0 * 64.0 * b2 ? CAMERA_OK : CAMERA_BAD_UP;
+}
+
 void camera_frame_init(struct camera_frame *cf, const struct scene_camera *c, uint32_t width,
                        uint32_t height) {
   float half_h = tanf(c->fov_deg * 0.5f * 3.14159265358979f / 180.0f);
   float half_w = half_h * (float)width / (float)height;
   cf->origin = c->from;
-  cf->forward = v3_norm(v3_sub(c->at, c->from));
-  vec3 right = v3_norm(v3_cross(cf->forward, c->up));
+  vec3 up_scaled, right_raw;
+  camera_axes(c, &cf->forward, &up_scaled, &right_raw);
+  vec3 right = v3_unit(right_raw);
   vec3 up = v3_cross(right, cf->forward);
   cf->right = v3_scale(right, half_w);
   cf->up = v3_scale(up, half_h);

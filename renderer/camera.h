@@ -14,6 +14,14 @@ struct camera_frame {
   uint32_t width, height;
 };
 
+/* What makes a camera unusable: no view direction (at equals from), or an up
+ * that is zero or parallel to the view (as far as floats can tell: the frame
+ * built from it would be rounding noise). Scale-free: any finite nonzero from
+ * - at and up, however small or large, are judged by their directions alone. */
+enum camera_fault { CAMERA_OK, CAMERA_NO_VIEW, CAMERA_BAD_UP };
+enum camera_fault camera_check(const struct scene_camera *c);
+
+/* The frame of a camera camera_check accepts. */
 void camera_frame_init(struct camera_frame *cf, const struct scene_camera *c, uint32_t width,
                        uint32_t height);
 

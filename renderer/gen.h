@@ -20,11 +20,15 @@ uint64_t gen_sphereflake_tri_count(uint32_t levels, uint32_t tess);
  * seen in depth. detail 1 gives about 164K triangles; triangle count scales
  * roughly linearly with detail. Materials: "bark", "leaf", "ground". */
 void gen_grove(struct scene *s, double detail, uint64_t seed);
+/* Exactly the triangles gen_grove(s, detail, any seed) adds, without building. */
+uint64_t gen_grove_tri_count(double detail);
 
 /* An architectural interior: walls, floor, ceiling, furniture, small objects,
  * mirrors. detail 1 gives about 47K triangles, roughly linear in detail.
  * Materials: "wall", "floor", "ceiling", "wood", "fabric", "metal", "mirror",
  * "ceramic". */
 void gen_room(struct scene *s, double detail, uint64_t seed);
+/* Exactly the triangles gen_room(s, detail, any seed) adds, without building. */
+uint64_t gen_room_tri_count(double detail);
 
 #endif

@@ -128,6 +128,27 @@ static void grove_place(struct rng *r, uint32_t n, double *xy) {
   }
 }
 
+/* Trees for `detail`: 40 per unit of detail, at least 1, at most a million. */
+static uint32_t grove_tree_count(double detail) {
+  double want = floor(GROVE_TREES_AT_DETAIL_1 * detail + 0.5);
+  return want < 1.0 ? 1u : want > 1e6 ? 1000000u : (uint32_t)want;
+}
+
+/* One tree: each branch is a lathe of 3 * sides triangles (a tube of 2 *
+ * sides and a cone of sides, gen_lathe_tri_count on its profile), branches
+ * multiply by GROVE_CHILDREN per level, and each tip carries leaves of 2. */
+static uint64_t grove_tree_tri_count(void) {
+  uint64_t tris = 0, branches = 1;
+  for (int level = 0; level <= GROVE_DEPTH; level++, branches *= GROVE_CHILDREN)
+    tris += branches * 3 * grove_sides[level];
+  return tris + branches / GROVE_CHILDREN * GROVE_LEAVES_PER_TIP * 2;
+}
+
+uint64_t gen_grove_tri_count(double detail) {
+  return 2ull * GROVE_GROUND_CELLS * GROVE_GROUND_CELLS +
+         (uint64_t)grove_tree_count(detail) * grove_tree_tri_count();
+}
+
 void gen_grove(struct scene *s, double detail, uint64_t seed) {
   CHECK_GT(detail, 0.0);
   struct grove_ctx c;
@@ -140,8 +161,7 @@ void gen_grove(struct scene *s, double detail, uint64_t seed) {
   gen_grid(s, gen_d3_make(-h, -h, 0), gen_d3_make(2 * h, 0, 0), gen_d3_make(0, 2 * h, 0),
            GROVE_GROUND_CELLS, GROVE_GROUND_CELLS, ground);
 
-  double want = floor(GROVE_TREES_AT_DETAIL_1 * detail + 0.5);
-  uint32_t n = want < 1.0 ? 1u : want > 1e6 ? 1000000u : (uint32_t)want;
+  uint32_t n = grove_tree_count(detail);
   double *xy = xmalloc(2ull * n * sizeof *xy);
   struct rng place = rng_make(seed, 0);
   grove_place(&place, n, xy);

@@ -63,10 +63,11 @@ static uint32_t room_res_fixed(const struct room_ctx *c, double base, uint32_t m
 
 /* Whether the next clutter slot is filled. A golden-ratio sequence on the slot
  * index thins slots evenly over the whole room and independently of the seed. */
-static bool room_keep(struct room_ctx *c) {
-  double frac = fmod((double)(c->slot++) * 0.6180339887498949, 1.0);
-  return frac < c->keep;
+static bool room_slot_kept(uint64_t slot, double keep) {
+  return fmod((double)slot * 0.6180339887498949, 1.0) < keep;
 }
+
+static bool room_keep(struct room_ctx *c) { return room_slot_kept(c->slot++, c->keep); }
 
 static void room_box(struct room_ctx *c, double x0, double y0, double z0, double x1, double y1,
                      double z1, uint32_t mat) {
@@ -197,6 +198,16 @@ static void room_book_stack(struct room_ctx *c, double x, double y, double z, in
 }
 
 /* ---- bookcase rows ---- */
+
+/* The bookcase's shelves, bottom up, in room_shelf_row's letters. */
+#define ROOM_SHELVES 5
+static const char *const room_shelf_rows[ROOM_SHELVES] = {
+    "BBBBBBBBBBBBBBBBBBBBBBBBV",
+    "BBBBBBBBBBBBBBOOBBBBBBBBBBC",
+    "VBBBBBBBBBBBBBBBBSV",
+    "BBBBBBBBBBBBBBBBBBOCWBBBBBB",
+    "CVBBBBBBBBBBBBOV",
+};
 
 enum room_item { ROOM_BOOK, ROOM_VASE, ROOM_BALL, ROOM_CUP, ROOM_STACK, ROOM_BOWL };
 
@@ -419,18 +430,12 @@ static void room_bookcase(struct room_ctx *c) {
   room_box(c, x0 + b, y1 - 0.02, 0, x1 - b, y1, 2.2, c->wood);
   room_box(c, x0 + b, y0, 0, x1 - b, y1 - 0.02, 0.08, c->wood);
   room_box(c, x0 + b, y0, 2.2 - b, x1 - b, y1 - 0.02, 2.2, c->wood);
-  static const char *rows[5] = {
-      "BBBBBBBBBBBBBBBBBBBBBBBBV",
-      "BBBBBBBBBBBBBBOOBBBBBBBBBBC",
-      "VBBBBBBBBBBBBBBBBSV",
-      "BBBBBBBBBBBBBBBBBBOCWBBBBBB",
-      "CVBBBBBBBBBBBBOV",
-  };
-  for (int i = 0; i < 5; i++) {
+  for (int i = 0; i < ROOM_SHELVES; i++) {
     double z = 0.08 + 0.44 * i;
     if (i > 0) room_box(c, x0 + b, y0, z - b, x1 - b, y1 - 0.02, z, c->wood);
     double top = i < 4 ? z + 0.44 - b : 2.2 - b;
-    room_shelf_row(c, x0 + b, x1 - b, y0 + 0.01, y1 - 0.02, z, top - z - 0.01, rows[i]);
+    room_shelf_row(c, x0 + b, x1 - b, y0 + 0.01, y1 - 0.02, z, top - z - 0.01,
+                   room_shelf_rows[i]);
   }
 }
 
@@ -507,19 +512,83 @@ static void room_fixtures(struct room_ctx *c) {
   if (room_keep(c)) room_vase(c, gen_d3_make(0.45, 4.9, 0), 0.16, vh, 1, c->ceramic);
 }
 
+/* Below detail 1, thin the clutter slots (linear in detail) and keep each
+ * object's shape; above 1 the room is full and tessellation grows instead
+ * (levels are per edge, so triangles go as their square). Furniture is
+ * always there, coarsened with detail down to a minimum shape. */
+static void room_scales(struct room_ctx *c, double detail) {
+  c->keep = detail >= 1.0 ? 1.0 : detail;
+  c->tess_scale = detail >= 1.0 ? sqrt(detail) : 1.0;
+  c->fixed_scale = sqrt(detail);
+}
+
+/* Every clutter slot in the order gen_room meets them, in room_shelf_row's
+ * letters plus P (plate); S stands for a stack of 4 books (4 slots). Before
+ * the shelves come none; after them the coffee table (fruit bowl: a bowl and
+ * 5 balls; vase; 3 books), the sideboard (3 vases, fruit bowl, 3 cups), the
+ * floor vase, and the table (6 plates with cups, fruit bowl, vase). */
+static const char *const room_clutter_after_shelves = "WOOOOOVBBB" "VVVWOOOOOCCC" "V"
+                                                      "PCPCPCPCPCPCWOOOOOV";
+
+/* Triangles of one clutter item of kind `letter` at c's scales: lathe
+ * profiles from room_cup, room_plate, room_vase and room_bowl (every radius
+ * but the ends' is positive, so gen_lathe_tri_count gives sides per end
+ * segment and 2 * sides per other), spheres from room_ball, boxes of 12. */
+static uint64_t room_item_tri_count(const struct room_ctx *c, char letter) {
+  uint64_t sides = room_res(c, ROOM_LATHE_SIDES, 6);
+  uint64_t vase_k = room_res(c, ROOM_VASE_STEPS, 3), bowl_k = room_res(c, ROOM_BOWL_STEPS, 2);
+  if (vase_k > ROOM_MAX_PROFILE - 6) vase_k = ROOM_MAX_PROFILE - 6;
+  if (bowl_k > (ROOM_MAX_PROFILE - 4) / 2 - 1) bowl_k = (ROOM_MAX_PROFILE - 4) / 2 - 1;
+  uint64_t ball = room_res(c, ROOM_BALL_TESS, 2);
+  switch (letter) {
+  case 'B': return 12;
+  case 'C': case 'P': return 8 * sides;     /* 6-point profiles */
+  case 'V': return (2 * vase_k + 6) * sides; /* k + 5 points */
+  case 'W': return (4 * bowl_k + 4) * sides; /* 2k + 4 points */
+  case 'O': return gen_sphere_tri_count((uint32_t)ball);
+  default: CHECK(false); return 0;
+  }
+}
+
+static uint64_t room_clutter_tri_count(const struct room_ctx *c) {
+  uint64_t tris = 0, slot = 0;
+  for (int i = 0; i <= ROOM_SHELVES; i++) {
+    const char *p = i < ROOM_SHELVES ? room_shelf_rows[i] : room_clutter_after_shelves;
+    for (; *p; p++)
+      for (int k = 0; k < (*p == 'S' ? 4 : 1); k++)
+        if (room_slot_kept(slot++, c->keep)) tris += room_item_tri_count(c, *p == 'S' ? 'B' : *p);
+  }
+  return tris;
+}
+
+/* Furniture and fixtures, always built: 115 boxes (shell 19, table and
+ * chairs 68, bookcase 9, sofa 14, coffee table 1, sideboard 4), 218
+ * triangles of floor, ceiling, walls and mirror, cylinders of 4 * sides
+ * (room_res_fixed(8): door knob, lamp cord and pole; (16): 8 table legs and
+ * the ball stand; (24): lamp base and pedestal), two 8 * sides lamp shades
+ * (24), and three spheres (door knob 4, big mirror ball 16, table ball 10). */
+static uint64_t room_fixed_tri_count(const struct room_ctx *c) {
+  uint64_t s8 = room_res_fixed(c, 8, 4), s16 = room_res_fixed(c, 16, 6);
+  uint64_t s24 = room_res_fixed(c, 24, 8);
+  return 115 * 12 + 218 + 3 * 4 * s8 + 9 * 4 * s16 + (2 * 4 + 2 * 8) * s24 +
+         gen_sphere_tri_count(room_res_fixed(c, 4, 2)) +
+         gen_sphere_tri_count(room_res_fixed(c, 16, 4)) +
+         gen_sphere_tri_count(room_res_fixed(c, 10, 3));
+}
+
+uint64_t gen_room_tri_count(double detail) {
+  struct room_ctx c;
+  room_scales(&c, detail);
+  return room_fixed_tri_count(&c) + room_clutter_tri_count(&c);
+}
+
 void gen_room(struct scene *s, double detail, uint64_t seed) {
   CHECK_GT(detail, 0.0);
   struct room_ctx c;
   c.s = s;
   c.rng = rng_make(seed, 0x726f6f6dull);
   c.slot = 0;
-  /* Below detail 1, thin the clutter slots (linear in detail) and keep each
-   * object's shape; above 1 the room is full and tessellation grows instead
-   * (levels are per edge, so triangles go as their square). Furniture is
-   * always there, coarsened with detail down to a minimum shape. */
-  c.keep = detail >= 1.0 ? 1.0 : detail;
-  c.tess_scale = detail >= 1.0 ? sqrt(detail) : 1.0;
-  c.fixed_scale = sqrt(detail);
+  room_scales(&c, detail);
   c.wall = scene_material_or_default(s, "wall", v3(0.8f, 0.78f, 0.72f), 1.0f, 0.0f);
   c.floor_mat = scene_material_or_default(s, "floor", v3(0.55f, 0.4f, 0.3f), 0.9f, 0.1f);
   c.ceiling = scene_material_or_default(s, "ceiling", v3(0.9f, 0.9f, 0.9f), 1.0f, 0.0f);

@@ -9,6 +9,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <setjmp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -49,7 +50,22 @@ struct kd_builder {
   uint32_t *strad;
   struct kd_ev *sev[2][3];
   uint32_t sev_len[2][3], sev_cap;
+  /* Out of host memory: kd_grow jumps here from any depth; everything the
+   * build holds hangs off this builder and the tree, so kd_build frees it all. */
+  jmp_buf oom;
+  unsigned long long oom_bytes;
 };
+
+/* realloc for the build: failure unwinds the whole build (kd_build returns
+ * false) instead of aborting the program. */
+static void *kd_grow(struct kd_builder *b, void *p, unsigned long long size) {
+  void *q = size <= SIZE_MAX ? realloc(p, size ? (size_t)size : 1) : NULL;
+  if (!q) {
+    b->oom_bytes = size;
+    longjmp(b->oom, 1);
+  }
+  return q;
+}
 
 void kd_build_params_default(struct kd_build_params *p) {
   p->cost_traversal = 1.0f;
@@ -76,7 +92,7 @@ static uint32_t float_key(float f) {
 
 /* Stable sort by t; equal keys keep their input order (prim order): insertion
  * for short lists, LSD radix otherwise. */
-static void sort_events(struct kd_ev *ev, size_t n) {
+static void sort_events(struct kd_builder *b, struct kd_ev *ev, size_t n) {
   if (n <= 64) {
     for (size_t x = 1; x < n; x++) {
       struct kd_ev v = ev[x];
@@ -87,13 +103,13 @@ static void sort_events(struct kd_ev *ev, size_t n) {
     }
     return;
   }
-  struct kd_ev *tmp = xmalloc(n * sizeof *tmp);
+  struct kd_ev *tmp = kd_grow(b, NULL, n * sizeof *tmp);
   struct kd_ev *src = ev, *dst = tmp;
   for (int pass = 0; pass < 4; pass++) {
     size_t count[257] = {0};
     int shift = 8 * pass;
     for (size_t i = 0; i < n; i++) count[((float_key(src[i].t) >> shift) & 255u) + 1]++;
-    for (int b = 0; b < 256; b++) count[b + 1] += count[b];
+    for (int k = 0; k < 256; k++) count[k + 1] += count[k];
     for (size_t i = 0; i < n; i++) dst[count[(float_key(src[i].t) >> shift) & 255u]++] = src[i];
     struct kd_ev *sw = src;
     src = dst;
@@ -108,7 +124,7 @@ static uint32_t new_node(struct kd_builder *b) {
   if (t->node_count == b->node_cap) {
     CHECK_LT(b->node_cap, KD_MAX_NODES);
     b->node_cap = b->node_cap ? 2 * b->node_cap : 1024;
-    t->nodes = xrealloc(t->nodes, (unsigned long long)b->node_cap * sizeof *t->nodes);
+    t->nodes = kd_grow(b, t->nodes, (unsigned long long)b->node_cap * sizeof *t->nodes);
   }
   t->stats.nodes++;
   return t->node_count++;
@@ -118,7 +134,7 @@ static void arena_reserve(struct kd_builder *b, size_t extra) {
   if (b->arena_top + extra <= b->arena_cap) return;
   size_t cap = b->arena_cap ? b->arena_cap : 4096;
   while (cap < b->arena_top + extra) cap *= 2;
-  b->arena = xrealloc(b->arena, cap * sizeof *b->arena);
+  b->arena = kd_grow(b, b->arena, (unsigned long long)cap * sizeof *b->arena);
   b->arena_cap = cap;
 }
 
@@ -151,7 +167,7 @@ static void make_leaf(struct kd_builder *b, uint32_t i, const struct kd_lists *l
     while (cap < (uint64_t)t->prim_ref_count + n) cap *= 2;
     CHECK_LE(cap, UINT32_MAX);
     b->prim_cap = (uint32_t)cap;
-    t->prims = xrealloc(t->prims, cap * sizeof *t->prims);
+    t->prims = kd_grow(b, t->prims, cap * sizeof *t->prims);
   }
   if (n) memcpy(t->prims + t->prim_ref_count, b->leaf_scratch, n * sizeof *t->prims);
   CHECK_LT(n, 1u << 29);
@@ -354,7 +370,7 @@ static void clip_straddlers(struct kd_builder *b, uint32_t ns, const struct kd_b
   if (2 * ns > b->sev_cap) {
     b->sev_cap = 2 * ns;
     for (int c = 0; c < 2; c++)
-      for (int a = 0; a < 3; a++) b->sev[c][a] = xrealloc(b->sev[c][a], b->sev_cap * sizeof *b->sev[c][a]);
+      for (int a = 0; a < 3; a++) b->sev[c][a] = kd_grow(b, b->sev[c][a], (unsigned long long)b->sev_cap * sizeof *b->sev[c][a]);
   }
   for (int c = 0; c < 2; c++)
     for (int a = 0; a < 3; a++) b->sev_len[c][a] = 0;
@@ -379,7 +395,7 @@ static void clip_straddlers(struct kd_builder *b, uint32_t ns, const struct kd_b
     b->side[p] |= 4u; /* straddler: its old events are replaced */
   }
   for (int c = 0; c < 2; c++)
-    for (int a = 0; a < 3; a++) sort_events(b->sev[c][a], b->sev_len[c][a]);
+    for (int a = 0; a < 3; a++) sort_events(b, b->sev[c][a], b->sev_len[c][a]);
 }
 
 /* Write to dst, in order of t, the events of ev[0..n) whose triangle is a
@@ -511,12 +527,19 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
   b->arena_top = l->off;
 }
 
-void kd_build(struct kd_tree *t, const struct scene *s, const struct kd_build_params *p) {
-  memset(t, 0, sizeof *t);
-  struct kd_builder b;
-  memset(&b, 0, sizeof b);
-  b.p = p;
-  b.t = t;
+static void kd_builder_free(struct kd_builder *b) {
+  free(b->tb);
+  free(b->side);
+  free(b->leaf_scratch);
+  free(b->strad);
+  for (int c = 0; c < 2; c++)
+    for (int a = 0; a < 3; a++) free(b->sev[c][a]);
+  free(b->arena);
+}
+
+static void kd_build_all(struct kd_builder *b, const struct scene *s) {
+  struct kd_tree *t = b->t;
+  const struct kd_build_params *p = b->p;
   uint32_t n = s->tri_count;
   CHECK_LT(n, 1u << 29);
   scene_bounds(s, &t->lo, &t->hi);
@@ -529,18 +552,19 @@ void kd_build(struct kd_tree *t, const struct scene *s, const struct kd_build_pa
   }
   if (max_depth > KD_DEPTH_LIMIT) max_depth = KD_DEPTH_LIMIT;
 
-  b.tb = xmalloc((n ? n : 1) * sizeof *b.tb);
-  b.side = xcalloc(n ? n : 1, 1);
-  b.leaf_scratch = xmalloc((n ? n : 1) * sizeof *b.leaf_scratch);
-  b.scene = s;
-  if (p->clip) b.strad = xmalloc((n ? n : 1) * sizeof *b.strad);
+  b->tb = kd_grow(b, NULL, (n ? n : 1) * (unsigned long long)sizeof *b->tb);
+  b->side = kd_grow(b, NULL, n ? n : 1);
+  memset(b->side, 0, n ? n : 1);
+  b->leaf_scratch = kd_grow(b, NULL, (n ? n : 1) * (unsigned long long)sizeof *b->leaf_scratch);
+  b->scene = s;
+  if (p->clip) b->strad = kd_grow(b, NULL, (n ? n : 1) * (unsigned long long)sizeof *b->strad);
   for (uint32_t i = 0; i < n; i++) {
     const struct scene_tri *tr = &s->tris[i];
     for (int a = 0; a < 3; a++) {
       float x = v3_get(tr->v[0], a), y = v3_get(tr->v[1], a), z = v3_get(tr->v[2], a);
       CHECK(isfinite(x) && isfinite(y) && isfinite(z));
-      b.tb[i].lo[a] = fminf(x, fminf(y, z));
-      b.tb[i].hi[a] = fmaxf(x, fmaxf(y, z));
+      b->tb[i].lo[a] = fminf(x, fminf(y, z));
+      b->tb[i].hi[a] = fmaxf(x, fmaxf(y, z));
     }
   }
 
@@ -548,12 +572,12 @@ void kd_build(struct kd_tree *t, const struct scene *s, const struct kd_build_pa
   struct kd_lists root = {0, {0, 0, 0}};
   /* Room for the root lists and the pending children below them (the peak is
    * about three times the root's lists for typical scenes; it grows if not). */
-  arena_reserve(&b, (size_t)18 * n + 1);
+  arena_reserve(b, (size_t)18 * n + 1);
   for (int a = 0; a < 3; a++) {
-    struct kd_ev *ev = b.arena + b.arena_top;
+    struct kd_ev *ev = b->arena + b->arena_top;
     uint32_t m = 0;
     for (uint32_t i = 0; i < n; i++) {
-      float lo = b.tb[i].lo[a], hi = b.tb[i].hi[a];
+      float lo = b->tb[i].lo[a], hi = b->tb[i].hi[a];
       if (lo == hi) {
         ev[m].t = lo;
         ev[m++].pt = (i << 2) | KD_EV_PLANAR;
@@ -564,23 +588,33 @@ void kd_build(struct kd_tree *t, const struct scene *s, const struct kd_build_pa
         ev[m++].pt = (i << 2) | KD_EV_END;
       }
     }
-    sort_events(ev, m);
+    sort_events(b, ev, m);
     root.len[a] = m;
-    b.arena_top += m;
+    b->arena_top += m;
   }
   struct kd_box bx = {{t->lo.x, t->lo.y, t->lo.z}, {t->hi.x, t->hi.y, t->hi.z}};
-  build_node(&b, &bx, &root, n, 0, max_depth, 0);
-  CHECK_EQ(b.arena_top, 0);
+  build_node(b, &bx, &root, n, 0, max_depth, 0);
+  CHECK_EQ(b->arena_top, 0);
 
   /* Trim the arrays to size: the tree lives as long as the scene. */
-  t->nodes = xrealloc(t->nodes, (unsigned long long)t->node_count * sizeof *t->nodes);
+  t->nodes = kd_grow(b, t->nodes, (unsigned long long)t->node_count * sizeof *t->nodes);
   if (t->prim_ref_count)
-    t->prims = xrealloc(t->prims, (unsigned long long)t->prim_ref_count * sizeof *t->prims);
-  free(b.tb);
-  free(b.side);
-  free(b.leaf_scratch);
-  free(b.strad);
-  for (int c = 0; c < 2; c++)
-    for (int a = 0; a < 3; a++) free(b.sev[c][a]);
-  free(b.arena);
+    t->prims = kd_grow(b, t->prims, (unsigned long long)t->prim_ref_count * sizeof *t->prims);
+}
+
+bool kd_build(struct kd_tree *t, const struct scene *s, const struct kd_build_params *p,
+              unsigned long long *failed_bytes) {
+  memset(t, 0, sizeof *t);
+  /* On the heap, not the stack: what the build changes after setjmp must
+   * still be there when kd_grow jumps back (C11 7.13.2.1). */
+  struct kd_builder *b = xcalloc(1, sizeof *b);
+  b->p = p;
+  b->t = t;
+  bool ok = setjmp(b->oom) == 0;
+  if (ok) kd_build_all(b, s);
+  else if (failed_bytes) *failed_bytes = b->oom_bytes;
+  kd_builder_free(b);
+  free(b);
+  if (!ok) kd_fini(t);
+  return ok;
 }

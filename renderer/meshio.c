@@ -5,10 +5,15 @@
  * primitive i with its vertices in stored order, byte for byte. */
 #include "renderer/meshio.h"
 
+#include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
@@ -94,7 +99,7 @@ static bool meshio_check_raw(const struct aiScene *as, const char *path, struct 
  * faces in file order, each fanned (a triangle as it is), normals from
  * nx/ny/nz when present. */
 static bool meshio_import_ply(struct scene *s, const char *path, const struct meshio_xform *xf,
-                              uint32_t material, struct err *e) {
+                              uint32_t material, uint64_t max_tris, struct err *e) {
   struct ply_mesh m;
   struct err pe = {0};
   if (!ply_read_file(path, &m, &pe))
@@ -105,9 +110,9 @@ static bool meshio_import_ply(struct scene *s, const char *path, const struct me
             "empty)");
     goto done;
   }
-  if (m.tri_count > UINT32_MAX - s->tri_count) {
-    err_set(e, path, 0, 0, "cannot import mesh: too many triangles (got %u, scene has %u)",
-            m.tri_count, s->tri_count);
+  if (m.tri_count > max_tris || m.tri_count > UINT32_MAX - s->tri_count) {
+    err_set(e, path, 0, 0, "cannot import mesh: too many triangles (got %u, the scene has room "
+            "for %llu)", m.tri_count, (unsigned long long)max_tris);
     goto done;
   }
   /* Pass 1: every placed vertex of every triangle is finite. */
@@ -148,9 +153,75 @@ done:
   return ok;
 }
 
-bool meshio_import(struct scene *s, const char *path, const struct meshio_xform *xf,
-                   uint32_t material, struct err *e) {
-  if (ply_claims(path)) return meshio_import_ply(s, path, xf, material, e);
+bool meshio_estimate(const char *path, uint64_t *least, uint64_t *most, struct err *e) {
+  *least = 0;
+  *most = UINT64_MAX;
+  const char *irregular = err_not_regular(path);
+  if (irregular) return err_set(e, path, 0, 0, "cannot import mesh: %s", irregular);
+  if (!ply_claims(path)) return true;
+  struct ply_counts c;
+  struct err pe = {0};
+  if (!ply_read_header_file(path, &c, &pe))
+    return err_set(e, pe.file, pe.line, pe.col, "cannot import mesh: %s", pe.msg);
+  *least = c.faces;
+  *most = c.tri_max;
+  return true;
+}
+
+/* assimp runs in a child process (meshio_import): a crash, an endless loop or
+ * a runaway allocation in it becomes one error naming the file. The child
+ * sends a head, then `count` triangles already placed, so the parent adds
+ * exactly the floats the in-process import added. */
+#define MESHIO_CHILD_CPU_S 60      /* CPU seconds (RLIMIT_CPU) */
+#define MESHIO_CHILD_WALL_S 120    /* wall seconds (alarm), for a child stuck waiting */
+#define MESHIO_CHILD_MEM_SHARE 4   /* it may map 1/4 of physical memory past the parent */
+
+struct meshio_wire_head {
+  uint32_t ok;
+  uint32_t pad;
+  uint64_t count;
+  char msg[ERR_MSG_MAX];
+};
+
+struct meshio_wire_tri {
+  float v[9], n[9];
+  uint32_t has_n;
+};
+
+static bool meshio_write_all(int fd, const void *p, size_t n) {
+  const char *b = p;
+  while (n > 0) {
+    ssize_t w = write(fd, b, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    b += w;
+    n -= (size_t)w;
+  }
+  return true;
+}
+
+/* Bytes read, short only at the end of the stream or on an error. */
+static size_t meshio_read_all(int fd, void *p, size_t n) {
+  char *b = p;
+  size_t got = 0;
+  while (got < n) {
+    ssize_t r = read(fd, b + got, n - got);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) break;
+    got += (size_t)r;
+  }
+  return got;
+}
+
+static void meshio_put_vec(float *out, vec3 v) {
+  out[0] = v.x;
+  out[1] = v.y;
+  out[2] = v.z;
+}
+
+/* In the child: the in-process import of old, sending instead of adding. */
+static bool meshio_assimp_send(const char *path, const struct meshio_xform *xf, int fd,
+                               struct err *e) {
   const struct aiScene *as = aiImportFile(path, MESHIO_READ_FLAGS);
   if (!as) {
     const char *why = aiGetErrorString();
@@ -196,30 +267,167 @@ bool meshio_import(struct scene *s, const char *path, const struct meshio_xform 
             as->mNumMeshes);
     goto done;
   }
-  if (count > (uint64_t)UINT32_MAX - s->tri_count) {
-    err_set(e, path, 0, 0, "cannot import mesh: too many triangles (got %llu, scene has %u)",
-            (unsigned long long)count, s->tri_count);
-    goto done;
-  }
 
-  /* Pass 2: append, in mesh then face order. */
-  for (unsigned mi = 0; mi < as->mNumMeshes; mi++) {
+  /* Pass 2: send, in mesh then face order. */
+  struct meshio_wire_head h;
+  memset(&h, 0, sizeof h);
+  h.ok = 1;
+  h.count = count;
+  if (!meshio_write_all(fd, &h, sizeof h)) goto done;
+  enum { MESHIO_BATCH = 1024 };
+  struct meshio_wire_tri *buf = xmalloc(MESHIO_BATCH * sizeof *buf);
+  size_t used = 0;
+  bool io_ok = true;
+  for (unsigned mi = 0; io_ok && mi < as->mNumMeshes; mi++) {
     const struct aiMesh *m = as->mMeshes[mi];
-    for (unsigned fi = 0; fi < m->mNumFaces; fi++) {
+    for (unsigned fi = 0; io_ok && fi < m->mNumFaces; fi++) {
       const struct aiFace *f = &m->mFaces[fi];
       if (f->mNumIndices != 3) continue;
+      struct meshio_wire_tri *t = &buf[used++];
+      memset(t, 0, sizeof *t);
       vec3 n[3];
-      bool has_n = meshio_face_normals(m, f, n);
-      scene_add_tri(s, meshio_place(&m->mVertices[f->mIndices[0]], xf),
-                    meshio_place(&m->mVertices[f->mIndices[1]], xf),
-                    meshio_place(&m->mVertices[f->mIndices[2]], xf), has_n ? n : NULL,
-                    material);
+      t->has_n = meshio_face_normals(m, f, n);
+      for (int k = 0; k < 3; k++) {
+        meshio_put_vec(t->v + 3 * k, meshio_place(&m->mVertices[f->mIndices[k]], xf));
+        if (t->has_n) meshio_put_vec(t->n + 3 * k, n[k]);
+      }
+      if (used == MESHIO_BATCH) {
+        io_ok = meshio_write_all(fd, buf, used * sizeof *buf);
+        used = 0;
+      }
     }
   }
-  ok = true;
+  if (io_ok && used) io_ok = meshio_write_all(fd, buf, used * sizeof *buf);
+  free(buf);
+  ok = io_ok;
 
 done:
   aiReleaseImport(as);
+  return ok;
+}
+
+/* In the child: limits, the import, and its verdict on fd. Never returns. */
+static _Noreturn void meshio_child(const char *path, const struct meshio_xform *xf, int fd) {
+  struct rlimit cpu = {MESHIO_CHILD_CPU_S, MESHIO_CHILD_CPU_S};
+  setrlimit(RLIMIT_CPU, &cpu);
+  alarm(MESHIO_CHILD_WALL_S);
+#ifndef __SANITIZE_ADDRESS__ /* ASan reserves terabytes of address space */
+  /* The child starts as a copy of the parent (the scene so far included), so
+   * the limit is what it maps now plus its share. */
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  unsigned long long mapped = 0;
+  FILE *statm = fopen("/proc/self/statm", "r");
+  if (statm && fscanf(statm, "%llu", &mapped) == 1 && pages > 0 && page > 0) {
+    struct rlimit as = {0, 0};
+    as.rlim_cur = as.rlim_max = (rlim_t)(mapped * (unsigned long long)page +
+                                         (unsigned long long)pages * (unsigned long long)page /
+                                             MESHIO_CHILD_MEM_SHARE);
+    setrlimit(RLIMIT_AS, &as);
+  }
+  if (statm) fclose(statm);
+#endif
+  struct err e;
+  memset(&e, 0, sizeof e);
+  if (!meshio_assimp_send(path, xf, fd, &e) && e.set) {
+    struct meshio_wire_head h;
+    memset(&h, 0, sizeof h);
+    snprintf(h.msg, sizeof h.msg, "%s", e.msg);
+    meshio_write_all(fd, &h, sizeof h);
+  }
+  _exit(0);
+}
+
+/* Why the child ended without a verdict, for the message. */
+static void meshio_child_death(int status, char *out, size_t cap) {
+  if (WIFSIGNALED(status)) {
+    int sig = WTERMSIG(status);
+    if (sig == SIGXCPU)
+      snprintf(out, cap, "it passed its CPU-time limit of %d s", MESHIO_CHILD_CPU_S);
+    else if (sig == SIGALRM)
+      snprintf(out, cap, "it passed its time limit of %d s", MESHIO_CHILD_WALL_S);
+    else
+      snprintf(out, cap, "it crashed (signal %d, %s; or ran out of its memory limit of 1/%d of "
+               "physical memory)", sig, strsignal(sig), MESHIO_CHILD_MEM_SHARE);
+  } else {
+    snprintf(out, cap, "it stopped (exit status %d; out of memory?)",
+             WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+  }
+}
+
+bool meshio_import(struct scene *s, const char *path, const struct meshio_xform *xf,
+                   uint32_t material, uint64_t max_tris, struct err *e) {
+  /* assimp opens the file by name: a pipe or device is refused first (a pipe
+   * would block it forever). */
+  const char *irregular = err_not_regular(path);
+  if (irregular) return err_set(e, path, 0, 0, "cannot import mesh: %s", irregular);
+  if (ply_claims(path)) return meshio_import_ply(s, path, xf, material, max_tris, e);
+  int fds[2];
+  if (pipe(fds) != 0)
+    return err_set(e, path, 0, 0, "cannot import mesh: pipe: %s", strerror(errno));
+  fflush(NULL); /* nothing buffered is written twice */
+  pid_t pid = fork();
+  if (pid < 0) {
+    close(fds[0]);
+    close(fds[1]);
+    return err_set(e, path, 0, 0, "cannot import mesh: fork: %s", strerror(errno));
+  }
+  if (pid == 0) {
+    close(fds[0]);
+    meshio_child(path, xf, fds[1]);
+  }
+  close(fds[1]);
+  const uint32_t before = s->tri_count;
+  bool ok = false, verdict = false;
+  struct meshio_wire_head h;
+  struct meshio_wire_tri *buf = NULL;
+  if (meshio_read_all(fds[0], &h, sizeof h) != sizeof h) goto reap;
+  verdict = true;
+  h.msg[sizeof h.msg - 1] = '\0';
+  if (!h.ok) {
+    err_set(e, path, 0, 0, "%s", h.msg);
+    goto reap;
+  }
+  if (h.count > max_tris || h.count > (uint64_t)UINT32_MAX - s->tri_count) {
+    err_set(e, path, 0, 0, "cannot import mesh: too many triangles (got %llu, the scene has "
+            "room for %llu)", (unsigned long long)h.count, (unsigned long long)max_tris);
+    goto reap;
+  }
+  scene_reserve(s, s->tri_count + (uint32_t)h.count);
+  enum { MESHIO_BATCH = 1024 };
+  buf = xmalloc(MESHIO_BATCH * sizeof *buf);
+  for (uint64_t i = 0; i < h.count;) {
+    size_t n = h.count - i < MESHIO_BATCH ? (size_t)(h.count - i) : MESHIO_BATCH;
+    if (meshio_read_all(fds[0], buf, n * sizeof *buf) != n * sizeof *buf) {
+      verdict = false;
+      goto reap;
+    }
+    for (size_t k = 0; k < n; k++) {
+      const struct meshio_wire_tri *t = &buf[k];
+      vec3 nn[3];
+      for (int j = 0; j < 3; j++) nn[j] = v3(t->n[3 * j], t->n[3 * j + 1], t->n[3 * j + 2]);
+      scene_add_tri(s, v3(t->v[0], t->v[1], t->v[2]), v3(t->v[3], t->v[4], t->v[5]),
+                    v3(t->v[6], t->v[7], t->v[8]), t->has_n ? nn : NULL, material);
+    }
+    i += n;
+  }
+  ok = true;
+
+reap:
+  free(buf);
+  /* The parent may stop reading early (a refusal); the child then ends on a
+   * broken pipe, which is no news. */
+  close(fds[0]);
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!verdict) {
+    char why[256];
+    meshio_child_death(status, why, sizeof why);
+    err_set(e, path, 0, 0, "cannot import mesh: the importer (assimp, in a child process) "
+            "gave no answer: %s", why);
+    ok = false;
+  }
+  if (!ok) s->tri_count = before; /* nothing of a failed mesh stays */
   return ok;
 }
 

@@ -78,6 +78,8 @@ struct ply_value {
 struct ply_reader {
   const unsigned char *buf;
   size_t len, pos;
+  uint64_t file_len;  /* bytes in the whole file: len, or more when buf is its header */
+  uint64_t slack;     /* data bytes past every element's fewest (ply_check_counts) */
   const char *name;
   struct err *e;
   enum ply_format fmt;
@@ -280,7 +282,7 @@ static uint64_t ply_min_bytes(const struct ply_reader *r, const struct ply_elem 
 
 /* Refuse counts the data cannot hold, before anything is allocated. */
 static bool ply_check_counts(struct ply_reader *r) {
-  uint64_t budget = r->len - r->pos;
+  uint64_t budget = r->file_len - r->pos;
   if (r->fmt == PLY_FMT_ASCII) budget++; /* the last line may lack its line break */
   for (size_t i = 0; i < r->nelems; i++) {
     const struct ply_elem *el = &r->elems[i];
@@ -293,9 +295,10 @@ static bool ply_check_counts(struct ply_reader *r) {
       return err_set(r->e, r->name, el->line, 0, "PLY header: element '%s': %llu instances of "
                      "at least %llu bytes each cannot fit in the %llu bytes after the header",
                      el->name, (unsigned long long)el->count, (unsigned long long)min,
-                     (unsigned long long)(r->len - r->pos));
+                     (unsigned long long)(r->file_len - r->pos));
     budget -= el->count * min;
   }
+  r->slack = budget;
   return true;
 }
 
@@ -651,6 +654,7 @@ bool ply_read_memory(const unsigned char *buf, size_t len, const char *name, str
   memset(&r, 0, sizeof r);
   r.buf = buf;
   r.len = len;
+  r.file_len = len;
   r.name = name;
   r.e = e;
   bool ok = ply_parse_header(&r) && ply_read_data(&r, m);
@@ -662,8 +666,9 @@ bool ply_read_memory(const unsigned char *buf, size_t len, const char *name, str
 
 bool ply_read_file(const char *path, struct ply_mesh *m, struct err *e) {
   memset(m, 0, sizeof *m);
-  FILE *f = fopen(path, "rb");
-  if (!f) return err_set(e, path, 0, 0, "cannot open: %s", strerror(errno));
+  const char *why;
+  FILE *f = err_fopen_regular(path, &why);
+  if (!f) return err_set(e, path, 0, 0, "cannot open: %s", why);
   /* Grow by doubling as bytes arrive: the buffer is at most twice the file. */
   size_t cap = 65536, len = 0, got;
   unsigned char *buf = xmalloc(cap);
@@ -679,12 +684,85 @@ bool ply_read_file(const char *path, struct ply_mesh *m, struct err *e) {
   return ok;
 }
 
+enum { PLY_HEADER_SCAN_MAX = 64 << 20 };
+
+/* Whether the n bytes at b hold a whole header: a line whose only word is
+ * end_header (what ply_parse_header ends at), ended by its line break. */
+static bool ply_header_complete(const unsigned char *b, size_t n) {
+  for (size_t pos = 0; pos < n;) {
+    const unsigned char *nl = memchr(b + pos, '\n', n - pos);
+    if (!nl) return false;
+    size_t end = (size_t)(nl - b), i = pos;
+    while (i < end && (b[i] == ' ' || b[i] == '\t')) i++;
+    if (end - i >= 10 && memcmp(b + i, "end_header", 10) == 0) {
+      i += 10;
+      while (i < end && (b[i] == ' ' || b[i] == '\t' || b[i] == '\r')) i++;
+      if (i == end) return true;
+    }
+    pos = end + 1;
+  }
+  return false;
+}
+
+bool ply_read_header_file(const char *path, struct ply_counts *c, struct err *e) {
+  memset(c, 0, sizeof *c);
+  const char *why;
+  FILE *f = err_fopen_regular(path, &why);
+  if (!f) return err_set(e, path, 0, 0, "cannot open: %s", why);
+  /* Read until the header is whole: headers are short, but comments may be
+   * long, so up to PLY_HEADER_SCAN_MAX bytes. */
+  size_t cap = 4096, len = 0, got;
+  unsigned char *buf = xmalloc(cap);
+  bool whole = false;
+  while (!(whole = ply_header_complete(buf, len)) && len < PLY_HEADER_SCAN_MAX &&
+         (got = fread(buf + len, 1, cap - len, f)) > 0) {
+    len += got;
+    if (len == cap) buf = xrealloc(buf, cap *= 2);
+  }
+  bool ok = !ferror(f);
+  if (!ok) err_set(e, path, 0, 0, "cannot read: %s", strerror(errno));
+  else if (!whole && len >= PLY_HEADER_SCAN_MAX)
+    ok = err_set(e, path, 0, 0, "PLY header: no end_header line in the first %d MiB",
+                 PLY_HEADER_SCAN_MAX >> 20);
+  /* The file's size bounds what its data can hold. */
+  uint64_t file_len = UINT64_MAX;
+  if (ok && fseek(f, 0, SEEK_END) == 0) {
+    long end = ftell(f);
+    if (end >= 0 && (uint64_t)end >= len) file_len = (uint64_t)end;
+  }
+  fclose(f);
+  struct ply_reader r;
+  memset(&r, 0, sizeof r);
+  r.buf = buf;
+  r.len = len;
+  r.file_len = file_len;
+  r.name = path;
+  r.e = e;
+  ok = ok && ply_parse_header(&r);
+  if (ok) {
+    const struct ply_prop *idx = NULL;
+    for (size_t i = 0; i < r.face->nprops; i++)
+      if (r.face->props[i].role == PLY_ROLE_INDICES) idx = &r.face->props[i];
+    c->vertices = r.vertex->count;
+    c->faces = r.face->count;
+    /* Each index past a face's third adds a triangle and takes at least one
+     * item's bytes (two characters in ASCII) of the slack. */
+    uint64_t item = r.fmt == PLY_FMT_ASCII ? 2 : ply_types[idx->type].size;
+    c->tri_max = file_len == UINT64_MAX ? UINT64_MAX : c->faces + r.slack / item;
+  }
+  for (size_t i = 0; i < r.nelems; i++) free(r.elems[i].props);
+  free(r.elems);
+  free(buf);
+  return ok;
+}
+
 bool ply_claims(const char *path) {
   size_t n = strlen(path);
   if (n >= 4 && path[n - 4] == '.' && (path[n - 3] | 0x20) == 'p' &&
       (path[n - 2] | 0x20) == 'l' && (path[n - 1] | 0x20) == 'y')
     return true;
-  FILE *f = fopen(path, "rb");
+  const char *why;
+  FILE *f = err_fopen_regular(path, &why);
   if (!f) return false;
   char head[3];
   bool ply = fread(head, 1, 3, f) == 3 && (head[0] | 0x20) == 'p' && (head[1] | 0x20) == 'l' &&

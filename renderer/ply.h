@@ -41,6 +41,19 @@ bool ply_read_memory(const unsigned char *buf, size_t len, const char *name, str
 /* Read the file at path whole and parse it as ply_read_memory does. */
 bool ply_read_file(const char *path, struct ply_mesh *m, struct err *e);
 
+/* What a PLY header says of the file's size, before its data is read. */
+struct ply_counts {
+  uint64_t vertices, faces; /* as declared (each face gives at least one triangle) */
+  uint64_t tri_max;         /* the most triangles the file's bytes can hold: faces,
+                               plus one per index past a face's third that the bytes
+                               beyond every element's smallest size could hold */
+};
+
+/* Read only the header of the file at path (and its size) and check its
+ * declared counts against that size as ply_read_memory does. Errors as
+ * ply_read_memory's header errors; the header must end in the first 64 MiB. */
+bool ply_read_header_file(const char *path, struct ply_counts *c, struct err *e);
+
 /* Free m's arrays and zero it; accepts a zeroed mesh. */
 void ply_mesh_fini(struct ply_mesh *m);
 

@@ -10,7 +10,9 @@
  * with the most rays left in its pass (its geometry is resident already), so a
  * scene with fewer queue points than cores (at the extreme, the root alone:
  * Whitted) still keeps every core busy. Drain c is the one core c took: at
- * most one a core, so at most `cores` queue points are drained at once.
+ * most one a core, so at most `cores` queue points are drained at once. With
+ * chip-wide sharing (qdrain_share_chip) a core joins the fullest drain first
+ * and takes a queue of its own only when the drains cannot feed the contexts.
  *
  * Whoever traces a claim's rays (the policy) tells the drain when each ray and
  * the claim are done: a pass moves on once all its claims are, and a releasing

@@ -19,22 +19,48 @@ void scene_fini(struct scene *s) {
   if (!s) return;
   free(s->tris);
   free(s->mats);
+  free(s->mat_slots);
   memset(s, 0, sizeof *s);
 }
 
+/* FNV-1a of a material name: the slot a lookup starts at. */
+static uint32_t name_hash(const char *name) {
+  uint32_t h = 2166136261u;
+  for (; *name; name++) h = (h ^ (unsigned char)*name) * 16777619u;
+  return h;
+}
+
+/* The slot holding name, or the empty slot where it would go (linear probing;
+ * the table is at most half full, so a probe ends). */
+static uint32_t find_slot(const struct scene *s, const char *name) {
+  const uint32_t mask = s->mat_slot_cap - 1;
+  uint32_t i = name_hash(name) & mask;
+  while (s->mat_slots[i] && strcmp(s->mats[s->mat_slots[i] - 1].name, name) != 0) i = (i + 1) & mask;
+  return i;
+}
+
 int scene_find_material(const struct scene *s, const char *name) {
-  for (uint32_t i = 0; i < s->mat_count; i++)
-    if (strcmp(s->mats[i].name, name) == 0) return (int)i;
-  return -1;
+  if (!s->mat_slot_cap) return -1;
+  uint32_t id = s->mat_slots[find_slot(s, name)];
+  return id ? (int)(id - 1) : -1;
 }
 
 uint32_t scene_add_material(struct scene *s, const struct scene_material *m) {
-  CHECK_LT(scene_find_material(s, m->name), 0);
+  if (2ull * (s->mat_count + 1) > s->mat_slot_cap) {
+    /* Rehash into twice the slots: ids keep their order, only the index moves. */
+    free(s->mat_slots);
+    s->mat_slot_cap = s->mat_slot_cap ? 2 * s->mat_slot_cap : 16;
+    s->mat_slots = xcalloc(s->mat_slot_cap, sizeof *s->mat_slots);
+    for (uint32_t i = 0; i < s->mat_count; i++) s->mat_slots[find_slot(s, s->mats[i].name)] = i + 1;
+  }
+  const uint32_t slot = find_slot(s, m->name);
+  CHECK_EQ(s->mat_slots[slot], 0u); /* the name must be new */
   if (s->mat_count == s->mat_cap) {
     s->mat_cap = s->mat_cap ? 2 * s->mat_cap : 8;
     s->mats = xrealloc(s->mats, (unsigned long long)s->mat_cap * sizeof *s->mats);
   }
   s->mats[s->mat_count] = *m;
+  s->mat_slots[slot] = s->mat_count + 1;
   return s->mat_count++;
 }
 
@@ -49,6 +75,12 @@ uint32_t scene_material_or_default(struct scene *s, const char *name, vec3 color
   m.diffuse = diffuse;
   m.mirror = mirror;
   return scene_add_material(s, &m);
+}
+
+void scene_reserve(struct scene *s, uint32_t n) {
+  if (n <= s->tri_cap) return;
+  s->tri_cap = n;
+  s->tris = xrealloc(s->tris, (unsigned long long)n * sizeof *s->tris);
 }
 
 uint32_t scene_add_tri(struct scene *s, vec3 a, vec3 b, vec3 c, const vec3 *normals,

@@ -43,6 +43,9 @@ struct scene {
   uint32_t tri_count, tri_cap;
   struct scene_material *mats;
   uint32_t mat_count, mat_cap;
+  uint32_t *mat_slots; /* hash of the names: material id + 1, 0 = empty (mat_slot_cap slots,
+                          a power of two, at least twice mat_count) */
+  uint32_t mat_slot_cap;
   struct scene_light lights[SCENE_MAX_LIGHTS];
   uint32_t light_count;
   struct scene_camera camera;
@@ -57,7 +60,8 @@ struct scene {
 void scene_init(struct scene *s);
 void scene_fini(struct scene *s);
 
-/* Material id of `name`, or -1. */
+/* Material id of `name`, or -1. Constant time (a hash of the names), so a
+ * scene of tens of thousands of materials loads in linear time. */
 int scene_find_material(const struct scene *s, const char *name);
 /* Add a material (name must be new); returns its id. */
 uint32_t scene_add_material(struct scene *s, const struct scene_material *m);
@@ -65,6 +69,10 @@ uint32_t scene_add_material(struct scene *s, const struct scene_material *m);
  * Lets the scene file override a generator's built-in materials by name. */
 uint32_t scene_material_or_default(struct scene *s, const char *name, vec3 color, float diffuse,
                                    float mirror);
+
+/* Make room for n triangles in all (no-op if there is): a scene whose size is
+ * known ahead takes n * 76 bytes, not up to twice that from doubling. */
+void scene_reserve(struct scene *s, uint32_t n);
 
 /* Append a triangle. Normals may be NULL: all three become the geometric normal
  * (or +Z for a zero-area triangle). Returns the new primitive id. */

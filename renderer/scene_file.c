@@ -5,7 +5,9 @@
 
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
+#include "renderer/camera.h"
 #include "renderer/gen.h"
 #include "renderer/meshio.h"
 #include "renderer/scene.h"
@@ -13,7 +15,6 @@
 #include "sim/err.h"
 
 /* Limits that keep a typo from asking for a machine-sized allocation. */
-#define SCENE_MAX_TRIANGLES 100000000ull
 #define SCENE_MAX_PIXELS 16384
 
 /* out = "path.key" (or "key" at the top level). */
@@ -74,12 +75,15 @@ static bool load_camera(const struct cfg_doc *d, struct cfg_node *n, struct scen
       !cfg_check_keys(d, n, "camera", "from, at, up, fov_deg", e))
     return false;
   c->fov_deg = (float)fov;
-  vec3 dir = v3_sub(c->at, c->from);
-  if (v3_len(dir) == 0.0f)
+  switch (camera_check(c)) {
+  case CAMERA_OK: return true;
+  case CAMERA_NO_VIEW:
     return cfg_fail(d, cfg_get(n, "at"), "camera.at", e, "equals camera.from (no view direction)");
-  if (v3_len(v3_cross(dir, c->up)) == 0.0f)
-    return cfg_fail(d, n, "camera", e, "up is zero or parallel to the view direction");
-  return true;
+  case CAMERA_BAD_UP:
+    return cfg_fail(d, cfg_get(n, "up") ? cfg_get(n, "up") : n, "camera.up", e,
+                    "zero or parallel to the view direction (as far as 32-bit floats can tell)");
+  }
+  return false;
 }
 
 static bool load_image(const struct cfg_doc *d, struct cfg_node *n, struct scene *s,
@@ -157,15 +161,24 @@ static void dir_of(const char *path, char *out, size_t cap) {
 
 static const char *const GENERATORS[] = {"sphereflake", "grove", "room", NULL};
 
+uint64_t scene_file_max_triangles(void) {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page <= 0) return SCENE_FILE_TRIANGLES_HARD_MAX;
+  uint64_t n = (uint64_t)pages * (uint64_t)page / 2 / SCENE_FILE_HOST_BYTES_PER_TRIANGLE;
+  return n < SCENE_FILE_TRIANGLES_HARD_MAX ? n : SCENE_FILE_TRIANGLES_HARD_MAX;
+}
+
+/* With `count` set, read and check the entry and set *count to exactly the
+ * triangles it would add, building nothing; without, build it. */
 static bool load_generator(const struct cfg_doc *d, struct cfg_node *g, const char *p,
-                           struct scene *s, struct err *e) {
+                           struct scene *s, uint64_t *count, struct err *e) {
   int kind = 0;
   char gp[96];
   snprintf(gp, sizeof gp, "%s.generator", p);
   if (!cfg_enum(d, cfg_get(g, "generator"), gp, GENERATORS, &kind, e)) return false;
   uint64_t seed = s->seed;
   if (!opt_u64(d, g, "seed", p, 0, UINT64_MAX, &seed, e)) return false;
-  uint64_t before = s->tri_count;
+  const uint64_t before = s->tri_count;
   if (kind == 0) {
     uint64_t levels = 4, tess = 3;
     if (!opt_u64(d, g, "detail", p, 0, 6, &levels, e) ||
@@ -173,25 +186,48 @@ static bool load_generator(const struct cfg_doc *d, struct cfg_node *g, const ch
         !cfg_check_keys(d, g, p, "generator, detail, tessellation, seed", e))
       return false;
     uint64_t n = gen_sphereflake_tri_count((uint32_t)levels, (uint32_t)tess);
-    if (before + n > SCENE_MAX_TRIANGLES)
-      return cfg_fail(d, g, p, e, "too many triangles (got %llu, expected at most %llu)",
-                      (unsigned long long)(before + n), SCENE_MAX_TRIANGLES);
-    gen_sphereflake(s, (uint32_t)levels, (uint32_t)tess);
+    if (count) *count = n;
+    else gen_sphereflake(s, (uint32_t)levels, (uint32_t)tess);
   } else {
     double detail = 1.0;
     if (!opt_f64(d, g, "detail", p, 1e-4, 200.0, &detail, e) ||
         !cfg_check_keys(d, g, p, "generator, detail, seed", e))
       return false;
-    if (kind == 1)
+    uint64_t n = kind == 1 ? gen_grove_tri_count(detail) : gen_room_tri_count(detail);
+    if (count) *count = n;
+    else if (kind == 1)
       gen_grove(s, detail, seed);
     else
       gen_room(s, detail, seed);
   }
+  /* The estimate is exact: what the scene file checked is what was built. */
+  if (!count) {
+    uint64_t n;
+    CHECK(load_generator(d, g, p, s, &n, e));
+    CHECK_EQ(s->tri_count - before, n);
+  }
   return true;
 }
 
+/* Reported the way a mesh's own errors are: at the entry's mesh value, with
+ * the mesh's file (and line and column when it has them). */
+static bool mesh_fail(const struct cfg_doc *d, struct cfg_node *mn, const char *p,
+                      const struct err *me, struct err *e) {
+  char mp[96];
+  snprintf(mp, sizeof mp, "%s.mesh", p);
+  /* Keep the mesh's own position (a PLY header line, an ASCII data line). */
+  char at[32] = "";
+  if (me->line > 0 && me->col > 0) snprintf(at, sizeof at, ":%d:%d", me->line, me->col);
+  else if (me->line > 0) snprintf(at, sizeof at, ":%d", me->line);
+  return cfg_fail(d, mn, mp, e, "%s%s: %s", me->file, at, me->msg);
+}
+
+/* With `least` set, read and check the entry and set *least to the fewest
+ * triangles its file's header promises, reading no data; without, import it,
+ * refused if it holds more than `room` triangles. */
 static bool load_mesh(const struct cfg_doc *d, struct cfg_node *g, const char *p,
-                      const char *scene_path, struct scene *s, struct err *e) {
+                      const char *scene_path, struct scene *s, uint64_t *least, uint64_t room,
+                      struct err *e) {
   struct cfg_node *mn = cfg_get(g, "mesh");
   char file[400], mat_name[SCENE_NAME_MAX] = "default", mp[96];
   snprintf(mp, sizeof mp, "%s.mesh", p);
@@ -206,11 +242,6 @@ static bool load_mesh(const struct cfg_doc *d, struct cfg_node *g, const char *p
       !cfg_check_keys(d, g, p, "mesh, material, scale, translate", e))
     return false;
   xf.scale = (float)scale;
-  int mat = scene_find_material(s, mat_name);
-  if (mat < 0) {
-    if (matn) return cfg_fail(d, matn, mp, e, "no material named '%s' in materials", mat_name);
-    mat = (int)scene_material_or_default(s, "default", v3(0.8f, 0.8f, 0.8f), 1.0f, 0.0f);
-  }
   char full[1024];
   if (file[0] == '/')
     snprintf(full, sizeof full, "%s", file);
@@ -221,31 +252,53 @@ static bool load_mesh(const struct cfg_doc *d, struct cfg_node *g, const char *p
   }
   struct err me;
   memset(&me, 0, sizeof me);
-  if (!meshio_import(s, full, &xf, (uint32_t)mat, &me)) {
-    snprintf(mp, sizeof mp, "%s.mesh", p);
-    /* Keep the mesh's own position (a PLY header line, an ASCII data line). */
-    char at[32] = "";
-    if (me.line > 0 && me.col > 0) snprintf(at, sizeof at, ":%d:%d", me.line, me.col);
-    else if (me.line > 0) snprintf(at, sizeof at, ":%d", me.line);
-    return cfg_fail(d, mn, mp, e, "%s%s: %s", me.file, at, me.msg);
+  if (least) {
+    uint64_t most;
+    return meshio_estimate(full, least, &most, &me) || mesh_fail(d, mn, p, &me, e);
   }
-  return true;
+  /* Generators may add the material this entry names, so it is looked up now. */
+  int mat = scene_find_material(s, mat_name);
+  if (mat < 0) {
+    if (matn) return cfg_fail(d, matn, mp, e, "no material named '%s' in materials", mat_name);
+    mat = (int)scene_material_or_default(s, "default", v3(0.8f, 0.8f, 0.8f), 1.0f, 0.0f);
+  }
+  return meshio_import(s, full, &xf, (uint32_t)mat, room, &me) || mesh_fail(d, mn, p, &me, e);
 }
 
 static bool load_geometry(const struct cfg_doc *d, struct cfg_node *n, const char *scene_path,
                           struct scene *s, struct err *e) {
   if (!cfg_expect_seq(d, n, "geometry", e)) return false;
   if (n->count == 0) return cfg_fail(d, n, "geometry", e, "empty list (expected at least one item)");
-  for (uint32_t i = 0; i < n->count; i++) {
-    struct cfg_node *g = &n->items[i];
-    char p[64];
-    snprintf(p, sizeof p, "geometry[%u]", i);
-    if (!cfg_expect_map(d, g, p, e)) return false;
-    bool is_gen = cfg_get(g, "generator") != NULL, is_mesh = cfg_get(g, "mesh") != NULL;
-    if (is_gen == is_mesh)
-      return cfg_fail(d, g, p, e, "expected exactly one of 'generator' or 'mesh'");
-    if (is_gen ? !load_generator(d, g, p, s, e) : !load_mesh(d, g, p, scene_path, s, e))
-      return false;
+  /* Pass 0 checks every entry and adds up its triangles (exact for the
+   * generators, a PLY header's face count for meshes) against the cap before
+   * anything is built; pass 1 builds, and refuses a mesh whose file holds
+   * more than the cap leaves room for before adding any of it. */
+  const uint64_t cap = scene_file_max_triangles();
+  for (int pass = 0; pass < 2; pass++) {
+    uint64_t total = 0;
+    for (uint32_t i = 0; i < n->count; i++) {
+      struct cfg_node *g = &n->items[i];
+      char p[64];
+      snprintf(p, sizeof p, "geometry[%u]", i);
+      if (!cfg_expect_map(d, g, p, e)) return false;
+      bool is_gen = cfg_get(g, "generator") != NULL, is_mesh = cfg_get(g, "mesh") != NULL;
+      if (is_gen == is_mesh)
+        return cfg_fail(d, g, p, e, "expected exactly one of 'generator' or 'mesh'");
+      uint64_t k = 0, *count = pass == 0 ? &k : NULL;
+      if (is_gen ? !load_generator(d, g, p, s, count, e)
+                 : !load_mesh(d, g, p, scene_path, s, count, cap - s->tri_count, e))
+        return false;
+      total += k;
+      if (pass == 0 && (k > cap || total > cap))
+        return cfg_fail(d, g, p, e, "too many triangles: this entry %s %llu, the scene would "
+                        "have %s%llu, expected at most %llu (about %u bytes of host memory a "
+                        "triangle, scene and k-d tree, within half of this host's memory; "
+                        "README: Limits)", is_gen ? "builds" : "holds at least",
+                        (unsigned long long)k, is_gen ? "" : "at least ",
+                        (unsigned long long)total, (unsigned long long)cap,
+                        SCENE_FILE_HOST_BYTES_PER_TRIANGLE);
+    }
+    if (pass == 0) scene_reserve(s, (uint32_t)total);
   }
   if (s->tri_count == 0) return cfg_fail(d, n, "geometry", e, "the scene has no triangles");
   return true;

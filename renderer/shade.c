@@ -140,7 +140,8 @@ void shade_shadow(const struct ray *r, bool occluded, struct framebuffer *fb,
 bool shade_parse_rays(const char *list, uint32_t *mask) {
   uint32_t m = RAY_MASK(RAY_PRIMARY);
   const char *p = list;
-  while (*p) {
+  /* Every item a name: "" and "primary," are refused, not read as primary. */
+  for (;;) {
     const char *q = strchr(p, ',');
     size_t len = q ? (size_t)(q - p) : strlen(p);
     int found = -1;
@@ -148,8 +149,8 @@ bool shade_parse_rays(const char *list, uint32_t *mask) {
       if (strlen(RAY_NAMES[t]) == len && strncmp(p, RAY_NAMES[t], len) == 0) found = t;
     if (found < 0) return false;
     m |= RAY_MASK(found);
-    p += len;
-    if (*p == ',') p++;
+    if (!q) break;
+    p = q + 1;
   }
   *mask = m;
   return true;

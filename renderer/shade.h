@@ -46,7 +46,8 @@ void shade_shadow(const struct ray *r, bool occluded, struct framebuffer *fb,
                   const struct mem_port *mem);
 
 /* Parse "primary,shadow,specular,diffuse" (any subset, comma-separated; primary
- * is implied) into a mask. Returns false on an unknown word. */
+ * is implied) into a mask. Returns false on an unknown word or an empty item
+ * ("", "primary,"). */
 bool shade_parse_rays(const char *list, uint32_t *mask);
 
 /* "primary,shadow,..." for a mask (buf of 64 bytes is enough). */

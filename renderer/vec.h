@@ -22,6 +22,20 @@ static inline vec3 v3_norm(vec3 a) {
   float l = v3_len(a);
   return l > 0.0f ? v3_scale(a, 1.0f / l) : a;
 }
+/* a scaled by the power of two that brings its largest component into [1, 2):
+ * exact (only exponents change), so a direction computed from the result is
+ * the one computed from a, without the underflow or overflow of squaring very
+ * small or large components. a itself when it is zero or not finite. */
+static inline vec3 v3_pow2_scaled(vec3 a) {
+  float m = fmaxf(fabsf(a.x), fmaxf(fabsf(a.y), fabsf(a.z)));
+  if (!(m > 0.0f) || !isfinite(m)) return a;
+  int e;
+  (void)frexpf(m, &e); /* m = f 2^e, f in [0.5, 1) */
+  return v3(ldexpf(a.x, 1 - e), ldexpf(a.y, 1 - e), ldexpf(a.z, 1 - e));
+}
+/* a / |a| at any scale (v3_norm's bits wherever v3_norm neither underflows
+ * nor overflows); the zero vector stays zero. */
+static inline vec3 v3_unit(vec3 a) { return v3_norm(v3_pow2_scaled(a)); }
 /* max and min of two non-NaN floats: one compare, where fmaxf and fminf are
  * library calls (their NaN rule keeps the compiler from using maxss). */
 static inline float max_nonnan(float a, float b) { return a > b ? a : b; }

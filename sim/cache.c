@@ -6,6 +6,7 @@
 
 #include <stdbool.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "sim/err.h"
 
@@ -15,20 +16,41 @@
 
 struct slot {
   uint64_t line;
-  uint32_t prev, next; /* LRU list of the set; CACHE_NONE ends it */
-  uint32_t flags;
+  uint32_t prev, next; /* LRU list of the set's used slots; CACHE_NONE ends it */
+  uint8_t flags, byte; /* byte, word: the owner's (cache_byte, cache_word) */
+  uint32_t word;
 };
 
+/* A set's used slots form its LRU list (head most recent); the rest of its
+ * slots have never held a line. A fresh set is a list of all its slots in
+ * index order whose tail is taken first, and a slot taken moves to the head:
+ * so the never-used slots are always the lowest `ways - used` of the set, in
+ * order, at the list's tail, and need no state of their own. The used ones
+ * are kept in a vector that grows with them: way w at vec[ways - 1 - w]. */
+struct set {
+  struct slot *vec;
+  uint32_t head, tail, used, cap;
+};
+
+/* Sets live in pages allocated when a set is first written, and a set's
+ * slots in its vector: a cache's host memory follows the lines it has held,
+ * not its configured size. */
+#define SET_PAGE 1024u
+
 struct cache {
-  struct slot *slots;
-  uint32_t *head, *tail; /* per set: most / least recently used slot */
+  struct set **set_pages;
+  uint64_t set_page_count;
   uint64_t lines, sets, ways;
   uint64_t set_mask;     /* sets - 1 when a power of two, else 0 (use %) */
   bool scan;             /* few ways: find a line by scanning its set */
   uint32_t *table;       /* otherwise: slot index + 1; 0 empty */
-  uint64_t table_mask;
+  uint64_t table_mask, table_used;
   unsigned table_shift;
+  uint64_t vec_bytes;    /* slots allocated in vectors */
 };
+
+static const struct slot ZERO_SLOT;
+static const struct set ZERO_SET;
 
 /* Up to this many ways a set is scanned (its tags sit in a few host lines);
  * beyond, the hash table finds the line. */
@@ -36,6 +58,35 @@ struct cache {
 
 static inline uint64_t set_of_line(const struct cache *c, uint64_t line) {
   return c->set_mask ? (line & c->set_mask) : line % c->sets;
+}
+
+static inline const struct set *set_peek(const struct cache *c, uint64_t s) {
+  const struct set *p = c->set_pages[s / SET_PAGE];
+  return p ? &p[s % SET_PAGE] : &ZERO_SET;
+}
+
+static inline struct set *set_get(struct cache *c, uint64_t s) {
+  struct set **p = &c->set_pages[s / SET_PAGE];
+  if (!*p) *p = xcalloc(SET_PAGE, sizeof **p);
+  return &(*p)[s % SET_PAGE];
+}
+
+/* Slot i to read: a never-used slot reads as zeros (no line, no flags). */
+static inline const struct slot *slot_peek(const struct cache *c, uint64_t i) {
+  const uint64_t s = i / c->ways, w = i - s * c->ways;
+  const struct set *st = set_peek(c, s);
+  return w + st->used >= c->ways ? &st->vec[c->ways - 1 - w] : &ZERO_SLOT;
+}
+
+/* Slot i of set st, used. */
+static inline struct slot *slot_at(const struct cache *c, struct set *st, uint64_t i) {
+  const uint64_t w = i % c->ways;
+  CHECK_GE(w + st->used, c->ways);
+  return &st->vec[c->ways - 1 - w];
+}
+
+static inline struct slot *slot_get(struct cache *c, uint64_t i) {
+  return slot_at(c, set_get(c, i / c->ways), i);
 }
 
 const char *cache_params_problem(const struct cache_params *p) {
@@ -53,15 +104,35 @@ static inline uint64_t hash_of(const struct cache *c, uint64_t line) {
   return (line * 0x9E3779B97F4A7C15ull) >> c->table_shift;
 }
 
-static void table_put(struct cache *c, uint64_t line, uint32_t slot) {
+static void table_insert(struct cache *c, uint64_t line, uint32_t slot) {
   uint64_t i = hash_of(c, line);
   while (c->table[i]) i = (i + 1) & c->table_mask;
   c->table[i] = slot + 1;
 }
 
+/* The table holds the valid lines at most half full: it starts small and
+ * doubles as lines arrive (lookups answer the same at any size). */
+static void table_resize(struct cache *c, unsigned bits) {
+  uint32_t *old = c->table;
+  uint64_t old_size = old ? c->table_mask + 1 : 0;
+  c->table = xcalloc(1ull << bits, sizeof *c->table);
+  c->table_mask = (1ull << bits) - 1;
+  c->table_shift = 64 - bits;
+  for (uint64_t i = 0; i < old_size; i++)
+    if (old[i]) table_insert(c, slot_peek(c, old[i] - 1)->line, old[i] - 1);
+  free(old);
+}
+
+static void table_put(struct cache *c, uint64_t line, uint32_t slot) {
+  if (2 * (c->table_used + 1) > c->table_mask + 1) table_resize(c, 64 - c->table_shift + 1);
+  c->table_used++;
+  table_insert(c, line, slot);
+}
+
 static void table_del(struct cache *c, uint64_t line) {
   uint64_t i = hash_of(c, line);
-  while (c->slots[c->table[i] - 1].line != line) i = (i + 1) & c->table_mask;
+  while (slot_peek(c, c->table[i] - 1)->line != line) i = (i + 1) & c->table_mask;
+  c->table_used--;
   /* Backward shift: move later entries of the cluster into the hole when their
    * home position allows it. */
   uint64_t j = i;
@@ -70,7 +141,7 @@ static void table_del(struct cache *c, uint64_t line) {
     for (;;) {
       j = (j + 1) & c->table_mask;
       if (!c->table[j]) return;
-      uint64_t home = hash_of(c, c->slots[c->table[j] - 1].line);
+      uint64_t home = hash_of(c, slot_peek(c, c->table[j] - 1)->line);
       /* Entry j may fill hole i unless its home lies cyclically in (i, j]. */
       bool stays = i <= j ? (i < home && home <= j) : (i < home || home <= j);
       if (!stays) break;
@@ -78,16 +149,6 @@ static void table_del(struct cache *c, uint64_t line) {
     c->table[i] = c->table[j];
     i = j;
   }
-}
-
-uint64_t cache_host_bytes(const struct cache_params *p) {
-  const uint64_t lines = p->size_bytes >> p->lg2_line, ways = p->ways ? p->ways : lines;
-  const uint64_t sets = lines / ways;
-  uint64_t b = sizeof(struct cache) + lines * sizeof(struct slot) + 2 * sets * sizeof(uint32_t);
-  if (ways <= SCAN_WAYS) return b;
-  uint64_t tsize = 16;
-  while (tsize < 2 * lines) tsize *= 2;
-  return b + tsize * sizeof(uint32_t); /* the table */
 }
 
 struct cache *cache_create(const struct cache_params *p) {
@@ -99,101 +160,134 @@ struct cache *cache_create(const struct cache_params *p) {
   c->set_mask = (c->sets & (c->sets - 1)) == 0 ? c->sets - 1 : 0;
   if (c->sets == 1) c->set_mask = 0;
   c->scan = c->ways <= SCAN_WAYS;
-  c->slots = xmalloc(c->lines * sizeof *c->slots);
-  c->head = xmalloc(c->sets * sizeof *c->head);
-  c->tail = xmalloc(c->sets * sizeof *c->tail);
-  for (uint64_t s = 0; s < c->sets; s++) {
-    uint64_t first = s * c->ways, last = first + c->ways - 1;
-    c->head[s] = (uint32_t)first;
-    c->tail[s] = (uint32_t)last;
-    for (uint64_t i = first; i <= last; i++) {
-      c->slots[i].line = 0;
-      c->slots[i].flags = 0;
-      c->slots[i].prev = i == first ? CACHE_NONE : (uint32_t)(i - 1);
-      c->slots[i].next = i == last ? CACHE_NONE : (uint32_t)(i + 1);
-    }
-  }
-  if (c->scan) return c;
-  uint64_t tsize = 16;
-  unsigned bits = 4;
-  while (tsize < 2 * c->lines) {
-    tsize *= 2;
-    bits++;
-  }
-  c->table = xcalloc(tsize, sizeof *c->table);
-  c->table_mask = tsize - 1;
-  c->table_shift = 64 - bits;
+  c->set_page_count = (c->sets + SET_PAGE - 1) / SET_PAGE;
+  c->set_pages = xcalloc(c->set_page_count, sizeof *c->set_pages);
+  if (!c->scan) table_resize(c, 4);
   return c;
 }
 
 void cache_destroy(struct cache *c) {
   if (!c) return;
-  free(c->slots);
-  free(c->head);
-  free(c->tail);
+  for (uint64_t i = 0; i < c->set_page_count; i++) {
+    if (!c->set_pages[i]) continue;
+    for (uint32_t k = 0; k < SET_PAGE; k++) free(c->set_pages[i][k].vec);
+    free(c->set_pages[i]);
+  }
+  free(c->set_pages);
   free(c->table);
   free(c);
 }
 
 uint64_t cache_lines(const struct cache *c) { return c->lines; }
 
+uint64_t cache_host_bytes(const struct cache *c) {
+  uint64_t b = sizeof *c + 8 * c->set_page_count + c->vec_bytes;
+  for (uint64_t i = 0; i < c->set_page_count; i++)
+    b += c->set_pages[i] ? SET_PAGE * sizeof(struct set) : 0;
+  return b + (c->table ? (c->table_mask + 1) * sizeof *c->table : 0);
+}
+
 uint32_t cache_find(const struct cache *c, uint64_t line) {
   if (c->scan) {
-    const uint64_t first = set_of_line(c, line) * c->ways;
-    for (uint64_t i = first; i < first + c->ways; i++)
-      if (c->slots[i].line == line && (c->slots[i].flags & F_VALID)) return (uint32_t)i;
+    const uint64_t s = set_of_line(c, line);
+    const struct set *st = set_peek(c, s);
+    /* Only the used slots can hold a line (a line is in one slot at most). */
+    for (uint32_t k = 0; k < st->used; k++)
+      if (st->vec[k].line == line && (st->vec[k].flags & F_VALID))
+        return (uint32_t)(s * c->ways + c->ways - 1 - k);
     return CACHE_NONE;
   }
   uint64_t i = hash_of(c, line);
   for (;;) {
     uint32_t v = c->table[i];
     if (!v) return CACHE_NONE;
-    if (c->slots[v - 1].line == line) return v - 1;
+    if (slot_peek(c, v - 1)->line == line) return v - 1;
     i = (i + 1) & c->table_mask;
   }
 }
 
 static inline uint64_t set_of_slot(const struct cache *c, uint32_t slot) { return slot / c->ways; }
 
-void cache_touch(struct cache *c, uint32_t slot) {
-  uint64_t s = set_of_slot(c, slot);
-  if (c->head[s] == slot) return;
-  struct slot *x = &c->slots[slot];
+/* Slot (used) to the head of its set's list. */
+static void to_head(struct cache *c, struct set *st, uint32_t slot) {
+  if (st->head == slot) return;
+  struct slot *x = slot_at(c, st, slot);
   /* Unlink (x is not the head, so it has a prev). */
-  c->slots[x->prev].next = x->next;
-  if (x->next != CACHE_NONE) c->slots[x->next].prev = x->prev;
-  else c->tail[s] = x->prev;
+  slot_at(c, st, x->prev)->next = x->next;
+  if (x->next != CACHE_NONE) slot_at(c, st, x->next)->prev = x->prev;
+  else st->tail = x->prev;
   x->prev = CACHE_NONE;
-  x->next = c->head[s];
-  c->slots[c->head[s]].prev = slot;
-  c->head[s] = slot;
+  x->next = st->head;
+  slot_at(c, st, st->head)->prev = slot;
+  st->head = slot;
+}
+
+void cache_touch(struct cache *c, uint32_t slot) {
+  to_head(c, set_get(c, set_of_slot(c, slot)), slot);
 }
 
 uint32_t cache_victim(const struct cache *c, uint64_t line) {
   uint64_t s = set_of_line(c, line);
-  for (uint32_t i = c->tail[s]; i != CACHE_NONE; i = c->slots[i].prev)
-    if (!(c->slots[i].flags & F_PENDING)) return i;
+  const struct set *st = set_peek(c, s);
+  /* A never-used slot first: the highest of them is the list's tail. */
+  if (st->used < c->ways) return (uint32_t)(s * c->ways + (c->ways - st->used) - 1);
+  for (uint32_t i = st->tail; i != CACHE_NONE;) {
+    const struct slot *x = &st->vec[c->ways - 1 - i % c->ways];
+    if (!(x->flags & F_PENDING)) return i;
+    i = x->prev;
+  }
   return CACHE_NONE;
 }
 
-bool cache_valid(const struct cache *c, uint32_t slot) { return c->slots[slot].flags & F_VALID; }
-uint64_t cache_line(const struct cache *c, uint32_t slot) { return c->slots[slot].line; }
-bool cache_dirty(const struct cache *c, uint32_t slot) { return c->slots[slot].flags & F_DIRTY; }
-bool cache_pending(const struct cache *c, uint32_t slot) { return c->slots[slot].flags & F_PENDING; }
-void cache_set_dirty(struct cache *c, uint32_t slot) { c->slots[slot].flags |= F_DIRTY; }
+bool cache_valid(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->flags & F_VALID; }
+uint64_t cache_line(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->line; }
+bool cache_dirty(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->flags & F_DIRTY; }
+bool cache_pending(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->flags & F_PENDING; }
+void cache_set_dirty(struct cache *c, uint32_t slot) { slot_get(c, slot)->flags |= F_DIRTY; }
 
 void cache_set_pending(struct cache *c, uint32_t slot, bool pending) {
-  if (pending) c->slots[slot].flags |= F_PENDING;
-  else c->slots[slot].flags &= ~F_PENDING;
+  struct slot *x = slot_get(c, slot);
+  if (pending) x->flags |= F_PENDING;
+  else x->flags &= (uint8_t)~F_PENDING;
 }
 
+uint32_t cache_word(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->word; }
+void cache_set_word(struct cache *c, uint32_t slot, uint32_t v) { slot_get(c, slot)->word = v; }
+uint8_t cache_byte(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->byte; }
+void cache_set_byte(struct cache *c, uint32_t slot, uint8_t v) { slot_get(c, slot)->byte = v; }
+
 void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bool pending) {
-  struct slot *x = &c->slots[slot];
-  CHECK_EQ(set_of_slot(c, slot), set_of_line(c, line));
-  CHECK(!(x->flags & F_PENDING));
-  if (!c->scan && (x->flags & F_VALID)) table_del(c, x->line);
+  const uint64_t s = set_of_slot(c, slot);
+  CHECK_EQ(s, set_of_line(c, line));
+  struct set *st = set_get(c, s);
+  const uint64_t in_set = slot - s * c->ways;
+  struct slot *x;
+  if (in_set < c->ways - st->used) {
+    /* A never-used slot: only the lowest-ranked one (cache_victim's) may be
+     * taken; it joins the list at the head. */
+    CHECK_EQ(in_set, c->ways - st->used - 1);
+    if (st->used == st->cap) {
+      uint64_t cap = st->cap ? 2ull * st->cap : 1;
+      if (cap > c->ways) cap = c->ways;
+      st->vec = xrealloc(st->vec, cap * sizeof *st->vec);
+      c->vec_bytes += (cap - st->cap) * sizeof *st->vec;
+      st->cap = (uint32_t)cap;
+    }
+    x = &st->vec[st->used];
+    memset(x, 0, sizeof *x);
+    x->prev = CACHE_NONE;
+    x->next = st->used ? st->head : CACHE_NONE;
+    if (st->used) slot_at(c, st, st->head)->prev = slot;
+    else st->tail = slot;
+    st->head = slot;
+    st->used++;
+  } else {
+    x = slot_at(c, st, slot);
+    CHECK(!(x->flags & F_PENDING));
+    if (!c->scan && (x->flags & F_VALID)) table_del(c, x->line);
+    to_head(c, st, slot);
+  }
   x->line = line;
-  x->flags = F_VALID | (dirty ? F_DIRTY : 0) | (pending ? F_PENDING : 0);
+  x->flags = (uint8_t)(F_VALID | (dirty ? F_DIRTY : 0) | (pending ? F_PENDING : 0));
   if (!c->scan) table_put(c, line, slot);
-  cache_touch(c, slot);
 }

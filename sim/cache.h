@@ -1,5 +1,8 @@
 /* One cache: set-associative or fully associative, LRU within a set, lines of
- * 2^lg2_line bytes. Tags and state only (values live on the host). A line may
+ * 2^lg2_line bytes. Tags and state only (values live on the host), allocated
+ * as lines arrive: host memory follows the lines a run touches (about 50 bytes
+ * each), not the configured size, so a 16 GiB cache costs what a small one
+ * does on the same work. A line may
  * be pending (allocated, its fill not yet back): it is never chosen as a
  * victim. The caller decides what a hit, a miss or an eviction costs; this
  * module only keeps the contents. Used for the L1s and the L2. */
@@ -19,9 +22,6 @@ struct cache_params {
 const char *cache_params_problem(const struct cache_params *p);
 
 struct cache;
-
-/* The host bytes cache_create(p) allocates (p usable). */
-uint64_t cache_host_bytes(const struct cache_params *p);
 
 /* p must pass cache_params_problem (CHECKed). Caller destroys. */
 struct cache *cache_create(const struct cache_params *p);
@@ -47,8 +47,17 @@ bool cache_pending(const struct cache *c, uint32_t slot);
 void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bool pending);
 void cache_set_dirty(struct cache *c, uint32_t slot);
 void cache_set_pending(struct cache *c, uint32_t slot, bool pending);
+/* A word and a byte the owner keeps with each slot (the L2: the head of a
+ * pending line's waiter list, the class of the access that missed); 0 until
+ * set, and kept across installs. */
+uint32_t cache_word(const struct cache *c, uint32_t slot);
+void cache_set_word(struct cache *c, uint32_t slot, uint32_t v);
+uint8_t cache_byte(const struct cache *c, uint32_t slot);
+void cache_set_byte(struct cache *c, uint32_t slot, uint8_t v);
 
 /* Lines the cache holds at most. */
 uint64_t cache_lines(const struct cache *c);
+/* Host bytes it holds now: page tables, the pages written so far, the table. */
+uint64_t cache_host_bytes(const struct cache *c);
 
 #endif

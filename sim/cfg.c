@@ -7,7 +7,6 @@
 #include "sim/cfg.h"
 
 #include <errno.h>
-#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,6 +14,7 @@
 #include <yaml.h>
 
 #include "sim/err.h"
+#include "sim/scalar.h"
 
 #define PN_ALIAS 3 /* pool node kind besides enum cfg_kind */
 #define PN_NONE UINT32_MAX
@@ -201,12 +201,25 @@ static bool on_event(struct loader *L, const yaml_event_t *ev, bool *done) {
     return true;
   case YAML_SCALAR_EVENT: {
     size_t len = ev->data.scalar.length;
+    const char *text = (const char *)ev->data.scalar.value;
     if (len > CFG_MAX_SCALAR_BYTES)
       return err_set(L->e, L->d->file, line, col, "scalar too long (got %zu bytes, expected at most %u)",
                      len, CFG_MAX_SCALAR_BYTES);
+    /* A "\0" escape (or \x00, \u0000) would cut the text short: "4\0xyz"
+     * would read as 4. */
+    if (memchr(text, '\0', len))
+      return err_set(L->e, L->d->file, line, col,
+                     "a NUL character (\\0) in a %s (got '%s\\0...', expected text without one)",
+                     at_key(L) ? "key" : "value", text);
+    enum scalar_why w = at_key(L) ? scalar_text(text) : SCALAR_OK;
+    if (w != SCALAR_OK)
+      return err_set(L->e, L->d->file, line, col,
+                     "key: %s (got '%s', expected a key without whitespace around it or control "
+                     "characters)",
+                     scalar_why_text(w), text);
     uint32_t i = node_add(L, CFG_SCALAR, ev->start_mark, ev->data.scalar.anchor);
     if (!i) return false;
-    L->pool[i].text = str_add(L, (const char *)ev->data.scalar.value, len);
+    L->pool[i].text = str_add(L, text, len);
     child_done(L, i);
     return true;
   }
@@ -351,11 +364,18 @@ static bool load(struct cfg_doc *d, const char *text, size_t len, struct err *e)
     yaml_event_t ev;
     if (!yaml_parser_parse(&p, &ev)) {
       const char *what = p.problem ? p.problem : "malformed YAML";
-      yaml_mark_t m = p.problem_mark;
-      if (p.context)
-        err_set(e, d->file, (int)m.line + 1, (int)m.column + 1, "YAML syntax: %s %s", what, p.context);
-      else
-        err_set(e, d->file, (int)m.line + 1, (int)m.column + 1, "YAML syntax: %s", what);
+      int line = (int)p.problem_mark.line + 1, col = (int)p.problem_mark.column + 1;
+      if (p.error == YAML_READER_ERROR) {
+        /* A byte libyaml cannot read (a raw NUL, a bad UTF-8 sequence): it
+         * gives the byte's offset, not a mark. */
+        if (p.problem_offset <= len) text_position(text, p.problem_offset, &line, &col);
+        err_set(e, d->file, line, col, "YAML syntax: %s (byte 0x%02x)", what,
+                (unsigned)p.problem_value & 0xffu);
+      } else if (p.context) {
+        err_set(e, d->file, line, col, "YAML syntax: %s %s", what, p.context);
+      } else {
+        err_set(e, d->file, line, col, "YAML syntax: %s", what);
+      }
       ok = false;
       break;
     }
@@ -389,9 +409,10 @@ static bool size_ok(const struct cfg_doc *d, const char *text, size_t len, struc
 bool cfg_load_file(struct cfg_doc *d, const char *path, struct err *e) {
   memset(d, 0, sizeof *d);
   snprintf(d->file, sizeof d->file, "%s", path);
-  FILE *f = fopen(path, "rb");
-  if (!f) return err_set(e, path, 0, 0, "cannot open: %s", strerror(errno));
-  /* Read at most one byte past the limit: a device or pipe that never ends
+  const char *why;
+  FILE *f = err_fopen_regular(path, &why); /* a pipe or device is refused unopened */
+  if (!f) return err_set(e, path, 0, 0, "cannot open: %s", why);
+  /* Read at most one byte past the limit: a file that grows as it is read
    * is refused like a large file. */
   char *buf = xmalloc(CFG_MAX_FILE_BYTES + 2);
   size_t n = fread(buf, 1, CFG_MAX_FILE_BYTES + 1, f);
@@ -460,11 +481,11 @@ static bool expect_scalar(const struct cfg_doc *d, const struct cfg_node *n, con
 bool cfg_f64(const struct cfg_doc *d, const struct cfg_node *n, const char *path, double lo,
              double hi, double *out, struct err *e) {
   if (!expect_scalar(d, n, path, "a number", e)) return false;
-  char *end = NULL;
-  errno = 0;
-  double v = strtod(n->text, &end);
-  if (end == n->text || *end != '\0' || errno == ERANGE || !isfinite(v))
-    return cfg_fail(d, n, path, e, "not a number (got '%s', expected a number)", n->text);
+  double v = 0;
+  enum scalar_why w = scalar_f64(n->text, &v);
+  if (w != SCALAR_OK)
+    return cfg_fail(d, n, path, e, "not a number%s%s (got '%s', expected a decimal number)",
+                    w == SCALAR_SYNTAX ? "" : ": ", scalar_why_text(w), n->text);
   if (v < lo || v > hi)
     return cfg_fail(d, n, path, e, "out of range (got %s, expected %g to %g)", n->text, lo, hi);
   *out = v;
@@ -475,15 +496,15 @@ bool cfg_u64(const struct cfg_doc *d, const struct cfg_node *n, const char *path
              uint64_t hi, uint64_t *out, struct err *e) {
   if (!expect_scalar(d, n, path, "a whole number", e)) return false;
   const char *s = n->text;
-  char *end = NULL;
-  errno = 0;
-  unsigned long long v = (s[0] >= '0' && s[0] <= '9') ? strtoull(s, &end, 0) : 0;
-  if (!end || end == s || *end != '\0' || errno == ERANGE)
-    return cfg_fail(d, n, path, e, "not a whole number (got '%s', expected %llu to %llu)", s,
-                    (unsigned long long)lo, (unsigned long long)hi);
-  if (v < lo || v > hi)
+  uint64_t v = 0;
+  enum scalar_why w = scalar_u64(s, &v);
+  if (w == SCALAR_OVERFLOW || (w == SCALAR_OK && (v < lo || v > hi)))
     return cfg_fail(d, n, path, e, "out of range (got %s, expected %llu to %llu)", s,
                     (unsigned long long)lo, (unsigned long long)hi);
+  if (w != SCALAR_OK)
+    return cfg_fail(d, n, path, e, "not a whole number%s%s (got '%s', expected %llu to %llu)",
+                    w == SCALAR_SYNTAX ? "" : ": ", scalar_why_text(w), s, (unsigned long long)lo,
+                    (unsigned long long)hi);
   *out = v;
   return true;
 }
@@ -502,6 +523,12 @@ bool cfg_str(const struct cfg_doc *d, const struct cfg_node *n, const char *path
   if (!expect_scalar(d, n, path, "a string", e)) return false;
   size_t len = strlen(n->text);
   if (len == 0) return cfg_fail(d, n, path, e, "empty string");
+  enum scalar_why w = scalar_text(n->text);
+  if (w != SCALAR_OK)
+    return cfg_fail(d, n, path, e,
+                    "%s (got '%s', expected text without whitespace around it or control "
+                    "characters)",
+                    scalar_why_text(w), n->text);
   if (len >= cap)
     return cfg_fail(d, n, path, e, "too long (got %zu characters, expected at most %u)", len,
                     cap - 1);

@@ -165,8 +165,9 @@ bool din_read_file(const char *path, din_record_fn fn, void *ctx, uint64_t *reco
                    struct err *e) {
   uint64_t records = 0;
   if (records_out) *records_out = 0;
-  FILE *f = fopen(path, "rb");
-  if (!f) return err_set(e, path, 0, 0, "cannot open din trace: %s", strerror(errno));
+  const char *why;
+  FILE *f = err_fopen_regular(path, &why);
+  if (!f) return err_set(e, path, 0, 0, "cannot open din trace: %s", why);
   bool ok = true;
   char *line = NULL;
   size_t cap = 0;

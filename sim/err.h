@@ -5,6 +5,8 @@
 #define RTSIM_SIM_ERR_H
 
 #include <stdbool.h>
+#include <stddef.h>
+#include <stdio.h>
 
 #define ERR_FILE_MAX 512
 #define ERR_MSG_MAX 1024
@@ -21,6 +23,11 @@ struct err {
  * Always returns false so callers can write `return err_set(...)`. */
 bool err_set(struct err *e, const char *file, int line, int col, const char *fmt, ...)
     __attribute__((format(printf, 5, 6)));
+
+/* Copy s into out (cap bytes, cut short to fit) with its control characters
+ * written as escapes (\n, \r, \t, \xNN), so that a message quoting user
+ * text stays one line. err_set does it to every file name and message. */
+void err_escape(char *out, size_t cap, const char *s);
 
 /* Format as "file:line:col: error: msg" (parts omitted when unknown). */
 void err_format(const struct err *e, char *buf, unsigned buf_size);
@@ -89,6 +96,18 @@ static inline struct err_value err_value_pointer(const volatile void *v) {
            default: err_value_pointer)(x)
 _Noreturn void err_check_op_failed(const char *file, int line, const char *a, const char *op,
                                    const char *b, struct err_value va, struct err_value vb);
+
+/* Open a user's input file for reading (binary), refusing anything but a
+ * regular file before it is opened: a named pipe would block forever, a
+ * device would never end or act on being opened. stat first, then open with
+ * O_NONBLOCK (so a file swapped for a pipe in between cannot block) and fstat
+ * again. On failure returns NULL and sets *why to a reason for a message:
+ * the system's ("No such file or directory") or "not a regular file (a named
+ * pipe)". */
+FILE *err_fopen_regular(const char *path, const char **why);
+/* The same check without opening, for a reader that opens the file by name
+ * itself (a library): NULL when path is a regular file, else the reason. */
+const char *err_not_regular(const char *path);
 
 /* malloc/calloc/realloc that abort with a clear message on exhaustion. */
 void *xmalloc(unsigned long long size);

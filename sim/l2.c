@@ -1,5 +1,5 @@
-/* The L2's state: the tag array (sim/cache.h), per slot the head of its
- * waiter list and the class of the miss; a pool of request records (stalled
+/* The L2's state: the tag array (sim/cache.h), which keeps per slot the head
+ * of its waiter list and the class of the miss; a pool of request records (stalled
  * accesses and waiters on pending lines); the miss queue (slots whose fetch
  * the DRAM has not yet taken) and the write buffer (lines to write back), both
  * FIFO rings. Events: a miss leaving for the DRAM, a write-back entering the
@@ -64,8 +64,6 @@ struct l2 {
   struct dram *dram;
   struct cache *tags;
   uint64_t *bank_free;
-  uint32_t *waiters; /* per slot: head of its waiter list (reqs), newest first */
-  uint8_t *miss_cls; /* per slot: class of the access that missed */
   uint32_t mshr_used;
   uint32_t wb_used; /* write-buffer places taken (reserved at eviction) */
   struct req *reqs;
@@ -158,8 +156,8 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
         uint32_t w = req_new(l2);
         l2->reqs[w] = *r;
         l2->reqs[w].ready_at = ready;
-        l2->reqs[w].next = l2->waiters[slot];
-        l2->waiters[slot] = w;
+        l2->reqs[w].next = cache_word(l2->tags, slot);
+        cache_set_word(l2->tags, slot, w);
       }
     } else {
       l2->st.hits++;
@@ -184,14 +182,14 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
   l2->st.fetch_bytes += LINE_BYTES;
   l2->st.fetch_bytes_by_class[r->cls] += LINE_BYTES;
   timeline_point(l2->tl, l2->col.misses, start, 1.0);
-  l2->miss_cls[victim] = r->cls;
-  l2->waiters[victim] = NONE;
+  cache_set_byte(l2->tags, victim, (uint8_t)r->cls);
+  cache_set_word(l2->tags, victim, NONE);
   if (r->waiter) {
     uint32_t w = req_new(l2);
     l2->reqs[w] = *r;
     l2->reqs[w].ready_at = ready;
     l2->reqs[w].next = NONE;
-    l2->waiters[victim] = w;
+    cache_set_word(l2->tags, victim, w);
   }
   engine_at(l2->eng, ready, ev_to_dram, l2, victim);
   return true;
@@ -325,7 +323,7 @@ static bool take_back(struct l2 *l2, uint32_t slot, uint64_t t) {
     l2->wb_used--;
     l2->st.writeback_bytes -= LINE_BYTES;
     l2->st.fetch_bytes -= LINE_BYTES;
-    l2->st.fetch_bytes_by_class[l2->miss_cls[slot]] -= LINE_BYTES;
+    l2->st.fetch_bytes_by_class[cache_byte(l2->tags, slot)] -= LINE_BYTES;
     l2->st.write_buffer_hits++;
     cache_set_dirty(l2->tags, slot);
     fill(l2, slot, t, false);
@@ -366,13 +364,13 @@ static void ev_held_merge(void *ctx, uint64_t r) {
 static void fill(struct l2 *l2, uint32_t s, uint64_t t, bool from_dram) {
   cache_set_pending(l2->tags, s, false);
   l2->mshr_used--;
-  unsigned cls = l2->miss_cls[s];
+  unsigned cls = cache_byte(l2->tags, s);
   if (from_dram) {
     timeline_point(l2->tl, l2->col.read_bytes, t, LINE_BYTES);
     timeline_point(l2->tl, l2->col.read_class0 + cls, t, LINE_BYTES);
   }
-  uint32_t w = l2->waiters[s];
-  l2->waiters[s] = NONE;
+  uint32_t w = cache_word(l2->tags, s);
+  cache_set_word(l2->tags, s, NONE);
   /* Waiters were pushed newest first: answer them oldest first. */
   uint32_t prev = NONE;
   while (w != NONE) {
@@ -428,9 +426,6 @@ struct l2 *l2_create(const struct l2_params *p, struct engine *e, struct timelin
   l2->client = *client;
   struct cache_params cp = {p->size_bytes, p->ways, L2_LG2_LINE};
   l2->tags = cache_create(&cp);
-  uint64_t lines = cache_lines(l2->tags);
-  l2->waiters = xmalloc(lines * sizeof *l2->waiters);
-  l2->miss_cls = xcalloc(lines, 1);
   l2->bank_free = xcalloc(p->banks, sizeof *l2->bank_free);
   l2->req_free = NONE;
   l2->stall_head = l2->stall_tail = NONE;
@@ -444,8 +439,6 @@ void l2_destroy(struct l2 *l2) {
   free(l2->wb.v);
   free(l2->reqs);
   free(l2->bank_free);
-  free(l2->miss_cls);
-  free(l2->waiters);
   cache_destroy(l2->tags);
   free(l2);
 }

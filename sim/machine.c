@@ -108,17 +108,6 @@ struct dram_params machine_dram_params(const struct machine_params *p) {
   return d;
 }
 
-uint64_t machine_cache_host_bytes(const struct machine_params *p) {
-  struct cache_params l2 = {p->l2_size_bytes, p->l2_ways, MACHINE_LG2_LINE};
-  /* The L2 keeps a waiter list head (4 bytes) and a class (1) a line. */
-  uint64_t b = cache_host_bytes(&l2) + (p->l2_size_bytes >> MACHINE_LG2_LINE) * 5;
-  if (p->l1_size_bytes) {
-    struct cache_params l1 = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE};
-    b += (uint64_t)p->cores * cache_host_bytes(&l1);
-  }
-  return b;
-}
-
 uint64_t machine_core_khz(const struct machine_params *p) {
   return (uint64_t)llround(p->clock_ghz * 1e6);
 }

@@ -126,10 +126,6 @@ struct machine_stats {
  * without a position; the config reader checks each value where it is). */
 const char *machine_params_problem(const struct machine_params *p);
 
-/* The host bytes the machine's tag arrays take (every L1 and the L2, with
- * the L2's per-line state): what a config's cache sizes cost before a run. */
-uint64_t machine_cache_host_bytes(const struct machine_params *p);
-
 /* The DRAM's parameters in p (for fidelity analytic, the channel's: the
  * figures its bounds read), and the core clock in whole kHz as the DRAM
  * converts it (for a DRAM built alone: rtsim dram-replay). */

@@ -1,7 +1,6 @@
 /* One table of keys drives reading, --set, checking and writing. */
 #include "sim/machine_cfg.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdlib.h>
@@ -10,6 +9,7 @@
 #include "sim/cfg.h"
 #include "sim/dram_banked.h"
 #include "sim/err.h"
+#include "sim/scalar.h"
 #include "sim/stats.h"
 
 enum kind { K_U32, K_U64, K_F64, K_SIZE, K_WAYS, K_ENUM, K_MAPPING };
@@ -200,22 +200,26 @@ void machine_cfg_defaults(struct machine_cfg *c) {
   p->sample_seed = 1;
 }
 
-/* "512KiB", "4MiB", "1GiB", "64B" or a plain number of bytes. */
-static bool parse_size(const char *s, uint64_t *out) {
-  if (!(s[0] >= '0' && s[0] <= '9')) return false;
-  char *end = NULL;
-  errno = 0;
-  unsigned long long v = strtoull(s, &end, 10);
-  if (errno == ERANGE || end == s) return false;
+/* "512KiB", "4MiB", "1GiB", "64B" or a plain number of bytes: the number
+ * under scalar.h's rule (so 010KiB is refused, as 010 is for a count). */
+static enum scalar_why parse_size(const char *s, uint64_t *out) {
+  enum scalar_why w = scalar_text(s);
+  if (w != SCALAR_OK) return w;
+  size_t digits = strspn(s, "0123456789");
+  const char *unit = s + digits;
   unsigned shift = 0;
-  if (*end == '\0' || strcmp(end, "B") == 0) shift = 0;
-  else if (strcmp(end, "KiB") == 0) shift = 10;
-  else if (strcmp(end, "MiB") == 0) shift = 20;
-  else if (strcmp(end, "GiB") == 0) shift = 30;
-  else return false;
-  if (shift && v > (UINT64_MAX >> shift)) return false;
-  *out = (uint64_t)v << shift;
-  return true;
+  if (*unit == '\0' || strcmp(unit, "B") == 0) shift = 0;
+  else if (strcmp(unit, "KiB") == 0) shift = 10;
+  else if (strcmp(unit, "MiB") == 0) shift = 20;
+  else if (strcmp(unit, "GiB") == 0) shift = 30;
+  else return SCALAR_SYNTAX;
+  uint64_t v = 0;
+  w = scalar_u64_n(s, digits, &v);
+  if (w == SCALAR_EMPTY) return SCALAR_SYNTAX; /* a unit alone */
+  if (w != SCALAR_OK) return w;
+  if (shift && v > (UINT64_MAX >> shift)) return SCALAR_OVERFLOW;
+  *out = v << shift;
+  return SCALAR_OK;
 }
 
 /* Read node n (a scalar) as key k into p. */
@@ -243,9 +247,15 @@ static bool read_value(const struct cfg_doc *d, const struct cfg_node *n, const 
   }
   case K_SIZE: {
     uint64_t v = 0;
-    if (n->kind != CFG_SCALAR || !parse_size(n->text, &v))
+    enum scalar_why w = n->kind == CFG_SCALAR ? parse_size(n->text, &v) : SCALAR_SYNTAX;
+    if (w == SCALAR_OVERFLOW)
+      return cfg_fail(d, n, k->name, e, "out of range (got %s, expected %.0f to %.0f bytes)",
+                      n->text, k->lo, k->hi);
+    if (w != SCALAR_OK)
       return cfg_fail(d, n, k->name, e,
-                      "not a size (got '%s', expected bytes such as 4096, 512KiB, 4MiB or 1GiB)",
+                      "not a size%s%s (got '%s', expected bytes such as 4096, 512KiB, 4MiB or "
+                      "1GiB)",
+                      w == SCALAR_SYNTAX ? "" : ": ", scalar_why_text(w),
                       n->kind == CFG_SCALAR ? n->text : "a list or map");
     if ((double)v < k->lo || (double)v > k->hi)
       return cfg_fail(d, n, k->name, e, "out of range (got %s, expected %.0f to %.0f bytes)",
@@ -282,8 +292,11 @@ static bool read_value(const struct cfg_doc *d, const struct cfg_node *n, const 
       return true;
     }
     uint64_t w;
-    if (n->kind != CFG_SCALAR || !(n->text[0] >= '0' && n->text[0] <= '9'))
-      return cfg_fail(d, n, k->name, e, "not a number of ways (got '%s', expected 1 to %.0f or full)",
+    enum scalar_why why = n->kind == CFG_SCALAR ? scalar_u64(n->text, &w) : SCALAR_SYNTAX;
+    if (why != SCALAR_OK && why != SCALAR_OVERFLOW)
+      return cfg_fail(d, n, k->name, e,
+                      "not a number of ways%s%s (got '%s', expected 1 to %.0f or full)",
+                      why == SCALAR_SYNTAX ? "" : ": ", scalar_why_text(why),
                       n->kind == CFG_SCALAR ? n->text : "a list or map", k->hi);
     if (!cfg_u64(d, n, k->name, (uint64_t)k->lo, (uint64_t)k->hi, &w, e)) return false;
     v = (uint32_t)w;
@@ -348,8 +361,11 @@ static bool load_includes(struct machine_cfg *c, struct cfg_doc *d, const char *
   int dir = slash ? (int)(slash - path) + 1 : 0;
   for (uint32_t i = 0; i < n; i++) {
     struct cfg_node *f = inc->kind == CFG_SEQ ? &inc->items[i] : inc;
-    if (f->kind != CFG_SCALAR || !f->text[0])
-      return cfg_fail(d, f, "include", e, "expected a file name");
+    if (f->kind != CFG_SCALAR) return cfg_fail(d, f, "include", e, "expected a file name");
+    enum scalar_why w = scalar_text(f->text);
+    if (w != SCALAR_OK)
+      return cfg_fail(d, f, "include", e, "%s (got '%s', expected a file name)",
+                      scalar_why_text(w), f->text);
     char sub[1024];
     if (f->text[0] == '/') snprintf(sub, sizeof sub, "%s", f->text);
     else if ((size_t)snprintf(sub, sizeof sub, "%.*s%s", dir, path, f->text) >= sizeof sub)

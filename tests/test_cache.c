@@ -1,6 +1,7 @@
 /* The cache module against a brute-force LRU (a timestamp per way, the oldest
  * replaced), for set-associative and fully associative geometries, including
  * pending lines that may not be evicted. */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -94,6 +95,48 @@ static void test_pending(void) {
   cache_destroy(c);
 }
 
+/* Tags are allocated as lines arrive: a 16 GiB cache (set-associative and
+ * fully associative) that sees the same 20,000 lines as a 4 MiB one answers
+ * the same (neither evicts: 20,000 lines fit both) and holds about the same
+ * host memory, well under 100 bytes a line touched beyond its page table. */
+static void test_lazy(void) {
+  const uint32_t ways[] = {16, 0};
+  for (int k = 0; k < 2; k++) {
+    struct cache_params small = {4u << 20, ways[k], 6}, big = {1ull << 34, ways[k], 6};
+    struct cache *a = cache_create(&small), *b = cache_create(&big);
+    const uint64_t b0 = cache_host_bytes(b);
+    uint64_t x = 11, mism = 0, hits = 0, distinct = 0;
+    static unsigned char seen[20000];
+    memset(seen, 0, sizeof seen);
+    for (int i = 0; i < 200000; i++) {
+      x = x * 6364136223846793005ull + 1442695040888963407ull;
+      uint64_t line = (x >> 33) % 20000;
+      distinct += !seen[line];
+      seen[line] = 1;
+      struct cache *cs[2] = {a, b};
+      int hit[2];
+      for (int j = 0; j < 2; j++) {
+        uint32_t s = cache_find(cs[j], line);
+        hit[j] = s != CACHE_NONE;
+        if (hit[j]) cache_touch(cs[j], s);
+        else cache_install(cs[j], cache_victim(cs[j], line), line, false, false);
+      }
+      mism += hit[0] != hit[1];
+      hits += hit[0];
+    }
+    EXPECTF(mism == 0 && hits == 200000 - distinct, "ways %u: %llu disagreements, %llu hits", ways[k],
+            (unsigned long long)mism, (unsigned long long)hits);
+    const uint64_t ha = cache_host_bytes(a), hb = cache_host_bytes(b);
+    printf("ways %u: 4 MiB holds %llu host bytes, 16 GiB %llu (%llu before any line)\n", ways[k],
+           (unsigned long long)ha, (unsigned long long)hb, (unsigned long long)b0);
+    EXPECTF(hb - b0 < 100ull * 20000 && hb <= ha + ha / 2, "ways %u: %llu host bytes against %llu",
+            ways[k], (unsigned long long)hb, (unsigned long long)ha);
+    EXPECT(b0 < (1u << 20)); /* the page table of a 16 GiB cache */
+    cache_destroy(a);
+    cache_destroy(b);
+  }
+}
+
 static void test_params(void) {
   struct cache_params bad[] = {{32, 0, 6}, {100, 0, 6}, {64 * 12, 5, 6}};
   for (unsigned i = 0; i < 3; i++) EXPECT(cache_params_problem(&bad[i]) != NULL);
@@ -106,7 +149,10 @@ int main(void) {
   run_geometry(64 * 96, 3, 500, 200000);
   run_geometry(32768, 8, 1 << 12, 300000);
   run_geometry(1 << 16, 0, 2048, 200000);
+  run_geometry(1u << 30, 16, 1 << 18, 300000); /* 16M lines, sparsely touched */
+  run_geometry(3u << 20, 12, 1 << 17, 300000); /* ways not a power of two */
   test_pending();
+  test_lazy();
   test_params();
   return testing_done("test_cache");
 }

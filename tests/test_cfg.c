@@ -240,6 +240,24 @@ int main(void) {
       {"a: &x [1]\n*x : 2\n", "t.yaml:2:1: error: a key must be a plain word, not a list or map"},
       {"&x k: 1\n*x : 2\n", "t.yaml:2:1: error: duplicate key 'k' (first at line 1)"},
       {"k: 1\n---\nk: [\n", ""}, /* the first document only */
+      /* Strict numbers (sim/scalar.h): the whole text, no whitespace around
+       * it, no leading zero; a NUL escape refused where it is written. */
+      {"k: .5\n", ""},
+      {"k: 2.5e-01\n", ""},
+      {"k: \" 3\"\n", "t.yaml:1:4: error: k: not a number: whitespace before or after it (got ' 3', expected a decimal number)"},
+      {"k: \"3 \"\n", "t.yaml:1:4: error: k: not a number: whitespace before or after it (got '3 '"},
+      {"k: \"\\n1.5\"\n", "t.yaml:1:4: error: k: not a number: whitespace before or after it (got '\\n1.5'"},
+      {"k: 01.5\n", "t.yaml:1:4: error: k: not a number: a leading zero, ambiguous between octal and decimal (got '01.5'"},
+      {"k: 1e-400\n", "t.yaml:1:4: error: k: not a number: too small (it would read as 0) (got '1e-400'"},
+      {"k: 0x8\n", "t.yaml:1:4: error: k: not a number (got '0x8'"},
+      {"k: \"4\\0xyz\"\n", "t.yaml:1:4: error: a NUL character (\\0) in a value (got '4\\0...', expected text without one)"},
+      {"k: \"4\\x00\"\n", "t.yaml:1:4: error: a NUL character (\\0) in a value"},
+      {"k: \"4\\u0000\"\n", "t.yaml:1:4: error: a NUL character (\\0) in a value"},
+      {"k: 1\n\"k\\0x\": 2\n", "t.yaml:2:1: error: a NUL character (\\0) in a key (got 'k\\0...'"},
+      {"\" k\": 1\n", "t.yaml:1:1: error: key: whitespace before or after it (got ' k'"},
+      {"\"k\\t\": 1\n", "t.yaml:1:1: error: key: whitespace before or after it (got 'k\\t'"},
+      {"\"a\\nb\": 1\n", "t.yaml:1:1: error: key: a control character in it (got 'a\\nb'"},
+      {"\"\": 1\n", "t.yaml:1:1: error: key: empty"},
   };
   char buf[2048];
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -256,9 +274,39 @@ int main(void) {
   struct err e;
   memset(&e, 0, sizeof e);
   EXPECT(cfg_load_text(&d, "g.yaml",
-                       "n: 0x40\npolicy: lru\nv: [1, 2.5, -3]\nb: true\ns: hello\nneg: -1\n", &e));
+                       "n: 64\npolicy: lru\nv: [1, 2.5, -3]\nb: true\ns: hello\nneg: -1\n"
+                       "oct: 010\nhex: 0x40\nsp: ' 4'\nbig: 18446744073709551616\n"
+                       "ws: 'a '\ntab: \"a\\tb\"\n",
+                       &e));
   uint64_t u = 0;
   EXPECT(cfg_u64(&d, cfg_get(&d.root, "n"), "n", 0, 100, &u, &e) && u == 64);
+  /* One rule for leading zeros: 010 is neither octal 8 nor 10; no hex. */
+  static const struct {
+    const char *key, *want;
+  } bad_u64[] = {
+      {"oct", "oct: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 0 to 100)"},
+      {"hex", "hex: not a whole number (got '0x40', expected 0 to 100)"},
+      {"sp", "sp: not a whole number: whitespace before or after it (got ' 4', expected 0 to 100)"},
+      {"big", "big: out of range (got 18446744073709551616, expected 0 to 100)"},
+  };
+  for (size_t i = 0; i < sizeof bad_u64 / sizeof bad_u64[0]; i++) {
+    memset(&e, 0, sizeof e);
+    u = 12345;
+    EXPECT(!cfg_u64(&d, cfg_get(&d.root, bad_u64[i].key), bad_u64[i].key, 0, 100, &u, &e));
+    EXPECTF(u == 12345 && strstr(e.msg, bad_u64[i].want), "%s: %s", bad_u64[i].key, e.msg);
+  }
+  /* Strings: no whitespace around them, no control characters. */
+  char str[64];
+  memset(&e, 0, sizeof e);
+  EXPECT(!cfg_str(&d, cfg_get(&d.root, "ws"), "ws", str, sizeof str, &e));
+  EXPECTF(strstr(e.msg, "ws: whitespace before or after it (got 'a '") && e.line == 11, "%s",
+          e.msg);
+  memset(&e, 0, sizeof e);
+  EXPECT(!cfg_str(&d, cfg_get(&d.root, "tab"), "tab", str, sizeof str, &e));
+  EXPECTF(strstr(e.msg, "tab: a control character in it (got 'a\\tb'"), "%s", e.msg);
+  memset(&e, 0, sizeof e);
+  EXPECT(cfg_str(&d, cfg_get(&d.root, "policy"), "policy", str, sizeof str, &e) &&
+         !strcmp(str, "lru"));
   int which = -1;
   static const char *const pol[] = {"fifo", "lru", "random", NULL};
   EXPECT(cfg_enum(&d, cfg_get(&d.root, "policy"), "policy", pol, &which, &e) && which == 1);

@@ -2,7 +2,10 @@
  * command line gets one line naming file:line:col (where there is one), exit
  * code 2, and no output file. Fixtures live in tests/data/scenes. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "testing.h"
@@ -60,7 +63,7 @@ static void test_hostile_yaml(void) {
       {RTSIM_TMP "/hostile_big.yaml",
        "hostile_big.yaml:1:1048577: error: file too large (got more than 1048576 bytes, expected at "
        "most 1048576)"},
-      {"/dev/zero", "/dev/zero:1:1048577: error: file too large"},
+      {"/dev/zero", "/dev/zero: error: cannot open: not a regular file (a character device)"},
   };
   char cmd[2048], out[8192];
   const char *img = RTSIM_TMP "/cli_hostile.exr";
@@ -80,7 +83,309 @@ static void test_hostile_yaml(void) {
   unlink(big);
 }
 
+/* Scenes past the triangle cap (README: Limits) are refused from their
+ * counts, before anything is built: quickly, in little memory, exit 2 and one
+ * line at the entry that crosses the cap with its figures. Every case is
+ * past the cap's hard maximum (100M), so it is refused on any host. */
+static void test_huge_scenes(void) {
+#ifdef __SANITIZE_ADDRESS__
+  const char *guard = "";
+#else
+  const char *guard = "ulimit -v 1048576; ";
+#endif
+  const char *room = RTSIM_TMP "/huge_room.yaml", *grove = RTSIM_TMP "/huge_grove.yaml",
+             *flake = RTSIM_TMP "/huge_flake.yaml", *mesh = RTSIM_TMP "/huge_mesh.yaml",
+             *ply = RTSIM_TMP "/huge_faces.ply";
+  const char *cam = "camera: {from: [0, -5, 1], at: [0, 0, 0]}\ngeometry:\n";
+  write_file(room, cam, "  - {generator: room, detail: 200}\n", 23, ""); /* 102M */
+  write_file(grove, cam, "  - {generator: grove, detail: 200}\n", 4, ""); /* 131M */
+  write_file(flake, cam, "  - {generator: sphereflake, detail: 6, tessellation: 64}\n", 1, "");
+  write_file(mesh, cam, "  - {mesh: huge_faces.ply}\n", 1, "");
+  /* 120M faces of at least 4 bytes: a sparse file of 480 MB the header's
+   * counts fit in, so only the triangle cap refuses it. */
+  const char *head = "ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
+                     "property uchar x\nproperty uchar y\nproperty uchar z\n"
+                     "element face 120000000\nproperty list uchar uchar vertex_indices\n"
+                     "end_header\n";
+  write_file(ply, head, "", 0, "");
+  EXPECT(truncate(ply, (off_t)(strlen(head) + 9 + 480000000ull)) == 0);
+  static const struct {
+    const char *path, *want;
+  } cases[] = {
+      {RTSIM_TMP "/huge_room.yaml", "error: geometry[%u]: too many triangles: this entry builds "
+       "4446498, the scene would have "},
+      {RTSIM_TMP "/huge_grove.yaml", "error: geometry[%u]: too many triangles: this entry builds "
+       "32808512, the scene would have "},
+      {RTSIM_TMP "/huge_flake.yaml", "huge_flake.yaml:3:5: error: geometry[0]: too many "
+       "triangles: this entry builds 29386555394, the scene would have 29386555394, expected at "
+       "most "},
+      {RTSIM_TMP "/huge_mesh.yaml", "huge_mesh.yaml:3:5: error: geometry[0]: too many "
+       "triangles: this entry holds at least 120000000, the scene would have at least "
+       "120000000, expected at most "},
+  };
+  char cmd[2048], out[8192], want[256];
+  const char *img = RTSIM_TMP "/cli_huge.exr";
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    unlink(img);
+    snprintf(cmd, sizeof cmd, "%stimeout 20 %s render %s -o %s --width 8 --height 8", guard,
+             RTSIM_BINARY, cases[i].path, img);
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    int rc = testing_run(cmd, out, sizeof out);
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    double s = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    EXPECTF(rc == 2, "%s: exit %d (124: timed out), output: %s", cases[i].path, rc, out);
+    /* The entry that crosses the cap depends on the host's memory. */
+    bool found = false;
+    for (unsigned k = 0; k < 23 && !found; k++) {
+      snprintf(want, sizeof want, cases[i].want, k);
+      found = strstr(out, want) != NULL;
+    }
+    EXPECTF(found, "%s: got '%s', want '%s'", cases[i].path, out, cases[i].want);
+    EXPECTF(count_lines(out) == 1, "%s: expected one line, got: %s", cases[i].path, out);
+    EXPECTF(access(img, F_OK) != 0, "%s: output file left behind", cases[i].path);
+    EXPECTF(s < 5.0, "%s: refused after %.1f s (expected before building anything)",
+            cases[i].path, s);
+  }
+  unlink(room);
+  unlink(grove);
+  unlink(flake);
+  unlink(mesh);
+  unlink(ply);
+}
+
+/* assimp runs in a child process: a file that crashes it, or makes it ask
+ * for more memory than exists, is one line and exit 2 naming the file. The
+ * files are assimp's own regression models (assimp-testmodels). */
+static void test_importer_child(void) {
+  static const struct {
+    const char *mesh, *want;
+  } cases[] = {
+      {"/usr/share/assimp/models/AC/nosurfaces.ac", "nosurfaces.ac: cannot import mesh: the "
+       "importer (assimp, in a child process) gave no answer: it crashed (signal 11"},
+      {"/usr/share/assimp/models/invalid/OutOfMemory.off", "OutOfMemory.off: cannot import mesh: "
+       "std::bad_alloc"},
+  };
+  const char *scene = RTSIM_TMP "/importer_child.yaml", *img = RTSIM_TMP "/importer_child.exr";
+  char cmd[2048], out[8192], item[512];
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    if (access(cases[i].mesh, R_OK) != 0) {
+      printf("note: %s not installed (assimp-testmodels); case skipped\n", cases[i].mesh);
+      continue;
+    }
+    snprintf(item, sizeof item, "  - {mesh: \"%s\"}\n", cases[i].mesh);
+    write_file(scene, "camera: {from: [0, -5, 1], at: [0, 0, 0]}\ngeometry:\n", item, 1, "");
+    unlink(img);
+    snprintf(cmd, sizeof cmd, "timeout 60 %s render %s -o %s --width 8 --height 8", RTSIM_BINARY,
+             scene, img);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 2, "%s: exit %d (124: timed out), output: %s", cases[i].mesh, rc, out);
+    EXPECTF(strstr(out, "importer_child.yaml:3:12: error: geometry[0].mesh: ") != NULL &&
+                strstr(out, cases[i].want) != NULL,
+            "%s: got '%s', want '%s'", cases[i].mesh, out, cases[i].want);
+    EXPECTF(count_lines(out) == 1, "%s: expected one line, got: %s", cases[i].mesh, out);
+    EXPECTF(access(img, F_OK) != 0, "%s: output file left behind", cases[i].mesh);
+  }
+  unlink(scene);
+}
+
+/* #17's reproducers that need generated input: a hits row longer than the
+ * 4095 bytes the reader used to split rows at, read whole; a plot table with
+ * a NUL byte or a padded number, refused where it stands; a camera whose up
+ * is tiny but valid, accepted and the same image as a unit up. */
+static void test_strict_inputs(void) {
+  char cmd[2048], out[8192];
+  /* A long origin (0.5 and 5000 zeros) and a long tmax (1000 and 5000
+   * zeros): split at 4095 bytes, the row was an error or, worse, two rows. */
+  const char *rays = RTSIM_TMP "/cli_long_rows.csv";
+  char *zeros = malloc(5001);
+  EXPECT(zeros != NULL);
+  if (!zeros) return;
+  memset(zeros, '0', 5000);
+  zeros[5000] = '\0';
+  FILE *f = fopen(rays, "w");
+  EXPECT(f != NULL);
+  if (f) {
+    fprintf(f, "id,ox,oy,oz,dx,dy,dz,tmin,tmax\n");
+    fprintf(f, "1,0.5%s,0.5,3,0,0,-1,0,inf\n", zeros);
+    fprintf(f, "2,0.5,0.5,3,0,0,-1,0,1000.%s\n", zeros);
+    fprintf(f, "3,0.5,0.5,3,0,0,-1,0,2.%s\n", zeros);
+    fclose(f);
+  }
+  free(zeros);
+  snprintf(cmd, sizeof cmd, "%s hits %sgood_mesh.yaml < %s", RTSIM_BINARY, SCN, rays);
+  int rc = testing_run(cmd, out, sizeof out);
+  EXPECTF(rc == 0 && !strcmp(out, "id,t,prim\n1,3,0\n2,3,0\n3,inf,-1\n"), "long rows: exit %d: %s",
+          rc, out);
+  /* A row of 18 fields whose first 4095 bytes are a row of 9: it used to be
+   * answered as two rays with exit 0. */
+  f = fopen(rays, "w");
+  EXPECT(f != NULL);
+  if (f) {
+    const char *head = "1,0.5,0.5,3,0,0,-1,0,1.";
+    fprintf(f, "id,ox,oy,oz,dx,dy,dz,tmin,tmax\n%s", head);
+    for (size_t i = strlen(head); i < 4095; i++) fputc('0', f);
+    fprintf(f, "2,0.5,0.5,3,0,0,-1,0,inf\n");
+    fclose(f);
+  }
+  rc = testing_run(cmd, out, sizeof out);
+  EXPECTF(rc == 2 &&
+              strstr(out, "<stdin>:2:4097: error: unexpected text after tmax (expected 9 fields)\n") &&
+              !strstr(out, ",-1\n") && !strstr(out, ",0\n") && count_lines(out) == 2,
+          "a row split in two: exit %d: %s", rc, out);
+  /* A row past the 1 MiB bound is refused, not read without end. */
+  unlink(rays);
+  snprintf(cmd, sizeof cmd,
+           "(printf 'id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,'; head -c 2000000 /dev/zero | tr '\\0' 5) "
+           "| %s hits %sgood_mesh.yaml",
+           RTSIM_BINARY, SCN);
+  rc = testing_run(cmd, out, sizeof out);
+  EXPECTF(rc == 2 && strstr(out, "<stdin>:2:1048577: error: row too long (got more than 1048576 "
+                                  "bytes, expected at most 1048576)"),
+          "huge row: exit %d: %s", rc, out);
+
+  /* rtsim plot's table: a NUL byte cut the table short with exit 0. */
+#define TABLE(text) text, sizeof text - 1 /* the texts hold a NUL */
+  static const struct {
+    const char *text;
+    size_t len;
+    const char *want;
+  } tables[] = {
+      {TABLE("x,y\n1,2\n2,3\0\n3,4\n"), "cli_plot.csv:3:4: error: a NUL byte (expected text: a CSV holds none)"},
+      {TABLE("x,y\n1,2\n 2,3\n"), "cli_plot.csv:3:1: error: --x x: not a number: whitespace before or after it (got ' 2')"},
+      {TABLE("x,y\n1,2\n2,03\n"), "cli_plot.csv:3:3: error: --y y: not a number: a leading zero"},
+  };
+#undef TABLE
+  const char *table = RTSIM_TMP "/cli_plot.csv", *png = RTSIM_TMP "/cli_plot.png";
+  for (size_t i = 0; i < sizeof tables / sizeof tables[0]; i++) {
+    f = fopen(table, "wb");
+    EXPECT(f != NULL);
+    if (!f) continue;
+    fwrite(tables[i].text, 1, tables[i].len, f);
+    fclose(f);
+    unlink(png);
+    snprintf(cmd, sizeof cmd, "%s plot %s --x x --y y -o %s", RTSIM_BINARY, table, png);
+    rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 2 && strstr(out, tables[i].want) && count_lines(out) == 1,
+            "plot table %zu: exit %d: %s", i, rc, out);
+    EXPECTF(access(png, F_OK) != 0, "plot table %zu: a plot was written", i);
+  }
+  unlink(table);
+
+  /* up: [0, 0, 1e-30] is a valid up: the image is the unit up's, bit for bit. */
+  const char *a = RTSIM_TMP "/cli_up_unit.exr", *b = RTSIM_TMP "/cli_up_tiny.exr";
+  snprintf(cmd, sizeof cmd, "%s render %sgood_room_tiny.yaml -o %s --width 16 --height 12 && "
+           "%s render %sgood_camera_tiny_up.yaml -o %s --width 16 --height 12",
+           RTSIM_BINARY, SCN, a, RTSIM_BINARY, SCN, b);
+  rc = testing_run(cmd, out, sizeof out);
+  EXPECTF(rc == 0, "tiny up: exit %d: %s", rc, out);
+  EXPECT(rc == 0 && testing_same_rgb(a, b));
+  unlink(a);
+  unlink(b);
+}
+
+/* Inputs that are not regular files (a named pipe, a device, a directory)
+ * are refused before they are opened for reading: exit 2, one line, at once.
+ * A pipe nobody writes would block a reader forever; each command runs under
+ * `timeout` so that a regression fails (exit 124) instead of hanging. */
+static void test_not_regular(void) {
+  const char *fifo_yaml = RTSIM_TMP "/cli_fifo.yaml", *fifo_ply = RTSIM_TMP "/cli_fifo.ply",
+             *fifo_obj = RTSIM_TMP "/cli_fifo.obj", *fifo_csv = RTSIM_TMP "/cli_fifo.csv",
+             *fifo_trace = RTSIM_TMP "/cli_fifo.trace";
+  const char *const fifos[] = {fifo_yaml, fifo_ply, fifo_obj, fifo_csv, fifo_trace};
+  for (size_t i = 0; i < 5; i++) {
+    unlink(fifos[i]);
+    EXPECTF(mkfifo(fifos[i], 0600) == 0, "mkfifo %s", fifos[i]);
+  }
+  /* Scenes whose mesh is a pipe: one read by rtsim's PLY reader, one by assimp. */
+  write_file(RTSIM_TMP "/cli_mesh_ply.yaml",
+             "camera: {from: [0, -5, 1], at: [0, 0, 0]}\ngeometry:\n  - mesh: cli_fifo.ply\n", "",
+             0, "");
+  write_file(RTSIM_TMP "/cli_mesh_obj.yaml",
+             "camera: {from: [0, -5, 1], at: [0, 0, 0]}\ngeometry:\n  - mesh: cli_fifo.obj\n", "",
+             0, "");
+  const char *pipe = "not a regular file (a named pipe)";
+  static const struct {
+    const char *args, *want, *why;
+  } cases[] = {
+      {"render " RTSIM_TMP "/cli_fifo.yaml -o x.exr", "cli_fifo.yaml: error: cannot open: ", NULL},
+      {"run " RTSIM_TMP "/cli_fifo.yaml " SCN "good_room_tiny.yaml -o xfifo",
+       "cli_fifo.yaml: error: cannot open: ", NULL},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " RTSIM_TMP "/cli_fifo.yaml -o xfifo",
+       "cli_fifo.yaml: error: cannot open: ", NULL},
+      {"render " RTSIM_TMP "/cli_mesh_ply.yaml -o x.exr",
+       "cli_mesh_ply.yaml:3:11: error: geometry[0].mesh: " RTSIM_TMP
+       "/cli_fifo.ply: cannot import mesh: ",
+       NULL},
+      {"render " RTSIM_TMP "/cli_mesh_obj.yaml -o x.exr",
+       "cli_mesh_obj.yaml:3:11: error: geometry[0].mesh: " RTSIM_TMP
+       "/cli_fifo.obj: cannot import mesh: ",
+       NULL},
+      {"plot " RTSIM_TMP "/cli_fifo.csv --x a --y b -o x.png", "cli_fifo.csv: error: cannot read: ",
+       NULL},
+      {"dram-replay " RTSIM_SOURCE_DIR "/configs/tiny.yaml " RTSIM_TMP "/cli_fifo.trace",
+       "cli_fifo.trace: error: cannot open: ", NULL},
+      {"render /dev/null -o x.exr", "/dev/null: error: cannot open: ",
+       "not a regular file (a character device)"},
+      {"render " SCN " -o x.exr", "/scenes/: error: cannot open: ", "not a regular file (a directory)"},
+  };
+  char cmd[2048], out[8192];
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    snprintf(cmd, sizeof cmd, "cd %s && rm -rf xfifo && timeout 20 %s %s", RTSIM_TMP, RTSIM_BINARY,
+             cases[i].args);
+    int rc = testing_run(cmd, out, sizeof out);
+    char want[1024];
+    snprintf(want, sizeof want, "%s%s", cases[i].want, cases[i].why ? cases[i].why : pipe);
+    EXPECTF(rc == 2, "'%s': exit %d (124: it blocked), output: %s", cases[i].args, rc, out);
+    EXPECTF(strstr(out, want) != NULL, "'%s': got '%s', want '%s'", cases[i].args, out, want);
+    EXPECTF(count_lines(out) == 1, "'%s': expected one line, got: %s", cases[i].args, out);
+    EXPECTF(access(RTSIM_TMP "/x.exr", F_OK) != 0 && access(RTSIM_TMP "/xfifo", F_OK) != 0,
+            "'%s': output left behind", cases[i].args);
+  }
+  for (size_t i = 0; i < 5; i++) unlink(fifos[i]);
+  unlink(RTSIM_TMP "/cli_mesh_ply.yaml");
+  unlink(RTSIM_TMP "/cli_mesh_obj.yaml");
+}
+
+/* rtsim run's refusals come before -o DIR is touched: a complete directory
+ * keeps its stats.json (the same file), a new one is not made. */
+static void test_run_refuses_first(void) {
+  char cmd[4096], out[8192];
+  const char *dir = RTSIM_TMP "/cli_refuse";
+  snprintf(cmd, sizeof cmd, "rm -rf %s && %s run %s/configs/tiny.yaml %sgood_room_tiny.yaml -o %s "
+           "--width 4 --height 4 --rays primary",
+           dir, RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, dir);
+  EXPECTF(testing_run(cmd, out, sizeof out) == 0, "the first run: %s", out);
+  struct stat before, after;
+  EXPECT(stat(RTSIM_TMP "/cli_refuse/stats.json", &before) == 0);
+  static const char *const refused[] = {
+      /* sampling's own limit: too few work items for the fraction */
+      "--width 8 --height 8 --set sample.fraction=0.01",
+      /* more ray contexts than any host maps stacks for */
+      "--width 8 --height 8 --set cores=4096 --set threads_per_core=16 --set rays_per_thread=16",
+      /* a sampled run cannot record a whole run's DRAM trace */
+      "--width 64 --height 64 --set sample.fraction=0.5 --dram-trace " RTSIM_TMP "/cli_refuse.trace",
+  };
+  for (size_t i = 0; i < sizeof refused / sizeof refused[0]; i++)
+    for (int fresh = 0; fresh < 2; fresh++) {
+      const char *d = fresh ? RTSIM_TMP "/cli_refuse_new" : dir;
+      snprintf(cmd, sizeof cmd, "rm -rf %s/cli_refuse_new && %s run %s/configs/tiny.yaml "
+               "%sgood_room_tiny.yaml -o %s %s",
+               RTSIM_TMP, RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, d, refused[i]);
+      int rc = testing_run(cmd, out, sizeof out);
+      EXPECTF(rc == 2 && count_lines(out) == 1, "'%s': exit %d: %s", refused[i], rc, out);
+      if (fresh)
+        EXPECTF(access(d, F_OK) != 0, "'%s': the directory was made", refused[i]);
+      else
+        EXPECTF(stat(RTSIM_TMP "/cli_refuse/stats.json", &after) == 0 &&
+                    after.st_ino == before.st_ino && after.st_mtim.tv_nsec == before.st_mtim.tv_nsec,
+                "'%s': the complete directory was touched", refused[i]);
+    }
+}
+
 int main(void) {
+  test_huge_scenes();
+  test_importer_child();
   static const struct {
     const char *file, *want;
   } bad[] = {
@@ -92,7 +397,7 @@ int main(void) {
       {"bad_generator.yaml", "bad_generator.yaml:3:16: error: geometry[0].generator: unknown value (got 'teapot', expected one of: sphereflake, grove, room)"},
       {"bad_detail.yaml", "bad_detail.yaml:4:13: error: geometry[0].detail: out of range (got -1, expected 0.0001 to 200)"},
       {"bad_material_ref.yaml", "bad_material_ref.yaml:4:15: error: geometry[0].material: no material named 'gold'"},
-      {"bad_mesh_missing.yaml", "bad_mesh_missing.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/no_such_mesh.obj: cannot import mesh: Unable to open file"},
+      {"bad_mesh_missing.yaml", "bad_mesh_missing.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/no_such_mesh.obj: cannot import mesh: No such file or directory"},
       {"bad_mesh_broken.yaml", "bad_mesh_broken.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/broken.ply:3: cannot import mesh: PLY header: element 'vertex': 3 instances of at least 12 bytes each cannot fit in the 2 bytes after the header"},
       {"bad_light_key.yaml", "bad_light_key.yaml:3:5: error: lights[0]: missing required key 'position'"},
       {"bad_camera_degenerate.yaml", "bad_camera_degenerate.yaml:1:31: error: camera.at: equals camera.from"},
@@ -103,6 +408,13 @@ int main(void) {
       {"bad_generator_key.yaml", "bad_generator_key.yaml:5:5: error: geometry[0].tesselation: unknown key 'tesselation' (expected one of: generator, detail, tessellation, seed)"},
       {"bad_both.yaml", "bad_both.yaml:3:5: error: geometry[0]: expected exactly one of 'generator' or 'mesh'"},
       {"no_such_scene.yaml", "no_such_scene.yaml: error: cannot open: No such file or directory"},
+      /* Strict numbers and strings (sim/scalar.h), a NUL escape, an up
+       * parallel to the view however small. */
+      {"bad_width_leading_zero.yaml", "bad_width_leading_zero.yaml:1:16: error: image.width: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 16384)"},
+      {"bad_number_space.yaml", "bad_number_space.yaml:1:52: error: camera.fov_deg: not a number: whitespace before or after it (got ' 50', expected a decimal number)"},
+      {"bad_nul.yaml", "bad_nul.yaml:1:7: error: a NUL character (\\0) in a value (got 'room\\0...', expected text without one)"},
+      {"bad_mesh_space.yaml", "bad_mesh_space.yaml:3:11: error: geometry[0].mesh: whitespace before or after it (got 'tri.obj '"},
+      {"bad_camera_up_parallel.yaml", "bad_camera_up_parallel.yaml:1:47: error: camera.up: zero or parallel to the view direction"},
   };
   char cmd[2048], out[8192];
   const char *img = RTSIM_TMP "/cli_out.exr";
@@ -124,6 +436,8 @@ int main(void) {
   }
 
   test_hostile_yaml();
+  test_not_regular();
+  test_run_refuses_first();
 
   /* Command-line mistakes: exit 2 and a message naming the problem. */
   static const struct {
@@ -194,6 +508,39 @@ int main(void) {
     EXPECTF(access(st, F_OK) != 0, "'%s': a run directory marked complete", usage[i].args);
   }
 
+  /* #17: strict numbers everywhere, one rule for leading zeros: exit 2,
+   * one line naming where, nothing written. */
+  static const struct {
+    const char *args, *want;
+  } strict[] = {
+      {"render " SCN "good_room_tiny.yaml -o x.exr --width 010", "--width: got '010' (a leading zero, ambiguous between octal and decimal), expected a whole number from 1 to 16384"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --width ' 8'", "--width: got ' 8' (whitespace before or after it)"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --seed 00", "--seed: got '00' (a leading zero"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --rays primary,", "--rays: got 'primary,'"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --rays ''", "--rays: got ''"},
+      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --sample 00.5 " SCN "good_room_tiny.yaml", "--sample: got '00.5'"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set cores=010", "--set cores=010: error: cores: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 4096)"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set l2.size=010KiB", "--set l2.size=010KiB: error: l2.size: not a size: a leading zero"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set 'clock_ghz=\n1.5'", "--set clock_ghz=\\n1.5: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5', expected a decimal number)"},
+      {"run " RTSIM_TEST_DATA "/configs/bad_nul.yaml " SCN "good_room_tiny.yaml -o xrun", "bad_nul.yaml:2:8: error: a NUL character (\\0) in a value (got '4\\0...'"},
+      {"run " RTSIM_TEST_DATA "/configs/bad_count_leading_zero.yaml " SCN "good_room_tiny.yaml -o xrun", "bad_count_leading_zero.yaml:2:8: error: cores: not a whole number: a leading zero"},
+      {"run " RTSIM_TEST_DATA "/configs/bad_size_leading_zero.yaml " SCN "good_room_tiny.yaml -o xrun", "bad_size_leading_zero.yaml:2:9: error: l2.size: not a size: a leading zero"},
+  };
+  for (size_t i = 0; i < sizeof strict / sizeof strict[0]; i++) {
+    snprintf(cmd, sizeof cmd, "cd %s && rm -rf xrun x.exr && %s %s", RTSIM_TMP, RTSIM_BINARY,
+             strict[i].args);
+    int rc = testing_run(cmd, out, sizeof out);
+    EXPECTF(rc == 2, "'%s': exit %d, output: %s", strict[i].args, rc, out);
+    EXPECTF(strstr(out, strict[i].want) != NULL, "'%s': got '%s', want '%s'", strict[i].args, out,
+            strict[i].want);
+    EXPECTF(count_lines(out) == 1, "'%s': expected one line, got: %s", strict[i].args, out);
+    char f[512];
+    snprintf(f, sizeof f, "%s/xrun/stats.json", RTSIM_TMP);
+    EXPECTF(access(f, F_OK) != 0, "'%s': a run directory marked complete", strict[i].args);
+    snprintf(f, sizeof f, "%s/x.exr", RTSIM_TMP);
+    EXPECTF(access(f, F_OK) != 0, "'%s': an image written", strict[i].args);
+  }
+
   /* --help and -h of every command succeed and print its own usage. */
   static const char *const helps[] = {"render", "export", "hits",  "bench", "traffic",
                                       "trace",  "run",    "sweep", "merge", "plot"};
@@ -212,7 +559,20 @@ int main(void) {
   } csv[] = {
       {"id,ox,oy\\n", "<stdin>:1:1: error: header: got 'id,ox,oy'"},
       {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0\\n", "<stdin>:2:"},
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,x,1,0,0,0,inf\\n", "<stdin>:2:7: error: field 4: not a number"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,x,1,0,0,0,inf\\n", "<stdin>:2:7: error: field 4 (oz): not a number (got 'x', expected a decimal number)"},
+      /* Strict fields: no whitespace, no leading zero, in range; inf only
+       * as tmax; a NUL byte refused where it stands (it used to end the
+       * row there, exit 0). */
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0, 0,0,1,0,0,0,inf\\n", "<stdin>:2:5: error: field 3 (oy): not a number: whitespace before or after it (got ' 0'"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,inf \\n", "<stdin>:2:17: error: field 9 (tmax): not a number: whitespace before or after it (got 'inf '"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n01,0,0,0,1,0,0,0,inf\\n", "<stdin>:2:1: error: id: not a whole number: a leading zero, ambiguous between octal and decimal (got '01'"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,00.5,0,0,1,0,0,0,inf\\n", "<stdin>:2:3: error: field 2 (ox): not a number: a leading zero"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,1e39\\n", "<stdin>:2:17: error: field 9 (tmax): not a number: too large (got '1e39', expected a decimal number or inf)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,inf,0,0,1,0,0,0,inf\\n", "<stdin>:2:3: error: field 2 (ox): not a number (got 'inf', expected a decimal number)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,nan\\n", "<stdin>:2:17: error: field 9 (tmax): not a number (got 'nan'"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,inf,\\n", "<stdin>:2:20: error: unexpected text after tmax (expected 9 fields)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0.5,0.5,3,0,0,-1,0,inf\\0garbage\\n", "<stdin>:2:25: error: a NUL byte (expected text: a CSV holds none)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\0\\n", "<stdin>:1:31: error: a NUL byte"},
       {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n7,0,0,0,0,0,0,0,inf\\n", "<stdin>:2:1: error: ray 7: direction is zero"},
       {"", "<stdin>: error: no input"},
   };
@@ -222,7 +582,12 @@ int main(void) {
     int rc = testing_run(cmd, out, sizeof out);
     EXPECTF(rc == 2, "csv %zu: exit %d: %s", i, rc, out);
     EXPECTF(strstr(out, csv[i].want) != NULL, "csv %zu: got '%s', want '%s'", i, out, csv[i].want);
+    /* The header line, if it was read, then the one error line. */
+    EXPECTF(count_lines(out) <= 2 && !strstr(out, "\n1,") && strncmp(out, "1,", 2),
+            "csv %zu: a row answered before the error, or more than one message: %s", i, out);
   }
+
+  test_strict_inputs();
 
   /* hits on a one-triangle mesh: exact, hand-computed answers. The mesh is the
    * triangle (0,0,0) (1,0,0) (0,1,0) scaled by 2. */

@@ -280,7 +280,35 @@ static void test_procedural(const char *name, gen_fn fn, double target, double s
   scene_fini(&d);
 }
 
+/* The closed-form counts the scene loader checks before building, against the
+ * triangles actually built: every detail the thinning, the rounding of
+ * tessellation levels and their clamps treat differently, several seeds. */
+static void test_count_formulas(void) {
+  static const double details[] = {1e-4, 0.013, 0.1, 0.37, 0.5, 0.618, 0.99, 1.0, 1.3,
+                                   2.0, 3.7, 9.0, 24.5};
+  for (size_t i = 0; i < sizeof details / sizeof details[0]; i++)
+    for (uint64_t seed = 1; seed <= 2; seed++) {
+      double d = details[i];
+      uint32_t room = gen_count(gen_room, d, seed * 77);
+      EXPECTF(room == gen_room_tri_count(d), "room detail %g seed %llu: built %u, formula %llu",
+              d, (unsigned long long)seed, room, (unsigned long long)gen_room_tri_count(d));
+      if (d > 3.0) continue; /* 40 trees per unit of detail: the small ones tell */
+      uint32_t grove = gen_count(gen_grove, d, seed * 77);
+      EXPECTF(grove == gen_grove_tri_count(d), "grove detail %g seed %llu: built %u, formula %llu",
+              d, (unsigned long long)seed, grove, (unsigned long long)gen_grove_tri_count(d));
+    }
+  /* Hand-computed: a tree is 3 (8 + 3*6 + 9*5 + 27*4 + 81*4) + 81*16*2 = 4101
+   * triangles and the ground 16*16*2; one tree below detail 1/80. */
+  EXPECT(gen_grove_tri_count(1.0) == 40 * 4101 + 512);
+  EXPECT(gen_grove_tri_count(0.001) == 4101 + 512);
+  EXPECT(gen_grove_tri_count(200.0) == 8000ull * 4101 + 512);
+  /* The room's tessellation levels stop at 256, so its count stops growing. */
+  EXPECT(gen_room_tri_count(200.0) > gen_room_tri_count(24.5));
+  EXPECT(gen_room_tri_count(1e6) == gen_room_tri_count(1e5));
+}
+
 int main(void) {
+  test_count_formulas();
   test_sphereflake_counts();
   test_sphereflake_geometry();
   test_watertight();

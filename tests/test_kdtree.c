@@ -524,7 +524,7 @@ static void run_scene(const char *name, const struct scene *s, const struct kd_b
   EXPECTF(s->tri_count > 0, "%s: empty scene", name);
   if (s->tri_count == 0) return;
   struct kd_tree kd;
-  kd_build(&kd, s, bp);
+  kd_build(&kd, s, bp, NULL);
   int md = bp->max_depth < 0 ? pbrt_max_depth(s->tri_count) : bp->max_depth;
   check_structure(name, s, &kd, md, bp->clip);
   check_rays(name, s, &kd, nrays, seed);
@@ -558,7 +558,7 @@ static void test_small_cases(void) {
   struct scene s;
   scene_init(&s);
   struct kd_tree kd;
-  kd_build(&kd, &s, &bp);
+  kd_build(&kd, &s, &bp, NULL);
   EXPECT(kd.node_count == 1 && kd_is_leaf(kd.nodes[0]) && kd_leaf_count(kd.nodes[0]) == 0);
   EXPECT(kd.stats.nodes == 1 && kd.stats.leaves == 1 && kd.stats.empty_leaves == 1);
   struct trace_ctx tr;
@@ -573,7 +573,7 @@ static void test_small_cases(void) {
   kd_fini(&kd);
   /* One triangle. */
   scene_add_tri(&s, v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0), NULL, 0);
-  kd_build(&kd, &s, &bp);
+  kd_build(&kd, &s, &bp, NULL);
   EXPECT(kd.node_count == 1 && kd_leaf_count(kd.nodes[0]) == 1);
   trace_init(&tr, &s, &kd, mem_port_native(), NULL);
   r.o = v3(0.25f, 0.25f, -1);
@@ -594,7 +594,7 @@ static void test_odd_mantissas(void) {
   soup_grid(&s, 31, 1500, true);
   bp.clip = false;
   struct kd_tree kd;
-  kd_build(&kd, &s, &bp);
+  kd_build(&kd, &s, &bp, NULL);
   uint32_t interior = kd.stats.nodes - kd.stats.leaves;
   uint32_t off = check_structure("odd soup", &s, &kd, pbrt_max_depth(s.tri_count), false);
   EXPECTF(interior > 100 && off == 0, "odd soup: %u of %u splits off the triangle bounds", off,
@@ -637,12 +637,12 @@ static void compare_clip(const char *name, const struct scene *s, int nrays, uin
   bp.clip = true;
   run_scene(name, s, &bp, nrays, seed);
   struct kd_tree kc, kw;
-  kd_build(&kc, s, &bp);
+  kd_build(&kc, s, &bp, NULL);
   bp.clip = false;
   char wname[96];
   snprintf(wname, sizeof wname, "%s whole bounds", name);
   run_scene(wname, s, &bp, nrays, seed + 1);
-  kd_build(&kw, s, &bp);
+  kd_build(&kw, s, &bp, NULL);
   uint64_t tc = tests_of(s, &kc, nrays, seed + 2), tw = tests_of(s, &kw, nrays, seed + 2);
   EXPECTF(tc < tw, "%s: clipping gave %llu triangle tests, whole bounds %llu", name,
           (unsigned long long)tc, (unsigned long long)tw);

@@ -56,6 +56,12 @@ int main(void) {
       {"bad_include_cycle.yaml", "error: include: included files nest deeper than 8"},
       {"bad_include_inner.yaml", "bad_include_inner.yaml:2:25: error: include: "},
       {"bad_include_map.yaml", "bad_include_map.yaml:2:3: error: include: expected a file name or a list of them"},
+      /* #17: a NUL escape cut the value ("4\0xyz" read as 4); counts read 010
+       * as octal 8 while sizes read it as 10; whitespace was skipped. */
+      {"bad_nul.yaml", "bad_nul.yaml:2:8: error: a NUL character (\\0) in a value (got '4\\0...', expected text without one)"},
+      {"bad_count_leading_zero.yaml", "bad_count_leading_zero.yaml:2:8: error: cores: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 4096)"},
+      {"bad_size_leading_zero.yaml", "bad_size_leading_zero.yaml:2:9: error: l2.size: not a size: a leading zero, ambiguous between octal and decimal (got '010KiB'"},
+      {"bad_number_space.yaml", "bad_number_space.yaml:1:12: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5', expected a decimal number)"},
   };
   char buf[2048];
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
@@ -87,6 +93,34 @@ int main(void) {
       {"dram.queue_structure=shared", ""},
       {"dram.command_queue=0", "--set dram.command_queue=0: error: dram.command_queue: out of range (got 0, expected 1 to 4096)"},
       {"dram.controller_cycles=0", "--set dram.controller_cycles=0: error: dram.controller_cycles: must be at least 1 with queue_structure per_bank or per_rank"},
+      /* Strict values (sim/scalar.h), one rule for counts and sizes. */
+      {"cores=10", ""},
+      {"cores=010", "--set cores=010: error: cores: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 4096)"},
+      {"cores=0x10", "--set cores=0x10: error: cores: not a whole number (got '0x10', expected 1 to 4096)"},
+      {"cores=+4", "cores: not a whole number (got '+4'"},
+      {"cores= 4", "--set cores= 4: error: cores: not a whole number: whitespace before or after it (got ' 4'"},
+      {"cores=4 ", "cores: not a whole number: whitespace before or after it (got '4 '"},
+      {"cores=", "--set cores=: error: cores: not a whole number: empty (got ''"},
+      {"cores=99999999999999999999", "cores: out of range (got 99999999999999999999, expected 1 to 4096)"},
+      {"sample.seed=007", "sample.seed: not a whole number: a leading zero"},
+      {"l2.size=1024KiB", ""},
+      {"l2.size=010KiB", "--set l2.size=010KiB: error: l2.size: not a size: a leading zero, ambiguous between octal and decimal (got '010KiB'"},
+      {"l2.size=01024", "l2.size: not a size: a leading zero"},
+      {"l1.size=00", "l1.size: not a size: a leading zero"},
+      {"l2.size= 1MiB", "l2.size: not a size: whitespace before or after it (got ' 1MiB'"},
+      {"l2.size=1MiB ", "l2.size: not a size: whitespace before or after it"},
+      {"l2.size=1 MiB", "l2.size: not a size (got '1 MiB'"},
+      {"l2.size=KiB", "l2.size: not a size (got 'KiB'"},
+      {"l2.size=18446744073709551615KiB", "l2.size: out of range (got 18446744073709551615KiB"},
+      {"l2.ways=08", "--set l2.ways=08: error: l2.ways: not a number of ways: a leading zero, ambiguous between octal and decimal (got '08', expected 1 to 268435456 or full)"},
+      {"l2.ways= full", "l2.ways: not a number of ways: whitespace before or after it (got ' full'"},
+      {"clock_ghz= 2", "--set clock_ghz= 2: error: clock_ghz: not a number: whitespace before or after it (got ' 2', expected a decimal number)"},
+      {"clock_ghz=\n1.5", "--set clock_ghz=\\n1.5: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5'"},
+      {"clock_ghz=01.5", "clock_ghz: not a number: a leading zero"},
+      {"clock_ghz=0.5", ""},
+      {"clock_ghz=inf", "clock_ghz: not a number (got 'inf'"},
+      {"dram.mapping=rochrababgco ", "--set dram.mapping=rochrababgco : error: dram.mapping: not an address mapping"},
+      {"fidelity= banked", "fidelity: unknown value (got ' banked'"},
   };
   for (size_t i = 0; i < sizeof sets / sizeof sets[0]; i++) {
     set_err(sets[i].set, buf, sizeof buf);

@@ -70,7 +70,7 @@ static void test_obj_quad(void) {
   scene_with_two(&s);
   struct meshio_xform xf = {2.0f, {10.0f, 20.0f, 30.0f}};
   struct err e = {0};
-  EXPECTF(meshio_import(&s, path, &xf, 7, &e), "%s", e.msg);
+  EXPECTF(meshio_import(&s, path, &xf, 7, UINT32_MAX, &e), "%s", e.msg);
   EXPECTF(s.tri_count == 4, "tri_count %u", s.tri_count);
   const vec3 corners[4] = {v3(0, 0, 0), v3(1, 0, 0), v3(1, 1, 0), v3(0, 1, 0)};
   bool seen[4] = {false, false, false, false};
@@ -99,7 +99,7 @@ static void test_obj_quad(void) {
   EXPECT(write_text(path, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"));
   scene_init(&s);
   struct meshio_xform id = {1.0f, {0, 0, 0}};
-  EXPECTF(meshio_import(&s, path, &id, 0, &e), "%s", e.msg);
+  EXPECTF(meshio_import(&s, path, &id, 0, UINT32_MAX, &e), "%s", e.msg);
   EXPECT(s.tri_count == 2);
   for (uint32_t i = 0; i < s.tri_count; i++)
     for (int k = 0; k < 3; k++) EXPECT(v3_same(s.tris[i].n[k], v3(0, 0, 1)));
@@ -121,7 +121,7 @@ static void test_ply_ascii(void) {
   scene_init(&s);
   struct meshio_xform xf = {0.5f, {1.0f, -2.0f, 3.0f}};
   struct err e = {0};
-  EXPECTF(meshio_import(&s, path, &xf, 3, &e), "%s", e.msg);
+  EXPECTF(meshio_import(&s, path, &xf, 3, UINT32_MAX, &e), "%s", e.msg);
   EXPECTF(s.tri_count == 4, "tri_count %u", s.tri_count);
   for (uint32_t i = 0; i < 4 && i < s.tri_count; i++) {
     EXPECT(s.tris[i].material == 3);
@@ -195,7 +195,7 @@ static void test_gltf(void) {
   scene_init(&s);
   struct meshio_xform xf = {3.0f, {1.0f, 1.0f, 1.0f}};
   struct err e = {0};
-  bool ok = meshio_import(&s, path, &xf, 2, &e);
+  bool ok = meshio_import(&s, path, &xf, 2, UINT32_MAX, &e);
   EXPECTF(ok, "glTF import failed: %s", e.msg);
   EXPECTF(s.tri_count == 2, "tri_count %u", s.tri_count);
   /* Node 0: p * 2 + (5,0,0); node 1: p + (0,0,-3); then the placement. */
@@ -287,7 +287,7 @@ static void test_export_round_trip(void) {
   struct scene r;
   scene_init(&r);
   struct meshio_xform id = {1.0f, {0, 0, 0}};
-  EXPECTF(meshio_import(&r, path, &id, 9, &e), "%s", e.msg);
+  EXPECTF(meshio_import(&r, path, &id, 9, UINT32_MAX, &e), "%s", e.msg);
   EXPECT(r.tri_count == s.tri_count);
   uint32_t bad = 0;
   for (uint32_t i = 0; i < r.tri_count && i < s.tri_count; i++)
@@ -327,7 +327,7 @@ static void expect_import_fails(const char *path) {
   uint64_t h = scene_hash(&s);
   struct meshio_xform id = {1.0f, {0, 0, 0}};
   struct err e = {0};
-  bool ok = meshio_import(&s, path, &id, 0, &e);
+  bool ok = meshio_import(&s, path, &id, 0, UINT32_MAX, &e);
   EXPECTF(!ok, "%s imported", path);
   EXPECTF(e.set && strcmp(e.file, path) == 0, "%s: err.file = '%s'", path, e.file);
   EXPECTF(strncmp(e.msg, "cannot import mesh: ", 20) == 0 && strlen(e.msg) > 20, "%s: msg '%s'",
@@ -365,7 +365,7 @@ static void test_box(void) {
   scene_init(&s);
   struct meshio_xform id = {1.0f, {0, 0, 0}};
   struct err e = {0};
-  EXPECTF(meshio_import(&s, path, &id, 0, &e), "%s", e.msg);
+  EXPECTF(meshio_import(&s, path, &id, 0, UINT32_MAX, &e), "%s", e.msg);
   EXPECTF(s.tri_count == 12, "box has %u triangles", s.tri_count);
   vec3 lo, hi;
   scene_bounds(&s, &lo, &hi);

@@ -149,7 +149,7 @@ static void check_scene(const char *path) {
   struct kd_build_params bp;
   kd_build_params_default(&bp);
   struct kd_tree kd;
-  kd_build(&kd, &s, &bp);
+  kd_build(&kd, &s, &bp, NULL);
   const uint32_t n = kd.node_count;
   uint32_t *tris = malloc(n * sizeof *tris);
   qpoint_subtree_tris(&kd, tris);

@@ -575,9 +575,6 @@ static void test_command(void) {
       {"run CFG SCN -o DIR --set l3.size=1", "unknown key 'l3.size'"},
       {"run " RTSIM_TEST_DATA "/configs/bad_size_unit.yaml SCN -o DIR", "bad_size_unit.yaml:2:9: error: l2.size"},
       {"run CFG SCN -o DIR --policy fastest", "--policy: got 'fastest'"},
-      /* Tags no host has room for (4096 L1s of 1 GiB: about 1.9 TB). */
-      {"run CFG SCN -o DIR --set cores=4096 --set l1.size=1GiB",
-       "--set l1.size=1GiB: error: the caches' tags would take 1924.1 GB of host memory"},
       {"run CFG -o DIR", "expected MACHINE.yaml SCENE.yaml, got 1 file"},
       {"run CFG SCN", "missing -o OUTDIR"},
       {"run CFG SCN -o DIR --width 0", "--width: got '0'"},

@@ -60,7 +60,7 @@ static bool measure(const char *path, double k, bool clip, struct scale_counts *
   kd_build_params_default(&bp);
   bp.clip = clip;
   struct kd_tree kd;
-  kd_build(&kd, &s, &bp);
+  kd_build(&kd, &s, &bp, NULL);
   struct trace_ctx tr;
   trace_init(&tr, &s, &kd, mem_port_native(), NULL);
   c->hits = c->occluded = 0;

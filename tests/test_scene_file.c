@@ -1,6 +1,7 @@
 /* Scene files: the committed scenes load with the paper's triangle counts,
  * meshes are placed as asked, and scene materials override generator ones. */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "renderer/scene.h"
@@ -65,6 +66,32 @@ int main(void) {
     EXPECT(flake >= 0 && s.mats[flake].mirror == 0.5f && s.mats[flake].diffuse == 0.5f);
     EXPECT(fabsf(s.mats[flake].color.y - 0.9f) < 1e-6f);
     scene_fini(&s);
+  }
+
+  /* 49,000 materials, and a mesh that names the last: each name finds its
+   * own id (the lookup is a hash, so this loads in linear time), an unknown
+   * name none. */
+  const char *many = RTSIM_TMP "/scene_many_materials.yaml";
+  FILE *f = fopen(many, "w");
+  EXPECT(f != NULL);
+  if (f) {
+    fputs("camera: {from: [0, -5, 1], at: [0, 0, 0]}\nmaterials:\n", f);
+    for (int i = 0; i < 49000; i++) fprintf(f, " m%d: {}\n", i);
+    fprintf(f, "geometry:\n  - mesh: %s/scenes/tri.obj\n    material: m48999\n", RTSIM_TEST_DATA);
+    fclose(f);
+    if (load(&s, many)) {
+      EXPECT(s.mat_count == 49000 && s.tri_count == 1 && s.tris[0].material == 48999);
+      char name[32];
+      int wrong = 0;
+      for (int i = 0; i < 49000; i++) {
+        snprintf(name, sizeof name, "m%d", i);
+        wrong += scene_find_material(&s, name) != i;
+      }
+      EXPECTF(wrong == 0, "%d of 49000 names found the wrong material", wrong);
+      EXPECT(scene_find_material(&s, "m49000") == -1 && scene_find_material(&s, "") == -1);
+      scene_fini(&s);
+    }
+    remove(many);
   }
   return testing_done("test_scene_file");
 }

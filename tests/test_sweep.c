@@ -170,6 +170,10 @@ static void test_bad_files(void) {
       {"bad_set_key.yaml", "bad_set_key.yaml:4:3: error: set.policy: unknown key 'policy'"},
       {"bad_nested.yaml", "bad_nested.yaml:4:14: error: axes.cores[1]: wrong type (got a list, expected one value)"},
       {"bad_machine.yaml", "configs/bad_size_unit.yaml:2:9: error: l2.size: not a size"},
+      /* #17: "\n1.5" was taken as 1.5 and broke --emit-jobs' one line a point. */
+      {"bad_value_newline.yaml", "bad_value_newline.yaml:4:18: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5', expected a decimal number)"},
+      {"bad_width_leading_zero.yaml", "bad_width_leading_zero.yaml:2:59: error: width: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 16384)"},
+      {"bad_path_space.yaml", "bad_path_space.yaml:1:10: error: machine: whitespace before or after it (got '../../../configs/tiny.yaml '"},
   };
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
     run("rm -rf %s/sw_bad", RTSIM_TMP);
@@ -425,7 +429,165 @@ static void test_plot(void) {
   }
 }
 
+/* Write path: a sweep over configs/tiny.yaml and scene (absolute), then axes. */
+static void write_sweep(const char *path, const char *scene, const char *axes) {
+  FILE *f = fopen(path, "w");
+  EXPECT(f != NULL);
+  if (!f) return;
+  fprintf(f, "machine: %s/configs/tiny.yaml\nworkload:\n  scene: %s\n  rays: primary\n"
+          "  width: 4\n  height: 4\naxes:\n%s",
+          RTSIM_SOURCE_DIR, scene, axes);
+  fclose(f);
+}
+
+/* A list of n values "first, first+1, ..." then extra, as a flow sequence. */
+static char *seq(unsigned first, unsigned n, const char *extra) {
+  size_t cap = (size_t)n * 12 + 64 + strlen(extra);
+  char *b = malloc(cap), *p = b;
+  p += sprintf(p, "[");
+  for (unsigned i = 0; i < n; i++) p += sprintf(p, "%s%u", i ? ", " : "", first + i);
+  sprintf(p, "%s%s]\n", extra[0] && n ? ", " : "", extra);
+  return b;
+}
+
+/* Bounded work: the point cap refuses a sweep before anything is written
+ * (--max-points raises it), a duplicate at the end of a 99,000-value axis is
+ * found (the check is n log n: it once took 20 s), a named pipe as the sweep,
+ * its machine or its scene is refused at once, and a plot of more panels
+ * than the cap is refused. */
+static void test_bounded(void) {
+  const char *scene = RTSIM_SOURCE_DIR "/scenes/small/room.yaml";
+  const char *file = RTSIM_TMP "/sw_cap.yaml", *dir = RTSIM_TMP "/sw_cap";
+  char axes[4096];
+  char *a = seq(1, 100, ""), *b = seq(0, 100, ""), *c = seq(1, 100, "");
+  snprintf(axes, sizeof axes, "  dram.latency: %s  seed: %s  timeline.window: %s", a, b, c);
+  free(a), free(b), free(c);
+  write_sweep(file, scene, axes);
+  for (int emit = 0; emit < 2; emit++) {
+    run("rm -rf %s", dir);
+    int rc = run("%s sweep %s -o %s%s", RTSIM_BINARY, file, dir, emit ? " --emit-jobs" : "");
+    EXPECTF(rc == 2 && count_lines(out) == 1 &&
+                strstr(out, "sw_cap.yaml:10:3: error: timeline.window: the sweep has 1000000 points "
+                            "(expected at most 10000: fewer values, or raise the cap with rtsim "
+                            "sweep --max-points N, up to 1000000)"),
+            "a million points: exit %d: %s", rc, out);
+    EXPECTF(!exists(dir), "a refused sweep made its directory");
+  }
+  /* 12 points: over a cap of 11, under one of 12. */
+  a = seq(1, 12, "");
+  snprintf(axes, sizeof axes, "  seed: %s", a);
+  free(a);
+  write_sweep(file, scene, axes);
+  run("rm -rf %s", dir);
+  int rc = run("%s sweep %s -o %s --emit-jobs --max-points 11", RTSIM_BINARY, file, dir);
+  EXPECTF(rc == 2 && strstr(out, "seed: the sweep has 12 points (expected at most 11:") &&
+              !exists(dir),
+          "12 points, cap 11: exit %d: %s", rc, out);
+  rc = run("(%s sweep %s -o %s --emit-jobs --max-points 12 2>/dev/null)", RTSIM_BINARY, file, dir);
+  EXPECTF(rc == 0 && count_lines(out) == 12, "12 points, cap 12: exit %d: %s", rc, out);
+  static const char *const bad_caps[] = {"0", "1000001", "1e3"};
+  for (int i = 0; i < 3; i++) {
+    rc = run("%s sweep %s -o %s --max-points %s", RTSIM_BINARY, file, dir, bad_caps[i]);
+    EXPECTF(rc == 2 && strstr(out, "--max-points: got"), "--max-points %s: %d %s", bad_caps[i], rc,
+            out);
+  }
+
+  /* 99,000 values, the last repeating the fifth: reported there, with the
+   * line of the first. Without the repeat, the whole axis is checked and the
+   * cap refuses it. */
+  a = seq(1, 98999, "5");
+  char *big = malloc(strlen(a) + 64);
+  sprintf(big, "  seed: %s", a);
+  free(a);
+  write_sweep(file, scene, big);
+  free(big);
+  run("rm -rf %s", dir);
+  rc = run("timeout 60 %s sweep %s -o %s", RTSIM_BINARY, file, dir);
+  EXPECTF(rc == 2 && count_lines(out) == 1 &&
+              strstr(out, "error: axes.seed[98999]: '5' is listed twice (first at line 8)") &&
+              !exists(dir),
+          "a repeat at the end of a long axis: exit %d: %.300s", rc, out);
+  a = seq(1, 99000, "");
+  big = malloc(strlen(a) + 64);
+  sprintf(big, "  dram.latency: %s", a);
+  free(a);
+  write_sweep(file, scene, big);
+  free(big);
+  rc = run("timeout 60 %s sweep %s -o %s", RTSIM_BINARY, file, dir);
+  EXPECTF(rc == 2 && strstr(out, "dram.latency: the sweep has 99000 points") && !exists(dir),
+          "a long axis of distinct values: exit %d: %.300s", rc, out);
+
+  /* Named pipes: as the sweep file, as its machine, as its scene. */
+  const char *fifo = RTSIM_TMP "/sw_fifo.yaml";
+  unlink(fifo);
+  EXPECT(mkfifo(fifo, 0600) == 0);
+  write_sweep(file, fifo, "  seed: [1, 2]\n");
+  rc = run("timeout 20 %s sweep %s -o %s", RTSIM_BINARY, file, dir);
+  EXPECTF(rc == 2 && count_lines(out) == 1 &&
+              strstr(out, "sw_fifo.yaml: error: cannot open: not a regular file (a named pipe)") &&
+              !exists(dir),
+          "a pipe as the scene: exit %d (124: it blocked): %s", rc, out);
+  rc = run("timeout 20 %s sweep %s -o %s", RTSIM_BINARY, fifo, dir);
+  EXPECTF(rc == 2 && strstr(out, "sw_fifo.yaml: error: cannot open: not a regular file") &&
+              !exists(dir),
+          "a pipe as the sweep: exit %d: %s", rc, out);
+  FILE *f = fopen(file, "w");
+  if (f) {
+    fprintf(f, "machine: %s\nworkload:\n  scene: %s\n", fifo, scene);
+    fclose(f);
+  }
+  rc = run("timeout 20 %s sweep %s -o %s", RTSIM_BINARY, file, dir);
+  EXPECTF(rc == 2 && strstr(out, "sw_fifo.yaml: error: cannot open: not a regular file") &&
+              !exists(dir),
+          "a pipe as the machine: exit %d: %s", rc, out);
+  unlink(fifo);
+  unlink(file);
+
+  /* A plot of 101 panels, or of 101 lines, is refused before gnuplot starts;
+   * 100 lines in 2 panels are drawn. */
+  const char *csv = RTSIM_TMP "/sw_panels.csv";
+  f = fopen(csv, "w");
+  if (f) {
+    fputs("x,y,p,q\n", f);
+    for (int i = 0; i < 101; i++) fprintf(f, "1,2,%d,%d\n", i, i % 2);
+    fclose(f);
+  }
+  static const struct {
+    const char *args, *want;
+  } caps[] = {
+      {"--panels p", "sw_panels.csv:1: error: --panels p: more than 100 values (expected at most "
+                     "100 panels"},
+      {"--lines p", "sw_panels.csv:1: error: --lines p: more than 100 values (expected at most 100 "
+                    "lines"},
+  };
+  for (int i = 0; i < 2; i++) {
+    run("rm -f %s/sw_panels.png", RTSIM_TMP);
+    rc = run("%s plot %s --x x --y y %s -o %s/sw_panels.png", RTSIM_BINARY, csv, caps[i].args,
+             RTSIM_TMP);
+    EXPECTF(rc == 2 && count_lines(out) == 1 && strstr(out, caps[i].want), "'%s': exit %d: %s",
+            caps[i].args, rc, out);
+    EXPECT(!exists(RTSIM_TMP "/sw_panels.png"));
+  }
+  f = fopen(csv, "w");
+  if (f) {
+    fputs("x,y,p,q\n", f);
+    for (int i = 0; i < 200; i++) fprintf(f, "%d,%d,%d,%d\n", i % 2, i, i / 2, i / 100);
+    fclose(f);
+  }
+  rc = run("%s plot %s --x x --y y --lines p --panels q -o %s/sw_panels.svg", RTSIM_BINARY, csv,
+           RTSIM_TMP);
+  EXPECTF(rc == 0 && strstr(out, "200 points, 100 lines, 2 panels"), "100 lines: exit %d: %s", rc,
+          out);
+  char *svg = read_all(RTSIM_TMP "/sw_panels.svg");
+  EXPECTF(svg && strstr(svg, "p = 0") && strstr(svg, "p = 99") && strstr(svg, "q = 1"),
+          "the 100-line plot lacks its legend or titles");
+  free(svg);
+  unlink(csv);
+  unlink(RTSIM_TMP "/sw_panels.svg");
+}
+
 int main(void) {
+  test_bounded();
   test_expansion();
   test_bad_files();
   test_run_and_merge();

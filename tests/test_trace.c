@@ -300,7 +300,7 @@ static void self_isect_case(const char *name, int is_plane, vec3 ctr, float size
   struct kd_tree kd;
   struct kd_build_params bp;
   kd_build_params_default(&bp);
-  kd_build(&kd, &s, &bp);
+  kd_build(&kd, &s, &bp, NULL);
   struct trace_ctx tr;
   trace_init(&tr, &s, &kd, mem_port_native(), NULL);
   struct rng g = rng_make(14, (uint64_t)is_plane * 7 + (uint64_t)(size * 1000.0f));
@@ -424,7 +424,7 @@ static void test_memory_announcements(void) {
   struct kd_tree kd;
   struct kd_build_params bp;
   kd_build_params_default(&bp);
-  kd_build(&kd, &s, &bp);
+  kd_build(&kd, &s, &bp, NULL);
   struct count_ctx c;
   memset(&c, 0, sizeof c);
   trace_layout_default(&c.l);

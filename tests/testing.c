@@ -64,7 +64,7 @@ int testing_load_world(struct scene *s, struct kd_tree *kd, const char *path) {
   }
   struct kd_build_params p;
   kd_build_params_default(&p);
-  kd_build(kd, s, &p);
+  kd_build(kd, s, &p, NULL);
   return 1;
 }
 
