@@ -42,7 +42,7 @@ int app_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format
 bool app_parse_rays(const char *text, void *mask);
 #define APP_RAYS_EXPECT "a comma-separated list of primary, shadow, specular, diffuse"
 bool app_parse_policy(const char *text, void *kind);
-#define APP_POLICY_EXPECT "one of: recursive, packet, dynamic"
+#define APP_POLICY_EXPECT "one of: recursive, packet, dynamic, treelet"
 /* The opts.h table entries render and run share: --width, --height (uint64_t),
  * --rays (uint32_t mask), --seed (uint64_t, and a bool set when given),
  * --policy (enum policy_kind). */

@@ -27,15 +27,15 @@ static const char TRAFFIC_HELP[] =
     "Measure the traffic from DRAM into a fully associative LRU L2 with 64-byte lines\n"
     "for every size from 1 KB to 4 MB (powers of two) in one pass over the access\n"
     "stream, for each scheduling policy, as the paper's Figures 5-7. The recursive and\n"
-    "packet schedules do not depend on the cache size and run once; the dynamic one\n"
-    "is made for a cache size, so it runs once per size.\n"
+    "packet schedules do not depend on the cache size and run once; the dynamic and\n"
+    "treelet ones are made for a cache size, so they run once per size.\n"
     "\n"
     "options:\n"
     "  --rays CONFIG       the paper's configurations: primary; shadow (primary + hard\n"
     "                      shadows); specular (+ shadows + specular); diffuse (+ shadows\n"
     "                      + diffuse); or an explicit list such as primary,diffuse\n"
-    "  --policy P          recursive, packet, dynamic or all (default all); relative\n"
-    "                      columns need recursive, which then runs too\n"
+    "  --policy P          recursive, packet, dynamic, treelet or all (default all);\n"
+    "                      relative columns need recursive, which then runs too\n"
     "  --width W --height H  image size (default: the scene's)\n"
     "  --dyn-batch N       dynamic: admit N primary rays at a time, each batch traced\n"
     "                      through all its generations (default 0: all at once)\n"
@@ -149,12 +149,12 @@ int cmd_traffic(int argc, char **argv) {
   const char *out = NULL;
   uint32_t mask = 0; /* 0: no --rays */
   uint64_t width = 0, height = 0;
-  bool want[POLICY_COUNT] = {true, true, true};
+  bool want[POLICY_COUNT] = {true, true, true, true};
   struct policy_params pp;
   policy_params_default(&pp);
   const struct opts_spec spec[] = {
       OPTS_STR("output", 'o', &out), TRAFFIC_OPTS(&width, &height, &mask, &pp),
-      OPTS_PARSE("policy", 0, want, parse_policies, "one of: recursive, packet, dynamic, all"),
+      OPTS_PARSE("policy", 0, want, parse_policies, "one of: recursive, packet, dynamic, treelet, all"),
       OPTS_END};
   struct opts_args args;
   int rc = opts_parse("traffic", TRAFFIC_HELP, spec, argc, argv, &args);
@@ -171,11 +171,12 @@ int cmd_traffic(int argc, char **argv) {
   struct lru_stack_params lp = lru_stack_params_default();
   const unsigned nsizes = lp.lg2_max - lp.lg2_min + 1;
   struct row *rows = xcalloc((uint64_t)POLICY_COUNT * nsizes, sizeof *rows);
-  unsigned nrows = 0, runs = (want[0] ? 1 : 0) + (want[1] ? 1 : 0) + (want[2] ? nsizes : 0), done = 0;
+  unsigned nrows = 0, done = 0, runs = (want[POLICY_RECURSIVE] ? 1 : 0) + (want[POLICY_PACKET] ? 1 : 0) +
+                                      (want[POLICY_DYNAMIC] ? nsizes : 0) + (want[POLICY_TREELET] ? nsizes : 0);
   struct fn_run fr;
   for (int p = 0; p < POLICY_COUNT; p++) {
     if (!want[p]) continue;
-    if (p != POLICY_DYNAMIC) {
+    if (!policy_queues((enum policy_kind)p)) {
       progress_line(policy_name((enum policy_kind)p), done, runs);
       run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &lp, NULL, &fr);
       done++;
@@ -184,7 +185,8 @@ int cmd_traffic(int argc, char **argv) {
     } else {
       for (unsigned k = 0; k < nsizes; k++) {
         char what[64];
-        snprintf(what, sizeof what, "dynamic %llu KB", (unsigned long long)(1ull << (lp.lg2_min + k)) / 1024);
+        snprintf(what, sizeof what, "%s %llu KB", policy_name((enum policy_kind)p),
+                 (unsigned long long)(1ull << (lp.lg2_min + k)) / 1024);
         progress_line(what, done, runs);
         /* Only this size's counts are kept, so analyse this size alone: the
          * same counts (LRU has the inclusion property), at a fraction of the
@@ -192,9 +194,9 @@ int cmd_traffic(int argc, char **argv) {
         struct lru_stack_params one = lp;
         one.lg2_min = one.lg2_max = lp.lg2_min + k;
         pp.cache_bytes = 1ull << (lp.lg2_min + k);
-        run_functional(&w, POLICY_DYNAMIC, mask, W, H, &pp, &one, NULL, &fr);
+        run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &one, NULL, &fr);
         done++;
-        rows[nrows++] = (struct row){POLICY_DYNAMIC, fr.res.size[0], fr.pot_vis_tris};
+        rows[nrows++] = (struct row){(enum policy_kind)p, fr.res.size[0], fr.pot_vis_tris};
       }
     }
   }
@@ -255,7 +257,7 @@ int cmd_traffic(int argc, char **argv) {
     return app_report(&e);
   }
   printf("scene: %s\nrays: %s\nimage: %ux%u\nruns: %u\n", scene_name, names, W, H, runs);
-  if (want[POLICY_DYNAMIC]) {
+  if (want[POLICY_DYNAMIC] || want[POLICY_TREELET]) {
     printf("dyn_batch: %llu%s\n", (unsigned long long)pp.dyn_batch_rays,
            pp.dyn_batch_rays ? " primary rays at a time" : " (all primary rays at once)");
     printf("dyn_ray_buffer_bytes: %llu\n", (unsigned long long)dyn_ray_buffer);
@@ -285,11 +287,11 @@ static const char TRACE_HELP[] =
     "check a replay against.\n"
     "\n"
     "options:\n"
-    "  --policy P          recursive, packet or dynamic (required)\n"
+    "  --policy P          recursive, packet, dynamic or treelet (required)\n"
     "  --rays CONFIG       primary, shadow, specular, diffuse or a list (required)\n"
     "  --din FILE          trace to write (required); written whole or not at all\n"
     "  --cache BYTES       the cache size of the printed replay command and, for\n"
-    "                      dynamic, the size the schedule is made for (default\n"
+    "                      dynamic and treelet, the size the schedule is made for (default\n"
     "                      524288); a power of two from 1024 to 4194304\n"
     "  --dyn-batch N       dynamic: admit N primary rays at a time (default 0: all)\n"
     "  --dyn-ray-buffer B  dynamic: bytes reserved for the rays being traced (default\n"
@@ -338,7 +340,7 @@ int cmd_trace(int argc, char **argv) {
   const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;
   if (!din_path) return app_usage_error("trace", "missing --din FILE");
-  if (!have_policy) return app_usage_error("trace", "missing --policy (recursive, packet or dynamic)");
+  if (!have_policy) return app_usage_error("trace", "missing --policy (recursive, packet, dynamic or treelet)");
   if (!mask) return app_usage_error("trace", "missing --rays (primary, shadow, specular or diffuse)");
   struct app_world w;
   if (!app_world_load(&w, scene_path)) return 2;

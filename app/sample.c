@@ -27,9 +27,10 @@ const char *sample_problem(const struct machine_params *p, enum policy_kind k, u
   if (p->fidelity == MACHINE_FIDELITY_ANALYTIC)
     return "sample.fraction: sampling simulates units in time: a timed fidelity (fixed, channel "
            "or banked), not analytic";
-  if (k == POLICY_DYNAMIC)
+  if (policy_queues(k))
     return "sample.fraction: sampling needs a policy that takes its work item by item "
-           "(recursive or packet); the dynamic policy traces every primary ray as one batch";
+           "(recursive or packet); the dynamic and treelet policies trace every primary ray "
+           "as one batch";
   /* A unit warms the pipeline with two items a ray context, then measures
    * at least one a context: the measured window then holds the unit's own
    * items, started at spread times. */

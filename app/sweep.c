@@ -111,7 +111,7 @@ static bool check_workload(const struct priv *pv, enum wl k, const struct cfg_no
   case WL_POLICY: {
     enum policy_kind p;
     if (!policy_parse(text, &p))
-      return cfg_fail(d, n, key, e, "unknown policy (got '%s', expected one of: recursive, packet, dynamic)",
+      return cfg_fail(d, n, key, e, "unknown policy (got '%s', expected one of: recursive, packet, dynamic, treelet)",
                       text);
     return true;
   }

@@ -12,10 +12,10 @@
 #include "renderer/trace.h"
 #include "sim/err.h"
 
-static const char *const NAMES[POLICY_COUNT] = {"recursive", "packet", "dynamic"};
+static const char *const NAMES[POLICY_COUNT] = {"recursive", "packet", "dynamic", "treelet"};
 
 static const struct policy_module *const MODULES[POLICY_COUNT] = {
-    &policy_recursive_module, &policy_packet_module, &policy_dynamic_module};
+    &policy_recursive_module, &policy_packet_module, &policy_dynamic_module, &policy_treelet_module};
 
 void policy_params_default(struct policy_params *p) {
   memset(p, 0, sizeof *p);
@@ -116,7 +116,7 @@ struct policy_job *policy_job_create(enum policy_kind k, const struct policy_set
   CHECK(policy_workers_supported(k, workers));
   CHECK_GE(cores, 1);
   CHECK_EQ(s->sc->scene, s->scene);
-  CHECK(!s->item || k != POLICY_DYNAMIC);
+  CHECK(!s->item || !policy_queues(k));
   struct policy_job *job = xcalloc(1, sizeof *job);
   job->mod = MODULES[k];
   job->setup = *s;

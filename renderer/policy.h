@@ -37,7 +37,13 @@ struct kd_tree;
 struct shade_ctx;
 struct framebuffer;
 
-enum policy_kind { POLICY_RECURSIVE = 0, POLICY_PACKET = 1, POLICY_DYNAMIC = 2, POLICY_COUNT = 3 };
+enum policy_kind {
+  POLICY_RECURSIVE = 0,
+  POLICY_PACKET = 1,
+  POLICY_DYNAMIC = 2,
+  POLICY_TREELET = 3, /* the dynamic policy's machinery, queues at treelets (treelet.h) */
+  POLICY_COUNT = 4
+};
 
 /* How the dynamic policy's cores share its queue points (policy_params). */
 enum policy_dyn_sharing { POLICY_DYN_PARTITION = 0, POLICY_DYN_CHIP = 1 };
@@ -232,5 +238,11 @@ void policy_run(enum policy_kind k, const struct policy_setup *s, const struct p
 const char *policy_name(enum policy_kind k);
 /* Parse a name; false if unknown. */
 bool policy_parse(const char *name, enum policy_kind *k);
+
+/* The policies whose rays wait in queues (dynamic, treelet): they trace all
+ * of a batch's rays at once, not a work item at a time. */
+static inline bool policy_queues(enum policy_kind k) {
+  return k == POLICY_DYNAMIC || k == POLICY_TREELET;
+}
 
 #endif

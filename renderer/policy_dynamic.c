@@ -72,6 +72,7 @@
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
+#include "renderer/treelet.h"
 #include "sim/err.h"
 
 #define DYN_NONE UINT32_MAX
@@ -106,6 +107,10 @@ struct dyn_slot_wait {
  * primary rays' order, the batch and its phase. */
 struct dyn {
   struct qpoint_set qs;
+  /* The treelet policy (policy_treelet_module): qs marks the treelet roots,
+   * queue i is the treelet rooted at qs.qnode[i], and tl_of[n] is the queue
+   * of node n's treelet; NULL for the dynamic policy. */
+  uint32_t *tl_of;
   struct qwalk_tree wt; /* the tree with qs's queue-point bits */
   struct qstore st;
   struct qdrain_set ds;
@@ -215,11 +220,13 @@ static void buf_push(struct ray_buf *b, const struct ray *r) {
 /* Append r to queue qi of store set `set`: the slot is claimed (counts, host
  * copy, heap) before the accesses, as any of them may suspend this worker
  * (qstore.h's hazards); a ray of the phase being drained counts as pending. */
-static void enqueue(struct dyn_worker *x, uint32_t qi, const struct ray *r, uint32_t set) {
+static void enqueue(struct dyn_worker *x, uint32_t qi, const struct ray *r, uint32_t set,
+                    uint32_t entry) {
   struct dyn *d = x->d;
   CHECK(!(r->flags & DYN_FLAG_DEAD));
   const uint32_t free0 = qstore_free_queues(&d->st);
   const uint64_t slot = qstore_push(&d->st, set, qi, r);
+  qstore_set_entry(&d->st, slot, entry);
   const bool fresh = qstore_free_queues(&d->st) > free0; /* a queue to take */
   if (set == DYN_SET_NOW) d->pending++;
   qstore_write(&d->st, &x->tr->mem, qi, slot);
@@ -266,10 +273,11 @@ static void terminate(struct dyn_worker *x, struct ray *r, const struct qwalk *w
 static void route(struct dyn_worker *x, struct ray *r, const struct qwalk *w, enum qwalk_end e,
                   uint32_t set) {
   if (e == QWALK_QUEUED) {
-    int64_t qi = qpoint_index(&x->d->qs, w->ni);
+    const struct dyn *d = x->d;
+    int64_t qi = d->tl_of ? (int64_t)d->tl_of[w->ni] : qpoint_index(&d->qs, w->ni);
     CHECK_GE(qi, 0);
     r->hit_prim = qwalk_best_prim(w);
-    enqueue(x, (uint32_t)qi, r, set);
+    enqueue(x, (uint32_t)qi, r, set, w->ni);
   } else {
     terminate(x, r, w, e);
   }
@@ -304,6 +312,8 @@ static void start(struct dyn_worker *x, struct ray *r) {
                                                : DYN_SET_NEXT;
   if (!qwalk_init(&d->wt, &w, r)) {
     terminate(x, r, &w, QWALK_DONE);
+  } else if (d->tl_of) {
+    route(x, r, &w, QWALK_QUEUED, set); /* at the root, in the root's treelet */
   } else {
     struct trace_ctx quiet = *tr;
     quiet.mem = mem_port_native();
@@ -326,7 +336,8 @@ static void flush(struct dyn_worker *x) {
 
 /* ---- tracing a claim ------------------------------------------------------------ */
 
-/* A ray of interior queue point node: its subtree, then onward. */
+/* A ray of interior queue point node: its subtree, then onward. A treelet's
+ * ray resumes at its entry node and walks on until it leaves the treelet. */
 static void process_subtree(struct dyn_worker *x, struct ray *r, uint32_t node) {
   struct dyn *d = x->d;
   struct trace_ctx *tr = x->tr;
@@ -334,8 +345,13 @@ static void process_subtree(struct dyn_worker *x, struct ray *r, uint32_t node) 
   struct qwalk w;
   CHECK(qwalk_init(&d->wt, &w, r));
   qwalk_to(&d->wt, tr, &w, node);
-  enum qwalk_end e = qwalk_run(&d->wt, tr, &w, w.sp, false);
-  if (e == QWALK_DONE) e = qwalk_leave(&d->wt, tr, &w);
+  enum qwalk_end e;
+  if (d->tl_of) {
+    e = qwalk_run_treelet(&d->wt, tr, &w, d->tl_of);
+  } else {
+    e = qwalk_run(&d->wt, tr, &w, w.sp, false);
+    if (e == QWALK_DONE) e = qwalk_leave(&d->wt, tr, &w);
+  }
   route(x, r, &w, e, DYN_SET_NOW);
   cost_add(x, r->pixel, n0, t0);
   flush(x);
@@ -347,7 +363,7 @@ static void trace_subtree_claim(struct dyn_worker *x) {
   const uint64_t slot = x->cl.slot[0];
   struct ray r = *qstore_ray(&d->st, slot);
   mem_load(&x->tr->mem, qstore_slot_addr(&d->st, slot), sizeof r, TRACE_CLASS_RAY);
-  process_subtree(x, &r, x->cl.node);
+  process_subtree(x, &r, d->tl_of ? qstore_entry(&d->st, slot) : x->cl.node);
   d->pending--;
   qdrain_slot_done(&d->ds, &x->cl, 0);
 }
@@ -387,7 +403,7 @@ static void trace_leaf_claim(struct dyn_worker *x) {
       over = false;
     } else {
       qwalk_to(&d->wt, tr, &w, cl->node);
-      route(x, &r, &w, qwalk_leave(&d->wt, tr, &w), DYN_SET_NOW);
+      route(x, &r, &w, d->tl_of ? qwalk_leave_treelet(&w) : qwalk_leave(&d->wt, tr, &w), DYN_SET_NOW);
     }
     cost_add(x, r.pixel, n0, t0);
     flush(x);
@@ -576,6 +592,45 @@ static void dyn_create(struct policy_job *job) {
   dyn_setup(job, d, block_tris, group);
 }
 
+/* The treelet policy: treelets of the tree for the same budget the dynamic
+ * policy gives a queue point's geometry (g_max: the cache left once the tree's
+ * share, the queue table and the ray buffer are reserved, over the cores that
+ * hold one at once), nodes and triangles counted (treelet.h), and each
+ * treelet's root a queue point. Queue i is the treelet of the i-th root in
+ * node order, so the drains see an ordinary selection. */
+static void tl_create(struct policy_job *job) {
+  struct dyn *d = xcalloc(1, sizeof *d);
+  const struct kd_tree *kd = job->setup.kd;
+  struct qpoint_budget bud;
+  uint32_t block_tris, group;
+  policy_dynamic_plan(&job->params, job->workers, job->cores, kd, job->setup.layout.tri_bytes,
+                      &d->qs, &bud, &block_tris, &group);
+  qpoint_fini(&d->qs);
+  struct treelet_set ts;
+  treelet_build(&ts, kd, job->setup.layout.tri_bytes, bud.gmax_bytes);
+  const uint32_t n = kd->node_count;
+  d->qs.node_count = n;
+  d->qs.gmax_bytes = bud.gmax_bytes;
+  d->qs.nodes = xmalloc((uint64_t)n * sizeof *d->qs.nodes + 1);
+  d->qs.qnode = xmalloc((uint64_t)ts.count * sizeof *d->qs.qnode + 1);
+  uint32_t *qi_of_treelet = xmalloc((uint64_t)ts.count * sizeof *qi_of_treelet + 1);
+  for (uint32_t i = 0; i < n; i++) {
+    d->qs.nodes[i] = kd->nodes[i];
+    const bool root = ts.root[ts.of[i]] == i;
+    kd_set_queue_point(&d->qs.nodes[i], root);
+    if (root) {
+      qi_of_treelet[ts.of[i]] = d->qs.count;
+      d->qs.qnode[d->qs.count++] = i;
+    }
+  }
+  CHECK_EQ(d->qs.count, ts.count);
+  d->tl_of = xmalloc((uint64_t)n * sizeof *d->tl_of + 1);
+  for (uint32_t i = 0; i < n; i++) d->tl_of[i] = qi_of_treelet[ts.of[i]];
+  free(qi_of_treelet);
+  treelet_fini(&ts);
+  dyn_setup(job, d, block_tris, group);
+}
+
 static void dyn_destroy(struct policy_job *job) {
   struct dyn *d = job->shared;
   if (!d) return;
@@ -586,6 +641,7 @@ static void dyn_destroy(struct policy_job *job) {
   qdrain_fini(&d->ds);
   qstore_fini(&d->st);
   qpoint_fini(&d->qs);
+  free(d->tl_of);
   free(d);
 }
 
@@ -672,6 +728,16 @@ static void dyn_finish(struct policy_job *job, struct render_stats *st) {
   qdrain_check_done(&d->ds);
   st->ray_slots_max += (uint64_t)qstore_chunks(&d->st) * QSTORE_CHUNK_RAYS;
 }
+
+const struct policy_module policy_treelet_module = {
+    .region_bytes = 0, /* its rays wait in the queues, at queue_base */
+    .max_workers = 0,
+    .create = tl_create,
+    .destroy = dyn_destroy,
+    .step = dyn_step,
+    .scratch_free = dyn_scratch_free,
+    .finish = dyn_finish,
+};
 
 const struct policy_module policy_dynamic_module = {
     .region_bytes = 0, /* its rays wait in the queues, at queue_base */

@@ -30,7 +30,7 @@ struct policy_module {
 };
 
 extern const struct policy_module policy_recursive_module, policy_packet_module,
-    policy_dynamic_module;
+    policy_dynamic_module, policy_treelet_module;
 
 struct policy_job {
   const struct policy_module *mod;

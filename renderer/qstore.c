@@ -31,6 +31,7 @@ void qstore_fini(struct qstore *st) {
   free(st->heap);
   free(st->pool);
   free(st->stored);
+  free(st->entry);
   free(st->chunk_next);
   free(st->chunk_refs);
   *st = (struct qstore){0};
@@ -102,6 +103,7 @@ static uint32_t chunk_alloc(struct qstore *st) {
       const uint64_t slots = (uint64_t)st->chunk_cap * QSTORE_CHUNK_RAYS;
       st->pool = xrealloc(st->pool, slots * sizeof *st->pool);
       st->stored = xrealloc(st->stored, slots);
+      st->entry = xrealloc(st->entry, slots * sizeof *st->entry);
       st->chunk_next = xrealloc(st->chunk_next, (uint64_t)st->chunk_cap * sizeof *st->chunk_next);
       st->chunk_refs = xrealloc(st->chunk_refs, (uint64_t)st->chunk_cap * sizeof *st->chunk_refs);
     }
@@ -137,6 +139,7 @@ uint64_t qstore_push(struct qstore *st, uint32_t set, uint32_t qi, const struct 
   const uint64_t slot = (uint64_t)q->tail * QSTORE_CHUNK_RAYS + q->tail_fill;
   st->pool[slot] = *r;
   st->stored[slot] = 0;
+  st->entry[slot] = 0;
   q->tail_fill++;
   q->count++;
   if (set == 0 && !q->held) heap_offer(st, qi);

@@ -58,6 +58,7 @@ struct qstore {
   struct qstore_queue **set;        /* set[s][q]; set[0] is the active set */
   struct ray *pool;                 /* slot k: pool[k], chunk k / QSTORE_CHUNK_RAYS */
   uint8_t *stored;                  /* per slot: its enqueue has issued its store */
+  uint32_t *entry;                  /* per slot: the node the ray resumes at (qstore_entry) */
   uint32_t *chunk_next;             /* next chunk of the same queue, or of the free list */
   uint32_t *chunk_refs;             /* cursors in it + rays handed out from it, not done */
   uint32_t chunks, chunk_cap, free_head;
@@ -93,6 +94,15 @@ static inline bool qstore_stored(const struct qstore *st, uint64_t slot) { retur
 
 /* The host record of slot (valid while the slot holds its ray). */
 static inline struct ray *qstore_ray(const struct qstore *st, uint64_t slot) { return &st->pool[slot]; }
+
+/* The node a queued ray resumes at, where its queue does not tell it (the
+ * treelet policy: a ray enters a treelet at its root or at a node its stack
+ * holds). 0 at the push. Host only: the 64-byte record has no room for it,
+ * where a real one would carry 4 more bytes (as it would carry its hit's t). */
+static inline uint32_t qstore_entry(const struct qstore *st, uint64_t slot) { return st->entry[slot]; }
+static inline void qstore_set_entry(struct qstore *st, uint64_t slot, uint32_t node) {
+  st->entry[slot] = node;
+}
 
 static inline uint64_t qstore_slot_addr(const struct qstore *st, uint64_t slot) {
   return st->queue_base + slot * sizeof(struct ray);

@@ -109,6 +109,26 @@ void qwalk_to(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w,
   }
 }
 
+enum qwalk_end qwalk_run_treelet(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w,
+                                 const uint32_t *of) {
+  const uint32_t cur = of[w->ni];
+  for (;;) {
+    if (of[w->ni] != cur) return QWALK_QUEUED;
+    trav_announce_node(tr, w->ni, 1);
+    struct kd_node nd = t->nodes[w->ni];
+    if (!kd_is_leaf(nd)) {
+      if (trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &w->ni, w->stack, &w->sp)) continue;
+    } else if (qwalk_leaf(tr, w, nd, 0, kd_leaf_count(nd))) {
+      return QWALK_HIT;
+    }
+    if (!walk_pop(w, 0)) return QWALK_DONE;
+  }
+}
+
+enum qwalk_end qwalk_leave_treelet(struct qwalk *w) {
+  return walk_pop(w, 0) ? QWALK_QUEUED : QWALK_DONE;
+}
+
 enum qwalk_end qwalk_leave(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w) {
   if (!walk_pop(w, 0)) return QWALK_DONE;
   return qwalk_run(t, tr, w, 0, true);

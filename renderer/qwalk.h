@@ -85,6 +85,17 @@ void qwalk_to(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w,
 /* After a queue point's subtree: on to the next queue point, or the end. */
 enum qwalk_end qwalk_leave(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w);
 
+/* Treelets (treelet.h; of[n]: node n's treelet): walk on inside the current
+ * node's treelet, all pending nodes included, and stop without loading it at
+ * the first node of another treelet (QWALK_QUEUED, w->ni), at the end, or at
+ * a hit that ends the ray. */
+enum qwalk_end qwalk_run_treelet(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w,
+                                 const uint32_t *of);
+
+/* After a leaf treelet (its leaf tested): the next pending node, where the
+ * ray queues (QWALK_QUEUED, w->ni), or the end. */
+enum qwalk_end qwalk_leave_treelet(struct qwalk *w);
+
 /* The best hit so far as a record carries it (hit_prim): -1 when none. */
 static inline int32_t qwalk_best_prim(const struct qwalk *w) {
   return w->best.found ? (int32_t)w->best.p : -1;

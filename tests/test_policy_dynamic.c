@@ -218,6 +218,36 @@ static void check_scene(const char *name) {
     free(cnt.cam);
     result_fini(&dy);
 
+    /* Treelet queues (the same machinery, a ray queued again at every treelet
+     * it enters): the same picture, rays and triangle tests as recursive, the
+     * same queue discipline, each camera ray read once. */
+    struct counter tc;
+    struct result tl;
+    memset(&tc, 0, sizeof tc);
+    render(&w, POLICY_TREELET, all, size, caches[c], &tc, &tl);
+    EXPECTF(memcmp(tl.fb.acc, ref.fb.acc, fb_bytes) == 0, "%s %u KB: treelet image differs from recursive",
+            name, kb);
+    EXPECT(memcmp(tl.st.rays, ref.st.rays, sizeof ref.st.rays) == 0);
+    EXPECT(tl.st.spawned == ref.st.spawned && tl.st.terminated == ref.st.terminated);
+    EXPECTF(testing_slots_left(&tc.slots) == 0 && tc.slots.bad == 0 && tc.slots.loads == tc.slots.stores &&
+                tc.slots.stores >= ref.st.rays[RAY_PRIMARY],
+            "%s %u KB treelet: queue slots: %llu stores, %llu loads, %llu bad", name, kb,
+            (unsigned long long)tc.slots.stores, (unsigned long long)tc.slots.loads,
+            (unsigned long long)tc.slots.bad);
+    bool tonce = true;
+    for (uint64_t k = 0; k < tc.npix; k++) tonce &= tc.cam[k] == 1;
+    EXPECT(tonce && tc.other_ray == 0 && tc.table_bad == 0 && tc.class_bad == 0);
+    testing_slots_fini(&tc.slots);
+    free(tc.cam);
+    result_fini(&tl);
+    struct result tn;
+    render(&w, POLICY_TREELET, noshadow, size, caches[c], NULL, &tn);
+    EXPECTF(memcmp(tn.fb.acc, ref_ns.fb.acc, fb_bytes) == 0 && tn.ts.tri_tests == ref_ns.ts.tri_tests &&
+                memcmp(tn.fb.cost_tris, ref_ns.fb.cost_tris, sizeof(uint32_t) * size * size) == 0,
+            "%s %u KB treelet (no shadows): %llu triangle tests, recursive %llu", name, kb,
+            (unsigned long long)tn.ts.tri_tests, (unsigned long long)ref_ns.ts.tri_tests);
+    result_fini(&tn);
+
     /* No shadow rays: the very same closest-hit work as recursive. */
     struct result dn;
     render(&w, POLICY_DYNAMIC, noshadow, size, caches[c], NULL, &dn);

@@ -112,7 +112,7 @@ static void rec_init(struct rec *c, const struct render *r, enum policy_kind k, 
   c->cam_hi = c->cam_lo + 64ull * r->res.fb.width * r->res.fb.height;
   c->own_lo = r->ps.layout.ray_base + id * policy_ray_region_bytes(k);
   c->own_hi = c->own_lo + policy_ray_region_bytes(k);
-  if (k == POLICY_DYNAMIC) { /* its rays wait in the shared queues */
+  if (k == POLICY_DYNAMIC || k == POLICY_TREELET) { /* its rays wait in the shared queues */
     c->own_lo = r->ps.layout.queue_base;
     c->own_hi = r->ps.layout.ray_base;
   }
@@ -236,7 +236,7 @@ static void check_policy(struct world *w, enum policy_kind k, uint32_t width, ui
   rec_init(&ref_rec, &ref, k, 0);
   struct mem_port port = {&REC_OPS, &ref_rec};
   ref.pp.dyn_batch_rays = DYN_BATCH;
-  if (k == POLICY_DYNAMIC) {
+  if (k == POLICY_DYNAMIC || k == POLICY_TREELET) {
     /* Its queue points are made for the job's workers and cores: the oracle is
      * worker 0 of such a job, alone. */
     struct policy_job *job = policy_job_create(k, &ref.ps, &ref.pp, WORKERS, 2);
@@ -251,7 +251,7 @@ static void check_policy(struct world *w, enum policy_kind k, uint32_t width, ui
   }
   EXPECT(ref_rec.ray_outside == 0 && ref_rec.ray_accesses > 0);
   for (int s = 0; s < SCHEDULE_COUNT; s++)
-    if (k != POLICY_DYNAMIC || s != NESTED) /* a nested dynamic worker would wait on its host */
+    if ((k != POLICY_DYNAMIC && k != POLICY_TREELET) || s != NESTED) /* a nested dynamic worker would wait on its host */
       run_workers(w, k, width, height, (enum schedule)s, &ref, &ref_rec);
   render_fini(&ref);
 }
@@ -304,6 +304,7 @@ int main(void) {
   check_policy(&w, POLICY_RECURSIVE, 23, 17);
   check_policy(&w, POLICY_PACKET, 23, 17);
   check_policy(&w, POLICY_DYNAMIC, 23, 17);
+  check_policy(&w, POLICY_TREELET, 23, 17);
   kd_fini(&w.kd);
   scene_fini(&w.s);
   return testing_done("test_policy_workers");

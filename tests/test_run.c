@@ -313,8 +313,8 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
    * DRAM bytes conserved. */
   struct machine_params banked = tiny;
   banked.fidelity = MACHINE_FIDELITY_BANKED;
-  const enum policy_kind all_kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC};
-  for (unsigned k = 0; k < 3; k++) {
+  const enum policy_kind all_kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC, POLICY_TREELET};
+  for (unsigned k = 0; k < 4; k++) {
     struct render r;
     timed(w, all_kinds[k], mask, &banked, &st, &r);
     EXPECTF(same_image(&ref.fb, &r.fb), "%s, %s on tiny.yaml with banked DRAM: image differs",
@@ -396,6 +396,23 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
            (unsigned long long)st.cycles, (double)st.issue_slots / ((double)p->cores * (double)st.cycles),
            (unsigned long long)st.parks, (unsigned long long)st.events);
     testing_slots_fini(&q.slots);
+    fb_fini(&r.fb);
+
+    /* Treelet queues on the same machine: the same picture and rays, the
+     * same queue discipline, every parked context woken (on the small L2,
+     * with its oversized leaves, and the many-context machine). */
+    if (p != &small_l2 && p != &many && p != &chip_small) continue;
+    struct qcheck tq;
+    timed_q(w, POLICY_TREELET, mask, p, &st, &r, &rs, &tq);
+    EXPECTF(same_image(&ref.fb, &r.fb), "%s, treelet on %s: image differs from recursive's", scene, dyn[i].name);
+    EXPECTF(memcmp(rs.rays, ref_rs.rays, sizeof rs.rays) == 0 && rs.terminated == rs.spawned,
+            "treelet on %s: rays differ from recursive's", dyn[i].name);
+    EXPECTF(tq.bad == 0 && tq.slots.bad == 0 && testing_slots_left(&tq.slots) == 0 &&
+                tq.slots.stores == tq.slots.loads && st.wakes == st.parks,
+            "treelet on %s: queue slots %llu stored, %llu loaded, %llu out of order", dyn[i].name,
+            (unsigned long long)tq.slots.stores, (unsigned long long)tq.slots.loads,
+            (unsigned long long)(tq.slots.bad + tq.bad));
+    testing_slots_fini(&tq.slots);
     fb_fini(&r.fb);
   }
   fb_fini(&ref.fb);

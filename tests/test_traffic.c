@@ -89,13 +89,15 @@ int main(void) {
   char cmd[2048], out[16384];
   const char *din = RTSIM_TMP "/traffic_test.din";
   /* Dynamic's schedule is made for 8 KB; its queues store whole lines. The
-   * last run is on a tree built with clipped (perfect) splits. */
-  static const char *const policies[] = {"recursive", "dynamic", "dynamic"};
-  char scenes[3][1024];
+   * third run is on a tree built with clipped (perfect) splits; the last is
+   * the treelet policy, its treelets made for 8 KB. */
+  static const char *const policies[] = {"recursive", "dynamic", "dynamic", "treelet"};
+  char scenes[4][1024];
   snprintf(scenes[0], sizeof scenes[0], "%s/scenes/small/room.yaml", RTSIM_SOURCE_DIR);
   snprintf(scenes[1], sizeof scenes[1], "%s/scenes/small/room.yaml", RTSIM_SOURCE_DIR);
   snprintf(scenes[2], sizeof scenes[2], "%s/scenes/good_room_tiny_clipped.yaml", RTSIM_TEST_DATA);
-  unsigned long long dyn_misses_8k = 0;
+  snprintf(scenes[3], sizeof scenes[3], "%s/scenes/small/room.yaml", RTSIM_SOURCE_DIR);
+  unsigned long long dyn_misses_8k = 0, tl_misses_8k = 0;
   for (size_t p = 0; p < sizeof policies / sizeof policies[0]; p++) {
     unlink(din);
     snprintf(cmd, sizeof cmd,
@@ -134,6 +136,7 @@ int main(void) {
       EXPECTF(m == r.caches[k]->misses, "%s %llu B: analyser %llu misses, replay %llu", policies[p],
               cb, m, (unsigned long long)r.caches[k]->misses);
       if (p == 1 && cb == 8192) dyn_misses_8k = m;
+      if (p == 3 && cb == 8192) tl_misses_8k = m;
       EXPECTF(wb == r.caches[k]->writebacks, "%s %llu B: analyser %llu write-backs, replay %llu",
               policies[p], cb, wb, (unsigned long long)r.caches[k]->writebacks);
       line = strchr(line + 1, '\n');
@@ -179,6 +182,23 @@ int main(void) {
             dyn_misses_8k);
   }
 
+  /* So does the treelet row at 8 KB. */
+  snprintf(cmd, sizeof cmd,
+           "%s traffic %s/scenes/small/room.yaml --policy treelet --rays shadow --width 24 --height 24 -o %s && cat %s",
+           RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
+  EXPECT(testing_run(cmd, out, sizeof out) == 0);
+  const char *tl = strstr(out, ",treelet,8192,");
+  EXPECTF(tl != NULL, "%s", out);
+  if (tl) {
+    double f0, f1, f2, f3, f4;
+    unsigned long long fc[5];
+    EXPECT(sscanf(tl + strlen(",treelet,8192,"), "%lf,%lf,%lf,%lf,%lf,%llu,%llu,%llu,%llu,%llu", &f0, &f1,
+                  &f2, &f3, &f4, &fc[0], &fc[1], &fc[2], &fc[3], &fc[4]) == 10);
+    unsigned long long lines = (fc[0] + fc[1] + fc[2] + fc[3] + fc[4]) / 64;
+    EXPECTF(tl_misses_8k > 0 && lines == tl_misses_8k, "treelet 8 KB: table %llu lines, trace %llu", lines,
+            tl_misses_8k);
+  }
+
   /* Without --cache the replay command is for 512 KB: 8192 ways. --help shows
    * the same, and nowhere the direct-mapped -l1-uassoc 0. */
   snprintf(cmd, sizeof cmd,
@@ -204,8 +224,8 @@ int main(void) {
     if (!eol) break;
     tagged += eol - q > 12 && !strncmp(eol - 11, ",7,64,whole", 11);
   }
-  EXPECTF(tagged == 3 * SIZES, "%d of %d rows end with the dynamic settings and the tree", tagged,
-          3 * SIZES);
+  EXPECTF(tagged == 4 * SIZES, "%d of %d rows end with the dynamic settings and the tree", tagged,
+          4 * SIZES);
 
   /* Bad command lines: exit 2. */
   snprintf(cmd, sizeof cmd, "%s traffic %s/scenes/small/room.yaml --rays glossy -o %s", RTSIM_BINARY,

@@ -115,7 +115,7 @@ static void check_scene(const char *path) {
   struct kd_build_params bp;
   kd_build_params_default(&bp);
   struct kd_tree kd;
-  kd_build(&kd, &s, &bp);
+  kd_build(&kd, &s, &bp, NULL);
   const uint32_t n = kd.node_count;
   uint32_t *parent = malloc(n * sizeof *parent);
   uint32_t *has_tris = calloc(n, sizeof *has_tris); /* triangles in the subtree */
