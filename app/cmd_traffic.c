@@ -34,8 +34,9 @@ static const char TRAFFIC_HELP[] =
     "  --rays CONFIG       the paper's configurations: primary; shadow (primary + hard\n"
     "                      shadows); specular (+ shadows + specular); diffuse (+ shadows\n"
     "                      + diffuse); or an explicit list such as primary,diffuse\n"
-    "  --policy P          recursive, packet, dynamic, treelet or all (default all);\n"
-    "                      relative columns need recursive, which then runs too\n"
+    "  --policy P          recursive, packet, dynamic, treelet or all (default: the\n"
+    "                      paper's three, recursive, packet and dynamic); relative\n"
+    "                      columns need recursive, which then runs too\n"
     "  --width W --height H  image size (default: the scene's)\n"
     "  --dyn-batch N       dynamic: admit N primary rays at a time, each batch traced\n"
     "                      through all its generations (default 0: all at once)\n"
@@ -149,7 +150,8 @@ int cmd_traffic(int argc, char **argv) {
   const char *out = NULL;
   uint32_t mask = 0; /* 0: no --rays */
   uint64_t width = 0, height = 0;
-  bool want[POLICY_COUNT] = {true, true, true, true};
+  /* The paper's three unless asked: results/traffic reproduces its figures. */
+  bool want[POLICY_COUNT] = {true, true, true, false};
   struct policy_params pp;
   policy_params_default(&pp);
   const struct opts_spec spec[] = {
