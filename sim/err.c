@@ -6,16 +6,37 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* src into dst (cap bytes, cut to fit) with control characters written as
+ * C escapes ("\n", "\x01"): the message quotes what the user wrote (a key, a
+ * --set, a CSV cell), and must stay one line. */
+static void one_line(char *dst, size_t cap, const char *src) {
+  size_t n = 0;
+  for (const unsigned char *p = (const unsigned char *)src; *p; p++) {
+    char esc[5] = {(char)*p, 0};
+    if (*p == '\n') memcpy(esc, "\\n", 3);
+    else if (*p == '\r') memcpy(esc, "\\r", 3);
+    else if (*p < 0x20 && *p != '\t') snprintf(esc, sizeof esc, "\\x%02x", *p);
+    else if (*p == 0x7f) memcpy(esc, "\\x7f", 5);
+    size_t len = strlen(esc);
+    if (n + len >= cap) break;
+    memcpy(dst + n, esc, len);
+    n += len;
+  }
+  dst[n] = '\0';
+}
+
 bool err_set(struct err *e, const char *file, int line, int col, const char *fmt, ...) {
   if (!e || e->set) return false;
   e->set = true;
-  snprintf(e->file, sizeof e->file, "%s", file ? file : "");
+  one_line(e->file, sizeof e->file, file ? file : "");
   e->line = line;
   e->col = col;
+  char msg[ERR_MSG_MAX];
   va_list ap;
   va_start(ap, fmt);
-  vsnprintf(e->msg, sizeof e->msg, fmt, ap);
+  vsnprintf(msg, sizeof msg, fmt, ap);
   va_end(ap);
+  one_line(e->msg, sizeof e->msg, msg);
   return false;
 }
 
