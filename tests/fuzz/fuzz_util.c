@@ -14,6 +14,8 @@
 #include "renderer/meshio.h"
 #include "renderer/scene.h"
 #include "sim/err.h"
+#include "sim/machine.h"
+#include "sim/machine_cfg.h"
 
 static char dir[512];
 
@@ -81,6 +83,26 @@ void fuzz_check_err(const struct err *e) {
   CHECK(e->msg[0] != '\0');
   CHECK(strchr(e->msg, '\n') == NULL);
   CHECK(strchr(e->file, '\n') == NULL);
+}
+
+void fuzz_check_machine(const struct machine_cfg *c) {
+  static struct machine_cfg again;
+  again = *c;
+  struct err e;
+  memset(&e, 0, sizeof e);
+  char text[256], back[256];
+  for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++) {
+    machine_cfg_value(c, i, text, sizeof text);
+    CHECK(text[0] != '\0');
+    CHECK(machine_cfg_set_at(&again, i, text, "round trip", 0, 0, &e));
+    machine_cfg_value(&again, i, back, sizeof back);
+    CHECK(strcmp(text, back) == 0);
+  }
+  CHECK(memcmp(&again.p, &c->p, sizeof c->p) == 0);
+  static FILE *sink;
+  if (!sink) CHECK((sink = fopen("/dev/null", "w")) != NULL);
+  machine_cfg_write_json(c, sink, "  ");
+  (void)machine_cache_host_bytes(&c->p);
 }
 
 /* ---- generator and mesh stand-ins (linked with --wrap) ------------------------ */

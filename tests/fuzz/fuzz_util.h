@@ -12,6 +12,7 @@
 #include <stdint.h>
 
 struct err;
+struct machine_cfg;
 
 /* The scratch folder (absolute, no trailing slash). */
 const char *fuzz_dir(void);
@@ -21,6 +22,9 @@ const char *fuzz_dir(void);
 const char *fuzz_file(const char *rel, const uint8_t *data, size_t size);
 /* A refusal: one message, non-empty, on one line. */
 void fuzz_check_err(const struct err *e);
+/* An accepted machine config: every key's value prints, and the printed text
+ * (what stats files and --emit-jobs carry) reads back to the same machine. */
+void fuzz_check_machine(const struct machine_cfg *c);
 
 /* Generators and mesh import run for real only when small (at most about
  * FUZZ_GEN_TRIANGLES triangles, meshes only from the repository's test data);
