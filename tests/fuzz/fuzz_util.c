@@ -55,7 +55,7 @@ const char *fuzz_dir(void) {
   if (dir[0]) return dir;
   /* In memory where there is a tmpfs: every run writes its input. */
   const char *tmp = getenv("TMPDIR");
-  if (!tmp || !tmp[0]) tmp = access("/dev/shm", W_OK) == 0 ? "/dev/shm" : "/tmp";
+  if (!tmp || !tmp[0]) tmp = access("/dev/shm", W_OK) == 0 ? "/dev/shm" : P_tmpdir;
   snprintf(dir, sizeof dir, "%s/rtsim-fuzz-XXXXXX", tmp);
   CHECK(mkdtemp(dir) != NULL);
   atexit(remove_dir);
