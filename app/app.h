@@ -72,6 +72,12 @@ struct app_world {
 bool app_world_load(struct app_world *w, const char *path);
 void app_world_fini(struct app_world *w);
 
+struct trace_ctx;
+/* rtsim hits after its set-up: the rays CSV read from in (named <stdin> in
+ * messages), each row's nearest hit written to out. Returns 0, or 2 after
+ * printing one message (tests/fuzz runs it on a world loaded once). */
+int app_hits_answer(struct trace_ctx *tr, FILE *in, FILE *out);
+
 /* What a render of a world needs besides the policy and the memory port: the
  * shading context, the framebuffer and the policy setup that points at them
  * (so it must not move once set up). One setup for render, traffic, bench and

@@ -107,28 +107,15 @@ static bool parse_line(char *line, unsigned long lineno, unsigned long long *id,
   return true;
 }
 
-int cmd_hits(int argc, char **argv) {
-  const struct opts_spec spec[] = {OPTS_END};
-  struct opts_args args;
-  int rc = opts_parse("hits", HELP, spec, argc, argv, &args);
-  if (rc != OPTS_GO) return rc;
-  const char *scene_path = opts_one_scene(&args);
-  if (!scene_path) return APP_EXIT_USAGE;
-  struct app_world w;
-  if (!app_world_load(&w, scene_path)) return 2;
-  struct trace_ctx tr;
-  struct trace_layout layout;
-  trace_layout_default(&layout);
-  trace_init(&tr, &w.scene, &w.kd, mem_port_native(), &layout);
-
+int app_hits_answer(struct trace_ctx *tr, FILE *in, FILE *out) {
   struct err e;
   memset(&e, 0, sizeof e);
   char *line = NULL;
   size_t cap = 0, len = 0;
   unsigned long lineno = 0;
-  rc = 0;
+  int rc = 0;
   for (;;) {
-    int got = read_row(stdin, &line, &cap, &len, lineno + 1, &e);
+    int got = read_row(in, &line, &cap, &len, lineno + 1, &e);
     if (got < 0) rc = app_report(&e);
     if (got <= 0) break;
     lineno++;
@@ -139,7 +126,7 @@ int cmd_hits(int argc, char **argv) {
         rc = app_report(&e);
         break;
       }
-      printf("id,t,prim\n");
+      fprintf(out, "id,t,prim\n");
       continue;
     }
     if (len == 0) continue;
@@ -162,16 +149,33 @@ int cmd_hits(int argc, char **argv) {
       break;
     }
     struct trace_hit h;
-    if (trace_closest(&tr, &r, &h))
-      printf("%llu,%.9g,%d\n", id, (double)h.t, h.prim);
+    if (trace_closest(tr, &r, &h))
+      fprintf(out, "%llu,%.9g,%d\n", id, (double)h.t, h.prim);
     else
-      printf("%llu,inf,-1\n", id);
+      fprintf(out, "%llu,inf,-1\n", id);
   }
   free(line);
   if (rc == 0 && lineno == 0) {
     err_set(&e, "<stdin>", 0, 0, "no input (expected the header '%s')", HEADER);
     rc = app_report(&e);
   }
+  return rc;
+}
+
+int cmd_hits(int argc, char **argv) {
+  const struct opts_spec spec[] = {OPTS_END};
+  struct opts_args args;
+  int rc = opts_parse("hits", HELP, spec, argc, argv, &args);
+  if (rc != OPTS_GO) return rc;
+  const char *scene_path = opts_one_scene(&args);
+  if (!scene_path) return APP_EXIT_USAGE;
+  struct app_world w;
+  if (!app_world_load(&w, scene_path)) return 2;
+  struct trace_ctx tr;
+  struct trace_layout layout;
+  trace_layout_default(&layout);
+  trace_init(&tr, &w.scene, &w.kd, mem_port_native(), &layout);
+  rc = app_hits_answer(&tr, stdin, stdout);
   app_world_fini(&w);
   return rc;
 }

@@ -76,5 +76,20 @@ int main(void) {
   CHECK_GE((calls++, x), 2);
   CHECK_NE(&x, NULL);
   EXPECT(calls == 1);
+
+  /* A record quotes user text (a --set, a key, a cell) and stays one line:
+   * control characters become escapes, in the file and in the message. */
+  struct err e;
+  memset(&e, 0, sizeof e);
+  err_set(&e, "--set cores=4\n8", 0, 0, "key 'a\nb\r\x01\x7f\tc': bad");
+  EXPECTF(!strcmp(e.file, "--set cores=4\\n8"), "file: %s", e.file);
+  EXPECTF(!strcmp(e.msg, "key 'a\\nb\\r\\x01\\x7f\\tc': bad"), "msg: %s", e.msg);
+  /* Cut to fit, never in the middle of an escape. */
+  char many[ERR_MSG_MAX];
+  memset(many, '\n', sizeof many - 1);
+  many[sizeof many - 1] = '\0';
+  memset(&e, 0, sizeof e);
+  err_set(&e, NULL, 0, 0, "%s", many);
+  EXPECTF(strlen(e.msg) == ERR_MSG_MAX - 2 && !strchr(e.msg, '\n'), "len %zu", strlen(e.msg));
   return testing_done("test_err");
 }

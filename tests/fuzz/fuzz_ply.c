@@ -1,12 +1,7 @@
 /* libFuzzer entry point for the PLY reader: any bytes must give a mesh whose
  * indices are in range and whose coordinates are finite, or one error; never
- * a crash, a hang or unbounded memory. Built only with -DRTSIM_FUZZ=ON:
- *   cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DRTSIM_FUZZ=ON
- *   cmake --build build-fuzz --target fuzz_ply
- *   mkdir -p build-fuzz/corpus
- *   build-fuzz/fuzz_ply -max_total_time=120 -max_len=4096 -dict=tests/fuzz/ply.dict \
- *     build-fuzz/corpus tests/fuzz/corpus tests/data/meshes
- * (the first corpus directory is the one new inputs are written to). */
+ * a crash, a hang or unbounded memory. Built with -DRTSIM_FUZZ=ON and run by
+ * .ci/fuzz on corpus/ply with ply.dict (README: Quick start). */
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
