@@ -158,6 +158,13 @@ static void test_huge_scenes(void) {
  * for more memory than exists, is one line and exit 2 naming the file. The
  * files are assimp's own regression models (assimp-testmodels). */
 static void test_importer_child(void) {
+#ifdef __SANITIZE_ADDRESS__
+  /* Under AddressSanitizer the child's crash is the sanitizer's (it reports
+   * and exits 1) and the child's memory limit is off: these cases would test
+   * the sanitizer, not the importer's guard. The plain build runs them. */
+  printf("note: importer child cases skipped under AddressSanitizer\n");
+  return;
+#endif
   static const struct {
     const char *mesh, *want;
   } cases[] = {
