@@ -680,6 +680,11 @@ bool sweep_load_capped(struct sweep *s, const char *path, const char *out_dir,
   for (unsigned i = 0; ok && i < s->npoints; i++)
     ok = build_point(pv, &s->points[i], &choices[(size_t)i * nd], out_dir, e);
   free(choices);
+  if (!ok) { /* refused after the expansion: s is empty, as sweep.h promises */
+    sweep_free(s);
+    memset(s, 0, sizeof *s);
+    snprintf(s->file, sizeof s->file, "%s", path);
+  }
   return ok;
 }
 
