@@ -163,40 +163,28 @@ int main(void) {
   }
   EXPECT(rows == SIZES);
 
-  /* The traffic table's dynamic row at 8 KB (its run analyses that size alone)
-   * equals the full analyser's count for the same schedule. */
-  snprintf(cmd, sizeof cmd,
-           "%s traffic %s/scenes/small/room.yaml --policy dynamic --rays shadow --width 24 --height 24 -o %s && cat %s",
-           RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
-  EXPECT(testing_run(cmd, out, sizeof out) == 0);
-  const char *dyn = strstr(out, ",dynamic,8192,");
-  EXPECTF(dyn != NULL, "%s", out);
-  if (dyn) {
+  /* The traffic table's dynamic and treelet rows at 8 KB (each run analyses
+   * that size alone) equal the full analyser's count for the same schedule. */
+  static const char *const queued[] = {"dynamic", "treelet"};
+  const unsigned long long want_8k[] = {dyn_misses_8k, tl_misses_8k};
+  for (int q = 0; q < 2; q++) {
+    snprintf(cmd, sizeof cmd,
+             "%s traffic %s/scenes/small/room.yaml --policy %s --rays shadow --width 24 --height 24 -o %s && cat %s",
+             RTSIM_BINARY, RTSIM_SOURCE_DIR, queued[q], csv, csv);
+    EXPECT(testing_run(cmd, out, sizeof out) == 0);
+    char key[32];
+    snprintf(key, sizeof key, ",%s,8192,", queued[q]);
+    const char *row8 = strstr(out, key);
+    EXPECTF(row8 != NULL, "%s", out);
+    if (!row8) continue;
     /* After cache_bytes: frac, geometry_mb, total_mb, rel x2, then fetch by class. */
     double f0, f1, f2, f3, f4;
     unsigned long long fc[5];
-    EXPECT(sscanf(dyn + strlen(",dynamic,8192,"), "%lf,%lf,%lf,%lf,%lf,%llu,%llu,%llu,%llu,%llu", &f0, &f1,
-                  &f2, &f3, &f4, &fc[0], &fc[1], &fc[2], &fc[3], &fc[4]) == 10);
+    EXPECT(sscanf(row8 + strlen(key), "%lf,%lf,%lf,%lf,%lf,%llu,%llu,%llu,%llu,%llu", &f0, &f1, &f2, &f3,
+                  &f4, &fc[0], &fc[1], &fc[2], &fc[3], &fc[4]) == 10);
     unsigned long long lines = (fc[0] + fc[1] + fc[2] + fc[3] + fc[4]) / 64;
-    EXPECTF(dyn_misses_8k > 0 && lines == dyn_misses_8k, "dynamic 8 KB: table %llu lines, trace %llu", lines,
-            dyn_misses_8k);
-  }
-
-  /* So does the treelet row at 8 KB. */
-  snprintf(cmd, sizeof cmd,
-           "%s traffic %s/scenes/small/room.yaml --policy treelet --rays shadow --width 24 --height 24 -o %s && cat %s",
-           RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
-  EXPECT(testing_run(cmd, out, sizeof out) == 0);
-  const char *tl = strstr(out, ",treelet,8192,");
-  EXPECTF(tl != NULL, "%s", out);
-  if (tl) {
-    double f0, f1, f2, f3, f4;
-    unsigned long long fc[5];
-    EXPECT(sscanf(tl + strlen(",treelet,8192,"), "%lf,%lf,%lf,%lf,%lf,%llu,%llu,%llu,%llu,%llu", &f0, &f1,
-                  &f2, &f3, &f4, &fc[0], &fc[1], &fc[2], &fc[3], &fc[4]) == 10);
-    unsigned long long lines = (fc[0] + fc[1] + fc[2] + fc[3] + fc[4]) / 64;
-    EXPECTF(tl_misses_8k > 0 && lines == tl_misses_8k, "treelet 8 KB: table %llu lines, trace %llu", lines,
-            tl_misses_8k);
+    EXPECTF(want_8k[q] > 0 && lines == want_8k[q], "%s 8 KB: table %llu lines, trace %llu", queued[q],
+            lines, want_8k[q]);
   }
 
   /* Without --cache the replay command is for 512 KB: 8192 ways. --help shows
