@@ -186,15 +186,15 @@ static int cmp_text(const void *a, const void *b) {
   return c ? c : (x->i > y->i) - (x->i < y->i);
 }
 
-/* The index of the first value of list v (in file order) that repeats an
- * earlier one, and in *first that earlier one's; UINT32_MAX when all differ.
- * By sorting, n log n: an axis may hold a hundred thousand values. Non-scalar
- * items (refused later, where they stand) count as no value. */
-static uint32_t first_repeat(const struct cfg_node *v, uint32_t *first) {
-  struct by_text *r = xmalloc((v->count ? v->count : 1ull) * sizeof *r);
+/* The index of the first of n texts (in file order; NULL counts as no value)
+ * that repeats an earlier one, and in *first that earlier one's; UINT32_MAX
+ * when all differ. By sorting, n log n: an axis may hold a hundred thousand
+ * values. */
+static uint32_t first_repeat_of(const char *const *texts, uint32_t count, uint32_t *first) {
+  struct by_text *r = xmalloc((count ? count : 1ull) * sizeof *r);
   uint32_t n = 0;
-  for (uint32_t i = 0; i < v->count; i++)
-    if (v->items[i].kind == CFG_SCALAR) r[n++] = (struct by_text){v->items[i].text, i};
+  for (uint32_t i = 0; i < count; i++)
+    if (texts[i]) r[n++] = (struct by_text){texts[i], i};
   qsort(r, n, sizeof *r, cmp_text);
   uint32_t dup = UINT32_MAX, group = 0;
   *first = 0;
@@ -212,8 +212,49 @@ static uint32_t first_repeat(const struct cfg_node *v, uint32_t *first) {
   return dup;
 }
 
+/* first_repeat_of over list v's values; non-scalar items (refused later,
+ * where they stand) count as no value. */
+static uint32_t first_repeat(const struct cfg_node *v, uint32_t *first) {
+  const char **t = xmalloc((v->count ? v->count : 1ull) * sizeof *t);
+  for (uint32_t i = 0; i < v->count; i++)
+    t[i] = v->items[i].kind == CFG_SCALAR ? v->items[i].text : NULL;
+  uint32_t dup = first_repeat_of(t, v->count, first);
+  free(t);
+  return dup;
+}
+
+/* In a zip group one key's values may repeat (policy: [dynamic, dynamic]
+ * beside dynamic.sharing: [partition, chip]); what must differ are the
+ * group's points, the rows of its values read across. Refused at the first
+ * row that repeats an earlier one. The lists are checked and of one length. */
+static bool check_zip_rows(const struct cfg_doc *d, const struct cfg_node *grp, const char *path,
+                           struct err *e) {
+  uint32_t rows = grp->items[0].count;
+  char **t = xcalloc(rows, sizeof *t);
+  for (uint32_t r = 0; r < rows; r++) {
+    size_t len = 1;
+    for (uint32_t k = 0; k < grp->count; k++) len += strlen(grp->items[k].items[r].text) + 1;
+    t[r] = xmalloc(len);
+    t[r][0] = '\0';
+    for (uint32_t k = 0; k < grp->count; k++) {
+      strcat(t[r], grp->items[k].items[r].text);
+      strcat(t[r], "\x1f"); /* a separator no scalar holds */
+    }
+  }
+  uint32_t first, dup = first_repeat_of((const char *const *)t, rows, &first);
+  for (uint32_t r = 0; r < rows; r++) free(t[r]);
+  free(t);
+  if (dup == UINT32_MAX) return true;
+  const struct cfg_node *at = &grp->items[0].items[dup];
+  return err_set(e, d->file, at->line, at->col,
+                 "%s: the values at index %u (one from each key) repeat those at index %u "
+                 "(line %d)",
+                 path, dup, first, grp->items[0].items[first].line);
+}
+
 /* Add map entry v (key: [values]) of section as an axis; check every value. */
-static bool add_axis(struct priv *pv, struct cfg_node *v, const char *section, struct err *e) {
+static bool add_axis(struct priv *pv, struct cfg_node *v, const char *section, bool zipped,
+                     struct err *e) {
   const struct cfg_doc *d = &pv->doc;
   char path[128];
   snprintf(path, sizeof path, "%s.%s", section, v->key);
@@ -239,7 +280,7 @@ static bool add_axis(struct priv *pv, struct cfg_node *v, const char *section, s
   pv->axes[pv->naxes++] = a;
   /* The first value that repeats an earlier one is refused where the old
    * one-by-one check refused it: after the values before it are checked. */
-  uint32_t first, dup = first_repeat(v, &first);
+  uint32_t first = 0, dup = zipped ? UINT32_MAX : first_repeat(v, &first);
   /* One scratch config for every value: a value sets only its own key (and a
    * refused one ends the read), so the others' are never seen. */
   struct machine_cfg *scratch = &pv->scratch;
@@ -326,7 +367,7 @@ static bool read_file(struct priv *pv, const char *path, struct err *e) {
   if (axes) {
     if (!cfg_expect_map(d, axes, "axes", e)) return false;
     for (uint32_t i = 0; i < axes->count; i++) {
-      if (!add_axis(pv, &axes->items[i], "axes", e)) return false;
+      if (!add_axis(pv, &axes->items[i], "axes", false, e)) return false;
       pv->dims = xrealloc(pv->dims, (pv->ndims + 1ull) * sizeof *pv->dims);
       pv->dims[pv->ndims++] = (struct dim){pv->naxes - 1, 1, axes->items[i].count};
     }
@@ -343,12 +384,13 @@ static bool read_file(struct priv *pv, const char *path, struct err *e) {
       unsigned first = pv->naxes;
       for (uint32_t i = 0; i < grp->count; i++) {
         struct cfg_node *v = &grp->items[i];
-        if (!add_axis(pv, v, path_g, e)) return false;
+        if (!add_axis(pv, v, path_g, true, e)) return false;
         if (v->count != grp->items[0].count)
           return cfg_fail(d, v, path_g, e,
                           "%s: %u values, but %s has %u (keys in a group move together)", v->key,
                           v->count, grp->items[0].key, grp->items[0].count);
       }
+      if (!check_zip_rows(d, grp, path_g, e)) return false;
       pv->dims = xrealloc(pv->dims, (pv->ndims + 1ull) * sizeof *pv->dims);
       pv->dims[pv->ndims++] = (struct dim){first, grp->count, grp->items[0].count};
     }

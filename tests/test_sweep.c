@@ -147,6 +147,15 @@ static void test_expansion(void) {
           "the first job is not a widest, two-ray-type point: %s", out);
   EXPECTF(strstr(last, "rays=primary,width=4 ") != NULL, "the last job is not a small one: %s", last);
   EXPECTF(strstr(out, "--rays primary,shadow --width 8 --height 4"), "workload arguments: %s", out);
+
+  /* A zipped key's value may repeat when the rows differ: three points. */
+  EXPECT(run("(%s sweep %szip_repeat.yaml -o %s/sw_zip --emit-jobs 2>/dev/null)", RTSIM_BINARY, SW,
+             RTSIM_TMP) == 0);
+  EXPECTF(count_lines(out) == 3, "zip_repeat.yaml: %s", out);
+  EXPECTF(strstr(out, "/policy=dynamic,dynamic.sharing=chip ") &&
+              strstr(out, "/policy=dynamic,dynamic.sharing=partition ") &&
+              strstr(out, "--set dynamic.sharing=chip"),
+          "zip_repeat.yaml: %s", out);
 }
 
 /* Bad sweep files: exit 2, one line at file:line:col, nothing created. */
@@ -162,6 +171,7 @@ static void test_bad_files(void) {
       {"bad_zip_length.yaml", "bad_zip_length.yaml:5:14: error: zip[0]: l2.ways: 3 values, but l2.size has 2"},
       {"bad_twice.yaml", "bad_twice.yaml:6:5: error: zip[0].l2.size: 'l2.size' is given twice (also in axes at line 4"},
       {"bad_dup_value.yaml", "bad_dup_value.yaml:4:17: error: axes.cores[2]: '1' is listed twice"},
+      {"bad_zip_row.yaml", "bad_zip_row.yaml:4:52: error: zip[0]: the values at index 3 (one from each key) repeat those at index 1 (line 4)"},
       {"bad_policy.yaml", "bad_policy.yaml:4:23: error: policy: unknown policy (got 'fastest'"},
       {"bad_rays.yaml", "bad_rays.yaml:4:19: error: rays: not a list of ray types (got 'primary,glossy'"},
       {"bad_scene_missing.yaml", "bad_scene_missing.yaml:3:44: error: axes.scene[1]: cannot open '../../../scenes/small/hall.yaml'"},
