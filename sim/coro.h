@@ -31,7 +31,8 @@ size_t coro_default_stack_bytes(void);
 /* How many coroutine stacks this host lets a process map at once: each takes
  * two memory mappings (its guard page and the stack), and the kernel allows
  * vm.max_map_count of them (/proc/sys/vm/max_map_count), some of which the
- * program, its libraries and its heap hold (a reserve of 4096 is kept).
+ * program, its libraries and its heap hold (a reserve of 4096 is kept; it
+ * also covers the up to 63 stacks of a pool's last chunk not yet handed out).
  * UINT64_MAX when the limit cannot be read. */
 uint64_t coro_host_stack_limit(void);
 
