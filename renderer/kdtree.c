@@ -5,6 +5,7 @@
  * stored exactly, so the tree depends only on the order of coordinates and on
  * SAH costs, both unchanged (up to rounding) when the scene is scaled.
  * Children and their lists are indices and arena offsets. */
+#define _DEFAULT_SOURCE /* madvise */
 #include "renderer/kdtree.h"
 
 #include <float.h>
@@ -12,6 +13,7 @@
 #include <setjmp.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 #include "renderer/scene.h"
 #include "sim/err.h"
@@ -43,6 +45,7 @@ struct kd_builder {
   uint8_t *side;      /* classification scratch: bit 0 below, bit 1 above */
   struct kd_ev *arena; /* LIFO store of event lists, see build_node */
   size_t arena_top, arena_cap;
+  size_t arena_high; /* the arena's pages above this may be resident but dead */
   uint32_t node_cap, prim_cap;
   uint32_t *leaf_scratch;
   /* Perfect splits: the straddlers of the node being split (prims) and the
@@ -136,6 +139,26 @@ static void arena_reserve(struct kd_builder *b, size_t extra) {
   while (cap < b->arena_top + extra) cap *= 2;
   b->arena = kd_grow(b, b->arena, (unsigned long long)cap * sizeof *b->arena);
   b->arena_cap = cap;
+}
+
+/* What lies in the arena past the top is dead once a split is done, but
+ * its pages stay resident: the root's split of a large scene touches about
+ * three times its lists (tens of megabytes), held to the end of the build
+ * beside the growing tree. Before a child is built (its lists on top, of
+ * `child` events), give back the pages past what can still be written: the
+ * top plus twice the child's lists (its subtree's splits), or `floor`, the
+ * furthest that a sibling still to be built of it or of an ancestor will
+ * write; once they are many. So no page given back is written again, and the
+ * build takes no new page faults. */
+static void arena_release(struct kd_builder *b, size_t child, size_t floor) {
+  const size_t page = 4096, ev = sizeof *b->arena;
+  size_t keep = b->arena_top + 2 * child;
+  if (keep < floor) keep = floor;
+  if (b->arena_high <= keep || (b->arena_high - keep) * ev < ((size_t)4 << 20)) return;
+  uintptr_t lo = ((uintptr_t)b->arena + keep * ev + page - 1) & ~(uintptr_t)(page - 1);
+  uintptr_t hi = ((uintptr_t)b->arena + b->arena_high * ev) & ~(uintptr_t)(page - 1);
+  if (hi > lo) madvise((void *)lo, hi - lo, MADV_DONTNEED);
+  b->arena_high = keep;
 }
 
 static int cmp_u32(const void *a, const void *b) {
@@ -416,9 +439,11 @@ static size_t merge_events(const struct kd_builder *b, const struct kd_ev *ev, u
 }
 
 /* Build node over the n triangles whose event lists are l (at the arena's top
- * region starting at l->off). On return the arena is popped back to l->off. */
+ * region starting at l->off). On return the arena is popped back to l->off.
+ * floor: how far into the arena nodes still to be built after this one will
+ * write (arena_release). */
 static void build_node(struct kd_builder *b, const struct kd_box *bx, const struct kd_lists *l,
-                       uint32_t n, int depth, int depth_left, int bad_refines) {
+                       uint32_t n, int depth, int depth_left, int bad_refines, size_t floor) {
   struct kd_tree *t = b->t;
   uint32_t i = new_node(b);
   if (n <= b->p->max_prims || depth_left == 0) {
@@ -515,11 +540,17 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
   memmove(b->arena + l->off, da, (wa + wb) * sizeof *da);
   lb.off = l->off + wa;
   b->arena_top = l->off + wa + wb;
+  size_t written = (size_t)(db + wb - b->arena);
+  if (written > b->arena_high) b->arena_high = written;
 
-  build_node(b, &below, &lb, nb, depth + 1, depth_left - 1, bad_refines);
+  /* The above child, built second from [l->off, + wa), writes up to 3 wa. */
+  size_t floor_below = l->off + 3 * wa > floor ? l->off + 3 * wa : floor;
+  arena_release(b, wb, floor_below);
+  build_node(b, &below, &lb, nb, depth + 1, depth_left - 1, bad_refines, floor_below);
   uint32_t above_idx = t->node_count;
   CHECK_LT(above_idx, KD_MAX_NODES);
-  build_node(b, &above, &la, na, depth + 1, depth_left - 1, bad_refines);
+  arena_release(b, wa, floor);
+  build_node(b, &above, &la, na, depth + 1, depth_left - 1, bad_refines, floor);
   uint32_t bits;
   memcpy(&bits, &s, sizeof bits);
   t->nodes[i].w0 = bits;
@@ -592,8 +623,13 @@ static void kd_build_all(struct kd_builder *b, const struct scene *s) {
     root.len[a] = m;
     b->arena_top += m;
   }
+  /* Unclipped, the triangles' bounds were needed for the root's events only. */
+  if (!p->clip) {
+    free(b->tb);
+    b->tb = NULL;
+  }
   struct kd_box bx = {{t->lo.x, t->lo.y, t->lo.z}, {t->hi.x, t->hi.y, t->hi.z}};
-  build_node(b, &bx, &root, n, 0, max_depth, 0);
+  build_node(b, &bx, &root, n, 0, max_depth, 0, 0);
   CHECK_EQ(b->arena_top, 0);
 
   /* Trim the arrays to size: the tree lives as long as the scene. */
