@@ -1,16 +1,18 @@
 /* SAH k-d tree over a scene's triangles, in the spirit of PBRT's KdTreeAccel,
- * with the paper's 8-byte nodes. Splits are stored exactly; the queue-point
- * flag lives in bit 2 of w1 in both node kinds. (The split's lowest mantissa
- * bit used to hold it; trimming every split to an even mantissa made the
- * candidate planes depend on the float grid, so a scene scaled by 3 or 0.1
- * built a different tree.)
+ * with the paper's 8-byte nodes. Splits are stored exactly; bit 2 of w1 is
+ * zero in both node kinds. (It held the dynamic policy's queue-point flag, in
+ * a copy of the nodes made for every selection, 8 bytes a node; the flags are
+ * a bitmap now, qpoint.h. Before that the split's lowest mantissa bit held
+ * it; trimming every split to an even mantissa made the candidate planes
+ * depend on the float grid, so a scene scaled by 3 or 0.1 built a different
+ * tree.)
  *
  * Node layout (two 32-bit words, children by index):
  *   interior: w0 = split as float bits
- *             w1 = (above_child << 3) | (queue_flag << 2) | axis (0,1,2);
+ *             w1 = (above_child << 3) | axis (0,1,2);
  *             below child = this + 1
  *   leaf:     w0 = offset of its first entry in the primitive index list
- *             w1 = (prim_count << 3) | (queue_flag << 2) | 3                     */
+ *             w1 = (prim_count << 3) | 3                                          */
 #ifndef RTSIM_RENDERER_KDTREE_H
 #define RTSIM_RENDERER_KDTREE_H
 
@@ -36,10 +38,6 @@ static inline float kd_split(struct kd_node n) {
   float f;
   memcpy(&f, &n.w0, sizeof f);
   return f;
-}
-static inline bool kd_is_queue_point(struct kd_node n) { return ((n.w1 >> 2) & 1u) != 0; }
-static inline void kd_set_queue_point(struct kd_node *n, bool on) {
-  n->w1 = on ? (n->w1 | 4u) : (n->w1 & ~4u);
 }
 
 /* Most nodes a tree may have: a child index takes 29 bits of w1. */

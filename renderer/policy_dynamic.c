@@ -111,7 +111,7 @@ struct dyn {
    * queue i is the treelet rooted at qs.qnode[i], and tl_of[n] is the queue
    * of node n's treelet; NULL for the dynamic policy. */
   uint32_t *tl_of;
-  struct qwalk_tree wt; /* the tree with qs's queue-point bits */
+  struct qwalk_tree wt; /* the tree with qs's queue points */
   struct qstore st;
   struct qdrain_set ds;
   uint32_t *order;  /* primary rays (work items) in Hilbert order */
@@ -562,7 +562,7 @@ void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32
 static void dyn_setup(struct policy_job *job, struct dyn *d, uint32_t block_tris, uint32_t group) {
   const struct policy_params *p = &job->params;
   const struct trace_layout *l = &job->setup.layout;
-  d->wt = (struct qwalk_tree){job->setup.kd, job->setup.scene, d->qs.nodes};
+  d->wt = (struct qwalk_tree){job->setup.kd, job->setup.scene, d->qs.nodes, d->qs.mark};
   d->idle.head = d->idle.tail = DYN_NONE;
   d->pass = xmalloc((uint64_t)job->cores * sizeof *d->pass);
   for (uint32_t c = 0; c < job->cores; c++) d->pass[c] = d->idle;
@@ -611,21 +611,23 @@ static void tl_create(struct policy_job *job) {
   const uint32_t n = kd->node_count;
   d->qs.node_count = n;
   d->qs.gmax_bytes = bud.gmax_bytes;
-  d->qs.nodes = xmalloc((uint64_t)n * sizeof *d->qs.nodes + 1);
+  d->qs.nodes = kd->nodes;
+  d->qs.mark = qpoint_mark_new(n);
   d->qs.qnode = xmalloc((uint64_t)ts.count * sizeof *d->qs.qnode + 1);
   uint32_t *qi_of_treelet = xmalloc((uint64_t)ts.count * sizeof *qi_of_treelet + 1);
   for (uint32_t i = 0; i < n; i++) {
-    d->qs.nodes[i] = kd->nodes[i];
-    const bool root = ts.root[ts.of[i]] == i;
-    kd_set_queue_point(&d->qs.nodes[i], root);
-    if (root) {
+    if (ts.root[ts.of[i]] == i) {
+      qpoint_mark(d->qs.mark, i);
       qi_of_treelet[ts.of[i]] = d->qs.count;
       d->qs.qnode[d->qs.count++] = i;
     }
   }
   CHECK_EQ(d->qs.count, ts.count);
-  d->tl_of = xmalloc((uint64_t)n * sizeof *d->tl_of + 1);
-  for (uint32_t i = 0; i < n; i++) d->tl_of[i] = qi_of_treelet[ts.of[i]];
+  /* The treelet of every node becomes its queue, in place: a second array
+   * of a word a node would be the run's peak on a large tree. */
+  for (uint32_t i = 0; i < n; i++) ts.of[i] = qi_of_treelet[ts.of[i]];
+  d->tl_of = ts.of;
+  ts.of = NULL;
   free(qi_of_treelet);
   treelet_fini(&ts);
   dyn_setup(job, d, block_tris, group);

@@ -1,7 +1,8 @@
 /* Queue-point selection. Nodes are in depth-first preorder (below child =
  * this + 1, above child after the below subtree), so node n's subtree is the
  * index range [n, end[n]) and parents precede children: every pass here is a
- * plain forward or backward scan, with no recursion. */
+ * plain forward or backward scan or a walk with a stack as deep as the tree,
+ * with no recursion. */
 #include "renderer/qpoint.h"
 
 #include <stdlib.h>
@@ -12,79 +13,70 @@
 
 #define QPOINT_NONE UINT32_MAX
 
-/* end[n]: one past the last node of n's subtree. */
-static void subtree_ends(const struct kd_tree *kd, uint32_t *end) {
-  for (uint32_t i = kd->node_count; i-- > 0;) {
-    struct kd_node nd = kd->nodes[i];
-    end[i] = kd_is_leaf(nd) ? i + 1 : end[kd_above(nd)];
-  }
-}
-
 void qpoint_subtree_tris(const struct kd_tree *kd, uint32_t *out) {
   const uint32_t n = kd->node_count;
   if (n == 0) return;
+  /* Parents and depths (a byte: trees are at most KD_DEPTH_LIMIT deep), for
+   * the meeting points below; a word a node less than subtree ends would
+   * take, on trees of millions of nodes. */
   uint32_t *parent = xmalloc((uint64_t)n * sizeof *parent);
-  uint32_t *end = xmalloc((uint64_t)n * sizeof *end);
-  int64_t *acc = xcalloc(n, sizeof *acc);
+  uint8_t *depth = xmalloc(n);
   parent[0] = QPOINT_NONE;
+  depth[0] = 0;
   for (uint32_t i = 0; i < n; i++) {
     struct kd_node nd = kd->nodes[i];
     if (kd_is_leaf(nd)) continue;
     CHECK_LT(i + 1, n);
     CHECK_GT(kd_above(nd), i + 1);
     CHECK_LT(kd_above(nd), n);
-    parent[i + 1] = i;
-    parent[kd_above(nd)] = i;
+    CHECK_LT(depth[i], 255);
+    parent[i + 1] = parent[kd_above(nd)] = i;
+    depth[i + 1] = depth[kd_above(nd)] = (uint8_t)(depth[i] + 1);
   }
-  subtree_ends(kd, end);
 
-  /* Each triangle's leaves in increasing node order (a counting sort). */
   uint32_t tri_count = 0;
   for (uint32_t j = 0; j < kd->prim_ref_count; j++)
     if (kd->prims[j] + 1 > tri_count) tri_count = kd->prims[j] + 1;
-  uint32_t *start = xcalloc((uint64_t)tri_count + 1, sizeof *start);
-  uint32_t *list = xmalloc((uint64_t)kd->prim_ref_count * sizeof *list + 1);
-  for (uint32_t i = 0; i < n; i++) {
-    struct kd_node nd = kd->nodes[i];
-    if (!kd_is_leaf(nd)) continue;
-    for (uint32_t j = 0; j < kd_leaf_count(nd); j++) start[kd->prims[kd_leaf_offset(nd) + j] + 1]++;
-  }
-  for (uint32_t p = 0; p < tri_count; p++) start[p + 1] += start[p];
-  uint32_t *fill = xmalloc((uint64_t)tri_count * sizeof *fill + 1);
-  memcpy(fill, start, (uint64_t)tri_count * sizeof *fill);
-  for (uint32_t i = 0; i < n; i++) {
-    struct kd_node nd = kd->nodes[i];
-    if (!kd_is_leaf(nd)) continue;
-    for (uint32_t j = 0; j < kd_leaf_count(nd); j++) list[fill[kd->prims[kd_leaf_offset(nd) + j]]++] = i;
-  }
-  free(fill);
+  /* The last leaf (in node order) each triangle was seen in. */
+  uint32_t *last = xmalloc((uint64_t)tri_count * sizeof *last + 1);
+  for (uint32_t p = 0; p < tri_count; p++) last[p] = QPOINT_NONE;
 
-  /* +1 at each leaf, -1 at the meeting point of consecutive leaves: after the
-   * subtree sums, a subtree counts each of its triangles once. The lowest
-   * common ancestor of leaves a <= b is the first ancestor of a whose range
-   * holds b; consecutive leaves of a triangle are near each other, so the walk
-   * is short. A repeated reference (a == b) cancels itself. */
-  for (uint32_t p = 0; p < tri_count; p++) {
-    for (uint32_t k = start[p]; k < start[p + 1]; k++) {
-      acc[list[k]]++;
-      if (k == start[p]) continue;
-      uint32_t a = list[k - 1], b = list[k], x = a;
-      while (end[x] <= b) x = parent[x];
-      acc[x]--;
+  /* +1 at each leaf, -1 at the meeting point of a triangle's consecutive
+   * leaves (leaves are visited in increasing node order, so last[p] and i
+   * are consecutive): after the subtree sums, a subtree counts each of its
+   * triangles once. The lowest common ancestor of two leaves: the deeper one
+   * climbs to the other's depth, then both climb until they meet; a
+   * triangle's consecutive leaves are near each other, so the climb is short.
+   * A repeated reference (a == b) cancels itself. Sums are kept in out modulo 2^32: a partial sum may go
+   * below zero, every final one is a count. */
+  memset(out, 0, (uint64_t)n * sizeof *out);
+  for (uint32_t i = 0; i < n; i++) {
+    struct kd_node nd = kd->nodes[i];
+    if (!kd_is_leaf(nd)) continue;
+    for (uint32_t j = 0; j < kd_leaf_count(nd); j++) {
+      uint32_t p = kd->prims[kd_leaf_offset(nd) + j];
+      out[i]++;
+      uint32_t a = last[p];
+      last[p] = i;
+      if (a == QPOINT_NONE) continue;
+      uint32_t x = a, y = i;
+      while (depth[x] > depth[y]) x = parent[x];
+      while (depth[y] > depth[x]) y = parent[y];
+      while (x != y) {
+        x = parent[x];
+        y = parent[y];
+      }
+      out[x]--;
     }
   }
-  for (uint32_t i = n; i-- > 1;) acc[parent[i]] += acc[i];
-  for (uint32_t i = 0; i < n; i++) {
-    CHECK_GE(acc[i], 0);
-    CHECK_LE(acc[i], (int64_t)tri_count);
-    out[i] = (uint32_t)acc[i];
-  }
-  free(start);
-  free(list);
-  free(acc);
-  free(end);
+  free(last);
+  free(depth);
+  for (uint32_t i = n; i-- > 1;) out[parent[i]] += out[i];
   free(parent);
+  for (uint32_t i = 0; i < n; i++) CHECK_LE(out[i], tri_count);
 }
+
+uint64_t *qpoint_mark_new(uint32_t n) { return xcalloc(n / 64 + 1, sizeof(uint64_t)); }
 
 void qpoint_select(struct qpoint_set *qs, const struct kd_tree *kd, const uint32_t *tris,
                    uint32_t tri_bytes, uint64_t gmax_bytes) {
@@ -92,36 +84,35 @@ void qpoint_select(struct qpoint_set *qs, const struct kd_tree *kd, const uint32
   memset(qs, 0, sizeof *qs);
   qs->node_count = n;
   qs->gmax_bytes = gmax_bytes;
-  qs->nodes = xmalloc((uint64_t)n * sizeof *qs->nodes + 1);
-  if (n) memcpy(qs->nodes, kd->nodes, (uint64_t)n * sizeof *qs->nodes);
-  uint32_t *end = xmalloc((uint64_t)n * sizeof *end + 1);
-  subtree_ends(kd, end);
+  qs->nodes = kd->nodes;
+  qs->mark = qpoint_mark_new(n);
   uint32_t cap = 64;
   qs->qnode = xmalloc(cap * sizeof *qs->qnode);
-  /* A preorder walk that skips the subtree of each queue point it marks: the
-   * first qualifying node on every branch, in increasing node order. */
-  for (uint32_t i = 0; i < n;) {
-    struct kd_node *nd = &qs->nodes[i];
-    kd_set_queue_point(nd, false);
-    if (tris[i] == 0) { /* no geometry: nothing to queue for */
-      for (uint32_t j = i; j < end[i]; j++) kd_set_queue_point(&qs->nodes[j], false);
-      i = end[i];
-      continue;
-    }
-    if (kd_is_leaf(*nd) || (uint64_t)tris[i] * tri_bytes <= gmax_bytes) {
-      kd_set_queue_point(nd, true);
+  if (n == 0) return;
+  /* A preorder walk that does not enter the subtree of a queue point it
+   * marks: the first qualifying node on every branch, in increasing node
+   * order. The stack holds the above children still to come (as many as the
+   * tree is deep). */
+  uint32_t stack[KD_DEPTH_LIMIT + 2], sp = 0;
+  stack[sp++] = 0;
+  while (sp) {
+    uint32_t i = stack[--sp];
+    if (tris[i] == 0) continue; /* no geometry: nothing to queue for */
+    struct kd_node nd = kd->nodes[i];
+    if (kd_is_leaf(nd) || (uint64_t)tris[i] * tri_bytes <= gmax_bytes) {
+      qpoint_mark(qs->mark, i);
       if (qs->count == cap) {
         cap *= 2;
         qs->qnode = xrealloc(qs->qnode, (uint64_t)cap * sizeof *qs->qnode);
       }
       qs->qnode[qs->count++] = i;
-      for (uint32_t j = i + 1; j < end[i]; j++) kd_set_queue_point(&qs->nodes[j], false);
-      i = end[i];
       continue;
     }
-    i++; /* interior above the queue points: its below child is next */
+    /* Interior above the queue points: its below child next, then above. */
+    CHECK_LT(sp + 2, KD_DEPTH_LIMIT + 3);
+    stack[sp++] = kd_above(nd);
+    stack[sp++] = i + 1;
   }
-  free(end);
 }
 
 static uint64_t share(uint64_t cache, uint32_t div) {
@@ -170,7 +161,7 @@ int64_t qpoint_index(const struct qpoint_set *qs, uint32_t n) {
 
 void qpoint_fini(struct qpoint_set *qs) {
   if (!qs) return;
-  free(qs->nodes);
+  free(qs->mark);
   free(qs->qnode);
   memset(qs, 0, sizeof *qs);
 }

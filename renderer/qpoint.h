@@ -8,6 +8,7 @@
 #ifndef RTSIM_RENDERER_QPOINT_H
 #define RTSIM_RENDERER_QPOINT_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 struct kd_tree;
@@ -42,16 +43,27 @@ struct qpoint_budget {
   uint64_t node_bytes, table_bytes, ray_bytes, gmax_bytes;
 };
 
-/* The selection: a copy of the tree's nodes with the queue-point bits set
- * (kd_is_queue_point), and the queue points in node order. The index of a queue
- * point in qnode[] is its queue-table index. Owns its arrays (qpoint_fini). */
+/* The selection: the queue points as a bitmap over the tree's nodes
+ * (qpoint_marked) and in node order. The index of a queue point in qnode[] is
+ * its queue-table index. Owns mark and qnode (qpoint_fini); nodes are the
+ * tree's, borrowed. */
 struct qpoint_set {
-  struct kd_node *nodes; /* node_count entries; the tree's own nodes are not modified */
+  const struct kd_node *nodes; /* the tree's nodes, node_count of them */
+  uint64_t *mark;              /* bit n set: node n is a queue point */
   uint32_t node_count;
   uint32_t *qnode;       /* node index of queue point q, increasing */
   uint32_t count;        /* number of queue points */
   uint64_t gmax_bytes;   /* the bound it was made for */
 };
+
+/* A bitmap of n nodes, all clear (free it). */
+uint64_t *qpoint_mark_new(uint32_t n);
+
+static inline bool qpoint_marked(const uint64_t *mark, uint32_t n) {
+  return (mark[n >> 6] >> (n & 63u)) & 1u;
+}
+
+static inline void qpoint_mark(uint64_t *mark, uint32_t n) { mark[n >> 6] |= 1ull << (n & 63u); }
 
 /* Select for a given bound: node n qualifies when tris[n] * tri_bytes <=
  * gmax_bytes (tris from qpoint_subtree_tris). */

@@ -4,6 +4,7 @@
 
 #include <math.h>
 
+#include "renderer/qpoint.h"
 #include "renderer/ray.h"
 #include "renderer/scene.h"
 #include "sim/err.h"
@@ -77,7 +78,7 @@ enum qwalk_end qwalk_run(const struct qwalk_tree *t, struct trace_ctx *tr, struc
   for (;;) {
     trav_announce_node(tr, w->ni, 1);
     struct kd_node nd = t->nodes[w->ni];
-    if (to_queue && kd_is_queue_point(nd)) return QWALK_QUEUED;
+    if (to_queue && qpoint_marked(t->mark, w->ni)) return QWALK_QUEUED;
     if (!kd_is_leaf(nd)) {
       if (trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &w->ni, w->stack, &w->sp)) continue;
     } else {

@@ -3,8 +3,8 @@
  * trace.c's (renderer/trav.h), so that a ray cut into pieces tests the same
  * triangles and finds the same hit as the ray traced in one go.
  *
- * Queue points are the nodes whose queue-point bit is set in the node array
- * the walk is given (kd_is_queue_point): the dynamic policy's (qpoint.h), or
+ * Queue points are the nodes whose bit is set in the bitmap the walk is given
+ * (qpoint_marked): the dynamic policy's (qpoint.h), or
  * any other set of subtree roots that holds every leaf with geometry below it
  * (a treelet policy marks its treelet roots). Nothing here queues a ray: the
  * walk only says where it stopped.
@@ -34,12 +34,12 @@ struct ray;
 struct scene;
 
 /* What a walk reads: the tree, the scene (to recompute a carried hit) and the
- * node array with the queue-point bits (the tree's own nodes, marked).
- * Borrowed. */
+ * nodes, and the queue points' bitmap (qpoint.h). Borrowed. */
 struct qwalk_tree {
   const struct kd_tree *kd;
   const struct scene *s;
   const struct kd_node *nodes;
+  const uint64_t *mark;
 };
 
 /* One ray's walk: the scheduling traversal (for a shadow ray the reversed

@@ -14,71 +14,80 @@ struct box {
   float lo[3], hi[3];
 };
 
-/* Half the surface area of every node's box: the relative chance that a ray
- * crossing the root's box crosses the node's (the SAH's measure). */
-static double *node_areas(const struct kd_tree *kd) {
-  const uint32_t n = kd->node_count;
-  struct box *b = xmalloc((uint64_t)n * sizeof *b);
-  double *area = xmalloc((uint64_t)n * sizeof *area);
-  for (int a = 0; a < 3; a++) {
-    b[0].lo[a] = v3_get(kd->lo, a);
-    b[0].hi[a] = v3_get(kd->hi, a);
-  }
-  for (uint32_t i = 0; i < n; i++) {
-    double d[3];
-    for (int a = 0; a < 3; a++) d[a] = (double)b[i].hi[a] - (double)b[i].lo[a];
-    area[i] = d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
-    struct kd_node nd = kd->nodes[i];
-    if (kd_is_leaf(nd)) continue;
-    uint32_t below = i + 1, above = kd_above(nd);
-    CHECK_LT(below, n);
-    CHECK_GT(above, below);
-    CHECK_LT(above, n);
-    int ax = kd_axis(nd);
-    float s = kd_split(nd);
-    b[below] = b[i];
-    b[below].hi[ax] = s;
-    b[above] = b[i];
-    b[above].lo[ax] = s;
-  }
-  free(b);
-  return area;
+/* A node with its box and half its box's surface area: the relative chance
+ * that a ray crossing the root's box crosses the node's (the SAH's measure).
+ * Boxes and areas are carried with the nodes waiting in the heap and in the
+ * list of treelet roots, not kept for every node (36 bytes a node were 220
+ * MB on sphereflake). */
+struct cand {
+  uint32_t node;
+  struct box b;
+  double area;
+};
+
+static struct cand cand_of(uint32_t node, const struct box *b) {
+  struct cand c = {node, *b, 0.0};
+  double d[3];
+  for (int a = 0; a < 3; a++) d[a] = (double)b->hi[a] - (double)b->lo[a];
+  c.area = d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+  return c;
+}
+
+/* The children of interior node c, boxes split at its plane. */
+static void children(const struct kd_tree *kd, const struct cand *c, struct cand out[2]) {
+  struct kd_node nd = kd->nodes[c->node];
+  uint32_t below = c->node + 1, above = kd_above(nd);
+  CHECK_LT(below, kd->node_count);
+  CHECK_GT(above, below);
+  CHECK_LT(above, kd->node_count);
+  int ax = kd_axis(nd);
+  float s = kd_split(nd);
+  struct box bb = c->b, ab = c->b;
+  bb.hi[ax] = s;
+  ab.lo[ax] = s;
+  out[0] = cand_of(below, &bb);
+  out[1] = cand_of(above, &ab);
 }
 
 struct former {
   const struct kd_tree *kd;
-  const double *area;
   const uint32_t *tris;  /* distinct triangles in each subtree */
   uint32_t *stamp;       /* stamp[p] == t + 1: triangle p is in treelet t */
   uint32_t *fresh;       /* the triangles a trial just stamped */
-  uint32_t *heap, heap_n;
+  struct cand *heap;
+  uint32_t heap_n, heap_cap;
   uint32_t *stack;
   uint32_t tri_bytes;
 };
 
-static int above_in_heap(const struct former *f, uint32_t a, uint32_t b) {
-  if (f->area[a] != f->area[b]) return f->area[a] > f->area[b];
-  return a < b;
+static int above_in_heap(const struct cand *a, const struct cand *b) {
+  if (a->area != b->area) return a->area > b->area;
+  return a->node < b->node;
 }
 
-static void heap_push(struct former *f, uint32_t v) {
+static void heap_push(struct former *f, struct cand v) {
+  if (f->heap_n == f->heap_cap) {
+    f->heap_cap = f->heap_cap ? 2 * f->heap_cap : 64;
+    f->heap = xrealloc(f->heap, (uint64_t)f->heap_cap * sizeof *f->heap);
+  }
   uint32_t i = f->heap_n++;
   while (i > 0) {
     uint32_t p = (i - 1) / 2;
-    if (!above_in_heap(f, v, f->heap[p])) break;
+    if (!above_in_heap(&v, &f->heap[p])) break;
     f->heap[i] = f->heap[p];
     i = p;
   }
   f->heap[i] = v;
 }
 
-static uint32_t heap_pop(struct former *f) {
-  uint32_t top = f->heap[0], v = f->heap[--f->heap_n], i = 0;
+static struct cand heap_pop(struct former *f) {
+  struct cand top = f->heap[0], v = f->heap[--f->heap_n];
+  uint32_t i = 0;
   for (;;) {
     uint32_t c = 2 * i + 1;
     if (c >= f->heap_n) break;
-    if (c + 1 < f->heap_n && above_in_heap(f, f->heap[c + 1], f->heap[c])) c++;
-    if (!above_in_heap(f, f->heap[c], v)) break;
+    if (c + 1 < f->heap_n && above_in_heap(&f->heap[c + 1], &f->heap[c])) c++;
+    if (!above_in_heap(&f->heap[c], &v)) break;
     f->heap[i] = f->heap[c];
     i = c;
   }
@@ -139,41 +148,54 @@ void treelet_build(struct treelet_set *ts, const struct kd_tree *kd, uint32_t tr
   qpoint_subtree_tris(kd, tris);
   struct former f = {
       .kd = kd,
-      .area = node_areas(kd),
       .tris = tris,
       .stamp = xcalloc((uint64_t)tri_count + 1, sizeof *f.stamp),
       .fresh = xmalloc(((uint64_t)leaf_max + 1) * sizeof *f.fresh),
-      .heap = xmalloc((uint64_t)n * sizeof *f.heap),
       .stack = xmalloc((uint64_t)n * sizeof *f.stack),
       .tri_bytes = tri_bytes,
   };
-  /* Roots waiting to start their treelet, first in first out. Every node
-   * enters the heap once (from its parent) and leaves it into a treelet or
-   * into this list, so n entries suffice. */
-  uint32_t *todo = xmalloc((uint64_t)n * sizeof *todo);
-  uint32_t todo_head = 0, todo_tail = 0;
-  todo[todo_tail++] = 0;
+  /* Roots waiting to start their treelet, first in first out. */
+  struct cand *todo = xmalloc(64 * sizeof *todo);
+  uint32_t todo_head = 0, todo_tail = 0, todo_cap = 64;
+  struct box root_box;
+  for (int a = 0; a < 3; a++) {
+    root_box.lo[a] = v3_get(kd->lo, a);
+    root_box.hi[a] = v3_get(kd->hi, a);
+  }
+  todo[todo_tail++] = cand_of(0, &root_box);
   while (todo_head < todo_tail) {
-    uint32_t r = todo[todo_head++], t = ts->count++;
+    struct cand r = todo[todo_head++];
+    uint32_t t = ts->count++;
     uint64_t bytes = 0;
-    ts->root[t] = r;
+    ts->root[t] = r.node;
     heap_push(&f, r);
     while (f.heap_n) {
-      uint32_t v = heap_pop(&f), fresh_n;
+      struct cand c = heap_pop(&f);
+      uint32_t v = c.node, fresh_n;
       uint64_t cost = trial(&f, v, t, &fresh_n);
-      if (v != r && bytes + cost > budget) {
+      if (v != r.node && bytes + cost > budget) {
         for (uint32_t k = 0; k < fresh_n; k++) f.stamp[f.fresh[k]] = 0;
-        todo[todo_tail++] = v;
+        if (todo_tail == todo_cap) {
+          /* Reclaim the consumed head before growing. */
+          memmove(todo, todo + todo_head, (uint64_t)(todo_tail - todo_head) * sizeof *todo);
+          todo_tail -= todo_head;
+          todo_head = 0;
+          if (todo_tail == todo_cap) {
+            todo_cap *= 2;
+            todo = xrealloc(todo, (uint64_t)todo_cap * sizeof *todo);
+          }
+        }
+        todo[todo_tail++] = c;
         continue;
       }
       ts->of[v] = t;
       bytes += cost;
-      struct kd_node nd = kd->nodes[v];
-      if (kd_is_leaf(nd)) continue;
-      uint32_t kids[2] = {v + 1, kd_above(nd)};
+      if (kd_is_leaf(kd->nodes[v])) continue;
+      struct cand kids[2];
+      children(kd, &c, kids);
       for (int k = 0; k < 2; k++) {
-        if (tris[kids[k]] == 0)
-          bytes += absorb(&f, ts, kids[k], t);
+        if (tris[kids[k].node] == 0)
+          bytes += absorb(&f, ts, kids[k].node, t);
         else
           heap_push(&f, kids[k]);
       }
@@ -185,7 +207,6 @@ void treelet_build(struct treelet_set *ts, const struct kd_tree *kd, uint32_t tr
   free(f.heap);
   free(f.fresh);
   free(f.stamp);
-  free((void *)f.area);
   free(tris);
 }
 

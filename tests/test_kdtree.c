@@ -258,7 +258,7 @@ static uint32_t check_structure(const char *name, const struct scene *s, const s
     seen[e.node] = 1;
     nodes++;
     struct kd_node nd = kd->nodes[e.node];
-    EXPECTF(!kd_is_queue_point(nd), "%s: node %u has its queue bit set", name, e.node);
+    EXPECTF(!(nd.w1 & 4u), "%s: node %u has bit 2 of w1 set (it is unused)", name, e.node);
     if (!kd_is_leaf(nd)) {
       int a = kd_axis(nd);
       float sp_v = kd_split(nd);
@@ -496,22 +496,6 @@ static int check_rays(const char *name, const struct scene *s, struct kd_tree *k
   EXPECTF(any_mism == 0, "%s: trace_any differs from brute force on %d rays", name, any_mism);
   EXPECTF(hits > nrays / 10, "%s: only %d of %d rays hit", name, hits, nrays);
 
-  /* Queue-point flags must not change any result. */
-  for (uint32_t i = 0; i < kd->node_count; i++) kd_set_queue_point(&kd->nodes[i], true);
-  int qmism = 0;
-  for (int i = 0; i < nrays; i++) {
-    struct trace_hit h;
-    bool b = trace_closest(&tr, &rays[i], &h);
-    struct ray_result r = result_of(b, &h, trace_any(&tr, &rays[i]));
-    if (r.prim != res[i].prim || r.t != res[i].t || r.b1 != res[i].b1 || r.b2 != res[i].b2 ||
-        r.any != res[i].any)
-      qmism++;
-  }
-  for (uint32_t i = 0; i < kd->node_count; i++) {
-    EXPECT(kd_is_queue_point(kd->nodes[i]));
-    kd_set_queue_point(&kd->nodes[i], false);
-  }
-  EXPECTF(qmism == 0, "%s: %d rays changed with queue points set", name, qmism);
   free(rays);
   free(res);
   free(svals);
@@ -532,21 +516,6 @@ static void run_scene(const char *name, const struct scene *s, const struct kd_b
           name, s->tri_count, kd.stats.nodes, kd.stats.leaves, kd.stats.empty_leaves,
           kd.stats.max_depth, kd.stats.max_leaf_prims, (unsigned long long)kd.stats.leaf_prim_refs);
   kd_fini(&kd);
-}
-
-static void test_node_bits(void) {
-  /* The queue flag leaves the split and the child index alone, odd mantissa or not. */
-  float odd = nextafterf(2.5f, 3.0f);
-  struct kd_node n = {fbits(odd), (7u << 3) | 1u};
-  EXPECT(!kd_is_leaf(n) && kd_axis(n) == 1 && kd_above(n) == 7 && kd_split(n) == odd);
-  EXPECT(!kd_is_queue_point(n));
-  kd_set_queue_point(&n, true);
-  EXPECT(kd_is_queue_point(n) && kd_split(n) == odd && kd_above(n) == 7 && kd_axis(n) == 1);
-  kd_set_queue_point(&n, false);
-  EXPECT(!kd_is_queue_point(n) && n.w1 == ((7u << 3) | 1u));
-  struct kd_node l = {12, (5u << 3) | 3u};
-  kd_set_queue_point(&l, true);
-  EXPECT(kd_is_leaf(l) && kd_is_queue_point(l) && kd_leaf_count(l) == 5 && kd_leaf_offset(l) == 12);
 }
 
 static void test_small_cases(void) {
@@ -707,7 +676,6 @@ static void test_generated(void) {
 }
 
 int main(void) {
-  test_node_bits();
   test_small_cases();
   test_odd_mantissas();
   test_soups();
