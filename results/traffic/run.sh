@@ -7,13 +7,15 @@
 # paper's, from results/traffic/paper.csv).
 #   usage: sh results/traffic/run.sh [OUT [DIV [JOBS]]]   (from the repository top;
 #   RTSIM names the binary (default build/rtsim), SCENES the scene folder
-#   (default scenes; the tests use scenes/small))
+#   (default scenes; the tests use scenes/small), POLICY the policies (passed to
+#   `rtsim traffic --policy`; default the paper's three))
 set -eu
 RTSIM=${RTSIM:-build/rtsim}
 SCENES=${SCENES:-scenes}
 OUT=${1:-results/traffic}
 DIV=${2:-1}
 JOBS=${3:-$(nproc)}
+POLICY=${POLICY:-}
 mkdir -p "$OUT"
 # Longest jobs first (diffuse, room before grove), so no core idles at the end.
 for c in diffuse specular shadow primary; do
@@ -22,8 +24,8 @@ for c in diffuse specular shadow primary; do
     [ "$c" = diffuse ] && size=512
     echo "$s $c $((size / DIV))"
   done
-done | RTSIM="$RTSIM" SCENES="$SCENES" xargs -P "$JOBS" -L 1 sh -c \
-  '"$RTSIM" traffic "$SCENES/$0.yaml" --rays "$1" --width "$2" --height "$2" -o "'"$OUT"'/$0-$1.csv" > /dev/null && echo "done: $0 $1 at $2x$2" >&2'
+done | RTSIM="$RTSIM" SCENES="$SCENES" POLICY="$POLICY" xargs -P "$JOBS" -L 1 sh -c \
+  '"$RTSIM" traffic "$SCENES/$0.yaml" --rays "$1" --width "$2" --height "$2" ${POLICY:+--policy "$POLICY"} -o "'"$OUT"'/$0-$1.csv" > /dev/null && echo "done: $0 $1 at $2x$2" >&2'
 first=1
 for s in room grove sphereflake; do
   for c in primary shadow specular diffuse; do
