@@ -1,7 +1,7 @@
 /* The renderer on the timed machine: the 1 x 1 x 1, no-L1, fully associative
  * machine fetches and writes back exactly what the functional model counts, at
- * any DRAM latency and bandwidth, for every policy (dynamic's schedule made for
- * that machine on both sides); many workers give the same image as one, and
+ * any DRAM latency and bandwidth, for every policy (dynamic's and treelet's
+ * schedules made for that machine on both sides); many workers give the same image as one, and
  * the dynamic policy's queues are each stored before they are read, read once
  * and left empty; its queue points ask no more of the L2 than its rule allows;
  * and rtsim run's outputs (image, determinism, bad input) through the command. */
@@ -231,7 +231,7 @@ static int same_image(const struct framebuffer *a, const struct framebuffer *b) 
 
 static void test_cross_check(struct world *w) {
   const uint32_t mask = RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_DIFFUSE);
-  const enum policy_kind kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC};
+  const enum policy_kind kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC, POLICY_TREELET};
   const unsigned sizes[] = {12, 16};
   /* Every DRAM level: ideal memory (fixed, latency 0), channels from fast to
    * starved, and banked DDR4 (open page, one channel; close page, two). */
@@ -249,7 +249,7 @@ static void test_cross_check(struct world *w) {
                {MACHINE_FIDELITY_BANKED, 0, 1, 64, 1, 16, DRAM_BANKED_OPEN_PAGE, 1},
                {MACHINE_FIDELITY_BANKED, 0, 1, 4, 1, 2, DRAM_BANKED_CLOSE_PAGE, 2}};
   const unsigned ndrams = sizeof drams / sizeof drams[0];
-  for (unsigned k = 0; k < 3; k++)
+  for (unsigned k = 0; k < sizeof kinds / sizeof kinds[0]; k++)
     for (unsigned s = 0; s < 2; s++) {
       uint64_t fetch, wb;
       functional(w, kinds[k], mask, sizes[s], &fetch, &wb);
