@@ -1,0 +1,26 @@
+#!/bin/sh
+# The scheduling study's figures: for each L2 size, cycles, DRAM bytes and the
+# threads' waiting share against cores, one line a scheme (the policy, and for
+# dynamic and treelet the sharing mode), one panel a scene.
+#   usage: sh results/contention/scheduling/plot.sh TABLE.csv OUTDIR
+set -eu
+RTSIM=${RTSIM:-build/rtsim}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+# rtsim plot draws one line per value of one column: add a scheme column. A
+# quoted value's commas (rays: "primary,shadow,diffuse") become + first.
+awk '{ o = ""; q = 0
+  for (i = 1; i <= length($0); i++) {
+    ch = substr($0, i, 1)
+    if (ch == "\"") { q = !q; continue }
+    o = o ((ch == "," && q) ? "+" : ch)
+  }
+  print o }' "$1" | awk -F, -v OFS=, '
+NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; print $0, "scheme"; next }
+{ s = $c["policy"]; if (s == "dynamic" || s == "treelet") s = s "-" $c["dynamic.sharing"]; print $0, s }' \
+  > "$tmp/t.csv"
+for l2 in 524288 4194304; do
+  "$RTSIM" plot "$tmp/t.csv" --x cores --y cycles --lines scheme --panels scene --where l2.size=$l2 --logx --logy -o "$2/cycles-l2-$l2.png"
+  "$RTSIM" plot "$tmp/t.csv" --x cores --y dram_bytes --lines scheme --panels scene --where l2.size=$l2 --logx --logy -o "$2/dram_bytes-l2-$l2.png"
+  "$RTSIM" plot "$tmp/t.csv" --x cores --y thread_wait_fraction --lines scheme --panels scene --where l2.size=$l2 --logx -o "$2/thread_wait_fraction-l2-$l2.png"
+done
