@@ -1,7 +1,9 @@
 /* The reproduction's regeneration path at reduced size: results/traffic/run.sh
  * on the small scenes at 1/16 of the paper's resolutions writes all 12 scene x
  * ray-configuration tables, 3 policies x 13 cache sizes each, with recursive as
- * the relative baseline, and the markdown report beside the paper's numbers. */
+ * the relative baseline, and the markdown report beside the paper's numbers;
+ * with POLICY=treelet the treelet policy's tables, which the report adds as a
+ * fourth column. */
 #include <stdio.h>
 #include <string.h>
 
@@ -43,5 +45,23 @@ int main(void) {
   /* The paper's numbers stand beside ours (grove, diffuse, 512 KB: packet
    * total 4409.57 MB, dynamic 564.75 MB). */
   EXPECT(strstr(out, "4451.86 / 4409.57 / 564.75") != NULL);
+
+  snprintf(cmd, sizeof cmd,
+           "cd %s && rm -rf %s/report-tl && RTSIM=%s SCENES=scenes/small POLICY=treelet sh "
+           "results/traffic/run.sh %s/report-tl 16 2 2>/dev/null && cat %s/report-tl/all.csv",
+           RTSIM_SOURCE_DIR, RTSIM_TMP, RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
+  EXPECT(testing_run(cmd, out, sizeof out) == 0);
+  /* With its baseline: recursive beside it, as in every traffic table. */
+  EXPECT(count(out, "\n") == 1 + 12 * 2 * 13 && count(out, ",treelet,") == 12 * 13);
+  snprintf(cmd, sizeof cmd,
+           "cd %s && sh results/traffic/tables.sh %s/report/all.csv results/traffic/paper.csv "
+           "%s/report-tl/all.csv",
+           RTSIM_SOURCE_DIR, RTSIM_TMP, RTSIM_TMP);
+  EXPECT(testing_run(cmd, out, sizeof out) == 0);
+  EXPECT(count(out, "### ") == 12);
+  EXPECT(count(out, "| total MB rec / pkt / dyn / tl |") == 12);
+  EXPECT(count(out, "| 4096 K |") == 12);
+  /* Every row has a treelet figure: four geometry numbers before the paper's. */
+  EXPECT(count(out, " / nan") == 0 && count(out, " / inf") == 0);
   return testing_done("test_report");
 }
