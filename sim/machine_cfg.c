@@ -193,7 +193,7 @@ void machine_cfg_defaults(struct machine_cfg *c) {
   p->cost_shade_cycles = 50;
   p->cost_ray_switch_cycles = 2;
   p->timeline_window_cycles = 10000;
-  p->dyn_sharing = 0;
+  p->dyn_sharing = 1; /* chip: results/contention/scheduling */
   p->sample_fraction = 1;
   p->sample_units = 0;
   p->sample_warming = 4;
