@@ -40,6 +40,7 @@ struct stack {
   struct stack *next; /* free list */
   unsigned char *base; /* mapping: guard page, then the stack */
   size_t usable;
+  size_t skew; /* the first frame starts this far below the top (SKEW_STEP) */
 };
 
 /* Stacks are mapped a chunk at a time, and a chunk is unmapped whole when
@@ -56,12 +57,21 @@ struct chunk {
  * untouched pages cost no memory, only address space). */
 #define CHUNK_MAX 64u
 
+/* Stack tops are page-aligned, so every coroutine's hot frames would sit at
+ * the same page offset and fight over the same host cache sets: with 4,096
+ * stacks live (1024 cores of tiny.yaml, dynamic policy) switches cost twice
+ * the host time. Stack n starts (n mod 16) x 256 bytes below its top. The
+ * simulation does not see it. */
+#define SKEW_STEP 256u
+#define SKEW_SPAN 16u
+
 struct coro_pool {
   size_t stack_bytes, page;
   bool paint;
   struct stack *free;
   struct chunk *chunks;
   unsigned next_chunk; /* stacks in the next chunk */
+  unsigned made;       /* stacks mapped so far */
 };
 
 struct coro {
@@ -136,6 +146,7 @@ static void chunk_add(struct coro_pool *p) {
     struct stack *s = &k->st[i];
     s->base = k->base + i * each;
     s->usable = p->stack_bytes;
+    s->skew = (size_t)(p->made++ % SKEW_SPAN) * SKEW_STEP;
     /* The lowest page faults on touch: stacks grow down into it on overflow. */
     CHECK(mprotect(s->base, p->page, PROT_NONE) == 0);
     /* A mapping where an earlier pool's stack was inherits its shadow, which
@@ -198,7 +209,8 @@ void coro_resume(struct coro *c) {
   CHECK(!c->finished);
   if (!c->started) {
     c->started = true;
-    c->ctx = make_fcontext(stack_lo(c) + c->st->usable, c->st->usable, entry);
+    c->ctx = make_fcontext(stack_lo(c) + c->st->usable - c->st->skew, c->st->usable - c->st->skew,
+                           entry);
   }
 #if CORO_ASAN
   void *fake = NULL;
