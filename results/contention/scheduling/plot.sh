@@ -7,15 +7,8 @@ set -eu
 RTSIM=${RTSIM:-build/rtsim}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-# rtsim plot draws one line per value of one column: add a scheme column. A
-# quoted value's commas (rays: "primary,shadow,diffuse") become + first.
-awk '{ o = ""; q = 0
-  for (i = 1; i <= length($0); i++) {
-    ch = substr($0, i, 1)
-    if (ch == "\"") { q = !q; continue }
-    o = o ((ch == "," && q) ? "+" : ch)
-  }
-  print o }' "$1" | awk -F, -v OFS=, '
+# rtsim plot draws one line per value of one column: add a scheme column.
+awk -f "$(dirname "$0")/unquote.awk" "$1" | awk -F, -v OFS=, '
 NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; print $0, "scheme"; next }
 { s = $c["policy"]; if (s == "dynamic" || s == "treelet") s = s "-" $c["dynamic.sharing"]; print $0, s }' \
   > "$tmp/t.csv"

@@ -7,14 +7,7 @@
 # utilization, and where the threads' cycles went.
 #   usage: sh results/contention/scheduling/summary.sh TABLE.csv
 set -eu
-# A quoted value holds commas (rays: "primary,shadow,diffuse"): they become +.
-awk '{ o = ""; q = 0
-  for (i = 1; i <= length($0); i++) {
-    ch = substr($0, i, 1)
-    if (ch == "\"") { q = !q; continue }
-    o = o ((ch == "," && q) ? "+" : ch)
-  }
-  print o }' "$1" | awk -F, '
+awk -f "$(dirname "$0")/unquote.awk" "$1" | awk -F, '
 NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
 {
   s = $c["policy"]; if (s == "dynamic" || s == "treelet") s = s " (" $c["dynamic.sharing"] ")"
