@@ -1,8 +1,7 @@
 /* Queue-point selection. Nodes are in depth-first preorder (below child =
- * this + 1, above child after the below subtree), so node n's subtree is the
- * index range [n, end[n]) and parents precede children: every pass here is a
- * plain forward or backward scan or a walk with a stack as deep as the tree,
- * with no recursion. */
+ * this + 1, above child after the below subtree), so parents precede
+ * children: every pass here is a plain forward or backward scan or a walk
+ * with a stack as deep as the tree, with no recursion. */
 #include "renderer/qpoint.h"
 
 #include <stdlib.h>
