@@ -22,6 +22,9 @@ void qdrain_init(struct qdrain_set *ds, struct qstore *st, const struct qpoint_s
   ds->cores = cores;
   ds->drain = xcalloc(cores, sizeof *ds->drain);
   ds->core = xcalloc(cores, sizeof *ds->core);
+  ds->hand = xcalloc(cores, sizeof *ds->hand);
+  ds->hand_at = xcalloc(cores, sizeof *ds->hand_at);
+  ds->nhand = 0;
   for (uint32_t c = 0; c < cores; c++) ds->drain[c].qi = ds->core[c].drain = QSTORE_NONE;
 }
 
@@ -33,8 +36,11 @@ void qdrain_share_chip(struct qdrain_set *ds, uint64_t feed) {
 void qdrain_fini(struct qdrain_set *ds) {
   free(ds->drain);
   free(ds->core);
+  free(ds->hand);
+  free(ds->hand_at);
   ds->drain = NULL;
   ds->core = NULL;
+  ds->hand = ds->hand_at = NULL;
 }
 
 void qdrain_claim_init(const struct qdrain_set *ds, struct qdrain_claim *cl) {
@@ -68,6 +74,23 @@ static void block_range(const struct qdrain_set *ds, struct kd_node nd, uint32_t
 
 static bool pass_last(const struct qdrain *dr) { return dr->block + 1 == dr->blocks; }
 
+/* Keep drain c's place in ds->hand true after its queue or its pass's rays
+ * left changed. */
+static void hand_update(struct qdrain_set *ds, uint32_t c) {
+  const struct qdrain *dr = &ds->drain[c];
+  const bool in = dr->qi != QSTORE_NONE && dr->k.left > 0;
+  if (in == (ds->hand_at[c] != 0)) return;
+  if (in) {
+    ds->hand[ds->nhand++] = c;
+    ds->hand_at[c] = ds->nhand;
+  } else {
+    const uint32_t i = ds->hand_at[c] - 1, last = ds->hand[--ds->nhand];
+    ds->hand[i] = last;
+    ds->hand_at[last] = i + 1;
+    ds->hand_at[c] = 0;
+  }
+}
+
 /* Start pass `block` over the rays of drain dr: from the newest again. */
 static void pass_begin(struct qdrain_set *ds, struct qdrain *dr, uint32_t block) {
   dr->block = block;
@@ -76,6 +99,7 @@ static void pass_begin(struct qdrain_set *ds, struct qdrain *dr, uint32_t block)
   dr->seq++;
   ds->handout += dr->k.left;
   if (pass_last(dr)) qstore_chunk_hold(ds->st, dr->k.c); /* the last pass frees behind it */
+  hand_update(ds, (uint32_t)(dr - ds->drain));
 }
 
 /* The drain core's workers take rays from, or NULL: a drain it joined is left
@@ -100,10 +124,11 @@ static void core_join(struct qdrain_set *ds, uint32_t core, uint32_t drain) {
  * already, so joining asks nothing more of the L2. */
 static uint32_t fullest_drain(const struct qdrain_set *ds) {
   uint32_t best = QSTORE_NONE;
-  for (uint32_t c = 0; c < ds->cores; c++) {
-    const struct qdrain *dr = &ds->drain[c];
-    if (dr->qi != QSTORE_NONE && dr->k.left > 0 &&
-        (best == QSTORE_NONE || dr->k.left > ds->drain[best].k.left))
+  for (uint32_t i = 0; i < ds->nhand; i++) {
+    const uint32_t c = ds->hand[i];
+    const uint64_t left = ds->drain[c].k.left;
+    if (best == QSTORE_NONE || left > ds->drain[best].k.left ||
+        (left == ds->drain[best].k.left && c < best))
       best = c;
   }
   return best;
@@ -152,6 +177,7 @@ static void next_pass(struct qdrain_set *ds, struct qdrain *dr, struct trace_ctx
 static void release(struct qdrain_set *ds, struct qdrain *dr) {
   qstore_release(ds->st, dr->qi);
   dr->qi = QSTORE_NONE;
+  hand_update(ds, (uint32_t)(dr - ds->drain));
 }
 
 /* Hand the next rays of drain dr's pass to cl: a group at a leaf (loaded,
@@ -173,6 +199,7 @@ static void claim(struct qdrain_set *ds, struct qdrain *dr, struct qdrain_claim 
   ds->handout -= cl->n;
   if (dr->k.left == 0 && cl->last) ds->open--; /* all handed out, no pass after */
   dr->busy++;
+  hand_update(ds, cl->drain);
 }
 
 enum qdrain_did qdrain_work(struct qdrain_set *ds, uint32_t core, struct trace_ctx *tr,
@@ -252,5 +279,6 @@ void qdrain_release_all(struct qdrain_set *ds) {
 
 void qdrain_check_done(const struct qdrain_set *ds) {
   CHECK_EQ(ds->open, 0);
+  CHECK_EQ(ds->nhand, 0);
   for (uint32_t c = 0; c < ds->cores; c++) CHECK_EQ(ds->drain[c].qi, QSTORE_NONE);
 }

@@ -66,6 +66,10 @@ struct qdrain_set {
   /* Drains with rays to hand out or passes left (qdrain_idle: none), kept
    * as they change so that a worker about to park does not scan the cores. */
   uint32_t open;
+  /* The drains with rays to hand out in their pass (qi held, k.left > 0),
+   * in no order, and each drain's place there + 1 (0: not there): a core
+   * looking for a drain to join reads these, not every core's. */
+  uint32_t *hand, *hand_at, nhand;
 };
 
 /* The rays a worker took at once from a drain (slot indices: qstore_ray). */
