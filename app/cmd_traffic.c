@@ -44,6 +44,10 @@ static const char TRAFFIC_HELP[] =
     "                      (default 4096: 64 rays; 0: one 64-byte ray, the rule of\n"
     "                      rtsim run for one ray context); also the rays streamed at\n"
     "                      once against a block of an oversized leaf's geometry\n"
+    "  --threads N         host threads: 2 runs the cache analyser beside the tracer\n"
+    "                      (the same numbers, in less time with a host core to\n"
+    "                      spare); 1 runs both on one (default: 2 when this process\n"
+    "                      may use two host CPUs or more, else 1)\n"
     "  -o, --output FILE   CSV to write (required), one row per policy and cache size\n"
     "  -h, --help          this text\n"
     "\n"
@@ -72,11 +76,12 @@ static bool parse_config(const char *s, void *dst) {
 #define CONFIG_EXPECT "primary, shadow, specular, diffuse or a comma-separated list of ray types"
 
 /* The options traffic and trace share besides their own. */
-#define TRAFFIC_OPTS(width, height, mask, pp)                                                \
+#define TRAFFIC_OPTS(width, height, mask, pp, threads)                                                \
   OPTS_U64("width", 0, width, 1, 16384), OPTS_U64("height", 0, height, 1, 16384),           \
       OPTS_PARSE("rays", 0, mask, parse_config, CONFIG_EXPECT),                             \
       OPTS_U64("dyn-batch", 0, &(pp)->dyn_batch_rays, 0, UINT32_MAX),                       \
-      OPTS_U64("dyn-ray-buffer", 0, &(pp)->dyn_ray_buffer_bytes, 0, 1ull << 32)
+      OPTS_U64("dyn-ray-buffer", 0, &(pp)->dyn_ray_buffer_bytes, 0, 1ull << 32),            \
+      OPTS_U64("threads", 0, threads, 1, 2)
 
 /* One functional run of policy k; analyser results, and the potentially
  * visible triangles counted. din may be NULL. */
@@ -89,8 +94,8 @@ struct fn_run {
 static void run_functional(const struct app_world *w, enum policy_kind k, uint32_t mask,
                            uint32_t width, uint32_t height, const struct policy_params *pp,
                            const struct lru_stack_params *lp, struct din_writer *din,
-                           struct fn_run *out) {
-  struct mem_functional *b = mem_functional_create(lp, din);
+                           uint64_t threads, struct fn_run *out) {
+  struct mem_functional *b = mem_functional_create(lp, din, threads > 1);
   struct app_render ar;
   app_render_init(&ar, w, mask, w->scene.seed, width, height);
   uint64_t words = ((uint64_t)w->scene.tri_count + 63) / 64;
@@ -150,12 +155,13 @@ int cmd_traffic(int argc, char **argv) {
   const char *out = NULL;
   uint32_t mask = 0; /* 0: no --rays */
   uint64_t width = 0, height = 0;
+  uint64_t threads = mem_functional_host_cpus() > 1 ? 2 : 1;
   /* The paper's three unless asked: results/traffic reproduces its figures. */
   bool want[POLICY_COUNT] = {true, true, true, false};
   struct policy_params pp;
   policy_params_default(&pp);
   const struct opts_spec spec[] = {
-      OPTS_STR("output", 'o', &out), TRAFFIC_OPTS(&width, &height, &mask, &pp),
+      OPTS_STR("output", 'o', &out), TRAFFIC_OPTS(&width, &height, &mask, &pp, &threads),
       OPTS_PARSE("policy", 0, want, parse_policies, "one of: recursive, packet, dynamic, treelet, all"),
       OPTS_END};
   struct opts_args args;
@@ -180,7 +186,7 @@ int cmd_traffic(int argc, char **argv) {
     if (!want[p]) continue;
     if (!policy_queues((enum policy_kind)p)) {
       progress_line(policy_name((enum policy_kind)p), done, runs);
-      run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &lp, NULL, &fr);
+      run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &lp, NULL, threads, &fr);
       done++;
       for (unsigned k = 0; k < nsizes; k++)
         rows[nrows++] = (struct row){(enum policy_kind)p, fr.res.size[k], fr.pot_vis_tris};
@@ -196,7 +202,7 @@ int cmd_traffic(int argc, char **argv) {
         struct lru_stack_params one = lp;
         one.lg2_min = one.lg2_max = lp.lg2_min + k;
         pp.cache_bytes = 1ull << (lp.lg2_min + k);
-        run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &one, NULL, &fr);
+        run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &one, NULL, threads, &fr);
         done++;
         rows[nrows++] = (struct row){(enum policy_kind)p, fr.res.size[0], fr.pot_vis_tris};
       }
@@ -295,6 +301,8 @@ static const char TRACE_HELP[] =
     "  --cache BYTES       the cache size of the printed replay command and, for\n"
     "                      dynamic and treelet, the size the schedule is made for (default\n"
     "                      524288); a power of two from 1024 to 4194304\n"
+    "  --threads N         host threads: 2 runs the analyser beside the tracer, 1 on\n"
+    "                      the same (default: 2 when two host CPUs are available)\n"
     "  --dyn-batch N       dynamic: admit N primary rays at a time (default 0: all)\n"
     "  --dyn-ray-buffer B  dynamic: bytes reserved for the rays being traced (default\n"
     "                      4096; 0: one ray)\n"
@@ -326,12 +334,13 @@ int cmd_trace(int argc, char **argv) {
   const char *din_path = NULL;
   uint32_t mask = 0; /* 0: no --rays */
   uint64_t width = 0, height = 0, cache = 512 * 1024;
+  uint64_t threads = mem_functional_host_cpus() > 1 ? 2 : 1;
   enum policy_kind pk = POLICY_RECURSIVE;
   bool have_policy = false;
   struct policy_params pp;
   policy_params_default(&pp);
   const struct opts_spec spec[] = {
-      OPTS_STR("din", 0, &din_path), TRAFFIC_OPTS(&width, &height, &mask, &pp),
+      OPTS_STR("din", 0, &din_path), TRAFFIC_OPTS(&width, &height, &mask, &pp, &threads),
       {.name = "policy", .kind = OPTS_KIND_PARSE, .dst = &pk, .parse = app_parse_policy,
        .expect = APP_POLICY_EXPECT, .given = &have_policy},
       OPTS_PARSE("cache", 0, &cache, parse_cache, "a power of two from 1024 to 4194304"),
@@ -358,7 +367,7 @@ int cmd_trace(int argc, char **argv) {
   }
   struct fn_run fr;
   pp.cache_bytes = cache;
-  run_functional(&w, pk, mask, W, H, &pp, &lp, din, &fr);
+  run_functional(&w, pk, mask, W, H, &pp, &lp, din, threads, &fr);
   uint64_t records = din_writer_records(din);
   bool ok = din_writer_close(din, &e);
   app_world_fini(&w);

@@ -2,14 +2,58 @@
  * NOTE: the analyser stays opaque (one call per line, except repeats of the
  * last line, counted here); inlining its lookup here would save a call (~1 ns)
  * against a hash probe and list update that cost far more, so it is not worth
- * exposing its internals. */
+ * exposing its internals.
+ * With a second host thread (mem_functional_create's analyser_thread), the
+ * lines bound for the analyser go into batches handed to that thread through a
+ * ring of FN_BATCHES: the tracer and the analyser then run at once, the
+ * analyser seeing the same lines in the same order, so its counts are the
+ * same. Everything else (line splitting, the repeat filter, the din trace,
+ * the request counts) stays on the caller's thread. */
+#define _GNU_SOURCE /* sched_getaffinity, CPU_COUNT */
 #include "sim/mem_functional.h"
 
+#include <pthread.h>
+#include <sched.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdlib.h>
 
 #include "sim/din.h"
 #include "sim/err.h"
+
+/* Lines a batch carries, and batches in the ring: 4 x 16384 lines (144 KiB of
+ * records each) keep the two threads a few batches apart, with one handover
+ * a batch. */
+#define FN_BATCH_LINES 16384u
+#define FN_BATCHES 4u
+/* A thread that finds the ring empty (full) polls it this many times (a few
+ * microseconds) before it sleeps: a handover then costs no system call while
+ * the two keep pace, and polling longer would take a host core from other
+ * work (a sweep runs a process per core). */
+#define FN_SPINS 200
+
+struct fn_batch {
+  uint32_t n;
+  uint64_t line[FN_BATCH_LINES];
+  uint8_t opcls[FN_BATCH_LINES]; /* op | cls << 2 */
+};
+
+/* The ring between the caller (producer) and the analyser thread (consumer).
+ * Batches [tail, head) are published and not yet analysed; the producer fills
+ * batch head % FN_BATCHES, which it owns while head - tail < FN_BATCHES. Only
+ * the producer moves head and only the consumer tail. A thread about to sleep
+ * raises its flag and looks at the ring again, and a thread that moved its
+ * index looks at the other's flag (both sequentially consistent), so one of
+ * the two always sees the other: no wake-up is lost. */
+struct fn_pipe {
+  pthread_t thread;
+  pthread_mutex_t mu;
+  pthread_cond_t filled, emptied;
+  _Atomic uint64_t head, tail;
+  _Atomic bool stop, consumer_sleeps, producer_sleeps;
+  struct lru_stack *ls; /* borrowed from the backend */
+  struct fn_batch b[FN_BATCHES];
+};
 
 struct mem_functional {
   struct lru_stack *ls;
@@ -24,9 +68,100 @@ struct mem_functional {
   /* Repeats kept from the analyser, by class: [0] loads, [1] stores. */
   uint64_t repeats[MEM_CLASS_MAX][2];
   struct mem_functional_stats st;
+  struct fn_pipe *pipe; /* NULL: the analyser runs on the caller's thread */
+  struct fn_batch *fill; /* with a pipe: the batch being filled */
 };
 
 #define FN_NO_CLASS MEM_CLASS_MAX
+
+static void lock(pthread_mutex_t *mu) { CHECK(pthread_mutex_lock(mu) == 0); }
+static void unlock(pthread_mutex_t *mu) { CHECK(pthread_mutex_unlock(mu) == 0); }
+
+static inline void relax(void) {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#endif
+}
+
+/* Wake the other side if it sleeps (or is about to) on cv. */
+static void poke(struct fn_pipe *q, _Atomic bool *sleeps, pthread_cond_t *cv) {
+  if (!atomic_load(sleeps)) return;
+  lock(&q->mu);
+  CHECK(pthread_cond_signal(cv) == 0);
+  unlock(&q->mu);
+}
+
+/* The consumer: true when batch tail is published, false when stopped with
+ * nothing left. */
+static bool wait_filled(struct fn_pipe *q, uint64_t tail) {
+  for (int i = 0; i < FN_SPINS; i++) {
+    if (atomic_load_explicit(&q->head, memory_order_acquire) != tail) return true;
+    relax();
+  }
+  lock(&q->mu);
+  atomic_store(&q->consumer_sleeps, true);
+  while (atomic_load(&q->head) == tail && !atomic_load(&q->stop))
+    CHECK(pthread_cond_wait(&q->filled, &q->mu) == 0);
+  atomic_store(&q->consumer_sleeps, false);
+  unlock(&q->mu);
+  return atomic_load(&q->head) != tail;
+}
+
+/* The producer: until fewer than `most` batches are published and not yet
+ * analysed. */
+static void wait_emptied(struct fn_pipe *q, uint64_t head, uint64_t most) {
+  for (int i = 0; i < FN_SPINS; i++) {
+    if (head - atomic_load_explicit(&q->tail, memory_order_acquire) < most) return;
+    relax();
+  }
+  lock(&q->mu);
+  atomic_store(&q->producer_sleeps, true);
+  while (head - atomic_load(&q->tail) >= most) CHECK(pthread_cond_wait(&q->emptied, &q->mu) == 0);
+  atomic_store(&q->producer_sleeps, false);
+  unlock(&q->mu);
+}
+
+static void *analyser_main(void *arg) {
+  struct fn_pipe *q = arg;
+  for (uint64_t tail = 0; wait_filled(q, tail);) {
+    const struct fn_batch *bt = &q->b[tail % FN_BATCHES];
+    for (uint32_t i = 0; i < bt->n; i++)
+      lru_stack_access(q->ls, bt->line[i], (enum lru_stack_op)(bt->opcls[i] & 3u), bt->opcls[i] >> 2);
+    atomic_store(&q->tail, ++tail);
+    poke(q, &q->producer_sleeps, &q->emptied);
+  }
+  return NULL;
+}
+
+/* Publish the batch being filled (if it holds lines) and take the next one,
+ * waiting while the ring is full. */
+static void pipe_publish(struct mem_functional *b) {
+  struct fn_pipe *q = b->pipe;
+  if (b->fill->n == 0) return;
+  const uint64_t head = atomic_load_explicit(&q->head, memory_order_relaxed) + 1;
+  atomic_store(&q->head, head);
+  poke(q, &q->consumer_sleeps, &q->filled);
+  wait_emptied(q, head, FN_BATCHES);
+  b->fill = &q->b[head % FN_BATCHES];
+  b->fill->n = 0;
+}
+
+/* Every line published so far analysed: the analyser is the caller's to read. */
+static void pipe_drain(struct mem_functional *b) {
+  pipe_publish(b);
+  wait_emptied(b->pipe, atomic_load_explicit(&b->pipe->head, memory_order_relaxed), 1);
+}
+
+static void analyse(struct mem_functional *b, uint64_t line, enum lru_stack_op op, unsigned cls) {
+  if (!b->pipe) {
+    lru_stack_access(b->ls, line, op, cls);
+    return;
+  }
+  struct fn_batch *bt = b->fill;
+  bt->line[bt->n] = line;
+  bt->opcls[bt->n] = (uint8_t)(op | cls << 2);
+  if (++bt->n == FN_BATCH_LINES) pipe_publish(b);
+}
 
 /* Feed every line of [addr, addr + size) to the analyser (and the trace). A
  * store covering a line whole allocates it without a fetch (LRU_STACK_WRITE_LINE);
@@ -52,7 +187,7 @@ static inline void fn_line(struct mem_functional *b, uint64_t line, enum lru_sta
   b->last_dirty = store || (line == b->last_line && b->last_dirty);
   b->last_line = line;
   b->last_cls = cls;
-  lru_stack_access(b->ls, line, op, cls);
+  analyse(b, line, op, cls);
 }
 
 static inline void fn_access(struct mem_functional *b, uint64_t addr, uint32_t size, bool is_store,
@@ -101,20 +236,46 @@ static void fn_store(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls
 static const struct mem_ops fn_ops = {fn_load, fn_store, NULL, NULL, NULL, NULL};
 
 struct mem_functional *mem_functional_create(const struct lru_stack_params *p,
-                                             struct din_writer *din) {
+                                             struct din_writer *din, bool analyser_thread) {
   struct mem_functional *b = xcalloc(1, sizeof *b);
   b->ls = lru_stack_create(p);
   b->din = din;
   b->lg2_line = p->lg2_line;
   b->last_cls = FN_NO_CLASS;
+  if (analyser_thread) {
+    struct fn_pipe *q = xcalloc(1, sizeof *q);
+    q->ls = b->ls;
+    CHECK(pthread_mutex_init(&q->mu, NULL) == 0);
+    CHECK(pthread_cond_init(&q->filled, NULL) == 0);
+    CHECK(pthread_cond_init(&q->emptied, NULL) == 0);
+    if (pthread_create(&q->thread, NULL, analyser_main, q) != 0)
+      err_check_failed(__FILE__, __LINE__, "pthread_create of the analyser thread");
+    b->pipe = q;
+    b->fill = &q->b[0];
+  }
   return b;
 }
 
 void mem_functional_destroy(struct mem_functional *b) {
   if (!b) return;
+  if (b->pipe) {
+    struct fn_pipe *q = b->pipe;
+    /* Lines not yet published are dropped: nobody reads them. */
+    lock(&q->mu);
+    atomic_store(&q->stop, true);
+    CHECK(pthread_cond_signal(&q->filled) == 0);
+    unlock(&q->mu);
+    CHECK(pthread_join(q->thread, NULL) == 0);
+    pthread_cond_destroy(&q->filled);
+    pthread_cond_destroy(&q->emptied);
+    pthread_mutex_destroy(&q->mu);
+    free(q);
+  }
   lru_stack_destroy(b->ls);
   free(b);
 }
+
+bool mem_functional_threaded(const struct mem_functional *b) { return b->pipe != NULL; }
 
 struct mem_port mem_functional_port(struct mem_functional *b) {
   struct mem_port port = {&fn_ops, b};
@@ -122,6 +283,7 @@ struct mem_port mem_functional_port(struct mem_functional *b) {
 }
 
 struct lru_stack *mem_functional_stack(struct mem_functional *b) {
+  if (b->pipe) pipe_drain(b);
   for (unsigned c = 0; c < MEM_CLASS_MAX; c++) {
     if (b->repeats[c][0] | b->repeats[c][1])
       lru_stack_count_repeats(b->ls, c, b->repeats[c][0], b->repeats[c][1]);
@@ -132,4 +294,12 @@ struct lru_stack *mem_functional_stack(struct mem_functional *b) {
 
 const struct mem_functional_stats *mem_functional_get_stats(const struct mem_functional *b) {
   return &b->st;
+}
+
+unsigned mem_functional_host_cpus(void) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) != 0) return 1;
+  const int n = CPU_COUNT(&set);
+  return n > 0 ? (unsigned)n : 1;
 }

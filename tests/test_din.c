@@ -197,7 +197,7 @@ static void test_backend_trace(void) {
   EXPECT(w != NULL);
   if (!w) return;
   struct lru_stack_params p = {6, 6, 12};
-  struct mem_functional *b = mem_functional_create(&p, w);
+  struct mem_functional *b = mem_functional_create(&p, w, false);
   struct mem_port port = mem_functional_port(b);
   uint64_t rng = 11;
   for (int k = 0; k < 30000; k++) {

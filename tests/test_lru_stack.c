@@ -418,7 +418,7 @@ enum { C0 = 0, C1 = 1, C2 = 2, C3 = 3, C_LAST = MEM_CLASS_MAX - 1 };
 
 static void test_backend(void) {
   struct lru_stack_params p = {6, 6, 9}; /* 1 .. 8 lines */
-  struct mem_functional *b = mem_functional_create(&p, NULL);
+  struct mem_functional *b = mem_functional_create(&p, NULL, false);
   struct mem_port port = mem_functional_port(b);
   mem_load(&port, 60, 8, C2);                    /* lines 0 and 1 */
   mem_store(&port, 64, 64, C2);                  /* line 1 */
@@ -454,7 +454,7 @@ static void test_backend(void) {
   /* Whole-line stores are found line by line: [1000, 1128) covers line 16 whole
    * and lines 15 and 17 in part, so 2 fetches; a 64-byte store across a line
    * boundary covers neither line whole (2 more); a 128-byte aligned store none. */
-  b = mem_functional_create(&p, NULL);
+  b = mem_functional_create(&p, NULL, false);
   port = mem_functional_port(b);
   mem_store(&port, 1000, 128, C3);
   mem_store(&port, 32, 64, C2);
@@ -475,10 +475,13 @@ static void test_backend(void) {
 /* The backend keeps repeats of the last line from the analyser (and hands their
  * counts over in mem_functional_stack): its results must equal the analyser fed
  * every line directly, on a trace dense in repeats, class changes and stores of
- * both kinds to the repeated line. */
-static void test_backend_repeats(void) {
+ * both kinds to the repeated line. With the analyser on its own thread too:
+ * the lines cross the ring in batches (a dozen here, the handover mid-run
+ * falling inside one), and the counts must not change. */
+static void test_backend_repeats(bool thread) {
   struct lru_stack_params p = {6, 6, 9}; /* 1 .. 8 lines */
-  struct mem_functional *b = mem_functional_create(&p, NULL);
+  struct mem_functional *b = mem_functional_create(&p, NULL, thread);
+  EXPECT(mem_functional_threaded(b) == thread);
   struct mem_port port = mem_functional_port(b);
   struct lru_stack *direct = lru_stack_create(&p);
   uint64_t rng = 7, line = 0;
@@ -522,6 +525,19 @@ static void test_backend_repeats(void) {
   mem_functional_destroy(b);
 }
 
+/* A threaded backend destroyed mid-run (lines published, lines still in the
+ * batch being filled, nobody reading): its thread ends and nothing leaks (ASan). */
+static void test_backend_thread_teardown(void) {
+  struct lru_stack_params p = lru_stack_params_default();
+  for (int n = 0; n < 3; n++) {
+    struct mem_functional *b = mem_functional_create(&p, NULL, true);
+    struct mem_port port = mem_functional_port(b);
+    for (uint64_t k = 0; k < (uint64_t)n * 50000; k++) mem_load(&port, k * 64, 8, 0);
+    mem_functional_destroy(b);
+  }
+  EXPECT(mem_functional_host_cpus() >= 1);
+}
+
 static void test_bench(void) {
   double rate = lru_stack_bench(300000, 1);
   EXPECT(rate > 0);
@@ -537,7 +553,9 @@ int main(void) {
   test_adversarial();
   test_default_sizes();
   test_backend();
-  test_backend_repeats();
+  test_backend_repeats(false);
+  test_backend_repeats(true);
+  test_backend_thread_teardown();
   test_bench();
   return testing_done("test_lru_stack");
 }

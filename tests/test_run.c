@@ -76,7 +76,7 @@ static void render_init(struct render *r, struct world *w, uint32_t mask) {
 static void functional(struct world *w, enum policy_kind k, uint32_t mask, unsigned lg2,
                        uint64_t *fetch, uint64_t *wb) {
   struct lru_stack_params lp = lru_stack_params_default();
-  struct mem_functional *b = mem_functional_create(&lp, NULL);
+  struct mem_functional *b = mem_functional_create(&lp, NULL, false);
   struct render r;
   render_init(&r, w, mask);
   struct policy_params pp;
