@@ -89,7 +89,7 @@ static const char HELP[] =
 #define PX_BOX_RIGHT 18
 #define PX_BOX_TOP 34
 #define PX_BOX_BOTTOM 66
-#define PX_TITLE 36
+#define PX_TITLE 40
 #define PX_LEGEND_ROW 21
 #define PX_CAPTION_LINE 18
 /* About the width of a character of the 11-point font (pngcairo and svg). */
@@ -411,7 +411,10 @@ static void gp_ticks(FILE *f, const char *axis, const struct plot_axis *a, const
 }
 
 static void gp_range(FILE *f, const char *axis, const struct plot_axis *a, const char *unit) {
-  fprintf(f, "set %srange [%.17g:%.17g]\n", axis, a->lo, a->hi);
+  /* NOTE: gnuplot drops a tick that sits exactly on the end of a log axis
+   * (rounding in its logarithms): widen such an axis by a hair. */
+  const double hair = a->log ? 1e-9 : 0;
+  fprintf(f, "set %srange [%.17g:%.17g]\n", axis, a->lo * (1 - hair), a->hi * (1 + hair));
   gp_ticks(f, axis, a, unit);
 }
 
@@ -984,7 +987,7 @@ int cmd_plot(int argc, char **argv) {
   snprintf(title, sizeof title, "%s %s %s", ys->pattern, bars ? "by" : "against", xk);
   fputs("set label ", gp);
   gp_str(gp, title);
-  fprintf(gp, " at screen 0.5, screen %.6f center font ',13'\n", 1 - 22.0 / H);
+  fprintf(gp, " at screen 0.5, screen %.6f center font ',13'\n", 1 - 18.0 / H);
   for (unsigned i = 0, o = 0; i < ncap; i++) {
     fputs("set label ", gp);
     gp_str(gp, caplines + o);
