@@ -426,7 +426,7 @@ static void test_plot(void) {
       {"--x rays_per_thread --y cycles --lines polcy", "--lines: no column 'polcy'"},
       {"--x rays_per_thread --y cycles --where l3.size=1", "--where: no column 'l3.size'"},
       {"--x rays_per_thread --y cycles --lines policy", "differ in l2.size, l2.ways: fix it with --where"},
-      {"--x policy --y cycles", "sw_ref.csv:2:59: error: --x policy: not a number (got 'packet')"},
+      {"--x policy --y cycles", "sw_ref.csv:3: error: rows at lines 2 and 3 fall on the same bar at policy = packet but differ in"},
       {"--x rays_per_thread --y fetch_queue_bytes --lines policy --panels l2.size --logy", "a value must be positive on a log scale"},
       {"--x rays_per_thread --y cycles --where l2.size=16KiB", "--where l2.size=16KiB: no row has it (the column holds: 16384, 32768)"},
   };

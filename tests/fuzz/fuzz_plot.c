@@ -2,9 +2,10 @@
  * does with the table before gnuplot (app/cmd_plot.c: columns, --where,
  * distinct lines and panels, numbers, log scales, rows that collide). The
  * input's first line is plot's options, separated by spaces; only --x, --y,
- * --lines, --panels, --where, --logx, --logy and --mark-x are passed on (with
- * their values), and -o names a file in a folder that does not exist, so a
- * table that passes every check stops there (exit 1) and gnuplot never runs.
+ * --lines, --panels, --where, --logx, --logy, --mark-x, --bars, --stack,
+ * --own-y and --yrange are passed on (with their values), and -o names a
+ * file in a folder that does not exist, so a table that passes every check
+ * stops there (exit 1) and gnuplot never runs.
  * The rest of the input is the table. Any bytes must give exit 1 or 2 (one
  * message); never a crash or a hang. */
 #include <stddef.h>
@@ -25,7 +26,8 @@ static const struct {
   const char *name;
   bool value;
 } OPTIONS[] = {{"--x", true},     {"--y", true},     {"--lines", true}, {"--panels", true},
-               {"--where", true}, {"--logx", false}, {"--logy", false}, {"--mark-x", true}};
+               {"--where", true}, {"--logx", false}, {"--logy", false}, {"--mark-x", true},
+               {"--bars", false}, {"--stack", false}, {"--own-y", false}, {"--yrange", true}};
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   /* argv's strings stay valid between runs: getopt keeps a pointer into them. */

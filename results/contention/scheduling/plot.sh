@@ -1,7 +1,8 @@
 #!/bin/sh
 # The scheduling study's figures: for each L2 size, cycles, DRAM bytes and the
 # threads' waiting share against cores, one line a scheme (the policy, and for
-# dynamic and treelet the sharing mode), one panel a scene.
+# dynamic and treelet the sharing mode), one panel a scene; and the DRAM bytes
+# by data class at 16 cores as stacked bars.
 #   usage: sh results/contention/scheduling/plot.sh TABLE.csv OUTDIR
 set -eu
 RTSIM=${RTSIM:-build/rtsim}
@@ -17,3 +18,7 @@ for l2 in 524288 4194304; do
   "$RTSIM" plot "$tmp/t.csv" --x cores --y dram_bytes --lines scheme --panels scene --where l2.size=$l2 --logx --logy -o "$2/dram_bytes-l2-$l2.png"
   "$RTSIM" plot "$tmp/t.csv" --x cores --y thread_wait_fraction --lines scheme --panels scene --where l2.size=$l2 --logx -o "$2/thread_wait_fraction-l2-$l2.png"
 done
+# The paper's Figures 3-4 as bars: DRAM bytes by data class, a group per
+# scheme, a bar per L2 size, at 16 cores.
+"$RTSIM" plot "$tmp/t.csv" --x scheme --y fetch_geometry_bytes,fetch_node_bytes,fetch_ray_bytes,fetch_queue_bytes,fetch_other_bytes \
+  --stack --lines l2.size --panels scene --where cores=16 -o "$2/bytes-by-class-cores-16.png"
