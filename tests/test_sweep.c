@@ -148,6 +148,14 @@ static void test_expansion(void) {
   EXPECTF(strstr(last, "rays=primary,width=4 ") != NULL, "the last job is not a small one: %s", last);
   EXPECTF(strstr(out, "--rays primary,shadow --width 8 --height 4"), "workload arguments: %s", out);
 
+  /* Quoted, a rays value keeps its comma (one point); after a space, a comma
+   * separates two values. */
+  EXPECT(run("(%s sweep %srays_quoted.yaml -o %s/sw_rays --emit-jobs 2>/dev/null)", RTSIM_BINARY,
+             SW, RTSIM_TMP) == 0);
+  EXPECTF(count_lines(out) == 3 && strstr(out, "/sw_rays/rays=shadow+specular ") &&
+              strstr(out, "/sw_rays/rays=shadow ") && strstr(out, "/sw_rays/rays=primary "),
+          "rays_quoted.yaml: %s", out);
+
   /* A zipped key's value may repeat when the rows differ: three points. */
   EXPECT(run("(%s sweep %szip_repeat.yaml -o %s/sw_zip --emit-jobs 2>/dev/null)", RTSIM_BINARY, SW,
              RTSIM_TMP) == 0);
@@ -174,6 +182,8 @@ static void test_bad_files(void) {
       {"bad_zip_row.yaml", "bad_zip_row.yaml:4:52: error: zip[0]: the values at index 3 (one from each key) repeat those at index 1 (line 4)"},
       {"bad_policy.yaml", "bad_policy.yaml:4:23: error: policy: unknown policy (got 'fastest'"},
       {"bad_rays.yaml", "bad_rays.yaml:4:19: error: rays: not a list of ray types (got 'primary,glossy'"},
+      /* #19 item 6: YAML splits [primary, shadow,specular] into three values. */
+      {"bad_rays_flow.yaml", "bad_rays_flow.yaml:4:19: error: axes.rays[1]: 'shadow,specular' unquoted in a flow list is two values, so two points (quote it, \"shadow,specular\", for one point"},
       {"bad_scene_missing.yaml", "bad_scene_missing.yaml:3:44: error: axes.scene[1]: cannot open '../../../scenes/small/hall.yaml'"},
       {"bad_names.yaml", "bad_names.yaml:4:44: error: scene: two points would share the directory name 'scene=room'"},
       {"bad_no_scene.yaml", "bad_no_scene.yaml:2:11: error: workload: missing the scene"},
