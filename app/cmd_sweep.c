@@ -669,16 +669,17 @@ static void calibrate(struct job *all, unsigned n, double *rate, double *peak_mb
 }
 
 /* Seconds of simulation per unit of the cost estimate when no point has run
- * yet: 3x the most measured on the project's machine (1.3 us, a 256x256
- * primary-ray image of the small room on tiny.yaml). */
-#define SWEEP_DEFAULT_RATE 4e-6
+ * yet: 3x the most measured on the project's machine, 5.3 us (the example
+ * sweep, every ray type, on 2 shared cores; a 256x256 primary-ray image of
+ * the small room took 1.3 us). Too high a rate only asks for more time. */
+#define SWEEP_DEFAULT_RATE 1.6e-5
 
 /* --emit-slurm: a job array script, task k running the points of line k.
  * Points go to tasks in a snake (longest first: task 1, 2, ..., K, K, ...,
  * 1, ...) so the tasks' expected times come out alike; the time request is
- * twice the longest task's, the memory request twice the largest point's
- * (each from the complete points when there are some, else from the
- * estimates alone). Slurm keeps its own copy of a script at submission, so
+ * twice the longest task's (at the complete points' measured rate when there
+ * are some), the memory request the largest point's estimate or twice the
+ * complete points' measured peak, whichever is larger. Slurm keeps its own copy of a script at submission, so
  * a script emitted later cannot change an array already queued. */
 static void emit_slurm(const struct line_base *b, struct job **todo, unsigned n, unsigned per,
                        struct job *all, unsigned npoints, const char *sweep_file) {
@@ -710,11 +711,11 @@ static void emit_slurm(const struct line_base *b, struct job **todo, unsigned n,
          "# again later changes no task of an array already queued; a task names its points,\n"
          "# skips one complete (or running elsewhere) when it starts, keeps a failed one's\n"
          "# stderr in its error.txt, and exits 2 when its number is not in this file.\n"
-         "# Requests: time twice the longest task's expected %.0f s, memory twice the largest\n"
+         "# Requests: time twice the longest task's expected %.0f s; memory the largest\n"
          "# point's %s (README.md, Sweeps).\n",
          per, tasks, tasks == 1 ? "" : "s", per, n, sweep_file, npoints, b->dir, longest,
-         measured ? "measured peak, or its estimate if larger"
-                  : "estimate (no point is complete to measure)");
+         measured ? "estimate, or twice the complete points' peak if larger"
+                  : "estimate (no point is complete to measure from)");
   printf("#SBATCH --job-name=rtsim-sweep\n#SBATCH --array=1-%u\n#SBATCH --ntasks=1\n"
          "#SBATCH --cpus-per-task=1\n#SBATCH --time=%u\n#SBATCH --mem=%uM\n",
          tasks ? tasks : 1, minutes, mib);
