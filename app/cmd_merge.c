@@ -4,7 +4,11 @@
  * stats.csv columns, each name once (a swept key that stats.csv also has, as
  * every config and workload key, takes stats.csv's resolved value: 16KiB
  * reads 16384). Points with other columns still merge: the union of the
- * columns in order of first appearance, missing cells empty. */
+ * columns in order of first appearance, missing cells empty. Last come the
+ * provenance columns from each stats.json (wall_s, peak_rss_mb, host,
+ * revision), which stats.csv leaves out to stay bit-identical run to run;
+ * points of one table from different revisions, or one scene under two
+ * hashes, are merged with a warning. */
 #include "app/app.h"
 
 #include <dirent.h>
@@ -22,7 +26,7 @@
 #include "sim/stats.h"
 
 static const char HELP[] =
-    "usage: rtsim merge DIR -o TABLE.csv\n"
+    "usage: rtsim merge DIR -o TABLE.csv [--reproducible]\n"
     "\n"
     "Join the complete points of a sweep directory (each subdirectory holding a\n"
     "stats.json) into one tidy CSV table, a row per point in natural order of\n"
@@ -32,9 +36,15 @@ static const char HELP[] =
     "value (l2.size 16KiB reads 16384). Points with different columns merge into\n"
     "the union of the columns; missing cells stay empty. Incomplete points are\n"
     "skipped and named on stderr; a DIR with no complete point is refused.\n"
+    "Last come each point's provenance from its stats.json: wall_s (host seconds\n"
+    "of the simulation), peak_rss_mb (MiB), host, revision (the build's git\n"
+    "describe). Points from different revisions, or one scene under different\n"
+    "scene_hash values, merge with a warning on stderr.\n"
     "\n"
     "options:\n"
     "  -o, --output TABLE.csv  the table (written whole or not at all)\n"
+    "  --reproducible          leave out wall_s, peak_rss_mb and host, which differ\n"
+    "                          run to run: the same points then merge to the same bytes\n"
     "  -h, --help              this text\n";
 
 static int cmp_names(const void *x, const void *y) {
@@ -50,11 +60,66 @@ static bool has(const char *dir, const char *sub, const char *name) {
   return stat(p, &sb) == 0;
 }
 
+/* The provenance columns, read from stats.json; the first three differ run
+ * to run (--reproducible leaves them out). */
+enum { PROV_WALL, PROV_RSS, PROV_HOST, PROV_REVISION, PROV_COUNT };
+static const char *const PROV_NAMES[PROV_COUNT] = {"wall_s", "peak_rss_mb", "host", "revision"};
+
 /* One point: its stats.csv and (when swept) point.csv, one row each. */
 struct point {
   char *name;
   struct csv_table stats, swept;
+  char prov[PROV_COUNT][256]; /* "" when its stats.json lacks one */
 };
+
+/* Read point p's provenance members from its stats.json (dir/name). */
+static bool read_provenance(struct point *p, const char *dir, struct err *e) {
+  char path[8192];
+  snprintf(path, sizeof path, "%s/%s/stats.json", dir, p->name);
+  const char *why;
+  FILE *f = err_fopen_regular(path, &why);
+  if (!f) return err_set(e, path, 0, 0, "cannot read the file: %s", why);
+  char *text = NULL;
+  size_t len = 0, got;
+  char buf[65536];
+  FILE *m = open_memstream(&text, &len);
+  CHECK(m);
+  while ((got = fread(buf, 1, sizeof buf, f)) > 0) fwrite(buf, 1, got, m);
+  fclose(f);
+  CHECK(fclose(m) == 0);
+  for (int k = 0; k < PROV_COUNT; k++)
+    if (!csv_json_member(text, PROV_NAMES[k], p->prov[k], sizeof p->prov[k])) p->prov[k][0] = '\0';
+  free(text);
+  return true;
+}
+
+static const char *cell(const struct point *p, const char *name);
+
+/* Warn when column `col` (a stats.csv column, or provenance k when col is
+ * NULL) takes more than one value over the points, within each group of
+ * equal `group` values (NULL: one group). Names the first point of each of
+ * the first two values. */
+static void warn_mixed(const struct point *pts, unsigned n, const char *col, int k,
+                       const char *group, const char *what) {
+  for (unsigned i = 0; i < n; i++) {
+    const char *g = group ? cell(&pts[i], group) : "";
+    const char *a = col ? cell(&pts[i], col) : pts[i].prov[k];
+    bool first_of_group = true;
+    for (unsigned h = 0; h < i && first_of_group; h++)
+      first_of_group = strcmp(group ? cell(&pts[h], group) : "", g) != 0;
+    if (!first_of_group) continue;
+    for (unsigned j = i + 1; j < n; j++) {
+      if (strcmp(group ? cell(&pts[j], group) : "", g)) continue;
+      const char *b = col ? cell(&pts[j], col) : pts[j].prov[k];
+      if (!strcmp(a, b)) continue;
+      fprintf(stderr,
+              "merge: warning: %s%s%s: %s '%s' (%s) and '%s' (%s); the table mixes them\n",
+              what, group ? " of scene " : "", group ? g : "", col ? col : PROV_NAMES[k], a,
+              pts[i].name, b, pts[j].name);
+      break;
+    }
+  }
+}
 
 static bool read_one_row(struct csv_table *t, const char *path, struct err *e) {
   if (!csv_read(t, path, e)) return false;
@@ -80,7 +145,9 @@ static void add_column(char ***cols, unsigned *n, const char *name) {
 
 int cmd_merge(int argc, char **argv) {
   const char *out = NULL;
-  const struct opts_spec spec[] = {OPTS_STR("output", 'o', &out), OPTS_END};
+  bool reproducible = false;
+  const struct opts_spec spec[] = {OPTS_STR("output", 'o', &out),
+                                   OPTS_FLAG("reproducible", 0, &reproducible), OPTS_END};
   struct opts_args args;
   int rc = opts_parse("merge", HELP, spec, argc, argv, &args);
   if (rc != OPTS_GO) return rc;
@@ -126,7 +193,7 @@ int cmd_merge(int argc, char **argv) {
     char path[8192];
     pts[i].name = names[i];
     snprintf(path, sizeof path, "%s/%s/stats.csv", dir, names[i]);
-    if (!read_one_row(&pts[i].stats, path, &e)) {
+    if (!read_one_row(&pts[i].stats, path, &e) || !read_provenance(&pts[i], dir, &e)) {
       rc = app_report(&e);
       goto done;
     }
@@ -143,6 +210,13 @@ int cmd_merge(int argc, char **argv) {
     for (unsigned k = 0; k < pts[i].swept.ncols; k++) add_column(&cols, &ncols, pts[i].swept.names[k]);
   for (unsigned i = 0; i < n; i++)
     for (unsigned k = 0; k < pts[i].stats.ncols; k++) add_column(&cols, &ncols, pts[i].stats.names[k]);
+  /* Provenance last: a stats.csv column of the same name (none today) would
+   * keep its place and its value. */
+  const unsigned nmeasured = ncols;
+  for (int k = reproducible ? PROV_REVISION : 0; k < PROV_COUNT; k++)
+    add_column(&cols, &ncols, PROV_NAMES[k]);
+  warn_mixed(pts, n, NULL, PROV_REVISION, NULL, "points from different builds");
+  warn_mixed(pts, n, "scene_hash", 0, "scene", "a scene changed between points");
 
   struct outfile o;
   if (!outfile_open(&o, out, "the table", &e)) {
@@ -159,7 +233,10 @@ int cmd_merge(int argc, char **argv) {
     stats_write_csv_str(f, pts[i].name);
     for (unsigned k = 1; k < ncols; k++) {
       fputc(',', f);
-      stats_write_csv_str(f, cell(&pts[i], cols[k]));
+      int prov = -1;
+      for (int q = 0; k >= nmeasured && q < PROV_COUNT; q++)
+        if (!strcmp(cols[k], PROV_NAMES[q])) prov = q;
+      stats_write_csv_str(f, prov >= 0 ? pts[i].prov[prov] : cell(&pts[i], cols[k]));
     }
     fputc('\n', f);
   }

@@ -211,3 +211,33 @@ int csv_natural_cmp(const char *a, const char *b) {
 }
 
 bool csv_number(const char *s, double *out) { return scalar_f64(s, out) == SCALAR_OK; }
+
+bool csv_json_member(const char *json, const char *key, char *out, unsigned cap) {
+  char pat[256];
+  snprintf(pat, sizeof pat, "\n  \"%s\": ", key);
+  const char *p = strstr(json, pat);
+  if (!p || cap == 0) return false;
+  p += strlen(pat);
+  unsigned n = 0;
+  if (*p != '"') {
+    while (*p && *p != ',' && *p != '\n' && *p != '}' && *p != '{' && *p != '[' && n + 1 < cap)
+      out[n++] = *p++;
+    out[n] = '\0';
+    return n > 0;
+  }
+  for (p++; *p && *p != '"'; p++) {
+    char c = *p;
+    if (c == '\\' && p[1]) {
+      c = *++p;
+      if (c == 'n') c = '\n';
+      else if (c == 't') c = '\t';
+      else if (c == 'u') { /* rtsim writes only control characters so: kept as '?' */
+        for (int k = 0; k < 4 && p[1]; k++) p++;
+        c = '?';
+      }
+    }
+    if (n + 1 < cap) out[n++] = c;
+  }
+  out[n] = '\0';
+  return *p == '"';
+}

@@ -37,4 +37,11 @@ int csv_natural_cmp(const char *a, const char *b);
  * around it, no leading zero). */
 bool csv_number(const char *s, double *out);
 
+/* The top-level member `key` of an rtsim stats.json (the text, whole) as
+ * text: a string unescaped, a number or literal as written; into out (cap
+ * bytes, cut to fit). False when the member is absent or not a scalar. Only
+ * what rtsim run writes is read: a member at the top level stands alone on
+ * its line, indented two spaces. */
+bool csv_json_member(const char *json, const char *key, char *out, unsigned cap);
+
 #endif

@@ -330,6 +330,11 @@ static bool write_json(const struct run_output_report *r, struct err *e) {
   }
   fputs(",\n  \"revision\": ", f);
   stats_write_json_str(f, app_revision);
+  /* Which machine ran it, for a sweep's provenance (rtsim merge). */
+  char host[256] = "";
+  if (gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
+  fputs(",\n  \"host\": ", f);
+  stats_write_json_str(f, host[0] ? host : "unknown");
   fputs(",\n  \"wall_s\": ", f);
   stats_write_json_f64(f, r->wall_s);
   struct rusage ru;

@@ -29,6 +29,10 @@ struct sweep_point {
   char **args;                   /* `rtsim run` arguments after the program name,
                                     NULL-terminated (owned) */
   double cost;                   /* expected host time, relative (see sweep.c) */
+  double setup_s;                /* expected host seconds before the simulation starts
+                                    (loading the scene, building its tree) */
+  double mem_mb;                 /* expected peak host memory of its run, MiB (an
+                                    over-estimate: see sweep.c) */
 };
 
 struct sweep {

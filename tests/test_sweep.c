@@ -7,6 +7,7 @@
  * 8x6 primary-ray images on configs/tiny.yaml, so each takes a fraction of a
  * second. */
 #include <dirent.h>
+#include <fcntl.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -105,20 +106,24 @@ static void test_expansion(void) {
   char *line = out;
   for (int k = 0; k < 8 && line; k++) {
     const int i = order[k];
+    /* A line names its point (#19 item 1): the sweep's runner on it. */
     char want[4096];
-    snprintf(want, sizeof want, "-o '%s/sw_emit/%s' ", RTSIM_TMP, GOOD_NAMES[i]);
+    snprintf(want, sizeof want, " sweep %s -o %s/sw_emit -j 1 --point %s", GOOD, RTSIM_TMP,
+             GOOD_NAMES[i]);
     char *nl = strchr(line, '\n');
     if (nl) *nl = '\0';
-    EXPECTF(!strncmp(line, RTSIM_BINARY " run /", strlen(RTSIM_BINARY) + 6),
+    EXPECTF(!strncmp(line, RTSIM_BINARY " sweep /", strlen(RTSIM_BINARY) + 8),
             "line %d does not start with the absolute program: %s", i, line);
-    char plain[4096];
-    snprintf(plain, sizeof plain, "-o %s/sw_emit/%s ", RTSIM_TMP, GOOD_NAMES[i]);
-    EXPECTF(strstr(line, want) || strstr(line, plain), "line %d: want %s in %s", k, plain, line);
-    EXPECTF(strstr(line, "--set dram.latency=100 --set rays_per_thread="),
-            "line %d lacks the fixed and swept --set: %s", i, line);
+    EXPECTF(strstr(line, want) && !strcmp(line + strlen(line) - strlen(GOOD_NAMES[i]), GOOD_NAMES[i]),
+            "line %d: want %s in %s", k, want, line);
     struct stat sb;
-    char dir[4096];
+    char dir[4096], cmd[8192];
     snprintf(dir, sizeof dir, "%s/sw_emit", RTSIM_TMP);
+    snprintf(cmd, sizeof cmd, "%s/%s/command.sh", dir, GOOD_NAMES[i]);
+    char *sh = read_all(cmd);
+    EXPECTF(sh && strstr(sh, "--set dram.latency=100 --set rays_per_thread="),
+            "%s lacks the fixed and swept --set: %s", cmd, sh ? sh : "(missing)");
+    free(sh);
     EXPECTF(point_file(dir, GOOD_NAMES[i], "command.sh", &sb) &&
                 point_file(dir, GOOD_NAMES[i], "point.csv", &sb),
             "%s: no command.sh or point.csv", GOOD_NAMES[i]);
@@ -138,24 +143,38 @@ static void test_expansion(void) {
       "scene=grove,rays=primary+shadow,width=4", "scene=grove,rays=primary+shadow,width=8"};
   for (int i = 0; i < 8; i++) {
     char want[512];
-    snprintf(want, sizeof want, "/sw_names/%s ", names[i]);
+    snprintf(want, sizeof want, "/sw_names -j 1 --point %s\n", names[i]);
     EXPECTF(strstr(out, want) != NULL, "names.yaml: no point %s in %s", names[i], out);
   }
   char *last = out + strlen(out) - 1;
   while (last > out && last[-1] != '\n') last--;
-  EXPECTF(strstr(out, "rays=primary+shadow,width=8 ") < strchr(out, '\n'),
+  EXPECTF(strstr(out, "rays=primary+shadow,width=8\n") < strchr(out, '\n') + 1,
           "the first job is not a widest, two-ray-type point: %s", out);
-  EXPECTF(strstr(last, "rays=primary,width=4 ") != NULL, "the last job is not a small one: %s", last);
-  EXPECTF(strstr(out, "--rays primary,shadow --width 8 --height 4"), "workload arguments: %s", out);
+  EXPECTF(strstr(last, "rays=primary,width=4\n") != NULL, "the last job is not a small one: %s", last);
+  char *sh = read_all(RTSIM_TMP "/sw_names/scene=room,rays=primary+shadow,width=8/command.sh");
+  EXPECTF(sh && strstr(sh, "--rays primary,shadow --width 8 --height 4"), "workload arguments: %s",
+          sh ? sh : "(no command.sh)");
+  free(sh);
+
+  /* Quoted, a rays value keeps its comma (one point); after a space, a comma
+   * separates two values. */
+  EXPECT(run("(%s sweep %srays_quoted.yaml -o %s/sw_rays --emit-jobs 2>/dev/null)", RTSIM_BINARY,
+             SW, RTSIM_TMP) == 0);
+  EXPECTF(count_lines(out) == 3 && strstr(out, "--point rays=shadow+specular\n") &&
+              strstr(out, "--point rays=shadow\n") && strstr(out, "--point rays=primary\n"),
+          "rays_quoted.yaml: %s", out);
 
   /* A zipped key's value may repeat when the rows differ: three points. */
   EXPECT(run("(%s sweep %szip_repeat.yaml -o %s/sw_zip --emit-jobs 2>/dev/null)", RTSIM_BINARY, SW,
              RTSIM_TMP) == 0);
   EXPECTF(count_lines(out) == 3, "zip_repeat.yaml: %s", out);
-  EXPECTF(strstr(out, "/policy=dynamic,dynamic.sharing=chip ") &&
-              strstr(out, "/policy=dynamic,dynamic.sharing=partition ") &&
-              strstr(out, "--set dynamic.sharing=chip"),
+  EXPECTF(strstr(out, "--point policy=dynamic,dynamic.sharing=chip\n") &&
+              strstr(out, "--point policy=dynamic,dynamic.sharing=partition\n"),
           "zip_repeat.yaml: %s", out);
+  sh = read_all(RTSIM_TMP "/sw_zip/policy=dynamic,dynamic.sharing=chip/command.sh");
+  EXPECTF(sh && strstr(sh, "--set dynamic.sharing=chip"), "zip_repeat.yaml: %s",
+          sh ? sh : "(no command.sh)");
+  free(sh);
 }
 
 /* Bad sweep files: exit 2, one line at file:line:col, nothing created. */
@@ -174,6 +193,8 @@ static void test_bad_files(void) {
       {"bad_zip_row.yaml", "bad_zip_row.yaml:4:52: error: zip[0]: the values at index 3 (one from each key) repeat those at index 1 (line 4)"},
       {"bad_policy.yaml", "bad_policy.yaml:4:23: error: policy: unknown policy (got 'fastest'"},
       {"bad_rays.yaml", "bad_rays.yaml:4:19: error: rays: not a list of ray types (got 'primary,glossy'"},
+      /* #19 item 6: YAML splits [primary, shadow,specular] into three values. */
+      {"bad_rays_flow.yaml", "bad_rays_flow.yaml:4:19: error: axes.rays[1]: 'shadow,specular' unquoted in a flow list is two values, so two points (quote it, \"shadow,specular\", for one point"},
       {"bad_scene_missing.yaml", "bad_scene_missing.yaml:3:44: error: axes.scene[1]: cannot open '../../../scenes/small/hall.yaml'"},
       {"bad_names.yaml", "bad_names.yaml:4:44: error: scene: two points would share the directory name 'scene=room'"},
       {"bad_no_scene.yaml", "bad_no_scene.yaml:2:11: error: workload: missing the scene"},
@@ -223,7 +244,7 @@ static void test_bad_files(void) {
 static void sweep_and_merge(const char *dir, const char *table) {
   int rc = run("%s sweep %s -o %s -j 2", RTSIM_BINARY, GOOD, dir);
   EXPECTF(rc == 0, "sweep into %s: exit %d: %s", dir, rc, out);
-  rc = run("%s merge %s -o %s", RTSIM_BINARY, dir, table);
+  rc = run("%s merge %s -o %s --reproducible", RTSIM_BINARY, dir, table);
   EXPECTF(rc == 0 && strstr(out, "merge: 8 points"), "merge %s: exit %d: %s", dir, rc, out);
 }
 
@@ -289,7 +310,7 @@ static void test_resume(void) {
                   after.st_mtim.tv_nsec == before[i].st_mtim.tv_nsec,
               "%s was run again", GOOD_NAMES[i]);
     }
-  rc = run("%s merge %s -o %s.csv", RTSIM_BINARY, dir, dir);
+  rc = run("%s merge %s -o %s.csv --reproducible", RTSIM_BINARY, dir, dir);
   EXPECTF(rc == 0 && same_text(RTSIM_TMP "/sw_resume.csv", RTSIM_TMP "/sw_ref.csv"),
           "resumed table differs from the reference (%d: %s)", rc, out);
 }
@@ -313,15 +334,23 @@ static void test_failing_point(void) {
   EXPECTF(err && strstr(err, "cannot write EXR") && strstr(err, "exited with code 2"),
           "error.txt: %s", err ? err : "(missing)");
   free(err);
+  /* Whoever runs the point, its own job line keeps its stderr (#19 item 1). */
+  unlink(err_path);
+  rc = run("cd / && %s sweep %s -o %s --emit-jobs 2>/dev/null | sh", RTSIM_BINARY, GOOD, dir);
+  EXPECTF(rc == 1, "the failing point's job line: exit %d, want 1: %s", rc, out);
+  err = read_all(err_path);
+  EXPECTF(err && strstr(err, "cannot write EXR") && strstr(err, "exited with code 2"),
+          "error.txt from the job line: %s", err ? err : "(missing)");
+  free(err);
   /* Merge takes the complete points and names the other. */
-  rc = run("%s merge %s -o %s.csv", RTSIM_BINARY, dir, dir);
+  rc = run("%s merge %s -o %s.csv --reproducible", RTSIM_BINARY, dir, dir);
   EXPECTF(rc == 0 && strstr(out, "merge: 7 points") && strstr(out, "1 incomplete skipped"),
           "merge: %d %s", rc, out);
   run("rm -rf '%s/%s/image.exr'", dir, bad);
   rc = run("%s sweep %s -o %s -j 2", RTSIM_BINARY, GOOD, dir);
   EXPECTF(rc == 0 && strstr(out, "8 points, 7 complete, running 1"), "retry: %d %s", rc, out);
   EXPECTF(!exists(err_path), "error.txt left after the point succeeded");
-  rc = run("%s merge %s -o %s.csv", RTSIM_BINARY, dir, dir);
+  rc = run("%s merge %s -o %s.csv --reproducible", RTSIM_BINARY, dir, dir);
   EXPECT(rc == 0 && same_text(RTSIM_TMP "/sw_fail.csv", RTSIM_TMP "/sw_ref.csv"));
 }
 
@@ -337,19 +366,185 @@ static void test_jobs_elsewhere(void) {
                "--will-cite -j 2)",
                RTSIM_TMP, RTSIM_BINARY, GOOD);
   EXPECTF(rc == 0, "parallel: exit %d: %s", rc, out);
-  rc = run("%s merge %s/sw_par -o %s/sw_par.csv", RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
+  rc = run("%s merge %s/sw_par -o %s/sw_par.csv --reproducible", RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
   EXPECTF(rc == 0 && same_text(RTSIM_TMP "/sw_par.csv", RTSIM_TMP "/sw_ref.csv"),
           "the table through GNU parallel differs (%d: %s)", rc, out);
 
-  rc = run("cd %s && %s sweep %s -o sw_slurm --emit-jobs > sw_jobs.txt 2>/dev/null && n=$(wc -l "
-           "< sw_jobs.txt) && i=1 && while [ $i -le $n ]; do SLURM_ARRAY_TASK_ID=$i sh -c 'eval "
-           "\"$(sed -n \"${SLURM_ARRAY_TASK_ID}p\" sw_jobs.txt)\"' >/dev/null || exit 1; i=$((i+1)); "
-           "done",
+  /* The README's Slurm recipe (#19 item 1): a script of 3 tasks of at most 3
+   * points, which Slurm copies at submission (cp here). Task 2 runs; then the
+   * jobs are emitted again (fewer now, over the same names) before tasks 1
+   * and 3 of the submitted copy run, and task 2 again: nothing lost. */
+  const char *sl = RTSIM_TMP "/sw_slurm";
+  rc = run("(cd %s && %s sweep %s -o sw_slurm --emit-slurm 3 > sw_slurm.sbatch && cp "
+           "sw_slurm.sbatch sw_slurm.submitted)",
            RTSIM_TMP, RTSIM_BINARY, GOOD);
-  EXPECTF(rc == 0, "slurm array: exit %d: %s", rc, out);
-  rc = run("%s merge %s/sw_slurm -o %s/sw_slurm.csv", RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
+  EXPECTF(rc == 0 && strstr(out, "3 array tasks (8 incomplete points of 8"), "emit-slurm: %d %s",
+          rc, out);
+  char *sc = read_all(RTSIM_TMP "/sw_slurm.sbatch");
+  /* Uncalibrated: 2 x a few seconds is under the 5-minute floor; the largest
+   * point's memory estimate, 32 MiB + 256 B x 5.7K triangles + 64 KiB x 8
+   * contexts, about 34 MiB, rounds up to 48M. */
+  EXPECTF(sc && strstr(sc, "\n#SBATCH --array=1-3\n") && strstr(sc, "\n#SBATCH --time=5\n") &&
+              strstr(sc, "\n#SBATCH --mem=48M\n") && strstr(sc, "#!/bin/sh\n") == sc,
+          "the script's requests: %s", sc ? sc : "(missing)");
+  free(sc);
+  rc = run("cd / && SLURM_ARRAY_TASK_ID=2 sh %s.submitted", sl);
+  EXPECTF(rc == 0 && strstr(out, "3 of 8 points named"), "task 2: %d %s", rc, out);
+  int done = 0;
+  struct stat sb;
+  for (int i = 0; i < 8; i++) done += point_file(sl, GOOD_NAMES[i], "stats.json", &sb);
+  EXPECTF(done == 3, "after task 2: %d points complete, want 3", done);
+  rc = run("(cd %s && %s sweep %s -o sw_slurm --emit-slurm 3 > sw_slurm.sbatch && %s sweep %s -o "
+           "sw_slurm --emit-jobs > sw_jobs.txt)",
+           RTSIM_TMP, RTSIM_BINARY, GOOD, RTSIM_BINARY, GOOD);
+  EXPECTF(rc == 0 && strstr(out, "2 array tasks (5 incomplete points of 8") &&
+              strstr(out, "5 job lines"),
+          "re-emit: %d %s", rc, out);
+  for (int task = 1; task <= 3; task++) {
+    rc = run("cd / && SLURM_ARRAY_TASK_ID=%d sh %s.submitted", task == 2 ? 2 : task, sl);
+    EXPECTF(rc == 0, "task %d after the re-emit: %d %s", task, rc, out);
+  }
+  rc = run("%s merge %s -o %s.csv --reproducible", RTSIM_BINARY, sl, sl);
   EXPECTF(rc == 0 && same_text(RTSIM_TMP "/sw_slurm.csv", RTSIM_TMP "/sw_ref.csv"),
           "the table through the Slurm recipe differs (%d: %s)", rc, out);
+  /* A task the script does not have, or no array at all, fails loudly. */
+  rc = run("SLURM_ARRAY_TASK_ID=4 sh %s.submitted", sl);
+  EXPECTF(rc == 2 && strstr(out, "rtsim sweep: no task '4' in ") && strstr(out, "tasks 1 to 3"),
+          "task 4: %d %s", rc, out);
+  rc = run("unset SLURM_ARRAY_TASK_ID; sh %s.submitted", sl);
+  EXPECTF(rc == 2 && strstr(out, "no task ''"), "no task id: %d %s", rc, out);
+  /* So does a line naming a point the sweep does not have (an edited file). */
+  rc = run("%s sweep %s -o %s -j 1 --point policy=packet,rays_per_thread=3", RTSIM_BINARY, GOOD,
+           sl);
+  EXPECTF(rc == 2 && strstr(out, "error: --point 'policy=packet,rays_per_thread=3': no such point"),
+          "unknown point: %d %s", rc, out);
+  rc = run("%s sweep %s -o %s --point ''", RTSIM_BINARY, GOOD, sl);
+  EXPECTF(rc == 2 && strstr(out, "--point: got ''"), "empty point: %d %s", rc, out);
+}
+
+/* --status (#19 item 2) on a sweep with points complete, failed, running
+ * (this process holds the point's claim) and never run; a runner leaves the
+ * running point to its holder. */
+static void test_status(void) {
+  const char *dir = RTSIM_TMP "/sw_status";
+  run("rm -rf %s && mkdir -p '%s/%s/image.exr/keep'", dir, dir, GOOD_NAMES[1]);
+  int rc = run("%s sweep %s -o %s --status", RTSIM_BINARY, GOOD, dir);
+  EXPECTF(rc == 1 && strstr(out, ": 8 points: 0 complete, 0 failed, 0 running, 8 not run\n"),
+          "before: %d %s", rc, out);
+  EXPECT(!exists(RTSIM_TMP "/sw_status/" "policy=recursive,rays_per_thread=1,l2.size=16KiB,l2.ways=4"));
+  rc = run("%s sweep %s -o %s -j 2 --point %s --point %s --point %s --point %s", RTSIM_BINARY,
+           GOOD, dir, GOOD_NAMES[0], GOOD_NAMES[1], GOOD_NAMES[2], GOOD_NAMES[3]);
+  EXPECTF(rc == 1, "four points, one failing: %d %s", rc, out);
+  char lock[8192];
+  snprintf(lock, sizeof lock, "%s/%s", dir, GOOD_NAMES[4]);
+  mkdir(lock, 0777);
+  strcat(lock, "/.running");
+  int fd = open(lock, O_RDWR | O_CREAT, 0644);
+  struct flock l = {.l_type = F_WRLCK, .l_whence = SEEK_SET};
+  EXPECT(fd >= 0 && fcntl(fd, F_SETLK, &l) == 0);
+  char who[128];
+  int n = snprintf(who, sizeof who, "node7 %ld %lld\n", (long)getpid(), (long long)time(NULL));
+  EXPECT(write(fd, who, (size_t)n) == n);
+  rc = run("%s sweep %s -o %s --status", RTSIM_BINARY, GOOD, dir);
+  EXPECTF(rc == 1 && strstr(out, ": 8 points: 3 complete, 1 failed, 1 running, 3 not run\n"),
+          "counts: %d %s", rc, out);
+  char want[1024];
+  snprintf(want, sizeof want, "\nfailed    %s: ", GOOD_NAMES[1]);
+  char *at = strstr(out, want);
+  EXPECTF(at && strstr(at, "cannot write EXR") < strchr(at + 1, '\n'), "failed line: %s", out);
+  snprintf(want, sizeof want, "\nrunning   %s: on node7, pid %ld, for ", GOOD_NAMES[4],
+           (long)getpid());
+  EXPECTF(strstr(out, want), "running line (want %s): %s", want, out);
+  for (int i = 5; i < 8; i++) {
+    snprintf(want, sizeof want, "\nnot run   %s\n", GOOD_NAMES[i]);
+    EXPECTF(strstr(out, want), "not-run line %d: %s", i, out);
+  }
+  for (int i = 0; i < 4; i++) {
+    snprintf(want, sizeof want, "\n%-9s %s", i == 1 ? "failed" : "complete", GOOD_NAMES[i]);
+    EXPECTF(strstr(out, want), "line %d: %s", i, out);
+  }
+  /* The failed points are listed before the complete ones. */
+  EXPECT(strstr(out, "\nfailed") && strstr(out, "\ncomplete") &&
+         strstr(out, "\nfailed") < strstr(out, "\ncomplete"));
+  /* A runner leaves the claimed point to its holder (exit 0, not run). */
+  rc = run("%s sweep %s -o %s -j 1 --point %s", RTSIM_BINARY, GOOD, dir, GOOD_NAMES[4]);
+  EXPECTF(rc == 0 && strstr(out, "1 point left to the process running them"), "busy: %d %s", rc,
+          out);
+  struct stat sb;
+  EXPECT(!point_file(dir, GOOD_NAMES[4], "stats.json", &sb));
+  close(fd);
+  run("rm -rf '%s/%s/image.exr'", dir, GOOD_NAMES[1]);
+  rc = run("%s sweep %s -o %s -j 2", RTSIM_BINARY, GOOD, dir);
+  EXPECTF(rc == 0 && strstr(out, "running 5"), "the rest: %d %s", rc, out);
+  rc = run("%s sweep %s -o %s --status", RTSIM_BINARY, GOOD, dir);
+  EXPECTF(rc == 0 && strstr(out, ": 8 points: 8 complete, 0 failed, 0 running, 0 not run\n"),
+          "after: %d %s", rc, out);
+}
+
+/* A sweep directory moved or copied elsewhere resumes (#19 item 3): the
+ * points' own directories, and configs and scenes moved with the tree, are
+ * the same paths; a config that is another file is not. */
+static void test_moved(void) {
+  const char *dir = RTSIM_TMP "/sw_moved";
+  run("rm -rf %s && cp -a %s/sw_ref %s", dir, RTSIM_TMP, dir);
+  int rc = run("%s sweep %s -o %s", RTSIM_BINARY, GOOD, dir);
+  EXPECTF(rc == 0 && strstr(out, "8 points, 8 complete, running 0"), "copied: %d %s", rc, out);
+  /* As if the whole tree, this directory in it, had lived at /gone/tree:
+   * every path in the commands, -o's included, under a root that is no more. */
+  rc = run("cd %s && for f in */command.sh; do sed -i -e 's|/sw_ref/|/sw_moved/|' -e "
+           "'s|%s/|/gone/tree/|g' \"$f\"; done && grep -q /gone/tree/configs/tiny.yaml */command.sh",
+           dir, RTSIM_SOURCE_DIR);
+  EXPECTF(rc == 0, "rewriting the commands: %d %s", rc, out);
+  rc = run("%s sweep %s -o %s", RTSIM_BINARY, GOOD, dir);
+  EXPECTF(rc == 0 && strstr(out, "8 points, 8 complete, running 0"), "moved tree: %d %s", rc, out);
+  rc = run("sed -i 's|/gone/tree/configs/tiny.yaml|/gone/tree/configs/other.yaml|' '%s/%s/command.sh'",
+           dir, GOOD_NAMES[3]);
+  rc = run("%s sweep %s -o %s", RTSIM_BINARY, GOOD, dir);
+  EXPECTF(rc == 2 && strstr(out, "was made by another command"), "another config: %d %s", rc, out);
+}
+
+/* Merged tables carry each point's provenance (#19 item 3) and warn, still
+ * writing the table, when points come from different builds or one scene
+ * under two hashes. */
+static void test_provenance(void) {
+  const char *t = RTSIM_TMP "/sw_prov.csv";
+  int rc = run("%s merge %s/sw_ref -o %s", RTSIM_BINARY, RTSIM_TMP, t);
+  EXPECTF(rc == 0 && !strstr(out, "warning"), "merge: %d %s", rc, out);
+  char *csv = read_all(t);
+  EXPECTF(csv && strstr(csv, ",wall_s,peak_rss_mb,host,revision\n"), "header: %.300s",
+          csv ? csv : "(missing)");
+  char host[256] = "";
+  gethostname(host, sizeof host - 1);
+  /* Each row ends in a positive wall time, a peak memory, this host and a revision. */
+  int rows = 0;
+  for (char *r = csv ? strchr(csv, '\n') : NULL; r && r[1]; r = strchr(r + 1, '\n')) {
+    char *end = strchr(r + 1, '\n'), *c = end;
+    for (int commas = 0; c > r && commas < 4;) commas += *--c == ',';
+    double wall = 0, rss = 0;
+    char h[256] = "", rev[256] = "";
+    int got = c > r ? sscanf(c + 1, "%lf,%lf,%255[^,],%255[^\n]", &wall, &rss, h, rev) : 0;
+    EXPECTF(got == 4 && wall > 0 && rss > 0 && !strcmp(h, host) && rev[0],
+            "provenance cells: %.*s", (int)(end - c), c);
+    rows++;
+  }
+  EXPECT(rows == 8);
+  free(csv);
+  /* One point from another build, another with its scene changed. */
+  const char *mixed = RTSIM_TMP "/sw_mixed";
+  run("rm -rf %s && cp -a %s/sw_ref %s", mixed, RTSIM_TMP, mixed);
+  run("sed -i 's|^  \"revision\": \".*\",$|  \"revision\": \"v0-old\",|' '%s/%s/stats.json'", mixed,
+      GOOD_NAMES[2]);
+  run("sed -i '2s|^room-small,[0-9a-f]*,|room-small,0123456789abcdef,|' '%s/%s/stats.csv'", mixed,
+      GOOD_NAMES[6]);
+  rc = run("%s merge %s -o %s.csv", RTSIM_BINARY, mixed, mixed);
+  EXPECTF(rc == 0 && exists(RTSIM_TMP "/sw_mixed.csv"), "mixed: %d %s", rc, out);
+  EXPECTF(strstr(out, "merge: warning: points from different builds: revision '") &&
+              strstr(out, "'v0-old' (" "policy=recursive,rays_per_thread=2,l2.size=16KiB,l2.ways=4)"),
+          "revision warning: %s", out);
+  EXPECTF(strstr(out, "merge: warning: a scene changed between points of scene room-small: "
+                      "scene_hash '") &&
+              strstr(out, "'0123456789abcdef' (policy=packet,rays_per_thread=2,l2.size=16KiB,l2.ways=4)"),
+          "scene hash warning: %s", out);
 }
 
 static void write_text(const char *path, const char *text) {
@@ -366,17 +561,26 @@ static void test_merge_edges(void) {
   const char *d = RTSIM_TMP "/sw_union";
   run("rm -rf %s && mkdir -p %s/p10 %s/p9 %s/q", d, d, d, d);
   char p[4096];
-  snprintf(p, sizeof p, "%s/p9/stats.json", d), write_text(p, "{}\n");
+  snprintf(p, sizeof p, "%s/p9/stats.json", d),
+      write_text(p, "{\n  \"revision\": \"r9\",\n  \"host\": \"h\\\"9\",\n  \"wall_s\": 1.5\n}\n");
   snprintf(p, sizeof p, "%s/p9/stats.csv", d), write_text(p, "x,y\n1,\"a,b\"\n");
   snprintf(p, sizeof p, "%s/p9/point.csv", d), write_text(p, "k,x\n7,5\n");
   snprintf(p, sizeof p, "%s/p10/stats.json", d), write_text(p, "{}\n");
   snprintf(p, sizeof p, "%s/p10/stats.csv", d), write_text(p, "x,z\n3,4\n");
   snprintf(p, sizeof p, "%s/q/command.sh", d), write_text(p, "exec false\n");
   int rc = run("%s merge %s -o %s.csv", RTSIM_BINARY, d, d);
-  EXPECTF(rc == 0 && strstr(out, "1 incomplete skipped: q"), "union: %d %s", rc, out);
+  EXPECTF(rc == 0 && strstr(out, "1 incomplete skipped: q") &&
+              strstr(out, "warning: points from different builds: revision 'r9' (p9) and '' (p10)"),
+          "union: %d %s", rc, out);
   char *t = read_all(RTSIM_TMP "/sw_union.csv");
-  EXPECTF(t && !strcmp(t, "point,k,x,y,z\np9,7,1,\"a,b\",\np10,,3,,4\n"), "union table: %s",
-          t ? t : "(missing)");
+  EXPECTF(t && !strcmp(t, "point,k,x,y,z,wall_s,peak_rss_mb,host,revision\n"
+                          "p9,7,1,\"a,b\",,1.5,,\"h\"\"9\",r9\np10,,3,,4,,,,\n"),
+          "union table: %s", t ? t : "(missing)");
+  free(t);
+  rc = run("%s merge %s -o %s.csv --reproducible", RTSIM_BINARY, d, d);
+  t = read_all(RTSIM_TMP "/sw_union.csv");
+  EXPECTF(rc == 0 && t && !strcmp(t, "point,k,x,y,z,revision\np9,7,1,\"a,b\",,r9\np10,,3,,4,\n"),
+          "union table, reproducible: %s", t ? t : "(missing)");
   free(t);
 
   run("rm -rf %s/sw_none && mkdir -p %s/sw_none/a", RTSIM_TMP, RTSIM_TMP);
@@ -604,6 +808,9 @@ int main(void) {
   test_resume();
   test_failing_point();
   test_jobs_elsewhere();
+  test_status();
+  test_moved();
+  test_provenance();
   test_merge_edges();
   test_plot();
   return testing_done("test_sweep");
