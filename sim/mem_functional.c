@@ -21,10 +21,12 @@
 #include "sim/din.h"
 #include "sim/err.h"
 
-/* Lines a batch carries, and batches in the ring: 4 x 16384 lines (144 KiB of
- * records each) keep the two threads a few batches apart, with one handover
- * a batch. */
-#define FN_BATCH_LINES 16384u
+/* Lines a batch carries, and batches in the ring: 4 x 65,536 lines (512 KiB
+ * of records each) keep the two threads a batch or more apart, with one
+ * handover a batch. A handover to a sleeping thread is a system call and a
+ * wake-up, slow on a virtual host, so batches are large: 16,384 lines cost
+ * a few percent more wall time. */
+#define FN_BATCH_LINES 65536u
 #define FN_BATCHES 4u
 /* A thread that finds the ring empty (full) polls it this many times (a few
  * microseconds) before it sleeps: a handover then costs no system call while
@@ -32,10 +34,13 @@
  * work (a sweep runs a process per core). */
 #define FN_SPINS 200
 
+/* A line's record: line << 5 | cls << 2 | op (a line number is below 2^59
+ * with lines of 32 bytes or more). Each batch starts a host cache line, so
+ * the two threads share none but the ones they hand over. */
+#define FN_REC(line, op, cls) ((line) << 5 | (uint64_t)(cls) << 2 | (uint64_t)(op))
 struct fn_batch {
-  uint32_t n;
-  uint64_t line[FN_BATCH_LINES];
-  uint8_t opcls[FN_BATCH_LINES]; /* op | cls << 2 */
+  _Alignas(64) uint32_t n;
+  uint64_t rec[FN_BATCH_LINES];
 };
 
 /* The ring between the caller (producer) and the analyser thread (consumer).
@@ -49,9 +54,13 @@ struct fn_pipe {
   pthread_t thread;
   pthread_mutex_t mu;
   pthread_cond_t filled, emptied;
-  _Atomic uint64_t head, tail;
-  _Atomic bool stop, consumer_sleeps, producer_sleeps;
   struct lru_stack *ls; /* borrowed from the backend */
+  _Atomic bool stop;
+  /* Each thread's own writes on a host cache line of their own. */
+  _Alignas(64) _Atomic uint64_t head;
+  _Atomic bool producer_sleeps;
+  _Alignas(64) _Atomic uint64_t tail;
+  _Atomic bool consumer_sleeps;
   struct fn_batch b[FN_BATCHES];
 };
 
@@ -69,7 +78,8 @@ struct mem_functional {
   uint64_t repeats[MEM_CLASS_MAX][2];
   struct mem_functional_stats st;
   struct fn_pipe *pipe; /* NULL: the analyser runs on the caller's thread */
-  struct fn_batch *fill; /* with a pipe: the batch being filled */
+  uint64_t *fill;       /* with a pipe: the records of the batch being filled */
+  uint32_t fill_n;      /* and how many it holds */
 };
 
 #define FN_NO_CLASS MEM_CLASS_MAX
@@ -125,8 +135,10 @@ static void *analyser_main(void *arg) {
   struct fn_pipe *q = arg;
   for (uint64_t tail = 0; wait_filled(q, tail);) {
     const struct fn_batch *bt = &q->b[tail % FN_BATCHES];
-    for (uint32_t i = 0; i < bt->n; i++)
-      lru_stack_access(q->ls, bt->line[i], (enum lru_stack_op)(bt->opcls[i] & 3u), bt->opcls[i] >> 2);
+    for (uint32_t i = 0, n = bt->n; i < n; i++) {
+      const uint64_t r = bt->rec[i];
+      lru_stack_access(q->ls, r >> 5, (enum lru_stack_op)(r & 3u), (unsigned)(r >> 2) & 7u);
+    }
     atomic_store(&q->tail, ++tail);
     poke(q, &q->producer_sleeps, &q->emptied);
   }
@@ -137,13 +149,14 @@ static void *analyser_main(void *arg) {
  * waiting while the ring is full. */
 static void pipe_publish(struct mem_functional *b) {
   struct fn_pipe *q = b->pipe;
-  if (b->fill->n == 0) return;
+  if (b->fill_n == 0) return;
   const uint64_t head = atomic_load_explicit(&q->head, memory_order_relaxed) + 1;
+  q->b[(head - 1) % FN_BATCHES].n = b->fill_n;
   atomic_store(&q->head, head);
   poke(q, &q->consumer_sleeps, &q->filled);
   wait_emptied(q, head, FN_BATCHES);
-  b->fill = &q->b[head % FN_BATCHES];
-  b->fill->n = 0;
+  b->fill = q->b[head % FN_BATCHES].rec;
+  b->fill_n = 0;
 }
 
 /* Every line published so far analysed: the analyser is the caller's to read. */
@@ -157,10 +170,8 @@ static void analyse(struct mem_functional *b, uint64_t line, enum lru_stack_op o
     lru_stack_access(b->ls, line, op, cls);
     return;
   }
-  struct fn_batch *bt = b->fill;
-  bt->line[bt->n] = line;
-  bt->opcls[bt->n] = (uint8_t)(op | cls << 2);
-  if (++bt->n == FN_BATCH_LINES) pipe_publish(b);
+  b->fill[b->fill_n] = FN_REC(line, op, cls);
+  if (++b->fill_n == FN_BATCH_LINES) pipe_publish(b);
 }
 
 /* Feed every line of [addr, addr + size) to the analyser (and the trace). A
@@ -242,7 +253,7 @@ struct mem_functional *mem_functional_create(const struct lru_stack_params *p,
   b->din = din;
   b->lg2_line = p->lg2_line;
   b->last_cls = FN_NO_CLASS;
-  if (analyser_thread) {
+  if (analyser_thread && p->lg2_line >= 5) { /* (records need lines of 32 bytes or more) */
     struct fn_pipe *q = xcalloc(1, sizeof *q);
     q->ls = b->ls;
     CHECK(pthread_mutex_init(&q->mu, NULL) == 0);
@@ -251,7 +262,7 @@ struct mem_functional *mem_functional_create(const struct lru_stack_params *p,
     if (pthread_create(&q->thread, NULL, analyser_main, q) != 0)
       err_check_failed(__FILE__, __LINE__, "pthread_create of the analyser thread");
     b->pipe = q;
-    b->fill = &q->b[0];
+    b->fill = q->b[0].rec;
   }
   return b;
 }

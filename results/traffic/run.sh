@@ -17,6 +17,10 @@ DIV=${2:-1}
 JOBS=${3:-$(nproc)}
 POLICY=${POLICY:-}
 mkdir -p "$OUT"
+# A run per core already keeps every core busy: the analyser's own thread
+# (rtsim traffic --threads 2) would only add host CPU time then.
+THREADS=1
+[ "$JOBS" = 1 ] && THREADS=2
 # Longest jobs first (diffuse, room before grove), so no core idles at the end.
 for c in diffuse specular shadow primary; do
   for s in room grove sphereflake; do
@@ -24,8 +28,8 @@ for c in diffuse specular shadow primary; do
     [ "$c" = diffuse ] && size=512
     echo "$s $c $((size / DIV))"
   done
-done | RTSIM="$RTSIM" SCENES="$SCENES" POLICY="$POLICY" xargs -P "$JOBS" -L 1 sh -c \
-  '"$RTSIM" traffic "$SCENES/$0.yaml" --rays "$1" --width "$2" --height "$2" ${POLICY:+--policy "$POLICY"} -o "'"$OUT"'/$0-$1.csv" > /dev/null && echo "done: $0 $1 at $2x$2" >&2'
+done | RTSIM="$RTSIM" SCENES="$SCENES" POLICY="$POLICY" THREADS="$THREADS" xargs -P "$JOBS" -L 1 sh -c \
+  '"$RTSIM" traffic "$SCENES/$0.yaml" --rays "$1" --width "$2" --height "$2" ${POLICY:+--policy "$POLICY"} --threads "$THREADS" -o "'"$OUT"'/$0-$1.csv" > /dev/null && echo "done: $0 $1 at $2x$2" >&2'
 first=1
 for s in room grove sphereflake; do
   for c in primary shadow specular diffuse; do
