@@ -182,6 +182,7 @@ int cmd_traffic(int argc, char **argv) {
   unsigned nrows = 0, done = 0, runs = (want[POLICY_RECURSIVE] ? 1 : 0) + (want[POLICY_PACKET] ? 1 : 0) +
                                       (want[POLICY_DYNAMIC] ? nsizes : 0) + (want[POLICY_TREELET] ? nsizes : 0);
   struct fn_run fr;
+  const double t0 = app_now();
   for (int p = 0; p < POLICY_COUNT; p++) {
     if (!want[p]) continue;
     if (!policy_queues((enum policy_kind)p)) {
@@ -209,6 +210,7 @@ int cmd_traffic(int argc, char **argv) {
     }
   }
   progress_line("done", runs, runs);
+  const double runs_s = app_now() - t0;
 
   struct err e = {0};
   struct outfile o;
@@ -270,6 +272,7 @@ int cmd_traffic(int argc, char **argv) {
            pp.dyn_batch_rays ? " primary rays at a time" : " (all primary rays at once)");
     printf("dyn_ray_buffer_bytes: %llu\n", (unsigned long long)dyn_ray_buffer);
   }
+  printf("runs_s: %.3f (wall seconds of the runs, without loading the scene)\n", runs_s);
   printf("output: %s\n", out);
   free(rows);
   app_world_fini(&w);
