@@ -45,24 +45,32 @@ static double *row(struct timeline *tl, uint64_t w) {
     tl->cap = cap;
   }
   if (w >= tl->rows) tl->rows = w + 1;
-  return tl->v + w * C;
+  tl->hot = tl->v + w * C;
+  tl->lo = w * tl->window;
+  tl->hi = tl->lo + tl->window;
+  return tl->hot;
+}
+
+/* The row of cycle t. */
+static inline double *row_at(struct timeline *tl, uint64_t t) {
+  return t >= tl->lo && t < tl->hi ? tl->hot : row(tl, t / tl->window);
 }
 
 void timeline_point(struct timeline *tl, unsigned col, uint64_t t, double amount) {
   CHECK_LT(col, tl->cols);
-  row(tl, t / tl->window)[col] += amount;
+  row_at(tl, t)[col] += amount;
 }
 
 void timeline_span(struct timeline *tl, unsigned col, uint64_t a, uint64_t b, double per_cycle) {
   CHECK_LT(col, tl->cols);
   if (b <= a) return;
   /* The row of the span's last window first: any coarsening happens now. */
-  row(tl, (b - 1) / tl->window);
-  const uint64_t win = tl->window;
+  if (!(b - 1 >= tl->lo && b - 1 < tl->hi)) row(tl, (b - 1) / tl->window);
   for (uint64_t x = a; x < b;) {
-    uint64_t end = (x / win + 1) * win;
+    double *r = row_at(tl, x);
+    uint64_t end = tl->hi; /* row_at leaves x's window hot */
     if (end > b) end = b;
-    row(tl, x / win)[col] += per_cycle * (double)(end - x);
+    r[col] += per_cycle * (double)(end - x);
     x = end;
   }
 }

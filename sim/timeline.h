@@ -14,6 +14,10 @@ struct timeline {
   double *v; /* rows x cols, row-major */
   uint64_t rows, cap, window;
   unsigned cols;
+  /* The row last reached and the cycles [lo, hi) it counts: most adds fall
+   * there, and find it without a division. */
+  double *hot;
+  uint64_t lo, hi;
 };
 
 /* window_cycles >= 1; cols >= 1. Nothing is allocated until the first add. */
