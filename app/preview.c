@@ -68,6 +68,8 @@ bool preview_write_heat_png(const struct image *im, const char *channel, const c
   for (uint64_t i = 0; i < n; i++)
     if (im->planes[ch][i] > max) max = im->planes[ch][i];
   if (!(top > 0)) top = max > 0 ? max : 1;
+  char clip[64] = "";
+  if (max > top) snprintf(clip, sizeof clip, " (top colour: %.6g or more)", top);
   /* The title's two lines inside gnuplot's double quotes: no quote or
    * backslash of a scene name may end them. */
   char t1[256], t2[256];
@@ -90,14 +92,14 @@ bool preview_write_heat_png(const struct image *im, const char *channel, const c
      * most colour-blind readers. */
     fprintf(gp,
             "set terminal pngcairo size %u,%u noenhanced font ',11'\nset output '%s'\n"
-            "set title \"%s\\n%s; largest pixel %.6g\"\nset size ratio -1\nunset key\nunset xtics\nunset ytics\n"
+            "set title \"%s\\n%s; largest pixel %.6g%s\"\nset size ratio -1\nunset key\nunset xtics\nunset ytics\n"
             "set border 0\nset xrange [-0.5:%u-0.5]\nset yrange [-0.5:%u-0.5]\n"
             "set cbrange [0:%.17g]\nset cblabel '%s'\nset cbtics format '%s'\n"
             "set palette defined (0 '#440154', 1 '#3b528b', 2 '#21908d', 3 '#5dc963', "
             "4 '#fde725')\n"
             "plot '%s' binary array=(%u,%u) flipy format='%%float' using ($1 > %.17g ? %.17g : $1) "
             "with image\n",
-            im->width * scale + 260, im->height * scale + 90, out.tmp, t1, t2, max, im->width,
+            im->width * scale + 260, im->height * scale + 90, out.tmp, t1, t2, max, clip, im->width,
             im->height, top, units, top >= 1e4 ? "%.1s%c" : "%g", raw.tmp, im->width, im->height, top, top);
     if (pclose(gp) != 0)
       ok = err_set(e, png, 0, 0, "gnuplot could not draw the heat map (is gnuplot-nox installed?)");
