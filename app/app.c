@@ -99,6 +99,7 @@ void app_render_fini(struct app_render *r) { fb_fini(&r->fb); }
 /* ---- one render on the timed machine (struct app_timed), for run and bench ---- */
 
 struct timed_ctx {
+  struct machine *m;
   struct policy_job *job;
   struct policy_worker *workers;
   uint64_t done, total; /* as the policy reports them (work items, or rays for dynamic) */
@@ -112,6 +113,12 @@ static void run_worker(void *arg, const struct machine_worker_info *info, struct
   if (!w->parked) policy_worker_init(w, r->job, info->id, info->core, info->thread, port);
   if (policy_job_work(r->job, w)) return;
   policy_worker_fini(r->job, w);
+}
+
+/* The policy's word on whom a worker's accesses are for, to its ray context
+ * (worker ids are the machine's context ids). */
+static void timed_attribute(void *ctx, uint32_t worker, const uint32_t *pixels, uint32_t n) {
+  machine_attribute(((struct timed_ctx *)ctx)->m, worker, pixels, n);
 }
 
 static void work_progress(void *ctx, uint64_t done, uint64_t total) {
@@ -133,7 +140,8 @@ static void cycle_progress(void *ctx, uint64_t cycle) {
 
 void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask, uint64_t seed,
                    uint32_t width, uint32_t height, enum policy_kind k,
-                   const struct machine_params *mp, bool progress, FILE *dram_trace) {
+                   const struct machine_params *mp, bool progress, FILE *dram_trace,
+                   bool costs) {
   app_render_init(&t->ar, w, mask, seed, width, height);
   t->ar.setup.layout.node_cycles = mp->cost_node_cycles;
   t->ar.setup.layout.tri_cycles = mp->cost_triangle_cycles;
@@ -151,9 +159,17 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
     t->ar.setup.item_done = sample_item_done;
     t->ar.setup.item_ctx = &t->sample;
   }
+  /* Per-pixel costs: whole runs only (a sampled run times a share of the
+   * work; its other items go through ports that count nothing per pixel). */
+  t->costs = costs && !t->sampled;
+  if (t->costs) {
+    t->ar.setup.attribute = timed_attribute;
+    t->ar.setup.attribute_ctx = &r;
+  }
   r.job = policy_job_create(k, &t->ar.setup, &pp, n, mp->cores);
   r.workers = xcalloc(n, sizeof *r.workers);
-  t->m = machine_create(mp, 0);
+  t->m = r.m = machine_create(mp, 0);
+  if (t->costs) machine_costs_enable(t->m, (uint64_t)width * height, TRACE_CLASS_COUNT);
   if (t->sampled) {
     char why[512];
     CHECK(sample_problem(mp, k, policy_job_total(r.job), n, why, sizeof why) == NULL);

@@ -105,16 +105,19 @@ struct app_timed {
   struct machine *m;
   struct sampler sample; /* mp->sample_fraction < 1 (sampled): the plan and probes */
   bool sampled;
+  bool costs; /* per-pixel costs counted (machine_get_costs) */
   struct render_stats st;
   struct trace_stats ts;
   double wall_s;
 };
 /* Render a width x height image of w with policy k on machine mp (which must
  * pass machine_params_problem), one worker per ray context; costs come from
- * mp. progress: a progress line on stderr. */
+ * mp. progress: a progress line on stderr. costs: count what every pixel
+ * cost the machine (machine_get_costs; a whole run only, not a sampled one). */
 void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask, uint64_t seed,
                    uint32_t width, uint32_t height, enum policy_kind k,
-                   const struct machine_params *mp, bool progress, FILE *dram_trace);
+                   const struct machine_params *mp, bool progress, FILE *dram_trace,
+                   bool costs);
 void app_timed_fini(struct app_timed *t);
 /* The work items a render of policy k at width x height takes (sampling's
  * population: pixels, or tiles for packet). */

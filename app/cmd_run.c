@@ -21,6 +21,7 @@
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
 #include "sim/outfile.h"
+#include "sim/scalar.h"
 
 static const char HELP[] =
     "usage: rtsim run MACHINE.yaml SCENE.yaml -o OUTDIR [options]\n"
@@ -42,6 +43,11 @@ static const char HELP[] =
     "  timeline.csv  one row per timeline.window cycles: DRAM bytes by class, L2\n"
     "                accesses and misses, issued operations, busy threads\n"
     "  traffic.png   DRAM bytes per cycle over the run by data class (gnuplot)\n"
+    "At the timed rungs, a whole run (not sampled) also writes per-pixel costs in\n"
+    "image.exr, each summing over the pixels to the run's total (README: Cost in\n"
+    "the picture): cost.issue_slots, cost.load_wait_cycles,\n"
+    "cost.dram_read_bytes.<class> (geometry, node, ray, queue, other),\n"
+    "cost.dram_write_bytes.\n"
     "Progress on stderr when it is a terminal.\n"
     "\n"
     "options:\n"
@@ -61,7 +67,26 @@ static const char HELP[] =
     "                      arrival in DRAM cycles, arrival and completion in core\n"
     "                      cycles), in arrival order; README: DRAM traces (not at\n"
     "                      fidelity analytic: it makes no requests)\n"
+    "  --cost-preview PNG  also write a heat map of one cost channel (colour bar in\n"
+    "                      its units)\n"
+    "  --cost-channel C    the channel --cost-preview draws (default\n"
+    "                      cost.issue_slots)\n"
+    "  --cost-max X        the colour bar's top (default: the largest pixel), to\n"
+    "                      compare maps of several runs on one scale\n"
     "  -h, --help          this text\n";
+
+static bool parse_cost_max(const char *text, void *dst) {
+  double v;
+  if (scalar_f64(text, &v) != SCALAR_OK || !(v > 0) || v > 1e300) return false;
+  *(double *)dst = v;
+  return true;
+}
+
+static bool parse_cost_channel(const char *text, void *dst) {
+  if (!run_output_is_cost_channel(text)) return false;
+  *(const char **)dst = text;
+  return true;
+}
 
 int cmd_run(int argc, char **argv) {
   const char *out = NULL;
@@ -69,7 +94,8 @@ int cmd_run(int argc, char **argv) {
   uint64_t width = 0, height = 0, seed = 0;
   bool have_seed = false;
   enum policy_kind policy = POLICY_RECURSIVE;
-  const char *trace_path = NULL;
+  const char *trace_path = NULL, *cost_preview = NULL, *cost_channel = "cost.issue_slots";
+  double cost_max = 0;
   struct outfile trace = {0};
   struct outdir od = {0};
   struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v), 0}; /* at most one an argument */
@@ -78,6 +104,11 @@ int cmd_run(int argc, char **argv) {
       APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy),
       OPTS_PARSE("set", 0, &sets, app_sets_add, "KEY=VALUE"),
       OPTS_STR("dram-trace", 0, &trace_path),
+      OPTS_STR("cost-preview", 0, &cost_preview),
+      OPTS_PARSE("cost-channel", 0, &cost_channel, parse_cost_channel,
+                 "one of: cost.issue_slots, cost.load_wait_cycles, cost.dram_read_bytes.geometry, "
+                 ".node, .ray, .queue, .other, cost.dram_write_bytes"),
+      OPTS_PARSE("cost-max", 0, &cost_max, parse_cost_max, "a number above 0"),
       OPTS_END};
   struct opts_args args;
   int rc = opts_parse("run", HELP, spec, argc, argv, &args);
@@ -98,6 +129,11 @@ int cmd_run(int argc, char **argv) {
   memset(&e, 0, sizeof e);
   if (!app_machine_load(&mc, machine_path, &sets, &e)) {
     app_report(&e);
+    goto done;
+  }
+  if (cost_preview && (mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC || mc.p.sample_fraction < 1)) {
+    app_usage_error("run", "--cost-preview: per-pixel costs are counted by whole timed runs only "
+                    "(not at fidelity analytic, not with sample.fraction below 1)");
     goto done;
   }
   if (trace_path && mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC) {
@@ -160,7 +196,7 @@ int cmd_run(int argc, char **argv) {
     app_analytic_run(&a, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p);
   else
     app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, isatty(2),
-                  trace.f);
+                  trace.f, true);
   struct run_output_report rep = {
       .out_dir = od.write,
       .machine_path = machine_path,
@@ -180,6 +216,10 @@ int cmd_run(int argc, char **argv) {
       .rstats = analytic ? &a.st : &t.st,
       .tstats = analytic ? &a.ts : &t.ts,
       .fb = analytic ? &a.ar.fb : &t.ar.fb,
+      .costs = !analytic && t.costs ? machine_get_costs(t.m) : NULL,
+      .cost_preview = cost_preview,
+      .cost_channel = cost_channel,
+      .cost_max = cost_max,
       .wall_s = analytic ? a.wall_s : t.wall_s,
   };
   /* The trace first: stats.json, written last, marks the directory complete. */

@@ -57,3 +57,55 @@ bool preview_write_png(const struct image *im, const char *png, struct err *e) {
   outfile_abort(&raw);
   return ok;
 }
+
+bool preview_write_heat_png(const struct image *im, const char *channel, const char *title,
+                            const char *subtitle, const char *units, double top, const char *png,
+                            struct err *e) {
+  const int ch = image_channel(im, channel);
+  CHECK_GE(ch, 0);
+  const uint64_t n = (uint64_t)im->width * im->height;
+  double max = 0;
+  for (uint64_t i = 0; i < n; i++)
+    if (im->planes[ch][i] > max) max = im->planes[ch][i];
+  if (!(top > 0)) top = max > 0 ? max : 1;
+  char clip[64] = "";
+  if (max > top) snprintf(clip, sizeof clip, " (top colour: %.6g or more)", top);
+  /* The title's two lines inside gnuplot's double quotes: no quote or
+   * backslash of a scene name may end them. */
+  char t1[256], t2[256];
+  snprintf(t1, sizeof t1, "%s", title);
+  snprintf(t2, sizeof t2, "%s", subtitle);
+  for (char *q = t1; *q; q++) if (*q == '"' || *q == '\\') *q = '\'';
+  for (char *q = t2; *q; q++) if (*q == '"' || *q == '\\') *q = '\'';
+  struct outfile raw, out = {0};
+  if (!outfile_open(&raw, png, "the heat map", e)) return false;
+  bool ok = fwrite(im->planes[ch], sizeof(float), n, raw.f) == n && fflush(raw.f) == 0;
+  if (!ok) err_set(e, png, 0, 0, "cannot write the heat map's temporary file");
+  ok = ok && outfile_open_named(&out, png, "the heat map", e);
+  FILE *gp = ok ? popen("gnuplot >/dev/null 2>&1", "w") : NULL;
+  if (ok && !gp) ok = err_set(e, png, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
+  if (ok) {
+    /* Small images are drawn enlarged (whole pixels), beside the colour bar. */
+    const uint32_t big = im->width > im->height ? im->width : im->height;
+    const uint32_t scale = big >= 512 ? 1 : 512 / big;
+    /* Viridis (matplotlib's): perceptually even, readable in grey and by
+     * most colour-blind readers. */
+    fprintf(gp,
+            "set terminal pngcairo size %u,%u noenhanced font ',11'\nset output '%s'\n"
+            "set title \"%s\\n%s; largest pixel %.6g%s\"\nset size ratio -1\nunset key\nunset xtics\nunset ytics\n"
+            "set border 0\nset xrange [-0.5:%u-0.5]\nset yrange [-0.5:%u-0.5]\n"
+            "set cbrange [0:%.17g]\nset cblabel '%s'\nset cbtics format '%s'\n"
+            "set palette defined (0 '#440154', 1 '#3b528b', 2 '#21908d', 3 '#5dc963', "
+            "4 '#fde725')\n"
+            "plot '%s' binary array=(%u,%u) flipy format='%%float' using ($1 > %.17g ? %.17g : $1) "
+            "with image\n",
+            im->width * scale + 260, im->height * scale + 90, out.tmp, t1, t2, max, clip, im->width,
+            im->height, top, units, top >= 1e4 ? "%.1s%c" : "%g", raw.tmp, im->width, im->height, top, top);
+    if (pclose(gp) != 0)
+      ok = err_set(e, png, 0, 0, "gnuplot could not draw the heat map (is gnuplot-nox installed?)");
+  }
+  ok = ok && outfile_commit(&out, e);
+  outfile_abort(&out);
+  outfile_abort(&raw);
+  return ok;
+}

@@ -13,4 +13,13 @@ struct image;
  * returns false. */
 bool preview_write_png(const struct image *im, const char *png, struct err *e);
 
+/* Write a heat map PNG of im's channel `channel` (which must exist) through
+ * gnuplot: a linear colour scale from 0 to top (0: the channel's largest
+ * value) with a colour bar labelled `units`, under a title of two lines
+ * (the second followed by the largest pixel's value); pixels above top take
+ * the top colour. Written whole or not at all. On failure fills e. */
+bool preview_write_heat_png(const struct image *im, const char *channel, const char *title,
+                            const char *subtitle, const char *units, double top, const char *png,
+                            struct err *e);
+
 #endif

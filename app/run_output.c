@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "app/app.h"
+#include "app/preview.h"
 #include "app/sample.h"
 #include "renderer/framebuffer.h"
 #include "renderer/image.h"
@@ -28,6 +29,51 @@ const char *const run_output_files[] = {"image.exr", "stats.csv", "timeline.csv"
                                         "traffic.png", "stats.json", NULL};
 
 static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
+
+/* ---- the image and its cost channels ---- */
+
+/* Issue slots, load wait, DRAM bytes read by class (trace_class_names'
+ * order), DRAM bytes written back. */
+const char *const run_output_cost_channels[] = {
+    "cost.issue_slots",          "cost.load_wait_cycles",     "cost.dram_read_bytes.geometry",
+    "cost.dram_read_bytes.node", "cost.dram_read_bytes.ray",  "cost.dram_read_bytes.queue",
+    "cost.dram_read_bytes.other", "cost.dram_write_bytes",    NULL};
+#define COST_CHANNELS 8
+_Static_assert(TRACE_CLASS_COUNT == 5, "a cost channel for each data class");
+
+bool run_output_is_cost_channel(const char *name) {
+  for (int i = 0; run_output_cost_channels[i]; i++)
+    if (!strcmp(name, run_output_cost_channels[i])) return true;
+  return false;
+}
+
+void run_output_image(const struct run_output_report *r, struct image *im) {
+  struct image fb;
+  fb_to_image(r->fb, &fb);
+  if (!r->costs) {
+    *im = fb;
+    return;
+  }
+  const char *names[IMAGE_MAX_CHANNELS];
+  uint32_t n = fb.channel_count;
+  for (uint32_t c = 0; c < n; c++) names[c] = fb.names[c];
+  for (int c = 0; c < COST_CHANNELS; c++) names[n + c] = run_output_cost_channels[c];
+  image_init(im, fb.width, fb.height, n + COST_CHANNELS, names);
+  const uint64_t px = (uint64_t)fb.width * fb.height;
+  for (uint32_t c = 0; c < n; c++) memcpy(im->planes[c], fb.planes[c], px * sizeof(float));
+  image_fini(&fb);
+  const struct machine_costs *k = r->costs;
+  CHECK_EQ(k->items, px);
+  CHECK_EQ(k->classes, TRACE_CLASS_COUNT);
+  /* NOTE: 32-bit floats, like cost.nodes: exact integers up to 2^24 a pixel. */
+  for (uint64_t i = 0; i < px; i++) {
+    im->planes[n][i] = (float)k->issue_slots[i];
+    im->planes[n + 1][i] = (float)k->load_wait_cycles[i];
+    for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++)
+      im->planes[n + 2 + c][i] = (float)((uint64_t)k->read_lines[c][i] * 64);
+    im->planes[n + 7][i] = (float)((uint64_t)k->write_lines[i] * 64);
+  }
+}
 
 /* The workload's identity (first columns) and the resolved config. */
 static void identity(const struct run_output_report *r, struct stats_table *t) {
@@ -321,6 +367,9 @@ static bool write_json(const struct run_output_report *r, struct err *e) {
   stats_fini(&t);
   if (r->machine && !r->sample) { /* a whole timed run: its timeline and latency histograms */
     const struct machine_stats *s = machine_get_stats(r->machine);
+    /* The exact total the cost.load_wait_cycles channel sums to (the mean
+     * above is rounded). */
+    fprintf(f, ",\n  \"load_latency_cycles_sum\": %llu", (unsigned long long)s->load_latency.sum);
     fprintf(f, ",\n  \"timeline_window_cycles\": %llu",
             (unsigned long long)machine_timeline(r->machine)->window);
     fputs(",\n  \"load_latency_histogram_cycles\": ", f);
@@ -348,8 +397,20 @@ bool run_output_write(const struct run_output_report *r, struct err *e) {
   char path[4200];
   snprintf(path, sizeof path, "%s/image.exr", r->out_dir);
   struct image im;
-  fb_to_image(r->fb, &im);
+  run_output_image(r, &im);
   bool ok = image_write_exr(&im, path, false, e);
+  if (ok && r->cost_preview && r->costs) {
+    char title[128], sub[256], units[64];
+    snprintf(title, sizeof title, "%s per pixel", r->cost_channel);
+    snprintf(sub, sizeof sub, "%s, %s policy, %ux%u", r->scene_name, r->policy, r->width,
+             r->height);
+    const char *u = strstr(r->cost_channel, "bytes") ? "bytes"
+                    : strstr(r->cost_channel, "slots") ? "issue slots (core cycles)"
+                                                       : "cycles";
+    snprintf(units, sizeof units, "%s a pixel", u);
+    ok = preview_write_heat_png(&im, r->cost_channel, title, sub, units, r->cost_max,
+                                r->cost_preview, e);
+  }
   image_fini(&im);
   /* stats.json last: it marks the directory complete. */
   ok = ok && write_csv(r, e);

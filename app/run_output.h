@@ -18,6 +18,8 @@ struct render_stats;
 struct trace_stats;
 struct framebuffer;
 struct app_analytic;
+struct machine_costs;
+struct image;
 
 struct run_output_report {
   const char *out_dir, *machine_path, *scene_path, *scene_name, *policy;
@@ -32,8 +34,20 @@ struct run_output_report {
   const struct render_stats *rstats;
   const struct trace_stats *tstats;
   const struct framebuffer *fb;
+  const struct machine_costs *costs; /* per-pixel costs (NULL: not counted) */
+  const char *cost_preview;          /* a heat map PNG of cost_channel (NULL: none) */
+  const char *cost_channel;
+  double cost_max;                   /* the colour scale's top (0: the largest value) */
   double wall_s;
 };
+
+/* The cost channels image.exr carries when the run counted them (README
+ * "Cost in the picture"), NULL-terminated; and whether name is one. */
+extern const char *const run_output_cost_channels[];
+bool run_output_is_cost_channel(const char *name);
+/* The image rtsim run writes: the framebuffer's channels, then r->costs'
+ * (im initialised here). */
+void run_output_image(const struct run_output_report *r, struct image *im);
 
 /* The names run_output_write writes or removes in out_dir, NULL-terminated
  * (app/outdir.h: what a signal removes, what a rerun does not carry over). */

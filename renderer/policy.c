@@ -144,6 +144,9 @@ void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_
   memset(w, 0, sizeof *w);
   trace_init(&w->tr, s->scene, s->kd, port, &s->layout);
   w->tr.tested = s->tested;
+  w->tr.attribute = s->attribute;
+  w->tr.attribute_ctx = s->attribute_ctx;
+  w->tr.worker = id;
   w->tr.layout.ray_base += (uint64_t)id * job->mod->region_bytes;
   w->id = id;
   w->core = core;

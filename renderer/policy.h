@@ -150,6 +150,16 @@ struct policy_setup {
   enum policy_item (*item)(void *ctx, uint64_t k, uint32_t core, struct mem_port *port);
   void (*item_done)(void *ctx, uint64_t k);
   void *item_ctx;
+  /* Optional (NULL: not told): whom a worker's accesses are for, so that a
+   * backend can charge their cost to pixels (README "Cost in the picture").
+   * Before its accesses for one ray the worker calls it with that ray's
+   * pixel (n = 1); before work shared by several rays (a packet's traversal,
+   * a queue point's table entry and geometry) with their pixels, one a ray
+   * (n > 1; the array stays as it is until the worker's next call, which is
+   * made, with n = 0 if need be, before it returns). Every access of a
+   * render is announced so. */
+  void (*attribute)(void *ctx, uint32_t worker, const uint32_t *pixels, uint32_t n);
+  void *attribute_ctx;
 };
 
 /* One render's shared work list and whatever the policy shares between its

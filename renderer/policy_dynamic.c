@@ -362,6 +362,7 @@ static void trace_subtree_claim(struct dyn_worker *x) {
   struct dyn *d = x->d;
   const uint64_t slot = x->cl.slot[0];
   struct ray r = *qstore_ray(&d->st, slot);
+  trace_attribute(x->tr, &r.pixel, 1);
   mem_load(&x->tr->mem, qstore_slot_addr(&d->st, slot), sizeof r, TRACE_CLASS_RAY);
   process_subtree(x, &r, d->tl_of ? qstore_entry(&d->st, slot) : x->cl.node);
   d->pending--;
@@ -391,6 +392,7 @@ static void trace_leaf_claim(struct dyn_worker *x) {
     }
     struct ray r = *qstore_ray(&d->st, slot);
     uint64_t n0 = tr->stats.node_visits, t0 = tr->stats.tri_tests;
+    trace_attribute(tr, &r.pixel, 1);
     mem_load(mem, qstore_slot_addr(&d->st, slot), sizeof r, TRACE_CLASS_RAY);
     struct qwalk w;
     CHECK(qwalk_init(&d->wt, &w, &r));
@@ -412,8 +414,10 @@ static void trace_leaf_claim(struct dyn_worker *x) {
   }
   /* Store the group back with its best hits (the last pass moved them on). */
   for (uint32_t t = 0; !cl->last && t < cl->n; t++)
-    if (!(qstore_ray(&d->st, cl->slot[t])->flags & DYN_FLAG_DEAD))
+    if (!(qstore_ray(&d->st, cl->slot[t])->flags & DYN_FLAG_DEAD)) {
+      trace_attribute(tr, &qstore_ray(&d->st, cl->slot[t])->pixel, 1);
       mem_store(mem, qstore_slot_addr(&d->st, cl->slot[t]), sizeof(struct ray), TRACE_CLASS_RAY);
+    }
 }
 
 /* Admit the batch's next primary ray: read it, take it to its first queue. */
@@ -424,6 +428,7 @@ static bool admit(struct dyn_worker *x) {
   d->admitting++;
   const uint32_t w = x->job->setup.fb->width;
   struct ray r;
+  trace_attribute(x->tr, &d->order[k], 1);
   policy_primary(x->job, x->wk, d->order[k] % w, d->order[k] / w, &r);
   x->st->spawned++;
   d->spawned++;

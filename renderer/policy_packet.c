@@ -92,6 +92,7 @@ struct pkt_scratch {
   struct trace_hit hits[PACKET_MAX];
   bool occ[PACKET_MAX];
   struct ray spawn[SHADE_MAX_SPAWN];
+  uint32_t pixels[PACKET_MAX]; /* the packet's rays' (trace_attribute) */
 };
 
 static void pkt_create(struct policy_job *job) {
@@ -140,6 +141,8 @@ static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
   pr->n = 0;
   for (uint32_t y = y0; y < y1; y++)
     for (uint32_t xx = x0; xx < x1; xx++) {
+      const uint32_t pix = y * w + xx;
+      trace_attribute(tr, &pix, 1);
       policy_primary(job, wk, xx, y, &pr->r[pr->n]);
       mem_store(mem, buf_addr(base, top, pr->n), sizeof(struct ray), TRACE_CLASS_RAY);
       pr->n++;
@@ -152,19 +155,27 @@ static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
     const uint32_t n = stack[top].n;
     cur->n = n;
     for (uint32_t i = 0; i < n; i++) {
+      trace_attribute(tr, &stack[top].r[i].pixel, 1);
       mem_load(mem, buf_addr(base, top, i), sizeof(struct ray), TRACE_CLASS_RAY);
       cur->r[i] = stack[top].r[i];
+      x->pixels[i] = cur->r[i].pixel;
     }
+    /* The traversal is the packet's: its cost is split among its rays. */
+    trace_attribute(tr, x->pixels, n);
     const uint8_t type = cur->r[0].type;
     st->rays[type] += n;
     st->terminated += n;
     if (type == RAY_SHADOW) {
       trace_packet_any(tr, x->pk, cur->r, n, x->occ, &x->cost);
-      for (uint32_t i = 0; i < n; i++) shade_shadow(&cur->r[i], x->occ[i], fb, mem);
+      for (uint32_t i = 0; i < n; i++) {
+        trace_attribute(tr, &cur->r[i].pixel, 1);
+        shade_shadow(&cur->r[i], x->occ[i], fb, mem);
+      }
     } else {
       trace_packet_closest(tr, x->pk, cur->r, n, x->hits, &x->cost);
       for (uint32_t g = 0; g < GROUP_COUNT; g++) group[g].n = 0;
       for (uint32_t i = 0; i < n; i++) {
+        trace_attribute(tr, &cur->r[i].pixel, 1);
         uint32_t ns = shade_hit(sc, &cur->r[i], &x->hits[i], fb, mem, x->spawn);
         uint64_t used = 0;
         for (uint32_t j = 0; j < ns; j++) {
@@ -181,6 +192,7 @@ static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
         struct packet *dst = &stack[top];
         dst->n = group[g].n;
         for (uint32_t i = 0; i < dst->n; i++) {
+          trace_attribute(tr, &group[g].r[i].pixel, 1);
           mem_store(mem, buf_addr(base, top, i), sizeof(struct ray), TRACE_CLASS_RAY);
           dst->r[i] = group[g].r[i];
         }

@@ -62,6 +62,7 @@ static bool rec_step(struct policy_job *job, struct policy_worker *wk) {
    * into its tracer, whatever runs while it waits). */
   uint64_t nodes0 = tr->stats.node_visits, tris0 = tr->stats.tri_tests;
   uint32_t top = 0;
+  trace_attribute(tr, &pix, 1); /* all its rays are the pixel's */
   policy_primary(job, wk, pix % w, pix / w, &stack[top]);
   mem_store(mem, stack_addr, sizeof(struct ray), TRACE_CLASS_RAY);
   top++;

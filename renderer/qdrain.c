@@ -50,8 +50,34 @@ void qdrain_claim_init(const struct qdrain_set *ds, struct qdrain_claim *cl) {
 
 void qdrain_claim_fini(struct qdrain_claim *cl) {
   free(cl->slot);
+  free(cl->pixels);
   cl->slot = NULL;
+  cl->pixels = NULL;
 }
+
+/* What tr does next (drain dr's table entry, a block of its geometry) is
+ * shared by all the queue's rays: tell it their pixels, kept in cl until the
+ * work is done (qdrain_attribute_end). */
+static void attribute_begin(const struct qdrain_set *ds, const struct qdrain *dr,
+                            struct trace_ctx *tr, struct qdrain_claim *cl) {
+  if (!tr->attribute) return;
+  struct qstore_cur k = dr->first;
+  const uint64_t n = k.left;
+  CHECK_GT(n, 0);
+  CHECK_LE(n, UINT32_MAX);
+  if (n > cl->pixels_cap) {
+    cl->pixels_cap = n;
+    cl->pixels = xrealloc(cl->pixels, n * sizeof *cl->pixels);
+  }
+  for (uint64_t i = 0; i < n; i++) {
+    cl->pixels[i] = qstore_ray(ds->st, qstore_cur_slot(&k))->pixel;
+    if (i + 1 < n) qstore_cur_next(ds->st, &k, false);
+  }
+  trace_attribute(tr, cl->pixels, (uint32_t)n);
+}
+
+/* The shared work is done: its cost is split now (the worker may park next). */
+static void attribute_end(struct trace_ctx *tr) { trace_attribute(tr, NULL, 0); }
 
 /* Load (announce) entries [j0, j1) of a leaf's geometry, as the paper does on
  * opening a queue at a leaf: it will all be tested. */
@@ -140,7 +166,8 @@ static uint32_t fullest_drain(const struct qdrain_set *ds) {
  * left, since a traversal visits a node once), then its table entry is read
  * and written, and at a leaf the first block of geometry is loaded. The
  * core's workers hand out the rays meanwhile. */
-static void take(struct qdrain_set *ds, uint32_t core, struct trace_ctx *tr) {
+static void take(struct qdrain_set *ds, uint32_t core, struct trace_ctx *tr,
+                 struct qdrain_claim *cl) {
   struct qdrain *dr = &ds->drain[core];
   CHECK_EQ(dr->qi, QSTORE_NONE);
   const uint32_t qi = qstore_take(ds->st, &dr->first);
@@ -153,22 +180,27 @@ static void take(struct qdrain_set *ds, uint32_t core, struct trace_ctx *tr) {
   pass_begin(ds, dr, 0);
   ds->open++;
   core_join(ds, core, core);
+  attribute_begin(ds, dr, tr, cl);
   qstore_touch(ds->st, &tr->mem, qi);
   if (kd_is_leaf(nd)) {
     uint32_t j0, j1;
     block_range(ds, nd, 0, &j0, &j1);
     preload_leaf(tr, nd, j0, j1);
   }
+  attribute_end(tr);
 }
 
 /* Every ray of the pass is handed out and done: start the next pass (the next
  * block of an oversized leaf's geometry, loaded at once). */
-static void next_pass(struct qdrain_set *ds, struct qdrain *dr, struct trace_ctx *tr) {
+static void next_pass(struct qdrain_set *ds, struct qdrain *dr, struct trace_ctx *tr,
+                      struct qdrain_claim *cl) {
   pass_begin(ds, dr, dr->block + 1);
   const struct kd_node nd = ds->qs->nodes[dr->node];
   uint32_t j0, j1;
   block_range(ds, nd, dr->block, &j0, &j1);
+  attribute_begin(ds, dr, tr, cl);
   preload_leaf(tr, nd, j0, j1);
+  attribute_end(tr);
 }
 
 /* Drain dr's rays are all handed out (their last pass): let the queue point
@@ -208,7 +240,7 @@ enum qdrain_did qdrain_work(struct qdrain_set *ds, uint32_t core, struct trace_c
   if (dr && dr->k.left == 0) { /* this pass is all handed out */
     if (!pass_last(dr)) {
       if (dr->busy == 0) {
-        next_pass(ds, dr, tr);
+        next_pass(ds, dr, tr, cl);
         return QDRAIN_STARTED;
       }
       /* Its last rays are still being tested: the core that took it waits for
@@ -223,7 +255,7 @@ enum qdrain_did qdrain_work(struct qdrain_set *ds, uint32_t core, struct trace_c
   if (!dr) {
     if (qstore_any_free(ds->st) && ds->drain[core].qi == QSTORE_NONE &&
         (!ds->chip || ds->handout < ds->feed)) {
-      take(ds, core, tr);
+      take(ds, core, tr, cl);
       return QDRAIN_STARTED;
     }
     const uint32_t j = fullest_drain(ds);

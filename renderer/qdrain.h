@@ -78,6 +78,10 @@ struct qdrain_claim {
   bool leaf, last; /* last: the last pass, which lets the rays go on */
   uint32_t n;
   uint64_t *slot;  /* group entries (qdrain_claim_init) */
+  /* The pixels of the rays of a queue point its worker took or started a
+   * pass of (trace_attribute: their shared work), grown as needed. */
+  uint32_t *pixels;
+  uint64_t pixels_cap;
 };
 
 void qdrain_init(struct qdrain_set *ds, struct qstore *st, const struct qpoint_set *qs,

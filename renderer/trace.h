@@ -89,7 +89,18 @@ struct trace_ctx {
   /* Optional bit set, one bit a triangle (set when tested against any ray):
    * the potentially visible geometry. NULL: not tracked. Owned by the caller. */
   uint64_t *tested;
+  /* Optional (NULL: nobody listens): told, with `worker`, whom this tracer's
+   * accesses are for from now on (policy_setup.attribute). */
+  void (*attribute)(void *ctx, uint32_t worker, const uint32_t *pixels, uint32_t n);
+  void *attribute_ctx;
+  uint32_t worker;
 };
+
+/* The accesses through tr from now on are for the rays of pixels[0..n)
+ * (policy_setup.attribute says how long the array must last). */
+static inline void trace_attribute(const struct trace_ctx *tr, const uint32_t *pixels, uint32_t n) {
+  if (tr->attribute) tr->attribute(tr->attribute_ctx, tr->worker, pixels, n);
+}
 
 void trace_init(struct trace_ctx *tr, const struct scene *s, const struct kd_tree *kd,
                 struct mem_port mem, const struct trace_layout *layout);

@@ -20,24 +20,24 @@ struct req {
   uint64_t line;
   void *waiter;      /* NULL: a posted store */
   uint64_t ready_at; /* a merged load: not before this cycle */
+  uint32_t tag;      /* the client's (l2_access) */
   uint8_t op, cls;
+  bool owner;        /* in a pending line's waiters: the access that missed (client.cost) */
   uint32_t next;
 };
 
-/* A FIFO ring of (value, entered) pairs, growing by doubling. */
+/* A FIFO ring of (value, entered, tag) triples, growing by doubling. */
 struct ring {
-  uint64_t (*v)[2];
+  uint64_t (*v)[3];
   uint64_t cap, lo, n;
 };
 
-static void ring_push(struct ring *r, uint64_t value, uint64_t at) {
+static void ring_push(struct ring *r, uint64_t value, uint64_t at, uint64_t tag) {
   if (r->n == r->cap) {
     uint64_t cap = r->cap ? 2 * r->cap : 64;
-    uint64_t(*v)[2] = xmalloc(cap * sizeof *v);
-    for (uint64_t i = 0; i < r->n; i++) {
-      v[i][0] = r->v[(r->lo + i) % r->cap][0];
-      v[i][1] = r->v[(r->lo + i) % r->cap][1];
-    }
+    uint64_t(*v)[3] = xmalloc(cap * sizeof *v);
+    for (uint64_t i = 0; i < r->n; i++)
+      for (int k = 0; k < 3; k++) v[i][k] = r->v[(r->lo + i) % r->cap][k];
     free(r->v);
     r->v = v;
     r->cap = cap;
@@ -45,6 +45,7 @@ static void ring_push(struct ring *r, uint64_t value, uint64_t at) {
   }
   r->v[(r->lo + r->n) % r->cap][0] = value;
   r->v[(r->lo + r->n) % r->cap][1] = at;
+  r->v[(r->lo + r->n) % r->cap][2] = tag;
   r->n++;
 }
 
@@ -109,7 +110,7 @@ static uint64_t tag_read(uint32_t slot) { return (uint64_t)slot << 1; }
 #define TAG_WRITE 1u
 
 static void ev_to_dram(void *ctx, uint64_t slot);
-static void ev_to_write_buffer(void *ctx, uint64_t line);
+static void ev_to_write_buffer(void *ctx, uint64_t r);
 static void ev_held_merge(void *ctx, uint64_t r);
 static void pump(struct l2 *l2);
 
@@ -156,6 +157,7 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
         uint32_t w = req_new(l2);
         l2->reqs[w] = *r;
         l2->reqs[w].ready_at = ready;
+        l2->reqs[w].owner = false;
         l2->reqs[w].next = cache_word(l2->tags, slot);
         cache_set_word(l2->tags, slot, w);
       }
@@ -168,7 +170,11 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
   if (cache_valid(l2->tags, victim) && cache_dirty(l2->tags, victim)) {
     l2->wb_used++;
     l2->st.writeback_bytes += LINE_BYTES;
-    engine_at(l2->eng, ready, ev_to_write_buffer, l2, cache_line(l2->tags, victim));
+    /* The victim's line and the evicting access's tag travel in a request. */
+    uint32_t w = req_new(l2);
+    l2->reqs[w].line = cache_line(l2->tags, victim);
+    l2->reqs[w].tag = r->tag;
+    engine_at(l2->eng, ready, ev_to_write_buffer, l2, w);
   }
   if (r->op == L2_STORE_LINE) {
     /* Nothing of the old line survives: allocate without a fetch. */
@@ -184,10 +190,14 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
   timeline_point(l2->tl, l2->col.misses, start, 1.0);
   cache_set_byte(l2->tags, victim, (uint8_t)r->cls);
   cache_set_word(l2->tags, victim, NONE);
-  if (r->waiter) {
+  /* The access that missed heads the waiters (the oldest): a load's own
+   * request, or for a store, when its DRAM read is to be charged, a record
+   * that waits for nothing. */
+  if (r->waiter || l2->client.cost) {
     uint32_t w = req_new(l2);
     l2->reqs[w] = *r;
     l2->reqs[w].ready_at = ready;
+    l2->reqs[w].owner = true;
     l2->reqs[w].next = NONE;
     cache_set_word(l2->tags, victim, w);
   }
@@ -243,9 +253,10 @@ static void stall_retry(struct l2 *l2, uint64_t t) {
   if (l2->stall_reason >= 0) stall_reason_set(l2, -1, t);
 }
 
-void l2_access(struct l2 *l2, uint64_t line, enum l2_op op, unsigned cls, void *waiter) {
+void l2_access(struct l2 *l2, uint64_t line, enum l2_op op, unsigned cls, void *waiter,
+               uint32_t tag) {
   const uint64_t t = engine_now(l2->eng);
-  struct req r = {line, waiter, 0, (uint8_t)op, (uint8_t)cls, NONE};
+  struct req r = {line, waiter, 0, tag, (uint8_t)op, (uint8_t)cls, false, NONE};
   /* In order: while anything is stalled, later accesses queue behind it. */
   if (l2->stall_head != NONE) {
     stall_push(l2, &r, t);
@@ -277,9 +288,11 @@ static bool try_write(struct l2 *l2, uint64_t t) {
   uint64_t addr = ring_head(&l2->wb)[0] << L2_LG2_LINE;
   if (!dram_can_take(l2->dram, addr, true)) return false;
   qmeter_leave(&l2->st.write_buffer, t, ring_head(&l2->wb)[1]);
+  const uint32_t tag = (uint32_t)ring_head(&l2->wb)[2];
   ring_pop(&l2->wb);
   l2->wb_used--;
   dram_take(l2->dram, addr, true, TAG_WRITE);
+  if (l2->client.cost) l2->client.cost(l2->client.cost_ctx, NULL, tag, 0, true);
   return true;
 }
 
@@ -339,15 +352,16 @@ static void ev_to_dram(void *ctx, uint64_t slot) {
     pump(l2); /* (a place in the write buffer is free) */
     return;
   }
-  ring_push(&l2->miss_q, slot, t);
+  ring_push(&l2->miss_q, slot, t, 0);
   qmeter_enter(&l2->st.miss_queue, t);
   pump(l2);
 }
 
-static void ev_to_write_buffer(void *ctx, uint64_t line) {
+static void ev_to_write_buffer(void *ctx, uint64_t r) {
   struct l2 *l2 = ctx;
   const uint64_t t = engine_now(l2->eng);
-  ring_push(&l2->wb, line, t);
+  ring_push(&l2->wb, l2->reqs[r].line, t, l2->reqs[r].tag);
+  req_release(l2, (uint32_t)r);
   qmeter_enter(&l2->st.write_buffer, t);
   pump(l2);
 }
@@ -381,6 +395,14 @@ static void fill(struct l2 *l2, uint32_t s, uint64_t t, bool from_dram) {
   }
   for (w = prev; w != NONE;) {
     uint32_t n = l2->reqs[w].next;
+    const struct req *q = &l2->reqs[w];
+    if (q->owner && from_dram && l2->client.cost)
+      l2->client.cost(l2->client.cost_ctx, q->waiter, q->tag, cls, false);
+    if (!q->waiter) { /* a store's record: nobody to answer */
+      req_release(l2, w);
+      w = n;
+      continue;
+    }
     if (l2->reqs[w].ready_at > t) {
       /* A merged load is never answered sooner than an L2 hit would be. */
       l2->st.merges_held++;
@@ -412,6 +434,13 @@ struct dram_client l2_dram_client(struct l2 *l2) {
 }
 
 void l2_attach(struct l2 *l2, struct dram *d) { l2->dram = d; }
+
+void l2_set_cost(struct l2 *l2, void *cost_ctx,
+                 void (*cost)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls, bool write)) {
+  CHECK_EQ(l2->st.accesses + l2->st.stalls, 0);
+  l2->client.cost_ctx = cost_ctx;
+  l2->client.cost = cost;
+}
 
 /* ---- life ---- */
 

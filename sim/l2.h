@@ -67,9 +67,17 @@ struct l2_stats {
 };
 
 /* What the L2 tells its client: ready(waiter, line) is scheduled (or called)
- * at the cycle a load's line is answered; waiter is what l2_access was given. */
+ * at the cycle a load's line is answered; waiter is what l2_access was given.
+ * cost (NULL: not wanted) hears every DRAM transfer with the access it is
+ * charged to: a line read for a miss when the DRAM delivers it (write false:
+ * waiter and tag of the access that missed, its class), a write-back when the
+ * DRAM takes it (write true: waiter NULL, the tag of the access whose miss
+ * evicted the dirty line, class 0). Misses served from the write buffer move
+ * nothing and are not told. */
 struct l2_client {
   engine_fn ready;
+  void *cost_ctx;
+  void (*cost)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls, bool write);
 };
 
 /* NULL if usable, else what is wrong (naming the l2.* key). */
@@ -86,10 +94,15 @@ void l2_destroy(struct l2 *l2); /* NULL ok; the DRAM is not the L2's */
 /* The client the DRAM must be created with, and the DRAM to use (not owned). */
 struct dram_client l2_dram_client(struct l2 *l2);
 void l2_attach(struct l2 *l2, struct dram *d);
+/* Set the client's cost hook (struct l2_client) before the first access. */
+void l2_set_cost(struct l2 *l2, void *cost_ctx,
+                 void (*cost)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls, bool write));
 
 /* An access of one line at engine_now. waiter: a load's, handed back to
- * client->ready; NULL for a store (posted: nobody waits). */
-void l2_access(struct l2 *l2, uint64_t line, enum l2_op op, unsigned cls, void *waiter);
+ * client->ready; NULL for a store (posted: nobody waits). tag: the client's
+ * word for whom the access is for, handed back to client->cost. */
+void l2_access(struct l2 *l2, uint64_t line, enum l2_op op, unsigned cls, void *waiter,
+               uint32_t tag);
 
 /* Warm the L2 with one access of a line, no time (sampling's fast-forward):
  * a line it holds (or is fetching) becomes the most recently used, dirty on a

@@ -39,7 +39,24 @@ struct mctx {
   uint64_t slots;     /* issue slots of the current block */
   uint64_t wait_from; /* cycle its waiting load left the core */
   uint32_t next;      /* ready FIFO of its thread */
+  /* Per-item costs (machine_costs_enable): the items it works for, what it
+   * has cost them since (COST_* counters, split when it is told anew), and
+   * the tags of its stores on their way to the L2, in issue order. */
+  const uint32_t *items;
+  uint32_t nitems, item1;
+  uint64_t *acc;
+  struct tagrun *runs;
+  uint32_t runs_cap, runs_lo, runs_n;
 };
+
+/* Stores in a row with one tag. */
+struct tagrun {
+  uint32_t tag, n;
+};
+
+/* A context's cost counters: issue slots, load wait, lines written back,
+ * then lines read by class. */
+enum { COST_SLOTS, COST_WAIT, COST_WRITE, COST_READ0 };
 
 struct mthread {
   uint32_t core;
@@ -83,6 +100,9 @@ struct machine {
   struct mctx *running;      /* the ray inside a block, if any (machine_probe) */
   struct mwarm *warm;        /* one warming port context a core (machine_warm_port) */
   uint64_t warm_slots, count_slots;
+  struct machine_costs costs; /* per item (machine_costs_enable) */
+  uint64_t *cost_acc;         /* every context's counters; NULL: costs not counted */
+  unsigned cost_stride;       /* counters a context */
 };
 
 /* A core's warming port (machine_warm_port). */
@@ -220,6 +240,156 @@ static void ray_ready(struct machine *m, struct mctx *c, uint64_t t) {
   kick(m, th->core);
 }
 
+/* ---- per-item costs ---- */
+
+/* Add v of counter ch to item. NOTE: line counts are 32-bit (half the host
+ * memory): 2^32 lines, 256 GiB of DRAM traffic for one item, is far past any
+ * run that ends. */
+static void cost_put(struct machine *m, uint32_t item, unsigned ch, uint64_t v) {
+  struct machine_costs *k = &m->costs;
+  CHECK_LT(item, k->items);
+  if (ch == COST_SLOTS) {
+    k->issue_slots[item] += v;
+  } else if (ch == COST_WAIT) {
+    k->load_wait_cycles[item] += v;
+  } else {
+    uint32_t *p = ch == COST_WRITE ? &k->write_lines[item] : &k->read_lines[ch - COST_READ0][item];
+    CHECK_LE(v, UINT32_MAX - *p);
+    *p += (uint32_t)v;
+  }
+}
+
+/* Charge what c has cost since it was told whom it works for: each counter
+ * split evenly among its items, the remainder one each to the first. */
+static void cost_flush(struct mctx *c) {
+  struct machine *m = c->m;
+  for (unsigned ch = 0; ch < m->cost_stride; ch++) {
+    const uint64_t v = c->acc[ch];
+    if (!v) continue;
+    c->acc[ch] = 0;
+    CHECK_GT(c->nitems, 0);
+    const uint64_t q = v / c->nitems, r = v % c->nitems;
+    for (uint32_t j = 0; j < c->nitems; j++)
+      if (q + (j < r)) cost_put(m, c->items[j], ch, q + (j < r));
+  }
+}
+
+/* c's own work (slots, waits, its loads' DRAM reads), charged when told anew. */
+static inline void cost_charge(struct mctx *c, unsigned ch, uint64_t v) {
+  if (!c->acc) return;
+  CHECK_GT(c->nitems, 0); /* every access is attributed */
+  c->acc[ch] += v;
+}
+
+/* The tag an access of c carries to the L2: the first item it works for. */
+static uint32_t cost_tag(const struct mctx *c) {
+  if (!c->acc) return 0;
+  CHECK_GT(c->nitems, 0);
+  return c->items[0];
+}
+
+/* A store's tag joins c's FIFO (its L2 access comes later: ev_l2_access). */
+static void cost_store_push(struct mctx *c, uint32_t tag) {
+  if (c->runs_n && c->runs[(c->runs_lo + c->runs_n - 1) % c->runs_cap].tag == tag) {
+    c->runs[(c->runs_lo + c->runs_n - 1) % c->runs_cap].n++;
+    return;
+  }
+  if (c->runs_n == c->runs_cap) {
+    uint32_t cap = c->runs_cap ? 2 * c->runs_cap : 4;
+    struct tagrun *r = xmalloc((uint64_t)cap * sizeof *r);
+    for (uint32_t i = 0; i < c->runs_n; i++) r[i] = c->runs[(c->runs_lo + i) % c->runs_cap];
+    free(c->runs);
+    c->runs = r;
+    c->runs_cap = cap;
+    c->runs_lo = 0;
+  }
+  c->runs[(c->runs_lo + c->runs_n++) % c->runs_cap] = (struct tagrun){tag, 1};
+}
+
+/* NOTE: a context's L2 accesses leave in issue order (its clock never goes
+ * back, and events of one cycle keep their order), so a FIFO finds each
+ * store's tag. */
+static uint32_t cost_store_pop(struct mctx *c) {
+  CHECK_GT(c->runs_n, 0);
+  struct tagrun *h = &c->runs[c->runs_lo];
+  const uint32_t tag = h->tag;
+  if (--h->n == 0) {
+    c->runs_lo = (c->runs_lo + 1) % c->runs_cap;
+    c->runs_n--;
+  }
+  return tag;
+}
+
+/* The L2's cost hook (struct l2_client): a line read for a miss or written
+ * back. A load's read waits with its context, which still works for the
+ * items it loaded for. */
+static void l2_cost(void *ctx, void *waiter, uint32_t tag, unsigned cls, bool write) {
+  struct machine *m = ctx;
+  if (write) {
+    cost_put(m, tag, COST_WRITE, 1);
+    return;
+  }
+  CHECK_LT(cls, m->costs.classes);
+  if (waiter) cost_charge(waiter, COST_READ0 + cls, 1);
+  else cost_put(m, tag, COST_READ0 + cls, 1);
+}
+
+void machine_costs_enable(struct machine *m, uint64_t items, unsigned classes) {
+  CHECK(!m->ran);
+  CHECK(!m->cost_acc);
+  CHECK_LT(classes, MEM_CLASS_MAX + 1);
+  CHECK_LE(items, (uint64_t)UINT32_MAX + 1);
+  struct machine_costs *k = &m->costs;
+  k->items = items;
+  k->classes = classes;
+  k->issue_slots = xcalloc(items + 1, sizeof *k->issue_slots);
+  k->load_wait_cycles = xcalloc(items + 1, sizeof *k->load_wait_cycles);
+  for (unsigned c = 0; c < classes; c++) k->read_lines[c] = xcalloc(items + 1, sizeof *k->read_lines[c]);
+  k->write_lines = xcalloc(items + 1, sizeof *k->write_lines);
+  m->cost_stride = COST_READ0 + classes;
+  m->cost_acc = xcalloc((uint64_t)m->nctx * m->cost_stride, sizeof *m->cost_acc);
+  for (uint32_t i = 0; i < m->nctx; i++) m->ctx[i].acc = m->cost_acc + (uint64_t)i * m->cost_stride;
+  l2_set_cost(m->l2, m, l2_cost);
+}
+
+void machine_attribute(struct machine *m, uint32_t ctx, const uint32_t *items, uint32_t n) {
+  if (!m->cost_acc) return;
+  CHECK_LT(ctx, m->nctx);
+  struct mctx *c = &m->ctx[ctx];
+  CHECK(m->running == c);
+  cost_flush(c);
+  for (uint32_t j = 0; j < n; j++) CHECK_LT(items[j], m->costs.items);
+  c->item1 = n ? items[0] : 0;
+  c->items = n == 1 ? &c->item1 : items;
+  c->nitems = n;
+}
+
+const struct machine_costs *machine_get_costs(const struct machine *m) {
+  return m->cost_acc ? &m->costs : NULL;
+}
+
+/* The end of a run that counted costs: every context's charged, and the
+ * items' sums are the run's totals (conservation). */
+static void cost_finish(struct machine *m) {
+  for (uint32_t i = 0; i < m->nctx; i++) {
+    CHECK_EQ(m->ctx[i].nitems, 0);
+    CHECK_EQ(m->ctx[i].runs_n, 0);
+  }
+  const struct machine_costs *k = &m->costs;
+  uint64_t slots = 0, wait = 0, wr = 0, rd[MEM_CLASS_MAX] = {0};
+  for (uint64_t i = 0; i < k->items; i++) {
+    slots += k->issue_slots[i];
+    wait += k->load_wait_cycles[i];
+    wr += k->write_lines[i];
+    for (unsigned c = 0; c < k->classes; c++) rd[c] += k->read_lines[c][i];
+  }
+  CHECK_EQ(slots, m->st.issue_slots);
+  CHECK_EQ(wait, m->st.load_latency.sum);
+  CHECK_EQ(wr * LINE_BYTES, m->st.l2.writeback_bytes);
+  for (unsigned c = 0; c < MEM_CLASS_MAX; c++)
+    CHECK_EQ(c < k->classes ? rd[c] * LINE_BYTES : 0, m->st.l2.fetch_bytes_by_class[c]);
+}
+
 /* ---- lines back ---- */
 
 /* A line of ray c's load is back at cycle t (fills c's L1). */
@@ -234,6 +404,7 @@ static void line_done(struct machine *m, struct mctx *c, uint64_t line, uint64_t
   CHECK_GT(c->pending, 0);
   if (--c->pending == 0) {
     hist_add(&m->st.load_latency, t - c->wait_from);
+    cost_charge(c, COST_WAIT, t - c->wait_from);
     ray_ready(m, c, t);
   }
 }
@@ -248,7 +419,9 @@ static void ev_line_done(void *ctx, uint64_t line) {
 static void ev_l2_access(void *ctx, uint64_t arg) {
   struct mctx *c = ctx;
   enum l2_op op = l2_unpack_op(arg);
-  l2_access(c->m->l2, l2_unpack_line(arg), op, l2_unpack_cls(arg), op == L2_LOAD ? c : NULL);
+  /* A load's context waits for it, still working for the same items. */
+  uint32_t tag = !c->acc ? 0 : op == L2_LOAD ? cost_tag(c) : cost_store_pop(c);
+  l2_access(c->m->l2, l2_unpack_line(arg), op, l2_unpack_cls(arg), op == L2_LOAD ? c : NULL, tag);
 }
 
 /* ---- cores ---- */
@@ -318,6 +491,11 @@ static void ev_issue(void *ctx, uint64_t core) {
     coro_destroy(c->co);
     c->co = NULL;
     m->stacks_live--;
+    if (c->acc) { /* it starts again (a wake) without knowing whom it worked for */
+      CHECK_LE(c->nitems, 1);
+      cost_flush(c);
+      c->nitems = 0;
+    }
     if (c->parking) { /* its stack is back in the pool until a wake */
       c->parking = false;
       c->state = CTX_PARKED;
@@ -342,6 +520,7 @@ static void t_compute(void *ctx, uint64_t cycles) {
   c->t += cycles;
   c->slots += cycles;
   c->m->st.computes++;
+  cost_charge(c, COST_SLOTS, cycles);
 }
 
 /* What a load and a store pay first: one issue slot at the context's time. */
@@ -351,6 +530,7 @@ static struct machine *door_issue(struct mctx *c, uint32_t size, unsigned cls) {
   CHECK_LT(cls, MEM_CLASS_MAX);
   c->t++;
   c->slots++;
+  cost_charge(c, COST_SLOTS, 1);
   return c->m;
 }
 
@@ -376,6 +556,7 @@ static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   }
   if (!pending) {
     hist_add(&m->st.load_latency, m->p.l1_latency_cycles);
+    cost_charge(c, COST_WAIT, m->p.l1_latency_cycles);
     c->t += m->p.l1_latency_cycles;
     return;
   }
@@ -403,6 +584,7 @@ static void t_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
       if (s != CACHE_NONE) cache_touch(l1, s);
     }
     bool whole = line >= first_whole && (line < end || last_whole);
+    if (c->acc) cost_store_push(c, cost_tag(c));
     engine_at(m->eng, c->t, ev_l2_access, c, l2_pack(line, whole ? L2_STORE_LINE : L2_STORE, cls));
   }
 }
@@ -547,7 +729,7 @@ static struct machine *create(const struct machine_params *p, uint64_t stack_byt
   static const struct l2_timeline_cols cols = {MACHINE_TL_L2_ACCESSES, MACHINE_TL_L2_MISSES,
                                                MACHINE_TL_DRAM_READ_BYTES, MACHINE_TL_READ_CLASS0,
                                                MACHINE_TL_DRAM_WRITE_BYTES};
-  struct l2_client lc = {ev_line_done};
+  struct l2_client lc = {ev_line_done, NULL, NULL};
   m->l2 = l2_create(&lp, m->eng, &m->tl, &cols, &lc);
   struct dram_params dp = machine_dram_params(p);
   struct dram_client dc = l2_dram_client(m->l2);
@@ -610,6 +792,12 @@ void machine_destroy(struct machine *m) {
   if (!m) return;
   for (uint32_t i = 0; i < m->nctx; i++) CHECK(m->ctx[i].co == NULL || !m->ran);
   for (uint32_t i = 0; i < m->nctx; i++) coro_destroy(m->ctx[i].co);
+  for (uint32_t i = 0; i < m->nctx; i++) free(m->ctx[i].runs);
+  free(m->cost_acc);
+  free(m->costs.issue_slots);
+  free(m->costs.load_wait_cycles);
+  for (unsigned c = 0; c < MEM_CLASS_MAX; c++) free(m->costs.read_lines[c]);
+  free(m->costs.write_lines);
   for (uint32_t i = 0; i < m->p.cores; i++) cache_destroy(m->core[i].l1);
   free(m->core);
   free(m->warm);
@@ -663,6 +851,7 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
            (uint64_t)m->nth * end);
   /* The timeline covers the whole run. */
   timeline_cover(&m->tl, end);
+  if (m->cost_acc) cost_finish(m);
 }
 
 const struct machine_stats *machine_get_stats(const struct machine *m) { return &m->st; }

@@ -186,6 +186,41 @@ uint64_t machine_warm_slots(const struct machine *m);
 struct mem_port machine_count_port(struct machine *m);
 uint64_t machine_count_slots(const struct machine *m);
 
+/* ---- per-item costs (README "Cost in the picture") ----
+ * The work of a run charged to items (pixels, to the renderer; integers here)
+ * so that every item's costs sum, over the items, to the run's totals:
+ * issue slots (= issue_slots), load latency from issue to data, L1 hits
+ * included (= load_latency.sum), DRAM lines read by class (x 64 =
+ * l2.fetch_bytes_by_class) and written back (x 64 = l2.writeback_bytes).
+ * A ray context is told whom its work is for (machine_attribute); from then
+ * on its slots, its loads' waits and the DRAM reads of the misses its loads
+ * make are charged to those items, split evenly among them (integer shares,
+ * the remainder one each to the first listed) when it is told anew. What
+ * reaches the DRAM after the context may have moved on (a store's miss, the
+ * write-back of a dirty line an access evicted) goes to the first item
+ * listed when the access was issued. Every access must be attributed
+ * (CHECKed). */
+struct machine_costs {
+  uint64_t items;
+  unsigned classes;              /* data classes counted, < MEM_CLASS_MAX */
+  uint64_t *issue_slots;         /* per item */
+  uint64_t *load_wait_cycles;    /* per item */
+  uint32_t *read_lines[MEM_CLASS_MAX]; /* per item, DRAM lines read by class */
+  uint32_t *write_lines;         /* per item, DRAM lines written back */
+};
+
+/* Count costs for `items` items and data classes below `classes` (before
+ * machine_run; host memory: 16 + 4 x (classes + 1) bytes an item). */
+void machine_costs_enable(struct machine *m, uint64_t items, unsigned classes);
+/* Ray context `ctx` (the running one) works for items[0..n) from now on
+ * (n = 0: nobody; its next access is a CHECK failure). n = 1: the item is
+ * copied; else items must stay as they are until the next call. A context
+ * whose worker function returns must not be left working for several. Does
+ * nothing unless costs are enabled. */
+void machine_attribute(struct machine *m, uint32_t ctx, const uint32_t *items, uint32_t n);
+/* After machine_run: the costs per item, or NULL when not enabled. */
+const struct machine_costs *machine_get_costs(const struct machine *m);
+
 /* The timeline: rows of MACHINE_TL_COLS values (sim/timeline.h). */
 const struct timeline *machine_timeline(const struct machine *m);
 /* The DRAM (its level's numbers: dram_report; its trace: dram_trace_to). */
