@@ -92,7 +92,7 @@ bool preview_write_heat_png(const struct image *im, const char *channel, const c
      * most colour-blind readers. */
     fprintf(gp,
             "set terminal pngcairo size %u,%u noenhanced font ',11'\nset output '%s'\n"
-            "set title \"%s\\n%s; largest pixel %.6g%s\"\nset size ratio -1\nunset key\nunset xtics\nunset ytics\n"
+            "set title \"%s\\n%s; largest pixel %.0f%s\"\nset size ratio -1\nunset key\nunset xtics\nunset ytics\n"
             "set border 0\nset xrange [-0.5:%u-0.5]\nset yrange [-0.5:%u-0.5]\n"
             "set cbrange [0:%.17g]\nset cblabel '%s'\nset cbtics format '%s'\n"
             "set palette defined (0 '#440154', 1 '#3b528b', 2 '#21908d', 3 '#5dc963', "

@@ -6,7 +6,7 @@ set -e
 out=results/cost-maps
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
-echo "policy,cycles,issue_slots,load_latency_cycles_sum,fetch_geometry_bytes,fetch_node_bytes,fetch_ray_bytes,l2_writeback_bytes" > $out/totals.csv
+echo "policy,cycles,issue_slots,load_latency_cycles_sum,fetch_geometry_bytes,fetch_node_bytes,fetch_ray_bytes,l2_writeback_bytes" > "$tmp/totals.csv"
 for p in recursive packet dynamic; do
   build/rtsim run configs/default.yaml scenes/grove.yaml --width 128 --height 128 --policy $p \
     -o "$tmp/$p" --cost-preview $out/$p-geometry.png \
@@ -16,5 +16,7 @@ for p in recursive packet dynamic; do
     --cost-channel cost.load_wait_cycles --cost-max 500000 > /dev/null
   j="$tmp/$p/stats.json"
   v() { sed -n "s/^  \"$1\": \([0-9]*\),\{0,1\}$/\1/p" "$j"; }
-  echo "$p,$(v cycles),$(v issue_slots),$(v load_latency_cycles_sum),$(v fetch_geometry_bytes),$(v fetch_node_bytes),$(v fetch_ray_bytes),$(v l2_writeback_bytes)" >> $out/totals.csv
+  echo "$p,$(v cycles),$(v issue_slots),$(v load_latency_cycles_sum),$(v fetch_geometry_bytes),$(v fetch_node_bytes),$(v fetch_ray_bytes),$(v l2_writeback_bytes)" >> "$tmp/totals.csv"
 done
+# Whole or not at all: the table appears once every run is in.
+mv "$tmp/totals.csv" $out/totals.csv
