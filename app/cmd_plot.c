@@ -52,6 +52,8 @@ static const char HELP[] =
     "  --bars             bars even when KEY holds numbers (one group a value)\n"
     "  --stack            bars with the --y columns stacked (bytes by data\n"
     "                     class); with --lines, one stacked bar per value\n"
+    "  --points           markers only, no lines (a scatter: a series may hold\n"
+    "                     several rows at one x); not with bars\n"
     "  --own-y            each panel its own y range (default: one for all)\n"
     "  --yrange LO:HI     the y range (default: from the data; 0..1 for a\n"
     "                     fraction)\n"
@@ -480,7 +482,7 @@ int cmd_plot(int argc, char **argv) {
   struct wheres wh = {.n = 0};
   struct marks mk = {.n = 0};
   struct yrange yr = {.set = false};
-  bool logx = false, logy = false, bars = false, stack = false, own_y = false;
+  bool logx = false, logy = false, bars = false, stack = false, own_y = false, points = false;
   const struct opts_spec spec[] = {
       OPTS_STR("x", 0, &xk),
       OPTS_STR("y", 0, &yarg),
@@ -492,6 +494,7 @@ int cmd_plot(int argc, char **argv) {
       OPTS_FLAG("bars", 0, &bars),
       OPTS_FLAG("stack", 0, &stack),
       OPTS_FLAG("own-y", 0, &own_y),
+      OPTS_FLAG("points", 0, &points),
       OPTS_PARSE("yrange", 0, &yr, parse_yrange, "LO:HI, two numbers with LO < HI"),
       OPTS_STR("script", 0, &script),
       OPTS_STR("output", 'o', &out),
@@ -517,6 +520,9 @@ int cmd_plot(int argc, char **argv) {
   if (bars && (logx || logy || mk.n))
     return app_usage_error("plot", "%s: not with --%s (bars have no numeric x, and start at 0)",
                            logx ? "--logx" : logy ? "--logy" : "--mark-x", stack ? "stack" : "bars");
+  if (points && bars)
+    return app_usage_error("plot", "--points: not with --%s (a scatter needs a numeric x)",
+                           stack ? "stack" : "bars");
   if (script && !strcmp(script, out))
     return app_usage_error("plot", "--script %s: the same file as -o", script);
 
@@ -634,9 +640,9 @@ int cmd_plot(int argc, char **argv) {
             yarg, lk, bars ? "bar" : "line");
     goto fail;
   }
-  if (bars && (logx || logy || mk.n)) {
+  if (bars && (logx || logy || mk.n || points)) {
     err_set(&e, t.file, 0, 0, "--x %s holds text: bars have no numeric x and start at 0 (got %s)",
-            xk, logx ? "--logx" : logy ? "--logy" : "--mark-x");
+            xk, logx ? "--logx" : logy ? "--logy" : mk.n ? "--mark-x" : "--points");
     goto fail;
   }
   distinct(&t, lc, kept, nkept, PLOT_LINES_MAX, &lines);
@@ -705,7 +711,9 @@ int cmd_plot(int argc, char **argv) {
     w->panel = pc < 0 ? 0 : index_of(&panels, csv_cell(&t, r, (unsigned)pc));
   }
   qsort(rows, nkept, sizeof *rows, cmp_row);
-  for (unsigned i = 1; i < nkept; i++) {
+  /* A scatter's series may hold several rows at one x (they are points
+   * apart, not a line's one value). */
+  for (unsigned i = 1; i < nkept && !points; i++) {
     const struct row *a = &rows[i - 1], *b = &rows[i];
     if (a->panel != b->panel || a->line != b->line || a->x != b->x) continue;
     char keys[1024];
@@ -962,8 +970,8 @@ int cmd_plot(int argc, char **argv) {
         if (i > at && rows[i].line == rows[i - 1].line) continue;
         for (unsigned k = 0; k < ny; k++) {
           const unsigned c = lc >= 0 ? rows[i].line : k;
-          fprintf(gp, "%s'-' using 1:2 with linespoints lw 2 lc %u pt %u notitle",
-                  nplotted++ ? ", " : "", c + 1, c % 13 + 1);
+          fprintf(gp, "%s'-' using 1:2 with %s lc %u pt %u notitle", nplotted++ ? ", " : "",
+                  points ? "points ps 1.3" : "linespoints lw 2", c + 1, c % 13 + 1);
         }
       }
       fputc('\n', gp);
@@ -1002,7 +1010,8 @@ int cmd_plot(int argc, char **argv) {
     for (unsigned i = 0; i < nleg; i++) {
       if (bars) fprintf(gp, "%sNaN with boxxyerror lc %u fs solid 0.85 border lc rgb 'gray20' title ",
                         i ? ", " : "", i + 1);
-      else fprintf(gp, "%sNaN with linespoints lw 2 lc %u pt %u title ", i ? ", " : "", i + 1, i % 13 + 1);
+      else fprintf(gp, "%sNaN with %s lc %u pt %u title ", i ? ", " : "",
+                   points ? "points ps 1.3" : "linespoints lw 2", i + 1, i % 13 + 1);
       gp_str(gp, leg[i]);
     }
     fputc('\n', gp);

@@ -214,6 +214,24 @@ static void test_bars(void) {
 }
 
 /* Bad options and tables: exit 2, one line, no picture. */
+/* --points: a scatter, markers only; a series may hold several rows at one x
+ * (refused without it: they would be one line's two values). */
+static void test_points(void) {
+  const char *t = T "scatter.csv";
+  write_file(t, "rung,speedup,error\nfixed,2,0.5\nfixed,2,3\nfixed,4,1\nanalytic,8,20\n");
+  char *s = plot(t, "--x speedup --y error --lines rung --points --logx --logy");
+  if (s) {
+    EXPECTF(count(s, "with points") == 4 && !strstr(s, "linespoints"),
+            "not markers only: %s", lines_with(s, "plot"));
+    EXPECT(strstr(s, "title 'rung = fixed'") != NULL);
+    free(s);
+  }
+  run("rm -f " T "bad.png");
+  int rc = run("%s plot %s --x speedup --y error --lines rung -o " T "bad.png", RTSIM_BINARY, t);
+  EXPECTF(rc == 2 && strstr(out, "fall on the same line"), "lines at one x: exit %d: %s", rc, out);
+  unlink(t);
+}
+
 static void test_refusals(void) {
   const char *t = T "sweep.csv", *b = T "bars.csv", *m = T "mixed.csv";
   write_file(m, "x,y\n1,2\nfour,3\n");
@@ -235,6 +253,9 @@ static void test_refusals(void) {
       {T "bars.csv", "--x policy --y cycles", "fall on the same bar at policy = "},
       {T "mixed.csv", "--x x --y y", "pl_mixed.csv:3:1: error: --x x: not a number (got 'four')"},
       {T "sweep.csv", "--x rays_per_thread --y cycles,nope", "--y: no column 'nope'"},
+      {T "bars.csv", "--x policy --y cycles --points",
+       "--x policy holds text: bars have no numeric x and start at 0 (got --points)"},
+      {T "bars.csv", "--x policy --y cycles --bars --points", "--points: not with --bars"},
   };
   (void)t, (void)b;
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
@@ -252,6 +273,7 @@ static void test_refusals(void) {
 int main(void) {
   test_lines();
   test_bars();
+  test_points();
   test_refusals();
   return testing_done("test_plot");
 }
