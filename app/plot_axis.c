@@ -64,6 +64,13 @@ void plot_fmt_tick(double v, const char *unit, char *out, size_t cap) {
     }
   }
   int k = 0;
+  /* A whole number under 10,000 that the prefix would turn into a long
+   * fraction (1024 pixels, 2048 cores) reads better in full than as 1.024k;
+   * round ones (2.5k, 2k) keep the prefix. */
+  if (!bytes && a < 10000 && a == floor(a) && fmod(a, 100) != 0) {
+    snprintf(out, cap, "%s%.0f", sign, a);
+    return;
+  }
   if (a >= 1000) {
     k = (int)floor(log10(a) / 3);
     if (k > 6) k = 6;

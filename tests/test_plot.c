@@ -146,6 +146,19 @@ static void test_lines(void) {
     EXPECTF(strstr(s, "set xtics ('1' 1, '2' 2)"), "x ticks: %s", lines_with(s, "set xtics"));
     free(s);
   }
+  /* A whole number under 10,000 in full where a prefix would make it a
+   * long fraction (1024, not 1.024k); round ones keep their prefix. */
+  {
+    const char *t2 = T "cores.csv";
+    write_file(t2, "cores,cycles\n256,9000\n1024,3000\n2000,2500\n");
+    s = plot(t2, "--x cores --y cycles");
+    if (s) {
+      const char *x = lines_with(s, "set xtics");
+      EXPECTF(strstr(x, "'1024' 1024") && strstr(x, "'2k' 2000") && !strstr(x, "1.024k"),
+              "x ticks: %s", x);
+      free(s);
+    }
+  }
   /* A byte-sized key in the legend in binary units. */
   s = plot(t, "--x rays_per_thread --y cycles --lines l2.size --where scene=a --where "
               "dram.latency=25");
