@@ -1,0 +1,200 @@
+/* Tables of named scalars alone (sim/stats.h), against hand-written output:
+ * insertion order past the first growth, the CSV header and row (RFC 4180
+ * quoting), JSON members and string escapes, doubles that read back the same
+ * bits in their shortest 15-17 digit form, and the CHECKs on bad input. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "sim/stats.h"
+#include "testing.h"
+
+/* What a writer prints, as a string (caller frees). */
+typedef void (*writer)(FILE *f, const void *arg);
+
+static char *capture(writer w, const void *arg) {
+  char *buf = NULL;
+  size_t len = 0;
+  FILE *f = open_memstream(&buf, &len);
+  w(f, arg);
+  fclose(f);
+  return buf;
+}
+
+static void w_csv_str(FILE *f, const void *s) { stats_write_csv_str(f, s); }
+static void w_json_str(FILE *f, const void *s) { stats_write_json_str(f, s); }
+static void w_f64(FILE *f, const void *v) { stats_write_json_f64(f, *(const double *)v); }
+static void w_header(FILE *f, const void *t) { stats_write_csv_header(t, f); }
+static void w_row(FILE *f, const void *t) { stats_write_csv_row(t, f); }
+static void w_members(FILE *f, const void *t) { stats_write_json_members(t, f, "  "); }
+
+static void expect_out(writer w, const void *arg, const char *want, const char *what) {
+  char *got = capture(w, arg);
+  EXPECTF(strcmp(got, want) == 0, "%s: got [%s], want [%s]", what, got, want);
+  free(got);
+}
+
+static void test_csv_str(void) {
+  expect_out(w_csv_str, "plain", "plain", "no special character");
+  expect_out(w_csv_str, "", "", "empty");
+  expect_out(w_csv_str, "a b;c", "a b;c", "space and semicolon need no quotes");
+  expect_out(w_csv_str, "a,b", "\"a,b\"", "comma");
+  expect_out(w_csv_str, "say \"hi\"", "\"say \"\"hi\"\"\"", "quotes doubled");
+  expect_out(w_csv_str, "two\nlines", "\"two\nlines\"", "line feed");
+  expect_out(w_csv_str, "cr\r", "\"cr\r\"", "carriage return");
+}
+
+static void test_json_str(void) {
+  expect_out(w_json_str, "plain", "\"plain\"", "plain");
+  expect_out(w_json_str, "", "\"\"", "empty");
+  expect_out(w_json_str, "a\"b\\c", "\"a\\\"b\\\\c\"", "quote and backslash");
+  expect_out(w_json_str, "t\tn\n\x01\x1f", "\"t\\u0009n\\u000a\\u0001\\u001f\"", "controls");
+  /* Bytes from 0x20 up pass as they are: DEL, and UTF-8 (e acute). */
+  expect_out(w_json_str, "\x7f\xc3\xa9/", "\"\x7f\xc3\xa9/\"", "DEL, UTF-8 and slash");
+}
+
+static void expect_f64(double v, const char *want) {
+  char what[64];
+  snprintf(what, sizeof what, "double %a", v);
+  expect_out(w_f64, &v, want, what);
+}
+
+static void test_f64(void) {
+  /* Hand-computed: %.15g when it reads back, else %.16g, else %.17g. */
+  expect_f64(0.0, "0");
+  expect_f64(-0.0, "-0");
+  expect_f64(1.0, "1");
+  expect_f64(0.5, "0.5");
+  expect_f64(0.1, "0.1");
+  expect_f64(-2.25, "-2.25");
+  expect_f64(1e300, "1e+300");
+  expect_f64(1.0 / 3.0, "0.3333333333333333");           /* 16 digits */
+  expect_f64(9007199254740992.0, "9007199254740992");      /* 2^53: 16 digits */
+  expect_f64(0.1 + 0.2, "0.30000000000000004");           /* 17 digits */
+  expect_f64(1.7976931348623157e308, "1.7976931348623157e+308");
+  expect_f64(5e-324, "4.94065645841247e-324"); /* 15 digits read it back; not "5e-324" */
+  /* Random bit patterns: every finite one reads back the same bits. */
+  uint64_t s = 21, bad = 0, tried = 0;
+  for (unsigned i = 0; i < 20000; i++) {
+    s = s * 6364136223846793005ull + 1442695040888963407ull;
+    uint64_t bits = s ^ (s >> 29);
+    double v;
+    memcpy(&v, &bits, sizeof v);
+    if (!isfinite(v)) continue;
+    tried++;
+    char *txt = capture(w_f64, &v);
+    double back = strtod(txt, NULL);
+    if (memcmp(&back, &v, sizeof v) != 0 && bad++ < 5)
+      fprintf(stderr, "%a printed %s read back %a\n", v, txt, back);
+    free(txt);
+  }
+  EXPECTF(bad == 0, "%llu of %llu doubles did not read back", (unsigned long long)bad,
+          (unsigned long long)tried);
+}
+
+static void test_table(void) {
+  struct stats_table t = {0};
+  stats_u64(&t, "cycles", 12345);
+  stats_u64(&t, "max_u64", UINT64_MAX);
+  stats_f64(&t, "hit_fraction", 0.75);
+  stats_str(&t, "scene", "room, small");
+  stats_str(&t, "policy", "say \"hi\"");
+  EXPECT(t.n == 5);
+  EXPECT(t.e[1].kind == STATS_U64 && t.e[1].u == UINT64_MAX);
+  EXPECT(t.e[2].kind == STATS_F64 && t.e[2].f == 0.75);
+  expect_out(w_header, &t, "cycles,max_u64,hit_fraction,scene,policy\n", "CSV header");
+  expect_out(w_row, &t, "12345,18446744073709551615,0.75,\"room, small\",\"say \"\"hi\"\"\"\n",
+             "CSV row");
+  expect_out(w_members, &t,
+             "  \"cycles\": 12345,\n  \"max_u64\": 18446744073709551615,\n"
+             "  \"hit_fraction\": 0.75,\n  \"scene\": \"room, small\",\n"
+             "  \"policy\": \"say \\\"hi\\\"\"",
+             "JSON members");
+  stats_fini(&t);
+  EXPECT(t.e == NULL && t.n == 0 && t.cap == 0);
+
+  /* Empty: an empty line of CSV, no JSON members. */
+  expect_out(w_header, &t, "\n", "empty header");
+  expect_out(w_row, &t, "\n", "empty row");
+  expect_out(w_members, &t, "", "no members");
+
+  /* Insertion order kept past the table's growth; 63-character names fit. */
+  char name[64];
+  for (unsigned i = 0; i < 200; i++) {
+    snprintf(name, sizeof name, "n%u", i);
+    stats_u64(&t, name, 1000u + i);
+  }
+  memset(name, 'x', 63);
+  name[63] = 0;
+  stats_u64(&t, name, 7);
+  unsigned out_of_order = 0;
+  for (unsigned i = 0; i < 200; i++) {
+    char want[16];
+    snprintf(want, sizeof want, "n%u", i);
+    out_of_order += strcmp(t.e[i].name, want) != 0 || t.e[i].u != 1000u + i;
+  }
+  EXPECTF(out_of_order == 0, "%u of 200 entries moved or changed", out_of_order);
+  EXPECT(t.n == 201 && strcmp(t.e[200].name, name) == 0);
+  stats_fini(&t);
+
+  /* A string value keeps its first 255 bytes. */
+  char longv[400];
+  memset(longv, 'v', sizeof longv - 1);
+  longv[sizeof longv - 1] = 0;
+  stats_str(&t, "long", longv);
+  EXPECT(strlen(t.e[0].s) == 255);
+  stats_fini(&t);
+}
+
+/* A stats call in a child that must die of its CHECK (stderr silenced). */
+static bool dies(void (*fn)(void)) {
+  fflush(NULL);
+  pid_t pid = fork();
+  if (pid == 0) {
+    if (!freopen("/dev/null", "w", stderr)) _exit(0);
+    fn();
+    _exit(0);
+  }
+  int st = 0;
+  waitpid(pid, &st, 0);
+  return !(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+}
+
+static void add_nan(void) {
+  struct stats_table t = {0};
+  stats_f64(&t, "x", NAN);
+}
+static void add_inf(void) {
+  struct stats_table t = {0};
+  stats_f64(&t, "x", -INFINITY);
+}
+static void add_long_name(void) {
+  struct stats_table t = {0};
+  char name[65];
+  memset(name, 'x', 64);
+  name[64] = 0;
+  stats_u64(&t, name, 1);
+}
+static void add_fine(void) {
+  struct stats_table t = {0};
+  stats_f64(&t, "x", 1.0);
+  stats_fini(&t);
+}
+
+static void test_checks(void) {
+  EXPECT(dies(add_nan));
+  EXPECT(dies(add_inf));
+  EXPECT(dies(add_long_name)); /* 64 characters leave no room for the NUL */
+  EXPECT(!dies(add_fine));     /* the harness itself does not die */
+}
+
+int main(void) {
+  test_csv_str();
+  test_json_str();
+  test_f64();
+  test_table();
+  test_checks();
+  return testing_done("test_stats");
+}
