@@ -40,7 +40,9 @@ void stats_write_json_members(const struct stats_table *t, FILE *f, const char *
 
 /* A JSON string literal of s. */
 void stats_write_json_str(FILE *f, const char *s);
-/* A double as JSON (shortest form that reads back the same bits). */
+/* A double as JSON: the fewest of 15, 16 or 17 significant digits that read
+ * back the same bits. Not always the shortest form (5e-324 is written
+ * 4.94065645841247e-324), but stable: outputs compare byte for byte. */
 void stats_write_json_f64(FILE *f, double v);
 
 #endif
