@@ -61,6 +61,9 @@ static const char HELP[] =
     "                     2); lines only\n"
     "  --mark-x X         a dashed vertical line at x = X in every panel (e.g. a\n"
     "                     value a paper names); repeatable; lines only\n"
+    "  --order A,B,...    these values first, in this order, where they are lines,\n"
+    "                     panels or bar groups (e.g. the paper's recursive,packet,\n"
+    "                     dynamic); the rest after them, sorted (default: all sorted)\n"
     "  --script FILE.gp   also write the gnuplot script (data inline), to adjust\n"
     "                     the figure by hand\n"
     "  -o FILE            the plot: .png (pngcairo) or .svg\n"
@@ -183,6 +186,26 @@ static void distinct(const struct csv_table *t, int c, const unsigned *rows, uns
     out->v[out->n++] = s;
   }
   qsort(out->v, out->n, sizeof *out->v, numeric ? cmp_num : cmp_nat);
+}
+
+/* --order: the values it names first, in its order, wherever they are lines,
+ * panels or bar groups; the rest after them, sorted as before. A name no
+ * value has is ignored (one order serves several plots of a table). */
+static void apply_order(struct values *v, const char *order) {
+  if (!order) return;
+  unsigned front = 0;
+  for (const char *p = order; *p;) {
+    const char *q = strchr(p, ',');
+    const size_t len = q ? (size_t)(q - p) : strlen(p);
+    for (unsigned k = front; k < v->n; k++)
+      if (strlen(v->v[k]) == len && !strncmp(v->v[k], p, len)) {
+        const char *x = v->v[k];
+        memmove(&v->v[front + 1], &v->v[front], (k - front) * sizeof *v->v);
+        v->v[front++] = x;
+        break;
+      }
+    p = q ? q + 1 : p + len;
+  }
 }
 
 /* The swept keys a point name states ("a=1,b=2" -> a, b), for messages. */
@@ -479,6 +502,7 @@ static unsigned wrap(const char *text, unsigned width, char *out, size_t cap) {
 
 int cmd_plot(int argc, char **argv) {
   const char *xk = NULL, *yarg = NULL, *lk = NULL, *pk = NULL, *out = NULL, *script = NULL;
+  const char *order = NULL;
   struct wheres wh = {.n = 0};
   struct marks mk = {.n = 0};
   struct yrange yr = {.set = false};
@@ -497,6 +521,7 @@ int cmd_plot(int argc, char **argv) {
       OPTS_FLAG("points", 0, &points),
       OPTS_PARSE("yrange", 0, &yr, parse_yrange, "LO:HI, two numbers with LO < HI"),
       OPTS_STR("script", 0, &script),
+      OPTS_STR("order", 0, &order),
       OPTS_STR("output", 'o', &out),
       OPTS_PARSE("mark-x", 0, &mk, add_mark, "a number" PLOT_AT_MOST(PLOT_WHERE_MAX)),
       OPTS_END};
@@ -648,6 +673,9 @@ int cmd_plot(int argc, char **argv) {
   distinct(&t, lc, kept, nkept, PLOT_LINES_MAX, &lines);
   distinct(&t, pc, kept, nkept, PLOT_PANELS_MAX, &panels);
   if (bars) distinct(&t, xc, kept, nkept, PLOT_LINES_MAX, &groups);
+  apply_order(&lines, order);
+  apply_order(&panels, order);
+  if (bars) apply_order(&groups, order);
   if (panels.n > PLOT_PANELS_MAX) {
     err_set(&e, t.file, 1, 0,
             "--panels %s: more than %d values (expected at most %d panels: keep fewer with "

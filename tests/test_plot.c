@@ -207,6 +207,16 @@ static void test_bars(void) {
     EXPECTF(strstr(s, "scene = grove"), "caption: %s", lines_with(s, "set label"));
     free(s);
   }
+  /* --order: the paper's order of the groups, and of the lines where it names
+   * them (4194304 first; 524288, not named, after it). */
+  s = plot(t, "--x policy --y cycles --lines l2.size --order recursive,packet,dynamic,4194304,nope");
+  if (s) {
+    EXPECTF(strstr(s, "set xtics ('recursive' 0, 'packet' 1, 'dynamic' 2)"), "ordered groups: %s",
+            lines_with(s, "set xtics"));
+    const char *a = strstr(s, "title 'l2.size = 4 MiB'"), *b = strstr(s, "title 'l2.size = 512 KiB'");
+    EXPECTF(a && b && a < b, "ordered lines: %s", lines_with(s, "title"));
+    free(s);
+  }
   /* Stacked: ray bytes sit on the geometry bytes (recursive, 512 KiB: 3M to
    * 4M); the legend names the classes; the bars under a group say their size. */
   s = plot(t, "--x policy --y fetch_geometry_bytes,fetch_ray_bytes --stack --lines l2.size");
