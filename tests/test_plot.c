@@ -4,7 +4,6 @@
  * legend with units, a caption of the fixed parameters, bar charts for a
  * text x (side by side and stacked), PNG and SVG, and bad options refused
  * with exit code 2 and one line. Tables are written here, a few rows each. */
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,16 +15,8 @@
 
 static char out[1 << 16];
 
-static int run(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /* Run a shell command (stderr with stdout into `out`); its exit code. */
-static int run(const char *fmt, ...) {
-  char cmd[8192];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(cmd, sizeof cmd, fmt, ap);
-  va_end(ap);
-  return testing_run(cmd, out, sizeof out);
-}
+#define run(...) testing_runf(out, sizeof out, __VA_ARGS__)
 
 static void write_file(const char *path, const char *text) {
   FILE *f = fopen(path, "w");

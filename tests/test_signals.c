@@ -8,7 +8,6 @@
 #include <dirent.h>
 #include <errno.h>
 #include <signal.h>
-#include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,15 +25,8 @@
 
 static char out[1 << 16];
 
-static int run(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
-static int run(const char *fmt, ...) {
-  char cmd[8192];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(cmd, sizeof cmd, fmt, ap);
-  va_end(ap);
-  return testing_run(cmd, out, sizeof out);
-}
+/* Run a shell command (stderr with stdout into `out`); its exit code. */
+#define run(...) testing_runf(out, sizeof out, __VA_ARGS__)
 
 static double now(void) {
   struct timespec t;

@@ -9,7 +9,6 @@
 #include <dirent.h>
 #include <fcntl.h>
 #include <signal.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -37,16 +36,8 @@ static const char *const GOOD_NAMES[8] = {
 
 static char out[1 << 16];
 
-static int run(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 /* Run a shell command (stderr with stdout into `out`); its exit code. */
-static int run(const char *fmt, ...) {
-  char cmd[8192];
-  va_list ap;
-  va_start(ap, fmt);
-  vsnprintf(cmd, sizeof cmd, fmt, ap);
-  va_end(ap);
-  return testing_run(cmd, out, sizeof out);
-}
+#define run(...) testing_runf(out, sizeof out, __VA_ARGS__)
 
 static int exists(const char *path) {
   struct stat sb;

@@ -2,6 +2,7 @@
 
 #include <dirent.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -21,6 +22,15 @@ int testing_checks = 0;
 int testing_done(const char *name) {
   printf("%s: %d checks, %d failed\n", name, testing_checks, testing_failures);
   return testing_failures ? 1 : 0;
+}
+
+int testing_runf(char *buf, unsigned buf_size, const char *fmt, ...) {
+  char cmd[8192];
+  va_list ap;
+  va_start(ap, fmt);
+  vsnprintf(cmd, sizeof cmd, fmt, ap);
+  va_end(ap);
+  return testing_run(cmd, buf, buf_size);
 }
 
 int testing_run(const char *cmd, char *buf, unsigned buf_size) {

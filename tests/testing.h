@@ -72,6 +72,9 @@ unsigned testing_temps_of(const char *path);
 /* Run a shell command, capture its stderr+stdout into buf; return exit code
  * (or -1 if it did not exit normally). */
 int testing_run(const char *cmd, char *buf, unsigned buf_size);
+/* testing_run of a command made by printf. */
+int testing_runf(char *buf, unsigned buf_size, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
 
 /* The whole of dir/name (caller frees; *len its length if len), or NULL. */
 char *testing_slurp(const char *dir, const char *name, size_t *len);
