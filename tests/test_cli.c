@@ -486,6 +486,8 @@ int main(void) {
       {"trace " SCN "good_room_tiny.yaml --din x.din --policy dynamic --rays primary --dyn-ray-buffer 99999999999", "--dyn-ray-buffer: got '99999999999'"},
       {"trace " SCN "good_room_tiny.yaml --din x.din --policy packet --rays primary --cache 3000", "--cache: got '3000', expected a power of two from 1024 to 4194304"},
       {"trace " SCN "good_room_tiny.yaml --din x.din --rays primary", "missing --policy"},
+      {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --threads 3", "--threads: got '3', expected a whole number from 1 to 2"},
+      {"trace " SCN "good_room_tiny.yaml --din x.din --policy recursive --rays primary --threads 0", "--threads: got '0', expected a whole number from 1 to 2"},
       {"render " SCN "good_room_tiny.yaml -o x.exr --half=1", "rtsim render: error: option --half takes no value"},
       {"render " SCN "good_room_tiny.yaml -o x.exr -xo", "unknown option '-x'"},
       {"render " SCN "good_room_tiny.yaml -o x.exr --seed -1", "--seed: got '-1', expected a whole number from 0 to 18446744073709551615"},
