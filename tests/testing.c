@@ -14,6 +14,7 @@
 #include "renderer/ray.h"
 #include "renderer/scene.h"
 #include "renderer/scene_file.h"
+#include "sim/dram_banked.h"
 #include "sim/err.h"
 
 int testing_failures = 0;
@@ -175,4 +176,29 @@ bool testing_same_rgb(const char *a, const char *b) {
   image_fini(&x);
   image_fini(&y);
   return same;
+}
+
+struct dram_banked_params testing_ddr4_params(void) {
+  struct dram_banked_params p;
+  memset(&p, 0, sizeof p);
+  p.clock_mhz = 1200;
+  p.channels = 1;
+  p.ranks = 1;
+  p.bank_groups = 4;
+  p.banks_per_group = 4;
+  p.rows = 65536;
+  p.columns = 1024;
+  p.bus_bytes = 8;
+  p.burst_length = 8;
+  strcpy(p.mapping, "rochrababgco");
+  p.page = DRAM_BANKED_OPEN_PAGE;
+  p.read_queue = 32;
+  p.write_queue = 32;
+  p.write_high = 24;
+  p.write_low = 8;
+  p.tCL = 16, p.tCWL = 16, p.tRCD = 16, p.tRP = 16, p.tRAS = 39, p.tRC = 55;
+  p.tCCD_S = 4, p.tCCD_L = 6, p.tRRD_S = 4, p.tRRD_L = 6, p.tFAW = 26;
+  p.tWR = 19, p.tWTR_S = 3, p.tWTR_L = 9, p.tRTW = 6, p.tRTP = 9;
+  p.tREFI = 0, p.tRFC = 420;
+  return p;
 }

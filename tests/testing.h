@@ -83,4 +83,8 @@ double testing_json_num(const char *dir, const char *name);
 /* The RGB planes of two EXR files are equal, bit for bit. */
 bool testing_same_rgb(const char *a, const char *b);
 
+/* A DDR4-2400 x8 part's banked parameters (1200 MHz, 1 channel, 1 rank,
+ * 4 x 4 banks, open page, queues of 32), refresh off: the DRAM tests' part. */
+struct dram_banked_params testing_ddr4_params(void);
+
 #endif
