@@ -9,8 +9,8 @@
 #include <string.h>
 #include <time.h>
 
-#include "renderer/policy.h"
-#include "renderer/scene_file.h"
+#include "renderer/policy/policy.h"
+#include "renderer/scene/scene_file.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/err.h"

@@ -5,8 +5,8 @@
 #include <string.h>
 
 #include "app/opts.h"
-#include "renderer/meshio.h"
-#include "renderer/scene_file.h"
+#include "renderer/scene/meshio.h"
+#include "renderer/scene/scene_file.h"
 #include "sim/err.h"
 
 static const char HELP[] =

@@ -10,7 +10,7 @@
 #include "app/preview.h"
 #include "renderer/framebuffer.h"
 #include "renderer/image.h"
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/err.h"

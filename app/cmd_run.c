@@ -13,7 +13,7 @@
 #include "app/opts.h"
 #include "app/outdir.h"
 #include "app/run_output.h"
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/coro.h"

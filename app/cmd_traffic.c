@@ -10,7 +10,7 @@
 
 #include "app/opts.h"
 #include "renderer/framebuffer.h"
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/din.h"

@@ -5,7 +5,7 @@
 
 #include <string.h>
 
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 #include "renderer/trace.h"
 #include "sim/analytic.h"
 #include "sim/machine.h"

@@ -31,7 +31,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 #include "sim/machine.h"
 
 struct stats_table;

@@ -18,10 +18,10 @@
 
 #include "app/app.h"
 #include "app/sample.h"
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 #include "renderer/ray.h"
 #include "renderer/scene.h"
-#include "renderer/scene_file.h"
+#include "renderer/scene/scene_file.h"
 #include "renderer/shade.h"
 #include "sim/cfg.h"
 #include "sim/err.h"

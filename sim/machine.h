@@ -74,7 +74,7 @@ struct machine_params {
   uint32_t cost_node_cycles, cost_triangle_cycles, cost_shade_cycles;
   uint32_t cost_ray_switch_cycles;
   uint64_t timeline_window_cycles;
-  /* How the dynamic policy's cores share its queue points (renderer/policy.h:
+  /* How the dynamic policy's cores share its queue points (renderer/policy/policy.h:
    * 0 partition, 1 chip). The machine does not read it: a workload setting
    * kept with the machine it is made for, as the costs are. */
   uint32_t dyn_sharing;

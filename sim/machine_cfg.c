@@ -27,7 +27,7 @@ static const char *const PAGE_NAMES[] = {"open", "close"};
 static const char *const FIDELITY_NAMES[MACHINE_FIDELITY_COUNT] = {"analytic", "fixed", "channel",
                                                                    "banked"};
 static const char *const QUEUE_NAMES[] = {"shared", "per_bank", "per_rank"}; /* enum dram_banked_queues */
-static const char *const SHARING_NAMES[] = {"partition", "chip"}; /* renderer/policy.h */
+static const char *const SHARING_NAMES[] = {"partition", "chip"}; /* renderer/policy/policy.h */
 static const struct key KEYS[MACHINE_CFG_KEYS] = {
     {"clock_ghz", K_F64, 1e-3, 1e3, OFF(clock_ghz)},
     {"cores", K_U32, 1, 4096, OFF(cores)},

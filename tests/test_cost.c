@@ -9,7 +9,7 @@
 #include "renderer/framebuffer.h"
 #include "renderer/image.h"
 #include "renderer/kdtree.h"
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"

@@ -7,8 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/gen.h"
-#include "renderer/gen_util.h"
+#include "renderer/scene/gen.h"
+#include "renderer/scene/gen_util.h"
 #include "renderer/scene.h"
 #include "testing.h"
 

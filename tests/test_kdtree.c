@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/gen.h"
+#include "renderer/scene/gen.h"
 #include "renderer/kdtree.h"
 #include "renderer/ray.h"
 #include "renderer/rng.h"

@@ -1,32 +1,48 @@
-/* The one door: sim/ never includes a renderer/ header; renderer/ includes from
- * sim/ only the memory interface (mem.h) and the file utilities that know
- * nothing of cycles or caches (cfg.h: YAML with positions, err.h: user-error
- * records, outfile.h: whole-or-absent output files), shared so that scene and
- * machine files report errors alike and every output is written one way. */
+/* The layers in the includes. The base pieces of sim/ (err, cfg, scalar,
+ * outfile, stats, hist: what both layers use, knowing nothing of cycles,
+ * caches or rays; the rtsim_base library) include from sim/ only each other;
+ * sim/ never includes a renderer/ header; renderer/ and its rooms include from
+ * sim/ only the memory interface (mem.h) and the base headers. The same door
+ * is held at link time by the renderer_door program (CMakeLists.txt). Each
+ * x.c with an x.h includes it first. */
 #include <dirent.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "testing.h"
 
-/* Call check on each .c and .h file of dir, open for reading; the number of
- * files. */
+/* Call check on each .c and .h file under RTSIM_SOURCE_DIR/rel, subfolders
+ * included (the renderer's rooms), open for reading, with its path from the
+ * source top ("renderer/policy/qwalk.c"); the number of files. */
 typedef void (*check_fn)(const char *path, const char *name, FILE *f, const void *arg);
-static int each_source(const char *dir, check_fn check, const void *arg) {
-  char path[1024];
+static int each_source(const char *rel, check_fn check, const void *arg) {
+  char dir[1024], path[1024], sub[1024];
   int files = 0;
+  snprintf(dir, sizeof dir, "%s/%s", RTSIM_SOURCE_DIR, rel);
   DIR *d = opendir(dir);
   EXPECTF(d != NULL, "cannot open %s", dir);
   if (!d) return 0;
   struct dirent *de;
   while ((de = readdir(d))) {
+    if (de->d_name[0] == '.') continue;
+    if (snprintf(path, sizeof path, "%s/%s", dir, de->d_name) >= (int)sizeof path ||
+        snprintf(sub, sizeof sub, "%s/%s", rel, de->d_name) >= (int)sizeof sub) {
+      EXPECTF(false, "path too long under %s", dir);
+      continue;
+    }
+    DIR *inner = opendir(path);
+    if (inner) {
+      closedir(inner);
+      files += each_source(sub, check, arg);
+      continue;
+    }
     size_t n = strlen(de->d_name);
     if (n < 3 || (strcmp(de->d_name + n - 2, ".c") && strcmp(de->d_name + n - 2, ".h"))) continue;
-    snprintf(path, sizeof path, "%s/%s", dir, de->d_name);
     FILE *f = fopen(path, "r");
     if (!f) continue;
     files++;
-    check(path, de->d_name, f, arg);
+    check(sub, de->d_name, f, arg);
     fclose(f);
   }
   closedir(d);
@@ -54,16 +70,17 @@ static void no_crossing(const char *path, const char *name, FILE *f, const void 
 }
 
 /* A dir/x.c that has a dir/x.h includes it first, before any other header,
- * to prove the header stands alone. arg: "dir". */
+ * to prove the header stands alone. path is from the source top. */
 static void own_header_first(const char *path, const char *name, FILE *f, const void *arg) {
-  char hpath[1024], line[1024], want[256];
-  size_t n = strlen(name);
+  (void)arg;
+  char hpath[1024], line[1024], want[1100];
+  size_t n = strlen(name), p = strlen(path);
   if (strcmp(name + n - 2, ".c") != 0) return;
-  snprintf(hpath, sizeof hpath, "%.*s.h", (int)(strlen(path) - 2), path);
+  snprintf(hpath, sizeof hpath, "%s/%.*s.h", RTSIM_SOURCE_DIR, (int)(p - 2), path);
   FILE *h = fopen(hpath, "r");
   if (!h) return;
   fclose(h);
-  snprintf(want, sizeof want, "#include \"%s/%.*s.h\"", (const char *)arg, (int)(n - 2), name);
+  snprintf(want, sizeof want, "#include \"%.*s.h\"", (int)(p - 2), path);
   while (fgets(line, sizeof line, f))
     if (!strncmp(line, "#include", 8)) {
       line[strcspn(line, "\n")] = '\0';
@@ -72,14 +89,40 @@ static void own_header_first(const char *path, const char *name, FILE *f, const 
     }
 }
 
+/* The base pieces: a file of sim/ named for one of them. */
+static const char *const BASE[] = {"err", "cfg", "scalar", "outfile", "stats", "hist", NULL};
+
+static bool is_base(const char *name) {
+  for (int i = 0; BASE[i]; i++) {
+    size_t n = strlen(BASE[i]);
+    if (!strncmp(name, BASE[i], n) && (!strcmp(name + n, ".c") || !strcmp(name + n, ".h")))
+      return true;
+  }
+  return false;
+}
+
+/* A base piece's includes of sim/: base headers only. */
+static void base_only(const char *path, const char *name, FILE *f, const void *arg) {
+  if (is_base(name)) no_crossing(path, name, f, arg);
+}
+
 int main(void) {
+  static const char *const base_rule[] = {"sim/",        "sim/err.h",   "sim/cfg.h",
+                                          "sim/scalar.h", "sim/outfile.h", "sim/stats.h",
+                                          "sim/hist.h",  NULL};
+  static const char *const base_up[] = {"renderer/", NULL};
   static const char *const sim_rule[] = {"renderer/", NULL};
-  static const char *const renderer_rule[] = {"sim/",      "sim/mem.h",     "sim/cfg.h",
-                                              "sim/err.h", "sim/outfile.h", NULL};
-  EXPECT(each_source(RTSIM_SOURCE_DIR "/sim", no_crossing, sim_rule) > 0);
-  EXPECT(each_source(RTSIM_SOURCE_DIR "/renderer", no_crossing, renderer_rule) > 0);
-  EXPECT(each_source(RTSIM_SOURCE_DIR "/sim", own_header_first, "sim") > 0);
-  EXPECT(each_source(RTSIM_SOURCE_DIR "/renderer", own_header_first, "renderer") > 0);
-  EXPECT(each_source(RTSIM_SOURCE_DIR "/app", own_header_first, "app") > 0);
+  static const char *const renderer_rule[] = {"sim/",          "sim/mem.h",    "sim/err.h",
+                                              "sim/cfg.h",     "sim/scalar.h", "sim/outfile.h",
+                                              "sim/stats.h",   "sim/hist.h",   NULL};
+  EXPECT(each_source("sim", base_only, base_rule) > 0);
+  EXPECT(each_source("sim", base_only, base_up) > 0);
+  EXPECT(each_source("sim", no_crossing, sim_rule) > 0);
+  EXPECT(each_source("renderer", no_crossing, renderer_rule) > 0);
+  /* The rooms are read too (a file in renderer/policy/ is checked). */
+  EXPECT(each_source("renderer/policy", no_crossing, renderer_rule) > 0);
+  EXPECT(each_source("renderer/scene", no_crossing, renderer_rule) > 0);
+  static const char *const dirs[] = {"sim", "renderer", "app", NULL};
+  for (int i = 0; dirs[i]; i++) EXPECT(each_source(dirs[i], own_header_first, NULL) > 0);
   return testing_done("test_layers");
 }

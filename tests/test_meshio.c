@@ -3,7 +3,7 @@
  * vertices are computed here; an exported PLY re-read by assimp itself must
  * give face i = primitive i bit for bit; every broken fixture fails with the
  * mesh path in the error and leaves the scene as it was. */
-#include "renderer/meshio.h"
+#include "renderer/scene/meshio.h"
 
 #include <math.h>
 #include <stdint.h>

@@ -5,7 +5,7 @@
  * back gives the same PLY bytes and the same hits, the 0.1-scaled room whose
  * first data byte is a line feed (the case assimp read shifted) reads back
  * exactly, and the shapes that crashed or hung assimp exit 2 with one line. */
-#include "renderer/ply.h"
+#include "renderer/scene/ply.h"
 
 #include <math.h>
 #include <stdarg.h>

@@ -12,10 +12,10 @@
 
 #include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
-#include "renderer/policy.h"
-#include "renderer/qpoint.h"
+#include "renderer/policy/policy.h"
+#include "renderer/policy/qpoint.h"
 #include "renderer/scene.h"
-#include "renderer/scene_file.h"
+#include "renderer/scene/scene_file.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/err.h"

@@ -1,4 +1,4 @@
-/* Workers of one render (renderer/policy.h) against one worker (the oracle):
+/* Workers of one render (renderer/policy/policy.h) against one worker (the oracle):
  * for recursive and packet, several workers give the bit-identical
  * framebuffer (colour and per-pixel cost), ray counts, trace counts and tested
  * set, whether they run one after another, take items in turn, or run inside
@@ -14,7 +14,7 @@
 
 #include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"

@@ -8,9 +8,9 @@
 #include <string.h>
 
 #include "renderer/kdtree.h"
-#include "renderer/qpoint.h"
+#include "renderer/policy/qpoint.h"
 #include "renderer/scene.h"
-#include "renderer/scene_file.h"
+#include "renderer/scene/scene_file.h"
 #include "sim/err.h"
 #include "testing.h"
 

@@ -1,4 +1,4 @@
-/* The queue store (renderer/qstore.h) alone, against a brute-force model: a
+/* The queue store (renderer/policy/qstore.h) alone, against a brute-force model: a
  * plain list of ray ids per queue and set. Random sequences of pushes, takes,
  * passes over taken queues (several at once, with rays handed out and done
  * out of order), releases and set swaps; at every step the store must agree
@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/qstore.h"
+#include "renderer/policy/qstore.h"
 #include "renderer/trace.h"
 #include "sim/err.h"
 #include "testing.h"

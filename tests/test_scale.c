@@ -14,7 +14,7 @@
 #include "renderer/kdtree.h"
 #include "renderer/ray.h"
 #include "renderer/scene.h"
-#include "renderer/scene_file.h"
+#include "renderer/scene/scene_file.h"
 #include "renderer/trace.h"
 #include "sim/err.h"
 #include "sim/mem.h"

@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "renderer/scene.h"
-#include "renderer/scene_file.h"
+#include "renderer/scene/scene_file.h"
 #include "sim/err.h"
 #include "testing.h"
 

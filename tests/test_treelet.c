@@ -9,8 +9,8 @@
 
 #include "renderer/kdtree.h"
 #include "renderer/scene.h"
-#include "renderer/scene_file.h"
-#include "renderer/treelet.h"
+#include "renderer/scene/scene_file.h"
+#include "renderer/policy/treelet.h"
 #include "sim/err.h"
 #include "testing.h"
 

@@ -10,10 +10,10 @@
 
 #include "renderer/image.h"
 #include "renderer/kdtree.h"
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 #include "renderer/ray.h"
 #include "renderer/scene.h"
-#include "renderer/scene_file.h"
+#include "renderer/scene/scene_file.h"
 #include "sim/dram_banked.h"
 #include "sim/err.h"
 

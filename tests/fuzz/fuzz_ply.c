@@ -7,7 +7,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "renderer/ply.h"
+#include "renderer/scene/ply.h"
 #include "sim/err.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);

@@ -1,4 +1,4 @@
-/* libFuzzer target: scene files (renderer/scene_file.c through sim/cfg.c).
+/* libFuzzer target: scene files (renderer/scene/scene_file.c through sim/cfg.c).
  * The input is a YAML file in tests/data/scenes/ of the scratch folder (its
  * meshes resolve as in the repository). Scenes are parsed and checked in
  * full, but built only when small: large generators and meshes outside the
@@ -12,7 +12,7 @@
 
 #include "renderer/camera.h"
 #include "renderer/scene.h"
-#include "renderer/scene_file.h"
+#include "renderer/scene/scene_file.h"
 #include "sim/err.h"
 #include "tests/fuzz/fuzz_util.h"
 

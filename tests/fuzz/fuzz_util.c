@@ -10,8 +10,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "renderer/gen.h"
-#include "renderer/meshio.h"
+#include "renderer/scene/gen.h"
+#include "renderer/scene/meshio.h"
 #include "renderer/scene.h"
 #include "sim/err.h"
 #include "sim/machine.h"

@@ -1,12 +1,12 @@
 /* Policy dispatch, the shared work list, workers, names and defaults. */
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 
 #include <stdlib.h>
 #include <string.h>
 
 #include "renderer/camera.h"
 #include "renderer/framebuffer.h"
-#include "renderer/policy_impl.h"
+#include "renderer/policy/policy_impl.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"

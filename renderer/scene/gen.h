@@ -1,8 +1,8 @@
 /* Procedural scene generators. Deterministic: the same parameters and seed
  * give bit-identical triangles. Each takes its materials by name through
  * scene_material_or_default, so a scene file can override them. */
-#ifndef RTSIM_RENDERER_GEN_H
-#define RTSIM_RENDERER_GEN_H
+#ifndef RTSIM_RENDERER_SCENE_GEN_H
+#define RTSIM_RENDERER_SCENE_GEN_H
 
 #include <stdint.h>
 

@@ -1,6 +1,6 @@
 /* The queue store (qstore.h): queues as lists of chunks in one arena, a free
  * list of chunks, and the heap that orders set 0's free queues. */
-#include "renderer/qstore.h"
+#include "renderer/policy/qstore.h"
 
 #include <stdlib.h>
 

@@ -20,8 +20,8 @@
  *   triangle crossing the segment is hit, and the reversed walk visits every
  *   leaf the segment crosses, so the answer is trace_any's. Private to
  *   renderer/. */
-#ifndef RTSIM_RENDERER_QWALK_H
-#define RTSIM_RENDERER_QWALK_H
+#ifndef RTSIM_RENDERER_POLICY_QWALK_H
+#define RTSIM_RENDERER_POLICY_QWALK_H
 
 #include <stdbool.h>
 #include <stdint.h>

@@ -5,8 +5,8 @@
  * finding one is a queue point whatever its size (its rays are then processed
  * in cache-sized blocks). Subtrees without geometry (empty leaves) hold no
  * queue point: there is nothing to load there, so rays just pass through. */
-#ifndef RTSIM_RENDERER_QPOINT_H
-#define RTSIM_RENDERER_QPOINT_H
+#ifndef RTSIM_RENDERER_POLICY_QPOINT_H
+#define RTSIM_RENDERER_POLICY_QPOINT_H
 
 #include <stdbool.h>
 #include <stdint.h>

@@ -1,9 +1,9 @@
-/* Mesh import (PLY through renderer/ply.c, everything else through assimp's
+/* Mesh import (PLY through renderer/scene/ply.c, everything else through assimp's
  * C API) and PLY export of the scene's triangles. Import is two passes over
  * the loaded mesh: the first counts triangles and validates every vertex, the
  * second appends, so a bad file never leaves half a mesh in the scene. Export writes 3 unshared vertices per face so face i is
  * primitive i with its vertices in stored order, byte for byte. */
-#include "renderer/meshio.h"
+#include "renderer/scene/meshio.h"
 
 #include <errno.h>
 #include <math.h>
@@ -19,7 +19,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
-#include "renderer/ply.h"
+#include "renderer/scene/ply.h"
 #include "renderer/scene.h"
 #include "sim/err.h"
 #include "sim/outfile.h"

@@ -4,12 +4,12 @@
  * Every tree has the same topology (fixed branching, fixed leaves per tip); the
  * seed only moves, bends and sizes things. So the triangle count depends on
  * `detail` alone: trees * GROVE_TREE_TRIS + ground. */
-#include "renderer/gen.h"
+#include "renderer/scene/gen.h"
 
 #include <math.h>
 #include <stdlib.h>
 
-#include "renderer/gen_util.h"
+#include "renderer/scene/gen_util.h"
 #include "renderer/rng.h"
 #include "renderer/scene.h"
 #include "sim/err.h"

@@ -19,13 +19,13 @@
  * (last) pass frees chunks behind the rays (qstore_chunk_drop). With one
  * worker this is the single loop it always was: take the fullest queue, pass
  * over its rays in order, take the next. Private to renderer/. */
-#ifndef RTSIM_RENDERER_QDRAIN_H
-#define RTSIM_RENDERER_QDRAIN_H
+#ifndef RTSIM_RENDERER_POLICY_QDRAIN_H
+#define RTSIM_RENDERER_POLICY_QDRAIN_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "renderer/qstore.h"
+#include "renderer/policy/qstore.h"
 
 struct qpoint_set;
 struct trace_ctx;

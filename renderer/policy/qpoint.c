@@ -2,7 +2,7 @@
  * this + 1, above child after the below subtree), so parents precede
  * children: every pass here is a plain forward or backward scan or a walk
  * with a stack as deep as the tree, with no recursion. */
-#include "renderer/qpoint.h"
+#include "renderer/policy/qpoint.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -3,8 +3,8 @@
  * three are present) and the face element's index lists, fanned into
  * triangles in file order. Every malformed input is one error; memory is a
  * fixed factor of the file's size. */
-#ifndef RTSIM_RENDERER_PLY_H
-#define RTSIM_RENDERER_PLY_H
+#ifndef RTSIM_RENDERER_SCENE_PLY_H
+#define RTSIM_RENDERER_SCENE_PLY_H
 
 #include <stdbool.h>
 #include <stddef.h>

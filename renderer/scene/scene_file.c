@@ -1,15 +1,15 @@
 /* Scene files: YAML (through sim/cfg) to a struct scene. All reads happen
  * here; every value is range-checked at its source position; unknown keys are
  * errors that list what was expected. */
-#include "renderer/scene_file.h"
+#include "renderer/scene/scene_file.h"
 
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
 
 #include "renderer/camera.h"
-#include "renderer/gen.h"
-#include "renderer/meshio.h"
+#include "renderer/scene/gen.h"
+#include "renderer/scene/meshio.h"
 #include "renderer/scene.h"
 #include "sim/cfg.h"
 #include "sim/err.h"

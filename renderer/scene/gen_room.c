@@ -7,12 +7,12 @@
  * balls, books) fills a fixed list of slots. Below detail 1 slots are thinned
  * in proportion to detail; above it tessellation alone grows. Which slots are filled depends on detail, never on
  * the seed, so the seed changes sizes and positions but not the triangle count. */
-#include "renderer/gen.h"
+#include "renderer/scene/gen.h"
 
 #include <math.h>
 #include <stdbool.h>
 
-#include "renderer/gen_util.h"
+#include "renderer/scene/gen_util.h"
 #include "renderer/rng.h"
 #include "renderer/scene.h"
 #include "sim/err.h"

@@ -1,10 +1,10 @@
 /* The resumable walk (qwalk.h): trace.c's traversal steps (renderer/trav.h),
  * paused at queue points and rebuilt there. */
-#include "renderer/qwalk.h"
+#include "renderer/policy/qwalk.h"
 
 #include <math.h>
 
-#include "renderer/qpoint.h"
+#include "renderer/policy/qpoint.h"
 #include "renderer/ray.h"
 #include "renderer/scene.h"
 #include "sim/err.h"

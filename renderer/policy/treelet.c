@@ -1,13 +1,13 @@
 /* Treelet formation (treelet.h). Nodes are in depth-first preorder (below
  * child = this + 1, above child by index), so a node's box follows from its
  * parent's in one forward scan. */
-#include "renderer/treelet.h"
+#include "renderer/policy/treelet.h"
 
 #include <stdlib.h>
 #include <string.h>
 
 #include "renderer/kdtree.h"
-#include "renderer/qpoint.h"
+#include "renderer/policy/qpoint.h"
 #include "sim/err.h"
 
 struct box {

@@ -31,8 +31,8 @@
  *   detached queue counts, and frees the chunks behind it). So writes made to
  *   a handed-out ray's slot always land in that ray's own record.
  * Private to renderer/. */
-#ifndef RTSIM_RENDERER_QSTORE_H
-#define RTSIM_RENDERER_QSTORE_H
+#ifndef RTSIM_RENDERER_POLICY_QSTORE_H
+#define RTSIM_RENDERER_POLICY_QSTORE_H
 
 #include <stdbool.h>
 #include <stdint.h>

@@ -7,7 +7,7 @@
  * indices) that is under 30 bytes of memory per file byte: the file (up to 2x
  * while read), 4x for positions, 4x for normals, under 24x for triangles. No
  * recursion, no whitespace skipping between end_header and the data. */
-#include "renderer/ply.h"
+#include "renderer/scene/ply.h"
 
 #include <errno.h>
 #include <math.h>

@@ -1,10 +1,10 @@
 /* Mesh files in and out: import of PLY through rtsim's own strict reader
- * (renderer/ply.h) and of any other format assimp reads (OBJ, glTF, ...)
+ * (renderer/scene/ply.h) and of any other format assimp reads (OBJ, glTF, ...)
  * through its C API, and export of the scene's triangles as a PLY file whose
  * faces are in primitive-id order, so any other ray tracer loads exactly our
  * geometry. */
-#ifndef RTSIM_RENDERER_MESHIO_H
-#define RTSIM_RENDERER_MESHIO_H
+#ifndef RTSIM_RENDERER_SCENE_MESHIO_H
+#define RTSIM_RENDERER_SCENE_MESHIO_H
 
 #include <stdbool.h>
 #include <stdint.h>

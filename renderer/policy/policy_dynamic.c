@@ -56,7 +56,7 @@
  * Simulated memory besides nodes, leaf lists and triangles (as trace.c) and
  * the queues (qstore.h): primary rays are read from the camera's array
  * (policy_primary). */
-#include "renderer/policy_impl.h"
+#include "renderer/policy/policy_impl.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -64,15 +64,15 @@
 #include "renderer/camera.h"
 #include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
-#include "renderer/policy.h"
-#include "renderer/qdrain.h"
-#include "renderer/qpoint.h"
-#include "renderer/qstore.h"
-#include "renderer/qwalk.h"
+#include "renderer/policy/policy.h"
+#include "renderer/policy/qdrain.h"
+#include "renderer/policy/qpoint.h"
+#include "renderer/policy/qstore.h"
+#include "renderer/policy/qwalk.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
-#include "renderer/treelet.h"
+#include "renderer/policy/treelet.h"
 #include "sim/err.h"
 
 #define DYN_NONE UINT32_MAX

@@ -6,13 +6,13 @@
  * simulated memory image, in the worker's ray region (a push is a store, a pop
  * a load), so a coroutine can suspend anywhere and its ray traffic is counted
  * like any other data. */
-#include "renderer/policy_impl.h"
+#include "renderer/policy/policy_impl.h"
 
 #include <stdlib.h>
 
 #include "renderer/camera.h"
 #include "renderer/framebuffer.h"
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"

@@ -2,14 +2,14 @@
  * (policy_recursive.c, policy_packet.c, policy_dynamic.c): the job's fields,
  * each module's table of operations, and the work-list helpers every module
  * uses the same way. Private to renderer/. */
-#ifndef RTSIM_RENDERER_POLICY_IMPL_H
-#define RTSIM_RENDERER_POLICY_IMPL_H
+#ifndef RTSIM_RENDERER_POLICY_POLICY_IMPL_H
+#define RTSIM_RENDERER_POLICY_POLICY_IMPL_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
 #include "renderer/camera.h"
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 
 struct ray;
 

@@ -20,8 +20,8 @@
  * partition is deterministic. The tree's memory layout is not changed (Aila and
  * Karras also lay each treelet out contiguously; here the nodes stay in
  * depth-first order). */
-#ifndef RTSIM_RENDERER_TREELET_H
-#define RTSIM_RENDERER_TREELET_H
+#ifndef RTSIM_RENDERER_POLICY_TREELET_H
+#define RTSIM_RENDERER_POLICY_TREELET_H
 
 #include <stdint.h>
 

@@ -1,11 +1,11 @@
 /* The multi-core drain (qdrain.h): drains, passes, claims, and cores joining
  * one another's drains. */
-#include "renderer/qdrain.h"
+#include "renderer/policy/qdrain.h"
 
 #include <stdlib.h>
 
 #include "renderer/kdtree.h"
-#include "renderer/qpoint.h"
+#include "renderer/policy/qpoint.h"
 #include "renderer/trace.h"
 #include "renderer/trav.h"
 #include "sim/err.h"

@@ -3,13 +3,13 @@
  * inputs by the same expression, so neighbouring triangles see bit-identical
  * floats: the precondition of a watertight ray/triangle test. The generators
  * themselves live in gen_sphereflake.c, gen_grove.c and gen_room.c. */
-#include "renderer/gen.h"
+#include "renderer/scene/gen.h"
 
 #include <math.h>
 #include <stddef.h>
 #include <stdlib.h>
 
-#include "renderer/gen_util.h"
+#include "renderer/scene/gen_util.h"
 #include "renderer/scene.h"
 #include "sim/err.h"
 

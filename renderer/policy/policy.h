@@ -23,8 +23,8 @@
  *   rather than spin, and whoever makes the work wakes it (mem_wake): the
  *   dynamic policy's workers share one batch.
  * With one worker every policy makes exactly the accesses it always made. */
-#ifndef RTSIM_RENDERER_POLICY_H
-#define RTSIM_RENDERER_POLICY_H
+#ifndef RTSIM_RENDERER_POLICY_POLICY_H
+#define RTSIM_RENDERER_POLICY_POLICY_H
 
 #include <stdbool.h>
 #include <stdint.h>

@@ -17,14 +17,14 @@
  * was active in, triangles tested against it) goes to its pixel, so they read
  * like the recursive policy's. tr->stats.node_visits counts packet node visits
  * (one fetch serves the packet); tri_tests counts ray/triangle tests. */
-#include "renderer/policy_impl.h"
+#include "renderer/policy/policy_impl.h"
 
 #include <stdlib.h>
 #include <string.h>
 
 #include "renderer/camera.h"
 #include "renderer/framebuffer.h"
-#include "renderer/policy.h"
+#include "renderer/policy/policy.h"
 #include "renderer/rng.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"

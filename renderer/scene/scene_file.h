@@ -1,8 +1,8 @@
 /* Scene files (the YAML under scenes/): camera, image size, lights, materials and
  * geometry (procedural generators or mesh files imported through assimp).
  * The format is documented in scenes/README.md. */
-#ifndef RTSIM_RENDERER_SCENE_FILE_H
-#define RTSIM_RENDERER_SCENE_FILE_H
+#ifndef RTSIM_RENDERER_SCENE_SCENE_FILE_H
+#define RTSIM_RENDERER_SCENE_SCENE_FILE_H
 
 #include <stdbool.h>
 

@@ -1,12 +1,12 @@
 /* Private mesh builders shared by the procedural generators (gen_*.c). Not a
- * public contract: only renderer/gen*.c include it.
+ * public contract: only renderer/scene/gen*.c include it.
  * Invariant every builder keeps: a vertex shared by several triangles of one
  * mesh is computed once (or by one expression of the same integer inputs), so
  * its float coordinates are bit-identical wherever it appears. The watertight
  * ray/triangle test relies on that. Geometry is computed in double and rounded
  * to float only when a triangle is emitted. */
-#ifndef RTSIM_RENDERER_GEN_UTIL_H
-#define RTSIM_RENDERER_GEN_UTIL_H
+#ifndef RTSIM_RENDERER_SCENE_GEN_UTIL_H
+#define RTSIM_RENDERER_SCENE_GEN_UTIL_H
 
 #include <math.h>
 #include <stdint.h>

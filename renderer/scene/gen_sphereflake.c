@@ -3,11 +3,11 @@
  * balls.c (floor first, then a depth-first walk from the root), with its
  * row-vector matrix convention; positions are computed in double and rounded
  * to float only in the emitted triangles. */
-#include "renderer/gen.h"
+#include "renderer/scene/gen.h"
 
 #include <math.h>
 
-#include "renderer/gen_util.h"
+#include "renderer/scene/gen_util.h"
 #include "renderer/scene.h"
 #include "sim/err.h"
 
