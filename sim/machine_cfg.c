@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "sim/cache.h"
 #include "sim/cfg.h"
 #include "sim/dram_banked.h"
 #include "sim/err.h"
@@ -439,17 +440,33 @@ static bool fail_at(const struct machine_cfg *c, const char *name, struct err *e
 
 static bool check_cache(const struct machine_cfg *c, const char *lvl, uint64_t size, uint32_t ways,
                         struct err *e) {
-  char sk[16], wk[16], got[64];
+  char sk[16], wk[16], got[64], msg[64];
   snprintf(sk, sizeof sk, "%s.size", lvl);
   snprintf(wk, sizeof wk, "%s.ways", lvl);
+  const struct cache_params cp = {size, ways, MACHINE_LG2_LINE};
+  const unsigned line = 1u << MACHINE_LG2_LINE;
+  const unsigned long long lines = size >> MACHINE_LG2_LINE;
   snprintf(got, sizeof got, "%llu bytes", (unsigned long long)size);
-  if (size < 64) return fail_at(c, sk, e, "smaller than one 64-byte line", got);
-  if (size % 64) return fail_at(c, sk, e, "not a whole number of 64-byte lines", got);
-  uint64_t lines = size / 64;
-  snprintf(got, sizeof got, "%u ways for %llu lines", ways, (unsigned long long)lines);
-  if (ways && ways > lines) return fail_at(c, wk, e, "more ways than the cache has lines", got);
-  if (ways && lines % ways) return fail_at(c, wk, e, "the ways must divide the number of lines", got);
-  return true;
+  switch (cache_geometry(&cp)) {
+  case CACHE_GEOMETRY_OK: return true;
+  case CACHE_GEOMETRY_SMALL: snprintf(msg, sizeof msg, "smaller than one %u-byte line", line); break;
+  case CACHE_GEOMETRY_PARTIAL:
+    snprintf(msg, sizeof msg, "not a whole number of %u-byte lines", line);
+    break;
+  case CACHE_GEOMETRY_LINES:
+    snprintf(msg, sizeof msg, "more than %llu lines", (unsigned long long)CACHE_MAX_LINES);
+    break;
+  case CACHE_GEOMETRY_WAYS_OVER:
+  case CACHE_GEOMETRY_WAYS_SPLIT:
+    snprintf(got, sizeof got, "%u ways for %llu lines", ways, lines);
+    return fail_at(c, wk, e,
+                   cache_geometry(&cp) == CACHE_GEOMETRY_WAYS_OVER
+                       ? "more ways than the cache has lines"
+                       : "the ways must divide the number of lines",
+                   got);
+  case CACHE_GEOMETRY_LINE: CHECK(!"the machine's line size is a cache's"); break;
+  }
+  return fail_at(c, sk, e, msg, got);
 }
 
 bool machine_cfg_check(const struct machine_cfg *c, struct err *e) {
@@ -457,11 +474,12 @@ bool machine_cfg_check(const struct machine_cfg *c, struct err *e) {
   if (p->l1_size_bytes && !check_cache(c, "l1", p->l1_size_bytes, p->l1_ways, e)) return false;
   if (!check_cache(c, "l2", p->l2_size_bytes, p->l2_ways, e)) return false;
   uint64_t n = (uint64_t)p->cores * p->threads_per_core * p->rays_per_thread;
-  if (n > (1u << 20)) {
-    char got[64];
+  if (n > MACHINE_MAX_CONTEXTS) {
+    char got[64], msg[96];
     snprintf(got, sizeof got, "%llu ray contexts", (unsigned long long)n);
-    return fail_at(c, "rays_per_thread", e,
-                   "cores x threads_per_core x rays_per_thread must be at most 1048576", got);
+    snprintf(msg, sizeof msg, "cores x threads_per_core x rays_per_thread must be at most %u",
+             MACHINE_MAX_CONTEXTS);
+    return fail_at(c, "rays_per_thread", e, msg, got);
   }
   /* A key written for another DRAM level, after the rung was chosen, would
    * silently do nothing: refuse it. (Choosing the rung last, as --set
