@@ -103,9 +103,11 @@ int cmd_run(int argc, char **argv) {
   struct outfile trace = {0};
   struct outdir od = {0};
   struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v), 0}; /* at most one an argument */
+  char policy_expect[160];
+  app_policy_expect(policy_expect, sizeof policy_expect, "");
   const struct opts_spec spec[] = {
       OPTS_STR("output", 'o', &out),
-      APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy),
+      APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy, policy_expect),
       OPTS_PARSE("set", 0, &sets, app_sets_add, "KEY=VALUE"),
       OPTS_STR("dram-trace", 0, &trace_path),
       OPTS_STR("cost-preview", 0, &cost_preview),

@@ -109,9 +109,10 @@ static bool check_workload(const struct priv *pv, enum wl k, const struct cfg_no
   case WL_SCENE: return true; /* resolved and loaded later */
   case WL_POLICY: {
     enum policy_kind p;
+    char list[128];
+    policy_list(list, sizeof list, ", ");
     if (!policy_parse(text, &p))
-      return cfg_fail(d, n, key, e, "unknown policy (got '%s', expected one of: recursive, packet, dynamic, treelet)",
-                      text);
+      return cfg_fail(d, n, key, e, "unknown policy (got '%s', expected one of: %s)", text, list);
     return true;
   }
   case WL_RAYS: {
