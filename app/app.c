@@ -39,6 +39,12 @@ bool app_parse_rays(const char *text, void *mask) { return shade_parse_rays(text
 
 bool app_parse_policy(const char *text, void *kind) { return policy_parse(text, kind); }
 
+void app_policy_expect(char *buf, size_t cap, const char *more) {
+  char list[128];
+  policy_list(list, sizeof list, ", ");
+  snprintf(buf, cap, "one of: %s%s", list, more);
+}
+
 double app_now(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);

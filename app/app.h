@@ -42,16 +42,17 @@ int app_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format
 bool app_parse_rays(const char *text, void *mask);
 #define APP_RAYS_EXPECT "a comma-separated list of primary, shadow, specular, diffuse"
 bool app_parse_policy(const char *text, void *kind);
-#define APP_POLICY_EXPECT "one of: recursive, packet, dynamic, treelet"
+/* What --policy takes, "one of: recursive, ..." and then `more` (", all"). */
+void app_policy_expect(char *buf, size_t cap, const char *more);
 /* The opts.h table entries render and run share: --width, --height (uint64_t),
  * --rays (uint32_t mask), --seed (uint64_t, and a bool set when given),
- * --policy (enum policy_kind). */
-#define APP_RENDER_OPTS(width, height, mask, seed, have_seed, policy)                        \
+ * --policy (enum policy_kind; policy_expect: app_policy_expect's text). */
+#define APP_RENDER_OPTS(width, height, mask, seed, have_seed, policy, policy_expect)         \
   OPTS_U64("width", 0, width, 1, 16384), OPTS_U64("height", 0, height, 1, 16384),           \
       OPTS_PARSE("rays", 0, mask, app_parse_rays, APP_RAYS_EXPECT),                         \
       {.name = "seed", .kind = OPTS_KIND_U64, .dst = (seed), .hi = UINT64_MAX,              \
        .given = (have_seed)},                                                               \
-      OPTS_PARSE("policy", 0, policy, app_parse_policy, APP_POLICY_EXPECT)
+      OPTS_PARSE("policy", 0, policy, app_parse_policy, policy_expect)
 
 /* The source revision this program was built from: `git describe --always
  * --dirty` of the source tree at build time, or "unknown" outside a git

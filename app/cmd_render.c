@@ -70,9 +70,11 @@ int cmd_render(int argc, char **argv) {
   uint64_t width = 0, height = 0, seed = 0;
   bool have_seed = false, half = false;
   enum policy_kind policy = POLICY_RECURSIVE;
+  char policy_expect[160];
+  app_policy_expect(policy_expect, sizeof policy_expect, "");
   const struct opts_spec spec[] = {
       OPTS_STR("output", 'o', &out),
-      APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy),
+      APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy, policy_expect),
       OPTS_FLAG("half", 0, &half),
       OPTS_STR("preview", 0, &preview),
       OPTS_END};

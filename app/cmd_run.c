@@ -73,6 +73,9 @@ static const char HELP[] =
     "                      cost.issue_slots)\n"
     "  --cost-max X        the colour bar's top (default: the largest pixel), to\n"
     "                      compare maps of several runs on one scale\n"
+    "  --help-keys         every machine config key as a Markdown table (name,\n"
+    "                      default, range, unit, the rungs that read it, what it\n"
+    "                      is): the README's table\n"
     "  -h, --help          this text\n";
 
 static bool parse_cost_max(const char *text, void *dst) {
@@ -96,12 +99,15 @@ int cmd_run(int argc, char **argv) {
   enum policy_kind policy = POLICY_RECURSIVE;
   const char *trace_path = NULL, *cost_preview = NULL, *cost_channel = "cost.issue_slots";
   double cost_max = 0;
+  bool help_keys = false;
   struct outfile trace = {0};
   struct outdir od = {0};
   struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v), 0}; /* at most one an argument */
+  char policy_expect[160];
+  app_policy_expect(policy_expect, sizeof policy_expect, "");
   const struct opts_spec spec[] = {
       OPTS_STR("output", 'o', &out),
-      APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy),
+      APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy, policy_expect),
       OPTS_PARSE("set", 0, &sets, app_sets_add, "KEY=VALUE"),
       OPTS_STR("dram-trace", 0, &trace_path),
       OPTS_STR("cost-preview", 0, &cost_preview),
@@ -109,10 +115,16 @@ int cmd_run(int argc, char **argv) {
                  "one of: cost.issue_slots, cost.load_wait_cycles, cost.dram_read_bytes.geometry, "
                  ".node, .ray, .queue, .other, cost.dram_write_bytes"),
       OPTS_PARSE("cost-max", 0, &cost_max, parse_cost_max, "a number above 0"),
+      OPTS_FLAG("help-keys", 0, &help_keys),
       OPTS_END};
   struct opts_args args;
   int rc = opts_parse("run", HELP, spec, argc, argv, &args);
   if (rc != OPTS_GO) goto done;
+  if (help_keys) {
+    machine_cfg_write_keys(stdout);
+    rc = 0;
+    goto done;
+  }
   rc = APP_EXIT_USAGE;
   if (args.n != 2) {
     app_usage_error("run", "expected MACHINE.yaml SCENE.yaml, got %d file%s", args.n,

@@ -160,9 +160,11 @@ int cmd_traffic(int argc, char **argv) {
   bool want[POLICY_COUNT] = {true, true, true, false};
   struct policy_params pp;
   policy_params_default(&pp);
+  char policy_expect[160];
+  app_policy_expect(policy_expect, sizeof policy_expect, ", all");
   const struct opts_spec spec[] = {
       OPTS_STR("output", 'o', &out), TRAFFIC_OPTS(&width, &height, &mask, &pp, &threads),
-      OPTS_PARSE("policy", 0, want, parse_policies, "one of: recursive, packet, dynamic, treelet, all"),
+      OPTS_PARSE("policy", 0, want, parse_policies, policy_expect),
       OPTS_END};
   struct opts_args args;
   int rc = opts_parse("traffic", TRAFFIC_HELP, spec, argc, argv, &args);
@@ -342,10 +344,12 @@ int cmd_trace(int argc, char **argv) {
   bool have_policy = false;
   struct policy_params pp;
   policy_params_default(&pp);
+  char policy_expect[160];
+  app_policy_expect(policy_expect, sizeof policy_expect, "");
   const struct opts_spec spec[] = {
       OPTS_STR("din", 0, &din_path), TRAFFIC_OPTS(&width, &height, &mask, &pp, &threads),
       {.name = "policy", .kind = OPTS_KIND_PARSE, .dst = &pk, .parse = app_parse_policy,
-       .expect = APP_POLICY_EXPECT, .given = &have_policy},
+       .expect = policy_expect, .given = &have_policy},
       OPTS_PARSE("cache", 0, &cache, parse_cache, "a power of two from 1024 to 4194304"),
       OPTS_END};
   struct opts_args args;
@@ -354,7 +358,11 @@ int cmd_trace(int argc, char **argv) {
   const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;
   if (!din_path) return app_usage_error("trace", "missing --din FILE");
-  if (!have_policy) return app_usage_error("trace", "missing --policy (recursive, packet, dynamic or treelet)");
+  if (!have_policy) {
+    char list[128];
+    policy_list(list, sizeof list, " or ");
+    return app_usage_error("trace", "missing --policy (%s)", list);
+  }
   if (!mask) return app_usage_error("trace", "missing --rays (primary, shadow, specular or diffuse)");
   struct app_world w;
   if (!app_world_load(&w, scene_path)) return 2;

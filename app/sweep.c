@@ -32,7 +32,6 @@
 enum wl { WL_SCENE, WL_POLICY, WL_RAYS, WL_WIDTH, WL_HEIGHT, WL_SEED, WL_COUNT };
 static const char *const WL_NAMES[WL_COUNT + 1] = {"scene", "policy", "rays",
                                                    "width", "height", "seed", NULL};
-#define WL_LIST "scene, policy, rays, width, height, seed"
 
 /* One key's values (an axis, or one key of a zipped group). */
 struct axis {
@@ -110,9 +109,10 @@ static bool check_workload(const struct priv *pv, enum wl k, const struct cfg_no
   case WL_SCENE: return true; /* resolved and loaded later */
   case WL_POLICY: {
     enum policy_kind p;
+    char list[128];
+    policy_list(list, sizeof list, ", ");
     if (!policy_parse(text, &p))
-      return cfg_fail(d, n, key, e, "unknown policy (got '%s', expected one of: recursive, packet, dynamic, treelet)",
-                      text);
+      return cfg_fail(d, n, key, e, "unknown policy (got '%s', expected one of: %s)", text, list);
     return true;
   }
   case WL_RAYS: {
@@ -142,14 +142,17 @@ static bool check_workload(const struct priv *pv, enum wl k, const struct cfg_no
 /* A key that is neither a machine nor a workload key. */
 static bool unknown_key(const struct priv *pv, const struct cfg_node *v, const char *section,
                         struct err *e, bool workload_too) {
-  char keys[2048];
+  char keys[2048], wl[256] = "";
   machine_cfg_key_list(keys, sizeof keys);
   if (machine_cfg_renamed(v->key))
     return err_set(e, pv->doc.file, v->key_line, v->key_col, "%s.%s: %s", section, v->key,
                    machine_cfg_renamed(v->key));
+  for (int k = 0; workload_too && k < WL_COUNT; k++)
+    snprintf(wl + strlen(wl), sizeof wl - strlen(wl), "%s%s", k ? ", " : "; or a workload key: ",
+             WL_NAMES[k]);
   return err_set(e, pv->doc.file, v->key_line, v->key_col,
                  "%s.%s: unknown key '%s' (expected a machine config key: %s%s)", section, v->key,
-                 v->key, keys, workload_too ? "; or a workload key: " WL_LIST : "");
+                 v->key, keys, wl);
 }
 
 /* Where else key `key` was given, if anywhere (section name and line). */
@@ -366,7 +369,7 @@ static bool read_file(struct priv *pv, const char *path, struct err *e) {
       if (k == WL_SCENE && !resolve(pv, n, path_k, &pv->scene_fixed, e)) return false;
       pv->wl[k] = n;
     }
-    if (!cfg_check_keys(d, w, "workload", WL_LIST, e)) return false;
+    if (!cfg_check_keys(d, w, "workload", e)) return false;
   }
 
   struct cfg_node *sets = cfg_get(root, "set");
@@ -420,7 +423,7 @@ static bool read_file(struct priv *pv, const char *path, struct err *e) {
       pv->dims[pv->ndims++] = (struct dim){first, grp->count, grp->items[0].count};
     }
   }
-  if (!cfg_check_keys(d, root, "", "machine, workload, set, axes, zip", e)) return false;
+  if (!cfg_check_keys(d, root, "", e)) return false;
   bool scene_swept = false;
   for (unsigned a = 0; a < pv->naxes; a++) scene_swept |= pv->axes[a].wl == WL_SCENE;
   if (!pv->scene_fixed && !scene_swept)

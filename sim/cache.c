@@ -122,15 +122,24 @@ static inline struct slot *slot_get(struct cache *c, uint64_t i) {
   return slot_at(c, set_get(c, i / c->ways), i);
 }
 
-const char *cache_params_problem(const struct cache_params *p) {
-  if (p->lg2_line < 2 || p->lg2_line > 16) return "the line size must be 4 bytes to 64 KiB";
+enum cache_geometry cache_geometry(const struct cache_params *p) {
+  if (p->lg2_line < 2 || p->lg2_line > 16) return CACHE_GEOMETRY_LINE;
   uint64_t line = 1ull << p->lg2_line;
-  if (p->size_bytes < line) return "the size is smaller than one line";
-  if (p->size_bytes % line) return "the size is not a whole number of lines";
+  if (p->size_bytes < line) return CACHE_GEOMETRY_SMALL;
+  if (p->size_bytes % line) return CACHE_GEOMETRY_PARTIAL;
   uint64_t lines = p->size_bytes >> p->lg2_line;
-  if (lines > (1ull << 28)) return "more than 2^28 lines";
-  if (p->ways && lines % p->ways) return "the ways do not divide the number of lines";
-  return NULL;
+  if (lines > CACHE_MAX_LINES) return CACHE_GEOMETRY_LINES;
+  if (p->ways > lines) return CACHE_GEOMETRY_WAYS_OVER;
+  if (p->ways && lines % p->ways) return CACHE_GEOMETRY_WAYS_SPLIT;
+  return CACHE_GEOMETRY_OK;
+}
+
+const char *cache_params_problem(const struct cache_params *p) {
+  static const char *const WHY[] = {
+      NULL, "the line size must be 4 bytes to 64 KiB", "the size is smaller than one line",
+      "the size is not a whole number of lines", "more than 2^28 lines",
+      "more ways than lines", "the ways do not divide the number of lines"};
+  return WHY[cache_geometry(p)];
 }
 
 static inline uint64_t hash_of(const struct cache *c, uint64_t line) {

@@ -18,6 +18,19 @@ struct cache_params {
   unsigned lg2_line;
 };
 
+/* What is wrong with a cache's shape, checked in this order (the one rule for
+ * every cache: cache_create's check and the machine config's). */
+enum cache_geometry {
+  CACHE_GEOMETRY_OK,
+  CACHE_GEOMETRY_LINE,       /* lg2_line outside 2..16 */
+  CACHE_GEOMETRY_SMALL,      /* smaller than one line */
+  CACHE_GEOMETRY_PARTIAL,    /* not a whole number of lines */
+  CACHE_GEOMETRY_LINES,      /* more than CACHE_MAX_LINES lines */
+  CACHE_GEOMETRY_WAYS_OVER,  /* more ways than lines */
+  CACHE_GEOMETRY_WAYS_SPLIT, /* the ways do not divide the lines */
+};
+#define CACHE_MAX_LINES (1ull << 28)
+enum cache_geometry cache_geometry(const struct cache_params *p);
 /* NULL if p is usable, else a one-line description of what is wrong. */
 const char *cache_params_problem(const struct cache_params *p);
 

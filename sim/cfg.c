@@ -323,6 +323,7 @@ static bool build(const struct loader *L, uint32_t i, struct cfg_node *out, stru
 static void node_free(struct cfg_node *n) {
   for (uint32_t i = 0; i < n->count; i++) node_free(&n->items[i]);
   free(n->items);
+  free(n->asked);
   memset(n, 0, sizeof *n);
 }
 
@@ -440,14 +441,35 @@ bool cfg_load_text(struct cfg_doc *d, const char *name, const char *text, struct
   return size_ok(d, text, len, e) && load(d, text, len, e);
 }
 
-struct cfg_node *cfg_get(struct cfg_node *m, const char *key) {
+/* Record in map m that its reader asks for key (once). */
+static void ask(struct cfg_node *m, const char *key) {
+  const size_t klen = strlen(key);
+  for (const char *p = m->asked; p && *p;) {
+    const char *end = strchr(p, ',');
+    size_t len = end ? (size_t)(end - p) : strlen(p);
+    if (len == klen && !memcmp(p, key, klen)) return;
+    p = end ? end + 2 : p + len;
+  }
+  const size_t sep = m->asked_len ? 2 : 0;
+  m->asked = xrealloc(m->asked, m->asked_len + sep + klen + 1);
+  memcpy(m->asked + m->asked_len, ", ", sep);
+  memcpy(m->asked + m->asked_len + sep, key, klen + 1);
+  m->asked_len += (uint32_t)(sep + klen);
+}
+
+struct cfg_node *cfg_peek(struct cfg_node *m, const char *key) {
   if (!m || m->kind != CFG_MAP) return NULL;
   for (uint32_t i = 0; i < m->count; i++)
-    if (strcmp(m->items[i].key, key) == 0) {
-      m->items[i].used = true;
-      return &m->items[i];
-    }
+    if (strcmp(m->items[i].key, key) == 0) return &m->items[i];
   return NULL;
+}
+
+struct cfg_node *cfg_get(struct cfg_node *m, const char *key) {
+  if (!m || m->kind != CFG_MAP) return NULL;
+  ask(m, key);
+  struct cfg_node *n = cfg_peek(m, key);
+  if (n) n->used = true;
+  return n;
 }
 
 bool cfg_fail(const struct cfg_doc *d, const struct cfg_node *n, const char *path, struct err *e,
@@ -576,7 +598,8 @@ bool cfg_enum(const struct cfg_doc *d, const struct cfg_node *n, const char *pat
 }
 
 bool cfg_check_keys(const struct cfg_doc *d, const struct cfg_node *m, const char *path,
-                    const char *expected, struct err *e) {
+                    struct err *e) {
+  const char *expected = m->asked ? m->asked : "(none)";
   for (uint32_t i = 0; i < m->count; i++) {
     const struct cfg_node *v = &m->items[i];
     if (v->used) continue;

@@ -2,7 +2,9 @@
  * every value's 1-based source position, plus typed getters that report
  * "file:line:col: error: key.path: what (got X, expected Y)". No libyaml type
  * leaves this module; the libyaml document is freed as soon as the tree exists.
- * Every read marks the key used; cfg_check_keys turns unread keys into errors.
+ * Every read marks the key used, and every key a reader asks a map for is
+ * recorded, present or not; cfg_check_keys turns unread keys into errors that
+ * list what the reader asked for ("expected one of: ...").
  * Used for machine configs (sim) and scene files (renderer): it knows nothing
  * of either. */
 #ifndef RTSIM_SIM_CFG_H
@@ -42,6 +44,9 @@ struct cfg_node {
   struct cfg_node *items;   /* map entries or sequence items (owned) */
   uint32_t count;
   bool used;                /* read by a getter (for unknown-key checks) */
+  char *asked;              /* a map: the keys readers asked for, ", "-separated, in the
+                             * order first asked (owned; NULL: none yet) */
+  uint32_t asked_len;
 };
 
 struct cfg_doc {
@@ -58,8 +63,12 @@ bool cfg_load_file(struct cfg_doc *d, const char *path, struct err *e);
 bool cfg_load_text(struct cfg_doc *d, const char *name, const char *text, struct err *e);
 void cfg_free(struct cfg_doc *d);
 
-/* Entry `key` of map node m (marked used), or NULL when absent. */
+/* Entry `key` of map node m (marked used), or NULL when absent. Either way
+ * m records that its reader asks for `key` (for cfg_check_keys). */
 struct cfg_node *cfg_get(struct cfg_node *m, const char *key);
+/* Entry `key` of map node m, or NULL: a look that neither marks it used nor
+ * records the key as one the reader takes (a check of which keys a map has). */
+struct cfg_node *cfg_peek(struct cfg_node *m, const char *key);
 
 /* Fail with an error at node n: "<path>: <message>". Always returns false. */
 bool cfg_fail(const struct cfg_doc *d, const struct cfg_node *n, const char *path, struct err *e,
@@ -89,8 +98,9 @@ bool cfg_enum(const struct cfg_doc *d, const struct cfg_node *n, const char *pat
               const char *const *choices, int *out, struct err *e);
 
 /* Every key of map m must have been read; otherwise "unknown key 'k'
- * (expected one of: <expected>)" at the first unread key. */
+ * (expected one of: <the keys asked of m, in the order first asked>)" at the
+ * first unread key. */
 bool cfg_check_keys(const struct cfg_doc *d, const struct cfg_node *m, const char *path,
-                    const char *expected, struct err *e);
+                    struct err *e);
 
 #endif

@@ -150,7 +150,7 @@ const char *machine_params_problem(const struct machine_params *p) {
   if (p->cores < 1 || p->cores > 4096) return "cores: must be 1 to 4096";
   if (p->threads_per_core < 1 || p->threads_per_core > 256) return "threads_per_core: must be 1 to 256";
   if (p->rays_per_thread < 1 || p->rays_per_thread > 256) return "rays_per_thread: must be 1 to 256";
-  if ((uint64_t)p->cores * p->threads_per_core * p->rays_per_thread > (1u << 20))
+  if ((uint64_t)p->cores * p->threads_per_core * p->rays_per_thread > MACHINE_MAX_CONTEXTS)
     return "cores x threads_per_core x rays_per_thread: at most 2^20 ray contexts";
   if (p->l1_size_bytes) {
     struct cache_params c = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE};

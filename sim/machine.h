@@ -35,6 +35,7 @@
 struct timeline;
 
 #define MACHINE_LG2_LINE 6 /* 64-byte lines everywhere */
+#define MACHINE_MAX_CONTEXTS (1u << 20) /* cores x threads_per_core x rays_per_thread */
 
 /* The fidelity ladder's rungs, cheapest first (README "Fidelity ladder"): an
  * analytic estimate from a functional pass (sim/analytic.h: no machine is

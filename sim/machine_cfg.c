@@ -1,11 +1,14 @@
-/* One table of keys drives reading, --set, checking and writing. */
+/* One table of keys, a row each, drives the defaults, reading, --set, the key
+ * lists of messages, checking, writing and the README key table. */
 #include "sim/machine_cfg.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "sim/cache.h"
 #include "sim/cfg.h"
 #include "sim/dram_banked.h"
 #include "sim/err.h"
@@ -14,190 +17,137 @@
 
 enum kind { K_U32, K_U64, K_F64, K_SIZE, K_WAYS, K_ENUM, K_MAPPING };
 
+/* The fidelity rungs that read a key (a mask of 1 << enum machine_fidelity);
+ * a key written for another rung after fidelity was chosen is refused. */
+#define R_A (1u << MACHINE_FIDELITY_ANALYTIC)
+#define R_F (1u << MACHINE_FIDELITY_FIXED)
+#define R_C (1u << MACHINE_FIDELITY_CHANNEL)
+#define R_B (1u << MACHINE_FIDELITY_BANKED)
+#define R_ALL (R_A | R_F | R_C | R_B)
+
 struct key {
   const char *name; /* "section.key" or "key" */
   enum kind kind;
-  double lo, hi;
-  size_t off;
+  double lo, hi;    /* K_ENUM: 0 and the last value's index */
+  const char *def;  /* the default, as a config writes it */
+  const char *unit; /* of the value ("" for a count or a name) */
+  unsigned rungs;   /* R_*: the fidelity rungs that read it */
+  size_t off;       /* where it goes in struct machine_params */
   const char *const *names; /* K_ENUM: the values' names (a uint32_t index), hi + 1 of them */
+  const char *doc;  /* one line: what it is (README's key table) */
 };
 
-#define OFF(f) offsetof(struct machine_params, f), NULL
 static const char *const PAGE_NAMES[] = {"open", "close"};
 static const char *const FIDELITY_NAMES[MACHINE_FIDELITY_COUNT] = {"analytic", "fixed", "channel",
                                                                    "banked"};
 static const char *const QUEUE_NAMES[] = {"shared", "per_bank", "per_rank"}; /* enum dram_banked_queues */
 static const char *const SHARING_NAMES[] = {"partition", "chip"}; /* renderer/policy/policy.h */
-static const struct key KEYS[MACHINE_CFG_KEYS] = {
-    {"clock_ghz", K_F64, 1e-3, 1e3, OFF(clock_ghz)},
-    {"cores", K_U32, 1, 4096, OFF(cores)},
-    {"threads_per_core", K_U32, 1, 256, OFF(threads_per_core)},
-    {"rays_per_thread", K_U32, 1, 256, OFF(rays_per_thread)},
-    {"l1.size", K_SIZE, 0, 1ull << 30, OFF(l1_size_bytes)},
-    {"l1.ways", K_WAYS, 1, 1u << 24, OFF(l1_ways)},
-    {"l1.latency", K_U32, 0, 1e6, OFF(l1_latency_cycles)},
-    {"l2.size", K_SIZE, 1, 1ull << 34, OFF(l2_size_bytes)},
-    {"l2.ways", K_WAYS, 1, 1u << 28, OFF(l2_ways)},
-    {"l2.latency", K_U32, 0, 1e6, OFF(l2_latency_cycles)},
-    {"l2.banks", K_U32, 1, 4096, OFF(l2_banks)},
-    {"l2.mshrs", K_U32, 1, 1u << 20, OFF(l2_mshrs)},
-    {"l2.write_buffer", K_U32, 1, 1u << 20, OFF(l2_write_buffer)},
+
+/* Every machine key, one row each: name, kind, range, default, unit, rungs,
+ * where it goes, (names of an enum's values,) what it is. The order is that of
+ * the stats columns and of stats.json's config: add a key at the end of its
+ * section. configs/default.yaml (or the DRAM preset it includes) states each
+ * default again with its source; a test holds the two equal. */
+#define P(f) offsetof(struct machine_params, f), NULL
+#define B(f) offsetof(struct machine_params, dram_banked.f), NULL
+#define E(f, names) offsetof(struct machine_params, f), names
+static const struct key KEYS[] = {
+    {"clock_ghz", K_F64, 1e-3, 1e3, "1.4", "GHz", R_ALL, P(clock_ghz), "the core clock; converts cycles to seconds (rays_per_second)"},
+    {"cores", K_U32, 1, 4096, "16", "", R_ALL, P(cores), "cores, each with an issue port and a private L1"},
+    {"threads_per_core", K_U32, 1, 256, "4", "", R_ALL, P(threads_per_core), "hardware threads a core, sharing its issue port round robin"},
+    {"rays_per_thread", K_U32, 1, 256, "2", "", R_ALL, P(rays_per_thread), "ray contexts a thread, which switches to another when one waits on memory"},
+    {"l1.size", K_SIZE, 0, 1ull << 30, "8KiB", "bytes", R_ALL, P(l1_size_bytes), "each core's private L1 (0: none)"},
+    {"l1.ways", K_WAYS, 1, 1u << 24, "4", "", R_ALL, P(l1_ways), "the L1's associativity (full: fully associative)"},
+    {"l1.latency", K_U32, 0, 1e6, "3", "cycles", R_ALL, P(l1_latency_cycles), "an L1 hit's load-use latency"},
+    {"l2.size", K_SIZE, 1, 1ull << 34, "4MiB", "bytes", R_ALL, P(l2_size_bytes), "the shared L2 (tags allocated as lines arrive)"},
+    {"l2.ways", K_WAYS, 1, 1u << 28, "16", "", R_ALL, P(l2_ways), "the L2's associativity (full: fully associative)"},
+    {"l2.latency", K_U32, 0, 1e6, "20", "cycles", R_ALL, P(l2_latency_cycles), "an L2 hit's latency"},
+    {"l2.banks", K_U32, 1, 4096, "8", "", R_ALL, P(l2_banks), "line-interleaved L2 banks, one access a cycle each"},
+    {"l2.mshrs", K_U32, 1, 1u << 20, "64", "", R_ALL, P(l2_mshrs), "L2 misses outstanding at once"},
+    {"l2.write_buffer", K_U32, 1, 1u << 20, "16", "lines", R_ALL, P(l2_write_buffer), "dirty victims waiting for the DRAM"},
     /* Where dram.model stood (its successor), so columns keep their order. */
-    {"fidelity", K_ENUM, 0, MACHINE_FIDELITY_COUNT - 1, offsetof(struct machine_params, fidelity),
-     FIDELITY_NAMES},
-    {"dram.latency", K_U64, 0, 1e9, OFF(dram_latency_cycles)},
-    {"dram.bytes_per_cycle", K_F64, 1e-6, 1e6, OFF(dram_bytes_per_cycle)},
-    {"dram.queue_depth", K_U32, 1, 1u << 20, OFF(dram_queue_depth)},
-    {"dram.clock_mhz", K_U32, 1, 16000, OFF(dram_clock_mhz)},
-#define BK(f) offsetof(struct machine_params, dram_banked.f), NULL
-    {"dram.channels", K_U32, 1, 64, BK(channels)},
-    {"dram.ranks", K_U32, 1, 16, BK(ranks)},
-    {"dram.bank_groups", K_U32, 1, 16, BK(bank_groups)},
-    {"dram.banks_per_group", K_U32, 1, 64, BK(banks_per_group)},
-    {"dram.rows", K_U32, 1, 1u << 24, BK(rows)},
-    {"dram.columns", K_U32, 1, 1u << 20, BK(columns)},
-    {"dram.bus_bytes", K_U32, 1, 64, BK(bus_bytes)},
-    {"dram.burst_length", K_U32, 1, 64, BK(burst_length)},
-    {"dram.mapping", K_MAPPING, 0, 0, BK(mapping)},
-    {"dram.page_policy", K_ENUM, 0, 1, offsetof(struct machine_params, dram_banked.page),
-     PAGE_NAMES},
-    {"dram.read_queue", K_U32, 1, 4096, BK(read_queue)},
-    {"dram.write_queue", K_U32, 1, 4096, BK(write_queue)},
-    {"dram.write_high", K_U32, 1, 4096, BK(write_high)},
-    {"dram.write_low", K_U32, 0, 4096, BK(write_low)},
-    {"dram.controller_cycles", K_U32, 0, 1000, BK(controller_cycles)},
-    {"dram.queue_structure", K_ENUM, 0, 2, offsetof(struct machine_params, dram_banked.queue_structure),
-     QUEUE_NAMES},
-    {"dram.command_queue", K_U32, 1, 4096, BK(command_queue)},
-    {"dram.tCL", K_U32, 1, 1000, BK(tCL)},
-    {"dram.tCWL", K_U32, 1, 1000, BK(tCWL)},
-    {"dram.tRCD", K_U32, 1, 1000, BK(tRCD)},
-    {"dram.tRP", K_U32, 1, 1000, BK(tRP)},
-    {"dram.tRAS", K_U32, 1, 1000, BK(tRAS)},
-    {"dram.tRC", K_U32, 1, 2000, BK(tRC)},
-    {"dram.tCCD_S", K_U32, 1, 1000, BK(tCCD_S)},
-    {"dram.tCCD_L", K_U32, 1, 1000, BK(tCCD_L)},
-    {"dram.tRRD_S", K_U32, 1, 1000, BK(tRRD_S)},
-    {"dram.tRRD_L", K_U32, 1, 1000, BK(tRRD_L)},
-    {"dram.tFAW", K_U32, 1, 10000, BK(tFAW)},
-    {"dram.tWR", K_U32, 1, 1000, BK(tWR)},
-    {"dram.tWTR_S", K_U32, 1, 1000, BK(tWTR_S)},
-    {"dram.tWTR_L", K_U32, 1, 1000, BK(tWTR_L)},
-    {"dram.tRTW", K_U32, 1, 1000, BK(tRTW)},
-    {"dram.tRTP", K_U32, 1, 1000, BK(tRTP)},
-    {"dram.tREFI", K_U32, 0, 1u << 20, BK(tREFI)},
-    {"dram.tRFC", K_U32, 1, 100000, BK(tRFC)},
-#undef BK
-    {"costs.node", K_U32, 0, 1e6, OFF(cost_node_cycles)},
-    {"costs.triangle", K_U32, 0, 1e6, OFF(cost_triangle_cycles)},
-    {"costs.shade", K_U32, 0, 1e6, OFF(cost_shade_cycles)},
-    {"costs.ray_switch", K_U32, 0, 1e6, OFF(cost_ray_switch_cycles)},
-    {"timeline.window", K_U64, 1, 1e12, OFF(timeline_window_cycles)},
-    {"dynamic.sharing", K_ENUM, 0, 1, offsetof(struct machine_params, dyn_sharing), SHARING_NAMES},
-    {"sample.fraction", K_F64, 1e-6, 1, OFF(sample_fraction)},
-    {"sample.units", K_U32, 0, 1u << 20, OFF(sample_units)},
-    {"sample.warming", K_F64, 0, 1e6, OFF(sample_warming)},
-    {"sample.seed", K_U64, 0, 1e15, OFF(sample_seed)},
+    {"fidelity", K_ENUM, 0, MACHINE_FIDELITY_COUNT - 1, "banked", "", R_ALL, E(fidelity, FIDELITY_NAMES), "the rung of the fidelity ladder: an estimate, or the timed machine with the DRAM at that detail"},
+    {"dram.latency", K_U64, 0, 1e9, "50", "cycles", R_A | R_F | R_C, P(dram_latency_cycles), "a DRAM read's latency with an idle queue"},
+    {"dram.bytes_per_cycle", K_F64, 1e-6, 1e6, "13", "bytes a cycle", R_A | R_C, P(dram_bytes_per_cycle), "what the channel sustains"},
+    {"dram.queue_depth", K_U32, 1, 1u << 20, "16", "entries", R_C, P(dram_queue_depth), "the channel's request queue"},
+    {"dram.clock_mhz", K_U32, 1, 16000, "1200", "MHz", R_ALL, P(dram_clock_mhz), "the DRAM's own clock: the banked level's timing, the DRAM-cycle column of --dram-trace"},
+    {"dram.channels", K_U32, 1, 64, "1", "", R_B, B(channels), "independent channels (a power of two)"},
+    {"dram.ranks", K_U32, 1, 16, "2", "", R_B, B(ranks), "ranks a channel (a power of two)"},
+    {"dram.bank_groups", K_U32, 1, 16, "4", "", R_B, B(bank_groups), "bank groups a rank (a power of two)"},
+    {"dram.banks_per_group", K_U32, 1, 64, "4", "", R_B, B(banks_per_group), "banks a bank group (a power of two)"},
+    {"dram.rows", K_U32, 1, 1u << 24, "65536", "", R_B, B(rows), "rows a bank (a power of two)"},
+    {"dram.columns", K_U32, 1, 1u << 20, "1024", "", R_B, B(columns), "device columns a row (a power of two)"},
+    {"dram.bus_bytes", K_U32, 1, 64, "8", "bytes", R_B, B(bus_bytes), "a channel's data bus; bus_bytes x burst_length = 64"},
+    {"dram.burst_length", K_U32, 1, 64, "8", "", R_B, B(burst_length), "beats a burst (even; a burst takes half as many DRAM cycles)"},
+    {"dram.mapping", K_MAPPING, 0, 0, "rochrababgco", "", R_B, B(mapping), "address bits to ro(w) ch(annel) ra(nk) b(ank)g(roup) ba(nk) co(lumn), most significant first"},
+    {"dram.page_policy", K_ENUM, 0, 1, "open", "", R_B, E(dram_banked.page, PAGE_NAMES), "open: a row stays open after its access; close: precharged at once"},
+    {"dram.read_queue", K_U32, 1, 4096, "16", "entries", R_B, B(read_queue), "read transactions a channel holds"},
+    {"dram.write_queue", K_U32, 1, 4096, "16", "entries", R_B, B(write_queue), "write transactions a channel holds"},
+    {"dram.write_high", K_U32, 1, 4096, "16", "entries", R_B, B(write_high), "writes that start a write drain"},
+    {"dram.write_low", K_U32, 0, 4096, "8", "entries", R_B, B(write_low), "writes a drain stops at"},
+    {"dram.controller_cycles", K_U32, 0, 1000, "2", "DRAM cycles", R_B, B(controller_cycles), "from taking a request to its first command (at least 1 with command queues)"},
+    {"dram.queue_structure", K_ENUM, 0, 2, "per_bank", "", R_B, E(dram_banked.queue_structure, QUEUE_NAMES), "transaction queues feeding a command queue per bank or per rank, or one FR-FCFS queue a channel"},
+    {"dram.command_queue", K_U32, 1, 4096, "8", "entries", R_B, B(command_queue), "a command queue (per_bank, per_rank)"},
+    {"dram.tCL", K_U32, 1, 1000, "17", "DRAM cycles", R_B, B(tCL), "read command to data"},
+    {"dram.tCWL", K_U32, 1, 1000, "12", "DRAM cycles", R_B, B(tCWL), "write command to data"},
+    {"dram.tRCD", K_U32, 1, 1000, "17", "DRAM cycles", R_B, B(tRCD), "activate to read or write"},
+    {"dram.tRP", K_U32, 1, 1000, "17", "DRAM cycles", R_B, B(tRP), "precharge to activate"},
+    {"dram.tRAS", K_U32, 1, 1000, "39", "DRAM cycles", R_B, B(tRAS), "activate to precharge"},
+    {"dram.tRC", K_U32, 1, 2000, "56", "DRAM cycles", R_B, B(tRC), "activate to activate, one bank (at least tRAS)"},
+    {"dram.tCCD_S", K_U32, 1, 1000, "4", "DRAM cycles", R_B, B(tCCD_S), "column to column, other bank group"},
+    {"dram.tCCD_L", K_U32, 1, 1000, "6", "DRAM cycles", R_B, B(tCCD_L), "column to column, same bank group"},
+    {"dram.tRRD_S", K_U32, 1, 1000, "4", "DRAM cycles", R_B, B(tRRD_S), "activate to activate, other bank group"},
+    {"dram.tRRD_L", K_U32, 1, 1000, "6", "DRAM cycles", R_B, B(tRRD_L), "activate to activate, same bank group"},
+    {"dram.tFAW", K_U32, 1, 10000, "26", "DRAM cycles", R_B, B(tFAW), "window of four activates, one rank"},
+    {"dram.tWR", K_U32, 1, 1000, "18", "DRAM cycles", R_B, B(tWR), "write recovery: write data to precharge"},
+    {"dram.tWTR_S", K_U32, 1, 1000, "3", "DRAM cycles", R_B, B(tWTR_S), "write data to read, other bank group"},
+    {"dram.tWTR_L", K_U32, 1, 1000, "9", "DRAM cycles", R_B, B(tWTR_L), "write data to read, same bank group"},
+    {"dram.tRTW", K_U32, 1, 1000, "10", "DRAM cycles", R_B, B(tRTW), "read to write"},
+    {"dram.tRTP", K_U32, 1, 1000, "9", "DRAM cycles", R_B, B(tRTP), "read to precharge"},
+    {"dram.tREFI", K_U32, 0, 1u << 20, "9360", "DRAM cycles", R_B, B(tREFI), "refresh interval (0: no refresh)"},
+    {"dram.tRFC", K_U32, 1, 100000, "420", "DRAM cycles", R_B, B(tRFC), "refresh to activate"},
+    {"costs.node", K_U32, 0, 1e6, "7", "cycles", R_ALL, P(cost_node_cycles), "compute a k-d traversal step"},
+    {"costs.triangle", K_U32, 0, 1e6, "20", "cycles", R_ALL, P(cost_triangle_cycles), "compute a ray/triangle test"},
+    {"costs.shade", K_U32, 0, 1e6, "50", "cycles", R_ALL, P(cost_shade_cycles), "compute shading a hit (spawning its rays included)"},
+    {"costs.ray_switch", K_U32, 0, 1e6, "2", "cycles", R_ALL, P(cost_ray_switch_cycles), "a thread switching to another ray's registers"},
+    {"timeline.window", K_U64, 1, 1e12, "10000", "cycles", R_ALL, P(timeline_window_cycles), "a timeline.csv row (windows double past 4096 rows)"},
+    {"dynamic.sharing", K_ENUM, 0, 1, "chip", "", R_ALL, E(dyn_sharing, SHARING_NAMES), "the dynamic and treelet policies' queue points: one a core (g_max divided) or chip-wide"},
+    {"sample.fraction", K_F64, 1e-6, 1, "1", "", R_ALL, P(sample_fraction), "share of work items simulated in detail, warm-up included (1: no sampling)"},
+    {"sample.units", K_U32, 0, 1u << 20, "0", "", R_ALL, P(sample_units), "strata of the work list, one detailed unit each (0: as many as fit, at most 40)"},
+    {"sample.warming", K_F64, 0, 1e6, "4", "", R_ALL, P(sample_warming), "items warmed without time before a unit, a multiple of its detailed items"},
+    {"sample.seed", K_U64, 0, 1e15, "1", "", R_ALL, P(sample_seed), "where each middle unit falls in its stratum"},
 };
+#undef P
+#undef B
+#undef E
+#define NKEYS (unsigned)(sizeof KEYS / sizeof KEYS[0])
+_Static_assert(sizeof KEYS / sizeof KEYS[0] <= MACHINE_CFG_KEYS_MAX, "raise MACHINE_CFG_KEYS_MAX");
 
-static const char *const SECTIONS[] = {"l1", "l2", "dram", "costs", "timeline", "dynamic", "sample"};
-#define NSECTIONS (sizeof SECTIONS / sizeof SECTIONS[0])
-
-const char *machine_cfg_key(unsigned i) { return i < MACHINE_CFG_KEYS ? KEYS[i].name : NULL; }
-
-/* Keys of section sec ("l2"; "" for the top level: plain keys), ", "-separated,
- * after the prefix text. */
-static void list_keys(const char *sec, const char *prefix, char *buf, size_t cap) {
-  size_t n = (size_t)snprintf(buf, cap, "%s", prefix);
-  size_t len = strlen(sec);
-  for (unsigned i = 0; i < MACHINE_CFG_KEYS && n < cap; i++) {
-    const char *name = KEYS[i].name, *dot = strchr(name, '.');
-    const char *leaf = NULL;
-    if (len == 0 && !dot) leaf = name;
-    if (len && dot && (size_t)(dot - name) == len && !strncmp(name, sec, len)) leaf = dot + 1;
-    if (leaf) n += (size_t)snprintf(buf + n, cap - n, "%s%s", n ? ", " : "", leaf);
-  }
+/* Key i's section ("l2") into sec; false for a top-level key. */
+static bool section_of(unsigned i, char sec[32]) {
+  const char *dot = strchr(KEYS[i].name, '.');
+  if (dot) snprintf(sec, 32, "%.*s", (int)(dot - KEYS[i].name), KEYS[i].name);
+  return dot != NULL;
 }
+
+/* Does key i open its section (the sections in the table's order)? */
+static bool opens_section(unsigned i, char sec[32]) {
+  char other[32];
+  if (!section_of(i, sec)) return false;
+  for (unsigned j = 0; j < i; j++)
+    if (section_of(j, other) && !strcmp(other, sec)) return false;
+  return true;
+}
+
+unsigned machine_cfg_count(void) { return NKEYS; }
+
+const char *machine_cfg_key(unsigned i) { return i < NKEYS ? KEYS[i].name : NULL; }
 
 void machine_cfg_key_list(char *buf, size_t cap) {
   size_t n = 0;
   buf[0] = '\0';
-  for (unsigned i = 0; i < MACHINE_CFG_KEYS && n < cap; i++)
+  for (unsigned i = 0; i < NKEYS && n < cap; i++)
     n += (size_t)snprintf(buf + n, cap - n, "%s%s", i ? ", " : "", KEYS[i].name);
-}
-
-void machine_cfg_defaults(struct machine_cfg *c) {
-  memset(c, 0, sizeof *c);
-  struct machine_params *p = &c->p;
-  /* configs/default.yaml documents each figure and its source. */
-  p->clock_ghz = 1.4;
-  p->cores = 16;
-  p->threads_per_core = 4;
-  p->rays_per_thread = 2;
-  p->l1_size_bytes = 8u << 10;
-  p->l1_ways = 4;
-  p->l1_latency_cycles = 3;
-  p->l2_size_bytes = 4u << 20;
-  p->l2_ways = 16;
-  p->l2_latency_cycles = 20;
-  p->l2_banks = 8;
-  p->l2_mshrs = 64;
-  p->l2_write_buffer = 16;
-  p->fidelity = MACHINE_FIDELITY_BANKED;
-  /* fidelity channel, fixed or analytic: fitted to the banked DDR4-2400 channel
-   * (configs/default.yaml says how). */
-  p->dram_latency_cycles = 50;
-  p->dram_bytes_per_cycle = 13;
-  p->dram_queue_depth = 16;
-  p->dram_clock_mhz = 1200;
-  /* fidelity banked: one DDR4-2400 channel (configs/dram/ddr4-2400.yaml
-   * gives each figure's source). */
-  struct dram_banked_params *b = &p->dram_banked;
-  b->channels = 1;
-  b->ranks = 2;
-  b->bank_groups = 4;
-  b->banks_per_group = 4;
-  b->rows = 65536;
-  b->columns = 1024;
-  b->bus_bytes = 8;
-  b->burst_length = 8;
-  snprintf(b->mapping, sizeof b->mapping, "rochrababgco");
-  b->page = DRAM_BANKED_OPEN_PAGE;
-  b->read_queue = 16;
-  b->write_queue = 16;
-  b->write_high = 16;
-  b->write_low = 8;
-  b->controller_cycles = 2;
-  b->queue_structure = DRAM_BANKED_PER_BANK;
-  b->command_queue = 8;
-  b->tCL = 17;
-  b->tCWL = 12;
-  b->tRCD = 17;
-  b->tRP = 17;
-  b->tRAS = 39;
-  b->tRC = 56;
-  b->tCCD_S = 4;
-  b->tCCD_L = 6;
-  b->tRRD_S = 4;
-  b->tRRD_L = 6;
-  b->tFAW = 26;
-  b->tWR = 18;
-  b->tWTR_S = 3;
-  b->tWTR_L = 9;
-  b->tRTW = 10;
-  b->tRTP = 9;
-  b->tREFI = 9360;
-  b->tRFC = 420;
-  p->cost_node_cycles = 7;
-  p->cost_triangle_cycles = 20;
-  p->cost_shade_cycles = 50;
-  p->cost_ray_switch_cycles = 2;
-  p->timeline_window_cycles = 10000;
-  p->dyn_sharing = 1; /* chip: results/contention/scheduling */
-  p->sample_fraction = 1;
-  p->sample_units = 0;
-  p->sample_warming = 4;
-  p->sample_seed = 1;
 }
 
 /* "512KiB", "4MiB", "1GiB", "64B" or a plain number of bytes: the number
@@ -307,6 +257,22 @@ static bool read_value(const struct cfg_doc *d, const struct cfg_node *n, const 
   return false;
 }
 
+void machine_cfg_defaults(struct machine_cfg *c) {
+  memset(c, 0, sizeof *c);
+  /* Each default goes through the reader a config's value does. */
+  struct cfg_doc d;
+  memset(&d, 0, sizeof d);
+  for (unsigned i = 0; i < NKEYS; i++) {
+    struct cfg_node n;
+    memset(&n, 0, sizeof n);
+    n.kind = CFG_SCALAR;
+    n.text = (char *)KEYS[i].def;
+    struct err e;
+    memset(&e, 0, sizeof e);
+    CHECK(read_value(&d, &n, &KEYS[i], &c->p, &e));
+  }
+}
+
 static void set_origin(struct machine_cfg *c, unsigned i, const char *file, int line, int col,
                        bool included) {
   snprintf(c->at[i].file, sizeof c->at[i].file, "%s", file);
@@ -314,24 +280,6 @@ static void set_origin(struct machine_cfg *c, unsigned i, const char *file, int 
   c->at[i].col = col;
   c->at[i].included = included;
   c->at[i].seq = ++c->seq;
-}
-
-/* The rungs whose DRAM reads key `name` (a mask of 1 << enum machine_fidelity).
- * The analytic rung reads the channel's latency and bandwidth for its bounds.
- * NOTE: only dram keys are held to this: a rung that ignores another key
- * (analytic and l2.mshrs, say) does not refuse it. */
-static unsigned key_models(const char *name) {
-  const unsigned all = (1u << MACHINE_FIDELITY_COUNT) - 1;
-  if (strncmp(name, "dram.", 5)) return all;
-  name += 5;
-  if (!strcmp(name, "clock_mhz")) return all;
-  if (!strcmp(name, "latency"))
-    return 1u << MACHINE_FIDELITY_ANALYTIC | 1u << MACHINE_FIDELITY_FIXED |
-           1u << MACHINE_FIDELITY_CHANNEL;
-  if (!strcmp(name, "bytes_per_cycle"))
-    return 1u << MACHINE_FIDELITY_ANALYTIC | 1u << MACHINE_FIDELITY_CHANNEL;
-  if (!strcmp(name, "queue_depth")) return 1u << MACHINE_FIDELITY_CHANNEL;
-  return 1u << MACHINE_FIDELITY_BANKED;
 }
 
 const char *machine_cfg_renamed(const char *name) {
@@ -386,44 +334,40 @@ static bool load(struct machine_cfg *c, const char *path, unsigned depth, struct
   struct cfg_doc d;
   memset(&d, 0, sizeof d);
   bool ok = cfg_load_file(&d, path, e) && cfg_expect_map(&d, &d.root, "(top level)", e);
-  for (unsigned s = 0; ok && s < NSECTIONS; s++) {
-    struct cfg_node *sec = cfg_get(&d.root, SECTIONS[s]);
-    if (sec && !cfg_expect_map(&d, sec, SECTIONS[s], e)) ok = false;
+  /* Ask for the top-level keys in the order an unknown key's message lists
+   * them: plain keys, sections, include. */
+  char sec[32];
+  for (unsigned i = 0; ok && i < NKEYS; i++)
+    if (!section_of(i, sec)) cfg_get(&d.root, KEYS[i].name);
+  for (unsigned i = 0; ok && i < NKEYS; i++)
+    if (opens_section(i, sec)) cfg_get(&d.root, sec);
+  if (ok) cfg_get(&d.root, "include");
+  for (unsigned i = 0; ok && i < NKEYS; i++) {
+    struct cfg_node *m = opens_section(i, sec) ? cfg_get(&d.root, sec) : NULL;
+    if (m && !cfg_expect_map(&d, m, sec, e)) ok = false;
   }
   if (ok) ok = load_includes(c, &d, path, depth, e);
   struct cfg_node *dm = cfg_get(&d.root, "dram");
-  if (ok && dm && (dm = cfg_get(dm, "model")))
+  if (ok && dm && (dm = cfg_peek(dm, "model")))
     ok = err_set(e, d.file, dm->key_line, dm->key_col, "dram.model: %s",
                  machine_cfg_renamed("dram.model"));
-  for (unsigned i = 0; ok && i < MACHINE_CFG_KEYS; i++) {
-    const char *name = KEYS[i].name, *dot = strchr(name, '.');
+  for (unsigned i = 0; ok && i < NKEYS; i++) {
     struct cfg_node *n;
-    if (dot) {
-      char sec[32];
-      snprintf(sec, sizeof sec, "%.*s", (int)(dot - name), name);
+    if (section_of(i, sec)) {
       struct cfg_node *m = cfg_get(&d.root, sec);
-      n = m ? cfg_get(m, dot + 1) : NULL;
+      n = m ? cfg_get(m, KEYS[i].name + strlen(sec) + 1) : NULL;
     } else {
-      n = cfg_get(&d.root, name);
+      n = cfg_get(&d.root, KEYS[i].name);
     }
     if (!n) continue;
     if (!read_value(&d, n, &KEYS[i], &c->p, e)) ok = false;
     else set_origin(c, i, path, n->line, n->col, depth > 0);
   }
-  char expected[2048];
-  for (unsigned s = 0; ok && s < NSECTIONS; s++) {
-    struct cfg_node *sec = cfg_get(&d.root, SECTIONS[s]);
-    list_keys(SECTIONS[s], "", expected, sizeof expected);
-    if (sec && !cfg_check_keys(&d, sec, SECTIONS[s], expected, e)) ok = false;
+  for (unsigned i = 0; ok && i < NKEYS; i++) {
+    struct cfg_node *m = opens_section(i, sec) ? cfg_get(&d.root, sec) : NULL;
+    if (m && !cfg_check_keys(&d, m, sec, e)) ok = false;
   }
-  if (ok) {
-    list_keys("", "", expected, sizeof expected);
-    for (unsigned s = 0; s < NSECTIONS; s++)
-      snprintf(expected + strlen(expected), sizeof expected - strlen(expected), ", %s",
-               SECTIONS[s]);
-    snprintf(expected + strlen(expected), sizeof expected - strlen(expected), ", include");
-    ok = cfg_check_keys(&d, &d.root, "", expected, e);
-  }
+  if (ok) ok = cfg_check_keys(&d, &d.root, "", e);
   cfg_free(&d);
   return ok;
 }
@@ -433,14 +377,14 @@ bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e) {
 }
 
 int machine_cfg_find(const char *name) {
-  for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++)
+  for (unsigned i = 0; i < NKEYS; i++)
     if (!strcmp(KEYS[i].name, name)) return (int)i;
   return -1;
 }
 
 bool machine_cfg_set_at(struct machine_cfg *c, unsigned i, const char *value, const char *file,
                         int line, int col, struct err *e) {
-  CHECK_LT(i, MACHINE_CFG_KEYS);
+  CHECK_LT(i, NKEYS);
   /* The value goes through the same typed reader as a file's. */
   struct cfg_doc d;
   memset(&d, 0, sizeof d);
@@ -496,17 +440,33 @@ static bool fail_at(const struct machine_cfg *c, const char *name, struct err *e
 
 static bool check_cache(const struct machine_cfg *c, const char *lvl, uint64_t size, uint32_t ways,
                         struct err *e) {
-  char sk[16], wk[16], got[64];
+  char sk[16], wk[16], got[64], msg[64];
   snprintf(sk, sizeof sk, "%s.size", lvl);
   snprintf(wk, sizeof wk, "%s.ways", lvl);
+  const struct cache_params cp = {size, ways, MACHINE_LG2_LINE};
+  const unsigned line = 1u << MACHINE_LG2_LINE;
+  const unsigned long long lines = size >> MACHINE_LG2_LINE;
   snprintf(got, sizeof got, "%llu bytes", (unsigned long long)size);
-  if (size < 64) return fail_at(c, sk, e, "smaller than one 64-byte line", got);
-  if (size % 64) return fail_at(c, sk, e, "not a whole number of 64-byte lines", got);
-  uint64_t lines = size / 64;
-  snprintf(got, sizeof got, "%u ways for %llu lines", ways, (unsigned long long)lines);
-  if (ways && ways > lines) return fail_at(c, wk, e, "more ways than the cache has lines", got);
-  if (ways && lines % ways) return fail_at(c, wk, e, "the ways must divide the number of lines", got);
-  return true;
+  switch (cache_geometry(&cp)) {
+  case CACHE_GEOMETRY_OK: return true;
+  case CACHE_GEOMETRY_SMALL: snprintf(msg, sizeof msg, "smaller than one %u-byte line", line); break;
+  case CACHE_GEOMETRY_PARTIAL:
+    snprintf(msg, sizeof msg, "not a whole number of %u-byte lines", line);
+    break;
+  case CACHE_GEOMETRY_LINES:
+    snprintf(msg, sizeof msg, "more than %llu lines", (unsigned long long)CACHE_MAX_LINES);
+    break;
+  case CACHE_GEOMETRY_WAYS_OVER:
+  case CACHE_GEOMETRY_WAYS_SPLIT:
+    snprintf(got, sizeof got, "%u ways for %llu lines", ways, lines);
+    return fail_at(c, wk, e,
+                   cache_geometry(&cp) == CACHE_GEOMETRY_WAYS_OVER
+                       ? "more ways than the cache has lines"
+                       : "the ways must divide the number of lines",
+                   got);
+  case CACHE_GEOMETRY_LINE: CHECK(!"the machine's line size is a cache's"); break;
+  }
+  return fail_at(c, sk, e, msg, got);
 }
 
 bool machine_cfg_check(const struct machine_cfg *c, struct err *e) {
@@ -514,21 +474,22 @@ bool machine_cfg_check(const struct machine_cfg *c, struct err *e) {
   if (p->l1_size_bytes && !check_cache(c, "l1", p->l1_size_bytes, p->l1_ways, e)) return false;
   if (!check_cache(c, "l2", p->l2_size_bytes, p->l2_ways, e)) return false;
   uint64_t n = (uint64_t)p->cores * p->threads_per_core * p->rays_per_thread;
-  if (n > (1u << 20)) {
-    char got[64];
+  if (n > MACHINE_MAX_CONTEXTS) {
+    char got[64], msg[96];
     snprintf(got, sizeof got, "%llu ray contexts", (unsigned long long)n);
-    return fail_at(c, "rays_per_thread", e,
-                   "cores x threads_per_core x rays_per_thread must be at most 1048576", got);
+    snprintf(msg, sizeof msg, "cores x threads_per_core x rays_per_thread must be at most %u",
+             MACHINE_MAX_CONTEXTS);
+    return fail_at(c, "rays_per_thread", e, msg, got);
   }
   /* A key written for another DRAM level, after the rung was chosen, would
    * silently do nothing: refuse it. (Choosing the rung last, as --set
    * fidelity=fixed on a channel config does, sets the others aside; a
    * preset's keys are a whole level.) */
   const unsigned model_seq = c->at[key_index("fidelity")].seq;
-  for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++) {
+  for (unsigned i = 0; i < NKEYS; i++) {
     const struct machine_cfg_origin *o = &c->at[i];
     if (!o->file[0] || o->included || o->seq < model_seq ||
-        (key_models(KEYS[i].name) >> p->fidelity & 1u))
+        (KEYS[i].rungs >> p->fidelity & 1u))
       continue;
     char v[64], msg[160];
     machine_cfg_value(c, i, v, sizeof v);
@@ -560,12 +521,7 @@ void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsig
   case K_F64: {
     double v;
     memcpy(&v, src, sizeof v);
-    snprintf(buf, cap, "%.17g", v);
-    /* The shortest text that reads back the same. */
-    for (int prec = 1; prec <= 17; prec++) {
-      snprintf(buf, cap, "%.*g", prec, v);
-      if (strtod(buf, NULL) == v) break;
-    }
+    stats_f64_text(v, 1, buf, cap);
     break;
   }
   case K_ENUM: {
@@ -594,7 +550,7 @@ void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsig
 }
 
 void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *indent) {
-  for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++) {
+  for (unsigned i = 0; i < NKEYS; i++) {
     char v[64];
     machine_cfg_value(c, i, v, sizeof v);
     fprintf(f, "%s%s", i ? ",\n" : "", indent);
@@ -607,9 +563,64 @@ void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *in
 }
 
 void machine_cfg_to_stats(const struct machine_cfg *c, struct stats_table *t) {
-  for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++) {
+  for (unsigned i = 0; i < NKEYS; i++) {
     char v[64];
     machine_cfg_value(c, i, v, sizeof v);
     stats_str(t, KEYS[i].name, v);
+  }
+}
+
+/* A bound of a key's range as a person writes it: 4096, 2^20, 10^9, 1GiB, 0.001. */
+static void bound_text(double v, bool bytes, char *buf, size_t cap) {
+  static const char *const UNITS[] = {"KiB", "MiB", "GiB"};
+  const bool whole = v == floor(v) && v < 0x1p63;
+  const uint64_t u = whole ? (uint64_t)v : 0;
+  if (bytes && u >= 1024) {
+    for (int k = 2; k >= 0; k--)
+      if (u % (1ull << (10 * (k + 1))) == 0) {
+        snprintf(buf, cap, "%lluGiB", (unsigned long long)(u >> (10 * (k + 1))));
+        memcpy(strchr(buf, 'G'), UNITS[k], 3);
+        return;
+      }
+  }
+  if (whole && u >= 65536 && !(u & (u - 1))) {
+    int lg = 0;
+    while ((1ull << lg) < u) lg++;
+    snprintf(buf, cap, "2^%d", lg);
+  } else if (whole) {
+    int lg = 0;
+    uint64_t t = u;
+    while (u >= 1000000 && t % 10 == 0) t /= 10, lg++;
+    if (u >= 1000000 && t == 1) snprintf(buf, cap, "10^%d", lg);
+    else snprintf(buf, cap, "%llu", (unsigned long long)u);
+  } else {
+    stats_f64_text(v, 1, buf, cap);
+  }
+}
+
+void machine_cfg_write_keys(FILE *f) {
+  fputs("| key | default | range | unit | fidelity rungs | what it is |\n", f);
+  fputs("|---|---|---|---|---|---|\n", f);
+  for (unsigned i = 0; i < NKEYS; i++) {
+    const struct key *k = &KEYS[i];
+    char range[256] = "", lo[32], hi[32], rungs[64] = "";
+    switch (k->kind) {
+    case K_ENUM:
+      for (unsigned v = 0; v <= (unsigned)k->hi; v++)
+        snprintf(range + strlen(range), sizeof range - strlen(range), "%s`%s`", v ? ", " : "",
+                 k->names[v]);
+      break;
+    case K_MAPPING: snprintf(range, sizeof range, "`ro ch ra bg ba co`, each once"); break;
+    default:
+      bound_text(k->lo, k->kind == K_SIZE, lo, sizeof lo);
+      bound_text(k->hi, k->kind == K_SIZE, hi, sizeof hi);
+      snprintf(range, sizeof range, "%s to %s%s", lo, hi, k->kind == K_WAYS ? ", `full`" : "");
+    }
+    for (unsigned r = 0; k->rungs != R_ALL && r < MACHINE_FIDELITY_COUNT; r++)
+      if (k->rungs >> r & 1u)
+        snprintf(rungs + strlen(rungs), sizeof rungs - strlen(rungs), "%s%s", rungs[0] ? ", " : "",
+                 FIDELITY_NAMES[r]);
+    fprintf(f, "| `%s` | `%s` | %s | %s | %s | %s |\n", k->name, k->def, range, k->unit,
+            k->rungs == R_ALL ? "all" : rungs, k->doc);
   }
 }

@@ -16,7 +16,8 @@
 struct err;
 struct stats_table;
 
-#define MACHINE_CFG_KEYS 63
+/* Room for the keys (the table in machine_cfg.c; a compile-time check). */
+#define MACHINE_CFG_KEYS_MAX 96
 
 /* Where each key's value came from, for errors found after reading. */
 struct machine_cfg_origin {
@@ -28,7 +29,7 @@ struct machine_cfg_origin {
 
 struct machine_cfg {
   struct machine_params p;
-  struct machine_cfg_origin at[MACHINE_CFG_KEYS];
+  struct machine_cfg_origin at[MACHINE_CFG_KEYS_MAX]; /* [0, machine_cfg_count()) */
   unsigned seq; /* settings so far */
 };
 
@@ -55,13 +56,19 @@ bool machine_cfg_set_at(struct machine_cfg *c, unsigned i, const char *value, co
  * divide them, ...), naming the key at fault where it was written. */
 bool machine_cfg_check(const struct machine_cfg *c, struct err *e);
 
-/* Key i's name (dotted) and its value as text ("4194304", "full", "0.5"). */
+/* How many keys there are; key i's name (dotted; NULL past the last) and its
+ * value as text ("4194304", "full", "0.5"). */
+unsigned machine_cfg_count(void);
 const char *machine_cfg_key(unsigned i);
 void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsigned cap);
 /* "key, key, ...": every key, for messages (cut to cap). */
 void machine_cfg_key_list(char *buf, size_t cap);
 /* Every key as a JSON member `"key": value` (numbers, or "full"). */
 void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *indent);
+/* Every key as a row of a Markdown table: name, default, range, unit, the
+ * fidelity rungs that read it, what it is (README's key table; rtsim run
+ * --help-keys). */
+void machine_cfg_write_keys(FILE *f);
 /* Every key as a column of t (numbers as numbers, "full" as text). */
 void machine_cfg_to_stats(const struct machine_cfg *c, struct stats_table *t);
 

@@ -37,12 +37,16 @@ void stats_fini(struct stats_table *t) {
   memset(t, 0, sizeof *t);
 }
 
-void stats_write_json_f64(FILE *f, double v) {
-  char buf[64];
-  for (int prec = 15; prec <= 17; prec++) {
-    snprintf(buf, sizeof buf, "%.*g", prec, v);
+void stats_f64_text(double v, int min_digits, char *buf, size_t cap) {
+  for (int prec = min_digits; prec <= 17; prec++) {
+    snprintf(buf, cap, "%.*g", prec, v);
     if (strtod(buf, NULL) == v) break;
   }
+}
+
+void stats_write_json_f64(FILE *f, double v) {
+  char buf[64];
+  stats_f64_text(v, 15, buf, sizeof buf);
   /* JSON has no bare "inf"/"nan"; stats_f64 refuses them, configs never hold them. */
   fputs(buf, f);
 }

@@ -1,6 +1,8 @@
 /* Machine configs: the shipped files load, default.yaml states the built-in
  * defaults, --set goes through the same checks, and every bad value is one
  * message naming file:line:col. */
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "sim/dram.h"
@@ -30,7 +32,41 @@ static void set_err(const char *assignment, char *out, unsigned cap) {
   if (e.set) err_format(&e, out, cap);
 }
 
+/* README's key table is what `rtsim run --help-keys` prints from the table of
+ * keys: a key added, renamed or redocumented without the README fails here
+ * (regenerate the lines between the markers with that command). */
+static void test_readme_table(void) {
+  char *readme = testing_slurp(RTSIM_SOURCE_DIR, "README.md", NULL);
+  EXPECT(readme != NULL);
+  if (!readme) return;
+  const char *begin = strstr(readme, "--help-keys`, one row a key");
+  const char *end = strstr(readme, "<!-- end of rtsim run --help-keys -->");
+  begin = begin ? strstr(begin, "-->\n") : NULL;
+  EXPECTF(begin && end && begin < end, "README has no marked key table%s", "");
+  FILE *f = tmpfile();
+  CHECK(f);
+  machine_cfg_write_keys(f);
+  long n = ftell(f);
+  rewind(f);
+  char *want = calloc((size_t)n + 1, 1);
+  CHECK(want && fread(want, 1, (size_t)n, f) == (size_t)n);
+  fclose(f);
+  if (begin && end && begin < end) {
+    begin += 4;
+    const size_t have = (size_t)(end - begin);
+    size_t same = 0;
+    while (same < have && same < (size_t)n && begin[same] == want[same]) same++;
+    EXPECTF(have == (size_t)n && same == have,
+            "README's key table differs from rtsim run --help-keys at byte %zu: README '%.60s', "
+            "table '%.60s'",
+            same, begin + same, want + same);
+  }
+  free(want);
+  free(readme);
+}
+
 int main(void) {
+  test_readme_table();
   static const struct {
     const char *file, *want;
   } bad[] = {
@@ -141,7 +177,7 @@ int main(void) {
     if (i == 0) {
       struct machine_cfg d;
       machine_cfg_defaults(&d);
-      for (unsigned k = 0; k < MACHINE_CFG_KEYS; k++) {
+      for (unsigned k = 0; k < machine_cfg_count(); k++) {
         char a[64], b[64];
         machine_cfg_value(&c, k, a, sizeof a);
         machine_cfg_value(&d, k, b, sizeof b);

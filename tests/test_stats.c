@@ -75,6 +75,19 @@ static void test_f64(void) {
   expect_f64(0.1 + 0.2, "0.30000000000000004");           /* 17 digits */
   expect_f64(1.7976931348623157e308, "1.7976931348623157e+308");
   expect_f64(5e-324, "4.94065645841247e-324"); /* 15 digits read it back; not "5e-324" */
+  expect_f64(1386126720.0, "1386126720");
+  /* From 1 digit up (machine config values): the shortest, exponent and all. */
+  static const struct {
+    double v;
+    const char *want;
+  } shortest[] = {{1.4, "1.4"}, {1000, "1e+03"}, {1386126720.0, "1.38612672e+09"},
+                  {5e-324, "5e-324"}, {0.1 + 0.2, "0.30000000000000004"}, {1e-6, "1e-06"}};
+  for (size_t i = 0; i < sizeof shortest / sizeof shortest[0]; i++) {
+    char buf[64];
+    stats_f64_text(shortest[i].v, 1, buf, sizeof buf);
+    EXPECTF(!strcmp(buf, shortest[i].want), "%a: got %s, expected %s", shortest[i].v, buf,
+            shortest[i].want);
+  }
   /* Random bit patterns: every finite one reads back the same bits. */
   uint64_t s = 21, bad = 0, tried = 0;
   for (unsigned i = 0; i < 20000; i++) {

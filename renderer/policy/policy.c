@@ -45,6 +45,14 @@ bool policy_parse(const char *name, enum policy_kind *k) {
   return false;
 }
 
+void policy_list(char *buf, size_t cap, const char *last) {
+  size_t n = 0;
+  buf[0] = '\0';
+  for (int i = 0; i < POLICY_COUNT && n < cap; i++)
+    n += (size_t)snprintf(buf + n, cap - n, "%s%s", i == 0 ? "" : i + 1 < POLICY_COUNT ? ", " : last,
+                          NAMES[i]);
+}
+
 /* ---- the work list ----------------------------------------------------------- */
 
 uint64_t policy_job_claim(struct policy_job *job, uint64_t n, uint64_t *first) {

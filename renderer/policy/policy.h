@@ -248,6 +248,9 @@ void policy_run(enum policy_kind k, const struct policy_setup *s, const struct p
 const char *policy_name(enum policy_kind k);
 /* Parse a name; false if unknown. */
 bool policy_parse(const char *name, enum policy_kind *k);
+/* Every policy's name in order, ", "-separated, `last` before the last one
+ * (", " or " or "): for messages (cut to cap). */
+void policy_list(char *buf, size_t cap, const char *last);
 
 /* The policies whose rays wait in queues (dynamic, treelet): they trace all
  * of a batch's rays at once, not a work item at a time. */

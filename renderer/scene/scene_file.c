@@ -72,7 +72,7 @@ static bool load_camera(const struct cfg_doc *d, struct cfg_node *n, struct scen
       !req_vec3(d, n, n, "at", "camera", -1e30, 1e30, &c->at, e) ||
       !opt_vec3(d, n, "up", "camera", -1e30, 1e30, &c->up, e) ||
       !opt_f64(d, n, "fov_deg", "camera", 0.01, 179.0, &fov, e) ||
-      !cfg_check_keys(d, n, "camera", "from, at, up, fov_deg", e))
+      !cfg_check_keys(d, n, "camera", e))
     return false;
   c->fov_deg = (float)fov;
   switch (camera_check(c)) {
@@ -92,7 +92,7 @@ static bool load_image(const struct cfg_doc *d, struct cfg_node *n, struct scene
   uint64_t w = s->width, h = s->height;
   if (!opt_u64(d, n, "width", "image", 1, SCENE_MAX_PIXELS, &w, e) ||
       !opt_u64(d, n, "height", "image", 1, SCENE_MAX_PIXELS, &h, e) ||
-      !cfg_check_keys(d, n, "image", "width, height", e))
+      !cfg_check_keys(d, n, "image", e))
     return false;
   s->width = (uint32_t)w;
   s->height = (uint32_t)h;
@@ -114,7 +114,7 @@ static bool load_lights(const struct cfg_doc *d, struct cfg_node *n, struct scen
     L->intensity = v3(1, 1, 1);
     if (!req_vec3(d, l, l, "position", p, -1e30, 1e30, &L->pos, e) ||
         !opt_vec3(d, l, "intensity", p, 0, 1e30, &L->intensity, e) ||
-        !cfg_check_keys(d, l, p, "position, intensity", e))
+        !cfg_check_keys(d, l, p, e))
       return false;
   }
   s->light_count = n->count;
@@ -141,7 +141,7 @@ static bool load_materials(const struct cfg_doc *d, struct cfg_node *n, struct s
     if (!opt_vec3(d, m, "color", p, 0, 1, &mat.color, e) ||
         !opt_f64(d, m, "diffuse", p, 0, 1, &diffuse, e) ||
         !opt_f64(d, m, "mirror", p, 0, 1, &mirror, e) ||
-        !cfg_check_keys(d, m, p, "color, diffuse, mirror", e))
+        !cfg_check_keys(d, m, p, e))
       return false;
     mat.diffuse = (float)diffuse;
     mat.mirror = (float)mirror;
@@ -176,23 +176,21 @@ static bool load_generator(const struct cfg_doc *d, struct cfg_node *g, const ch
   char gp[96];
   snprintf(gp, sizeof gp, "%s.generator", p);
   if (!cfg_enum(d, cfg_get(g, "generator"), gp, GENERATORS, &kind, e)) return false;
-  uint64_t seed = s->seed;
-  if (!opt_u64(d, g, "seed", p, 0, UINT64_MAX, &seed, e)) return false;
+  /* Read in the order the keys are listed when one is unknown. */
+  uint64_t seed = s->seed, levels = 4, tess = 3;
+  double detail = 1.0;
+  if (kind == 0 ? !opt_u64(d, g, "detail", p, 0, 6, &levels, e) ||
+                      !opt_u64(d, g, "tessellation", p, 1, 64, &tess, e)
+                : !opt_f64(d, g, "detail", p, 1e-4, 200.0, &detail, e))
+    return false;
+  if (!opt_u64(d, g, "seed", p, 0, UINT64_MAX, &seed, e) || !cfg_check_keys(d, g, p, e))
+    return false;
   const uint64_t before = s->tri_count;
   if (kind == 0) {
-    uint64_t levels = 4, tess = 3;
-    if (!opt_u64(d, g, "detail", p, 0, 6, &levels, e) ||
-        !opt_u64(d, g, "tessellation", p, 1, 64, &tess, e) ||
-        !cfg_check_keys(d, g, p, "generator, detail, tessellation, seed", e))
-      return false;
     uint64_t n = gen_sphereflake_tri_count((uint32_t)levels, (uint32_t)tess);
     if (count) *count = n;
     else gen_sphereflake(s, (uint32_t)levels, (uint32_t)tess);
   } else {
-    double detail = 1.0;
-    if (!opt_f64(d, g, "detail", p, 1e-4, 200.0, &detail, e) ||
-        !cfg_check_keys(d, g, p, "generator, detail, seed", e))
-      return false;
     uint64_t n = kind == 1 ? gen_grove_tri_count(detail) : gen_room_tri_count(detail);
     if (count) *count = n;
     else if (kind == 1)
@@ -239,7 +237,7 @@ static bool load_mesh(const struct cfg_doc *d, struct cfg_node *g, const char *p
   double scale = 1.0;
   if (!opt_f64(d, g, "scale", p, 1e-30, 1e30, &scale, e) ||
       !opt_vec3(d, g, "translate", p, -1e30, 1e30, &xf.translate, e) ||
-      !cfg_check_keys(d, g, p, "mesh, material, scale, translate", e))
+      !cfg_check_keys(d, g, p, e))
     return false;
   xf.scale = (float)scale;
   char full[1024];
@@ -281,7 +279,7 @@ static bool load_geometry(const struct cfg_doc *d, struct cfg_node *n, const cha
       char p[64];
       snprintf(p, sizeof p, "geometry[%u]", i);
       if (!cfg_expect_map(d, g, p, e)) return false;
-      bool is_gen = cfg_get(g, "generator") != NULL, is_mesh = cfg_get(g, "mesh") != NULL;
+      bool is_gen = cfg_peek(g, "generator") != NULL, is_mesh = cfg_peek(g, "mesh") != NULL;
       if (is_gen == is_mesh)
         return cfg_fail(d, g, p, e, "expected exactly one of 'generator' or 'mesh'");
       uint64_t k = 0, *count = pass == 0 ? &k : NULL;
@@ -314,7 +312,7 @@ static bool load_kd_tree(struct cfg_doc *d, struct cfg_node *n, struct scene *s,
   int k = 0;
   if (v && !cfg_enum(d, v, "kd_tree.splits", splits, &k, e)) return false;
   s->kd_clip = k == 1;
-  return cfg_check_keys(d, n, "kd_tree", "splits", e);
+  return cfg_check_keys(d, n, "kd_tree", e);
 }
 
 bool scene_file_load(struct scene *s, const char *path, struct err *e) {
@@ -344,10 +342,7 @@ bool scene_file_load(struct scene *s, const char *path, struct err *e) {
     goto done;
   }
   /* Check the top level before generating geometry, which can take seconds. */
-  if (!cfg_check_keys(&d, r, "",
-                      "name, seed, image, camera, background, ambient, lights, materials, "
-                      "kd_tree, geometry",
-                      e))
+  if (!cfg_check_keys(&d, r, "", e))
     goto done;
   ok = load_geometry(&d, n, path, s, e);
 done:

@@ -91,7 +91,7 @@ void fuzz_check_machine(const struct machine_cfg *c) {
   struct err e;
   memset(&e, 0, sizeof e);
   char text[256], back[256];
-  for (unsigned i = 0; i < MACHINE_CFG_KEYS; i++) {
+  for (unsigned i = 0; i < machine_cfg_count(); i++) {
     machine_cfg_value(c, i, text, sizeof text);
     CHECK(text[0] != '\0');
     CHECK(machine_cfg_set_at(&again, i, text, "round trip", 0, 0, &e));
