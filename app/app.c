@@ -146,15 +146,15 @@ static void cycle_progress(void *ctx, uint64_t cycle) {
 
 void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask, uint64_t seed,
                    uint32_t width, uint32_t height, enum policy_kind k,
-                   const struct machine_params *mp, bool progress, FILE *dram_trace,
-                   bool costs) {
+                   const struct machine_params *mp, const struct machine_cfg_work *work,
+                   bool progress, FILE *dram_trace, bool costs) {
   app_render_init(&t->ar, w, mask, seed, width, height);
-  t->ar.setup.layout.node_cycles = mp->cost_node_cycles;
-  t->ar.setup.layout.tri_cycles = mp->cost_triangle_cycles;
-  t->ar.sc.shade_cycles = mp->cost_shade_cycles;
+  t->ar.setup.layout.node_cycles = work->cost_node_cycles;
+  t->ar.setup.layout.tri_cycles = work->cost_triangle_cycles;
+  t->ar.sc.shade_cycles = work->cost_shade_cycles;
   struct policy_params pp;
   policy_params_machine(&pp, mp->l2_size_bytes);
-  pp.dyn_sharing = mp->dyn_sharing;
+  pp.dyn_sharing = work->dyn_sharing;
   const uint32_t n = mp->cores * mp->threads_per_core * mp->rays_per_thread;
   struct timed_ctx r = {0};
   t->ar.setup.progress = work_progress;

@@ -99,6 +99,7 @@ void app_render_fini(struct app_render *r);
 
 struct machine;
 struct machine_params;
+struct machine_cfg_work;
 /* One render on the timed machine: the machine (its statistics and timeline),
  * the framebuffer in ar, the render's counters and the host seconds it took. */
 struct app_timed {
@@ -112,13 +113,13 @@ struct app_timed {
   double wall_s;
 };
 /* Render a width x height image of w with policy k on machine mp (which must
- * pass machine_params_problem), one worker per ray context; costs come from
- * mp. progress: a progress line on stderr. costs: count what every pixel
+ * pass machine_params_problem), one worker per ray context; the compute the
+ * renderer announces and the dynamic policy's sharing come from work. progress: a progress line on stderr. costs: count what every pixel
  * cost the machine (machine_get_costs; a whole run only, not a sampled one). */
 void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask, uint64_t seed,
                    uint32_t width, uint32_t height, enum policy_kind k,
-                   const struct machine_params *mp, bool progress, FILE *dram_trace,
-                   bool costs);
+                   const struct machine_params *mp, const struct machine_cfg_work *work,
+                   bool progress, FILE *dram_trace, bool costs);
 void app_timed_fini(struct app_timed *t);
 /* The work items a render of policy k at width x height takes (sampling's
  * population: pixels, or tiles for packet). */
@@ -138,7 +139,7 @@ struct app_analytic {
 };
 void app_analytic_run(struct app_analytic *a, const struct app_world *w, uint32_t mask,
                       uint64_t seed, uint32_t width, uint32_t height, enum policy_kind k,
-                      const struct machine_params *mp);
+                      const struct machine_params *mp, const struct machine_cfg_work *work);
 void app_analytic_fini(struct app_analytic *a);
 
 /* Repeatable --set KEY=VALUE options, in order (argv's strings): an

@@ -205,10 +205,11 @@ int cmd_run(int argc, char **argv) {
   struct app_timed t = {0};
   struct app_analytic a;
   if (analytic)
-    app_analytic_run(&a, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p);
+    app_analytic_run(&a, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p,
+                     &mc.work);
   else
-    app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, isatty(2),
-                  trace.f, true);
+    app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, &mc.work,
+                  isatty(2), trace.f, true);
   struct run_output_report rep = {
       .out_dir = od.write,
       .machine_path = machine_path,

@@ -9,18 +9,19 @@
 #include "renderer/trace.h"
 #include "sim/analytic.h"
 #include "sim/machine.h"
+#include "sim/machine_cfg.h"
 
 void app_analytic_run(struct app_analytic *a, const struct app_world *w, uint32_t mask,
                       uint64_t seed, uint32_t width, uint32_t height, enum policy_kind k,
-                      const struct machine_params *mp) {
+                      const struct machine_params *mp, const struct machine_cfg_work *work) {
   memset(a, 0, sizeof *a);
   app_render_init(&a->ar, w, mask, seed, width, height);
-  a->ar.setup.layout.node_cycles = mp->cost_node_cycles;
-  a->ar.setup.layout.tri_cycles = mp->cost_triangle_cycles;
-  a->ar.sc.shade_cycles = mp->cost_shade_cycles;
+  a->ar.setup.layout.node_cycles = work->cost_node_cycles;
+  a->ar.setup.layout.tri_cycles = work->cost_triangle_cycles;
+  a->ar.sc.shade_cycles = work->cost_shade_cycles;
   struct policy_params pp;
   policy_params_machine(&pp, mp->l2_size_bytes);
-  pp.dyn_sharing = mp->dyn_sharing; /* one core: either way the same */
+  pp.dyn_sharing = work->dyn_sharing; /* one core: either way the same */
   /* One worker on one core. NOTE: the dynamic policy's queue points are then
    * made for the whole L2 (g_max not divided among the cores, a one-ray ray
    * buffer), so it may do somewhat different work than on the timed machine;

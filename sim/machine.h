@@ -71,14 +71,10 @@ struct machine_params {
   uint32_t dram_queue_depth;
   uint32_t dram_clock_mhz;
   struct dram_banked_params dram_banked; /* fidelity banked (its clock: dram_clock_mhz) */
-  /* Compute the renderer announces (the machine charges what it is told). */
-  uint32_t cost_node_cycles, cost_triangle_cycles, cost_shade_cycles;
+  /* A thread's switch to another ray's registers. (The compute the renderer
+   * announces per step is the renderer's: struct machine_cfg_work.) */
   uint32_t cost_ray_switch_cycles;
   uint64_t timeline_window_cycles;
-  /* How the dynamic policy's cores share its queue points (renderer/policy/policy.h:
-   * 0 partition, 1 chip). The machine does not read it: a workload setting
-   * kept with the machine it is made for, as the costs are. */
-  uint32_t dyn_sharing;
   /* Sampling (README "Sampling"; the run reads these, the machine does not):
    * the share of work items simulated in detail (1: all, no sampling), the
    * strata (one detailed unit each), the items warmed functionally before a

@@ -32,7 +32,7 @@ struct key {
   const char *def;  /* the default, as a config writes it */
   const char *unit; /* of the value ("" for a count or a name) */
   unsigned rungs;   /* R_*: the fidelity rungs that read it */
-  size_t off;       /* where it goes in struct machine_params */
+  size_t off;       /* where it goes in struct machine_cfg (p: the machine's; work) */
   const char *const *names; /* K_ENUM: the values' names (a uint32_t index), hi + 1 of them */
   const char *doc;  /* one line: what it is (README's key table) */
 };
@@ -48,9 +48,11 @@ static const char *const SHARING_NAMES[] = {"partition", "chip"}; /* renderer/po
  * the stats columns and of stats.json's config: add a key at the end of its
  * section. configs/default.yaml (or the DRAM preset it includes) states each
  * default again with its source; a test holds the two equal. */
-#define P(f) offsetof(struct machine_params, f), NULL
-#define B(f) offsetof(struct machine_params, dram_banked.f), NULL
-#define E(f, names) offsetof(struct machine_params, f), names
+#define P(f) offsetof(struct machine_cfg, p.f), NULL
+#define B(f) offsetof(struct machine_cfg, p.dram_banked.f), NULL
+#define E(f, names) offsetof(struct machine_cfg, p.f), names
+#define W(f) offsetof(struct machine_cfg, work.f), NULL
+#define WE(f, names) offsetof(struct machine_cfg, work.f), names
 static const struct key KEYS[] = {
     {"clock_ghz", K_F64, 1e-3, 1e3, "1.4", "GHz", R_ALL, P(clock_ghz), "the core clock; converts cycles to seconds (rays_per_second)"},
     {"cores", K_U32, 1, 4096, "16", "", R_ALL, P(cores), "cores, each with an issue port and a private L1"},
@@ -106,12 +108,12 @@ static const struct key KEYS[] = {
     {"dram.tRTP", K_U32, 1, 1000, "9", "DRAM cycles", R_B, B(tRTP), "read to precharge"},
     {"dram.tREFI", K_U32, 0, 1u << 20, "9360", "DRAM cycles", R_B, B(tREFI), "refresh interval (0: no refresh)"},
     {"dram.tRFC", K_U32, 1, 100000, "420", "DRAM cycles", R_B, B(tRFC), "refresh to activate"},
-    {"costs.node", K_U32, 0, 1e6, "7", "cycles", R_ALL, P(cost_node_cycles), "compute a k-d traversal step"},
-    {"costs.triangle", K_U32, 0, 1e6, "20", "cycles", R_ALL, P(cost_triangle_cycles), "compute a ray/triangle test"},
-    {"costs.shade", K_U32, 0, 1e6, "50", "cycles", R_ALL, P(cost_shade_cycles), "compute shading a hit (spawning its rays included)"},
+    {"costs.node", K_U32, 0, 1e6, "7", "cycles", R_ALL, W(cost_node_cycles), "compute a k-d traversal step"},
+    {"costs.triangle", K_U32, 0, 1e6, "20", "cycles", R_ALL, W(cost_triangle_cycles), "compute a ray/triangle test"},
+    {"costs.shade", K_U32, 0, 1e6, "50", "cycles", R_ALL, W(cost_shade_cycles), "compute shading a hit (spawning its rays included)"},
     {"costs.ray_switch", K_U32, 0, 1e6, "2", "cycles", R_ALL, P(cost_ray_switch_cycles), "a thread switching to another ray's registers"},
     {"timeline.window", K_U64, 1, 1e12, "10000", "cycles", R_ALL, P(timeline_window_cycles), "a timeline.csv row (windows double past 4096 rows)"},
-    {"dynamic.sharing", K_ENUM, 0, 1, "chip", "", R_ALL, E(dyn_sharing, SHARING_NAMES), "the dynamic and treelet policies' queue points: one a core (g_max divided) or chip-wide"},
+    {"dynamic.sharing", K_ENUM, 0, 1, "chip", "", R_ALL, WE(dyn_sharing, SHARING_NAMES), "the dynamic and treelet policies' queue points: one a core (g_max divided) or chip-wide"},
     {"sample.fraction", K_F64, 1e-6, 1, "1", "", R_ALL, P(sample_fraction), "share of work items simulated in detail, warm-up included (1: no sampling)"},
     {"sample.units", K_U32, 0, 1u << 20, "0", "", R_ALL, P(sample_units), "strata of the work list, one detailed unit each (0: as many as fit, at most 40)"},
     {"sample.warming", K_F64, 0, 1e6, "4", "", R_ALL, P(sample_warming), "items warmed without time before a unit, a multiple of its detailed items"},
@@ -174,8 +176,8 @@ static enum scalar_why parse_size(const char *s, uint64_t *out) {
 
 /* Read node n (a scalar) as key k into p. */
 static bool read_value(const struct cfg_doc *d, const struct cfg_node *n, const struct key *k,
-                       struct machine_params *p, struct err *e) {
-  char *dst = (char *)p + k->off;
+                       struct machine_cfg *c, struct err *e) {
+  char *dst = (char *)c + k->off;
   switch (k->kind) {
   case K_F64: {
     double v;
@@ -232,7 +234,7 @@ static bool read_value(const struct cfg_doc *d, const struct cfg_node *n, const 
                       "not an address mapping (got '%s', expected six two-letter fields, each of "
                       "ro ch ra bg ba co once, most significant first, e.g. rochrababgco)",
                       n->kind == CFG_SCALAR ? n->text : "a list or map");
-    snprintf(dst, sizeof p->dram_banked.mapping, "%s", n->text);
+    snprintf(dst, sizeof c->p.dram_banked.mapping, "%s", n->text);
     return true;
   }
   case K_WAYS: {
@@ -269,7 +271,7 @@ void machine_cfg_defaults(struct machine_cfg *c) {
     n.text = (char *)KEYS[i].def;
     struct err e;
     memset(&e, 0, sizeof e);
-    CHECK(read_value(&d, &n, &KEYS[i], &c->p, &e));
+    CHECK(read_value(&d, &n, &KEYS[i], c, &e));
   }
 }
 
@@ -360,7 +362,7 @@ static bool load(struct machine_cfg *c, const char *path, unsigned depth, struct
       n = cfg_get(&d.root, KEYS[i].name);
     }
     if (!n) continue;
-    if (!read_value(&d, n, &KEYS[i], &c->p, e)) ok = false;
+    if (!read_value(&d, n, &KEYS[i], c, e)) ok = false;
     else set_origin(c, i, path, n->line, n->col, depth > 0);
   }
   for (unsigned i = 0; ok && i < NKEYS; i++) {
@@ -395,7 +397,7 @@ bool machine_cfg_set_at(struct machine_cfg *c, unsigned i, const char *value, co
   n.text = (char *)value;
   n.line = line;
   n.col = col;
-  if (!read_value(&d, &n, &KEYS[i], &c->p, e)) return false;
+  if (!read_value(&d, &n, &KEYS[i], c, e)) return false;
   set_origin(c, i, file, line, col, false);
   return true;
 }
@@ -516,7 +518,7 @@ bool machine_cfg_check(const struct machine_cfg *c, struct err *e) {
 
 void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsigned cap) {
   const struct key *k = &KEYS[i];
-  const char *src = (const char *)&c->p + k->off;
+  const char *src = (const char *)c + k->off;
   switch (k->kind) {
   case K_F64: {
     double v;

@@ -27,8 +27,19 @@ struct machine_cfg_origin {
   unsigned seq;  /* order of setting (0: the default) */
 };
 
+/* What a machine config says about the work run on the machine rather than
+ * about the machine: the compute the renderer announces per step (its
+ * kernel's costs on these cores) and how the dynamic and treelet policies
+ * share queue points among the cores. Not in struct machine_params: the
+ * machine never reads them; the program hands them to the renderer. */
+struct machine_cfg_work {
+  uint32_t cost_node_cycles, cost_triangle_cycles, cost_shade_cycles;
+  uint32_t dyn_sharing; /* renderer/policy/policy.h: 0 partition, 1 chip */
+};
+
 struct machine_cfg {
   struct machine_params p;
+  struct machine_cfg_work work;
   struct machine_cfg_origin at[MACHINE_CFG_KEYS_MAX]; /* [0, machine_cfg_count()) */
   unsigned seq; /* settings so far */
 };

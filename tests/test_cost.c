@@ -115,20 +115,21 @@ struct result {
 };
 
 static void render(const struct scene *s, const struct kd_tree *kd, enum policy_kind k,
-                   const struct machine_params *p, bool costs, struct result *out) {
+                   const struct machine_cfg *mc, bool costs, struct result *out) {
+  const struct machine_params *p = &mc->p;
   struct shade_ctx sc = {0};
   sc.scene = s;
   sc.ray_mask = RAY_MASK(RAY_TYPE_COUNT) - 1;
   sc.seed = s->seed;
-  sc.shade_cycles = p->cost_shade_cycles;
+  sc.shade_cycles = mc->work.cost_shade_cycles;
   struct framebuffer fb;
   struct policy_setup setup;
   memset(&setup, 0, sizeof setup);
   setup.scene = s;
   setup.kd = kd;
   trace_layout_default(&setup.layout);
-  setup.layout.node_cycles = p->cost_node_cycles;
-  setup.layout.tri_cycles = p->cost_triangle_cycles;
+  setup.layout.node_cycles = mc->work.cost_node_cycles;
+  setup.layout.tri_cycles = mc->work.cost_triangle_cycles;
   setup.sc = &sc;
   fb_init(&fb, W, H, setup.layout.fb_base);
   setup.fb = &fb;
@@ -139,7 +140,7 @@ static void render(const struct scene *s, const struct kd_tree *kd, enum policy_
   }
   struct policy_params pp;
   policy_params_machine(&pp, p->l2_size_bytes);
-  pp.dyn_sharing = p->dyn_sharing;
+  pp.dyn_sharing = mc->work.dyn_sharing;
   const uint32_t n = p->cores * p->threads_per_core * p->rays_per_thread;
   r.job = policy_job_create(k, &setup, &pp, n, p->cores);
   r.workers = calloc(n, sizeof *r.workers);
@@ -195,8 +196,8 @@ static void test_policies(const char *scene, const char *config, uint32_t l2_siz
   if (l2_size) mc.p.l2_size_bytes = l2_size; /* small: many write-backs */
   for (int k = 0; k < POLICY_COUNT; k++) {
     struct result on, off;
-    render(&s, &kd, (enum policy_kind)k, &mc.p, true, &on);
-    render(&s, &kd, (enum policy_kind)k, &mc.p, false, &off);
+    render(&s, &kd, (enum policy_kind)k, &mc, true, &on);
+    render(&s, &kd, (enum policy_kind)k, &mc, false, &off);
     const char *pn = policy_name((enum policy_kind)k);
     EXPECTF(same_machine(&on.st, &off.st), "%s %s %s: counting costs moved the machine", scene,
             config, pn);

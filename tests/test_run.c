@@ -165,16 +165,23 @@ static void timed_worker(void *arg, const struct machine_worker_info *info, stru
  * machine's stats and the render's are copied out (rs may be NULL), the
  * framebuffer kept in r (caller finishes it). With q, every worker's queue
  * accesses are checked. */
-static void timed_q(struct world *w, enum policy_kind k, uint32_t mask,
-                    const struct machine_params *p, struct machine_stats *out, struct render *r,
-                    struct render_stats *rs, struct qcheck *q) {
+/* A machine and what its config says about the work (costs, sharing). */
+struct tcfg {
+  struct machine_params p;
+  struct machine_cfg_work work;
+};
+
+static void timed_q(struct world *w, enum policy_kind k, uint32_t mask, const struct tcfg *c,
+                    struct machine_stats *out, struct render *r, struct render_stats *rs,
+                    struct qcheck *q) {
+  const struct machine_params *p = &c->p;
   render_init(r, w, mask);
-  r->setup.layout.node_cycles = p->cost_node_cycles;
-  r->setup.layout.tri_cycles = p->cost_triangle_cycles;
-  r->sc.shade_cycles = p->cost_shade_cycles;
+  r->setup.layout.node_cycles = c->work.cost_node_cycles;
+  r->setup.layout.tri_cycles = c->work.cost_triangle_cycles;
+  r->sc.shade_cycles = c->work.cost_shade_cycles;
   struct policy_params pp;
   policy_params_machine(&pp, p->l2_size_bytes);
-  pp.dyn_sharing = p->dyn_sharing;
+  pp.dyn_sharing = c->work.dyn_sharing;
   uint32_t n = p->cores * p->threads_per_core * p->rays_per_thread;
   struct timed_ctx t = {policy_job_create(k, &r->setup, &pp, n, p->cores), NULL, NULL};
   t.workers = calloc(n, sizeof *t.workers);
@@ -197,13 +204,13 @@ static void timed_q(struct world *w, enum policy_kind k, uint32_t mask,
   policy_job_destroy(t.job);
 }
 
-static void timed(struct world *w, enum policy_kind k, uint32_t mask, const struct machine_params *p,
+static void timed(struct world *w, enum policy_kind k, uint32_t mask, const struct tcfg *c,
                   struct machine_stats *out, struct render *r) {
-  timed_q(w, k, mask, p, out, r, NULL, NULL);
+  timed_q(w, k, mask, c, out, r, NULL, NULL);
 }
 
 /* configs/NAME.yaml, resolved (it must load). */
-static struct machine_params shipped_config(const char *name) {
+static struct tcfg shipped_config(const char *name) {
   char path[1024];
   snprintf(path, sizeof path, "%s/configs/%s.yaml", RTSIM_SOURCE_DIR, name);
   struct machine_cfg c;
@@ -211,18 +218,19 @@ static struct machine_params shipped_config(const char *name) {
   struct err e;
   memset(&e, 0, sizeof e);
   CHECK(machine_cfg_load(&c, path, &e));
-  return c.p;
+  return (struct tcfg){c.p, c.work};
 }
 
-static struct machine_params one_by_one(uint64_t l2_bytes) {
+static struct tcfg one_by_one(uint64_t l2_bytes) {
   struct machine_cfg c;
   machine_cfg_defaults(&c);
-  struct machine_params p = c.p;
-  p.cores = p.threads_per_core = p.rays_per_thread = 1;
-  p.l1_size_bytes = 0;
-  p.l2_size_bytes = l2_bytes;
-  p.l2_ways = 0;
-  return p;
+  struct tcfg t = {c.p, c.work};
+  struct machine_params *p = &t.p;
+  p->cores = p->threads_per_core = p->rays_per_thread = 1;
+  p->l1_size_bytes = 0;
+  p->l2_size_bytes = l2_bytes;
+  p->l2_ways = 0;
+  return t;
 }
 
 static int same_image(const struct framebuffer *a, const struct framebuffer *b) {
@@ -257,18 +265,19 @@ static void test_cross_check(struct world *w, unsigned first, unsigned last) {
       functional(w, kinds[k], mask, sizes[s], &fetch, &wb);
       EXPECT(fetch > 0);
       for (unsigned d = 0; d < ndrams; d++) {
-        struct machine_params p = one_by_one(1ull << sizes[s]);
-        p.fidelity = drams[d].model;
-        p.dram_latency_cycles = drams[d].latency;
-        p.dram_bytes_per_cycle = drams[d].bw;
-        p.l2_mshrs = drams[d].mshrs;
-        p.dram_queue_depth = drams[d].queue;
-        p.l2_write_buffer = drams[d].write_buffer;
-        p.dram_banked.page = drams[d].page;
-        p.dram_banked.channels = drams[d].channels;
+        struct tcfg c = one_by_one(1ull << sizes[s]);
+        struct machine_params *p = &c.p;
+        p->fidelity = drams[d].model;
+        p->dram_latency_cycles = drams[d].latency;
+        p->dram_bytes_per_cycle = drams[d].bw;
+        p->l2_mshrs = drams[d].mshrs;
+        p->dram_queue_depth = drams[d].queue;
+        p->l2_write_buffer = drams[d].write_buffer;
+        p->dram_banked.page = drams[d].page;
+        p->dram_banked.channels = drams[d].channels;
         struct machine_stats st;
         struct render r;
-        timed(w, kinds[k], mask, &p, &st, &r);
+        timed(w, kinds[k], mask, &c, &st, &r);
         /* A miss that takes its line back from the write buffer (the DRAM
          * slow to drain it) saves the fetch the functional model makes, and
          * the write-back too unless the line, dirty again, is evicted again
@@ -298,11 +307,11 @@ static void test_cross_check(struct world *w, unsigned first, unsigned last) {
 static void test_many_workers(struct world *w, const char *scene, bool all) {
   const uint32_t mask = RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) |
                         RAY_MASK(RAY_DIFFUSE);
-  const struct machine_params tiny = shipped_config("tiny");
+  const struct tcfg tiny = shipped_config("tiny");
   struct render ref;
   struct machine_stats st;
   struct render_stats ref_rs;
-  struct machine_params one = one_by_one(1 << 20);
+  struct tcfg one = one_by_one(1 << 20);
   timed_q(w, POLICY_RECURSIVE, mask, &one, &st, &ref, &ref_rs, NULL);
   for (int k = 0; all && k < 2; k++) {
     struct render r;
@@ -313,8 +322,8 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
   }
   /* Every scene, every policy, on the banked DRAM: the same picture, and the
    * DRAM bytes conserved. */
-  struct machine_params banked = tiny;
-  banked.fidelity = MACHINE_FIDELITY_BANKED;
+  struct tcfg banked = tiny;
+  banked.p.fidelity = MACHINE_FIDELITY_BANKED;
   const enum policy_kind all_kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC, POLICY_TREELET};
   for (unsigned k = 0; k < 4; k++) {
     struct render r;
@@ -325,31 +334,32 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
     fb_fini(&r.fb);
   }
 
-  struct machine_params small_l2 = tiny, many = tiny;
-  small_l2.l2_size_bytes = 4096;
-  many.cores = 3;
-  many.threads_per_core = 3;
-  many.rays_per_thread = 3;
-  many.l2_size_bytes = 16384;
+  struct tcfg small_l2 = tiny, many = tiny;
+  small_l2.p.l2_size_bytes = 4096;
+  many.p.cores = 3;
+  many.p.threads_per_core = 3;
+  many.p.rays_per_thread = 3;
+  many.p.l2_size_bytes = 16384;
   /* Chip-wide sharing (dynamic.sharing: chip): the cores on one queue point,
    * and with a 4 KiB L2 on the blocks of oversized leaves together. */
-  struct machine_params chip = tiny, chip_small = many;
-  chip.dyn_sharing = chip_small.dyn_sharing = POLICY_DYN_CHIP;
-  chip_small.l2_size_bytes = 4096;
+  struct tcfg chip = tiny, chip_small = many;
+  chip.work.dyn_sharing = chip_small.work.dyn_sharing = POLICY_DYN_CHIP;
+  chip_small.p.l2_size_bytes = 4096;
   const struct {
     const char *name;
-    const struct machine_params *p;
+    const struct tcfg *c;
   } dyn[] = {{"tiny.yaml", &tiny}, {"tiny.yaml, 4 KiB L2", &small_l2},
              {"tiny.yaml, 3 x 3 x 3, 16 KiB L2", &many}, {"1 x 1 x 1", &one},
              {"tiny.yaml, chip", &chip}, {"tiny.yaml, 3 x 3 x 3, 4 KiB L2, chip", &chip_small}};
   for (unsigned i = 0; i < sizeof dyn / sizeof dyn[0]; i++) {
-    const struct machine_params *p = dyn[i].p;
-    if (!all && p != &tiny && p != &one && p != &chip) continue;
+    const struct tcfg *c = dyn[i].c;
+    const struct machine_params *p = &c->p;
+    if (!all && c != &tiny && c != &one && c != &chip) continue;
     const uint32_t workers = p->cores * p->threads_per_core * p->rays_per_thread;
     /* The plan it runs with: with a 4 KiB L2, some leaves exceed g_max. */
     struct policy_params pp;
     policy_params_machine(&pp, p->l2_size_bytes);
-    pp.dyn_sharing = p->dyn_sharing;
+    pp.dyn_sharing = c->work.dyn_sharing;
     struct qpoint_set qs;
     struct qpoint_budget b;
     uint32_t bt, group;
@@ -359,7 +369,7 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
       struct kd_node nd = qs.nodes[qs.qnode[q]];
       oversized += kd_is_leaf(nd) && kd_leaf_count(nd) > bt;
     }
-    if (p == &small_l2 || p == &chip_small) EXPECTF(oversized > 0, "%s: no leaf over g_max (%u queue points)", dyn[i].name, qs.count);
+    if (c == &small_l2 || c == &chip_small) EXPECTF(oversized > 0, "%s: no leaf over g_max (%u queue points)", dyn[i].name, qs.count);
     EXPECT(group == 1);
     const uint32_t queues = qs.count;
     qpoint_fini(&qs);
@@ -367,7 +377,7 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
     struct render r;
     struct render_stats rs;
     struct qcheck q;
-    timed_q(w, POLICY_DYNAMIC, mask, p, &st, &r, &rs, &q);
+    timed_q(w, POLICY_DYNAMIC, mask, c, &st, &r, &rs, &q);
     EXPECTF(same_image(&ref.fb, &r.fb), "%s, dynamic on %s: image differs from recursive's", scene, dyn[i].name);
     EXPECTF(memcmp(rs.rays, ref_rs.rays, sizeof rs.rays) == 0 && rs.spawned == ref_rs.spawned &&
                 rs.terminated == rs.spawned,
@@ -403,9 +413,9 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
     /* Treelet queues on the same machine: the same picture and rays, the
      * same queue discipline, every parked context woken (on the small L2,
      * with its oversized leaves, and the many-context machine). */
-    if (p != &small_l2 && p != &many && p != &chip_small) continue;
+    if (c != &small_l2 && c != &many && c != &chip_small) continue;
     struct qcheck tq;
-    timed_q(w, POLICY_TREELET, mask, p, &st, &r, &rs, &tq);
+    timed_q(w, POLICY_TREELET, mask, c, &st, &r, &rs, &tq);
     EXPECTF(same_image(&ref.fb, &r.fb), "%s, treelet on %s: image differs from recursive's", scene, dyn[i].name);
     EXPECTF(memcmp(rs.rays, ref_rs.rays, sizeof rs.rays) == 0 && rs.terminated == rs.spawned,
             "treelet on %s: rays differ from recursive's", dyn[i].name);
@@ -436,7 +446,8 @@ static void test_machine_plan(void) {
     qpoint_subtree_tris(&w.kd, tris);
     for (unsigned ci = 0; ci < 3; ci++)
       for (unsigned li = 0; li < 3; li++) {
-        const struct machine_params cp = shipped_config(cfgs[ci]), *p = &cp;
+        const struct tcfg cc = shipped_config(cfgs[ci]);
+        const struct machine_params *p = &cc.p;
         const uint64_t S = l2s[li] ? l2s[li] : p->l2_size_bytes;
         const uint32_t C = p->cores, workers = C * p->threads_per_core * p->rays_per_thread;
         struct policy_params pp;
