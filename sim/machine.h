@@ -31,6 +31,7 @@
 #include "sim/hist.h"
 #include "sim/l2.h"
 #include "sim/mem.h"
+#include "sim/stats.h"
 
 struct timeline;
 
@@ -162,6 +163,21 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
                  void *progress_ctx);
 
 const struct machine_stats *machine_get_stats(const struct machine *m);
+
+/* The machine's numbers (sim/stats.h), over a struct machine_stats; the L1's
+ * and the engine's, whose counters it keeps, and the DRAM utilization it
+ * computes for the levels without their own. */
+extern const struct stats_descs machine_stats_descs, machine_l1_stats_descs, machine_engine_stats_descs,
+    machine_dram_util_stats_descs;
+/* Where the run's own numbers go in the machine's order: after `seconds`, and
+ * after issue_slots_per_blocking_load. */
+enum { MACHINE_STATS_SLOT_RUN = 200, MACHINE_STATS_SLOT_RUN_MISSES };
+/* After machine_run: append every number of the machine and its components
+ * to t, in their tables' order; per-class numbers for `classes` data classes
+ * named class_names; run (NULL: none) fills the MACHINE_STATS_SLOT_RUN* slots
+ * (its env: the machine's, slot_ctx = run_ctx). */
+void machine_stats_emit(const struct machine *m, struct stats_table *t, const char *const *class_names,
+                        unsigned classes, stats_slot_fn run, const void *run_ctx);
 
 /* ---- sampling (README "Sampling") ----
  * The counters of a running machine at the current cycle: what a window of
