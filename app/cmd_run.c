@@ -73,6 +73,9 @@ static const char HELP[] =
     "                      cost.issue_slots)\n"
     "  --cost-max X        the colour bar's top (default: the largest pixel), to\n"
     "                      compare maps of several runs on one scale\n"
+    "  --help-stats        list every number stats.json and stats.csv hold: name,\n"
+    "                      unit, component, description (README: Numbers)\n"
+    "  --help-stats-markdown  the same as the README's table rows\n"
     "  -h, --help          this text\n";
 
 static bool parse_cost_max(const char *text, void *dst) {
@@ -96,6 +99,7 @@ int cmd_run(int argc, char **argv) {
   enum policy_kind policy = POLICY_RECURSIVE;
   const char *trace_path = NULL, *cost_preview = NULL, *cost_channel = "cost.issue_slots";
   double cost_max = 0;
+  bool help_stats = false, help_stats_md = false;
   struct outfile trace = {0};
   struct outdir od = {0};
   struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v), 0}; /* at most one an argument */
@@ -109,10 +113,17 @@ int cmd_run(int argc, char **argv) {
                  "one of: cost.issue_slots, cost.load_wait_cycles, cost.dram_read_bytes.geometry, "
                  ".node, .ray, .queue, .other, cost.dram_write_bytes"),
       OPTS_PARSE("cost-max", 0, &cost_max, parse_cost_max, "a number above 0"),
+      OPTS_FLAG("help-stats", 0, &help_stats),
+      OPTS_FLAG("help-stats-markdown", 0, &help_stats_md),
       OPTS_END};
   struct opts_args args;
   int rc = opts_parse("run", HELP, spec, argc, argv, &args);
   if (rc != OPTS_GO) goto done;
+  if (help_stats || help_stats_md) {
+    run_output_stats_help(stdout, help_stats_md);
+    rc = fflush(stdout) == 0 ? 0 : 1;
+    goto done;
+  }
   rc = APP_EXIT_USAGE;
   if (args.n != 2) {
     app_usage_error("run", "expected MACHINE.yaml SCENE.yaml, got %d file%s", args.n,
