@@ -248,24 +248,8 @@ static bool write_csv(const struct run_output_report *r, struct err *e) {
 static bool write_timeline(const struct run_output_report *r, struct err *e) {
   struct outfile o;
   if (!open_out(&o, r, "timeline.csv", e)) return false;
-  FILE *f = o.f;
-  const struct timeline *tl = machine_timeline(r->machine);
-  const uint64_t rows = tl->rows, win = tl->window;
-  const uint64_t end = machine_get_stats(r->machine)->cycles;
-  fputs("cycle,cycles,dram_read_bytes,dram_write_bytes", f);
-  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) fprintf(f, ",read_%s_bytes", trace_class_names[c]);
-  fputs(",l2_accesses,l2_misses,issued_ops,busy_threads\n", f);
-  for (uint64_t i = 0; i < rows; i++) {
-    const double *v = timeline_row(tl, i);
-    uint64_t start = i * win, len = start + win <= end ? win : (end > start ? end - start : 0);
-    if (len == 0) break;
-    fprintf(f, "%llu,%llu,%.2f,%.2f", (unsigned long long)start, (unsigned long long)len,
-            v[MACHINE_TL_DRAM_READ_BYTES], v[MACHINE_TL_DRAM_WRITE_BYTES]);
-    for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++)
-      fprintf(f, ",%.2f", v[MACHINE_TL_READ_CLASS0 + c]);
-    fprintf(f, ",%.0f,%.0f,%.0f,%.4f\n", v[MACHINE_TL_L2_ACCESSES], v[MACHINE_TL_L2_MISSES],
-            v[MACHINE_TL_ISSUED_OPS], v[MACHINE_TL_BUSY_THREAD_CYCLES] / (double)len);
-  }
+  timeline_write_csv(machine_timeline(r->machine), machine_tl_cols, machine_tl_col_count, trace_class_names,
+                     TRACE_CLASS_COUNT, machine_get_stats(r->machine)->cycles, o.f);
   return outfile_commit(&o, e);
 }
 
@@ -410,4 +394,5 @@ void run_output_stats_help(FILE *f, bool markdown) {
       &machine_engine_stats_descs};
   for (unsigned i = 0; i < sizeof order / sizeof order[0]; i++)
     (markdown ? stats_write_markdown : stats_write_help)(order[i], f);
+  timeline_write_help(machine_tl_cols, machine_tl_col_count, markdown, f);
 }

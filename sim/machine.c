@@ -1028,3 +1028,19 @@ void machine_stats_emit(const struct machine *m, struct stats_table *t, const ch
                                 .classes = classes, .slot = m_slot, .slot_ctx = &x};
   stats_emit(t, &machine_stats_descs, &m->st, &env);
 }
+
+/* The timeline's columns (enum machine_tl_col), as timeline.csv writes them. */
+const struct timeline_col machine_tl_cols[] = {
+    {"dram_read_bytes", "bytes", "bytes the DRAM delivered in the window (a transfer split in proportion)",
+     MACHINE_TL_DRAM_READ_BYTES, 1, 2, false, false},
+    {"dram_write_bytes", "bytes", "bytes the DRAM wrote in the window", MACHINE_TL_DRAM_WRITE_BYTES, 1, 2, false,
+     false},
+    {"read_%s_bytes", "bytes", "of the bytes read, those of each data class", MACHINE_TL_READ_CLASS0,
+     MEM_CLASS_MAX, 2, true, false},
+    {"l2_accesses", "count", "accesses that reached the L2", MACHINE_TL_L2_ACCESSES, 1, 0, false, false},
+    {"l2_misses", "count", "those that missed", MACHINE_TL_L2_MISSES, 1, 0, false, false},
+    {"issued_ops", "cycles", "issue slots used, all cores", MACHINE_TL_ISSUED_OPS, 1, 0, false, false},
+    {"busy_threads", "threads", "mean threads with a ray ready, running or being switched to",
+     MACHINE_TL_BUSY_THREAD_CYCLES, 1, 4, false, true},
+};
+const unsigned machine_tl_col_count = sizeof machine_tl_cols / sizeof machine_tl_cols[0];

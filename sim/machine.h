@@ -32,6 +32,7 @@
 #include "sim/l2.h"
 #include "sim/mem.h"
 #include "sim/stats.h"
+#include "sim/timeline.h"
 
 struct timeline;
 
@@ -237,8 +238,11 @@ void machine_attribute(struct machine *m, uint32_t ctx, const uint32_t *items, u
 /* After machine_run: the costs per item, or NULL when not enabled. */
 const struct machine_costs *machine_get_costs(const struct machine *m);
 
-/* The timeline: rows of MACHINE_TL_COLS values (sim/timeline.h). */
+/* The timeline: rows of MACHINE_TL_COLS values (sim/timeline.h), and its
+ * columns as timeline.csv writes them, each declared once. */
 const struct timeline *machine_timeline(const struct machine *m);
+extern const struct timeline_col machine_tl_cols[];
+extern const unsigned machine_tl_col_count;
 /* The DRAM (its level's numbers: dram_report; its trace: dram_trace_to). */
 struct dram *machine_dram(const struct machine *m);
 

@@ -12,6 +12,7 @@
 #include "sim/l2.h"
 #include "sim/machine.h"
 #include "sim/stats.h"
+#include "sim/timeline.h"
 #include "testing.h"
 
 /* What a writer prints, as a string (caller frees). */
@@ -260,6 +261,19 @@ static void test_components(void) {
   }
 }
 
+/* Every column the machine adds to its timeline is written: declared once. */
+static void test_timeline_cols(void) {
+  unsigned seen[MACHINE_TL_COLS] = {0};
+  for (unsigned j = 0; j < machine_tl_col_count; j++) {
+    const struct timeline_col *c = &machine_tl_cols[j];
+    EXPECT(c->span >= 1 && c->unit[0] && c->desc[0]);
+    EXPECT(c->per_class ? c->span == MEM_CLASS_MAX : c->span == 1);
+    for (unsigned k = 0; k < c->span && c->col + k < MACHINE_TL_COLS; k++) seen[c->col + k]++;
+    EXPECT(c->col + c->span <= MACHINE_TL_COLS);
+  }
+  for (unsigned i = 0; i < MACHINE_TL_COLS; i++) EXPECTF(seen[i] == 1, "timeline column %u: %u descriptors", i, seen[i]);
+}
+
 /* The README's table of numbers is `rtsim run --help-stats-markdown`. */
 static void test_readme(void) {
   FILE *p = popen(RTSIM_BINARY " run --help-stats-markdown", "r");
@@ -289,6 +303,7 @@ static void test_readme(void) {
 int main(void) {
   test_uncovered();
   test_components();
+  test_timeline_cols();
   test_readme();
   test_csv_str();
   test_json_str();
