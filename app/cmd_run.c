@@ -76,6 +76,9 @@ static const char HELP[] =
     "  --help-keys         every machine config key as a Markdown table (name,\n"
     "                      default, range, unit, the rungs that read it, what it\n"
     "                      is): the README's table\n"
+    "  --help-stats        list every number stats.json and stats.csv hold: name,\n"
+    "                      unit, component, description (README: Numbers)\n"
+    "  --help-stats-markdown  the same as the README's table rows\n"
     "  -h, --help          this text\n";
 
 static bool parse_cost_max(const char *text, void *dst) {
@@ -100,6 +103,7 @@ int cmd_run(int argc, char **argv) {
   const char *trace_path = NULL, *cost_preview = NULL, *cost_channel = "cost.issue_slots";
   double cost_max = 0;
   bool help_keys = false;
+  bool help_stats = false, help_stats_md = false;
   struct outfile trace = {0};
   struct outdir od = {0};
   struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v), 0}; /* at most one an argument */
@@ -116,6 +120,8 @@ int cmd_run(int argc, char **argv) {
                  ".node, .ray, .queue, .other, cost.dram_write_bytes"),
       OPTS_PARSE("cost-max", 0, &cost_max, parse_cost_max, "a number above 0"),
       OPTS_FLAG("help-keys", 0, &help_keys),
+      OPTS_FLAG("help-stats", 0, &help_stats),
+      OPTS_FLAG("help-stats-markdown", 0, &help_stats_md),
       OPTS_END};
   struct opts_args args;
   int rc = opts_parse("run", HELP, spec, argc, argv, &args);
@@ -123,6 +129,11 @@ int cmd_run(int argc, char **argv) {
   if (help_keys) {
     machine_cfg_write_keys(stdout);
     rc = 0;
+    goto done;
+  }
+  if (help_stats || help_stats_md) {
+    run_output_stats_help(stdout, help_stats_md);
+    rc = fflush(stdout) == 0 ? 0 : 1;
     goto done;
   }
   rc = APP_EXIT_USAGE;

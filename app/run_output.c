@@ -91,21 +91,6 @@ static void identity(const struct run_output_report *r, struct stats_table *t) {
   stats_u64(t, "seed", r->seed);
 }
 
-/* A queue's numbers for Little's law: requests that left it, their mean wait,
- * and the mean and most requests inside (length_mean x cycles = wait_mean x
- * requests, measured apart). */
-static void queue(struct stats_table *t, const char *prefix, const struct qmeter *q, uint64_t cycles) {
-  char name[64];
-  snprintf(name, sizeof name, "%s_requests", prefix);
-  stats_u64(t, name, q->left);
-  snprintf(name, sizeof name, "%s_wait_mean", prefix);
-  stats_f64(t, name, ratio((double)q->wait_sum, (double)q->left));
-  snprintf(name, sizeof name, "%s_length_mean", prefix);
-  stats_f64(t, name, ratio((double)q->area, (double)cycles));
-  snprintf(name, sizeof name, "%s_length_max", prefix);
-  stats_u64(t, name, q->max);
-}
-
 /* Fidelity analytic: what its counts and estimate know, under the timed
  * rungs' names and in their order; what only time tells (threads' idle
  * time, switches, waits, merges, stalls, queues, latencies, events) is
@@ -164,6 +149,61 @@ static void measured_analytic(const struct run_output_report *r, struct stats_ta
   stats_f64(t, "analytic_bandwidth_bound_cycles", a->bandwidth_bound_cycles);
 }
 
+/* ---- the run's own numbers, at the machine's slots (README "Numbers") ----
+ * The workload's counts (the renderer's) and figures of the machine that need
+ * the renderer's data classes; st: the struct run_output_report. */
+
+static double run_seconds(const struct run_output_report *r) {
+  return (double)machine_get_stats(r->machine)->cycles / (r->cfg->p.clock_ghz * 1e9);
+}
+static uint64_t run_rays(const void *st, const struct stats_env *env) {
+  (void)env;
+  return render_stats_total(((const struct run_output_report *)st)->rstats);
+}
+static double run_rays_per_second(const void *st, const struct stats_env *env) {
+  return ratio((double)run_rays(st, env), run_seconds(st));
+}
+static uint64_t run_node_visits(const void *st, const struct stats_env *env) {
+  (void)env;
+  return ((const struct run_output_report *)st)->tstats->node_visits;
+}
+static uint64_t run_tri_tests(const void *st, const struct stats_env *env) {
+  (void)env;
+  return ((const struct run_output_report *)st)->tstats->tri_tests;
+}
+static double run_slots_per_geometry_miss(const void *st, const struct stats_env *env) {
+  (void)env;
+  const struct machine_stats *s = machine_get_stats(((const struct run_output_report *)st)->machine);
+  const uint64_t *by = s->l2.fetch_bytes_by_class;
+  uint64_t geo_misses = (by[TRACE_CLASS_GEOMETRY] + by[TRACE_CLASS_NODE]) / 64;
+  return ratio((double)s->issue_slots, (double)geo_misses);
+}
+
+static const struct stats_desc run_desc[] = {
+    {.name = "rays_traced", .unit = "count", .desc = "rays traced, every kind", .how = STATS_HOW_U64,
+     .u64 = run_rays},
+    {.name = "rays_per_second", .unit = "per second", .desc = "rays traced / seconds",
+     .how = STATS_HOW_F64, .f64 = run_rays_per_second},
+    {.name = "kd_node_visits", .unit = "count", .desc = "k-d tree nodes visited", .how = STATS_HOW_U64,
+     .u64 = run_node_visits},
+    {.name = "triangle_tests", .unit = "count", .desc = "ray-triangle tests", .how = STATS_HOW_U64,
+     .u64 = run_tri_tests},
+};
+static const struct stats_desc run_misses_desc[] = {
+    {.name = "issue_slots_per_geometry_miss", .unit = "cycles",
+     .desc = "issue slots / lines of triangles or k-d nodes read from the DRAM", .how = STATS_HOW_F64,
+     .f64 = run_slots_per_geometry_miss},
+};
+const struct stats_descs run_output_stats_descs = {"run", run_desc, STATS_COUNT(run_desc), 0, NULL, 0};
+const struct stats_descs run_output_misses_stats_descs = {"run", run_misses_desc, STATS_COUNT(run_misses_desc),
+                                                          0, NULL, 0};
+
+static void run_slot(const struct stats_env *env, int slot, struct stats_table *t) {
+  const void *r = env->slot_ctx;
+  if (slot == MACHINE_STATS_SLOT_RUN) stats_emit(t, &run_output_stats_descs, r, env);
+  else stats_emit(t, &run_output_misses_stats_descs, r, env);
+}
+
 /* Every measured scalar, units in the names. */
 static void measured(const struct run_output_report *r, struct stats_table *t) {
   if (r->analytic) {
@@ -181,89 +221,7 @@ static void measured(const struct run_output_report *r, struct stats_table *t) {
     sample_stats(r->sample, p, peak, t);
     return;
   }
-  const double cyc = (double)s->cycles;
-  const uint64_t rays = render_stats_total(r->rstats);
-  const double seconds = cyc / (p->clock_ghz * 1e9);
-  stats_u64(t, "cycles", s->cycles);
-  stats_f64(t, "seconds", seconds);
-  stats_u64(t, "rays_traced", rays);
-  stats_f64(t, "rays_per_second", ratio((double)rays, seconds));
-  stats_u64(t, "kd_node_visits", r->tstats->node_visits);
-  stats_u64(t, "triangle_tests", r->tstats->tri_tests);
-  stats_u64(t, "ray_contexts", s->contexts);
-  stats_u64(t, "threads", s->threads);
-  stats_u64(t, "issue_slots", s->issue_slots);
-  stats_f64(t, "core_utilization", ratio((double)s->issue_slots, (double)p->cores * cyc));
-  double tc = (double)s->threads * cyc;
-  stats_f64(t, "thread_idle_fraction",
-            ratio((double)(s->thread_wait_cycles + s->thread_parked_cycles + s->thread_done_cycles), tc));
-  stats_f64(t, "thread_wait_fraction", ratio((double)s->thread_wait_cycles, tc));
-  stats_f64(t, "thread_parked_fraction", ratio((double)s->thread_parked_cycles, tc));
-  stats_f64(t, "thread_done_fraction", ratio((double)s->thread_done_cycles, tc));
-  stats_u64(t, "ray_switches", s->ray_switches);
-  stats_u64(t, "ray_switch_cycles", s->switch_cycles);
-  stats_u64(t, "waits", s->waits);
-  stats_u64(t, "wait_cycles", s->wait_cycles);
-  stats_u64(t, "parks", s->parks);
-  stats_u64(t, "wakes", s->wakes);
-  stats_u64(t, "loads", s->loads);
-  stats_u64(t, "stores", s->stores);
-  stats_u64(t, "blocking_loads", s->blocking_loads);
-  stats_f64(t, "issue_slots_per_blocking_load", ratio((double)s->issue_slots, (double)s->blocking_loads));
-  const struct l2_stats *l2 = &s->l2;
-  uint64_t geo_misses = (l2->fetch_bytes_by_class[TRACE_CLASS_GEOMETRY] + l2->fetch_bytes_by_class[TRACE_CLASS_NODE]) / 64;
-  stats_f64(t, "issue_slots_per_geometry_miss", ratio((double)s->issue_slots, (double)geo_misses));
-  stats_u64(t, "l1_accesses", s->l1_accesses);
-  stats_u64(t, "l1_hits", s->l1_hits);
-  stats_u64(t, "l2_accesses", l2->accesses);
-  stats_u64(t, "l2_hits", l2->hits);
-  stats_u64(t, "l2_misses", l2->misses);
-  stats_f64(t, "l2_miss_rate", ratio((double)l2->misses, (double)l2->accesses));
-  stats_u64(t, "l2_mshr_merges", l2->mshr_merges);
-  stats_u64(t, "l2_merges_held", l2->merges_held);
-  stats_u64(t, "l2_write_buffer_hits", l2->write_buffer_hits);
-  stats_u64(t, "l2_whole_line_allocs", l2->whole_line_allocs);
-  stats_u64(t, "l2_stalls", l2->stalls);
-  static const char *const why[L2_STALL_COUNT] = {"mshr", "set", "write_buffer", "dram"};
-  for (unsigned i = 0; i < L2_STALL_COUNT; i++) {
-    char name[64];
-    snprintf(name, sizeof name, "l2_stall_%s_cycles", why[i]);
-    stats_u64(t, name, l2->stall_cycles[i]);
-  }
-  stats_u64(t, "l2_bank_wait_cycles", l2->bank_wait_cycles);
-  stats_u64(t, "l2_fetch_bytes", l2->fetch_bytes);
-  stats_u64(t, "l2_writeback_bytes", l2->writeback_bytes);
-  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) {
-    char name[64];
-    snprintf(name, sizeof name, "fetch_%s_bytes", trace_class_names[c]);
-    stats_u64(t, name, l2->fetch_bytes_by_class[c]);
-  }
-  queue(t, "l2_stall_queue", &l2->stall_queue, s->cycles);
-  queue(t, "l2_miss_queue", &l2->miss_queue, s->cycles);
-  stats_u64(t, "backpressure_cycles", l2->miss_queue.wait_sum);
-  queue(t, "l2_write_buffer", &l2->write_buffer, s->cycles);
-  const struct dram_stats *d = &s->dram;
-  stats_u64(t, "dram_reads", d->reads);
-  stats_u64(t, "dram_writes", d->writes);
-  stats_u64(t, "dram_read_bytes", d->read_bytes);
-  stats_u64(t, "dram_write_bytes", d->write_bytes);
-  stats_u64(t, "dram_bytes", d->read_bytes + d->write_bytes);
-  stats_f64(t, "dram_bytes_per_cycle", ratio((double)(d->read_bytes + d->write_bytes), cyc));
-  /* (the channel level reports its own, the same share: dram_report) */
-  if (peak > 0 && machine_fidelity_dram(p->fidelity) != DRAM_MODEL_CHANNEL)
-    stats_f64(t, "dram_utilization", ratio((double)(d->read_bytes + d->write_bytes), cyc) / peak);
-  stats_f64(t, "dram_read_latency_mean", hist_mean(&d->read_latency));
-  stats_u64(t, "dram_read_latency_p50", hist_quantile(&d->read_latency, 0.50));
-  stats_u64(t, "dram_read_latency_p95", hist_quantile(&d->read_latency, 0.95));
-  stats_u64(t, "dram_read_latency_p99", hist_quantile(&d->read_latency, 0.99));
-  stats_u64(t, "dram_read_latency_max", d->read_latency.max);
-  stats_f64(t, "dram_write_latency_mean", hist_mean(&d->write_latency));
-  dram_report(machine_dram(r->machine), t, s->cycles);
-  stats_f64(t, "load_latency_mean", hist_mean(&s->load_latency));
-  stats_u64(t, "load_latency_p95", hist_quantile(&s->load_latency, 0.95));
-  stats_u64(t, "load_latency_max", s->load_latency.max);
-  stats_u64(t, "events", s->events);
-  stats_u64(t, "coroutine_stacks_max", s->stacks_max);
+  machine_stats_emit(r->machine, t, trace_class_names, TRACE_CLASS_COUNT, run_slot, r);
 }
 
 /* Start OUTDIR/name through a temporary (commit with outfile_commit). */
@@ -290,24 +248,8 @@ static bool write_csv(const struct run_output_report *r, struct err *e) {
 static bool write_timeline(const struct run_output_report *r, struct err *e) {
   struct outfile o;
   if (!open_out(&o, r, "timeline.csv", e)) return false;
-  FILE *f = o.f;
-  const struct timeline *tl = machine_timeline(r->machine);
-  const uint64_t rows = tl->rows, win = tl->window;
-  const uint64_t end = machine_get_stats(r->machine)->cycles;
-  fputs("cycle,cycles,dram_read_bytes,dram_write_bytes", f);
-  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) fprintf(f, ",read_%s_bytes", trace_class_names[c]);
-  fputs(",l2_accesses,l2_misses,issued_ops,busy_threads\n", f);
-  for (uint64_t i = 0; i < rows; i++) {
-    const double *v = timeline_row(tl, i);
-    uint64_t start = i * win, len = start + win <= end ? win : (end > start ? end - start : 0);
-    if (len == 0) break;
-    fprintf(f, "%llu,%llu,%.2f,%.2f", (unsigned long long)start, (unsigned long long)len,
-            v[MACHINE_TL_DRAM_READ_BYTES], v[MACHINE_TL_DRAM_WRITE_BYTES]);
-    for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++)
-      fprintf(f, ",%.2f", v[MACHINE_TL_READ_CLASS0 + c]);
-    fprintf(f, ",%.0f,%.0f,%.0f,%.4f\n", v[MACHINE_TL_L2_ACCESSES], v[MACHINE_TL_L2_MISSES],
-            v[MACHINE_TL_ISSUED_OPS], v[MACHINE_TL_BUSY_THREAD_CYCLES] / (double)len);
-  }
+  timeline_write_csv(machine_timeline(r->machine), machine_tl_cols, machine_tl_col_count, trace_class_names,
+                     TRACE_CLASS_COUNT, machine_get_stats(r->machine)->cycles, o.f);
   return outfile_commit(&o, e);
 }
 
@@ -441,4 +383,16 @@ void run_output_summary(const struct run_output_report *r, FILE *f) {
       }
   fprintf(f, "wall_s: %.3f\noutput: %s\n", r->wall_s, r->out_dir);
   stats_fini(&t);
+}
+
+void run_output_stats_help(FILE *f, bool markdown) {
+  /* The tables in the order machine_stats_emit fills the machine's slots. */
+  static const struct stats_descs *const order[] = {
+      &machine_stats_descs,           &run_output_stats_descs,       &run_output_misses_stats_descs,
+      &machine_l1_stats_descs,        &l2_stats_descs,               &dram_stats_descs,
+      &machine_dram_util_stats_descs, &dram_channel_stats_descs,     &dram_banked_stats_descs,
+      &machine_engine_stats_descs};
+  for (unsigned i = 0; i < sizeof order / sizeof order[0]; i++)
+    (markdown ? stats_write_markdown : stats_write_help)(order[i], f);
+  timeline_write_help(machine_tl_cols, machine_tl_col_count, markdown, f);
 }

@@ -57,4 +57,10 @@ bool run_output_write(const struct run_output_report *r, struct err *e);
 /* A few "key: value" lines for a person. */
 void run_output_summary(const struct run_output_report *r, FILE *f);
 
+/* Every number a whole timed run writes, table by table (each component's in
+ * its order), then timeline.csv's columns: name, unit, component, description,
+ * one a line
+ * (`rtsim run --help-stats`), or as Markdown table rows (README "Numbers"). */
+void run_output_stats_help(FILE *f, bool markdown);
+
 #endif

@@ -178,3 +178,61 @@ void dram_trace_to(struct dram *d, FILE *f) {
           dram_model_names[d->p.model], d->p.clock_mhz,
           (unsigned long long)d->core_khz);
 }
+
+/* ---- the numbers every level shares (README "Numbers") ---- */
+
+static double dram_ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
+static uint64_t dram_bytes(const void *st, const struct stats_env *env) {
+  (void)env;
+  const struct dram_stats *s = st;
+  return s->read_bytes + s->write_bytes;
+}
+static double dram_bytes_per_cycle(const void *st, const struct stats_env *env) {
+  return dram_ratio((double)dram_bytes(st, env), (double)env->cycles);
+}
+static double dram_read_latency_mean(const void *st, const struct stats_env *env) {
+  (void)env;
+  return hist_mean(&((const struct dram_stats *)st)->read_latency);
+}
+#define DRAM_QUANTILE(pc)                                                                   \
+  static uint64_t dram_read_latency_p##pc(const void *st, const struct stats_env *env) {    \
+    (void)env;                                                                              \
+    return hist_quantile(&((const struct dram_stats *)st)->read_latency, pc / 100.0);       \
+  }
+DRAM_QUANTILE(50)
+DRAM_QUANTILE(95)
+DRAM_QUANTILE(99)
+static double dram_write_latency_mean(const void *st, const struct stats_env *env) {
+  (void)env;
+  return hist_mean(&((const struct dram_stats *)st)->write_latency);
+}
+
+static const struct stats_desc dram_desc[] = {
+    STATS_FIELD(struct dram_stats, reads, "dram_reads", "count", "64-byte reads served"),
+    STATS_FIELD(struct dram_stats, writes, "dram_writes", "count", "64-byte writes served"),
+    STATS_FIELD(struct dram_stats, read_bytes, "dram_read_bytes", "bytes", "bytes read"),
+    STATS_FIELD(struct dram_stats, write_bytes, "dram_write_bytes", "bytes", "bytes written"),
+    STATS_U64(struct dram_stats, read_bytes, dram_bytes, "dram_bytes", "bytes", "bytes read and written"),
+    STATS_F64(struct dram_stats, write_bytes, dram_bytes_per_cycle, "dram_bytes_per_cycle",
+              "bytes/cycle", "bytes read and written per core cycle of the run"),
+    STATS_SLOT(DRAM_STATS_SLOT_UTILIZATION),
+    STATS_F64(struct dram_stats, read_latency, dram_read_latency_mean, "dram_read_latency_mean",
+              "cycles", "reads, taken to data delivered: mean"),
+    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p50, "dram_read_latency_p50", "cycles",
+              "the same, median"),
+    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p95, "dram_read_latency_p95", "cycles",
+              "the same, 95th percentile"),
+    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p99, "dram_read_latency_p99", "cycles",
+              "the same, 99th percentile"),
+    STATS_FIELD(struct dram_stats, read_latency.max, "dram_read_latency_max", "cycles", "the same, most"),
+    STATS_F64(struct dram_stats, write_latency.sum, dram_write_latency_mean, "dram_write_latency_mean",
+              "cycles", "writes, taken to written: mean"),
+    STATS_SLOT(DRAM_STATS_SLOT_LEVEL),
+};
+static const struct stats_skip dram_skip[] = {
+    STATS_SKIP(struct dram_stats, write_latency.count, "the mean's divisor: equals dram_writes"),
+    STATS_SKIP(struct dram_stats, write_latency.max, "only the write latency's mean is written"),
+    STATS_SKIP(struct dram_stats, write_latency.bucket, "only the write latency's mean is written"),
+};
+const struct stats_descs dram_stats_descs = {"dram", dram_desc, STATS_COUNT(dram_desc),
+                                             sizeof(struct dram_stats), dram_skip, STATS_COUNT(dram_skip)};

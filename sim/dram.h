@@ -55,6 +55,12 @@ void dram_take(struct dram *d, uint64_t addr, bool write, uint64_t tag);
 void dram_finish(struct dram *d);
 
 const struct dram_stats *dram_get_stats(const struct dram *d);
+/* The numbers every level shares, over a struct dram_stats (sim/stats.h): its
+ * slots are where the caller puts a utilization figure of its own (the
+ * channel level reports its own) and the level's numbers (dram_report). */
+enum { DRAM_STATS_SLOT_UTILIZATION = 100, DRAM_STATS_SLOT_LEVEL };
+struct stats_descs;
+extern const struct stats_descs dram_stats_descs;
 /* The level's own numbers (names with units), for a run of `cycles`. */
 void dram_report(const struct dram *d, struct stats_table *t, uint64_t cycles);
 

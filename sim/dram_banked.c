@@ -1066,38 +1066,87 @@ static void banked_finish(void *self) {
 
 static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 
+/* The banked level's numbers (README "Numbers"); env->ctx is the level. */
+static double bk_dram_cycles(const struct stats_env *env) {
+  const struct dram_banked *d = env->ctx;
+  return (double)env->cycles * (double)d->clk.den / (double)d->clk.num;
+}
+static double bk_row_hit_rate(const void *st, const struct stats_env *env) {
+  (void)env;
+  const struct dram_banked_stats *s = st;
+  return ratio((double)s->row_hits, (double)(s->reads + s->writes));
+}
+static double bk_bus_utilization(const void *st, const struct stats_env *env) {
+  const struct dram_banked *d = env->ctx;
+  const struct dram_banked_stats *s = st;
+  return ratio((double)s->bus_busy_cycles, bk_dram_cycles(env) * d->p.channels);
+}
+static double bk_bank_active_fraction(const void *st, const struct stats_env *env) {
+  const struct dram_banked *d = env->ctx;
+  const struct dram_banked_stats *s = st;
+  return ratio((double)s->bank_open_cycles, bk_dram_cycles(env) * d->banks_per_channel * d->p.channels);
+}
+#define BK_QUEUE_FNS(k, n)                                                                     \
+  static double bk_queue_length_mean_##k(const void *st, const struct stats_env *env) {        \
+    return ratio((double)((const struct dram_banked_stats *)st)->queue_area[k], (double)env->cycles); \
+  }                                                                                            \
+  static double bk_queue_wait_mean_##k(const void *st, const struct stats_env *env) {          \
+    (void)env;                                                                                 \
+    const struct dram_banked_stats *s = st;                                                    \
+    return ratio((double)s->queue_wait_sum_cycles[k], (double)s->n);                           \
+  }
+BK_QUEUE_FNS(0, reads)
+BK_QUEUE_FNS(1, writes)
+#define BK_QUEUE(k, q, what)                                                                     \
+  STATS_F64(struct dram_banked_stats, queue_area[k], bk_queue_length_mean_##k,                  \
+            "dram_" q "_queue_length_mean", "requests", what " queued, all channels: mean over the run"), \
+      STATS_FIELD(struct dram_banked_stats, queue_max[k], "dram_" q "_queue_length_max", "requests", \
+                  what " queued, all channels: most at once"),                                   \
+      STATS_F64(struct dram_banked_stats, queue_wait_sum_cycles[k], bk_queue_wait_mean_##k,      \
+                "dram_" q "_queue_wait_mean_cycles", "cycles", what ", taken to column command: mean"), \
+      STATS_FIELD(struct dram_banked_stats, queue_wait_max_cycles[k], "dram_" q "_queue_wait_max_cycles", \
+                  "cycles", what ", taken to column command: most")
+
+static const struct stats_desc banked_desc[] = {
+    STATS_FIELD(struct dram_banked_stats, row_hits, "dram_row_hits", "count", "requests that found their row open"),
+    STATS_FIELD(struct dram_banked_stats, row_misses, "dram_row_misses", "count", "requests that found their bank closed"),
+    STATS_FIELD(struct dram_banked_stats, row_conflicts, "dram_row_conflicts", "count",
+                "requests that found another row open"),
+    STATS_F64(struct dram_banked_stats, reads, bk_row_hit_rate, "dram_row_hit_rate", "fraction",
+              "row hits / requests (reads and writes)"),
+    STATS_FIELD(struct dram_banked_stats, activates, "dram_activates", "count", "row activations"),
+    STATS_FIELD(struct dram_banked_stats, precharges, "dram_precharges", "count", "precharges, auto-precharges included"),
+    STATS_FIELD(struct dram_banked_stats, refreshes, "dram_refreshes", "count", "refresh commands"),
+    STATS_FIELD(struct dram_banked_stats, refresh_cycles, "dram_refresh_cycles", "DRAM cycles",
+                "rank-cycles in refresh (DRAM clock)"),
+    STATS_FIELD(struct dram_banked_stats, write_drains, "dram_write_drains", "count", "turns from reads to writes"),
+    STATS_FIELD(struct dram_banked_stats, write_forwards, "dram_write_forwards", "count",
+                "reads answered from the write queue (no command)"),
+    STATS_FIELD(struct dram_banked_stats, write_merges, "dram_write_merges", "count",
+                "writes that found their line in the write queue"),
+    STATS_FIELD(struct dram_banked_stats, read_merges, "dram_read_merges", "count",
+                "reads served by another queued read's column command"),
+    STATS_F64(struct dram_banked_stats, bus_busy_cycles, bk_bus_utilization, "dram_bus_utilization", "fraction",
+              "data bus busy, averaged over channels"),
+    STATS_F64(struct dram_banked_stats, bank_open_cycles, bk_bank_active_fraction, "dram_bank_active_fraction",
+              "fraction", "bank-cycles with a row open"),
+    BK_QUEUE(0, "read", "reads"),
+    BK_QUEUE(1, "write", "writes"),
+};
+static const struct stats_skip banked_skip[] = {
+    STATS_SKIP(struct dram_banked_stats, writes, "read with reads by dram_row_hit_rate and the write queue's mean"),
+    STATS_SKIP(struct dram_banked_stats, read_latency_sum_cycles,
+               "the same as the read latency every level reports (dram_read_latency_mean)"),
+    STATS_SKIP(struct dram_banked_stats, dram_cycles, "the figures use the run's length in DRAM cycles"),
+};
+const struct stats_descs dram_banked_stats_descs = {"dram banked", banked_desc, STATS_COUNT(banked_desc),
+                                                    sizeof(struct dram_banked_stats), banked_skip,
+                                                    STATS_COUNT(banked_skip)};
+
 static void banked_report(const void *self, struct stats_table *t, uint64_t cycles) {
   const struct dram_banked *d = self;
-  const struct dram_banked_stats *s = &d->st;
-  const double dram_cycles = (double)cycles * (double)d->clk.den / (double)d->clk.num;
-  const uint64_t reqs = s->reads + s->writes;
-  stats_u64(t, "dram_row_hits", s->row_hits);
-  stats_u64(t, "dram_row_misses", s->row_misses);
-  stats_u64(t, "dram_row_conflicts", s->row_conflicts);
-  stats_f64(t, "dram_row_hit_rate", ratio((double)s->row_hits, (double)reqs));
-  stats_u64(t, "dram_activates", s->activates);
-  stats_u64(t, "dram_precharges", s->precharges);
-  stats_u64(t, "dram_refreshes", s->refreshes);
-  stats_u64(t, "dram_refresh_cycles", s->refresh_cycles);
-  stats_u64(t, "dram_write_drains", s->write_drains);
-  stats_u64(t, "dram_write_forwards", s->write_forwards);
-  stats_u64(t, "dram_write_merges", s->write_merges);
-  stats_u64(t, "dram_read_merges", s->read_merges);
-  stats_f64(t, "dram_bus_utilization", ratio((double)s->bus_busy_cycles, dram_cycles * d->p.channels));
-  stats_f64(t, "dram_bank_active_fraction",
-            ratio((double)s->bank_open_cycles, dram_cycles * d->banks_per_channel * d->p.channels));
-  static const char *const names[2][4] = {
-      {"dram_read_queue_length_mean", "dram_read_queue_length_max", "dram_read_queue_wait_mean_cycles",
-       "dram_read_queue_wait_max_cycles"},
-      {"dram_write_queue_length_mean", "dram_write_queue_length_max",
-       "dram_write_queue_wait_mean_cycles", "dram_write_queue_wait_max_cycles"}};
-  const uint64_t n[2] = {s->reads, s->writes};
-  for (int k = 0; k < 2; k++) {
-    stats_f64(t, names[k][0], ratio((double)s->queue_area[k], (double)cycles));
-    stats_u64(t, names[k][1], s->queue_max[k]);
-    stats_f64(t, names[k][2], ratio((double)s->queue_wait_sum_cycles[k], (double)n[k]));
-    stats_u64(t, names[k][3], s->queue_wait_max_cycles[k]);
-  }
+  const struct stats_env env = {.cycles = cycles, .ctx = d};
+  stats_emit(t, &dram_banked_stats_descs, &d->st, &env);
 }
 
 static void banked_destroy(void *self) { dram_banked_destroy(self); }

@@ -219,6 +219,9 @@ struct dram_banked_stats {
   uint64_t dram_cycles;            /* DRAM cycles simulated when finished */
 };
 const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d);
+/* The level's numbers, over its struct dram_banked_stats (sim/stats.h). */
+struct stats_descs;
+extern const struct stats_descs dram_banked_stats_descs;
 
 /* A line address's coordinates. column: the first device column of the
  * line's burst (the co field times burst_length). */

@@ -152,14 +152,54 @@ static void ch_take(void *self, uint64_t addr, bool write, uint64_t tag) {
 
 static void ch_finish(void *self) { sweep_to(self, TICK_FOREVER); }
 
+/* The channel level's numbers (README "Numbers"). */
+static double ch_utilization(const void *st, const struct stats_env *env) {
+  const struct dram_channel_stats *s = st;
+  const double tick = (double)(1ull << DRAM_TICK_BITS), cyc = (double)env->cycles;
+  return cyc > 0 ? (double)s->busy_ticks / tick / cyc : 0.0;
+}
+static double ch_fifo_wait_mean(const void *st, const struct stats_env *env) {
+  (void)env;
+  const struct dram_channel_stats *s = st;
+  const double tick = (double)(1ull << DRAM_TICK_BITS), n = (double)s->requests;
+  return n > 0 ? (double)s->wait_ticks_sum / tick / n : 0.0;
+}
+static double ch_fifo_length_mean(const void *st, const struct stats_env *env) {
+  const struct dram_channel_stats *s = st;
+  const double cyc = (double)env->cycles;
+  return cyc > 0 ? s->fifo_area / cyc : 0.0;
+}
+static uint64_t ch_fifo_length_max(const void *st, const struct stats_env *env) {
+  (void)env;
+  return ((const struct dram_channel_stats *)st)->fifo_max;
+}
+
+#define CH_AFTER(f) (offsetof(struct dram_channel_stats, f) + STATS_FIELD_SIZE(struct dram_channel_stats, f))
+static const struct stats_desc channel_desc[] = {
+    STATS_F64(struct dram_channel_stats, busy_ticks, ch_utilization, "dram_utilization", "fraction",
+              "cycles the channel was transferring / cycles of the run"),
+    STATS_F64(struct dram_channel_stats, wait_ticks_sum, ch_fifo_wait_mean, "dram_fifo_wait_mean", "cycles",
+              "requests, taken to the start of their transfer: mean"),
+    STATS_F64(struct dram_channel_stats, fifo_area, ch_fifo_length_mean, "dram_fifo_length_mean", "requests",
+              "requests in the FIFO: mean over the run"),
+    STATS_U64(struct dram_channel_stats, fifo_max, ch_fifo_length_max, "dram_fifo_length_max", "requests",
+              "requests in the FIFO: most at once"),
+};
+static const struct stats_skip channel_skip[] = {
+    STATS_SKIP(struct dram_channel_stats, requests, "the wait mean's divisor: dram_reads + dram_writes"),
+    STATS_SKIP(struct dram_channel_stats, last_end_ticks, "the channel's own clock"),
+    {CH_AFTER(requests), offsetof(struct dram_channel_stats, busy_ticks) - CH_AFTER(requests), "padding", NULL},
+    {CH_AFTER(fifo_max), offsetof(struct dram_channel_stats, last_end_ticks) - CH_AFTER(fifo_max), "padding", NULL},
+    {CH_AFTER(last_end_ticks), sizeof(struct dram_channel_stats) - CH_AFTER(last_end_ticks), "padding", NULL},
+};
+const struct stats_descs dram_channel_stats_descs = {"dram channel", channel_desc, STATS_COUNT(channel_desc),
+                                                     sizeof(struct dram_channel_stats), channel_skip,
+                                                     STATS_COUNT(channel_skip)};
+
 static void ch_report(const void *self, struct stats_table *t, uint64_t cycles) {
   const struct dram_channel *d = self;
-  const double tick = (double)(1ull << DRAM_TICK_BITS), cyc = (double)cycles;
-  const double n = (double)d->st.requests;
-  stats_f64(t, "dram_utilization", cyc > 0 ? (double)d->st.busy_ticks / tick / cyc : 0.0);
-  stats_f64(t, "dram_fifo_wait_mean", n > 0 ? (double)d->st.wait_ticks_sum / tick / n : 0.0);
-  stats_f64(t, "dram_fifo_length_mean", cyc > 0 ? d->st.fifo_area / cyc : 0.0);
-  stats_u64(t, "dram_fifo_length_max", d->st.fifo_max);
+  const struct stats_env env = {.cycles = cycles, .ctx = d};
+  stats_emit(t, &dram_channel_stats_descs, &d->st, &env);
 }
 
 static void ch_destroy(void *self) {

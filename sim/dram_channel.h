@@ -48,6 +48,9 @@ struct dram_channel;
 struct dram_channel *dram_channel_create(const struct dram_channel_params *p, struct engine *e,
                                          const struct dram_client *client);
 extern const struct dram_level_ops dram_channel_ops; /* self: a struct dram_channel * */
+/* The level's numbers, over its struct dram_channel_stats (sim/stats.h). */
+struct stats_descs;
+extern const struct stats_descs dram_channel_stats_descs;
 
 static inline uint64_t dram_ticks_to_cycles_ceil(dram_tick ticks) {
   dram_tick c = (ticks + ((1ull << DRAM_TICK_BITS) - 1)) >> DRAM_TICK_BITS;

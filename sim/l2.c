@@ -11,6 +11,7 @@
 
 #include "sim/cache.h"
 #include "sim/dram.h"
+#include "sim/stats.h"
 #include "sim/timeline.h"
 
 #define NONE UINT32_MAX
@@ -484,3 +485,85 @@ void l2_finish(struct l2 *l2, uint64_t end) {
 }
 
 const struct l2_stats *l2_get_stats(const struct l2 *l2) { return &l2->st; }
+
+/* ---- the L2's numbers (README "Numbers") ---- */
+
+static double l2_ratio(uint64_t a, uint64_t b) { return b > 0 ? (double)a / (double)b : 0.0; }
+static double l2_miss_rate(const void *st, const struct stats_env *env) {
+  (void)env;
+  const struct l2_stats *s = st;
+  return l2_ratio(s->misses, s->accesses);
+}
+/* A queue's numbers for Little's law: requests that left it, their mean wait,
+ * and the mean and most requests inside (length_mean x cycles = wait_mean x
+ * requests, measured apart). */
+#define L2_QUEUE_FNS(q)                                                                  \
+  static double q##_wait_mean(const void *st, const struct stats_env *env) {             \
+    (void)env;                                                                           \
+    const struct l2_stats *s = st;                                                       \
+    return l2_ratio(s->q.wait_sum, s->q.left);                                           \
+  }                                                                                      \
+  static double q##_length_mean(const void *st, const struct stats_env *env) {           \
+    const struct l2_stats *s = st;                                                       \
+    return l2_ratio(s->q.area, env->cycles);                                             \
+  }
+L2_QUEUE_FNS(stall_queue)
+L2_QUEUE_FNS(miss_queue)
+L2_QUEUE_FNS(write_buffer)
+#define L2_QUEUE(q, pre, what)                                                                    \
+  STATS_FIELD(struct l2_stats, q.left, pre "_requests", "requests", what " that left it"),       \
+      STATS_F64(struct l2_stats, q.wait_sum, q##_wait_mean, pre "_wait_mean", "cycles",          \
+                what ": mean cycles inside"),                                                    \
+      STATS_F64(struct l2_stats, q.area, q##_length_mean, pre "_length_mean", "requests",        \
+                what ": mean requests inside over the run"),                                     \
+      STATS_FIELD(struct l2_stats, q.max, pre "_length_max", "requests", what ": most inside at once")
+#define L2_QUEUE_SKIPS(q)                                                                        \
+  STATS_SKIP(struct l2_stats, q.entered, "equals requests at the end of a run (nothing queued)"), \
+      STATS_SKIP(struct l2_stats, q.len, "0 at the end of a run"),                               \
+      STATS_SKIP(struct l2_stats, q.since, "the meter's own clock")
+
+_Static_assert(L2_STALL_COUNT == 4, "a descriptor for each stall reason");
+static const struct stats_desc l2_desc[] = {
+    STATS_FIELD(struct l2_stats, accesses, "l2_accesses", "count", "loads and stores that reached the L2"),
+    STATS_FIELD(struct l2_stats, hits, "l2_hits", "count", "accesses that found their line"),
+    STATS_FIELD(struct l2_stats, misses, "l2_misses", "count", "accesses that did not"),
+    STATS_F64(struct l2_stats, misses, l2_miss_rate, "l2_miss_rate", "fraction", "misses / accesses"),
+    STATS_FIELD(struct l2_stats, mshr_merges, "l2_mshr_merges", "count",
+                "misses that joined a fetch already in flight (an MSHR)"),
+    STATS_FIELD(struct l2_stats, merges_held, "l2_merges_held", "count",
+                "merged loads answered after the fill, to honour l2.latency"),
+    STATS_FIELD(struct l2_stats, write_buffer_hits, "l2_write_buffer_hits", "count",
+                "misses served from the write buffer (no DRAM read or write)"),
+    STATS_FIELD(struct l2_stats, whole_line_allocs, "l2_whole_line_allocs", "count",
+                "whole-line stores allocated without a fetch"),
+    STATS_FIELD(struct l2_stats, stalls, "l2_stalls", "count", "accesses that queued behind a stall"),
+    STATS_FIELD(struct l2_stats, stall_cycles[L2_STALL_MSHR], "l2_stall_mshr_cycles", "cycles",
+                "stalled: no MSHR free"),
+    STATS_FIELD(struct l2_stats, stall_cycles[L2_STALL_SET], "l2_stall_set_cycles", "cycles",
+                "stalled: every way of the set busy"),
+    STATS_FIELD(struct l2_stats, stall_cycles[L2_STALL_WRITE_BUFFER], "l2_stall_write_buffer_cycles",
+                "cycles", "stalled: write buffer full"),
+    STATS_FIELD(struct l2_stats, stall_cycles[L2_STALL_DRAM], "l2_stall_dram_cycles", "cycles",
+                "stalled: the DRAM would not take a request"),
+    STATS_FIELD(struct l2_stats, bank_wait_cycles, "l2_bank_wait_cycles", "cycles",
+                "accesses waiting for their bank"),
+    STATS_FIELD(struct l2_stats, fetch_bytes, "l2_fetch_bytes", "bytes", "lines read from the DRAM"),
+    STATS_FIELD(struct l2_stats, writeback_bytes, "l2_writeback_bytes", "bytes",
+                "dirty lines written back to the DRAM"),
+    {.name = "fetch_%s_bytes", .unit = "bytes", .desc = "lines read from the DRAM, by data class",
+     .how = STATS_HOW_FIELD, .off = offsetof(struct l2_stats, fetch_bytes_by_class),
+     .size = STATS_FIELD_SIZE(struct l2_stats, fetch_bytes_by_class), .per_class = true},
+    L2_QUEUE(stall_queue, "l2_stall_queue", "accesses stalled at the input"),
+    L2_QUEUE(miss_queue, "l2_miss_queue", "misses waiting for the DRAM to take them"),
+    STATS_FIELD(struct l2_stats, miss_queue.wait_sum, "backpressure_cycles", "cycles",
+                "cycles misses waited for the DRAM to take them, summed"),
+    L2_QUEUE(write_buffer, "l2_write_buffer", "write-backs from eviction to the DRAM taking them"),
+};
+static const struct stats_skip l2_skip[] = {
+    STATS_SKIP(struct l2_stats, accesses_by_class, "not written yet (the timeline counts accesses)"),
+    L2_QUEUE_SKIPS(stall_queue),
+    L2_QUEUE_SKIPS(miss_queue),
+    L2_QUEUE_SKIPS(write_buffer),
+};
+const struct stats_descs l2_stats_descs = {"l2", l2_desc, STATS_COUNT(l2_desc), sizeof(struct l2_stats),
+                                           l2_skip, STATS_COUNT(l2_skip)};

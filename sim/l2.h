@@ -118,6 +118,9 @@ bool l2_quiet(const struct l2 *l2);
 void l2_finish(struct l2 *l2, uint64_t end);
 
 const struct l2_stats *l2_get_stats(const struct l2 *l2);
+/* The L2's numbers, over a struct l2_stats (sim/stats.h; cycles: the run's). */
+struct stats_descs;
+extern const struct stats_descs l2_stats_descs;
 
 /* An access packed into one event argument: line, op and class. */
 static inline uint64_t l2_pack(uint64_t line, enum l2_op op, unsigned cls) {

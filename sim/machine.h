@@ -31,6 +31,8 @@
 #include "sim/hist.h"
 #include "sim/l2.h"
 #include "sim/mem.h"
+#include "sim/stats.h"
+#include "sim/timeline.h"
 
 struct timeline;
 
@@ -160,6 +162,21 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
 
 const struct machine_stats *machine_get_stats(const struct machine *m);
 
+/* The machine's numbers (sim/stats.h), over a struct machine_stats; the L1's
+ * and the engine's, whose counters it keeps, and the DRAM utilization it
+ * computes for the levels without their own. */
+extern const struct stats_descs machine_stats_descs, machine_l1_stats_descs, machine_engine_stats_descs,
+    machine_dram_util_stats_descs;
+/* Where the run's own numbers go in the machine's order: after `seconds`, and
+ * after issue_slots_per_blocking_load. */
+enum { MACHINE_STATS_SLOT_RUN = 200, MACHINE_STATS_SLOT_RUN_MISSES };
+/* After machine_run: append every number of the machine and its components
+ * to t, in their tables' order; per-class numbers for `classes` data classes
+ * named class_names; run (NULL: none) fills the MACHINE_STATS_SLOT_RUN* slots
+ * (its env: the machine's, slot_ctx = run_ctx). */
+void machine_stats_emit(const struct machine *m, struct stats_table *t, const char *const *class_names,
+                        unsigned classes, stats_slot_fn run, const void *run_ctx);
+
 /* ---- sampling (README "Sampling") ----
  * The counters of a running machine at the current cycle: what a window of
  * the run did is the difference of two probes. */
@@ -218,8 +235,11 @@ void machine_attribute(struct machine *m, uint32_t ctx, const uint32_t *items, u
 /* After machine_run: the costs per item, or NULL when not enabled. */
 const struct machine_costs *machine_get_costs(const struct machine *m);
 
-/* The timeline: rows of MACHINE_TL_COLS values (sim/timeline.h). */
+/* The timeline: rows of MACHINE_TL_COLS values (sim/timeline.h), and its
+ * columns as timeline.csv writes them, each declared once. */
 const struct timeline *machine_timeline(const struct machine *m);
+extern const struct timeline_col machine_tl_cols[];
+extern const unsigned machine_tl_col_count;
 /* The DRAM (its level's numbers: dram_report; its trace: dram_trace_to). */
 struct dram *machine_dram(const struct machine *m);
 

@@ -105,3 +105,113 @@ void stats_write_json_members(const struct stats_table *t, FILE *f, const char *
     else csv_value(x, f);
   }
 }
+
+/* ---- descriptors ---- */
+
+static void emit_one(struct stats_table *t, const struct stats_desc *d, const void *st,
+                     const struct stats_env *env, unsigned cls) {
+  char name[64];
+  if (d->per_class) snprintf(name, sizeof name, d->name, env->class_names[cls]);
+  else snprintf(name, sizeof name, "%s", d->name);
+  const unsigned char *base = (const unsigned char *)st;
+  switch (d->how) {
+  case STATS_HOW_FIELD: {
+    uint64_t v;
+    memcpy(&v, base + d->off + (size_t)cls * sizeof v, sizeof v);
+    stats_u64(t, name, v);
+    break;
+  }
+  case STATS_HOW_U64: stats_u64(t, name, d->u64(st, env)); break;
+  case STATS_HOW_F64: stats_f64(t, name, d->f64(st, env)); break;
+  case STATS_HOW_SLOT: break;
+  }
+}
+
+void stats_emit(struct stats_table *t, const struct stats_descs *g, const void *st,
+                const struct stats_env *env) {
+  for (unsigned i = 0; i < g->n; i++) {
+    const struct stats_desc *d = &g->d[i];
+    if (d->how == STATS_HOW_SLOT) {
+      CHECK(env->slot != NULL);
+      env->slot(env, d->slot, t);
+      continue;
+    }
+    if (d->present && !d->present(st, env)) continue;
+    if (!d->per_class) {
+      emit_one(t, d, st, env, 0);
+      continue;
+    }
+    CHECK(d->how == STATS_HOW_FIELD);
+    CHECK_LE((uint64_t)env->classes * sizeof(uint64_t), d->size);
+    for (unsigned c = 0; c < env->classes; c++) emit_one(t, d, st, env, c);
+  }
+}
+
+/* Mark the bytes g's descriptors read, and its skips, at base in seen[0..size). */
+static void mark(const struct stats_descs *g, size_t base, size_t size, unsigned char *seen) {
+  for (unsigned i = 0; i < g->n; i++) {
+    CHECK_LE(base + g->d[i].off + g->d[i].size, size);
+    memset(seen + base + g->d[i].off, 1, g->d[i].size);
+  }
+  for (unsigned i = 0; i < g->nskip; i++) {
+    const struct stats_skip *k = &g->skip[i];
+    CHECK_LE(base + k->off + k->size, size);
+    CHECK(k->why && k->why[0]);
+    if (!k->by) {
+      memset(seen + base + k->off, 1, k->size);
+    } else if (k->by->struct_size) {
+      CHECK_EQ(k->by->struct_size, k->size);
+      mark(k->by, base + k->off, size, seen);
+    } else {
+      /* by's descriptors are about this same struct: they must cover the skip */
+      for (unsigned j = 0; j < k->by->n; j++) {
+        const struct stats_desc *d = &k->by->d[j];
+        if (d->off >= k->off && d->off + d->size <= k->off + k->size)
+          memset(seen + base + d->off, 1, d->size);
+      }
+    }
+  }
+}
+
+const char *stats_uncovered(const struct stats_descs *g, char *buf, size_t len) {
+  if (g->struct_size == 0) return NULL;
+  unsigned char *seen = xcalloc(1, g->struct_size);
+  mark(g, 0, g->struct_size, seen);
+  const char *r = NULL;
+  for (size_t b = 0; b < g->struct_size && !r; b++)
+    if (!seen[b]) {
+      size_t e = b;
+      while (e < g->struct_size && !seen[e]) e++;
+      snprintf(buf, len, "%s: bytes %zu..%zu of its stats struct (%zu bytes) are neither written "
+               "by a descriptor nor listed as skipped",
+               g->component, b, e - 1, g->struct_size);
+      r = buf;
+    }
+  free(seen);
+  return r;
+}
+
+static void help_name(const struct stats_desc *d, char *buf, size_t len) {
+  if (d->per_class) snprintf(buf, len, d->name, "<class>");
+  else snprintf(buf, len, "%s", d->name);
+}
+
+void stats_write_help(const struct stats_descs *g, FILE *f) {
+  for (unsigned i = 0; i < g->n; i++) {
+    const struct stats_desc *d = &g->d[i];
+    if (d->how == STATS_HOW_SLOT) continue;
+    char name[64];
+    help_name(d, name, sizeof name);
+    fprintf(f, "%-36s %-16s %s: %s\n", name, d->unit, g->component, d->desc);
+  }
+}
+
+void stats_write_markdown(const struct stats_descs *g, FILE *f) {
+  for (unsigned i = 0; i < g->n; i++) {
+    const struct stats_desc *d = &g->d[i];
+    if (d->how == STATS_HOW_SLOT) continue;
+    char name[64];
+    help_name(d, name, sizeof name);
+    fprintf(f, "| `%s` | %s | %s | %s |\n", name, d->unit, g->component, d->desc);
+  }
+}

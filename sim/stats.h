@@ -6,6 +6,7 @@
 #define RTSIM_SIM_STATS_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 
@@ -51,5 +52,101 @@ void stats_f64_text(double v, int min_digits, char *buf, size_t cap);
 /* A double as JSON: stats_f64_text at 15 digits. Not always the shortest form,
  * but stable: outputs compare byte for byte. */
 void stats_write_json_f64(FILE *f, double v);
+
+/* ---- descriptors: the numbers a component owns, declared once ----
+ * A component keeps its counters as plain uint64_t fields of its stats struct
+ * (incremented where they happen, no lookup) and declares them in one
+ * constant table: the stats.json key and stats.csv column (its unit in it),
+ * the unit, one line of description, and where the value lives (the field's
+ * offset, or a function for a derived figure). Writers, `rtsim run
+ * --help-stats` and the README's table all walk the tables, in table order. */
+
+enum stats_how {
+  STATS_HOW_FIELD, /* the uint64_t at off */
+  STATS_HOW_U64,   /* u64(st, env) */
+  STATS_HOW_F64,   /* f64(st, env) */
+  STATS_HOW_SLOT   /* env->slot(env, slot, t): another table's numbers go here */
+};
+
+struct stats_table;
+struct stats_env;
+typedef void (*stats_slot_fn)(const struct stats_env *env, int slot, struct stats_table *t);
+
+/* What derived figures may read besides the stats struct. */
+struct stats_env {
+  uint64_t cycles;                /* the run's length */
+  const void *ctx;                /* the component's own (its parameters, clocks) */
+  const char *const *class_names; /* data class names (the renderer's), for per-class numbers */
+  unsigned classes;
+  stats_slot_fn slot;             /* fills a table's STATS_HOW_SLOT entries */
+  const void *slot_ctx;
+};
+
+struct stats_desc {
+  const char *name; /* key and column; with per_class, a format with one %s (the class) */
+  const char *unit; /* "cycles", "bytes", "fraction", "count", ... */
+  const char *desc; /* one line */
+  enum stats_how how;
+  /* The bytes of the stats struct this entry reads: the field itself, or for a
+   * function the field it is about (the lost-counter test covers the struct
+   * with these spans). size 0: none (a slot, or a figure of env alone). */
+  size_t off, size;
+  uint64_t (*u64)(const void *st, const struct stats_env *env);
+  double (*f64)(const void *st, const struct stats_env *env);
+  bool (*present)(const void *st, const struct stats_env *env); /* NULL: always written */
+  int slot;
+  bool per_class; /* one number per data class: field off + 8 x class */
+};
+
+/* Bytes of a stats struct another table writes (by), or deliberately not
+ * written, and why: the lost-counter test accepts a field only with a
+ * descriptor, another table's descriptor, or a reason here. by with a struct
+ * of its own: that struct sits at off (size: its size); without: by's
+ * descriptors read this same struct (off, size: the fields they cover). */
+struct stats_skip {
+  size_t off, size;
+  const char *why;
+  const struct stats_descs *by;
+};
+
+/* One component's table. struct_size: its stats struct's (0: its fields live
+ * in another component's struct, which lists them as skips naming this table). */
+struct stats_descs {
+  const char *component;
+  const struct stats_desc *d;
+  unsigned n;
+  size_t struct_size;
+  const struct stats_skip *skip;
+  unsigned nskip;
+};
+
+#define STATS_FIELD_SIZE(T, f) sizeof(((T *)0)->f)
+/* A uint64_t counter written as it is. */
+#define STATS_FIELD(T, f, nm, un, ds)                                                      \
+  {.name = nm, .unit = un, .desc = ds, .how = STATS_HOW_FIELD, .off = offsetof(T, f),     \
+   .size = STATS_FIELD_SIZE(T, f)}
+/* A figure derived by fn, about field f. */
+#define STATS_F64(T, f, fn, nm, un, ds)                                                    \
+  {.name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .off = offsetof(T, f),       \
+   .size = STATS_FIELD_SIZE(T, f), .f64 = fn}
+#define STATS_U64(T, f, fn, nm, un, ds)                                                    \
+  {.name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .off = offsetof(T, f),       \
+   .size = STATS_FIELD_SIZE(T, f), .u64 = fn}
+#define STATS_SLOT(id) {.name = "", .unit = "", .desc = "", .how = STATS_HOW_SLOT, .slot = id}
+#define STATS_SKIP(T, f, reason) {offsetof(T, f), STATS_FIELD_SIZE(T, f), reason, NULL}
+#define STATS_SKIP_BY(T, f, table) {offsetof(T, f), STATS_FIELD_SIZE(T, f), "another table", &(table)}
+#define STATS_COUNT(a) ((unsigned)(sizeof(a) / sizeof((a)[0])))
+
+/* Append g's numbers for stats struct st to t, in table order. */
+void stats_emit(struct stats_table *t, const struct stats_descs *g, const void *st,
+                const struct stats_env *env);
+/* NULL if every byte of g's stats struct is read by a descriptor, its own or
+ * a skip's other table's, or is a skip with a reason (or g has no struct of
+ * its own); else a description of the first byte that is none, in buf. */
+const char *stats_uncovered(const struct stats_descs *g, char *buf, size_t len);
+/* One line per number: name, unit, description (slots left out). */
+void stats_write_help(const struct stats_descs *g, FILE *f);
+/* The same as Markdown table rows `| name | unit | description |`. */
+void stats_write_markdown(const struct stats_descs *g, FILE *f);
 
 #endif

@@ -83,3 +83,45 @@ const double *timeline_row(const struct timeline *tl, uint64_t i) {
   CHECK_LT(i, tl->rows);
   return tl->v + i * tl->cols;
 }
+
+static void col_name(const struct timeline_col *c, const char *cls, char *buf, size_t len) {
+  if (c->per_class) snprintf(buf, len, c->name, cls);
+  else snprintf(buf, len, "%s", c->name);
+}
+
+void timeline_write_csv(const struct timeline *tl, const struct timeline_col *c, unsigned n,
+                        const char *const *class_names, unsigned classes, uint64_t end, FILE *f) {
+  char name[64];
+  fputs("cycle,cycles", f);
+  for (unsigned j = 0; j < n; j++) {
+    CHECK(!c[j].per_class || classes <= c[j].span);
+    for (unsigned k = 0; k < (c[j].per_class ? classes : 1); k++) {
+      col_name(&c[j], c[j].per_class ? class_names[k] : "", name, sizeof name);
+      fprintf(f, ",%s", name);
+    }
+  }
+  fputc('\n', f);
+  const uint64_t win = tl->window;
+  for (uint64_t i = 0; i < tl->rows; i++) {
+    const double *v = timeline_row(tl, i);
+    uint64_t start = i * win, len = start + win <= end ? win : (end > start ? end - start : 0);
+    if (len == 0) break;
+    fprintf(f, "%llu,%llu", (unsigned long long)start, (unsigned long long)len);
+    for (unsigned j = 0; j < n; j++)
+      for (unsigned k = 0; k < (c[j].per_class ? classes : 1); k++) {
+        CHECK_LT(c[j].col + k, tl->cols);
+        double x = v[c[j].col + k];
+        fprintf(f, ",%.*f", c[j].decimals, c[j].mean ? x / (double)len : x);
+      }
+    fputc('\n', f);
+  }
+}
+
+void timeline_write_help(const struct timeline_col *c, unsigned n, bool markdown, FILE *f) {
+  char name[64];
+  for (unsigned j = 0; j < n; j++) {
+    col_name(&c[j], "<class>", name, sizeof name);
+    if (markdown) fprintf(f, "| `%s` | %s | timeline.csv | %s |\n", name, c[j].unit, c[j].desc);
+    else fprintf(f, "%-36s %-16s timeline.csv: %s\n", name, c[j].unit, c[j].desc);
+  }
+}

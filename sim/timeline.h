@@ -6,7 +6,9 @@
 #ifndef RTSIM_SIM_TIMELINE_H
 #define RTSIM_SIM_TIMELINE_H
 
+#include <stdbool.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #define TIMELINE_MAX_ROWS 4096u
 
@@ -33,5 +35,25 @@ void timeline_cover(struct timeline *tl, uint64_t end);
 
 /* Row i (i < rows): cols values. */
 const double *timeline_row(const struct timeline *tl, uint64_t i);
+
+/* A column of timeline.csv, declared once by whoever adds to it: its name
+ * (with per_class, a format with one %s: one column per data class, values
+ * in col + class), unit, one-line description, the decimals it is written
+ * with, and whether it is written per cycle of its window (a mean) rather
+ * than as the window's sum. span: the timeline columns it covers. */
+struct timeline_col {
+  const char *name, *unit, *desc;
+  unsigned col, span;
+  int decimals;
+  bool per_class, mean;
+};
+
+/* timeline.csv: `cycle,cycles,<names>` then a row per window up to the run's
+ * end (the last window cut at end): its start, its length, then each
+ * column's value. Per-class columns for `classes` classes named class_names. */
+void timeline_write_csv(const struct timeline *tl, const struct timeline_col *c, unsigned n,
+                        const char *const *class_names, unsigned classes, uint64_t end, FILE *f);
+/* One line per column: name, unit, description (Markdown rows if markdown). */
+void timeline_write_help(const struct timeline_col *c, unsigned n, bool markdown, FILE *f);
 
 #endif

@@ -8,7 +8,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "sim/dram.h"
+#include "sim/l2.h"
+#include "sim/machine.h"
 #include "sim/stats.h"
+#include "sim/timeline.h"
 #include "testing.h"
 
 /* What a writer prints, as a string (caller frees). */
@@ -203,7 +207,117 @@ static void test_checks(void) {
   EXPECT(!dies(add_fine));     /* the harness itself does not die */
 }
 
+/* ---- descriptors ---- */
+
+/* A component with three counters; its table below forgets one. */
+struct toy_stats {
+  uint64_t a, b, c;
+  struct toy_sub {
+    uint64_t x, y;
+  } sub;
+};
+static const struct stats_desc toy_sub_desc[] = {
+    STATS_FIELD(struct toy_sub, x, "x", "count", "x"),
+    STATS_FIELD(struct toy_sub, y, "y", "count", "y"),
+};
+static const struct stats_descs toy_sub = {"sub", toy_sub_desc, 2, sizeof(struct toy_sub), NULL, 0};
+static const struct stats_descs toy_sub_short = {"sub", toy_sub_desc, 1, sizeof(struct toy_sub), NULL, 0};
+static const struct stats_desc toy_desc[] = {
+    STATS_FIELD(struct toy_stats, a, "a", "count", "a"),
+    STATS_FIELD(struct toy_stats, c, "c", "count", "c"),
+};
+
+static void test_uncovered(void) {
+  char buf[256];
+  /* b has no descriptor and no reason: found, with its bytes */
+  const struct stats_skip sub[] = {STATS_SKIP_BY(struct toy_stats, sub, toy_sub)};
+  struct stats_descs g = {"toy", toy_desc, 2, sizeof(struct toy_stats), sub, 1};
+  const char *why = stats_uncovered(&g, buf, sizeof buf);
+  EXPECT(why && strstr(why, "toy: bytes 8..15 "));
+  /* a reason covers it */
+  const struct stats_skip both[] = {STATS_SKIP_BY(struct toy_stats, sub, toy_sub),
+                                    STATS_SKIP(struct toy_stats, b, "not written, because")};
+  g.skip = both;
+  g.nskip = 2;
+  EXPECT(stats_uncovered(&g, buf, sizeof buf) == NULL);
+  /* a field the other table forgets is found through it */
+  const struct stats_skip short_sub[] = {STATS_SKIP_BY(struct toy_stats, sub, toy_sub_short),
+                                         STATS_SKIP(struct toy_stats, b, "not written, because")};
+  g.skip = short_sub;
+  why = stats_uncovered(&g, buf, sizeof buf);
+  EXPECTF(why && strstr(why, "bytes 32..39 "), "%s", why ? why : "(none)");
+}
+
+/* Every component's table: every byte of its stats struct reaches the files
+ * or is skipped with a reason; names are unique (but for a figure written
+ * only when present, in place of another's: dram_utilization) and say a unit. */
+static void test_components(void) {
+  const struct stats_descs *const all[] = {
+      &machine_stats_descs,      &machine_l1_stats_descs,  &machine_engine_stats_descs,
+      &machine_dram_util_stats_descs, &l2_stats_descs,     &dram_stats_descs,
+      &dram_channel_stats_descs, &dram_banked_stats_descs};
+  const unsigned n = sizeof all / sizeof all[0];
+  char buf[256];
+  for (unsigned i = 0; i < n; i++) {
+    const char *why = stats_uncovered(all[i], buf, sizeof buf);
+    EXPECTF(why == NULL, "%s", why);
+    for (unsigned j = 0; j < all[i]->n; j++) {
+      const struct stats_desc *d = &all[i]->d[j];
+      if (d->how == STATS_HOW_SLOT) continue;
+      EXPECTF(d->unit[0] && d->desc[0], "%s: unit and description", d->name);
+      for (unsigned k = i; k < n; k++)
+        for (unsigned l = k == i ? j + 1 : 0; l < all[k]->n; l++)
+          EXPECTF(strcmp(d->name, all[k]->d[l].name) || all[k]->d[l].how == STATS_HOW_SLOT ||
+                      d->present || all[k]->d[l].present,
+                  "%s named twice", d->name);
+    }
+  }
+}
+
+/* Every column the machine adds to its timeline is written: declared once. */
+static void test_timeline_cols(void) {
+  unsigned seen[MACHINE_TL_COLS] = {0};
+  for (unsigned j = 0; j < machine_tl_col_count; j++) {
+    const struct timeline_col *c = &machine_tl_cols[j];
+    EXPECT(c->span >= 1 && c->unit[0] && c->desc[0]);
+    EXPECT(c->per_class ? c->span == MEM_CLASS_MAX : c->span == 1);
+    for (unsigned k = 0; k < c->span && c->col + k < MACHINE_TL_COLS; k++) seen[c->col + k]++;
+    EXPECT(c->col + c->span <= MACHINE_TL_COLS);
+  }
+  for (unsigned i = 0; i < MACHINE_TL_COLS; i++) EXPECTF(seen[i] == 1, "timeline column %u: %u descriptors", i, seen[i]);
+}
+
+/* The README's table of numbers is `rtsim run --help-stats-markdown`. */
+static void test_readme(void) {
+  FILE *p = popen(RTSIM_BINARY " run --help-stats-markdown", "r");
+  static char want[1 << 16], readme[1 << 20];
+  size_t wn = fread(want, 1, sizeof want - 1, p);
+  want[wn] = '\0';
+  EXPECT(pclose(p) == 0 && wn > 0);
+  FILE *f = fopen(RTSIM_SOURCE_DIR "/README.md", "r");
+  EXPECT(f != NULL);
+  if (!f) return;
+  size_t rn = fread(readme, 1, sizeof readme - 1, f);
+  readme[rn] = '\0';
+  fclose(f);
+  static const char begin[] = "<!-- numbers: rtsim run --help-stats-markdown -->\n";
+  const char *a = strstr(readme, begin);
+  const char *h = a ? strstr(a, "|---|") : NULL;
+  const char *b = strstr(readme, "<!-- numbers end -->");
+  EXPECTF(a && h && b && h < b, "README: the table between the markers");
+  if (!(a && h && b && h < b)) return;
+  h = strchr(h, '\n') + 1;
+  const size_t have = (size_t)(b - h);
+  EXPECTF(have == wn && !memcmp(h, want, wn),
+          "README \"Numbers\" differs from rtsim run --help-stats-markdown: paste its output "
+          "between the markers");
+}
+
 int main(void) {
+  test_uncovered();
+  test_components();
+  test_timeline_cols();
+  test_readme();
   test_csv_str();
   test_json_str();
   test_f64();
