@@ -1,5 +1,6 @@
-/* Slots are grouped by set; each set keeps an LRU list (indices, most recent
- * at the head). A hash table of line -> slot (linear probing, backward-shift
+/* Slots are grouped by set. A scanned set (few ways) orders its slots by a
+ * use stamp; a hashed one keeps an LRU list (indices, most recent at the
+ * head). A hash table of line -> slot (linear probing, backward-shift
  * deletion) finds a line in O(1) whatever the associativity, so a fully
  * associative L2 of 64K lines costs what a 4-way L1 does. */
 #include "sim/cache.h"
@@ -16,7 +17,17 @@
 
 struct slot {
   uint64_t line;
-  uint32_t prev, next; /* LRU list of the set's used slots; CACHE_NONE ends it */
+  /* A scanned cache stamps each use from one counter: the least recently
+   * used slot of a set has the smallest stamp, so a use is one store, where
+   * moving a slot to the head of a list took three dependent ones (an L1 hit
+   * on the timed machine makes one). A hashed cache, whose set may be the
+   * whole cache, keeps the list: its victim is the list's tail, no scan. */
+  union {
+    struct {
+      uint32_t prev, next; /* hashed: LRU list of the set's used slots; CACHE_NONE ends it */
+    };
+    uint64_t stamp; /* scanned: the cache's use count at the last use */
+  };
   uint8_t flags, byte; /* byte, word: the owner's (cache_byte, cache_word) */
   uint32_t word;
 };
@@ -29,7 +40,7 @@ struct slot {
  * are kept in a vector that grows with them: way w at vec[ways - 1 - w]. */
 struct set {
   struct slot *vec;
-  uint32_t head, tail, used, cap;
+  uint32_t head, tail, used, cap; /* head and tail: hashed caches only */
 };
 
 /* Sets live in pages allocated when a set is first written, and a set's
@@ -41,6 +52,8 @@ struct cache {
   struct set **set_pages;
   uint64_t set_page_count;
   uint64_t lines, sets, ways;
+  uint64_t uses;         /* scanned: the last stamp given */
+  unsigned lg2_ways;     /* ways a power of two: its log2, else 64 (divide) */
   uint64_t set_mask;     /* sets - 1 when a power of two, else 0 (use %) */
   bool scan;             /* few ways: find a line by scanning its set */
   uint32_t *table;       /* otherwise: slot index + 1; 0 empty */
@@ -65,6 +78,17 @@ static const struct set ZERO_SET;
 /* Up to this many ways a set is scanned (its tags sit in a few host lines);
  * beyond, the hash table finds the line. */
 #define SCAN_WAYS 16
+
+/* Slot i's set and its way in the set. A power-of-two way count (every
+ * configured cache so far) shifts and masks: the division they replace was
+ * a tenth of a timed run's host time on the L1 hit path. */
+static inline uint64_t set_of_slot(const struct cache *c, uint64_t i) {
+  return c->lg2_ways < 64 ? i >> c->lg2_ways : i / c->ways;
+}
+
+static inline uint64_t way_of_slot(const struct cache *c, uint64_t i) {
+  return c->lg2_ways < 64 ? i & (c->ways - 1) : i % c->ways;
+}
 
 static inline uint64_t set_of_line(const struct cache *c, uint64_t line) {
   return c->set_mask ? (line & c->set_mask) : line % c->sets;
@@ -106,20 +130,20 @@ static inline struct set *set_get(struct cache *c, uint64_t s) {
 
 /* Slot i to read: a never-used slot reads as zeros (no line, no flags). */
 static inline const struct slot *slot_peek(const struct cache *c, uint64_t i) {
-  const uint64_t s = i / c->ways, w = i - s * c->ways;
+  const uint64_t s = set_of_slot(c, i), w = way_of_slot(c, i);
   const struct set *st = set_peek(c, s);
   return w + st->used >= c->ways ? &st->vec[c->ways - 1 - w] : &ZERO_SLOT;
 }
 
 /* Slot i of set st, used. */
 static inline struct slot *slot_at(const struct cache *c, struct set *st, uint64_t i) {
-  const uint64_t w = i % c->ways;
+  const uint64_t w = way_of_slot(c, i);
   CHECK_GE(w + st->used, c->ways);
   return &st->vec[c->ways - 1 - w];
 }
 
 static inline struct slot *slot_get(struct cache *c, uint64_t i) {
-  return slot_at(c, set_get(c, i / c->ways), i);
+  return slot_at(c, set_get(c, set_of_slot(c, i)), i);
 }
 
 enum cache_geometry cache_geometry(const struct cache_params *p) {
@@ -199,6 +223,8 @@ struct cache *cache_create(const struct cache_params *p) {
   c->lines = p->size_bytes >> p->lg2_line;
   c->ways = p->ways ? p->ways : c->lines;
   c->sets = c->lines / c->ways;
+  c->lg2_ways = 64;
+  if ((c->ways & (c->ways - 1)) == 0) c->lg2_ways = (unsigned)__builtin_ctzll(c->ways);
   c->set_mask = (c->sets & (c->sets - 1)) == 0 ? c->sets - 1 : 0;
   if (c->sets == 1) c->set_mask = 0;
   c->scan = c->ways <= SCAN_WAYS;
@@ -259,10 +285,12 @@ uint32_t cache_find(const struct cache *c, uint64_t line) {
   }
 }
 
-static inline uint64_t set_of_slot(const struct cache *c, uint32_t slot) { return slot / c->ways; }
-
 /* Slot (used) to the head of its set's list. */
 static void to_head(struct cache *c, struct set *st, uint32_t slot) {
+  if (c->scan) {
+    slot_at(c, st, slot)->stamp = ++c->uses;
+    return;
+  }
   if (st->head == slot) return;
   struct slot *x = slot_at(c, st, slot);
   /* Unlink (x is not the head, so it has a prev). */
@@ -279,13 +307,45 @@ void cache_touch(struct cache *c, uint32_t slot) {
   to_head(c, set_get(c, set_of_slot(c, slot)), slot);
 }
 
+uint32_t cache_use(struct cache *c, uint64_t line) {
+  if (!c->scan) {
+    const uint32_t slot = cache_find(c, line);
+    if (slot != CACHE_NONE) cache_touch(c, slot);
+    return slot;
+  }
+  /* A scanned set (flat or paged): only its used slots can hold the line. */
+  const uint64_t s = set_of_line(c, line);
+  struct set *page = c->set_pages[s / SET_PAGE];
+  if (!page) return CACHE_NONE;
+  struct set *st = &page[s % SET_PAGE];
+  for (uint32_t k = 0; k < st->used; k++)
+    if (st->vec[k].line == line && (st->vec[k].flags & F_VALID)) {
+      st->vec[k].stamp = ++c->uses;
+      return (uint32_t)(s * c->ways + c->ways - 1 - k);
+    }
+  return CACHE_NONE;
+}
+
 uint32_t cache_victim(const struct cache *c, uint64_t line) {
   uint64_t s = set_of_line(c, line);
   const struct set *st = set_peek(c, s);
   /* A never-used slot first: the highest of them is the list's tail. */
   if (st->used < c->ways) return (uint32_t)(s * c->ways + (c->ways - st->used) - 1);
+  if (c->scan) {
+    /* The oldest stamp not pending (stamps are distinct: one answer). */
+    uint32_t best = CACHE_NONE;
+    uint64_t oldest = UINT64_MAX;
+    for (uint32_t k = 0; k < c->ways; k++) {
+      const struct slot *x = &st->vec[k];
+      if (!(x->flags & F_PENDING) && x->stamp < oldest) {
+        oldest = x->stamp;
+        best = (uint32_t)(s * c->ways + c->ways - 1 - k);
+      }
+    }
+    return best;
+  }
   for (uint32_t i = st->tail; i != CACHE_NONE;) {
-    const struct slot *x = &st->vec[c->ways - 1 - i % c->ways];
+    const struct slot *x = &st->vec[c->ways - 1 - way_of_slot(c, i)];
     if (!(x->flags & F_PENDING)) return i;
     i = x->prev;
   }
@@ -328,11 +388,15 @@ void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bo
     }
     x = &st->vec[st->used];
     memset(x, 0, sizeof *x);
-    x->prev = CACHE_NONE;
-    x->next = st->used ? st->head : CACHE_NONE;
-    if (st->used) slot_at(c, st, st->head)->prev = slot;
-    else st->tail = slot;
-    st->head = slot;
+    if (c->scan) {
+      x->stamp = ++c->uses;
+    } else {
+      x->prev = CACHE_NONE;
+      x->next = st->used ? st->head : CACHE_NONE;
+      if (st->used) slot_at(c, st, st->head)->prev = slot;
+      else st->tail = slot;
+      st->head = slot;
+    }
     st->used++;
   } else {
     x = slot_at(c, st, slot);

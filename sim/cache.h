@@ -46,6 +46,9 @@ void cache_destroy(struct cache *c); /* NULL ok */
 uint32_t cache_find(const struct cache *c, uint64_t line);
 /* Make slot the most recently used of its set. */
 void cache_touch(struct cache *c, uint32_t slot);
+/* cache_find then, on a hit, cache_touch, in one look at the set: the slot
+ * (now the most recently used), or CACHE_NONE (nothing changed). */
+uint32_t cache_use(struct cache *c, uint64_t line);
 
 /* The slot line would replace: the least recently used slot of its set that is
  * not pending (an invalid slot first), or CACHE_NONE if every slot is pending. */

@@ -66,6 +66,7 @@ struct l2 {
   struct dram *dram;
   struct cache *tags;
   uint64_t *bank_free;
+  bool banks_pow2;       /* banks a power of two: mask, not divide, the line */
   uint32_t mshr_used;
   uint32_t wb_used; /* write-buffer places taken (reserved at eviction) */
   struct req *reqs;
@@ -122,7 +123,8 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
     return false;
   }
   const uint64_t line = r->line;
-  uint32_t slot = cache_find(l2->tags, line);
+  /* A hit is made the most recently used now: nothing below refuses a hit. */
+  uint32_t slot = cache_use(l2->tags, line);
   bool hit = slot != CACHE_NONE;
   uint32_t victim = CACHE_NONE;
   if (!hit) {
@@ -141,7 +143,8 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
       return false;
     }
   }
-  uint64_t *bf = &l2->bank_free[line % l2->p.banks];
+  const uint64_t bank = l2->banks_pow2 ? line & (l2->p.banks - 1) : line % l2->p.banks;
+  uint64_t *bf = &l2->bank_free[bank];
   uint64_t start = t > *bf ? t : *bf;
   l2->st.bank_wait_cycles += start - t;
   *bf = start + 1;
@@ -150,7 +153,6 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
   l2->st.accesses_by_class[r->cls]++;
   timeline_point(l2->tl, l2->col.accesses, start, 1.0);
   if (hit) {
-    cache_touch(l2->tags, slot);
     if (r->op != L2_LOAD) cache_set_dirty(l2->tags, slot);
     if (cache_pending(l2->tags, slot)) {
       l2->st.mshr_merges++;
@@ -207,9 +209,8 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
 }
 
 void l2_warm(struct l2 *l2, uint64_t line, bool write) {
-  uint32_t slot = cache_find(l2->tags, line);
+  uint32_t slot = cache_use(l2->tags, line);
   if (slot != CACHE_NONE) {
-    cache_touch(l2->tags, slot);
     if (write) cache_set_dirty(l2->tags, slot);
     return;
   }
@@ -457,6 +458,7 @@ struct l2 *l2_create(const struct l2_params *p, struct engine *e, struct timelin
   struct cache_params cp = {p->size_bytes, p->ways, L2_LG2_LINE};
   l2->tags = cache_create(&cp);
   l2->bank_free = xcalloc(p->banks, sizeof *l2->bank_free);
+  l2->banks_pow2 = (p->banks & (p->banks - 1)) == 0;
   l2->req_free = NONE;
   l2->stall_head = l2->stall_tail = NONE;
   l2->stall_reason = -1;

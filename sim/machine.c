@@ -191,8 +191,12 @@ static void th_set(struct machine *m, struct mthread *th, enum th_state s, uint6
 
 static void kick(struct machine *m, uint32_t core);
 
+/* NOTE: a thread's cur is ready whenever kick or ev_issue asks (a ray that
+ * waits, parks or ends is replaced by th_next before either runs again), so
+ * the ray's own state, a host cache miss away, need not be read. */
 static bool th_issuable_at(const struct machine *m, const struct mthread *th, uint64_t *at) {
-  if (th->cur == NONE || m->ctx[th->cur].state != CTX_READY) return false;
+  (void)m;
+  if (th->cur == NONE) return false;
   *at = th->ready_at;
   return true;
 }
@@ -397,9 +401,7 @@ static void cost_finish(struct machine *m) {
 static void line_done(struct machine *m, struct mctx *c, uint64_t line, uint64_t t) {
   struct cache *l1 = m->core[c->info.core].l1;
   if (l1) {
-    uint32_t s = cache_find(l1, line);
-    if (s == CACHE_NONE) cache_install(l1, cache_victim(l1, line), line, false, false);
-    else cache_touch(l1, s);
+    if (cache_use(l1, line) == CACHE_NONE) cache_install(l1, cache_victim(l1, line), line, false, false);
   }
   m->loads_back++;
   CHECK_GT(c->pending, 0);
@@ -545,9 +547,7 @@ static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   for (; line <= end; line++) {
     if (l1) {
       m->st.l1_accesses++;
-      uint32_t s = cache_find(l1, line);
-      if (s != CACHE_NONE) {
-        cache_touch(l1, s);
+      if (cache_use(l1, line) != CACHE_NONE) {
         m->st.l1_hits++;
         continue;
       }
@@ -581,8 +581,7 @@ static void t_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   for (; line <= end; line++) {
     if (l1) {
       /* Write-through, no allocation: a line the L1 holds is updated. */
-      uint32_t s = cache_find(l1, line);
-      if (s != CACHE_NONE) cache_touch(l1, s);
+      cache_use(l1, line);
     }
     bool whole = line >= first_whole && (line < end || last_whole);
     if (c->acc) cost_store_push(c, cost_tag(c));
@@ -650,9 +649,8 @@ static void warm_access(struct mwarm *w, uint64_t addr, uint32_t size, bool stor
   for (uint64_t line = addr >> MACHINE_LG2_LINE, end = (addr + size - 1) >> MACHINE_LG2_LINE;
        line <= end; line++) {
     if (l1) {
-      uint32_t s = cache_find(l1, line);
+      uint32_t s = cache_use(l1, line);
       if (s != CACHE_NONE) {
-        cache_touch(l1, s);
         if (!store) continue;
       } else if (!store) {
         s = cache_victim(l1, line);
