@@ -1,8 +1,8 @@
 /* Functional backend: line splitting in front of the LRU stack analyser.
- * NOTE: the analyser stays opaque (one call per line, except repeats of the
- * last line, counted here); inlining its lookup here would save a call (~1 ns)
- * against a hash probe and list update that cost far more, so it is not worth
- * exposing its internals.
+ * NOTE: the analyser stays opaque: it gets the lines (except repeats of the
+ * last line, counted here) in batches of records, which lets it fetch ahead
+ * (lru_stack_access_batch); inlining its lookup here would save little against
+ * a hash probe and list update that cost far more.
  * With a second host thread (mem_functional_create's analyser_thread), the
  * lines bound for the analyser go into batches handed to that thread through a
  * ring of FN_BATCHES: the tracer and the analyser then run at once, the
@@ -85,6 +85,7 @@ struct mem_functional {
   uint64_t *fill;       /* the records of the batch being filled (a pipe's or local) */
   uint32_t fill_n;      /* and how many it holds */
   uint32_t fill_cap;    /* 0: records unused (lines under 32 bytes): one call a line */
+  bool fast_loads;      /* records in use and no din trace: fn_load's short path */
   uint64_t local[FN_LOCAL_LINES]; /* the batch without a pipe */
 };
 
@@ -241,11 +242,43 @@ static inline void fn_access(struct mem_functional *b, uint64_t addr, uint32_t s
   }
 }
 
+/* fn_load's general case: a load over several lines, or one with a din trace. */
+static __attribute__((noinline)) void fn_load_lines(struct mem_functional *b, uint64_t addr,
+                                                    uint32_t size_bytes, unsigned cls) {
+  fn_access(b, addr, size_bytes, false, cls);
+}
+
+/* fn_line for a load of one line that the batch has room for. */
+static inline void fast_load_line(struct mem_functional *b, uint64_t line, unsigned cls) {
+  const bool same = line == b->last_line;
+  if (same && cls == b->last_cls) {
+    b->repeats[cls][0]++;
+    return;
+  }
+  b->last_dirty = same && b->last_dirty;
+  b->last_line = line;
+  b->last_cls = cls;
+  b->fill[b->fill_n++] = FN_REC(line, LRU_STACK_READ, cls);
+}
+
+/* Most loads (a node, a triangle, a ray) fall within one or two lines: that
+ * case is inlined here, fn_line's steps for a load done in place, so a load
+ * costs a few instructions, not a call of the general path (which saves and
+ * restores half the registers). A load that wraps past 2^64 has lines far
+ * apart and takes the general path, which CHECKs it. */
 static void fn_load(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls) {
   struct mem_functional *b = ctx;
-  fn_access(b, addr, size_bytes, false, cls);
+  CHECK_LT(cls, MEM_CLASS_MAX);
   b->st.loads[cls]++;
   b->st.bytes_loaded[cls] += size_bytes;
+  const uint64_t line = addr >> b->lg2_line, span = ((addr + (size_bytes - 1)) >> b->lg2_line) - line;
+  if (!b->fast_loads || size_bytes == 0 || span > 1 || b->fill_n + 2 >= b->fill_cap) {
+    fn_load_lines(b, addr, size_bytes, cls);
+    return;
+  }
+  b->st.line_accesses[cls] += span + 1;
+  fast_load_line(b, line, cls);
+  if (span) fast_load_line(b, line + 1, cls);
 }
 
 static void fn_store(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls) {
@@ -280,6 +313,7 @@ struct mem_functional *mem_functional_create(const struct lru_stack_params *p,
     b->fill = b->local;
     b->fill_cap = FN_LOCAL_LINES;
   }
+  b->fast_loads = b->fill_cap > 0 && !din;
   return b;
 }
 
