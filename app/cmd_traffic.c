@@ -11,6 +11,7 @@
 #include "app/opts.h"
 #include "renderer/framebuffer.h"
 #include "renderer/policy/policy.h"
+#include "renderer/policy/qpoint.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/din.h"
@@ -94,13 +95,14 @@ struct fn_run {
 static void run_functional(const struct app_world *w, enum policy_kind k, uint32_t mask,
                            uint32_t width, uint32_t height, const struct policy_params *pp,
                            const struct lru_stack_params *lp, struct din_writer *din,
-                           uint64_t threads, struct fn_run *out) {
+                           uint64_t threads, const uint32_t *subtree_tris, struct fn_run *out) {
   struct mem_functional *b = mem_functional_create(lp, din, threads > 1);
   struct app_render ar;
   app_render_init(&ar, w, mask, w->scene.seed, width, height);
   uint64_t words = ((uint64_t)w->scene.tri_count + 63) / 64;
   uint64_t *tested = xcalloc(words, sizeof *tested);
   ar.setup.tested = tested;
+  ar.setup.subtree_tris = subtree_tris;
   policy_run(k, &ar.setup, pp, mem_functional_port(b), &out->st, NULL);
   lru_stack_finish(mem_functional_stack(b));
   lru_stack_get_results(mem_functional_stack(b), &out->res);
@@ -185,11 +187,18 @@ int cmd_traffic(int argc, char **argv) {
                                       (want[POLICY_DYNAMIC] ? nsizes : 0) + (want[POLICY_TREELET] ? nsizes : 0);
   struct fn_run fr;
   const double t0 = app_now();
+  /* The queue points' subtree counts depend on the tree alone: counted once
+   * for the runs of every cache size. */
+  uint32_t *subtree_tris = NULL;
+  if (want[POLICY_DYNAMIC] || want[POLICY_TREELET]) {
+    subtree_tris = xmalloc((uint64_t)w.kd.node_count * sizeof *subtree_tris + 1);
+    qpoint_subtree_tris(&w.kd, subtree_tris);
+  }
   for (int p = 0; p < POLICY_COUNT; p++) {
     if (!want[p]) continue;
     if (!policy_queues((enum policy_kind)p)) {
       progress_line(policy_name((enum policy_kind)p), done, runs);
-      run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &lp, NULL, threads, &fr);
+      run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &lp, NULL, threads, subtree_tris, &fr);
       done++;
       for (unsigned k = 0; k < nsizes; k++)
         rows[nrows++] = (struct row){(enum policy_kind)p, fr.res.size[k], fr.pot_vis_tris};
@@ -205,7 +214,7 @@ int cmd_traffic(int argc, char **argv) {
         struct lru_stack_params one = lp;
         one.lg2_min = one.lg2_max = lp.lg2_min + k;
         pp.cache_bytes = 1ull << (lp.lg2_min + k);
-        run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &one, NULL, threads, &fr);
+        run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &one, NULL, threads, subtree_tris, &fr);
         done++;
         rows[nrows++] = (struct row){(enum policy_kind)p, fr.res.size[0], fr.pot_vis_tris};
       }
@@ -213,6 +222,7 @@ int cmd_traffic(int argc, char **argv) {
   }
   progress_line("done", runs, runs);
   const double runs_s = app_now() - t0;
+  free(subtree_tris);
 
   struct err e = {0};
   struct outfile o;
@@ -378,7 +388,7 @@ int cmd_trace(int argc, char **argv) {
   }
   struct fn_run fr;
   pp.cache_bytes = cache;
-  run_functional(&w, pk, mask, W, H, &pp, &lp, din, threads, &fr);
+  run_functional(&w, pk, mask, W, H, &pp, &lp, din, threads, NULL, &fr);
   uint64_t records = din_writer_records(din);
   bool ok = din_writer_close(din, &e);
   app_world_fini(&w);

@@ -56,6 +56,16 @@ void lru_stack_destroy(struct lru_stack *ls); /* NULL ok */
  * line; else one hash probe, a list move and one step per size that misses. */
 void lru_stack_access(struct lru_stack *ls, uint64_t line, enum lru_stack_op op, unsigned cls);
 
+/* A packed access for lru_stack_access_batch: line << 5 | cls << 2 | op. The
+ * line must be below 2^59 (a byte address over lines of 32 bytes or more) and
+ * cls below 8. */
+#define LRU_STACK_REC(line, op, cls) ((uint64_t)(line) << 5 | (uint64_t)(cls) << 2 | (uint64_t)(op))
+
+/* The n accesses rec[0..n) (LRU_STACK_REC), in order: exactly n calls of
+ * lru_stack_access, faster because the hash slots and nodes of the accesses a
+ * few places ahead are fetched into the host cache while earlier ones run. */
+void lru_stack_access_batch(struct lru_stack *ls, const uint64_t *rec, uint32_t n);
+
 /* Count, without passing them one by one, `loads` + `stores` accesses of class
  * cls that the caller filtered out because each repeated the most recent line
  * with that line's last class, and each store found it dirty already (a store

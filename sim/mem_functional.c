@@ -1,8 +1,8 @@
 /* Functional backend: line splitting in front of the LRU stack analyser.
- * NOTE: the analyser stays opaque (one call per line, except repeats of the
- * last line, counted here); inlining its lookup here would save a call (~1 ns)
- * against a hash probe and list update that cost far more, so it is not worth
- * exposing its internals.
+ * NOTE: the analyser stays opaque: it gets the lines (except repeats of the
+ * last line, counted here) in batches of records, which lets it fetch ahead
+ * (lru_stack_access_batch); inlining its lookup here would save little against
+ * a hash probe and list update that cost far more.
  * With a second host thread (mem_functional_create's analyser_thread), the
  * lines bound for the analyser go into batches handed to that thread through a
  * ring of FN_BATCHES: the tracer and the analyser then run at once, the
@@ -33,11 +33,15 @@
  * the two keep pace, and polling longer would take a host core from other
  * work (a sweep runs a process per core). */
 #define FN_SPINS 200
+/* Lines held back on the caller's thread (no analyser thread) to be analysed
+ * together: the analyser fetches the host cache lines of the accesses ahead
+ * of the one it works on (lru_stack_access_batch). 8 KiB of records. */
+#define FN_LOCAL_LINES 1024u
 
 /* A line's record: line << 5 | cls << 2 | op (a line number is below 2^59
  * with lines of 32 bytes or more). Each batch starts a host cache line, so
  * the two threads share none but the ones they hand over. */
-#define FN_REC(line, op, cls) ((line) << 5 | (uint64_t)(cls) << 2 | (uint64_t)(op))
+#define FN_REC LRU_STACK_REC
 struct fn_batch {
   _Alignas(64) uint32_t n;
   uint64_t rec[FN_BATCH_LINES];
@@ -78,8 +82,11 @@ struct mem_functional {
   uint64_t repeats[MEM_CLASS_MAX][2];
   struct mem_functional_stats st;
   struct fn_pipe *pipe; /* NULL: the analyser runs on the caller's thread */
-  uint64_t *fill;       /* with a pipe: the records of the batch being filled */
+  uint64_t *fill;       /* the records of the batch being filled (a pipe's or local) */
   uint32_t fill_n;      /* and how many it holds */
+  uint32_t fill_cap;    /* 0: records unused (lines under 32 bytes): one call a line */
+  bool fast_loads;      /* records in use and no din trace: fn_load's short path */
+  uint64_t local[FN_LOCAL_LINES]; /* the batch without a pipe */
 };
 
 #define FN_NO_CLASS MEM_CLASS_MAX
@@ -135,10 +142,7 @@ static void *analyser_main(void *arg) {
   struct fn_pipe *q = arg;
   for (uint64_t tail = 0; wait_filled(q, tail);) {
     const struct fn_batch *bt = &q->b[tail % FN_BATCHES];
-    for (uint32_t i = 0, n = bt->n; i < n; i++) {
-      const uint64_t r = bt->rec[i];
-      lru_stack_access(q->ls, r >> 5, (enum lru_stack_op)(r & 3u), (unsigned)(r >> 2) & 7u);
-    }
+    lru_stack_access_batch(q->ls, bt->rec, bt->n);
     atomic_store(&q->tail, ++tail);
     poke(q, &q->producer_sleeps, &q->emptied);
   }
@@ -165,13 +169,22 @@ static void pipe_drain(struct mem_functional *b) {
   wait_emptied(b->pipe, atomic_load_explicit(&b->pipe->head, memory_order_relaxed), 1);
 }
 
+/* Analyse the local batch (no pipe). */
+static void local_flush(struct mem_functional *b) {
+  lru_stack_access_batch(b->ls, b->fill, b->fill_n);
+  b->fill_n = 0;
+}
+
 static void analyse(struct mem_functional *b, uint64_t line, enum lru_stack_op op, unsigned cls) {
-  if (!b->pipe) {
+  if (b->fill_cap == 0) {
     lru_stack_access(b->ls, line, op, cls);
     return;
   }
   b->fill[b->fill_n] = FN_REC(line, op, cls);
-  if (++b->fill_n == FN_BATCH_LINES) pipe_publish(b);
+  if (++b->fill_n == b->fill_cap) {
+    if (b->pipe) pipe_publish(b);
+    else local_flush(b);
+  }
 }
 
 /* Feed every line of [addr, addr + size) to the analyser (and the trace). A
@@ -229,11 +242,43 @@ static inline void fn_access(struct mem_functional *b, uint64_t addr, uint32_t s
   }
 }
 
+/* fn_load's general case: a load over several lines, or one with a din trace. */
+static __attribute__((noinline)) void fn_load_lines(struct mem_functional *b, uint64_t addr,
+                                                    uint32_t size_bytes, unsigned cls) {
+  fn_access(b, addr, size_bytes, false, cls);
+}
+
+/* fn_line for a load of one line that the batch has room for. */
+static inline void fast_load_line(struct mem_functional *b, uint64_t line, unsigned cls) {
+  const bool same = line == b->last_line;
+  if (same && cls == b->last_cls) {
+    b->repeats[cls][0]++;
+    return;
+  }
+  b->last_dirty = same && b->last_dirty;
+  b->last_line = line;
+  b->last_cls = cls;
+  b->fill[b->fill_n++] = FN_REC(line, LRU_STACK_READ, cls);
+}
+
+/* Most loads (a node, a triangle, a ray) fall within one or two lines: that
+ * case is inlined here, fn_line's steps for a load done in place, so a load
+ * costs a few instructions, not a call of the general path (which saves and
+ * restores half the registers). A load that wraps past 2^64 has lines far
+ * apart and takes the general path, which CHECKs it. */
 static void fn_load(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls) {
   struct mem_functional *b = ctx;
-  fn_access(b, addr, size_bytes, false, cls);
+  CHECK_LT(cls, MEM_CLASS_MAX);
   b->st.loads[cls]++;
   b->st.bytes_loaded[cls] += size_bytes;
+  const uint64_t line = addr >> b->lg2_line, span = ((addr + (size_bytes - 1)) >> b->lg2_line) - line;
+  if (!b->fast_loads || size_bytes == 0 || span > 1 || b->fill_n + 2 >= b->fill_cap) {
+    fn_load_lines(b, addr, size_bytes, cls);
+    return;
+  }
+  b->st.line_accesses[cls] += span + 1;
+  fast_load_line(b, line, cls);
+  if (span) fast_load_line(b, line + 1, cls);
 }
 
 static void fn_store(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls) {
@@ -263,7 +308,12 @@ struct mem_functional *mem_functional_create(const struct lru_stack_params *p,
       err_check_failed(__FILE__, __LINE__, "pthread_create of the analyser thread");
     b->pipe = q;
     b->fill = q->b[0].rec;
+    b->fill_cap = FN_BATCH_LINES;
+  } else if (p->lg2_line >= 5) {
+    b->fill = b->local;
+    b->fill_cap = FN_LOCAL_LINES;
   }
+  b->fast_loads = b->fill_cap > 0 && !din;
   return b;
 }
 
@@ -295,6 +345,7 @@ struct mem_port mem_functional_port(struct mem_functional *b) {
 
 struct lru_stack *mem_functional_stack(struct mem_functional *b) {
   if (b->pipe) pipe_drain(b);
+  else if (b->fill_n) local_flush(b);
   for (unsigned c = 0; c < MEM_CLASS_MAX; c++) {
     if (b->repeats[c][0] | b->repeats[c][1])
       lru_stack_count_repeats(b->ls, c, b->repeats[c][0], b->repeats[c][1]);

@@ -402,6 +402,52 @@ static void test_default_sizes(void) {
   free(t.a);
 }
 
+/* lru_stack_access_batch against one call an access (checked against the naive
+ * LRU above): the same results with every size alone (the dynamic runs of
+ * rtsim traffic analyse one; from 8,192 lines the batch fetches ahead) and all
+ * 13 at once, in batches of uneven lengths. */
+static void test_batch(void) {
+  struct trace t = {0};
+  uint64_t rng = 7;
+  uint32_t hot = 0, stream = 30000;
+  for (int k = 0; k < 300000; k++) {
+    uint64_t r = rng_next(&rng);
+    if (r % 10 < 7) {
+      hot = (hot + 20000 + (uint32_t)((r >> 16) % 33) - 16) % 20000;
+      tr_add(&t, hot, (int)((r >> 40) % 3), (unsigned)(r >> 44) % MEM_CLASS_MAX);
+    } else {
+      tr_add(&t, stream++, (r >> 40) % 4 == 0 ? LRU_STACK_WRITE_LINE : LRU_STACK_READ, 2);
+      if (stream == 130000) stream = 30000;
+    }
+  }
+  uint64_t *rec = malloc(t.n * sizeof *rec);
+  for (size_t k = 0; k < t.n; k++)
+    rec[k] = LRU_STACK_REC(map_line(MAP_SPARSE, t.a[k].id) & ((UINT64_C(1) << 59) - 1),
+                           t.a[k].store, t.a[k].cls);
+  const struct lru_stack_params all = lru_stack_params_default();
+  for (unsigned lg2 = all.lg2_min; lg2 <= all.lg2_max + 1; lg2++) {
+    struct lru_stack_params p = all;
+    if (lg2 <= all.lg2_max) p.lg2_min = p.lg2_max = lg2; /* else all 13 sizes */
+    struct lru_stack *one = lru_stack_create(&p), *bat = lru_stack_create(&p);
+    for (size_t k = 0; k < t.n; k++)
+      lru_stack_access(one, rec[k] >> 5, (enum lru_stack_op)(rec[k] & 3u), (unsigned)(rec[k] >> 2) & 7u);
+    for (size_t k = 0, len = 1; k < t.n; k += len, len = len * 3 % 4099 + 1) {
+      if (len > t.n - k) len = t.n - k;
+      lru_stack_access_batch(bat, rec + k, (uint32_t)len);
+    }
+    lru_stack_check_invariants(bat);
+    struct lru_stack_results a, b;
+    lru_stack_get_results(one, &a);
+    lru_stack_get_results(bat, &b);
+    EXPECTF(memcmp(&a, &b, sizeof a) == 0, "batch, sizes 2^%u..2^%u: results differ", p.lg2_min,
+            p.lg2_max);
+    lru_stack_destroy(one);
+    lru_stack_destroy(bat);
+  }
+  free(rec);
+  free(t.a);
+}
+
 static void test_params(void) {
   struct lru_stack_params bad[] = {{6, 5, 10}, {6, 12, 10}, {6, 6, 40}, {25, 26, 30}, {0, 0, 31}};
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
@@ -552,6 +598,7 @@ int main(void) {
   test_loops();
   test_adversarial();
   test_default_sizes();
+  test_batch();
   test_backend();
   test_backend_repeats(false);
   test_backend_repeats(true);

@@ -160,6 +160,10 @@ struct policy_setup {
    * render is announced so. */
   void (*attribute)(void *ctx, uint32_t worker, const uint32_t *pixels, uint32_t n);
   void *attribute_ctx;
+  /* Optional (NULL: the dynamic policy counts them itself): qpoint_subtree_tris
+   * of kd, for a caller that runs the dynamic policy many times over one tree
+   * (rtsim traffic, once per cache size) to count once. */
+  const uint32_t *subtree_tris;
 };
 
 /* One render's shared work list and whatever the policy shares between its

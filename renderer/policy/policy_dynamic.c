@@ -538,15 +538,16 @@ static bool advance(struct dyn *d) {
 
 static uint32_t clamp_u32(uint64_t v) { return v == 0 ? 1 : (v > UINT32_MAX ? UINT32_MAX : (uint32_t)v); }
 
-void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32_t cores,
-                         const struct kd_tree *kd, uint32_t tri_bytes, struct qpoint_set *qs,
-                         struct qpoint_budget *b, uint32_t *block_tris, uint32_t *group) {
+/* policy_dynamic_plan with the subtree triangle counts given (tris,
+ * qpoint_subtree_tris of kd). */
+static void plan_counted(const struct policy_params *p, uint32_t workers, uint32_t cores,
+                         const struct kd_tree *kd, const uint32_t *tris, uint32_t tri_bytes,
+                         struct qpoint_set *qs, struct qpoint_budget *b, uint32_t *block_tris,
+                         uint32_t *group) {
   CHECK_GE(workers, 1);
   CHECK_GE(cores, 1);
   CHECK_LE(cores, workers);
   CHECK_GT(tri_bytes, 0);
-  uint32_t *tris = xmalloc((uint64_t)kd->node_count * sizeof *tris + 1);
-  qpoint_subtree_tris(kd, tris);
   const uint64_t rays = p->dyn_ray_buffer_bytes ? p->dyn_ray_buffer_bytes
                                                 : (uint64_t)workers * sizeof(struct ray);
   /* Geometry resident at once: one queue point a core, or one for the chip. */
@@ -554,9 +555,29 @@ void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32
   struct qpoint_reserve res = {p->cache_bytes, p->dyn_node_share, p->dyn_table_share,
                                p->dyn_ray_share, rays, holders};
   qpoint_plan(qs, b, kd, tris, tri_bytes, &res);
-  free(tris);
   *block_tris = clamp_u32(b->gmax_bytes / tri_bytes);
   *group = clamp_u32(b->ray_bytes / sizeof(struct ray) / workers);
+}
+
+void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32_t cores,
+                         const struct kd_tree *kd, uint32_t tri_bytes, struct qpoint_set *qs,
+                         struct qpoint_budget *b, uint32_t *block_tris, uint32_t *group) {
+  uint32_t *tris = xmalloc((uint64_t)kd->node_count * sizeof *tris + 1);
+  qpoint_subtree_tris(kd, tris);
+  plan_counted(p, workers, cores, kd, tris, tri_bytes, qs, b, block_tris, group);
+  free(tris);
+}
+
+/* policy_dynamic_plan for a job: with the setup's subtree counts if it has them. */
+static void job_plan(const struct policy_job *job, struct qpoint_set *qs, struct qpoint_budget *b,
+                     uint32_t *block_tris, uint32_t *group) {
+  const struct policy_setup *s = &job->setup;
+  if (s->subtree_tris)
+    plan_counted(&job->params, job->workers, job->cores, s->kd, s->subtree_tris,
+                 s->layout.tri_bytes, qs, b, block_tris, group);
+  else
+    policy_dynamic_plan(&job->params, job->workers, job->cores, s->kd, s->layout.tri_bytes, qs, b,
+                        block_tris, group);
 }
 
 /* The job's shared state around a selection of queue points (d->qs, whose
@@ -592,8 +613,7 @@ static void dyn_create(struct policy_job *job) {
   /* Queue points for the cache and the machine (policy.h). */
   struct qpoint_budget bud;
   uint32_t block_tris, group;
-  policy_dynamic_plan(&job->params, job->workers, job->cores, job->setup.kd,
-                      job->setup.layout.tri_bytes, &d->qs, &bud, &block_tris, &group);
+  job_plan(job, &d->qs, &bud, &block_tris, &group);
   dyn_setup(job, d, block_tris, group);
 }
 
@@ -608,8 +628,7 @@ static void tl_create(struct policy_job *job) {
   const struct kd_tree *kd = job->setup.kd;
   struct qpoint_budget bud;
   uint32_t block_tris, group;
-  policy_dynamic_plan(&job->params, job->workers, job->cores, kd, job->setup.layout.tri_bytes,
-                      &d->qs, &bud, &block_tris, &group);
+  job_plan(job, &d->qs, &bud, &block_tris, &group);
   qpoint_fini(&d->qs);
   struct treelet_set ts;
   treelet_build(&ts, kd, job->setup.layout.tri_bytes, bud.gmax_bytes);
