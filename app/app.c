@@ -14,8 +14,8 @@
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/err.h"
-#include "sim/machine_cfg.h"
 #include "sim/machine.h"
+#include "sim/machine_cfg.h"
 
 int app_report(const struct err *e) {
   char buf[ERR_FILE_MAX + ERR_MSG_MAX + 64];
@@ -66,7 +66,8 @@ bool app_world_load(struct app_world *w, const char *path) {
   p.clip = w->scene.kd_clip;
   unsigned long long bytes = 0;
   if (!kd_build(&w->kd, &w->scene, &p, &bytes)) {
-    err_set(&e, path, 0, 0, "out of host memory building the k-d tree over the scene's %u "
+    err_set(&e, path, 0, 0,
+            "out of host memory building the k-d tree over the scene's %u "
             "triangles (an allocation of %llu bytes failed; README: Limits)",
             w->scene.tri_count, bytes);
     app_report(&e);

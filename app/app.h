@@ -7,12 +7,12 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "app/sample.h"
 #include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
 #include "renderer/policy/policy.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
-#include "app/sample.h"
 #include "sim/analytic.h"
 
 struct err;
@@ -47,11 +47,14 @@ void app_policy_expect(char *buf, size_t cap, const char *more);
 /* The opts.h table entries render and run share: --width, --height (uint64_t),
  * --rays (uint32_t mask), --seed (uint64_t, and a bool set when given),
  * --policy (enum policy_kind; policy_expect: app_policy_expect's text). */
-#define APP_RENDER_OPTS(width, height, mask, seed, have_seed, policy, policy_expect)         \
-  OPTS_U64("width", 0, width, 1, 16384), OPTS_U64("height", 0, height, 1, 16384),           \
-      OPTS_PARSE("rays", 0, mask, app_parse_rays, APP_RAYS_EXPECT),                         \
-      {.name = "seed", .kind = OPTS_KIND_U64, .dst = (seed), .hi = UINT64_MAX,              \
-       .given = (have_seed)},                                                               \
+#define APP_RENDER_OPTS(width, height, mask, seed, have_seed, policy, policy_expect)               \
+  OPTS_U64("width", 0, width, 1, 16384), OPTS_U64("height", 0, height, 1, 16384),                  \
+      OPTS_PARSE("rays", 0, mask, app_parse_rays, APP_RAYS_EXPECT),                                \
+      {.name = "seed",                                                                             \
+       .kind = OPTS_KIND_U64,                                                                      \
+       .dst = (seed),                                                                              \
+       .hi = UINT64_MAX,                                                                           \
+       .given = (have_seed)},                                                                      \
       OPTS_PARSE("policy", 0, policy, app_parse_policy, policy_expect)
 
 /* The source revision this program was built from: `git describe --always
@@ -114,8 +117,9 @@ struct app_timed {
 };
 /* Render a width x height image of w with policy k on machine mp (which must
  * pass machine_params_problem), one worker per ray context; the compute the
- * renderer announces and the dynamic policy's sharing come from work. progress: a progress line on stderr. costs: count what every pixel
- * cost the machine (machine_get_costs; a whole run only, not a sampled one). */
+ * renderer announces and the dynamic policy's sharing come from work. progress: a progress line on
+ * stderr. costs: count what every pixel cost the machine (machine_get_costs; a whole run only, not
+ * a sampled one). */
 void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask, uint64_t seed,
                    uint32_t width, uint32_t height, enum policy_kind k,
                    const struct machine_params *mp, const struct machine_cfg_work *work,

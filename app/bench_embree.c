@@ -76,7 +76,8 @@ void bench_embree_destroy(struct bench_embree *be) {
   free(be);
 }
 
-double bench_embree_trace(struct bench_embree *be, const struct ray *rays, uint32_t n, int32_t *prim) {
+double bench_embree_trace(struct bench_embree *be, const struct ray *rays, uint32_t n,
+                          int32_t *prim) {
   struct RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   double t0 = app_now();
@@ -115,7 +116,8 @@ struct bench_embree *bench_embree_create(const struct scene *s, double *build_s)
 
 void bench_embree_destroy(struct bench_embree *be) { (void)be; }
 
-double bench_embree_trace(struct bench_embree *be, const struct ray *rays, uint32_t n, int32_t *prim) {
+double bench_embree_trace(struct bench_embree *be, const struct ray *rays, uint32_t n,
+                          int32_t *prim) {
   (void)be;
   (void)rays;
   for (uint32_t i = 0; i < n; i++) prim[i] = -1;

@@ -23,6 +23,7 @@ void bench_embree_destroy(struct bench_embree *be);
 
 /* Trace rays[0..n) one at a time; prim[i] = the primitive hit, or -1. Returns
  * the wall time of the loop. */
-double bench_embree_trace(struct bench_embree *be, const struct ray *rays, uint32_t n, int32_t *prim);
+double bench_embree_trace(struct bench_embree *be, const struct ray *rays, uint32_t n,
+                          int32_t *prim);
 
 #endif

@@ -11,10 +11,10 @@
 #include "app/bench_embree.h"
 #include "app/opts.h"
 #include "renderer/camera.h"
-#include "renderer/scene/meshio.h"
+#include "renderer/policy/policy.h"
 #include "renderer/ray.h"
 #include "renderer/scene.h"
-#include "renderer/policy/policy.h"
+#include "renderer/scene/meshio.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/coro.h"
@@ -99,13 +99,15 @@ static struct ray *primary_rays(const struct scene *s, uint32_t W, uint32_t H) {
   struct camera_frame cf;
   camera_frame_init(&cf, &s->camera, W, H);
   camera_hilbert_order(W, H, order);
-  for (uint32_t i = 0; i < n; i++) camera_primary(&cf, order[i] % W, order[i] / W, s->seed, &rays[i]);
+  for (uint32_t i = 0; i < n; i++)
+    camera_primary(&cf, order[i] % W, order[i] / W, s->seed, &rays[i]);
   free(order);
   return rays;
 }
 
 /* rtsim's tracer alone on the same rays (native backend); prim[i] its hits. */
-static double trace_only(const struct app_world *w, const struct ray *rays, uint32_t n, int32_t *prim) {
+static double trace_only(const struct app_world *w, const struct ray *rays, uint32_t n,
+                         int32_t *prim) {
   struct trace_ctx tr;
   struct trace_layout lay;
   trace_layout_default(&lay);
@@ -140,8 +142,7 @@ static struct bench_embree *embree_from_ply(const struct app_world *w, double *b
     if (back.tri_count != w->scene.tri_count)
       fprintf(stderr, "rtsim bench: %s: read back %u triangles, wrote %u\n", ply, back.tri_count,
               w->scene.tri_count);
-    else
-      be = bench_embree_create(&back, build_s);
+    else be = bench_embree_create(&back, build_s);
   } else {
     app_report(&e);
   }
@@ -172,12 +173,13 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
       struct machine_params p = mc.p;
       p.sample_fraction = sample;
       char why[512];
-      const char *bad = sample_problem(&p, POLICY_RECURSIVE, app_work_items(POLICY_RECURSIVE, W, H),
-                                       p.cores * p.threads_per_core * p.rays_per_thread, why,
-                                       sizeof why);
+      const char *bad =
+          sample_problem(&p, POLICY_RECURSIVE, app_work_items(POLICY_RECURSIVE, W, H),
+                         p.cores * p.threads_per_core * p.rays_per_thread, why, sizeof why);
       if (bad) {
         app_world_fini(&w);
-        return app_usage_error("bench", "--sample %g on %s at %ux%u: %s", sample, argv[i], W, H, bad);
+        return app_usage_error("bench", "--sample %g on %s at %ux%u: %s", sample, argv[i], W, H,
+                               bad);
       }
     }
     double best = 0, full_s = 0, full_cycles = 0;
@@ -198,8 +200,7 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
       double cycles = (double)st->cycles, lo = 0, hi = 0;
       if (sampled) cycles = sample_cycles(&t.sample, &lo, &hi);
       char name[600];
-      snprintf(name, sizeof name, "%s%s", cfg_path,
-               one ? " at 1x1x1" : sampled ? " sampled" : "");
+      snprintf(name, sizeof name, "%s%s", cfg_path, one ? " at 1x1x1" : sampled ? " sampled" : "");
       printf("%s,%u,%u,%llu,%s,%llu,%.4f,%.4f,%.2f,%.0f,%llu,%.0f,%.4f,%.4f",
              w.scene.name[0] ? w.scene.name : argv[i], W, H, (unsigned long long)nrays, name,
              (unsigned long long)st->contexts, best, t.wall_s, best > 0 ? t.wall_s / best : 0.0,
@@ -211,8 +212,7 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
       if (sampled)
         printf(",%.0f,%.0f,%.2f,%+.4f\n", lo, hi, t.wall_s > 0 ? full_s / t.wall_s : 0.0,
                full_cycles > 0 ? (cycles - full_cycles) / full_cycles : 0.0);
-      else
-        printf(",,,,\n");
+      else printf(",,,,\n");
       if (run == 1) {
         full_s = t.wall_s;
         full_cycles = cycles;
@@ -277,12 +277,14 @@ int cmd_bench(int argc, char **argv) {
                                     "libembree-dev and configure with -DRTSIM_EMBREE=ON)");
   if (embree && mask != RAY_MASK(RAY_PRIMARY))
     return app_usage_error("bench", "--embree compares primary rays only (--rays primary)");
-  printf("scene,triangles,kd_nodes,kd_build_s,width,height,rays,native_s,rays_per_s%s%s\n",
-         functional ? ",functional_s,slowdown,line_accesses,accesses_per_s,functional_2t_s,slowdown_2t"
-                    : "",
-         embree ? ",kd_splits,kd_refs_per_tri,kd_max_leaf,trace_s,trace_rays_per_s,embree_build_s,embree_s,"
-                  "embree_rays_per_s,vs_embree,trace_vs_embree,prim_mismatches"
-                : "");
+  printf(
+      "scene,triangles,kd_nodes,kd_build_s,width,height,rays,native_s,rays_per_s%s%s\n",
+      functional ? ",functional_s,slowdown,line_accesses,accesses_per_s,functional_2t_s,slowdown_2t"
+                 : "",
+      embree
+          ? ",kd_splits,kd_refs_per_tri,kd_max_leaf,trace_s,trace_rays_per_s,embree_build_s,embree_s,"
+            "embree_rays_per_s,vs_embree,trace_vs_embree,prim_mismatches"
+          : "");
   for (int i = optind; i < argc; i++) {
     struct app_world w;
     if (!app_world_load(&w, argv[i])) return 2;
@@ -344,9 +346,11 @@ int cmd_bench(int argc, char **argv) {
       double rps = best > 0 ? (double)nrays / best : 0.0, trps = tbest > 0 ? np / tbest : 0.0,
              erps = ebest > 0 ? np / ebest : 0.0;
       printf(",%s,%.2f,%u,%.4f,%.0f,%.3f,%.4f,%.0f,%.3f,%.3f,%llu",
-             w.scene.kd_clip ? "clipped" : "whole", w.scene.tri_count ? (double)w.kd.stats.leaf_prim_refs / w.scene.tri_count : 0.0,
-             w.kd.stats.max_leaf_prims, tbest, trps, ebuild, ebest, erps, erps > 0 ? rps / erps : 0.0,
-             erps > 0 ? trps / erps : 0.0, (unsigned long long)mismatches);
+             w.scene.kd_clip ? "clipped" : "whole",
+             w.scene.tri_count ? (double)w.kd.stats.leaf_prim_refs / w.scene.tri_count : 0.0,
+             w.kd.stats.max_leaf_prims, tbest, trps, ebuild, ebest, erps,
+             erps > 0 ? rps / erps : 0.0, erps > 0 ? trps / erps : 0.0,
+             (unsigned long long)mismatches);
       bench_embree_destroy(be);
       free(prays);
       free(tprim);

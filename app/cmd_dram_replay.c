@@ -60,11 +60,11 @@ static const char HELP[] =
     "                        (core cycles) for every request, in trace order\n"
     "  -h, --help            this text\n";
 
-#define REPLAY_LINE_MAX 4096            /* bytes a line, its newline not counted */
-#define REPLAY_CYCLE_MAX (1ull << 40)   /* latest arrival, in core cycles */
+#define REPLAY_LINE_MAX 4096          /* bytes a line, its newline not counted */
+#define REPLAY_CYCLE_MAX (1ull << 40) /* latest arrival, in core cycles */
 #define REPLAY_LINE_BYTES 64u
-#define REPLAY_FIELDS_MAX 6             /* fields kept of a line (one past the most allowed) */
-#define REPLAY_ECHO_MAX 40              /* bytes of a bad field quoted in a message */
+#define REPLAY_FIELDS_MAX 6 /* fields kept of a line (one past the most allowed) */
+#define REPLAY_ECHO_MAX 40  /* bytes of a bad field quoted in a message */
 
 /* ---- the trace reader ---- */
 
@@ -84,11 +84,11 @@ struct reader {
   const char *path;
   char buf[REPLAY_LINE_MAX];
   unsigned long line;
-  unsigned fields;            /* the trace's fields a line; 0 until its first request */
-  unsigned long format_line;  /* the line that set it */
+  unsigned fields;           /* the trace's fields a line; 0 until its first request */
+  unsigned long format_line; /* the line that set it */
   struct dram_clock clock;
-  uint64_t requests;          /* read so far */
-  uint64_t last_at;           /* the last request's arrival as written (its field's unit) */
+  uint64_t requests; /* read so far */
+  uint64_t last_at;  /* the last request's arrival as written (its field's unit) */
   struct err *e;
 };
 
@@ -103,7 +103,9 @@ static const char *echo(const struct field *f, char *buf, size_t cap) {
   return buf;
 }
 
-static bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+static bool is_blank(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
+}
 
 /* A whole decimal number below 2^64. */
 static bool parse_dec(const struct field *f, uint64_t *out) {
@@ -277,10 +279,10 @@ struct replay {
   struct reader rd;
   struct request next; /* the next request to offer, when have_next */
   bool have_next, blocked, failed;
-  uint64_t feed_at; /* the pending feed event's cycle, or UINT64_MAX */
+  uint64_t feed_at;  /* the pending feed event's cycle, or UINT64_MAX */
   struct slot *ring; /* capacity a power of two; requests [head, taken) by index */
   uint64_t cap, head, taken;
-  FILE *per; /* the per-request file, or NULL */
+  FILE *per;                /* the per-request file, or NULL */
   struct hist read_latency; /* arrival to done, core cycles */
   uint64_t reads, writes, write_latency_sum, wait_sum;
   uint64_t first_arrival, last_done;
@@ -413,7 +415,8 @@ static void report(const struct replay *p, const char *path, const char *format,
 int cmd_dram_replay(int argc, char **argv) {
   const char *per_path = NULL;
   struct outfile per = {0};
-  struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v), 0}; /* at most one an argument */
+  struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v),
+                          0}; /* at most one an argument */
   struct replay *p = NULL;
   FILE *in = NULL;
   const struct opts_spec spec[] = {OPTS_PARSE("set", 0, &sets, app_sets_add, "KEY=VALUE"),

@@ -149,10 +149,8 @@ int app_hits_answer(struct trace_ctx *tr, FILE *in, FILE *out) {
       break;
     }
     struct trace_hit h;
-    if (trace_closest(tr, &r, &h))
-      fprintf(out, "%llu,%.9g,%d\n", id, (double)h.t, h.prim);
-    else
-      fprintf(out, "%llu,inf,-1\n", id);
+    if (trace_closest(tr, &r, &h)) fprintf(out, "%llu,%.9g,%d\n", id, (double)h.t, h.prim);
+    else fprintf(out, "%llu,inf,-1\n", id);
   }
   free(line);
   if (rc == 0 && lineno == 0) {

@@ -112,8 +112,7 @@ static void warn_mixed(const struct point *pts, unsigned n, const char *col, int
       if (strcmp(group ? cell(&pts[j], group) : "", g)) continue;
       const char *b = col ? cell(&pts[j], col) : pts[j].prov[k];
       if (!strcmp(a, b)) continue;
-      fprintf(stderr,
-              "merge: warning: %s%s%s: %s '%s' (%s) and '%s' (%s); the table mixes them\n",
+      fprintf(stderr, "merge: warning: %s%s%s: %s '%s' (%s) and '%s' (%s); the table mixes them\n",
               what, group ? " of scene " : "", group ? g : "", col ? col : PROV_NAMES[k], a,
               pts[i].name, b, pts[j].name);
       break;
@@ -207,9 +206,11 @@ int cmd_merge(int argc, char **argv) {
   }
   /* Swept keys first (in the points' order), then the measured columns. */
   for (unsigned i = 0; i < n; i++)
-    for (unsigned k = 0; k < pts[i].swept.ncols; k++) add_column(&cols, &ncols, pts[i].swept.names[k]);
+    for (unsigned k = 0; k < pts[i].swept.ncols; k++)
+      add_column(&cols, &ncols, pts[i].swept.names[k]);
   for (unsigned i = 0; i < n; i++)
-    for (unsigned k = 0; k < pts[i].stats.ncols; k++) add_column(&cols, &ncols, pts[i].stats.names[k]);
+    for (unsigned k = 0; k < pts[i].stats.ncols; k++)
+      add_column(&cols, &ncols, pts[i].stats.names[k]);
   /* Provenance last: a stats.csv column of the same name (none today) would
    * keep its place and its value. */
   const unsigned nmeasured = ncols;

@@ -242,7 +242,6 @@ static bool all_powers_of_two(const double *v, unsigned n) {
   return true;
 }
 
-
 struct row {
   unsigned r;
   double x; /* the value, or for bars the group's index */
@@ -356,10 +355,11 @@ static void y_titles(struct ycols *y) {
 /* Columns that name the machine and the workload: what a caption says when
  * they do not vary over the plotted rows, with the keys a sweep varied (in
  * its point names) and the --where keys. */
-static const char *const CAPTION_KEYS[] = {
-    "scene",   "policy",          "rays",    "width",    "height",       "fidelity",
-    "cores",   "threads_per_core", "rays_per_thread", "l1.size", "l2.size", "l2.ways",
-    "clock_ghz"};
+static const char *const CAPTION_KEYS[] = {"scene",    "policy",           "rays",
+                                           "width",    "height",           "fidelity",
+                                           "cores",    "threads_per_core", "rays_per_thread",
+                                           "l1.size",  "l2.size",          "l2.ways",
+                                           "clock_ghz"};
 
 static bool in_point_name(const struct csv_table *t, int pc, unsigned r, const char *key) {
   if (pc < 0) return false;
@@ -394,23 +394,27 @@ static void caption(const struct csv_table *t, const unsigned *kept, unsigned nk
     if (!want) continue;
     const char *v0 = csv_cell(t, kept[0], c);
     bool constant = v0[0] != '\0';
-    for (unsigned i = 1; i < nkept && constant; i++) constant = same_value(csv_cell(t, kept[i], c), v0);
+    for (unsigned i = 1; i < nkept && constant; i++)
+      constant = same_value(csv_cell(t, kept[i], c), v0);
     if (!constant) continue;
     char item[512];
     if ((int)c == hc && wc >= 0 && !drawn[wc]) {
       /* Said with the width, as "256x256 pixels", when both are fixed. */
       bool wfixed = true;
       const char *w0 = csv_cell(t, kept[0], (unsigned)wc);
-      for (unsigned i = 1; i < nkept && wfixed; i++) wfixed = same_value(csv_cell(t, kept[i], (unsigned)wc), w0);
+      for (unsigned i = 1; i < nkept && wfixed; i++)
+        wfixed = same_value(csv_cell(t, kept[i], (unsigned)wc), w0);
       if (wfixed && w0[0]) continue;
     }
     if ((int)c == wc && hc >= 0 && !drawn[hc]) {
       const char *h0 = csv_cell(t, kept[0], (unsigned)hc);
       bool hfixed = h0[0] != '\0';
-      for (unsigned i = 1; i < nkept && hfixed; i++) hfixed = same_value(csv_cell(t, kept[i], (unsigned)hc), h0);
+      for (unsigned i = 1; i < nkept && hfixed; i++)
+        hfixed = same_value(csv_cell(t, kept[i], (unsigned)hc), h0);
       if (hfixed) {
         snprintf(item, sizeof item, "%sx%s pixels", v0, h0);
-        len += (size_t)snprintf(out + len, len < cap ? cap - len : 0, "%s%s", len ? "; " : "", item);
+        len +=
+            (size_t)snprintf(out + len, len < cap ? cap - len : 0, "%s%s", len ? "; " : "", item);
         continue;
       }
     }
@@ -544,7 +548,10 @@ int cmd_plot(int argc, char **argv) {
   if (stack) bars = true;
   if (bars && (logx || logy || mk.n))
     return app_usage_error("plot", "%s: not with --%s (bars have no numeric x, and start at 0)",
-                           logx ? "--logx" : logy ? "--logy" : "--mark-x", stack ? "stack" : "bars");
+                           logx   ? "--logx"
+                           : logy ? "--logy"
+                                  : "--mark-x",
+                           stack ? "stack" : "bars");
   if (points && bars)
     return app_usage_error("plot", "--points: not with --%s (a scatter needs a numeric x)",
                            stack ? "stack" : "bars");
@@ -667,7 +674,11 @@ int cmd_plot(int argc, char **argv) {
   }
   if (bars && (logx || logy || mk.n || points)) {
     err_set(&e, t.file, 0, 0, "--x %s holds text: bars have no numeric x and start at 0 (got %s)",
-            xk, logx ? "--logx" : logy ? "--logy" : mk.n ? "--mark-x" : "--points");
+            xk,
+            logx   ? "--logx"
+            : logy ? "--logy"
+            : mk.n ? "--mark-x"
+                   : "--points");
     goto fail;
   }
   distinct(&t, lc, kept, nkept, PLOT_LINES_MAX, &lines);
@@ -715,9 +726,9 @@ int cmd_plot(int argc, char **argv) {
       if (!csv_number(s, dst)) {
         double ignored;
         enum scalar_why why = scalar_f64(s, &ignored);
-        err_set(&e, t.file, t.lines[k], t.cols[k],
-                "%s %s: not a number%s%s (got '%s'); %s", a == ny ? "--x" : "--y", t.names[c],
-                why == SCALAR_SYNTAX ? "" : ": ", scalar_why_text(why), s,
+        err_set(&e, t.file, t.lines[k], t.cols[k], "%s %s: not a number%s%s (got '%s'); %s",
+                a == ny ? "--x" : "--y", t.names[c], why == SCALAR_SYNTAX ? "" : ": ",
+                scalar_why_text(why), s,
                 a == ny ? "--x needs a numeric column for lines (--bars draws its values as "
                           "groups)"
                         : "--y needs numeric columns (use a text column for --lines or --panels)");
@@ -730,8 +741,10 @@ int cmd_plot(int argc, char **argv) {
         goto fail;
       }
       if (stacked && a < ny && *dst < 0) {
-        err_set(&e, t.file, t.lines[k], t.cols[k], "--y %s: a stacked value must not be "
-                "negative (got %s)", t.names[c], s);
+        err_set(&e, t.file, t.lines[k], t.cols[k],
+                "--y %s: a stacked value must not be "
+                "negative (got %s)",
+                t.names[c], s);
         goto fail;
       }
     }
@@ -749,8 +762,8 @@ int cmd_plot(int argc, char **argv) {
     err_set(&e, t.file, t.lines[(size_t)b->r * t.ncols], 0,
             "rows at lines %d and %d fall on the same %s at %s = %s but differ in %s: fix "
             "it with --where KEY=VALUE, or show it with --lines or --panels",
-            t.lines[(size_t)a->r * t.ncols], t.lines[(size_t)b->r * t.ncols],
-            bars ? "bar" : "line", xk, csv_cell(&t, b->r, (unsigned)xc), keys);
+            t.lines[(size_t)a->r * t.ncols], t.lines[(size_t)b->r * t.ncols], bars ? "bar" : "line",
+            xk, csv_cell(&t, b->r, (unsigned)xc), keys);
     goto fail;
   }
 
@@ -810,7 +823,7 @@ int cmd_plot(int argc, char **argv) {
    * --y column; stacked, the colours are the --y columns. */
   const unsigned nside = bars ? (lc >= 0 ? lines.n : stacked ? 1 : ny) : 1;
   unsigned nleg = 0;
-  char (*leg)[512] = xcalloc(PLOT_LINES_MAX + PLOT_Y_MAX, sizeof *leg);
+  char(*leg)[512] = xcalloc(PLOT_LINES_MAX + PLOT_Y_MAX, sizeof *leg);
   if (stacked) {
     for (unsigned k = 0; k < ny; k++) snprintf(leg[nleg++], sizeof leg[0], "%s", ys->title[k]);
   } else if (lc >= 0) {
@@ -837,7 +850,7 @@ int cmd_plot(int argc, char **argv) {
    * which the labels turn), and panels too wide to sit side by side go one
    * under another. */
   size_t ticklen = 0, grouplen = 0;
-  char (*blab)[256] = xcalloc(lines.n ? lines.n : 1, sizeof *blab);
+  char(*blab)[256] = xcalloc(lines.n ? lines.n : 1, sizeof *blab);
   const bool twolevel = bars && stacked && nside > 1;
   for (unsigned g = 0; bars && g < groups.n; g++) {
     char v[256];
@@ -851,7 +864,8 @@ int cmd_plot(int argc, char **argv) {
   unsigned pw = PX_PANEL_W;
   if (bars) {
     double group = grouplen * PX_CHAR + 16;
-    if (twolevel && nside * (ticklen * PX_CHAR + 10) > group) group = nside * (ticklen * PX_CHAR + 10);
+    if (twolevel && nside * (ticklen * PX_CHAR + 10) > group)
+      group = nside * (ticklen * PX_CHAR + 10);
     double want = group * groups.n + PX_BOX_LEFT + PX_BOX_RIGHT;
     if (want > pw) pw = want > PX_PANEL_W_MAX ? PX_PANEL_W_MAX : (unsigned)want;
   }
@@ -902,20 +916,24 @@ int cmd_plot(int argc, char **argv) {
   fputs("set xlabel ", gp);
   gp_str(gp, label);
   fputc('\n', gp);
-  if (yunit[0] && strcmp(yunit, ys->pattern)) snprintf(label, sizeof label, "%s (%s)", ys->pattern, yunit);
+  if (yunit[0] && strcmp(yunit, ys->pattern))
+    snprintf(label, sizeof label, "%s (%s)", ys->pattern, yunit);
   else snprintf(label, sizeof label, "%s", ys->pattern);
   if (twolevel) fputs("set xlabel offset 0,-1.2\n", gp);
-  if (logx) fprintf(gp, "set logscale x %d\n", xa.lo > 0 && all_powers_of_two(xa.ticks, xa.nticks) ? 2 : 10);
+  if (logx)
+    fprintf(gp, "set logscale x %d\n",
+            xa.lo > 0 && all_powers_of_two(xa.ticks, xa.nticks) ? 2 : 10);
   if (logy) fprintf(gp, "set logscale y %d\n", ybase);
   for (unsigned m = 0; m < mk.n; m++)
-    fprintf(gp, "set arrow from %.17g, graph 0 to %.17g, graph 1 nohead dt 2 lw 1.5 lc rgb 'gray30'\n",
+    fprintf(gp,
+            "set arrow from %.17g, graph 0 to %.17g, graph 1 nohead dt 2 lw 1.5 lc rgb 'gray30'\n",
             mk.v[m], mk.v[m]);
   unsigned at = 0;
   for (unsigned p = 0; p < panels.n; p++) {
     const unsigned col = p % cols, prw = p / cols;
     const double left = col * pw, top = PX_TITLE + legh + prw * PX_PANEL_H;
-    fprintf(gp, "set lmargin at screen %.6f\nset rmargin at screen %.6f\n", (left + PX_BOX_LEFT) / W,
-            (left + pw - PX_BOX_RIGHT) / W);
+    fprintf(gp, "set lmargin at screen %.6f\nset rmargin at screen %.6f\n",
+            (left + PX_BOX_LEFT) / W, (left + pw - PX_BOX_RIGHT) / W);
     fprintf(gp, "set tmargin at screen %.6f\nset bmargin at screen %.6f\n",
             1 - (top + PX_BOX_TOP) / H, 1 - (top + PX_PANEL_H - boxbottom) / H);
     char pt[512] = "";
@@ -968,8 +986,10 @@ int cmd_plot(int argc, char **argv) {
       const unsigned ncolour = stacked ? ny : nside;
       fputs("plot ", gp);
       for (unsigned c = 0; c < ncolour; c++)
-        fprintf(gp, "%s'-' using 1:2:3:4:5:6 with boxxyerror lc %u fs solid 0.85 border lc rgb "
-                "'gray20' notitle", c ? ", " : "", c + 1);
+        fprintf(gp,
+                "%s'-' using 1:2:3:4:5:6 with boxxyerror lc %u fs solid 0.85 border lc rgb "
+                "'gray20' notitle",
+                c ? ", " : "", c + 1);
       fputc('\n', gp);
       for (unsigned c = 0; c < ncolour; c++) {
         for (unsigned i = at; i < end; i++) {
@@ -1006,7 +1026,8 @@ int cmd_plot(int argc, char **argv) {
       for (unsigned i = at, first = at; i < end; i++) {
         if (i + 1 < end && rows[i + 1].line == rows[i].line) continue;
         for (unsigned k = 0; k < ny; k++) {
-          for (unsigned j = first; j <= i; j++) fprintf(gp, "%.17g %.17g\n", rows[j].x, rows[j].y[k]);
+          for (unsigned j = first; j <= i; j++)
+            fprintf(gp, "%.17g %.17g\n", rows[j].x, rows[j].y[k]);
           fputs("e\n", gp);
         }
         first = i + 1;
@@ -1018,7 +1039,8 @@ int cmd_plot(int argc, char **argv) {
   fputs("unset logscale\nunset arrow\nunset label\nunset title\nunset xlabel\nunset ylabel\n"
         "unset grid\nunset border\nunset tics\nset origin 0,0\nset size 1,1\n"
         "set lmargin at screen 0\nset rmargin at screen 1\nset tmargin at screen 1\n"
-        "set bmargin at screen 0\nset xrange [0:1]\nset yrange [0:1]\n", gp);
+        "set bmargin at screen 0\nset xrange [0:1]\nset yrange [0:1]\n",
+        gp);
   char title[2200];
   snprintf(title, sizeof title, "%s %s %s", ys->pattern, bars ? "by" : "against", xk);
   fputs("set label ", gp);
@@ -1032,14 +1054,18 @@ int cmd_plot(int argc, char **argv) {
     o += (unsigned)strlen(caplines + o) + 1;
   }
   if (nleg) {
-    fprintf(gp, "set key at screen 0.5, screen %.6f center top horizontal Left reverse maxrows %u "
-            "samplen 3 spacing 1.1\n", 1 - (PX_TITLE - 4.0) / H, legrows);
+    fprintf(gp,
+            "set key at screen 0.5, screen %.6f center top horizontal Left reverse maxrows %u "
+            "samplen 3 spacing 1.1\n",
+            1 - (PX_TITLE - 4.0) / H, legrows);
     fputs("plot ", gp);
     for (unsigned i = 0; i < nleg; i++) {
-      if (bars) fprintf(gp, "%sNaN with boxxyerror lc %u fs solid 0.85 border lc rgb 'gray20' title ",
-                        i ? ", " : "", i + 1);
-      else fprintf(gp, "%sNaN with %s lc %u pt %u title ", i ? ", " : "",
-                   points ? "points ps 1.3" : "linespoints lw 2", i + 1, i % 13 + 1);
+      if (bars)
+        fprintf(gp, "%sNaN with boxxyerror lc %u fs solid 0.85 border lc rgb 'gray20' title ",
+                i ? ", " : "", i + 1);
+      else
+        fprintf(gp, "%sNaN with %s lc %u pt %u title ", i ? ", " : "",
+                points ? "points ps 1.3" : "linespoints lw 2", i + 1, i % 13 + 1);
       gp_str(gp, leg[i]);
     }
     fputc('\n', gp);

@@ -75,9 +75,7 @@ int cmd_render(int argc, char **argv) {
   const struct opts_spec spec[] = {
       OPTS_STR("output", 'o', &out),
       APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy, policy_expect),
-      OPTS_FLAG("half", 0, &half),
-      OPTS_STR("preview", 0, &preview),
-      OPTS_END};
+      OPTS_FLAG("half", 0, &half), OPTS_STR("preview", 0, &preview), OPTS_END};
   struct opts_args args;
   int rc = opts_parse("render", HELP, spec, argc, argv, &args);
   if (rc != OPTS_GO) return rc;
@@ -106,11 +104,12 @@ int cmd_render(int argc, char **argv) {
   fb_to_image(fb, &im);
   /* Bytes of the image, for the memory line of the summary. */
   const double image_bytes = (double)W * H *
-                             (3 * sizeof *fb->acc + sizeof *fb->cost_nodes +
-                              sizeof *fb->cost_tris + im.channel_count * sizeof(float));
+                             (3 * sizeof *fb->acc + sizeof *fb->cost_nodes + sizeof *fb->cost_tris +
+                              im.channel_count * sizeof(float));
   struct err e;
   memset(&e, 0, sizeof e);
-  bool ok = image_write_exr(&im, out, half, &e) && (!preview || preview_write_png(&im, preview, &e));
+  bool ok =
+      image_write_exr(&im, out, half, &e) && (!preview || preview_write_png(&im, preview, &e));
   image_fini(&im);
   const uint64_t seed_used = ar.sc.seed;
   app_render_fini(&ar);
@@ -140,7 +139,8 @@ int cmd_render(int argc, char **argv) {
   const double mb = 1048576.0;
   double scene_mb = (double)w.scene.tri_count * sizeof *w.scene.tris / mb;
   double tree_mb = ((double)w.kd.node_count * sizeof *w.kd.nodes +
-                    (double)w.kd.prim_ref_count * sizeof *w.kd.prims) / mb;
+                    (double)w.kd.prim_ref_count * sizeof *w.kd.prims) /
+                   mb;
   double rays_mb = (double)st.ray_slots_max * sizeof(struct ray) / mb;
   double data_mb = scene_mb + tree_mb + rays_mb;
   double image_mb = image_bytes / mb;

@@ -106,7 +106,8 @@ int cmd_run(int argc, char **argv) {
   bool help_stats = false, help_stats_md = false;
   struct outfile trace = {0};
   struct outdir od = {0};
-  struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v), 0}; /* at most one an argument */
+  struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v),
+                          0}; /* at most one an argument */
   char policy_expect[160];
   app_policy_expect(policy_expect, sizeof policy_expect, "");
   const struct opts_spec spec[] = {
@@ -156,12 +157,12 @@ int cmd_run(int argc, char **argv) {
   }
   if (cost_preview && (mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC || mc.p.sample_fraction < 1)) {
     app_usage_error("run", "--cost-preview: per-pixel costs are counted by whole timed runs only "
-                    "(not at fidelity analytic, not with sample.fraction below 1)");
+                           "(not at fidelity analytic, not with sample.fraction below 1)");
     goto done;
   }
   if (trace_path && mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC) {
     app_usage_error("run", "--dram-trace: fidelity analytic makes no DRAM requests (choose a "
-                    "timed rung: --set fidelity=fixed, channel or banked)");
+                           "timed rung: --set fidelity=fixed, channel or banked)");
     goto done;
   }
   /* Everything that can refuse the run is checked before OUTDIR is touched:
@@ -176,8 +177,8 @@ int cmd_run(int argc, char **argv) {
   char whybuf[512];
   const char *key = "sample.fraction";
   const uint32_t contexts = mc.p.cores * mc.p.threads_per_core * mc.p.rays_per_thread;
-  const char *why = sample_problem(&mc.p, policy, app_work_items(policy, W, H), contexts, whybuf,
-                                   sizeof whybuf);
+  const char *why =
+      sample_problem(&mc.p, policy, app_work_items(policy, W, H), contexts, whybuf, sizeof whybuf);
   if (!why && mc.p.sample_fraction < 1 && trace_path)
     why = "sample.fraction: --dram-trace records a whole run; a sampled run skips most of the work";
   /* Every ray context may hold a coroutine stack at once (the timed rungs). */
@@ -216,8 +217,7 @@ int cmd_run(int argc, char **argv) {
   struct app_timed t = {0};
   struct app_analytic a;
   if (analytic)
-    app_analytic_run(&a, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p,
-                     &mc.work);
+    app_analytic_run(&a, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, &mc.work);
   else
     app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, &mc.work,
                   isatty(2), trace.f, true);

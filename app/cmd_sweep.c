@@ -349,8 +349,8 @@ static int claim(const struct job *j, bool *busy) {
     if (fstat(fd, &a) == 0 && stat(path, &b) == 0 && a.st_ino == b.st_ino && a.st_dev == b.st_dev) {
       char host[256] = "?", text[512];
       gethostname(host, sizeof host - 1);
-      int n = snprintf(text, sizeof text, "%s %ld %lld\n", host, (long)getpid(),
-                       (long long)time(NULL));
+      int n =
+          snprintf(text, sizeof text, "%s %ld %lld\n", host, (long)getpid(), (long long)time(NULL));
       if (ftruncate(fd, 0) != 0 || write(fd, text, (size_t)n) != n) {
         /* the lock holds all the same; --status then shows no holder */
       }
@@ -461,7 +461,8 @@ struct tally {
 static void progress(const struct tally *t) {
   char eta[32] = "?";
   double el = app_now() - t->t0;
-  if (t->cost_done > 0) format_duration(el * (t->cost_total - t->cost_done) / t->cost_done, eta, sizeof eta);
+  if (t->cost_done > 0)
+    format_duration(el * (t->cost_total - t->cost_done) / t->cost_done, eta, sizeof eta);
   fprintf(stderr, "\r\033[Ksweep: %u/%u done, %u failed, %u running, ETA %s", t->done, t->total,
           t->failed, t->running, eta);
   fflush(stderr);
@@ -580,10 +581,8 @@ static int run_jobs(const char *bin, struct job **todo, unsigned n, unsigned job
         kill(run[k].pid, SIGKILL);
         got = waitpid(run[k].pid, &status, 0);
       }
-      if (exists(run[k].j->dir, "stats.json"))
-        settle(run[k].j, status, &run[k].err);
-      else
-        outfile_abort(&run[k].err);
+      if (exists(run[k].j->dir, "stats.json")) settle(run[k].j, status, &run[k].err);
+      else outfile_abort(&run[k].err);
       release(run[k].j, run[k].lock);
     }
   }
@@ -661,7 +660,8 @@ static void calibrate(struct job *all, unsigned n, double *rate, double *peak_mb
     fclose(f);
     text[got] = '\0';
     double x;
-    if (csv_json_member(text, "wall_s", v, sizeof v) && csv_number(v, &x) && x / all[i].p->cost > *rate)
+    if (csv_json_member(text, "wall_s", v, sizeof v) && csv_number(v, &x) &&
+        x / all[i].p->cost > *rate)
       *rate = x / all[i].p->cost;
     if (csv_json_member(text, "peak_rss_mb", v, sizeof v) && csv_number(v, &x) && x > *peak_mb)
       *peak_mb = x;
@@ -679,8 +679,8 @@ static void calibrate(struct job *all, unsigned n, double *rate, double *peak_mb
  * 1, ...) so the tasks' expected times come out alike; the time request is
  * twice the longest task's (at the complete points' measured rate when there
  * are some), the memory request the largest point's estimate or twice the
- * complete points' measured peak, whichever is larger. Slurm keeps its own copy of a script at submission, so
- * a script emitted later cannot change an array already queued. */
+ * complete points' measured peak, whichever is larger. Slurm keeps its own copy of a script at
+ * submission, so a script emitted later cannot change an array already queued. */
 static void emit_slurm(const struct line_base *b, struct job **todo, unsigned n, unsigned per,
                        struct job *all, unsigned npoints, const char *sweep_file) {
   const unsigned tasks = (n + per - 1) / per;
@@ -729,8 +729,10 @@ static void emit_slurm(const struct line_base *b, struct job **todo, unsigned n,
          " run it as a Slurm array, sbatch $0)\" >&2; exit 2 ;;\nesac\n",
          tasks);
   if (tasks > 1000)
-    fprintf(stderr, "rtsim sweep: warning: %u array tasks; clusters often cap arrays at 1000 "
-                    "(MaxArraySize): raise N\n", tasks);
+    fprintf(stderr,
+            "rtsim sweep: warning: %u array tasks; clusters often cap arrays at 1000 "
+            "(MaxArraySize): raise N\n",
+            tasks);
   free(by_task);
   free(count);
   free(secs);
@@ -743,9 +745,9 @@ static bool has_outputs(const char *dir) {
   bool any = false;
   struct dirent *de;
   while (!any && (de = readdir(d)))
-    any = strcmp(de->d_name, ".") && strcmp(de->d_name, "..") &&
-          strcmp(de->d_name, "command.sh") && strcmp(de->d_name, "point.csv") &&
-          strcmp(de->d_name, ".running") && strcmp(de->d_name, "error.txt");
+    any = strcmp(de->d_name, ".") && strcmp(de->d_name, "..") && strcmp(de->d_name, "command.sh") &&
+          strcmp(de->d_name, "point.csv") && strcmp(de->d_name, ".running") &&
+          strcmp(de->d_name, "error.txt");
   closedir(d);
   return any;
 }
@@ -810,7 +812,11 @@ int cmd_sweep(int argc, char **argv) {
       OPTS_U64("jobs", 'j', &jobs, 1, 4096),
       OPTS_U64("max-points", 0, &max_points, 1, SWEEP_POINTS_MAX),
       OPTS_FLAG("emit-jobs", 0, &emit),
-      {.name = "emit-slurm", .kind = OPTS_KIND_U64, .dst = &per_task, .lo = 1, .hi = 100000,
+      {.name = "emit-slurm",
+       .kind = OPTS_KIND_U64,
+       .dst = &per_task,
+       .lo = 1,
+       .hi = 100000,
        .given = &slurm},
       OPTS_FLAG("status", 0, &show),
       OPTS_PARSE("point", 0, &names, add_name, "a point's name (a directory name, no '/')"),

@@ -77,11 +77,11 @@ static bool parse_config(const char *s, void *dst) {
 #define CONFIG_EXPECT "primary, shadow, specular, diffuse or a comma-separated list of ray types"
 
 /* The options traffic and trace share besides their own. */
-#define TRAFFIC_OPTS(width, height, mask, pp, threads)                                                \
-  OPTS_U64("width", 0, width, 1, 16384), OPTS_U64("height", 0, height, 1, 16384),           \
-      OPTS_PARSE("rays", 0, mask, parse_config, CONFIG_EXPECT),                             \
-      OPTS_U64("dyn-batch", 0, &(pp)->dyn_batch_rays, 0, UINT32_MAX),                       \
-      OPTS_U64("dyn-ray-buffer", 0, &(pp)->dyn_ray_buffer_bytes, 0, 1ull << 32),            \
+#define TRAFFIC_OPTS(width, height, mask, pp, threads)                                             \
+  OPTS_U64("width", 0, width, 1, 16384), OPTS_U64("height", 0, height, 1, 16384),                  \
+      OPTS_PARSE("rays", 0, mask, parse_config, CONFIG_EXPECT),                                    \
+      OPTS_U64("dyn-batch", 0, &(pp)->dyn_batch_rays, 0, UINT32_MAX),                              \
+      OPTS_U64("dyn-ray-buffer", 0, &(pp)->dyn_ray_buffer_bytes, 0, 1ull << 32),                   \
       OPTS_U64("threads", 0, threads, 1, 2)
 
 /* One functional run of policy k; analyser results, and the potentially
@@ -107,7 +107,8 @@ static void run_functional(const struct app_world *w, enum policy_kind k, uint32
   lru_stack_finish(mem_functional_stack(b));
   lru_stack_get_results(mem_functional_stack(b), &out->res);
   out->pot_vis_tris = 0;
-  for (uint64_t i = 0; i < words; i++) out->pot_vis_tris += (uint64_t)__builtin_popcountll(tested[i]);
+  for (uint64_t i = 0; i < words; i++)
+    out->pot_vis_tris += (uint64_t)__builtin_popcountll(tested[i]);
   free(tested);
   app_render_fini(&ar);
   mem_functional_destroy(b);
@@ -166,15 +167,15 @@ int cmd_traffic(int argc, char **argv) {
   app_policy_expect(policy_expect, sizeof policy_expect, ", all");
   const struct opts_spec spec[] = {
       OPTS_STR("output", 'o', &out), TRAFFIC_OPTS(&width, &height, &mask, &pp, &threads),
-      OPTS_PARSE("policy", 0, want, parse_policies, policy_expect),
-      OPTS_END};
+      OPTS_PARSE("policy", 0, want, parse_policies, policy_expect), OPTS_END};
   struct opts_args args;
   int rc = opts_parse("traffic", TRAFFIC_HELP, spec, argc, argv, &args);
   if (rc != OPTS_GO) return rc;
   const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;
   if (!out) return app_usage_error("traffic", "missing -o TABLE.csv");
-  if (!mask) return app_usage_error("traffic", "missing --rays (primary, shadow, specular or diffuse)");
+  if (!mask)
+    return app_usage_error("traffic", "missing --rays (primary, shadow, specular or diffuse)");
 
   struct app_world w;
   if (!app_world_load(&w, scene_path)) return 2;
@@ -183,8 +184,9 @@ int cmd_traffic(int argc, char **argv) {
   struct lru_stack_params lp = lru_stack_params_default();
   const unsigned nsizes = lp.lg2_max - lp.lg2_min + 1;
   struct row *rows = xcalloc((uint64_t)POLICY_COUNT * nsizes, sizeof *rows);
-  unsigned nrows = 0, done = 0, runs = (want[POLICY_RECURSIVE] ? 1 : 0) + (want[POLICY_PACKET] ? 1 : 0) +
-                                      (want[POLICY_DYNAMIC] ? nsizes : 0) + (want[POLICY_TREELET] ? nsizes : 0);
+  unsigned nrows = 0, done = 0,
+           runs = (want[POLICY_RECURSIVE] ? 1 : 0) + (want[POLICY_PACKET] ? 1 : 0) +
+                  (want[POLICY_DYNAMIC] ? nsizes : 0) + (want[POLICY_TREELET] ? nsizes : 0);
   struct fn_run fr;
   const double t0 = app_now();
   /* The queue points' subtree counts depend on the tree alone: counted once
@@ -198,7 +200,8 @@ int cmd_traffic(int argc, char **argv) {
     if (!want[p]) continue;
     if (!policy_queues((enum policy_kind)p)) {
       progress_line(policy_name((enum policy_kind)p), done, runs);
-      run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &lp, NULL, threads, subtree_tris, &fr);
+      run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &lp, NULL, threads, subtree_tris,
+                     &fr);
       done++;
       for (unsigned k = 0; k < nsizes; k++)
         rows[nrows++] = (struct row){(enum policy_kind)p, fr.res.size[k], fr.pot_vis_tris};
@@ -214,7 +217,8 @@ int cmd_traffic(int argc, char **argv) {
         struct lru_stack_params one = lp;
         one.lg2_min = one.lg2_max = lp.lg2_min + k;
         pp.cache_bytes = 1ull << (lp.lg2_min + k);
-        run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &one, NULL, threads, subtree_tris, &fr);
+        run_functional(&w, (enum policy_kind)p, mask, W, H, &pp, &one, NULL, threads, subtree_tris,
+                       &fr);
         done++;
         rows[nrows++] = (struct row){(enum policy_kind)p, fr.res.size[0], fr.pot_vis_tris};
       }
@@ -241,8 +245,9 @@ int cmd_traffic(int argc, char **argv) {
              "rel_geometry,rel_total");
   for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
     fprintf(f, ",fetch_%s", trace_class_names[cl]);
-  fprintf(f, ",writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes,"
-             "kd_splits\n");
+  fprintf(
+      f, ",writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes,"
+         "kd_splits\n");
   const unsigned lg2 = lp.lg2_line;
   struct trace_layout layout;
   trace_layout_default(&layout);
@@ -268,10 +273,10 @@ int cmd_traffic(int argc, char **argv) {
             bg > 0 ? g / bg : 0.0, bt > 0 ? t / bt : 0.0);
     for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
       fprintf(f, ",%llu", (unsigned long long)fetched(&r->s, cl, lg2));
-    fprintf(f, ",%llu,%llu,%llu,%llu,%llu,%llu,%s\n", (unsigned long long)wb, (unsigned long long)acc,
-            (unsigned long long)r->pot_vis_tris, (unsigned long long)pv_bytes,
-            (unsigned long long)pp.dyn_batch_rays, (unsigned long long)dyn_ray_buffer,
-            w.scene.kd_clip ? "clipped" : "whole");
+    fprintf(f, ",%llu,%llu,%llu,%llu,%llu,%llu,%s\n", (unsigned long long)wb,
+            (unsigned long long)acc, (unsigned long long)r->pot_vis_tris,
+            (unsigned long long)pv_bytes, (unsigned long long)pp.dyn_batch_rays,
+            (unsigned long long)dyn_ray_buffer, w.scene.kd_clip ? "clipped" : "whole");
   }
   if (!outfile_commit(&o, &e)) {
     free(rows);
@@ -357,9 +362,14 @@ int cmd_trace(int argc, char **argv) {
   char policy_expect[160];
   app_policy_expect(policy_expect, sizeof policy_expect, "");
   const struct opts_spec spec[] = {
-      OPTS_STR("din", 0, &din_path), TRAFFIC_OPTS(&width, &height, &mask, &pp, &threads),
-      {.name = "policy", .kind = OPTS_KIND_PARSE, .dst = &pk, .parse = app_parse_policy,
-       .expect = policy_expect, .given = &have_policy},
+      OPTS_STR("din", 0, &din_path),
+      TRAFFIC_OPTS(&width, &height, &mask, &pp, &threads),
+      {.name = "policy",
+       .kind = OPTS_KIND_PARSE,
+       .dst = &pk,
+       .parse = app_parse_policy,
+       .expect = policy_expect,
+       .given = &have_policy},
       OPTS_PARSE("cache", 0, &cache, parse_cache, "a power of two from 1024 to 4194304"),
       OPTS_END};
   struct opts_args args;
@@ -373,7 +383,8 @@ int cmd_trace(int argc, char **argv) {
     policy_list(list, sizeof list, " or ");
     return app_usage_error("trace", "missing --policy (%s)", list);
   }
-  if (!mask) return app_usage_error("trace", "missing --rays (primary, shadow, specular or diffuse)");
+  if (!mask)
+    return app_usage_error("trace", "missing --rays (primary, shadow, specular or diffuse)");
   struct app_world w;
   if (!app_world_load(&w, scene_path)) return 2;
   uint32_t W = width ? (uint32_t)width : w.scene.width;

@@ -143,8 +143,7 @@ bool csv_read(struct csv_table *t, const char *path, struct err *e) {
     if (!all.cells[i][0]) ok = err_set(e, path, all.lines[i], all.cols[i], "empty column name");
     for (unsigned j = 0; ok && j < i; j++)
       if (!strcmp(all.cells[i], all.cells[j]))
-        ok = err_set(e, path, all.lines[i], all.cols[i], "column '%s' appears twice",
-                     all.cells[i]);
+        ok = err_set(e, path, all.lines[i], all.cols[i], "column '%s' appears twice", all.cells[i]);
   }
   if (!ok) {
     for (unsigned i = 0; i < all.n; i++) free(all.cells[i]);

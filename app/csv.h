@@ -11,7 +11,7 @@ struct err;
 
 struct csv_table {
   char file[512];
-  char **names;      /* ncols column names (owned) */
+  char **names; /* ncols column names (owned) */
   unsigned ncols;
   char **cells;      /* nrows x ncols, row-major (owned); "" for an empty cell */
   int *lines, *cols; /* position of each cell (nrows x ncols) */

@@ -16,7 +16,8 @@ static const struct command {
      "  render SCENE.yaml -o IMAGE.exr   ray trace a scene to an OpenEXR image\n"},
     {"export", cmd_export,
      "  export SCENE.yaml -o SCENE.ply   write the scene's triangles (face i = primitive i)\n"},
-    {"hits", cmd_hits, "  hits SCENE.yaml                  nearest hits for rays read as CSV on stdin\n"},
+    {"hits", cmd_hits,
+     "  hits SCENE.yaml                  nearest hits for rays read as CSV on stdin\n"},
     {"traffic", cmd_traffic,
      "  traffic SCENE.yaml --rays R -o T.csv  DRAM-to-L2 traffic of the scheduling\n"
      "                                   policies for every cache size, 1 KB to 4 MB\n"},

@@ -118,10 +118,8 @@ int opts_parse(const char *cmd, const char *help, const struct opts_spec *spec, 
 
 const char *opts_one(const struct opts_args *a, const char *what, const char *noun) {
   if (a->n == 1) return a->v[0];
-  if (a->n == 0)
-    app_usage_error(a->cmd, "missing %s", what);
-  else
-    app_usage_error(a->cmd, "expected one %s, got %d", noun, a->n);
+  if (a->n == 0) app_usage_error(a->cmd, "missing %s", what);
+  else app_usage_error(a->cmd, "expected one %s, got %d", noun, a->n);
   return NULL;
 }
 

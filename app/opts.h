@@ -33,17 +33,22 @@ struct opts_spec {
 
 /* Table entries. dst's type is checked: OPTS_FLAG takes a bool *, OPTS_STR a
  * const char **, OPTS_U64 a uint64_t *. */
-#define OPTS_FLAG(n_, l_, d_)                                                                \
-  {.name = (n_), .letter = (l_), .kind = OPTS_KIND_FLAG, .dst = OPTS_DST_(bool, d_)}
-#define OPTS_STR(n_, l_, d_)                                                                 \
-  {.name = (n_), .letter = (l_), .kind = OPTS_KIND_STR, .dst = OPTS_DST_(const char *, d_)}
-#define OPTS_U64(n_, l_, d_, lo_, hi_)                                                       \
-  {.name = (n_), .letter = (l_), .kind = OPTS_KIND_U64, .dst = OPTS_DST_(uint64_t, d_),     \
-   .lo = (lo_), .hi = (hi_)}
-#define OPTS_PARSE(n_, l_, d_, fn_, expect_)                                                 \
-  {.name = (n_), .letter = (l_), .kind = OPTS_KIND_PARSE, .dst = (d_), .parse = (fn_),      \
-   .expect = (expect_)}
-#define OPTS_END {.name = NULL}
+#define OPTS_FLAG(n_, l_, d_)                                                                      \
+  { .name = (n_), .letter = (l_), .kind = OPTS_KIND_FLAG, .dst = OPTS_DST_(bool, d_) }
+#define OPTS_STR(n_, l_, d_)                                                                       \
+  { .name = (n_), .letter = (l_), .kind = OPTS_KIND_STR, .dst = OPTS_DST_(const char *, d_) }
+#define OPTS_U64(n_, l_, d_, lo_, hi_)                                                             \
+  {                                                                                                \
+    .name = (n_), .letter = (l_), .kind = OPTS_KIND_U64, .dst = OPTS_DST_(uint64_t, d_),           \
+    .lo = (lo_), .hi = (hi_)                                                                       \
+  }
+#define OPTS_PARSE(n_, l_, d_, fn_, expect_)                                                       \
+  {                                                                                                \
+    .name = (n_), .letter = (l_), .kind = OPTS_KIND_PARSE, .dst = (d_), .parse = (fn_),            \
+    .expect = (expect_)                                                                            \
+  }
+#define OPTS_END                                                                                   \
+  { .name = NULL }
 /* A pointer of the named type (a mismatch is a compile error under -Werror). */
 #define OPTS_DST_(type, d_) ((void *)(1 ? (d_) : (type *)0))
 

@@ -131,8 +131,8 @@ static void remove_stale_siblings(const char *parent, const char *base) {
   struct dirent *de;
   while ((de = readdir(dp))) {
     const char *n = de->d_name;
-    if (n[0] != '.' || strncmp(n + 1, base, bl) || (strncmp(n + 1 + bl, ".run-", 5) &&
-                                                    strncmp(n + 1 + bl, ".old-", 5)))
+    if (n[0] != '.' || strncmp(n + 1, base, bl) ||
+        (strncmp(n + 1 + bl, ".run-", 5) && strncmp(n + 1 + bl, ".old-", 5)))
       continue;
     char *end;
     long pid = strtol(n + bl + 6, &end, 10);
@@ -167,8 +167,8 @@ bool outdir_begin(struct outdir *d, const char *path, const char *const *outputs
     d->fresh = true;
     /* Armed first: a signal right after mkdir must find the sibling to remove. */
     arm(d, outputs);
-    if (mkdir(d->write, 0777) != 0 && (errno != EEXIST || !clear_dir(d->write) ||
-                                       mkdir(d->write, 0777) != 0)) {
+    if (mkdir(d->write, 0777) != 0 &&
+        (errno != EEXIST || !clear_dir(d->write) || mkdir(d->write, 0777) != 0)) {
       int code = errno;
       d->fresh = false;
       disarm();
@@ -196,8 +196,7 @@ static void restore(const struct outdir *d, const char *const *outputs) {
     struct dirent *de;
     while ((de = readdir(dp))) {
       const char *n = de->d_name;
-      if (!strcmp(n, ".") || !strcmp(n, "..") || is_output(n, outputs) || is_temporary(n))
-        continue;
+      if (!strcmp(n, ".") || !strcmp(n, "..") || is_output(n, outputs) || is_temporary(n)) continue;
       char from[OUTDIR_NAME], to[OUTDIR_NAME];
       snprintf(from, sizeof from, "%s/%s", d->write, n);
       snprintf(to, sizeof to, "%s/%s", d->target, n);
@@ -270,8 +269,9 @@ bool outdir_commit(struct outdir *d, struct err *e) {
   bool ok = carry_over(d, d->outputs, e) && swap(d, e);
   if (!ok) restore(d, d->outputs);
   else if (!clear_dir(d->write))
-    fprintf(stderr, "rtsim run: warning: the previous outputs are left in %s (it holds a "
-                    "directory made meanwhile)\n",
+    fprintf(stderr,
+            "rtsim run: warning: the previous outputs are left in %s (it holds a "
+            "directory made meanwhile)\n",
             d->write);
   d->fresh = false;
   disarm();

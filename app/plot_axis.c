@@ -99,7 +99,8 @@ void plot_fmt_value(const char *cell, const char *unit, char *out, size_t cap) {
   }
   char num[64];
   plot_fmt_tick(v, unit, num, sizeof num);
-  if (!unit[0] || !strcmp(unit, "bytes") || !strcmp(unit, "fraction")) snprintf(out, cap, "%s", num);
+  if (!unit[0] || !strcmp(unit, "bytes") || !strcmp(unit, "fraction"))
+    snprintf(out, cap, "%s", num);
   else snprintf(out, cap, "%s %s", num, unit);
 }
 
@@ -113,8 +114,8 @@ static void add_tick(struct plot_axis *a, double v) {
   if (a->nticks < PLOT_TICKS_MAX) a->ticks[a->nticks++] = v;
 }
 
-void plot_axis_nice(struct plot_axis *a, double min, double max, bool log, int base,
-                    bool fraction, bool zero) {
+void plot_axis_nice(struct plot_axis *a, double min, double max, bool log, int base, bool fraction,
+                    bool zero) {
   a->log = log;
   a->nticks = 0;
   if (log) {

@@ -37,8 +37,8 @@ struct plot_axis {
  * above max; else on multiples of 1, 2, 2.5 or 5 x 10^k, about 5 intervals.
  * fraction: a unit of fraction, drawn on [0, 1] when the values fit in it;
  * zero: the range includes 0 (bars start there). */
-void plot_axis_nice(struct plot_axis *a, double min, double max, bool log, int base,
-                    bool fraction, bool zero);
+void plot_axis_nice(struct plot_axis *a, double min, double max, bool log, int base, bool fraction,
+                    bool zero);
 
 /* A range just around the values v[0..n-1] (sorted, distinct, n >= 1) with a
  * tick at each, when they are few and far enough apart to be read (a sweep's

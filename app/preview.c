@@ -47,8 +47,7 @@ bool preview_write_png(const struct image *im, const char *png, struct err *e) {
             "unset border\nunset tics\nunset key\nset xrange [-0.5:%u-0.5]\n"
             "set yrange [-0.5:%u-0.5]\n"
             "plot '%s' binary array=(%u,%u) flipy format='%%uchar%%uchar%%uchar' with rgbimage\n",
-            im->width, im->height, out.tmp, im->width, im->height, raw.tmp, im->width,
-            im->height);
+            im->width, im->height, out.tmp, im->width, im->height, raw.tmp, im->width, im->height);
     if (pclose(gp) != 0)
       ok = err_set(e, png, 0, 0, "gnuplot could not write the preview (is gnuplot-nox installed?)");
   }
@@ -75,8 +74,10 @@ bool preview_write_heat_png(const struct image *im, const char *channel, const c
   char t1[256], t2[256];
   snprintf(t1, sizeof t1, "%s", title);
   snprintf(t2, sizeof t2, "%s", subtitle);
-  for (char *q = t1; *q; q++) if (*q == '"' || *q == '\\') *q = '\'';
-  for (char *q = t2; *q; q++) if (*q == '"' || *q == '\\') *q = '\'';
+  for (char *q = t1; *q; q++)
+    if (*q == '"' || *q == '\\') *q = '\'';
+  for (char *q = t2; *q; q++)
+    if (*q == '"' || *q == '\\') *q = '\'';
   struct outfile raw, out = {0};
   if (!outfile_open(&raw, png, "the heat map", e)) return false;
   bool ok = fwrite(im->planes[ch], sizeof(float), n, raw.f) == n && fflush(raw.f) == 0;
@@ -90,17 +91,19 @@ bool preview_write_heat_png(const struct image *im, const char *channel, const c
     const uint32_t scale = big >= 512 ? 1 : 512 / big;
     /* Viridis (matplotlib's): perceptually even, readable in grey and by
      * most colour-blind readers. */
-    fprintf(gp,
-            "set terminal pngcairo size %u,%u noenhanced font ',11'\nset output '%s'\n"
-            "set title \"%s\\n%s; largest pixel %.0f%s\"\nset size ratio -1\nunset key\nunset xtics\nunset ytics\n"
-            "set border 0\nset xrange [-0.5:%u-0.5]\nset yrange [-0.5:%u-0.5]\n"
-            "set cbrange [0:%.17g]\nset cblabel '%s'\nset cbtics format '%s'\n"
-            "set palette defined (0 '#440154', 1 '#3b528b', 2 '#21908d', 3 '#5dc963', "
-            "4 '#fde725')\n"
-            "plot '%s' binary array=(%u,%u) flipy format='%%float' using ($1 > %.17g ? %.17g : $1) "
-            "with image\n",
-            im->width * scale + 260, im->height * scale + 90, out.tmp, t1, t2, max, clip, im->width,
-            im->height, top, units, top >= 1e4 ? "%.1s%c" : "%g", raw.tmp, im->width, im->height, top, top);
+    fprintf(
+        gp,
+        "set terminal pngcairo size %u,%u noenhanced font ',11'\nset output '%s'\n"
+        "set title \"%s\\n%s; largest pixel %.0f%s\"\nset size ratio -1\nunset key\nunset xtics\nunset ytics\n"
+        "set border 0\nset xrange [-0.5:%u-0.5]\nset yrange [-0.5:%u-0.5]\n"
+        "set cbrange [0:%.17g]\nset cblabel '%s'\nset cbtics format '%s'\n"
+        "set palette defined (0 '#440154', 1 '#3b528b', 2 '#21908d', 3 '#5dc963', "
+        "4 '#fde725')\n"
+        "plot '%s' binary array=(%u,%u) flipy format='%%float' using ($1 > %.17g ? %.17g : $1) "
+        "with image\n",
+        im->width * scale + 260, im->height * scale + 90, out.tmp, t1, t2, max, clip, im->width,
+        im->height, top, units, top >= 1e4 ? "%.1s%c" : "%g", raw.tmp, im->width, im->height, top,
+        top);
     if (pclose(gp) != 0)
       ok = err_set(e, png, 0, 0, "gnuplot could not draw the heat map (is gnuplot-nox installed?)");
   }

@@ -25,7 +25,7 @@
 #include "sim/stats.h"
 #include "sim/timeline.h"
 
-const char *const run_output_files[] = {"image.exr", "stats.csv", "timeline.csv",
+const char *const run_output_files[] = {"image.exr",   "stats.csv",  "timeline.csv",
                                         "traffic.png", "stats.json", NULL};
 
 static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
@@ -35,8 +35,8 @@ static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 /* Issue slots, load wait, DRAM bytes read by class (trace_class_names'
  * order), DRAM bytes written back. */
 const char *const run_output_cost_channels[] = {
-    "cost.issue_slots",          "cost.load_wait_cycles",     "cost.dram_read_bytes.geometry",
-    "cost.dram_read_bytes.node", "cost.dram_read_bytes.ray",  "cost.dram_read_bytes.queue",
+    "cost.issue_slots",           "cost.load_wait_cycles",    "cost.dram_read_bytes.geometry",
+    "cost.dram_read_bytes.node",  "cost.dram_read_bytes.ray", "cost.dram_read_bytes.queue",
     "cost.dram_read_bytes.other", "cost.dram_write_bytes",    NULL};
 #define COST_CHANNELS 8
 _Static_assert(TRACE_CLASS_COUNT == 5, "a cost channel for each data class");
@@ -118,8 +118,9 @@ static void measured_analytic(const struct run_output_report *r, struct stats_ta
   stats_u64(t, "blocking_loads", n->blocking_loads);
   stats_f64(t, "issue_slots_per_blocking_load",
             ratio((double)n->issue_slots, (double)n->blocking_loads));
-  uint64_t geo_misses = (n->fetch_bytes_by_class[TRACE_CLASS_GEOMETRY] +
-                         n->fetch_bytes_by_class[TRACE_CLASS_NODE]) / 64;
+  uint64_t geo_misses =
+      (n->fetch_bytes_by_class[TRACE_CLASS_GEOMETRY] + n->fetch_bytes_by_class[TRACE_CLASS_NODE]) /
+      64;
   stats_f64(t, "issue_slots_per_geometry_miss", ratio((double)n->issue_slots, (double)geo_misses));
   stats_u64(t, "l1_accesses", n->l1_accesses);
   stats_u64(t, "l1_hits", n->l1_hits);
@@ -139,8 +140,7 @@ static void measured_analytic(const struct run_output_report *r, struct stats_ta
   stats_u64(t, "dram_writes", n->writeback_bytes / 64);
   stats_u64(t, "dram_read_bytes", n->fetch_bytes);
   stats_u64(t, "dram_write_bytes", n->writeback_bytes);
-  stats_f64(t, "dram_bytes_per_cycle",
-            ratio((double)(n->fetch_bytes + n->writeback_bytes), cyc));
+  stats_f64(t, "dram_bytes_per_cycle", ratio((double)(n->fetch_bytes + n->writeback_bytes), cyc));
   stats_f64(t, "analytic_slots_per_blocking_load", a->slots_per_blocking);
   stats_f64(t, "analytic_blocking_miss_rate", a->blocking_miss_rate);
   stats_f64(t, "analytic_load_latency_cycles", a->load_latency_cycles);
@@ -173,30 +173,46 @@ static uint64_t run_tri_tests(const void *st, const struct stats_env *env) {
 }
 static double run_slots_per_geometry_miss(const void *st, const struct stats_env *env) {
   (void)env;
-  const struct machine_stats *s = machine_get_stats(((const struct run_output_report *)st)->machine);
+  const struct machine_stats *s =
+      machine_get_stats(((const struct run_output_report *)st)->machine);
   const uint64_t *by = s->l2.fetch_bytes_by_class;
   uint64_t geo_misses = (by[TRACE_CLASS_GEOMETRY] + by[TRACE_CLASS_NODE]) / 64;
   return ratio((double)s->issue_slots, (double)geo_misses);
 }
 
 static const struct stats_desc run_desc[] = {
-    {.name = "rays_traced", .unit = "count", .desc = "rays traced, every kind", .how = STATS_HOW_U64,
+    {.name = "rays_traced",
+     .unit = "count",
+     .desc = "rays traced, every kind",
+     .how = STATS_HOW_U64,
      .u64 = run_rays},
-    {.name = "rays_per_second", .unit = "per second", .desc = "rays traced / seconds",
-     .how = STATS_HOW_F64, .f64 = run_rays_per_second},
-    {.name = "kd_node_visits", .unit = "count", .desc = "k-d tree nodes visited", .how = STATS_HOW_U64,
+    {.name = "rays_per_second",
+     .unit = "per second",
+     .desc = "rays traced / seconds",
+     .how = STATS_HOW_F64,
+     .f64 = run_rays_per_second},
+    {.name = "kd_node_visits",
+     .unit = "count",
+     .desc = "k-d tree nodes visited",
+     .how = STATS_HOW_U64,
      .u64 = run_node_visits},
-    {.name = "triangle_tests", .unit = "count", .desc = "ray-triangle tests", .how = STATS_HOW_U64,
+    {.name = "triangle_tests",
+     .unit = "count",
+     .desc = "ray-triangle tests",
+     .how = STATS_HOW_U64,
      .u64 = run_tri_tests},
 };
 static const struct stats_desc run_misses_desc[] = {
-    {.name = "issue_slots_per_geometry_miss", .unit = "cycles",
-     .desc = "issue slots / lines of triangles or k-d nodes read from the DRAM", .how = STATS_HOW_F64,
+    {.name = "issue_slots_per_geometry_miss",
+     .unit = "cycles",
+     .desc = "issue slots / lines of triangles or k-d nodes read from the DRAM",
+     .how = STATS_HOW_F64,
      .f64 = run_slots_per_geometry_miss},
 };
-const struct stats_descs run_output_stats_descs = {"run", run_desc, STATS_COUNT(run_desc), 0, NULL, 0};
-const struct stats_descs run_output_misses_stats_descs = {"run", run_misses_desc, STATS_COUNT(run_misses_desc),
-                                                          0, NULL, 0};
+const struct stats_descs run_output_stats_descs = {"run", run_desc, STATS_COUNT(run_desc),
+                                                   0,     NULL,     0};
+const struct stats_descs run_output_misses_stats_descs = {
+    "run", run_misses_desc, STATS_COUNT(run_misses_desc), 0, NULL, 0};
 
 static void run_slot(const struct stats_env *env, int slot, struct stats_table *t) {
   const void *r = env->slot_ctx;
@@ -248,8 +264,9 @@ static bool write_csv(const struct run_output_report *r, struct err *e) {
 static bool write_timeline(const struct run_output_report *r, struct err *e) {
   struct outfile o;
   if (!open_out(&o, r, "timeline.csv", e)) return false;
-  timeline_write_csv(machine_timeline(r->machine), machine_tl_cols, machine_tl_col_count, trace_class_names,
-                     TRACE_CLASS_COUNT, machine_get_stats(r->machine)->cycles, o.f);
+  timeline_write_csv(machine_timeline(r->machine), machine_tl_cols, machine_tl_col_count,
+                     trace_class_names, TRACE_CLASS_COUNT, machine_get_stats(r->machine)->cycles,
+                     o.f);
   return outfile_commit(&o, e);
 }
 
@@ -265,15 +282,16 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
     outfile_abort(&o);
     return err_set(e, final, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
   }
-  int n = snprintf(cmd, sizeof cmd,
-                   "set terminal pngcairo size 1000,560 noenhanced\nset output '%s'\n"
-                   "set datafile separator ','\nset key outside right top\n"
-                   "set title 'DRAM traffic per cycle: %s, %s policy, %ux%u (window %llu cycles)'\n"
-                   "set xlabel 'simulated time (million cycles)'\n"
-                   "set ylabel 'DRAM bytes per cycle'\nset grid\nset yrange [0:*]\n"
-                   "plot '%s' using (($1+$2/2)/1e6):(($3+$4)/$2) with steps lw 2 lc rgb 'black' title 'all (read + write)'",
-                   o.tmp, r->scene_name, r->policy, r->width, r->height,
-                   (unsigned long long)machine_timeline(r->machine)->window, csv);
+  int n = snprintf(
+      cmd, sizeof cmd,
+      "set terminal pngcairo size 1000,560 noenhanced\nset output '%s'\n"
+      "set datafile separator ','\nset key outside right top\n"
+      "set title 'DRAM traffic per cycle: %s, %s policy, %ux%u (window %llu cycles)'\n"
+      "set xlabel 'simulated time (million cycles)'\n"
+      "set ylabel 'DRAM bytes per cycle'\nset grid\nset yrange [0:*]\n"
+      "plot '%s' using (($1+$2/2)/1e6):(($3+$4)/$2) with steps lw 2 lc rgb 'black' title 'all (read + write)'",
+      o.tmp, r->scene_name, r->policy, r->width, r->height,
+      (unsigned long long)machine_timeline(r->machine)->window, csv);
   for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++)
     n += snprintf(cmd + n, sizeof cmd - (size_t)n,
                   ", '' using (($1+$2/2)/1e6):($%u/$2) with steps title 'read: %s'", 5 + c,
@@ -346,7 +364,7 @@ bool run_output_write(const struct run_output_report *r, struct err *e) {
     snprintf(title, sizeof title, "%s per pixel", r->cost_channel);
     snprintf(sub, sizeof sub, "%s, %s policy, %ux%u", r->scene_name, r->policy, r->width,
              r->height);
-    const char *u = strstr(r->cost_channel, "bytes") ? "bytes"
+    const char *u = strstr(r->cost_channel, "bytes")   ? "bytes"
                     : strstr(r->cost_channel, "slots") ? "issue slots (core cycles)"
                                                        : "cycles";
     snprintf(units, sizeof units, "%s a pixel", u);
@@ -371,10 +389,11 @@ bool run_output_write(const struct run_output_report *r, struct err *e) {
 void run_output_summary(const struct run_output_report *r, FILE *f) {
   struct stats_table t = {0};
   measured(r, &t);
-  static const char *const show[] = {"cycles", "cycles_ci95_low", "cycles_ci95_high",
-                                     "sample_detailed_fraction", "rays_traced", "rays_per_second", "core_utilization",
-                                     "thread_idle_fraction", "l2_miss_rate", "dram_bytes_per_cycle",
-                                     "dram_read_latency_mean", "load_latency_mean", "events"};
+  static const char *const show[] = {
+      "cycles",       "cycles_ci95_low",      "cycles_ci95_high",       "sample_detailed_fraction",
+      "rays_traced",  "rays_per_second",      "core_utilization",       "thread_idle_fraction",
+      "l2_miss_rate", "dram_bytes_per_cycle", "dram_read_latency_mean", "load_latency_mean",
+      "events"};
   for (unsigned i = 0; i < sizeof show / sizeof show[0]; i++)
     for (unsigned j = 0; j < t.n; j++)
       if (!strcmp(t.e[j].name, show[i])) {
@@ -388,9 +407,9 @@ void run_output_summary(const struct run_output_report *r, FILE *f) {
 void run_output_stats_help(FILE *f, bool markdown) {
   /* The tables in the order machine_stats_emit fills the machine's slots. */
   static const struct stats_descs *const order[] = {
-      &machine_stats_descs,           &run_output_stats_descs,       &run_output_misses_stats_descs,
-      &machine_l1_stats_descs,        &l2_stats_descs,               &dram_stats_descs,
-      &machine_dram_util_stats_descs, &dram_channel_stats_descs,     &dram_banked_stats_descs,
+      &machine_stats_descs,           &run_output_stats_descs,   &run_output_misses_stats_descs,
+      &machine_l1_stats_descs,        &l2_stats_descs,           &dram_stats_descs,
+      &machine_dram_util_stats_descs, &dram_channel_stats_descs, &dram_banked_stats_descs,
       &machine_engine_stats_descs};
   for (unsigned i = 0; i < sizeof order / sizeof order[0]; i++)
     (markdown ? stats_write_markdown : stats_write_help)(order[i], f);

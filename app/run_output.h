@@ -25,19 +25,19 @@ struct run_output_report {
   const char *out_dir, *machine_path, *scene_path, *scene_name, *policy;
   uint32_t mask, width, height;
   uint64_t seed;
-  uint64_t scene_hash; /* scene_hash() of the loaded scene */
+  uint64_t scene_hash;   /* scene_hash() of the loaded scene */
   const char *kd_splits; /* "whole" or "clipped": how the k-d tree was built */
   const struct machine_cfg *cfg;
   const struct machine *machine;       /* a timed rung's; NULL at fidelity analytic */
   const struct app_analytic *analytic; /* fidelity analytic's counts and estimate, else NULL */
-  const struct sampler *sample; /* a sampled run's estimates (NULL: a full run) */
+  const struct sampler *sample;        /* a sampled run's estimates (NULL: a full run) */
   const struct render_stats *rstats;
   const struct trace_stats *tstats;
   const struct framebuffer *fb;
   const struct machine_costs *costs; /* per-pixel costs (NULL: not counted) */
   const char *cost_preview;          /* a heat map PNG of cost_channel (NULL: none) */
   const char *cost_channel;
-  double cost_max;                   /* the colour scale's top (0: the largest value) */
+  double cost_max; /* the colour scale's top (0: the largest value) */
   double wall_s;
 };
 

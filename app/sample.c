@@ -183,7 +183,15 @@ struct parts {
   double slots_mid;      /* issue slots the middle stands for */
 };
 
-enum sample_fig { SF_CYCLES, SF_DRAM_BYTES, SF_BYTES_PER_CYCLE, SF_UTIL, SF_RAYS_PER_S, SF_LOAD_LAT, SF_COUNT };
+enum sample_fig {
+  SF_CYCLES,
+  SF_DRAM_BYTES,
+  SF_BYTES_PER_CYCLE,
+  SF_UTIL,
+  SF_RAYS_PER_S,
+  SF_LOAD_LAT,
+  SF_COUNT
+};
 
 /* A middle quantity's total: its ratio to issue slots over the middle units,
  * times the issue slots the middle stands for. */
@@ -216,7 +224,8 @@ static void parts_of(const struct sampler *s, struct parts *p) {
   const struct sample_unit *f = &s->u[0], *l = &s->u[s->n - 1];
   for (unsigned q = 0; q < SQ_COUNT; q++) {
     p->edge[q] = delta(f, q) + delta(l, q);
-    for (uint32_t h = 1; h + 1 < s->n; h++) p->S[q] += weight(s, h) * delta(&s->u[h], q) / items(&s->u[h]);
+    for (uint32_t h = 1; h + 1 < s->n; h++)
+      p->S[q] += weight(s, h) * delta(&s->u[h], q) / items(&s->u[h]);
   }
   p->slots_mid = (double)s->slots_total - p->edge[SQ_SLOTS];
 }

@@ -42,7 +42,8 @@ enum sample_q { SQ_CYCLES, SQ_SLOTS, SQ_DRAM_BYTES, SQ_LAT_SUM, SQ_LAT_N, SQ_COU
 
 struct sample_unit {
   uint64_t stratum_lo, stratum_hi; /* the stratum's items [lo, hi) */
-  uint64_t warm_from, start, measure, end; /* warmed [warm_from, start), detailed [start, end), measured [measure, end) */
+  uint64_t warm_from, start, measure,
+      end; /* warmed [warm_from, start), detailed [start, end), measured [measure, end) */
   uint64_t at0[SQ_COUNT], at1[SQ_COUNT];
   bool have0, have1;
 };
@@ -52,10 +53,10 @@ struct sampler {
   uint64_t total; /* work items */
   uint32_t n;     /* units */
   struct sample_unit *u;
-  uint32_t cur;   /* the unit the next claims belong to (claims come in order) */
+  uint32_t cur; /* the unit the next claims belong to (claims come in order) */
   uint64_t detailed, warmed, measured; /* items */
-  uint64_t in_flight; /* detailed items claimed and not finished */
-  bool *drained;      /* [h]: the gap before unit h has seen the pipeline empty */
+  uint64_t in_flight;                  /* detailed items claimed and not finished */
+  bool *drained;                       /* [h]: the gap before unit h has seen the pipeline empty */
   uint32_t cores;
   double hz;
   /* After the run (sample_finish): exact totals. */

@@ -30,14 +30,14 @@
 
 /* Workload keys; machine keys are machine_cfg's. */
 enum wl { WL_SCENE, WL_POLICY, WL_RAYS, WL_WIDTH, WL_HEIGHT, WL_SEED, WL_COUNT };
-static const char *const WL_NAMES[WL_COUNT + 1] = {"scene", "policy", "rays",
-                                                   "width", "height", "seed", NULL};
+static const char *const WL_NAMES[WL_COUNT + 1] = {"scene",  "policy", "rays", "width",
+                                                   "height", "seed",   NULL};
 
 /* One key's values (an axis, or one key of a zipped group). */
 struct axis {
   const char *key;
   const char *section; /* "axes" or "zip" */
-  int machine_key; /* machine_cfg index, or -1 for a workload key */
+  int machine_key;     /* machine_cfg index, or -1 for a workload key */
   enum wl wl;
   struct cfg_node *node; /* the key's map entry (its list of values) */
   char **resolved;       /* scene axes: absolute paths (owned) */
@@ -65,7 +65,7 @@ struct priv {
   struct cfg_node *wl[WL_COUNT];
   char *scene_fixed; /* absolute (owned) */
   struct cfg_node *sets;
-  struct machine_cfg base; /* the base config with the fixed overrides */
+  struct machine_cfg base;    /* the base config with the fixed overrides */
   struct machine_cfg scratch; /* for checking axis values one at a time */
   char machine_path[4096];
   struct scene_info *scenes;
@@ -81,15 +81,16 @@ static char *dup_str(const char *s) {
 
 /* path resolved against the sweep file's directory, made canonical: false
  * (error at n) when there is no such file. */
-static bool resolve(const struct priv *pv, const struct cfg_node *n, const char *what,
-                    char **out, struct err *e) {
+static bool resolve(const struct priv *pv, const struct cfg_node *n, const char *what, char **out,
+                    struct err *e) {
   char joined[8192];
   if (n->text[0] == '/') snprintf(joined, sizeof joined, "%s", n->text);
   else snprintf(joined, sizeof joined, "%s/%s", pv->dir, n->text);
   char *real = realpath(joined, NULL);
   if (!real)
-    return cfg_fail(&pv->doc, n, what, e, "cannot open '%s' (%s; paths are relative to the sweep file)",
-                    n->text, strerror(errno));
+    return cfg_fail(&pv->doc, n, what, e,
+                    "cannot open '%s' (%s; paths are relative to the sweep file)", n->text,
+                    strerror(errno));
   if (strpbrk(real, "\n\r")) {
     free(real);
     return cfg_fail(&pv->doc, n, what, e, "a path with a line break cannot go into a job line");
@@ -148,8 +149,8 @@ static bool unknown_key(const struct priv *pv, const struct cfg_node *v, const c
     return err_set(e, pv->doc.file, v->key_line, v->key_col, "%s.%s: %s", section, v->key,
                    machine_cfg_renamed(v->key));
   for (int k = 0; workload_too && k < WL_COUNT; k++)
-    snprintf(wl + strlen(wl), sizeof wl - strlen(wl), "%s%s", k ? ", " : "; or a workload key: ",
-             WL_NAMES[k]);
+    snprintf(wl + strlen(wl), sizeof wl - strlen(wl), "%s%s",
+             k ? ", " : "; or a workload key: ", WL_NAMES[k]);
   return err_set(e, pv->doc.file, v->key_line, v->key_col,
                  "%s.%s: unknown key '%s' (expected a machine config key: %s%s)", section, v->key,
                  v->key, keys, wl);
@@ -299,10 +300,10 @@ static bool add_axis(struct priv *pv, struct cfg_node *v, const char *section, b
                    "group, or is fixed)",
                    path, v->key, where, line);
   if (!cfg_expect_seq(d, v, path, e)) return false;
-  if (v->count == 0)
-    return cfg_fail(d, v, path, e, "empty list (expected at least one value)");
-  struct axis a = {v->key, strcmp(section, "axes") ? "zip" : "axes", mk,
-                   wk >= 0 ? (enum wl)wk : WL_COUNT, v, NULL};
+  if (v->count == 0) return cfg_fail(d, v, path, e, "empty list (expected at least one value)");
+  struct axis a = {v->key, strcmp(section, "axes") ? "zip" : "axes",
+                   mk,     wk >= 0 ? (enum wl)wk : WL_COUNT,
+                   v,      NULL};
   if (wk == WL_SCENE) a.resolved = xcalloc(v->count, sizeof *a.resolved);
   pv->axes = xrealloc(pv->axes, (pv->naxes + 1ull) * sizeof *pv->axes);
   pv->axes[pv->naxes++] = a;
@@ -348,7 +349,8 @@ static bool read_file(struct priv *pv, const char *path, struct err *e) {
 
   /* The base machine, then the fixed overrides over it. */
   struct cfg_node *m = cfg_get(root, "machine");
-  if (!m) return cfg_fail(d, root, "", e, "missing required key 'machine' (the base machine config)");
+  if (!m)
+    return cfg_fail(d, root, "", e, "missing required key 'machine' (the base machine config)");
   char text[4096], *mpath = NULL;
   if (!cfg_str(d, m, "machine", text, sizeof text, e) || !resolve(pv, m, "machine", &mpath, e))
     return false;
@@ -408,7 +410,8 @@ static bool read_file(struct priv *pv, const char *path, struct err *e) {
       char path_g[64];
       snprintf(path_g, sizeof path_g, "zip[%u]", g);
       if (!cfg_expect_map(d, grp, path_g, e)) return false;
-      if (grp->count == 0) return cfg_fail(d, grp, path_g, e, "empty group (expected key: [values])");
+      if (grp->count == 0)
+        return cfg_fail(d, grp, path_g, e, "empty group (expected key: [values])");
       unsigned first = pv->naxes;
       for (uint32_t i = 0; i < grp->count; i++) {
         struct cfg_node *v = &grp->items[i];
@@ -563,8 +566,8 @@ static bool load_scenes(struct priv *pv, struct err *e) {
     const char *path = axis == UINT_MAX ? pv->scene_fixed : pv->axes[axis].resolved[i];
     struct scene sc;
     if (!scene_file_load(&sc, path, e)) return false;
-    pv->scenes[pv->nscenes++] = (struct scene_info){dup_str(path), sc.width, sc.height,
-                                                    sc.tri_count, sc.light_count};
+    pv->scenes[pv->nscenes++] =
+        (struct scene_info){dup_str(path), sc.width, sc.height, sc.tri_count, sc.light_count};
     scene_fini(&sc);
   }
   return true;
@@ -611,8 +614,8 @@ static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *
     const struct axis *x = &pv->axes[a];
     if (x->machine_key < 0) continue;
     const struct cfg_node *n = &x->node->items[choice[dim_of(pv, a)]];
-    CHECK(machine_cfg_set_at(&c, (unsigned)x->machine_key, n->text, pv->doc.file, n->line,
-                             n->col, e)); /* each value was checked alone */
+    CHECK(machine_cfg_set_at(&c, (unsigned)x->machine_key, n->text, pv->doc.file, n->line, n->col,
+                             e)); /* each value was checked alone */
   }
   if (!machine_cfg_check(&c, e)) {
     size_t l = strlen(e->msg);
@@ -643,9 +646,9 @@ static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *
   enum policy_kind pk;
   CHECK(policy_parse(policy ? policy : "recursive", &pk));
   char whybuf[512];
-  const char *why = sample_problem(&c.p, pk, app_work_items(pk, (uint32_t)w, (uint32_t)h),
-                                   c.p.cores * c.p.threads_per_core * c.p.rays_per_thread, whybuf,
-                                   sizeof whybuf);
+  const char *why =
+      sample_problem(&c.p, pk, app_work_items(pk, (uint32_t)w, (uint32_t)h),
+                     c.p.cores * c.p.threads_per_core * c.p.rays_per_thread, whybuf, sizeof whybuf);
   if (why) {
     const struct machine_cfg_origin *o = &c.at[machine_cfg_find("sample.fraction")];
     return err_set(e, o->file[0] ? o->file : pv->doc.file, o->line, o->col, "%s [point %s]", why,
@@ -709,8 +712,8 @@ bool sweep_load(struct sweep *s, const char *path, const char *out_dir, struct e
   return sweep_load_capped(s, path, out_dir, SWEEP_POINTS_DEFAULT, e);
 }
 
-bool sweep_load_capped(struct sweep *s, const char *path, const char *out_dir,
-                       unsigned max_points, struct err *e) {
+bool sweep_load_capped(struct sweep *s, const char *path, const char *out_dir, unsigned max_points,
+                       struct err *e) {
   memset(s, 0, sizeof *s);
   snprintf(s->file, sizeof s->file, "%s", path);
   struct priv *pv = xcalloc(1, sizeof *pv);

@@ -36,12 +36,12 @@ struct sweep_point {
 };
 
 struct sweep {
-  char file[512];           /* the sweep file as given */
-  const char **keys;        /* swept keys in dimension order (nkeys; owned by the sweep) */
+  char file[512];    /* the sweep file as given */
+  const char **keys; /* swept keys in dimension order (nkeys; owned by the sweep) */
   unsigned nkeys;
   struct sweep_point *points;
   unsigned npoints;
-  void *priv;               /* axis storage */
+  void *priv; /* axis storage */
 };
 
 /* Read and check the sweep file at path and expand its points, each writing
@@ -52,8 +52,8 @@ bool sweep_load(struct sweep *s, const char *path, const char *out_dir, struct e
 /* The same with a cap on the points other than SWEEP_POINTS_DEFAULT (1 to
  * SWEEP_POINTS_MAX): a sweep with more is refused, at the axis or group that
  * takes the count past the cap. */
-bool sweep_load_capped(struct sweep *s, const char *path, const char *out_dir,
-                       unsigned max_points, struct err *e);
+bool sweep_load_capped(struct sweep *s, const char *path, const char *out_dir, unsigned max_points,
+                       struct err *e);
 void sweep_free(struct sweep *s);
 
 #endif

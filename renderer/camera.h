@@ -10,7 +10,8 @@ struct scene_camera;
 struct ray;
 
 struct camera_frame {
-  vec3 origin, forward, right, up; /* right and up scaled by the half-extent of the image plane at distance 1 */
+  vec3 origin, forward, right,
+      up; /* right and up scaled by the half-extent of the image plane at distance 1 */
   uint32_t width, height;
 };
 

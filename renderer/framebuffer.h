@@ -18,10 +18,10 @@ struct image;
 
 struct framebuffer {
   uint32_t width, height;
-  int64_t *acc;          /* 3 per pixel */
-  uint32_t *cost_nodes;  /* k-d node visits of all rays of the pixel */
-  uint32_t *cost_tris;   /* triangle tests of all rays of the pixel */
-  uint64_t base_addr;    /* simulated address of pixel 0 */
+  int64_t *acc;         /* 3 per pixel */
+  uint32_t *cost_nodes; /* k-d node visits of all rays of the pixel */
+  uint32_t *cost_tris;  /* triangle tests of all rays of the pixel */
+  uint64_t base_addr;   /* simulated address of pixel 0 */
 };
 
 void fb_init(struct framebuffer *fb, uint32_t width, uint32_t height, uint64_t base_addr);

@@ -72,8 +72,8 @@ static const char *image_exr_why(const struct image_exr_msg *m, exr_result_t rv)
 
 /* Point the pipeline's channels (sorted by name in the file, so matched by
  * name, not position) at image row `row` of the float planes. */
-static bool image_bind_channels(const struct image *im, exr_coding_channel_info_t *chans,
-                                int count, int32_t row, bool decode) {
+static bool image_bind_channels(const struct image *im, exr_coding_channel_info_t *chans, int count,
+                                int32_t row, bool decode) {
   for (int k = 0; k < count; k++) {
     int c = image_channel(im, chans[k].channel_name);
     if (c < 0) return false;
@@ -82,10 +82,8 @@ static bool image_bind_channels(const struct image *im, exr_coding_channel_info_
     chans[k].user_data_type = (uint16_t)EXR_PIXEL_FLOAT;
     chans[k].user_pixel_stride = (int32_t)sizeof(float);
     chans[k].user_line_stride = (int32_t)(sizeof(float) * im->width);
-    if (decode)
-      chans[k].decode_to_ptr = p;
-    else
-      chans[k].encode_from_ptr = p;
+    if (decode) chans[k].decode_to_ptr = p;
+    else chans[k].encode_from_ptr = p;
   }
   return true;
 }
@@ -103,8 +101,8 @@ bool image_write_exr(const struct image *im, const char *path, bool half, struct
 
   struct outfile out = {0};
 
-  if (im->width == 0 || im->height == 0 || im->channel_count == 0 ||
-      im->width > INT32_MAX || im->height > INT32_MAX) {
+  if (im->width == 0 || im->height == 0 || im->channel_count == 0 || im->width > INT32_MAX ||
+      im->height > INT32_MAX) {
     err_set(e, path, 0, 0, "cannot write EXR: empty image (%ux%u, %u channels)", im->width,
             im->height, im->channel_count);
     goto done;
@@ -217,8 +215,10 @@ bool image_read_exr(struct image *im, const char *path, struct err *e) {
     const exr_attr_chlist_entry_t *ch = &chl->entries[c];
     names[c] = ch->name.str;
     if (ch->pixel_type != EXR_PIXEL_HALF && ch->pixel_type != EXR_PIXEL_FLOAT) {
-      err_set(e, path, 0, 0, "EXR channel '%s': unsupported pixel type (got uint, expected "
-              "half or float)", ch->name.str);
+      err_set(e, path, 0, 0,
+              "EXR channel '%s': unsupported pixel type (got uint, expected "
+              "half or float)",
+              ch->name.str);
       goto done;
     }
     if (ch->x_sampling != 1 || ch->y_sampling != 1) {

@@ -41,8 +41,8 @@ struct kd_builder {
   const struct kd_build_params *p;
   const struct scene *scene;
   struct kd_tree *t;
-  struct kd_box *tb;  /* triangle bounds */
-  uint8_t *side;      /* classification scratch: bit 0 below, bit 1 above */
+  struct kd_box *tb;   /* triangle bounds */
+  uint8_t *side;       /* classification scratch: bit 0 below, bit 1 above */
   struct kd_ev *arena; /* LIFO store of event lists, see build_node */
   size_t arena_top, arena_cap;
   size_t arena_high; /* the arena's pages above this may be resident but dead */
@@ -234,8 +234,8 @@ static double box_area(const struct kd_box *bx) {
 /* SAH cost of splitting bx at s on axis a with nb triangles below, na above
  * (PBRT-v3's formula, evaluated in double); kept if it beats the best by more
  * than a tie. */
-static inline void consider(const struct kd_builder *b, const struct kd_box *bx, double inv_area, int a,
-                     float s, uint32_t nb, uint32_t na, struct kd_plane *best) {
+static inline void consider(const struct kd_builder *b, const struct kd_box *bx, double inv_area,
+                            int a, float s, uint32_t nb, uint32_t na, struct kd_plane *best) {
   if (!(s > bx->lo[a] && s < bx->hi[a])) return;
   int o0 = (a + 1) % 3, o1 = (a + 2) % 3;
   double d0 = (double)bx->hi[o0] - bx->lo[o0], d1 = (double)bx->hi[o1] - bx->lo[o1];
@@ -258,8 +258,8 @@ static inline void consider(const struct kd_builder *b, const struct kd_box *bx,
  * once allowed only even mantissas (to free a flag bit) and stepped odd values
  * one float aside, which made the choice depend on the float grid and so on
  * the scene's units. */
-static void sweep_axis(const struct kd_builder *b, const struct kd_lists *l, const struct kd_box *bx,
-                       double inv_area, int a, struct kd_plane *best) {
+static void sweep_axis(const struct kd_builder *b, const struct kd_lists *l,
+                       const struct kd_box *bx, double inv_area, int a, struct kd_plane *best) {
   const struct kd_ev *ev = b->arena + l->off;
   size_t base = 0;
   for (int k = 0; k < a; k++) base += l->len[k];
@@ -393,7 +393,9 @@ static void clip_straddlers(struct kd_builder *b, uint32_t ns, const struct kd_b
   if (2 * ns > b->sev_cap) {
     b->sev_cap = 2 * ns;
     for (int c = 0; c < 2; c++)
-      for (int a = 0; a < 3; a++) b->sev[c][a] = kd_grow(b, b->sev[c][a], (unsigned long long)b->sev_cap * sizeof *b->sev[c][a]);
+      for (int a = 0; a < 3; a++)
+        b->sev[c][a] =
+            kd_grow(b, b->sev[c][a], (unsigned long long)b->sev_cap * sizeof *b->sev[c][a]);
   }
   for (int c = 0; c < 2; c++)
     for (int a = 0; a < 3; a++) b->sev_len[c][a] = 0;
@@ -487,10 +489,8 @@ static void build_node(struct kd_builder *b, const struct kd_box *bx, const stru
       b->side[p] = v < s ? 1u : 0u;
       continue;
     }
-    if (ty == KD_EV_END)
-      b->side[p] = (uint8_t)(b->side[p] | (v > s ? 2u : 0u));
-    else
-      b->side[p] = (uint8_t)(v < s ? 1u : (v > s ? 2u : 3u));
+    if (ty == KD_EV_END) b->side[p] = (uint8_t)(b->side[p] | (v > s ? 2u : 0u));
+    else b->side[p] = (uint8_t)(v < s ? 1u : (v > s ? 2u : 3u));
     uint8_t sd = b->side[p];
     CHECK_NE(sd, 0);
     nb += sd & 1u;

@@ -57,15 +57,16 @@ struct kd_build_params {
 
 struct kd_stats {
   uint32_t nodes, leaves, empty_leaves, max_depth, max_leaf_prims;
-  uint64_t leaf_prim_refs; /* sum of leaf sizes (triangles referenced by several leaves count each time) */
+  uint64_t leaf_prim_refs; /* sum of leaf sizes (triangles referenced by several leaves count each
+                              time) */
 };
 
 struct kd_tree {
-  struct kd_node *nodes;  /* node 0 is the root */
+  struct kd_node *nodes; /* node 0 is the root */
   uint32_t node_count;
-  uint32_t *prims;        /* leaf primitive index lists, concatenated */
+  uint32_t *prims; /* leaf primitive index lists, concatenated */
   uint32_t prim_ref_count;
-  vec3 lo, hi;            /* root bounds */
+  vec3 lo, hi; /* root bounds */
   struct kd_stats stats;
 };
 

@@ -7,7 +7,13 @@
 
 #include "renderer/vec.h"
 
-enum ray_type { RAY_PRIMARY = 0, RAY_SHADOW = 1, RAY_SPECULAR = 2, RAY_DIFFUSE = 3, RAY_TYPE_COUNT = 4 };
+enum ray_type {
+  RAY_PRIMARY = 0,
+  RAY_SHADOW = 1,
+  RAY_SPECULAR = 2,
+  RAY_DIFFUSE = 3,
+  RAY_TYPE_COUNT = 4
+};
 
 /* Bit set of enabled ray types (1u << RAY_x). */
 #define RAY_MASK(t) (1u << (t))
@@ -24,7 +30,7 @@ struct ray {
   uint8_t type;        /* enum ray_type */
   uint8_t light;       /* shadow rays: light index */
   uint8_t flags;
-  int32_t hit_prim;    /* scheduling state: best hit so far when a ray is deferred, or -1 */
+  int32_t hit_prim; /* scheduling state: best hit so far when a ray is deferred, or -1 */
 };
 
 _Static_assert(sizeof(struct ray) == 64, "a ray is one 64-byte line");

@@ -16,7 +16,9 @@ static inline uint64_t rng_mix64(uint64_t x) {
 
 static inline uint64_t rng_hash2(uint64_t a, uint64_t b) { return rng_mix64(a ^ rng_mix64(b)); }
 
-struct rng { uint64_t state, inc; };
+struct rng {
+  uint64_t state, inc;
+};
 
 static inline struct rng rng_make(uint64_t seed, uint64_t stream) {
   struct rng r;
@@ -35,6 +37,8 @@ static inline uint32_t rng_u32(struct rng *r) {
 }
 
 /* Uniform float in [0, 1). */
-static inline float rng_f32(struct rng *r) { return (float)(rng_u32(r) >> 8) * (1.0f / 16777216.0f); }
+static inline float rng_f32(struct rng *r) {
+  return (float)(rng_u32(r) >> 8) * (1.0f / 16777216.0f);
+}
 
 #endif

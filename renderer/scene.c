@@ -35,7 +35,8 @@ static uint32_t name_hash(const char *name) {
 static uint32_t find_slot(const struct scene *s, const char *name) {
   const uint32_t mask = s->mat_slot_cap - 1;
   uint32_t i = name_hash(name) & mask;
-  while (s->mat_slots[i] && strcmp(s->mats[s->mat_slots[i] - 1].name, name) != 0) i = (i + 1) & mask;
+  while (s->mat_slots[i] && strcmp(s->mats[s->mat_slots[i] - 1].name, name) != 0)
+    i = (i + 1) & mask;
   return i;
 }
 

@@ -13,7 +13,7 @@
 
 struct scene_material {
   char name[SCENE_NAME_MAX];
-  vec3 color;   /* base colour, linear RGB in [0,1] */
+  vec3 color;    /* base colour, linear RGB in [0,1] */
   float diffuse; /* weight of the diffuse (Lambert) term, >= 0 */
   float mirror;  /* specular mirror reflectance in [0,1] */
 };

@@ -52,8 +52,8 @@ uint32_t shade_hit(const struct shade_ctx *c, const struct ray *r, const struct 
   vec3 p = trace_hit_point(s, h, &err);
   float b0 = 1.0f - h->b1 - h->b2;
   vec3 ng = tri_normal(t);
-  vec3 ns = v3_norm(v3_add(v3_add(v3_scale(t->n[0], b0), v3_scale(t->n[1], h->b1)),
-                           v3_scale(t->n[2], h->b2)));
+  vec3 ns = v3_norm(
+      v3_add(v3_add(v3_scale(t->n[0], b0), v3_scale(t->n[1], h->b1)), v3_scale(t->n[2], h->b2)));
   /* Face the normals toward the incoming ray. */
   if (v3_dot(ng, r->d) > 0.0f) ng = v3_scale(ng, -1.0f);
   if (v3_dot(ns, ng) < 0.0f) ns = v3_scale(ns, -1.0f);

@@ -21,8 +21,8 @@ struct scene;
 struct trace_hit;
 struct framebuffer;
 
-#define SHADE_MAX_DEPTH 2        /* reflection bounces, the paper's limit */
-#define SHADE_DIFFUSE_GRID 3     /* 3 x 3 = 9 diffuse rays a round */
+#define SHADE_MAX_DEPTH 2    /* reflection bounces, the paper's limit */
+#define SHADE_DIFFUSE_GRID 3 /* 3 x 3 = 9 diffuse rays a round */
 #define SHADE_DIFFUSE_CONTINUE 0.1f
 /* Most rays one hit can spawn: a shadow ray per light, a mirror ray, a round
  * of diffuse rays. */
@@ -36,8 +36,8 @@ struct shade_ctx {
 };
 
 /* Shade the result of a non-shadow ray r (h->prim < 0: a miss). A hit
- * announces c->shade_cycles of compute. Adds direct contributions to fb and writes the rays it spawns to out[] (at most
- * SHADE_MAX_SPAWN), shadow rays first. Returns how many it spawned. */
+ * announces c->shade_cycles of compute. Adds direct contributions to fb and writes the rays it
+ * spawns to out[] (at most SHADE_MAX_SPAWN), shadow rays first. Returns how many it spawned. */
 uint32_t shade_hit(const struct shade_ctx *c, const struct ray *r, const struct trace_hit *h,
                    struct framebuffer *fb, const struct mem_port *mem, struct ray *out);
 

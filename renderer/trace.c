@@ -18,7 +18,6 @@
 #include "renderer/trav.h"
 #include "sim/err.h"
 
-
 static float gamma_f(int n) {
   float e = 0.5f * FLT_EPSILON;
   return ((float)n * e) / (1.0f - (float)n * e);
@@ -62,10 +61,9 @@ static bool tri_degenerate(vec3 a, vec3 b, vec3 c) {
 /* The test for one axis permutation (kx, ky, kz constants after inlining, so
  * every coordinate is picked without a round trip through memory). */
 static inline __attribute__((always_inline)) bool isect_perm(const struct trace_isect_ray *r,
-                                                             vec3 a, vec3 b, vec3 c, int kx,
-                                                             int ky, int kz, float tmin,
-                                                             float tmax, float *t, float *b1,
-                                                             float *b2) {
+                                                             vec3 a, vec3 b, vec3 c, int kx, int ky,
+                                                             int kz, float tmin, float tmax,
+                                                             float *t, float *b1, float *b2) {
   /* Translate to the ray origin, permute so that kz is the ray's main axis, shear. */
   float oz = v3_get(r->o, kz), ox = v3_get(r->o, kx), oy = v3_get(r->o, ky);
   float az = v3_get(a, kz) - oz, bz = v3_get(b, kz) - oz, cz = v3_get(c, kz) - oz;
@@ -84,8 +82,7 @@ static inline __attribute__((always_inline)) bool isect_perm(const struct trace_
     e1 = (float)((double)cx * ay - (double)cy * ax);
     e2 = (float)((double)ax * by - (double)ay * bx);
   }
-  if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f))
-    return false;
+  if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f)) return false;
   float det = e0 + e1 + e2;
   if (det == 0.0f || isnan(det)) return false;
 
@@ -172,18 +169,16 @@ void trace_init(struct trace_ctx *tr, const struct scene *s, const struct kd_tre
   tr->scene = s;
   tr->kd = kd;
   tr->mem = mem;
-  if (layout)
-    tr->layout = *layout;
-  else
-    trace_layout_default(&tr->layout);
+  if (layout) tr->layout = *layout;
+  else trace_layout_default(&tr->layout);
 }
 
 /* Shared loop of trace_closest (any_hit false) and trace_any (true). Hits are
  * accepted against the ray's whole (tmin, best t) range, not the node's
  * interval; a node is skipped when the best hit lies before its interval. */
 static inline __attribute__((always_inline)) bool traverse_n(struct trace_ctx *tr,
-                                                              const struct ray *r, bool any_hit,
-                                                              struct trace_hit *h, bool native) {
+                                                             const struct ray *r, bool any_hit,
+                                                             struct trace_hit *h, bool native) {
   h->t = r->tmax;
   h->prim = -1;
   h->b1 = h->b2 = 0.0f;
@@ -248,9 +243,9 @@ bool trace_any(struct trace_ctx *tr, const struct ray *r) {
 struct pk_ray {
   float o[3], inv[3], tol[3]; /* struct trav_ray */
   float delta;
-  float t0, t1;               /* interval in the current node */
-  float tmin, upper, best_t;  /* closest hit: upper = nextafter(best_t) once found */
-  uint32_t nodes;             /* nodes the ray was active in */
+  float t0, t1;              /* interval in the current node */
+  float tmin, upper, best_t; /* closest hit: upper = nextafter(best_t) once found */
+  uint32_t nodes;            /* nodes the ray was active in */
 };
 _Static_assert(sizeof(struct pk_ray) == 64, "a packet ray's traversal state is one line");
 
@@ -329,12 +324,9 @@ static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk
       q->o[a] = tv.o[a];
       q->inv[a] = tv.inv[a];
       q->tol[a] = tv.tol[a];
-      if (tv.flat[a])
-        pk->flat[a] |= bit;
-      else if (tv.inv[a] > 0.0f)
-        pk->pos[a] |= bit;
-      else
-        pk->neg[a] |= bit;
+      if (tv.flat[a]) pk->flat[a] |= bit;
+      else if (tv.inv[a] > 0.0f) pk->pos[a] |= bit;
+      else pk->neg[a] |= bit;
     }
     q->delta = tv.delta;
     q->t0 = tv.t0;
@@ -582,10 +574,8 @@ vec3 trace_offset_origin(vec3 p, vec3 err, vec3 n, vec3 d) {
   /* Round away from p so the offset survives the addition's rounding. */
   float pc[3] = {po.x, po.y, po.z}, oc[3] = {off.x, off.y, off.z};
   for (int i = 0; i < 3; i++) {
-    if (oc[i] > 0.0f)
-      pc[i] = nextafterf(pc[i], INFINITY);
-    else if (oc[i] < 0.0f)
-      pc[i] = nextafterf(pc[i], -INFINITY);
+    if (oc[i] > 0.0f) pc[i] = nextafterf(pc[i], INFINITY);
+    else if (oc[i] < 0.0f) pc[i] = nextafterf(pc[i], -INFINITY);
   }
   return v3(pc[0], pc[1], pc[2]);
 }

@@ -20,8 +20,8 @@ struct ray;
 
 struct trace_hit {
   float t;
-  int32_t prim;   /* -1: miss */
-  float b1, b2;   /* barycentric weights of vertices 1 and 2 (vertex 0: 1-b1-b2) */
+  int32_t prim; /* -1: miss */
+  float b1, b2; /* barycentric weights of vertices 1 and 2 (vertex 0: 1-b1-b2) */
 };
 
 /* Per-ray precomputation of the watertight test. */
@@ -124,7 +124,7 @@ bool trace_any(struct trace_ctx *tr, const struct ray *r);
 /* Scratch of packet queries (about 41 KB; on the heap so that kernels fit small
  * coroutine stacks). One per concurrent caller. */
 struct trace_packet;
-struct trace_packet *trace_packet_create(void); /* fatal on allocation failure */
+struct trace_packet *trace_packet_create(void);     /* fatal on allocation failure */
 void trace_packet_destroy(struct trace_packet *pk); /* NULL ok */
 
 /* Optional per-ray work of a packet query: nodes the ray was active in (needed

@@ -37,7 +37,7 @@
 struct trav_ray {
   float o[3], inv[3], tol[3];
   bool flat[3];
-  float delta; /* slack in scene units */
+  float delta;  /* slack in scene units */
   float t0, t1; /* clipped to the slack-thickened root box */
 };
 
@@ -97,8 +97,9 @@ struct trav_entry {
 /* One traversal step at interior node nd (index ni) over [t0, t1]: picks the
  * child to visit next (*next, its interval in *t0, *t1) and pushes the other one if
  * both need a visit. Returns false when neither child needs one. */
-static inline bool trav_interior(const struct trav_ray *tr, struct kd_node nd, uint32_t ni, float *t0,
-                          float *t1, uint32_t *next, struct trav_entry *stack, int *sp) {
+static inline bool trav_interior(const struct trav_ray *tr, struct kd_node nd, uint32_t ni,
+                                 float *t0, float *t1, uint32_t *next, struct trav_entry *stack,
+                                 int *sp) {
   int a = kd_axis(nd);
   float s = kd_split(nd);
   uint32_t below = ni + 1, above = kd_above(nd);
@@ -274,8 +275,8 @@ static inline bool trav_leaf_n(struct trace_ctx *tr, const struct trace_isect_ra
   return false;
 }
 static inline bool trav_leaf(struct trace_ctx *tr, const struct trace_isect_ray *ir, float tmin,
-                             int32_t ignore, bool any, struct kd_node nd, uint32_t j0,
-                             uint32_t j1, struct trav_best *b) {
+                             int32_t ignore, bool any, struct kd_node nd, uint32_t j0, uint32_t j1,
+                             struct trav_best *b) {
   return trav_leaf_n(tr, ir, tmin, ignore, any, nd, j0, j1, b, false);
 }
 

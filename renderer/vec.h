@@ -6,9 +6,14 @@
 #include <math.h>
 #include <stdint.h>
 
-typedef struct { float x, y, z; } vec3;
+typedef struct {
+  float x, y, z;
+} vec3;
 
-static inline vec3 v3(float x, float y, float z) { vec3 r = {x, y, z}; return r; }
+static inline vec3 v3(float x, float y, float z) {
+  vec3 r = {x, y, z};
+  return r;
+}
 static inline vec3 v3_add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
 static inline vec3 v3_sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
 static inline vec3 v3_mul(vec3 a, vec3 b) { return v3(a.x * b.x, a.y * b.y, a.z * b.z); }

@@ -149,11 +149,10 @@ void analytic_estimate(const struct machine_params *p, const struct analytic_cou
   out->contexts_per_core = n;
   out->slots_per_blocking = b > 0 ? slots / b : 0;
   out->blocking_miss_rate = b > 0 ? (double)c->blocking_l2_misses / b : 0;
-  out->load_latency_cycles =
-      b > 0 ? (double)p->l2_latency_cycles +
-                  out->blocking_miss_rate * (double)p->dram_latency_cycles +
-                  (double)c->l1_hit_loads * p->l1_latency_cycles / b
-            : 0;
+  out->load_latency_cycles = b > 0 ? (double)p->l2_latency_cycles +
+                                         out->blocking_miss_rate * (double)p->dram_latency_cycles +
+                                         (double)c->l1_hit_loads * p->l1_latency_cycles / b
+                                   : 0;
   /* A ray issues c slots, then gives the port up for L: n rays keep it busy
    * n c / (c + L) of the time, at most all of it. With no blocking load
    * there is nothing to hide (the L1 latencies alone are then ignored). */

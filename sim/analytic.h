@@ -17,12 +17,12 @@ struct machine_params;
 
 /* What one worker's accesses did to one core's L1 and the L2. */
 struct analytic_counts {
-  uint64_t issue_slots;            /* compute cycles + one per load and store */
+  uint64_t issue_slots; /* compute cycles + one per load and store */
   uint64_t loads, stores, computes;
-  uint64_t blocking_loads;         /* loads with a line the L1 did not hold */
-  uint64_t blocking_l2_misses;     /* blocking loads with a line the L2 fetched */
-  uint64_t l1_hit_loads;           /* loads answered by the L1 (l1.latency each) */
-  uint64_t l1_accesses, l1_hits;   /* lines of loads, as the timed machine counts */
+  uint64_t blocking_loads;       /* loads with a line the L1 did not hold */
+  uint64_t blocking_l2_misses;   /* blocking loads with a line the L2 fetched */
+  uint64_t l1_hit_loads;         /* loads answered by the L1 (l1.latency each) */
+  uint64_t l1_accesses, l1_hits; /* lines of loads, as the timed machine counts */
   uint64_t l2_accesses, l2_hits, l2_misses, l2_whole_line_allocs;
   uint64_t fetch_bytes, writeback_bytes; /* DRAM reads and writes, in bytes */
   uint64_t fetch_bytes_by_class[MEM_CLASS_MAX];
@@ -36,14 +36,14 @@ struct analytic_counts {
  * L)); cycles = max(issue slots / (cores x u), DRAM bytes /
  * dram.bytes_per_cycle). */
 struct analytic_estimate {
-  double contexts_per_core;     /* n */
-  double slots_per_blocking;    /* c (0 when no load blocks) */
-  double blocking_miss_rate;    /* share of blocking loads that miss the L2 */
-  double load_latency_cycles;   /* L */
-  double core_utilization;      /* u */
-  double latency_bound_cycles;  /* issue slots / (cores x u) */
-  double bandwidth_bound_cycles;/* DRAM bytes / dram.bytes_per_cycle */
-  uint64_t cycles;              /* the larger bound, rounded up */
+  double contexts_per_core;      /* n */
+  double slots_per_blocking;     /* c (0 when no load blocks) */
+  double blocking_miss_rate;     /* share of blocking loads that miss the L2 */
+  double load_latency_cycles;    /* L */
+  double core_utilization;       /* u */
+  double latency_bound_cycles;   /* issue slots / (cores x u) */
+  double bandwidth_bound_cycles; /* DRAM bytes / dram.bytes_per_cycle */
+  uint64_t cycles;               /* the larger bound, rounded up */
 };
 
 struct analytic;

@@ -52,16 +52,16 @@ struct cache {
   struct set **set_pages;
   uint64_t set_page_count;
   uint64_t lines, sets, ways;
-  uint64_t uses;         /* scanned: the last stamp given */
-  unsigned lg2_ways;     /* ways a power of two: its log2, else 64 (divide) */
-  uint64_t set_mask;     /* sets - 1 when a power of two, else 0 (use %) */
-  bool scan;             /* few ways: find a line by scanning its set */
-  uint32_t *table;       /* otherwise: slot index + 1; 0 empty */
+  uint64_t uses;     /* scanned: the last stamp given */
+  unsigned lg2_ways; /* ways a power of two: its log2, else 64 (divide) */
+  uint64_t set_mask; /* sets - 1 when a power of two, else 0 (use %) */
+  bool scan;         /* few ways: find a line by scanning its set */
+  uint32_t *table;   /* otherwise: slot index + 1; 0 empty */
   uint64_t table_mask, table_used;
   unsigned table_shift;
-  uint64_t vec_bytes;    /* slots allocated in vectors */
-  bool flat_ok;          /* small and scanned: one block, made at the first install */
-  struct slot *flat;     /* then every slot, set s's at flat[s * ways] */
+  uint64_t vec_bytes; /* slots allocated in vectors */
+  bool flat_ok;       /* small and scanned: one block, made at the first install */
+  struct slot *flat;  /* then every slot, set s's at flat[s * ways] */
 };
 
 /* A scanned cache of at most this many lines (an L1: 8 KiB is 128) keeps
@@ -159,10 +159,13 @@ enum cache_geometry cache_geometry(const struct cache_params *p) {
 }
 
 const char *cache_params_problem(const struct cache_params *p) {
-  static const char *const WHY[] = {
-      NULL, "the line size must be 4 bytes to 64 KiB", "the size is smaller than one line",
-      "the size is not a whole number of lines", "more than 2^28 lines",
-      "more ways than lines", "the ways do not divide the number of lines"};
+  static const char *const WHY[] = {NULL,
+                                    "the line size must be 4 bytes to 64 KiB",
+                                    "the size is smaller than one line",
+                                    "the size is not a whole number of lines",
+                                    "more than 2^28 lines",
+                                    "more ways than lines",
+                                    "the ways do not divide the number of lines"};
   return WHY[cache_geometry(p)];
 }
 
@@ -352,10 +355,16 @@ uint32_t cache_victim(const struct cache *c, uint64_t line) {
   return CACHE_NONE;
 }
 
-bool cache_valid(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->flags & F_VALID; }
+bool cache_valid(const struct cache *c, uint32_t slot) {
+  return slot_peek(c, slot)->flags & F_VALID;
+}
 uint64_t cache_line(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->line; }
-bool cache_dirty(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->flags & F_DIRTY; }
-bool cache_pending(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->flags & F_PENDING; }
+bool cache_dirty(const struct cache *c, uint32_t slot) {
+  return slot_peek(c, slot)->flags & F_DIRTY;
+}
+bool cache_pending(const struct cache *c, uint32_t slot) {
+  return slot_peek(c, slot)->flags & F_PENDING;
+}
 void cache_set_dirty(struct cache *c, uint32_t slot) { slot_get(c, slot)->flags |= F_DIRTY; }
 
 void cache_set_pending(struct cache *c, uint32_t slot, bool pending) {

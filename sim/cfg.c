@@ -120,8 +120,9 @@ static uint32_t node_add(struct loader *L, uint8_t kind, yaml_mark_t m, const ya
     return 0;
   }
   if (kind != PN_ALIAS && ++L->nodes > CFG_MAX_NODES) {
-    err_set(L->e, L->d->file, line, col, "too many YAML nodes (got more than %u, expected at most %u)",
-            CFG_MAX_NODES, CFG_MAX_NODES);
+    err_set(L->e, L->d->file, line, col,
+            "too many YAML nodes (got more than %u, expected at most %u)", CFG_MAX_NODES,
+            CFG_MAX_NODES);
     return 0;
   }
   if (L->npool == L->cap) {
@@ -159,8 +160,8 @@ static bool on_alias(struct loader *L, const yaml_event_t *ev) {
   int line = (int)ev->start_mark.line + 1, col = (int)ev->start_mark.column + 1;
   uint32_t t = L->anchors ? *anchor_slot(L, name) : 0;
   if (t == 0)
-    return err_set(L->e, L->d->file, line, col, "alias '*%.64s' refers to no anchor defined before it",
-                   name);
+    return err_set(L->e, L->d->file, line, col,
+                   "alias '*%.64s' refers to no anchor defined before it", name);
   const struct pnode *tn = &L->pool[t];
   if (tn->open)
     return err_set(L->e, L->d->file, line, col, "alias '*%.64s' refers to a node that contains it",
@@ -180,8 +181,8 @@ static bool on_alias(struct loader *L, const yaml_event_t *ev) {
                    name, (unsigned long long)L->alias_nodes, CFG_MAX_ALIAS_NODES);
   if (L->nodes > CFG_MAX_NODES)
     return err_set(L->e, L->d->file, line, col,
-                   "alias '*%.64s': too many YAML nodes (got %llu, expected at most %u)",
-                   name, (unsigned long long)L->nodes, CFG_MAX_NODES);
+                   "alias '*%.64s': too many YAML nodes (got %llu, expected at most %u)", name,
+                   (unsigned long long)L->nodes, CFG_MAX_NODES);
   uint32_t i = node_add(L, PN_ALIAS, ev->start_mark, NULL);
   struct pnode *n = &L->pool[i];
   n->target = t;
@@ -196,15 +197,14 @@ static bool on_event(struct loader *L, const yaml_event_t *ev, bool *done) {
   int line = (int)ev->start_mark.line + 1, col = (int)ev->start_mark.column + 1;
   switch (ev->type) {
   case YAML_STREAM_END_EVENT:
-  case YAML_DOCUMENT_END_EVENT:
-    *done = true;
-    return true;
+  case YAML_DOCUMENT_END_EVENT: *done = true; return true;
   case YAML_SCALAR_EVENT: {
     size_t len = ev->data.scalar.length;
     const char *text = (const char *)ev->data.scalar.value;
     if (len > CFG_MAX_SCALAR_BYTES)
-      return err_set(L->e, L->d->file, line, col, "scalar too long (got %zu bytes, expected at most %u)",
-                     len, CFG_MAX_SCALAR_BYTES);
+      return err_set(L->e, L->d->file, line, col,
+                     "scalar too long (got %zu bytes, expected at most %u)", len,
+                     CFG_MAX_SCALAR_BYTES);
     /* A "\0" escape (or \x00, \u0000) would cut the text short: "4\0xyz"
      * would read as 4. */
     if (memchr(text, '\0', len))
@@ -228,7 +228,8 @@ static bool on_event(struct loader *L, const yaml_event_t *ev, bool *done) {
     if (at_key(L))
       return err_set(L->e, L->d->file, line, col, "a key must be a plain word, not a list or map");
     bool seq = ev->type == YAML_SEQUENCE_START_EVENT;
-    const yaml_char_t *anchor = seq ? ev->data.sequence_start.anchor : ev->data.mapping_start.anchor;
+    const yaml_char_t *anchor =
+        seq ? ev->data.sequence_start.anchor : ev->data.mapping_start.anchor;
     uint32_t i = node_add(L, seq ? CFG_SEQ : CFG_MAP, ev->start_mark, anchor);
     if (!i) return false;
     L->pool[i].open = true;
@@ -243,10 +244,8 @@ static bool on_event(struct loader *L, const yaml_event_t *ev, bool *done) {
     child_done(L, i);
     return true;
   }
-  case YAML_ALIAS_EVENT:
-    return on_alias(L, ev);
-  default: /* stream and document starts */
-    return true;
+  case YAML_ALIAS_EVENT: return on_alias(L, ev);
+  default: /* stream and document starts */ return true;
   }
 }
 
@@ -282,8 +281,8 @@ static bool check_duplicates(const struct cfg_doc *d, const struct cfg_node *m, 
   free(r);
   if (dup == UINT32_MAX) return true;
   const struct cfg_node *v = &m->items[dup];
-  return err_set(e, d->file, v->key_line, v->key_col, "duplicate key '%s' (first at line %d)", v->key,
-                 m->items[first].key_line);
+  return err_set(e, d->file, v->key_line, v->key_col, "duplicate key '%s' (first at line %d)",
+                 v->key, m->items[first].key_line);
 }
 
 /* Copy pool node i into out, aliases expanded (copies keep the positions of
@@ -425,10 +424,8 @@ bool cfg_load_file(struct cfg_doc *d, const char *path, struct err *e) {
     buf = xrealloc(buf, cap + 1);
   }
   bool ok;
-  if (ferror(f))
-    ok = err_set(e, path, 0, 0, "cannot read: %s", strerror(errno));
-  else
-    ok = size_ok(d, buf, n, e) && load(d, buf, n, e);
+  if (ferror(f)) ok = err_set(e, path, 0, 0, "cannot read: %s", strerror(errno));
+  else ok = size_ok(d, buf, n, e) && load(d, buf, n, e);
   fclose(f);
   free(buf);
   return ok;
@@ -491,8 +488,7 @@ static const char *kind_name(const struct cfg_node *n) {
 bool cfg_expect_map(const struct cfg_doc *d, const struct cfg_node *n, const char *path,
                     struct err *e) {
   if (n->kind == CFG_MAP) return true;
-  return cfg_fail(d, n, path, e, "wrong type (got %s, expected a map of key: value)",
-                  kind_name(n));
+  return cfg_fail(d, n, path, e, "wrong type (got %s, expected a map of key: value)", kind_name(n));
 }
 
 bool cfg_expect_seq(const struct cfg_doc *d, const struct cfg_node *n, const char *path,
@@ -569,8 +565,7 @@ bool cfg_f64_list(const struct cfg_doc *d, const struct cfg_node *n, const char 
                   unsigned count, double lo, double hi, double *out, struct err *e) {
   if (n->kind != CFG_SEQ || n->count != count) {
     if (n->kind == CFG_SEQ)
-      return cfg_fail(d, n, path, e, "wrong length (got %u numbers, expected %u)", n->count,
-                      count);
+      return cfg_fail(d, n, path, e, "wrong length (got %u numbers, expected %u)", n->count, count);
     return cfg_fail(d, n, path, e, "wrong type (got %s, expected a list of %u numbers)",
                     kind_name(n), count);
   }
@@ -604,10 +599,8 @@ bool cfg_check_keys(const struct cfg_doc *d, const struct cfg_node *m, const cha
     const struct cfg_node *v = &m->items[i];
     if (v->used) continue;
     char where[256];
-    if (path && path[0])
-      snprintf(where, sizeof where, "%s.%s", path, v->key);
-    else
-      snprintf(where, sizeof where, "%s", v->key);
+    if (path && path[0]) snprintf(where, sizeof where, "%s.%s", path, v->key);
+    else snprintf(where, sizeof where, "%s", v->key);
     return err_set(e, d->file, v->key_line, v->key_col,
                    "%s: unknown key '%s' (expected one of: %s)", where, v->key, expected);
   }

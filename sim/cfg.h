@@ -37,15 +37,15 @@ enum cfg_kind { CFG_SCALAR, CFG_MAP, CFG_SEQ };
 
 struct cfg_node {
   enum cfg_kind kind;
-  int line, col;            /* position of the value, 1-based */
-  char *text;               /* scalar text (the document's); NULL for maps and sequences */
-  char *key;                /* key text when this node is a map value (the document's) */
-  int key_line, key_col;    /* position of the key */
-  struct cfg_node *items;   /* map entries or sequence items (owned) */
+  int line, col;          /* position of the value, 1-based */
+  char *text;             /* scalar text (the document's); NULL for maps and sequences */
+  char *key;              /* key text when this node is a map value (the document's) */
+  int key_line, key_col;  /* position of the key */
+  struct cfg_node *items; /* map entries or sequence items (owned) */
   uint32_t count;
-  bool used;                /* read by a getter (for unknown-key checks) */
-  char *asked;              /* a map: the keys readers asked for, ", "-separated, in the
-                             * order first asked (owned; NULL: none yet) */
+  bool used;   /* read by a getter (for unknown-key checks) */
+  char *asked; /* a map: the keys readers asked for, ", "-separated, in the
+                * order first asked (owned; NULL: none yet) */
   uint32_t asked_len;
 };
 

@@ -37,7 +37,7 @@ extern fcontext_t make_fcontext(void *sp, size_t size, void (*fn)(transfer_t));
 #define PAINT 0xA5u
 
 struct stack {
-  struct stack *next; /* free list */
+  struct stack *next;  /* free list */
   unsigned char *base; /* mapping: guard page, then the stack */
   size_t usable;
   size_t skew; /* the first frame starts this far below the top (SKEW_STEP) */

@@ -107,10 +107,8 @@ static bool is_end(int c) { return c == '\0' || c == '\n'; }
 /* Describe a character for a message. */
 static const char *char_name(int c, char *buf, size_t cap) {
   if (is_end(c)) return "end of line";
-  if (c >= 0x21 && c < 0x7f)
-    snprintf(buf, cap, "'%c'", c);
-  else
-    snprintf(buf, cap, "byte 0x%02x", (unsigned)(unsigned char)c);
+  if (c >= 0x21 && c < 0x7f) snprintf(buf, cap, "'%c'", c);
+  else snprintf(buf, cap, "byte 0x%02x", (unsigned)(unsigned char)c);
   return buf;
 }
 

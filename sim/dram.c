@@ -175,8 +175,7 @@ void dram_trace_to(struct dram *d, FILE *f) {
           "# rtsim dram trace v1: address op arrival_dram_cycle arrival_cycle done_cycle "
           "(fidelity %s, DRAM clock %u MHz, core clock %llu kHz; one line a 64-byte request, "
           "in arrival order)\n",
-          dram_model_names[d->p.model], d->p.clock_mhz,
-          (unsigned long long)d->core_khz);
+          dram_model_names[d->p.model], d->p.clock_mhz, (unsigned long long)d->core_khz);
 }
 
 /* ---- the numbers every level shares (README "Numbers") ---- */
@@ -194,10 +193,10 @@ static double dram_read_latency_mean(const void *st, const struct stats_env *env
   (void)env;
   return hist_mean(&((const struct dram_stats *)st)->read_latency);
 }
-#define DRAM_QUANTILE(pc)                                                                   \
-  static uint64_t dram_read_latency_p##pc(const void *st, const struct stats_env *env) {    \
-    (void)env;                                                                              \
-    return hist_quantile(&((const struct dram_stats *)st)->read_latency, pc / 100.0);       \
+#define DRAM_QUANTILE(pc)                                                                          \
+  static uint64_t dram_read_latency_p##pc(const void *st, const struct stats_env *env) {           \
+    (void)env;                                                                                     \
+    return hist_quantile(&((const struct dram_stats *)st)->read_latency, pc / 100.0);              \
   }
 DRAM_QUANTILE(50)
 DRAM_QUANTILE(95)
@@ -212,21 +211,23 @@ static const struct stats_desc dram_desc[] = {
     STATS_FIELD(struct dram_stats, writes, "dram_writes", "count", "64-byte writes served"),
     STATS_FIELD(struct dram_stats, read_bytes, "dram_read_bytes", "bytes", "bytes read"),
     STATS_FIELD(struct dram_stats, write_bytes, "dram_write_bytes", "bytes", "bytes written"),
-    STATS_U64(struct dram_stats, read_bytes, dram_bytes, "dram_bytes", "bytes", "bytes read and written"),
+    STATS_U64(struct dram_stats, read_bytes, dram_bytes, "dram_bytes", "bytes",
+              "bytes read and written"),
     STATS_F64(struct dram_stats, write_bytes, dram_bytes_per_cycle, "dram_bytes_per_cycle",
               "bytes/cycle", "bytes read and written per core cycle of the run"),
     STATS_SLOT(DRAM_STATS_SLOT_UTILIZATION),
     STATS_F64(struct dram_stats, read_latency, dram_read_latency_mean, "dram_read_latency_mean",
               "cycles", "reads, taken to data delivered: mean"),
-    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p50, "dram_read_latency_p50", "cycles",
-              "the same, median"),
-    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p95, "dram_read_latency_p95", "cycles",
-              "the same, 95th percentile"),
-    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p99, "dram_read_latency_p99", "cycles",
-              "the same, 99th percentile"),
-    STATS_FIELD(struct dram_stats, read_latency.max, "dram_read_latency_max", "cycles", "the same, most"),
-    STATS_F64(struct dram_stats, write_latency.sum, dram_write_latency_mean, "dram_write_latency_mean",
-              "cycles", "writes, taken to written: mean"),
+    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p50, "dram_read_latency_p50",
+              "cycles", "the same, median"),
+    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p95, "dram_read_latency_p95",
+              "cycles", "the same, 95th percentile"),
+    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p99, "dram_read_latency_p99",
+              "cycles", "the same, 99th percentile"),
+    STATS_FIELD(struct dram_stats, read_latency.max, "dram_read_latency_max", "cycles",
+                "the same, most"),
+    STATS_F64(struct dram_stats, write_latency.sum, dram_write_latency_mean,
+              "dram_write_latency_mean", "cycles", "writes, taken to written: mean"),
     STATS_SLOT(DRAM_STATS_SLOT_LEVEL),
 };
 static const struct stats_skip dram_skip[] = {
@@ -234,5 +235,9 @@ static const struct stats_skip dram_skip[] = {
     STATS_SKIP(struct dram_stats, write_latency.max, "only the write latency's mean is written"),
     STATS_SKIP(struct dram_stats, write_latency.bucket, "only the write latency's mean is written"),
 };
-const struct stats_descs dram_stats_descs = {"dram", dram_desc, STATS_COUNT(dram_desc),
-                                             sizeof(struct dram_stats), dram_skip, STATS_COUNT(dram_skip)};
+const struct stats_descs dram_stats_descs = {"dram",
+                                             dram_desc,
+                                             STATS_COUNT(dram_desc),
+                                             sizeof(struct dram_stats),
+                                             dram_skip,
+                                             STATS_COUNT(dram_skip)};

@@ -23,10 +23,10 @@ enum { KIND_HIT = 0, KIND_MISS = 1, KIND_CONFLICT = 2 };
 enum cmd_type { CMD_NONE, CMD_ACT, CMD_PRE, CMD_RD, CMD_WR, CMD_REF };
 
 struct bank {
-  int64_t act_ok; /* earliest ACT: PRE + tRP, ACT + tRC, REF + tRFC */
-  int64_t col_ok; /* ACT + tRCD */
-  int64_t pre_ok; /* ACT + tRAS, RD + tRTP, WR + tCWL + BL/2 + tWR */
-  int64_t ref_ok; /* its last precharge + tRP */
+  int64_t act_ok;           /* earliest ACT: PRE + tRP, ACT + tRC, REF + tRFC */
+  int64_t col_ok;           /* ACT + tRCD */
+  int64_t pre_ok;           /* ACT + tRAS, RD + tRTP, WR + tCWL + BL/2 + tWR */
+  int64_t ref_ok;           /* its last precharge + tRP */
   int64_t act_at, close_at; /* the current or last open interval (act_at < 0: none) */
   uint64_t row;
   uint32_t hits; /* column commands since ACT */
@@ -44,10 +44,10 @@ struct rank {
   int64_t act, rd, wr; /* last ACT, RD, WR in the rank */
   int64_t faw[4];      /* the last four ACTs, a ring from faw_i (oldest) */
   unsigned faw_i;
-  int64_t ref_end;     /* REF + tRFC */
-  int64_t next_due;    /* the next refresh falls due (FAR: refresh off) */
-  uint32_t pending;    /* refreshes due and not yet issued */
-  uint32_t open;       /* banks with a row open */
+  int64_t ref_end;  /* REF + tRFC */
+  int64_t next_due; /* the next refresh falls due (FAR: refresh off) */
+  uint32_t pending; /* refreshes due and not yet issued */
+  uint32_t open;    /* banks with a row open */
 };
 
 struct req {
@@ -80,13 +80,13 @@ struct burst {
 struct channel {
   struct queue q[2];
   bool writing;
-  int64_t rd; /* last RD on the channel (tRTW) */
+  int64_t rd;           /* last RD on the channel (tRTW) */
   struct burst *bursts; /* data bursts that may still matter, by start */
   uint32_t nb, cap_b;
   struct bank *banks;   /* ranks x groups x banks_per_group */
   struct group *groups; /* ranks x groups */
   struct rank *ranks;
-  int64_t next;         /* earliest cycle a command may issue or a refresh fall due */
+  int64_t next; /* earliest cycle a command may issue or a refresh fall due */
   uint64_t scan_no;
   /* per_bank / per_rank: */
   struct queue *cq;     /* command queues, by bank within the channel or by rank */
@@ -114,7 +114,8 @@ struct dram_banked {
   uint64_t mk_ch, mk_ra, mk_bg, mk_ba, mk_ro, mk_co;
   int64_t cursor;   /* the first DRAM cycle not yet handled */
   uint64_t wake_at; /* earliest wake pending (UINT64_MAX: none) */
-  uint64_t space_at; /* per_bank: the latest space callback scheduled for a refused second request */
+  uint64_t
+      space_at; /* per_bank: the latest space callback scheduled for a refused second request */
   uint64_t seq, inflight, queued;
   /* Occupancy integrals by time, per queue kind. */
   uint64_t q_len[2], q_last[2];
@@ -158,7 +159,8 @@ bool dram_banked_mapping_ok(const char *s) {
 const char *dram_banked_params_problem(const struct dram_banked_params *p) {
   if (p->clock_mhz < 1 || p->clock_mhz > (1u << 24) / 1000)
     return "dram.clock_mhz: must be 1 to 16777";
-  if (!pow2(p->channels) || p->channels > 64) return "dram.channels: must be a power of two from 1 to 64";
+  if (!pow2(p->channels) || p->channels > 64)
+    return "dram.channels: must be a power of two from 1 to 64";
   if (!pow2(p->ranks) || p->ranks > 16) return "dram.ranks: must be a power of two from 1 to 16";
   if (!pow2(p->bank_groups) || p->bank_groups > 16)
     return "dram.bank_groups: must be a power of two from 1 to 16";
@@ -169,7 +171,8 @@ const char *dram_banked_params_problem(const struct dram_banked_params *p) {
     return "dram.burst_length: must be a power of two from 2 to 64";
   if (!pow2(p->columns) || p->columns < p->burst_length || p->columns > (1u << 20))
     return "dram.columns: must be a power of two from burst_length to 2^20";
-  if (!pow2(p->bus_bytes) || p->bus_bytes > 32) return "dram.bus_bytes: must be a power of two up to 32";
+  if (!pow2(p->bus_bytes) || p->bus_bytes > 32)
+    return "dram.bus_bytes: must be a power of two up to 32";
   if (p->bus_bytes * p->burst_length != 64)
     return "dram.bus_bytes: bus_bytes x burst_length must be 64 (one line per burst)";
   if (!dram_banked_mapping_ok(p->mapping))
@@ -189,7 +192,8 @@ const char *dram_banked_params_problem(const struct dram_banked_params *p) {
       p->queue_structure != DRAM_BANKED_PER_RANK)
     return "dram.queue_structure: expected shared, per_bank or per_rank";
   if (p->queue_structure != DRAM_BANKED_SHARED) {
-    if (p->command_queue < 1 || p->command_queue > 4096) return "dram.command_queue: must be 1 to 4096";
+    if (p->command_queue < 1 || p->command_queue > 4096)
+      return "dram.command_queue: must be 1 to 4096";
     if (p->controller_cycles < 1)
       return "dram.controller_cycles: must be at least 1 with queue_structure per_bank or per_rank "
              "(a request reaches its command queue at the end of a cycle)";
@@ -280,8 +284,8 @@ static void area_to(struct dram_banked *d, int k, uint64_t t) {
 /* The earliest start >= s0 of a burst of `rank` that overlaps no burst on the
  * channel (one idle cycle between ranks). Bursts are disjoint and sorted by
  * start, so moving past one can only meet later ones. */
-static int64_t bus_fit(const struct dram_banked *d, const struct channel *c, int64_t s0, uint32_t rank,
-                       bool write) {
+static int64_t bus_fit(const struct dram_banked *d, const struct channel *c, int64_t s0,
+                       uint32_t rank, bool write) {
   const int64_t b = d->burst_cycles;
   int64_t s = s0;
   for (uint32_t i = 0; i < c->nb; i++) {
@@ -294,8 +298,8 @@ static int64_t bus_fit(const struct dram_banked *d, const struct channel *c, int
 
 /* Record a burst at `start`; forget those that end before any future burst
  * could begin (a command at `now` or later puts data at now + min latency). */
-static void bus_add(struct dram_banked *d, struct channel *c, int64_t now, int64_t start, uint32_t rank,
-                    bool write) {
+static void bus_add(struct dram_banked *d, struct channel *c, int64_t now, int64_t start,
+                    uint32_t rank, bool write) {
   const int64_t b = d->burst_cycles;
   int64_t horizon = now + (d->p.tCL < d->p.tCWL ? d->p.tCL : d->p.tCWL);
   uint32_t k = 0;
@@ -317,8 +321,8 @@ static void bus_add(struct dram_banked *d, struct channel *c, int64_t now, int64
 
 /* ---- Earliest times of each command ---- */
 
-static int64_t act_earliest(const struct dram_banked *d, const struct channel *c, const struct req *r,
-                            int64_t now) {
+static int64_t act_earliest(const struct dram_banked *d, const struct channel *c,
+                            const struct req *r, int64_t now) {
   const struct bank *bk = &c->banks[r->bank];
   const struct rank *rk = &c->ranks[r->rank];
   const struct group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
@@ -330,8 +334,8 @@ static int64_t act_earliest(const struct dram_banked *d, const struct channel *c
   return t;
 }
 
-static int64_t col_earliest(const struct dram_banked *d, const struct channel *c, const struct req *r,
-                            bool write, int64_t now) {
+static int64_t col_earliest(const struct dram_banked *d, const struct channel *c,
+                            const struct req *r, bool write, int64_t now) {
   const struct bank *bk = &c->banks[r->bank];
   const struct rank *rk = &c->ranks[r->rank];
   const struct group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
@@ -360,8 +364,8 @@ struct pick {
   uint32_t rank, bank; /* bank within the channel */
   uint32_t qi;         /* request index in the served queue (per_bank: in command queue cq) */
   uint32_t cq;
-  bool for_req;        /* a request's command (else refresh work) */
-  int64_t next;        /* earliest cycle >= now any candidate could issue (FAR: none) */
+  bool for_req; /* a request's command (else refresh work) */
+  int64_t next; /* earliest cycle >= now any candidate could issue (FAR: none) */
 };
 
 /* qi: the request's index in the served queue, or -1 for refresh work. */
@@ -433,8 +437,7 @@ static void scan(struct dram_banked *d, struct channel *c, int64_t now, struct p
     const struct req *r = &q->r[i];
     if (c->ranks[r->rank].pending) continue;
     const struct bank *bk = &c->banks[r->bank];
-    if (!bk->open)
-      consider(pk, act_earliest(d, c, r, now), now, CMD_ACT, r->rank, r->bank, i);
+    if (!bk->open) consider(pk, act_earliest(d, c, r, now), now, CMD_ACT, r->rank, r->bank, i);
     else if (bk->row != r->row && !bk->hit_held)
       consider(pk, max64(max64(now, r->ready), bk->pre_ok), now, CMD_PRE, r->rank, r->bank, i);
   }
@@ -488,8 +491,8 @@ static void bank_close(struct dram_banked *d, struct channel *c, struct bank *bk
 
 /* The bank, rank, group and bus state of r's column command at now; returns
  * the cycle its data transfer ends. */
-static int64_t column_state(struct dram_banked *d, struct channel *c, const struct req *rq, bool write,
-                            int64_t now) {
+static int64_t column_state(struct dram_banked *d, struct channel *c, const struct req *rq,
+                            bool write, int64_t now) {
   const struct req r = *rq;
   struct bank *bk = &c->banks[r.bank];
   struct rank *rk = &c->ranks[r.rank];
@@ -536,7 +539,8 @@ static void queue_leave(struct dram_banked *d, int qk, const struct req *r, int6
   if (wait > d->st.queue_wait_max_cycles[qk]) d->st.queue_wait_max_cycles[qk] = wait;
 }
 
-static void issue_column(struct dram_banked *d, struct channel *c, int qk, uint32_t qi, int64_t now) {
+static void issue_column(struct dram_banked *d, struct channel *c, int qk, uint32_t qi,
+                         int64_t now) {
   struct queue *q = &c->q[qk];
   struct req r = q->r[qi];
   memmove(&q->r[qi], &q->r[qi + 1], (q->n - qi - 1) * sizeof *q->r);
@@ -554,7 +558,8 @@ static void issue_column(struct dram_banked *d, struct channel *c, int qk, uint3
   engine_at(d->e, done, on_done, d, r.tag);
 }
 
-static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t qi, uint32_t j, int64_t now);
+static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t qi, uint32_t j,
+                            int64_t now);
 
 static void issue(struct dram_banked *d, struct channel *c, const struct pick *pk, int64_t now) {
   const int qk = c->writing ? WR_Q : RD_Q;
@@ -604,8 +609,7 @@ static void issue(struct dram_banked *d, struct channel *c, const struct pick *p
     d->st.refresh_cycles += d->p.tRFC;
     break;
   }
-  case CMD_NONE:
-    break;
+  case CMD_NONE: break;
   }
 }
 
@@ -754,7 +758,8 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
   }
 }
 
-static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t qi, uint32_t j, int64_t now) {
+static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t qi, uint32_t j,
+                            int64_t now) {
   struct queue *q = &c->cq[qi];
   struct req r = q->r[j];
   memmove(&q->r[j], &q->r[j + 1], (q->n - j - 1) * sizeof *q->r);
@@ -762,7 +767,9 @@ static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t q
   c->cq_n--;
   d->queued--;
   /* DRAMsim3's row hit: the row has served a column command since its ACT. */
-  count_kind(d, c->banks[r.bank].hits ? KIND_HIT : r.kind == KIND_CONFLICT ? KIND_CONFLICT : KIND_MISS);
+  count_kind(d, c->banks[r.bank].hits     ? KIND_HIT
+                : r.kind == KIND_CONFLICT ? KIND_CONFLICT
+                                          : KIND_MISS);
   int64_t end = column_state(d, c, &r, r.write, now);
   queue_leave(d, r.write ? WR_Q : RD_Q, &r, now);
   if (r.write) return; /* posted: served when it arrived */
@@ -947,8 +954,9 @@ static void serve_at(struct dram_banked *d, int64_t at, uint64_t tag) {
 
 /* Queue a request in its channel's queue qk (the request's fields but tag,
  * line and ready from co); the level's counters follow. */
-static struct req *enqueue(struct dram_banked *d, struct channel *c, int qk, const struct dram_banked_coord *co,
-                           uint64_t addr, uint64_t tag, int64_t ready) {
+static struct req *enqueue(struct dram_banked *d, struct channel *c, int qk,
+                           const struct dram_banked_coord *co, uint64_t addr, uint64_t tag,
+                           int64_t ready) {
   struct queue *q = &c->q[qk];
   CHECK_LT(q->n, q->cap);
   struct req *r = &q->r[q->n++];
@@ -972,8 +980,8 @@ static struct req *enqueue(struct dram_banked *d, struct channel *c, int qk, con
 }
 
 /* per_bank / per_rank: the request arrives after DRAM cycle cursor - 1. */
-static void take_cq(struct dram_banked *d, struct channel *c, const struct dram_banked_coord *co, uint64_t addr,
-                    bool write, uint64_t tag) {
+static void take_cq(struct dram_banked *d, struct channel *c, const struct dram_banked_coord *co,
+                    uint64_t addr, bool write, uint64_t tag) {
   const int64_t arr = d->cursor - 1, ready = arr + (int64_t)d->p.controller_cycles;
   const uint64_t line = addr >> 6;
   CHECK_LT(c->took_at, arr);
@@ -1084,63 +1092,77 @@ static double bk_bus_utilization(const void *st, const struct stats_env *env) {
 static double bk_bank_active_fraction(const void *st, const struct stats_env *env) {
   const struct dram_banked *d = env->ctx;
   const struct dram_banked_stats *s = st;
-  return ratio((double)s->bank_open_cycles, bk_dram_cycles(env) * d->banks_per_channel * d->p.channels);
+  return ratio((double)s->bank_open_cycles,
+               bk_dram_cycles(env) * d->banks_per_channel * d->p.channels);
 }
-#define BK_QUEUE_FNS(k, n)                                                                     \
-  static double bk_queue_length_mean_##k(const void *st, const struct stats_env *env) {        \
-    return ratio((double)((const struct dram_banked_stats *)st)->queue_area[k], (double)env->cycles); \
-  }                                                                                            \
-  static double bk_queue_wait_mean_##k(const void *st, const struct stats_env *env) {          \
-    (void)env;                                                                                 \
-    const struct dram_banked_stats *s = st;                                                    \
-    return ratio((double)s->queue_wait_sum_cycles[k], (double)s->n);                           \
+#define BK_QUEUE_FNS(k, n)                                                                         \
+  static double bk_queue_length_mean_##k(const void *st, const struct stats_env *env) {            \
+    return ratio((double)((const struct dram_banked_stats *)st)->queue_area[k],                    \
+                 (double)env->cycles);                                                             \
+  }                                                                                                \
+  static double bk_queue_wait_mean_##k(const void *st, const struct stats_env *env) {              \
+    (void)env;                                                                                     \
+    const struct dram_banked_stats *s = st;                                                        \
+    return ratio((double)s->queue_wait_sum_cycles[k], (double)s->n);                               \
   }
 BK_QUEUE_FNS(0, reads)
 BK_QUEUE_FNS(1, writes)
-#define BK_QUEUE(k, q, what)                                                                     \
-  STATS_F64(struct dram_banked_stats, queue_area[k], bk_queue_length_mean_##k,                  \
-            "dram_" q "_queue_length_mean", "requests", what " queued, all channels: mean over the run"), \
-      STATS_FIELD(struct dram_banked_stats, queue_max[k], "dram_" q "_queue_length_max", "requests", \
-                  what " queued, all channels: most at once"),                                   \
-      STATS_F64(struct dram_banked_stats, queue_wait_sum_cycles[k], bk_queue_wait_mean_##k,      \
-                "dram_" q "_queue_wait_mean_cycles", "cycles", what ", taken to column command: mean"), \
-      STATS_FIELD(struct dram_banked_stats, queue_wait_max_cycles[k], "dram_" q "_queue_wait_max_cycles", \
-                  "cycles", what ", taken to column command: most")
+#define BK_QUEUE(k, q, what)                                                                       \
+  STATS_F64(struct dram_banked_stats, queue_area[k], bk_queue_length_mean_##k,                     \
+            "dram_" q "_queue_length_mean", "requests",                                            \
+            what " queued, all channels: mean over the run"),                                      \
+      STATS_FIELD(struct dram_banked_stats, queue_max[k], "dram_" q "_queue_length_max",           \
+                  "requests", what " queued, all channels: most at once"),                         \
+      STATS_F64(struct dram_banked_stats, queue_wait_sum_cycles[k], bk_queue_wait_mean_##k,        \
+                "dram_" q "_queue_wait_mean_cycles", "cycles",                                     \
+                what ", taken to column command: mean"),                                           \
+      STATS_FIELD(struct dram_banked_stats, queue_wait_max_cycles[k],                              \
+                  "dram_" q "_queue_wait_max_cycles", "cycles",                                    \
+                  what ", taken to column command: most")
 
 static const struct stats_desc banked_desc[] = {
-    STATS_FIELD(struct dram_banked_stats, row_hits, "dram_row_hits", "count", "requests that found their row open"),
-    STATS_FIELD(struct dram_banked_stats, row_misses, "dram_row_misses", "count", "requests that found their bank closed"),
+    STATS_FIELD(struct dram_banked_stats, row_hits, "dram_row_hits", "count",
+                "requests that found their row open"),
+    STATS_FIELD(struct dram_banked_stats, row_misses, "dram_row_misses", "count",
+                "requests that found their bank closed"),
     STATS_FIELD(struct dram_banked_stats, row_conflicts, "dram_row_conflicts", "count",
                 "requests that found another row open"),
     STATS_F64(struct dram_banked_stats, reads, bk_row_hit_rate, "dram_row_hit_rate", "fraction",
               "row hits / requests (reads and writes)"),
     STATS_FIELD(struct dram_banked_stats, activates, "dram_activates", "count", "row activations"),
-    STATS_FIELD(struct dram_banked_stats, precharges, "dram_precharges", "count", "precharges, auto-precharges included"),
+    STATS_FIELD(struct dram_banked_stats, precharges, "dram_precharges", "count",
+                "precharges, auto-precharges included"),
     STATS_FIELD(struct dram_banked_stats, refreshes, "dram_refreshes", "count", "refresh commands"),
     STATS_FIELD(struct dram_banked_stats, refresh_cycles, "dram_refresh_cycles", "DRAM cycles",
                 "rank-cycles in refresh (DRAM clock)"),
-    STATS_FIELD(struct dram_banked_stats, write_drains, "dram_write_drains", "count", "turns from reads to writes"),
+    STATS_FIELD(struct dram_banked_stats, write_drains, "dram_write_drains", "count",
+                "turns from reads to writes"),
     STATS_FIELD(struct dram_banked_stats, write_forwards, "dram_write_forwards", "count",
                 "reads answered from the write queue (no command)"),
     STATS_FIELD(struct dram_banked_stats, write_merges, "dram_write_merges", "count",
                 "writes that found their line in the write queue"),
     STATS_FIELD(struct dram_banked_stats, read_merges, "dram_read_merges", "count",
                 "reads served by another queued read's column command"),
-    STATS_F64(struct dram_banked_stats, bus_busy_cycles, bk_bus_utilization, "dram_bus_utilization", "fraction",
-              "data bus busy, averaged over channels"),
-    STATS_F64(struct dram_banked_stats, bank_open_cycles, bk_bank_active_fraction, "dram_bank_active_fraction",
-              "fraction", "bank-cycles with a row open"),
+    STATS_F64(struct dram_banked_stats, bus_busy_cycles, bk_bus_utilization, "dram_bus_utilization",
+              "fraction", "data bus busy, averaged over channels"),
+    STATS_F64(struct dram_banked_stats, bank_open_cycles, bk_bank_active_fraction,
+              "dram_bank_active_fraction", "fraction", "bank-cycles with a row open"),
     BK_QUEUE(0, "read", "reads"),
     BK_QUEUE(1, "write", "writes"),
 };
 static const struct stats_skip banked_skip[] = {
-    STATS_SKIP(struct dram_banked_stats, writes, "read with reads by dram_row_hit_rate and the write queue's mean"),
+    STATS_SKIP(struct dram_banked_stats, writes,
+               "read with reads by dram_row_hit_rate and the write queue's mean"),
     STATS_SKIP(struct dram_banked_stats, read_latency_sum_cycles,
                "the same as the read latency every level reports (dram_read_latency_mean)"),
-    STATS_SKIP(struct dram_banked_stats, dram_cycles, "the figures use the run's length in DRAM cycles"),
+    STATS_SKIP(struct dram_banked_stats, dram_cycles,
+               "the figures use the run's length in DRAM cycles"),
 };
-const struct stats_descs dram_banked_stats_descs = {"dram banked", banked_desc, STATS_COUNT(banked_desc),
-                                                    sizeof(struct dram_banked_stats), banked_skip,
+const struct stats_descs dram_banked_stats_descs = {"dram banked",
+                                                    banked_desc,
+                                                    STATS_COUNT(banked_desc),
+                                                    sizeof(struct dram_banked_stats),
+                                                    banked_skip,
                                                     STATS_COUNT(banked_skip)};
 
 static void banked_report(const void *self, struct stats_table *t, uint64_t cycles) {
@@ -1154,7 +1176,9 @@ static void banked_destroy(void *self) { dram_banked_destroy(self); }
 const struct dram_level_ops dram_banked_ops = {banked_can_take, banked_take, banked_finish,
                                                banked_report, banked_destroy};
 
-const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d) { return &d->st; }
+const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d) {
+  return &d->st;
+}
 
 struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint64_t core_khz,
                                        struct engine *e, const struct dram_client *client) {
@@ -1172,8 +1196,9 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
   d->cq_mode = p->queue_structure != DRAM_BANKED_SHARED;
   d->wake_at = UINT64_MAX;
   /* Field widths, then positions from the least significant (the last). */
-  unsigned width[6] = {lg2(p->rows), lg2(p->channels), lg2(p->ranks), lg2(p->bank_groups),
-                       lg2(p->banks_per_group), lg2(p->columns / p->burst_length)};
+  unsigned width[6] = {
+      lg2(p->rows),        lg2(p->channels),        lg2(p->ranks),
+      lg2(p->bank_groups), lg2(p->banks_per_group), lg2(p->columns / p->burst_length)};
   unsigned pos[6] = {0}, at = 0;
   for (int i = 5; i >= 0; i--) {
     int f = field_of(p->mapping + 2 * i);

@@ -171,7 +171,7 @@ struct dram_banked_params {
   uint32_t write_high, write_low;   /* write drain watermarks (entries) */
   uint32_t controller_cycles;       /* DRAM cycles from taking a request to its first command */
   enum dram_banked_queues queue_structure;
-  uint32_t command_queue;           /* per_bank / per_rank: entries a command queue */
+  uint32_t command_queue; /* per_bank / per_rank: entries a command queue */
   /* Timing in DRAM clock cycles. */
   uint32_t tCL, tCWL, tRCD, tRP, tRAS, tRC, tCCD_S, tCCD_L, tRRD_S, tRRD_L, tFAW, tWR, tWTR_S,
       tWTR_L, tRTW, tRTP, tREFI, tRFC;
@@ -209,14 +209,14 @@ struct dram_banked_stats {
   uint64_t write_merges;   /* writes that found their line in the write queue */
   uint64_t read_merges;    /* per_bank / per_rank: reads served by another queued read's RD */
   /* Per queue kind [0] reads, [1] writes: */
-  uint64_t queue_area[2];          /* time integral of the entries queued, core cycles x entries */
+  uint64_t queue_area[2]; /* time integral of the entries queued, core cycles x entries */
   uint64_t queue_wait_sum_cycles[2]; /* sum over requests of their queue time (core cycles) */
   uint64_t queue_wait_max_cycles[2];
-  uint64_t queue_max[2];           /* most entries queued at once, all channels together */
+  uint64_t queue_max[2];            /* most entries queued at once, all channels together */
   uint64_t read_latency_sum_cycles; /* take to done, reads, core cycles */
-  uint64_t bus_busy_cycles;        /* data bus cycles carrying a burst, summed over channels */
-  uint64_t bank_open_cycles;       /* DRAM cycles with a row open, summed over banks */
-  uint64_t dram_cycles;            /* DRAM cycles simulated when finished */
+  uint64_t bus_busy_cycles;         /* data bus cycles carrying a burst, summed over channels */
+  uint64_t bank_open_cycles;        /* DRAM cycles with a row open, summed over banks */
+  uint64_t dram_cycles;             /* DRAM cycles simulated when finished */
 };
 const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d);
 /* The level's numbers, over its struct dram_banked_stats (sim/stats.h). */

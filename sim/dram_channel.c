@@ -17,7 +17,7 @@ struct dram_channel {
   struct dram_client client;
   double ticks_per_byte;
   dram_tick *starts; /* ring: start ticks of the last queue_depth requests */
-  uint64_t k;       /* requests so far */
+  uint64_t k;        /* requests so far */
   uint64_t space_at; /* cycle of the pending space event, or UINT64_MAX */
   /* Occupancy sweep: entry and start ticks of requests not yet started at
    * sweep_t (a ring of capacity sw_cap from sw_lo, sw_n long); sw_e: how many
@@ -38,7 +38,8 @@ static void sweep_to(struct dram_channel *d, dram_tick x) {
   const double tick = 1.0 / (double)(1ull << DRAM_TICK_BITS);
   while (d->sw_n) {
     dram_tick *head = d->sw[d->sw_lo % d->sw_cap];
-    dram_tick next_entry = d->sw_e < d->sw_n ? d->sw[(d->sw_lo + d->sw_e) % d->sw_cap][0] : TICK_FOREVER;
+    dram_tick next_entry =
+        d->sw_e < d->sw_n ? d->sw[(d->sw_lo + d->sw_e) % d->sw_cap][0] : TICK_FOREVER;
     dram_tick next_start = head[1];
     dram_tick ev = next_entry < next_start ? next_entry : next_start;
     if (ev > x) break;
@@ -88,7 +89,8 @@ const char *dram_channel_params_problem(const struct dram_channel_params *p) {
   if (!(p->bytes_per_cycle > 0) || !isfinite(p->bytes_per_cycle) || p->bytes_per_cycle > 1e6)
     return "dram.bytes_per_cycle: must be above 0 and at most 10^6 bytes per cycle";
   if (p->bytes_per_cycle < 1e-6) return "dram.bytes_per_cycle: must be at least 10^-6";
-  if (p->queue_depth < 1 || p->queue_depth > (1u << 20)) return "dram.queue_depth: must be 1 to 2^20";
+  if (p->queue_depth < 1 || p->queue_depth > (1u << 20))
+    return "dram.queue_depth: must be 1 to 2^20";
   if (p->latency_cycles > (1ull << 40)) return "dram.latency: must be at most 2^40 cycles";
   return NULL;
 }
@@ -174,26 +176,34 @@ static uint64_t ch_fifo_length_max(const void *st, const struct stats_env *env) 
   return ((const struct dram_channel_stats *)st)->fifo_max;
 }
 
-#define CH_AFTER(f) (offsetof(struct dram_channel_stats, f) + STATS_FIELD_SIZE(struct dram_channel_stats, f))
+#define CH_AFTER(f)                                                                                \
+  (offsetof(struct dram_channel_stats, f) + STATS_FIELD_SIZE(struct dram_channel_stats, f))
 static const struct stats_desc channel_desc[] = {
     STATS_F64(struct dram_channel_stats, busy_ticks, ch_utilization, "dram_utilization", "fraction",
               "cycles the channel was transferring / cycles of the run"),
-    STATS_F64(struct dram_channel_stats, wait_ticks_sum, ch_fifo_wait_mean, "dram_fifo_wait_mean", "cycles",
-              "requests, taken to the start of their transfer: mean"),
-    STATS_F64(struct dram_channel_stats, fifo_area, ch_fifo_length_mean, "dram_fifo_length_mean", "requests",
-              "requests in the FIFO: mean over the run"),
-    STATS_U64(struct dram_channel_stats, fifo_max, ch_fifo_length_max, "dram_fifo_length_max", "requests",
-              "requests in the FIFO: most at once"),
+    STATS_F64(struct dram_channel_stats, wait_ticks_sum, ch_fifo_wait_mean, "dram_fifo_wait_mean",
+              "cycles", "requests, taken to the start of their transfer: mean"),
+    STATS_F64(struct dram_channel_stats, fifo_area, ch_fifo_length_mean, "dram_fifo_length_mean",
+              "requests", "requests in the FIFO: mean over the run"),
+    STATS_U64(struct dram_channel_stats, fifo_max, ch_fifo_length_max, "dram_fifo_length_max",
+              "requests", "requests in the FIFO: most at once"),
 };
 static const struct stats_skip channel_skip[] = {
-    STATS_SKIP(struct dram_channel_stats, requests, "the wait mean's divisor: dram_reads + dram_writes"),
+    STATS_SKIP(struct dram_channel_stats, requests,
+               "the wait mean's divisor: dram_reads + dram_writes"),
     STATS_SKIP(struct dram_channel_stats, last_end_ticks, "the channel's own clock"),
-    {CH_AFTER(requests), offsetof(struct dram_channel_stats, busy_ticks) - CH_AFTER(requests), "padding", NULL},
-    {CH_AFTER(fifo_max), offsetof(struct dram_channel_stats, last_end_ticks) - CH_AFTER(fifo_max), "padding", NULL},
-    {CH_AFTER(last_end_ticks), sizeof(struct dram_channel_stats) - CH_AFTER(last_end_ticks), "padding", NULL},
+    {CH_AFTER(requests), offsetof(struct dram_channel_stats, busy_ticks) - CH_AFTER(requests),
+     "padding", NULL},
+    {CH_AFTER(fifo_max), offsetof(struct dram_channel_stats, last_end_ticks) - CH_AFTER(fifo_max),
+     "padding", NULL},
+    {CH_AFTER(last_end_ticks), sizeof(struct dram_channel_stats) - CH_AFTER(last_end_ticks),
+     "padding", NULL},
 };
-const struct stats_descs dram_channel_stats_descs = {"dram channel", channel_desc, STATS_COUNT(channel_desc),
-                                                     sizeof(struct dram_channel_stats), channel_skip,
+const struct stats_descs dram_channel_stats_descs = {"dram channel",
+                                                     channel_desc,
+                                                     STATS_COUNT(channel_desc),
+                                                     sizeof(struct dram_channel_stats),
+                                                     channel_skip,
                                                      STATS_COUNT(channel_skip)};
 
 static void ch_report(const void *self, struct stats_table *t, uint64_t cycles) {

@@ -18,7 +18,7 @@ typedef void (*engine_fn)(void *ctx, uint64_t arg);
 
 struct engine;
 
-struct engine *engine_create(void); /* fatal on allocation failure; caller destroys */
+struct engine *engine_create(void);    /* fatal on allocation failure; caller destroys */
 void engine_destroy(struct engine *e); /* NULL ok */
 
 /* The cycle of the event being handled (or of the last one handled). */

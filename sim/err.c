@@ -46,14 +46,10 @@ bool err_set(struct err *e, const char *file, int line, int col, const char *fmt
 }
 
 void err_format(const struct err *e, char *buf, unsigned buf_size) {
-  if (!e->file[0])
-    snprintf(buf, buf_size, "error: %s", e->msg);
-  else if (e->line <= 0)
-    snprintf(buf, buf_size, "%s: error: %s", e->file, e->msg);
-  else if (e->col <= 0)
-    snprintf(buf, buf_size, "%s:%d: error: %s", e->file, e->line, e->msg);
-  else
-    snprintf(buf, buf_size, "%s:%d:%d: error: %s", e->file, e->line, e->col, e->msg);
+  if (!e->file[0]) snprintf(buf, buf_size, "error: %s", e->msg);
+  else if (e->line <= 0) snprintf(buf, buf_size, "%s: error: %s", e->file, e->msg);
+  else if (e->col <= 0) snprintf(buf, buf_size, "%s:%d: error: %s", e->file, e->line, e->msg);
+  else snprintf(buf, buf_size, "%s:%d:%d: error: %s", e->file, e->line, e->col, e->msg);
 }
 
 void err_check_failed(const char *file, int line, const char *expr) {

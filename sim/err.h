@@ -33,9 +33,9 @@ void err_escape(char *out, size_t cap, const char *s);
 void err_format(const struct err *e, char *buf, unsigned buf_size);
 
 /* Fatal programmer or allocation error: prints and aborts. Never for user input. */
-#define CHECK(cond)                                                                     \
-  do {                                                                                  \
-    if (!(cond)) err_check_failed(__FILE__, __LINE__, #cond);                           \
+#define CHECK(cond)                                                                                \
+  do {                                                                                             \
+    if (!(cond)) err_check_failed(__FILE__, __LINE__, #cond);                                      \
   } while (0)
 _Noreturn void err_check_failed(const char *file, int line, const char *expr);
 
@@ -54,11 +54,10 @@ _Noreturn void err_check_failed(const char *file, int line, const char *expr);
 #define CHECK_GE(a, b) ERR_CHECK_OP_(a, >=, b, #a, #b)
 
 /* The operands' text is taken before expansion, so NULL prints as NULL. */
-#define ERR_CHECK_OP_(a, op, b, a_text, b_text)                                         \
-  do {                                                                                  \
-    if (!((a)op(b)))                                                                    \
-      err_check_op_failed(__FILE__, __LINE__, a_text, #op, b_text, ERR_VALUE_(a),       \
-                          ERR_VALUE_(b));                                               \
+#define ERR_CHECK_OP_(a, op, b, a_text, b_text)                                                    \
+  do {                                                                                             \
+    if (!((a)op(b)))                                                                               \
+      err_check_op_failed(__FILE__, __LINE__, a_text, #op, b_text, ERR_VALUE_(a), ERR_VALUE_(b));  \
   } while (0)
 
 /* One value of a failed CHECK_*, for printing. */
@@ -85,15 +84,24 @@ static inline struct err_value err_value_pointer(const volatile void *v) {
   struct err_value x = {ERR_VALUE_POINTER, 0, 0, 0, v};
   return x;
 }
-#define ERR_VALUE_(x)                                                                   \
-  _Generic((x), _Bool: err_value_unsigned, char: err_value_signed,                      \
-           signed char: err_value_signed, short: err_value_signed, int: err_value_signed, \
-           long: err_value_signed, long long: err_value_signed,                         \
-           unsigned char: err_value_unsigned, unsigned short: err_value_unsigned,       \
-           unsigned: err_value_unsigned, unsigned long: err_value_unsigned,             \
-           unsigned long long: err_value_unsigned, float: err_value_float,              \
-           double: err_value_float, long double: err_value_float,                       \
-           default: err_value_pointer)(x)
+#define ERR_VALUE_(x)                                                                              \
+  _Generic((x), _Bool                                                                              \
+           : err_value_unsigned, char                                                              \
+           : err_value_signed, signed char                                                         \
+           : err_value_signed, short                                                               \
+           : err_value_signed, int                                                                 \
+           : err_value_signed, long                                                                \
+           : err_value_signed, long long                                                           \
+           : err_value_signed, unsigned char                                                       \
+           : err_value_unsigned, unsigned short                                                    \
+           : err_value_unsigned, unsigned                                                          \
+           : err_value_unsigned, unsigned long                                                     \
+           : err_value_unsigned, unsigned long long                                                \
+           : err_value_unsigned, float                                                             \
+           : err_value_float, double                                                               \
+           : err_value_float, long double                                                          \
+           : err_value_float, default                                                              \
+           : err_value_pointer)(x)
 _Noreturn void err_check_op_failed(const char *file, int line, const char *a, const char *op,
                                    const char *b, struct err_value va, struct err_value vb);
 

@@ -23,7 +23,7 @@ struct req {
   uint64_t ready_at; /* a merged load: not before this cycle */
   uint32_t tag;      /* the client's (l2_access) */
   uint8_t op, cls;
-  bool owner;        /* in a pending line's waiters: the access that missed (client.cost) */
+  bool owner; /* in a pending line's waiters: the access that missed (client.cost) */
   uint32_t next;
 };
 
@@ -66,15 +66,15 @@ struct l2 {
   struct dram *dram;
   struct cache *tags;
   uint64_t *bank_free;
-  bool banks_pow2;       /* banks a power of two: mask, not divide, the line */
+  bool banks_pow2; /* banks a power of two: mask, not divide, the line */
   uint32_t mshr_used;
   uint32_t wb_used; /* write-buffer places taken (reserved at eviction) */
   struct req *reqs;
   uint32_t req_free, req_cap;
   uint32_t stall_head, stall_tail;
-  int stall_reason;      /* the oldest stalled access's reason, or -1 */
-  uint64_t stall_since;  /* when that reason began */
-  int last_refusal;      /* why l2_try last said no */
+  int stall_reason;     /* the oldest stalled access's reason, or -1 */
+  uint64_t stall_since; /* when that reason began */
+  int last_refusal;     /* why l2_try last said no */
   struct ring miss_q, wb;
   struct l2_stats st;
 };
@@ -84,7 +84,8 @@ const char *l2_params_problem(const struct l2_params *p) {
   if (cache_params_problem(&c)) return "l2: size and ways do not make a cache of 64-byte lines";
   if (p->banks < 1 || p->banks > 4096) return "l2.banks: must be 1 to 4096";
   if (p->mshrs < 1 || p->mshrs > (1u << 20)) return "l2.mshrs: must be 1 to 2^20";
-  if (p->write_buffer < 1 || p->write_buffer > (1u << 20)) return "l2.write_buffer: must be 1 to 2^20";
+  if (p->write_buffer < 1 || p->write_buffer > (1u << 20))
+    return "l2.write_buffer: must be 1 to 2^20";
   return NULL;
 }
 
@@ -93,7 +94,8 @@ static uint32_t req_new(struct l2 *l2) {
     uint32_t old = l2->req_cap;
     l2->req_cap = old ? 2 * old : 1024;
     l2->reqs = xrealloc(l2->reqs, (uint64_t)l2->req_cap * sizeof *l2->reqs);
-    for (uint32_t i = old; i < l2->req_cap; i++) l2->reqs[i].next = i + 1 < l2->req_cap ? i + 1 : NONE;
+    for (uint32_t i = old; i < l2->req_cap; i++)
+      l2->reqs[i].next = i + 1 < l2->req_cap ? i + 1 : NONE;
     l2->req_free = old;
   }
   uint32_t r = l2->req_free;
@@ -438,7 +440,8 @@ struct dram_client l2_dram_client(struct l2 *l2) {
 void l2_attach(struct l2 *l2, struct dram *d) { l2->dram = d; }
 
 void l2_set_cost(struct l2 *l2, void *cost_ctx,
-                 void (*cost)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls, bool write)) {
+                 void (*cost)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls,
+                              bool write)) {
   CHECK_EQ(l2->st.accesses + l2->st.stalls, 0);
   l2->client.cost_ctx = cost_ctx;
   l2->client.cost = cost;
@@ -499,37 +502,40 @@ static double l2_miss_rate(const void *st, const struct stats_env *env) {
 /* A queue's numbers for Little's law: requests that left it, their mean wait,
  * and the mean and most requests inside (length_mean x cycles = wait_mean x
  * requests, measured apart). */
-#define L2_QUEUE_FNS(q)                                                                  \
-  static double q##_wait_mean(const void *st, const struct stats_env *env) {             \
-    (void)env;                                                                           \
-    const struct l2_stats *s = st;                                                       \
-    return l2_ratio(s->q.wait_sum, s->q.left);                                           \
-  }                                                                                      \
-  static double q##_length_mean(const void *st, const struct stats_env *env) {           \
-    const struct l2_stats *s = st;                                                       \
-    return l2_ratio(s->q.area, env->cycles);                                             \
+#define L2_QUEUE_FNS(q)                                                                            \
+  static double q##_wait_mean(const void *st, const struct stats_env *env) {                       \
+    (void)env;                                                                                     \
+    const struct l2_stats *s = st;                                                                 \
+    return l2_ratio(s->q.wait_sum, s->q.left);                                                     \
+  }                                                                                                \
+  static double q##_length_mean(const void *st, const struct stats_env *env) {                     \
+    const struct l2_stats *s = st;                                                                 \
+    return l2_ratio(s->q.area, env->cycles);                                                       \
   }
 L2_QUEUE_FNS(stall_queue)
 L2_QUEUE_FNS(miss_queue)
 L2_QUEUE_FNS(write_buffer)
-#define L2_QUEUE(q, pre, what)                                                                    \
-  STATS_FIELD(struct l2_stats, q.left, pre "_requests", "requests", what " that left it"),       \
-      STATS_F64(struct l2_stats, q.wait_sum, q##_wait_mean, pre "_wait_mean", "cycles",          \
-                what ": mean cycles inside"),                                                    \
-      STATS_F64(struct l2_stats, q.area, q##_length_mean, pre "_length_mean", "requests",        \
-                what ": mean requests inside over the run"),                                     \
-      STATS_FIELD(struct l2_stats, q.max, pre "_length_max", "requests", what ": most inside at once")
-#define L2_QUEUE_SKIPS(q)                                                                        \
-  STATS_SKIP(struct l2_stats, q.entered, "equals requests at the end of a run (nothing queued)"), \
-      STATS_SKIP(struct l2_stats, q.len, "0 at the end of a run"),                               \
+#define L2_QUEUE(q, pre, what)                                                                     \
+  STATS_FIELD(struct l2_stats, q.left, pre "_requests", "requests", what " that left it"),         \
+      STATS_F64(struct l2_stats, q.wait_sum, q##_wait_mean, pre "_wait_mean", "cycles",            \
+                what ": mean cycles inside"),                                                      \
+      STATS_F64(struct l2_stats, q.area, q##_length_mean, pre "_length_mean", "requests",          \
+                what ": mean requests inside over the run"),                                       \
+      STATS_FIELD(struct l2_stats, q.max, pre "_length_max", "requests",                           \
+                  what ": most inside at once")
+#define L2_QUEUE_SKIPS(q)                                                                          \
+  STATS_SKIP(struct l2_stats, q.entered, "equals requests at the end of a run (nothing queued)"),  \
+      STATS_SKIP(struct l2_stats, q.len, "0 at the end of a run"),                                 \
       STATS_SKIP(struct l2_stats, q.since, "the meter's own clock")
 
 _Static_assert(L2_STALL_COUNT == 4, "a descriptor for each stall reason");
 static const struct stats_desc l2_desc[] = {
-    STATS_FIELD(struct l2_stats, accesses, "l2_accesses", "count", "loads and stores that reached the L2"),
+    STATS_FIELD(struct l2_stats, accesses, "l2_accesses", "count",
+                "loads and stores that reached the L2"),
     STATS_FIELD(struct l2_stats, hits, "l2_hits", "count", "accesses that found their line"),
     STATS_FIELD(struct l2_stats, misses, "l2_misses", "count", "accesses that did not"),
-    STATS_F64(struct l2_stats, misses, l2_miss_rate, "l2_miss_rate", "fraction", "misses / accesses"),
+    STATS_F64(struct l2_stats, misses, l2_miss_rate, "l2_miss_rate", "fraction",
+              "misses / accesses"),
     STATS_FIELD(struct l2_stats, mshr_merges, "l2_mshr_merges", "count",
                 "misses that joined a fetch already in flight (an MSHR)"),
     STATS_FIELD(struct l2_stats, merges_held, "l2_merges_held", "count",
@@ -538,23 +544,29 @@ static const struct stats_desc l2_desc[] = {
                 "misses served from the write buffer (no DRAM read or write)"),
     STATS_FIELD(struct l2_stats, whole_line_allocs, "l2_whole_line_allocs", "count",
                 "whole-line stores allocated without a fetch"),
-    STATS_FIELD(struct l2_stats, stalls, "l2_stalls", "count", "accesses that queued behind a stall"),
+    STATS_FIELD(struct l2_stats, stalls, "l2_stalls", "count",
+                "accesses that queued behind a stall"),
     STATS_FIELD(struct l2_stats, stall_cycles[L2_STALL_MSHR], "l2_stall_mshr_cycles", "cycles",
                 "stalled: no MSHR free"),
     STATS_FIELD(struct l2_stats, stall_cycles[L2_STALL_SET], "l2_stall_set_cycles", "cycles",
                 "stalled: every way of the set busy"),
-    STATS_FIELD(struct l2_stats, stall_cycles[L2_STALL_WRITE_BUFFER], "l2_stall_write_buffer_cycles",
-                "cycles", "stalled: write buffer full"),
+    STATS_FIELD(struct l2_stats, stall_cycles[L2_STALL_WRITE_BUFFER],
+                "l2_stall_write_buffer_cycles", "cycles", "stalled: write buffer full"),
     STATS_FIELD(struct l2_stats, stall_cycles[L2_STALL_DRAM], "l2_stall_dram_cycles", "cycles",
                 "stalled: the DRAM would not take a request"),
     STATS_FIELD(struct l2_stats, bank_wait_cycles, "l2_bank_wait_cycles", "cycles",
                 "accesses waiting for their bank"),
-    STATS_FIELD(struct l2_stats, fetch_bytes, "l2_fetch_bytes", "bytes", "lines read from the DRAM"),
+    STATS_FIELD(struct l2_stats, fetch_bytes, "l2_fetch_bytes", "bytes",
+                "lines read from the DRAM"),
     STATS_FIELD(struct l2_stats, writeback_bytes, "l2_writeback_bytes", "bytes",
                 "dirty lines written back to the DRAM"),
-    {.name = "fetch_%s_bytes", .unit = "bytes", .desc = "lines read from the DRAM, by data class",
-     .how = STATS_HOW_FIELD, .off = offsetof(struct l2_stats, fetch_bytes_by_class),
-     .size = STATS_FIELD_SIZE(struct l2_stats, fetch_bytes_by_class), .per_class = true},
+    {.name = "fetch_%s_bytes",
+     .unit = "bytes",
+     .desc = "lines read from the DRAM, by data class",
+     .how = STATS_HOW_FIELD,
+     .off = offsetof(struct l2_stats, fetch_bytes_by_class),
+     .size = STATS_FIELD_SIZE(struct l2_stats, fetch_bytes_by_class),
+     .per_class = true},
     L2_QUEUE(stall_queue, "l2_stall_queue", "accesses stalled at the input"),
     L2_QUEUE(miss_queue, "l2_miss_queue", "misses waiting for the DRAM to take them"),
     STATS_FIELD(struct l2_stats, miss_queue.wait_sum, "backpressure_cycles", "cycles",
@@ -562,10 +574,11 @@ static const struct stats_desc l2_desc[] = {
     L2_QUEUE(write_buffer, "l2_write_buffer", "write-backs from eviction to the DRAM taking them"),
 };
 static const struct stats_skip l2_skip[] = {
-    STATS_SKIP(struct l2_stats, accesses_by_class, "not written yet (the timeline counts accesses)"),
+    STATS_SKIP(struct l2_stats, accesses_by_class,
+               "not written yet (the timeline counts accesses)"),
     L2_QUEUE_SKIPS(stall_queue),
     L2_QUEUE_SKIPS(miss_queue),
     L2_QUEUE_SKIPS(write_buffer),
 };
-const struct stats_descs l2_stats_descs = {"l2", l2_desc, STATS_COUNT(l2_desc), sizeof(struct l2_stats),
-                                           l2_skip, STATS_COUNT(l2_skip)};
+const struct stats_descs l2_stats_descs = {
+    "l2", l2_desc, STATS_COUNT(l2_desc), sizeof(struct l2_stats), l2_skip, STATS_COUNT(l2_skip)};

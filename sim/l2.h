@@ -13,8 +13,8 @@
  *   waits at the L2, in order, while the DRAM refuses it (back-pressure).
  * - A dirty victim enters the write buffer (l2.write_buffer entries); the
  *   buffer drains to the DRAM, oldest first. A miss to a line still in the
- *   buffer takes it back when it would leave for the DRAM (no DRAM access). Reads go to the DRAM first; a
- *   write goes when no read is waiting, or first when the buffer is full.
+ *   buffer takes it back when it would leave for the DRAM (no DRAM access). Reads go to the DRAM
+ * first; a write goes when no read is waiting, or first when the buffer is full.
  * - The input stalls in order (every later access queues behind) while the
  *   oldest access cannot proceed: MSHRs full, every way of its set pending,
  *   a dirty victim with the write buffer full, or a miss held at the L2
@@ -53,10 +53,10 @@ enum l2_stall { L2_STALL_MSHR, L2_STALL_SET, L2_STALL_WRITE_BUFFER, L2_STALL_DRA
 
 struct l2_stats {
   uint64_t accesses, hits, misses, mshr_merges, whole_line_allocs;
-  uint64_t merges_held;      /* merged loads answered after the fill, to honour l2.latency */
+  uint64_t merges_held;       /* merged loads answered after the fill, to honour l2.latency */
   uint64_t write_buffer_hits; /* misses served from the write buffer (no DRAM read or write) */
-  uint64_t bank_wait_cycles; /* accesses waiting for their bank */
-  uint64_t stalls;           /* accesses that queued behind a stall */
+  uint64_t bank_wait_cycles;  /* accesses waiting for their bank */
+  uint64_t stalls;            /* accesses that queued behind a stall */
   uint64_t stall_cycles[L2_STALL_COUNT];
   uint64_t accesses_by_class[MEM_CLASS_MAX];
   uint64_t fetch_bytes, writeback_bytes;
@@ -96,7 +96,8 @@ struct dram_client l2_dram_client(struct l2 *l2);
 void l2_attach(struct l2 *l2, struct dram *d);
 /* Set the client's cost hook (struct l2_client) before the first access. */
 void l2_set_cost(struct l2 *l2, void *cost_ctx,
-                 void (*cost)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls, bool write));
+                 void (*cost)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls,
+                              bool write));
 
 /* An access of one line at engine_now. waiter: a load's, handed back to
  * client->ready; NULL for a store (posted: nobody waits). tag: the client's

@@ -163,9 +163,8 @@ static inline void count_evictions(struct lru_stack *ls, unsigned d, unsigned s,
 }
 
 /* One access; home is slot_of(line), computed by the caller. */
-static inline __attribute__((always_inline)) void access_one(struct lru_stack *ls, uint64_t line,
-                                                            enum lru_stack_op op, unsigned cls,
-                                                            uint64_t home) {
+static inline __attribute__((always_inline)) void
+access_one(struct lru_stack *ls, uint64_t line, enum lru_stack_op op, unsigned cls, uint64_t home) {
   CHECK_LT(cls, MEM_CLASS_MAX);
   CHECK_LE(op, LRU_STACK_WRITE_LINE);
   const bool is_store = op != LRU_STACK_READ;
@@ -284,7 +283,8 @@ void lru_stack_access_batch(struct lru_stack *ls, const uint64_t *rec, uint32_t 
       home[i % LRU_PF_SLOT] = a;
       __builtin_prefetch(&ls->slot[a]);
     }
-    if (i + LRU_PF_NODE < n) __builtin_prefetch(&ls->node[ls->slot[home[(i + LRU_PF_NODE) % LRU_PF_SLOT]]]);
+    if (i + LRU_PF_NODE < n)
+      __builtin_prefetch(&ls->node[ls->slot[home[(i + LRU_PF_NODE) % LRU_PF_SLOT]]]);
     const uint64_t r = rec[i];
     access_one(ls, r >> 5, (enum lru_stack_op)(r & 3u), (unsigned)(r >> 2) & 7u, h);
   }
@@ -419,10 +419,8 @@ double lru_stack_bench(uint64_t accesses, uint64_t seed) {
       if (r % 100 < 70) {
         /* Hot set: mostly small steps from the last hot line, sometimes a jump. */
         uint64_t step = (r >> 8) % 100;
-        if (step < 85)
-          hot = (hot + HOT_LINES + (r >> 16) % 33 - 16) % HOT_LINES;
-        else
-          hot = (r >> 16) % HOT_LINES;
+        if (step < 85) hot = (hot + HOT_LINES + (r >> 16) % 33 - 16) % HOT_LINES;
+        else hot = (r >> 16) % HOT_LINES;
         line = hot_base + hot;
       } else {
         line = stream++;

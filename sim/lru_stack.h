@@ -38,9 +38,9 @@ const char *lru_stack_params_problem(const struct lru_stack_params *p);
 
 /* What an access does to its line. */
 enum lru_stack_op {
-  LRU_STACK_READ = 0,       /* load: a miss fetches the line */
-  LRU_STACK_WRITE = 1,      /* store to part of the line: a miss fetches it first */
-  LRU_STACK_WRITE_LINE = 2  /* store of the whole line: a miss allocates, no fetch */
+  LRU_STACK_READ = 0,      /* load: a miss fetches the line */
+  LRU_STACK_WRITE = 1,     /* store to part of the line: a miss fetches it first */
+  LRU_STACK_WRITE_LINE = 2 /* store of the whole line: a miss allocates, no fetch */
 };
 
 struct lru_stack;

@@ -98,8 +98,8 @@ struct machine {
   uint64_t loads_out, loads_back; /* conservation: L2 load requests and answers */
   struct timeline tl;
   struct machine_stats st;
-  struct mctx *running;      /* the ray inside a block, if any (machine_probe) */
-  struct mwarm *warm;        /* one warming port context a core (machine_warm_port) */
+  struct mctx *running; /* the ray inside a block, if any (machine_probe) */
+  struct mwarm *warm;   /* one warming port context a core (machine_warm_port) */
   uint64_t warm_slots, count_slots;
   struct machine_costs costs; /* per item (machine_costs_enable) */
   uint64_t *cost_acc;         /* every context's counters; NULL: costs not counted */
@@ -117,14 +117,17 @@ static const struct mem_ops timed_ops;
 /* ---- parameters ---- */
 
 static struct l2_params l2_params_of(const struct machine_params *p) {
-  struct l2_params l = {p->l2_size_bytes,    p->l2_ways, p->l2_latency_cycles,
-                        p->l2_banks,         p->l2_mshrs, p->l2_write_buffer};
+  struct l2_params l = {p->l2_size_bytes, p->l2_ways,  p->l2_latency_cycles,
+                        p->l2_banks,      p->l2_mshrs, p->l2_write_buffer};
   return l;
 }
 
 struct dram_params machine_dram_params(const struct machine_params *p) {
-  struct dram_params d = {machine_fidelity_dram(p->fidelity), p->dram_latency_cycles,
-                          p->dram_bytes_per_cycle, p->dram_queue_depth, p->dram_clock_mhz,
+  struct dram_params d = {machine_fidelity_dram(p->fidelity),
+                          p->dram_latency_cycles,
+                          p->dram_bytes_per_cycle,
+                          p->dram_queue_depth,
+                          p->dram_clock_mhz,
                           p->dram_banked};
   return d;
 }
@@ -149,8 +152,10 @@ const char *machine_params_problem(const struct machine_params *p) {
   if (p->fidelity >= MACHINE_FIDELITY_COUNT)
     return "fidelity: expected analytic, fixed, channel or banked";
   if (p->cores < 1 || p->cores > 4096) return "cores: must be 1 to 4096";
-  if (p->threads_per_core < 1 || p->threads_per_core > 256) return "threads_per_core: must be 1 to 256";
-  if (p->rays_per_thread < 1 || p->rays_per_thread > 256) return "rays_per_thread: must be 1 to 256";
+  if (p->threads_per_core < 1 || p->threads_per_core > 256)
+    return "threads_per_core: must be 1 to 256";
+  if (p->rays_per_thread < 1 || p->rays_per_thread > 256)
+    return "rays_per_thread: must be 1 to 256";
   if ((uint64_t)p->cores * p->threads_per_core * p->rays_per_thread > MACHINE_MAX_CONTEXTS)
     return "cores x threads_per_core x rays_per_thread: at most 2^20 ray contexts";
   if (p->l1_size_bytes) {
@@ -349,7 +354,8 @@ void machine_costs_enable(struct machine *m, uint64_t items, unsigned classes) {
   k->classes = classes;
   k->issue_slots = xcalloc(items + 1, sizeof *k->issue_slots);
   k->load_wait_cycles = xcalloc(items + 1, sizeof *k->load_wait_cycles);
-  for (unsigned c = 0; c < classes; c++) k->read_lines[c] = xcalloc(items + 1, sizeof *k->read_lines[c]);
+  for (unsigned c = 0; c < classes; c++)
+    k->read_lines[c] = xcalloc(items + 1, sizeof *k->read_lines[c]);
   k->write_lines = xcalloc(items + 1, sizeof *k->write_lines);
   m->cost_stride = COST_READ0 + classes;
   m->cost_acc = xcalloc((uint64_t)m->nctx * m->cost_stride, sizeof *m->cost_acc);
@@ -401,7 +407,8 @@ static void cost_finish(struct machine *m) {
 static void line_done(struct machine *m, struct mctx *c, uint64_t line, uint64_t t) {
   struct cache *l1 = m->core[c->info.core].l1;
   if (l1) {
-    if (cache_use(l1, line) == CACHE_NONE) cache_install(l1, cache_victim(l1, line), line, false, false);
+    if (cache_use(l1, line) == CACHE_NONE)
+      cache_install(l1, cache_victim(l1, line), line, false, false);
   }
   m->loads_back++;
   CHECK_GT(c->pending, 0);
@@ -693,7 +700,9 @@ static void n_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   ((struct machine *)ctx)->count_slots++;
 }
 
-static void n_compute(void *ctx, uint64_t cycles) { ((struct machine *)ctx)->count_slots += cycles; }
+static void n_compute(void *ctx, uint64_t cycles) {
+  ((struct machine *)ctx)->count_slots += cycles;
+}
 
 static const struct mem_ops count_ops = {n_access, n_access, n_compute, NULL, NULL, NULL};
 
@@ -855,7 +864,9 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
 
 const struct machine_stats *machine_get_stats(const struct machine *m) { return &m->st; }
 const struct timeline *machine_timeline(const struct machine *m) { return &m->tl; }
-struct dram *machine_dram(const struct machine *m) { return m->dram; }
+struct dram *machine_dram(const struct machine *m) {
+  return m->dram;
+}
 
 /* ---- the machine's numbers (README "Numbers") ----
  * The cores' and threads' counters, then at its slots the L1's, the L2's, the
@@ -868,9 +879,12 @@ static double m_seconds(const void *st, const struct stats_env *env) {
   return (double)M_ST(st)->cycles / (M_OF(env)->p.clock_ghz * 1e9);
 }
 static double m_core_utilization(const void *st, const struct stats_env *env) {
-  return m_ratio((double)M_ST(st)->issue_slots, (double)M_OF(env)->p.cores * (double)M_ST(st)->cycles);
+  return m_ratio((double)M_ST(st)->issue_slots,
+                 (double)M_OF(env)->p.cores * (double)M_ST(st)->cycles);
 }
-static double m_thread_cycles(const void *st) { return (double)M_ST(st)->threads * (double)M_ST(st)->cycles; }
+static double m_thread_cycles(const void *st) {
+  return (double)M_ST(st)->threads * (double)M_ST(st)->cycles;
+}
 static double m_idle_fraction(const void *st, const struct stats_env *env) {
   (void)env;
   const struct machine_stats *s = st;
@@ -911,7 +925,8 @@ static const struct stats_desc machine_desc[] = {
     STATS_SLOT(MACHINE_STATS_SLOT_RUN),
     STATS_FIELD(MS, contexts, "ray_contexts", "count", "ray contexts: cores x threads x rays"),
     STATS_FIELD(MS, threads, "threads", "count", "hardware threads: cores x threads_per_core"),
-    STATS_FIELD(MS, issue_slots, "issue_slots", "cycles", "issue slots used (compute, loads, stores)"),
+    STATS_FIELD(MS, issue_slots, "issue_slots", "cycles",
+                "issue slots used (compute, loads, stores)"),
     STATS_F64(MS, issue_slots, m_core_utilization, "core_utilization", "fraction",
               "issue slots used / cores x cycles"),
     STATS_F64(MS, thread_done_cycles, m_idle_fraction, "thread_idle_fraction", "fraction",
@@ -922,7 +937,8 @@ static const struct stats_desc machine_desc[] = {
               "thread-cycles with live rays, all parked (no work)"),
     STATS_F64(MS, thread_done_cycles, m_done_fraction, "thread_done_fraction", "fraction",
               "thread-cycles with no work left"),
-    STATS_FIELD(MS, ray_switches, "ray_switches", "count", "a thread taking another ray than its last"),
+    STATS_FIELD(MS, ray_switches, "ray_switches", "count",
+                "a thread taking another ray than its last"),
     STATS_FIELD(MS, switch_cycles, "ray_switch_cycles", "cycles", "thread cycles paid for them"),
     STATS_FIELD(MS, waits, "waits", "count", "mem_wait calls: a worker idle by its own choice"),
     STATS_FIELD(MS, wait_cycles, "wait_cycles", "cycles", "cycles they asked for"),
@@ -930,16 +946,18 @@ static const struct stats_desc machine_desc[] = {
     STATS_FIELD(MS, wakes, "wakes", "count", "mem_wake calls"),
     STATS_FIELD(MS, loads, "loads", "count", "loads issued"),
     STATS_FIELD(MS, stores, "stores", "count", "stores issued"),
-    STATS_FIELD(MS, blocking_loads, "blocking_loads", "count", "loads that left the L1 and suspended their ray"),
-    STATS_F64(MS, blocking_loads, m_slots_per_blocking_load, "issue_slots_per_blocking_load", "cycles",
-              "issue slots / blocking loads"),
+    STATS_FIELD(MS, blocking_loads, "blocking_loads", "count",
+                "loads that left the L1 and suspended their ray"),
+    STATS_F64(MS, blocking_loads, m_slots_per_blocking_load, "issue_slots_per_blocking_load",
+              "cycles", "issue slots / blocking loads"),
     STATS_SLOT(MACHINE_STATS_SLOT_RUN_MISSES),
     STATS_SLOT(M_SLOT_L1),
     STATS_SLOT(M_SLOT_L2),
     STATS_SLOT(M_SLOT_DRAM),
     STATS_F64(MS, load_latency, m_load_latency_mean, "load_latency_mean", "cycles",
               "loads, issue to data (L1 hits too): mean"),
-    STATS_U64(MS, load_latency, m_load_latency_p95, "load_latency_p95", "cycles", "the same, 95th percentile"),
+    STATS_U64(MS, load_latency, m_load_latency_p95, "load_latency_p95", "cycles",
+              "the same, 95th percentile"),
     STATS_FIELD(MS, load_latency.max, "load_latency_max", "cycles", "the same, most"),
     STATS_SLOT(M_SLOT_ENGINE),
     STATS_FIELD(MS, stacks_max, "coroutine_stacks_max", "count",
@@ -955,8 +973,9 @@ static const struct stats_skip machine_skip[] = {
     STATS_SKIP_BY(MS, dram, dram_stats_descs),
     STATS_SKIP_BY(MS, events, machine_engine_stats_descs),
 };
-const struct stats_descs machine_stats_descs = {"machine", machine_desc, STATS_COUNT(machine_desc),
-                                                sizeof(MS), machine_skip, STATS_COUNT(machine_skip)};
+const struct stats_descs machine_stats_descs = {
+    "machine",  machine_desc, STATS_COUNT(machine_desc),
+    sizeof(MS), machine_skip, STATS_COUNT(machine_skip)};
 
 /* The L1s' counters, kept by the machine in its own stats (NOTE: fields of
  * struct machine_stats, listed there as skips naming this table). */
@@ -969,15 +988,16 @@ const struct stats_descs machine_l1_stats_descs = {"l1", l1_desc, STATS_COUNT(l1
 static const struct stats_desc engine_desc[] = {
     STATS_FIELD(MS, events, "events", "count", "events the engine handled"),
 };
-const struct stats_descs machine_engine_stats_descs = {"engine", engine_desc, STATS_COUNT(engine_desc), 0,
-                                                       NULL, 0};
+const struct stats_descs machine_engine_stats_descs = {
+    "engine", engine_desc, STATS_COUNT(engine_desc), 0, NULL, 0};
 
 /* The DRAM's share of its peak, for the levels that do not report their own
  * (the channel does: dram_channel_stats_descs). */
 static bool m_dram_util_present(const void *st, const struct stats_env *env) {
   (void)st;
   const struct machine_params *p = &M_OF(env)->p;
-  return machine_dram_peak_bytes_per_cycle(p) > 0 && machine_fidelity_dram(p->fidelity) != DRAM_MODEL_CHANNEL;
+  return machine_dram_peak_bytes_per_cycle(p) > 0 &&
+         machine_fidelity_dram(p->fidelity) != DRAM_MODEL_CHANNEL;
 }
 static double m_dram_utilization(const void *st, const struct stats_env *env) {
   const struct machine_stats *s = st;
@@ -985,11 +1005,15 @@ static double m_dram_utilization(const void *st, const struct stats_env *env) {
   return m_ratio(b, (double)s->cycles) / machine_dram_peak_bytes_per_cycle(&M_OF(env)->p);
 }
 static const struct stats_desc dram_util_desc[] = {
-    {.name = "dram_utilization", .unit = "fraction", .desc = "DRAM bytes per cycle / the level's peak (banked)",
-     .how = STATS_HOW_F64, .f64 = m_dram_utilization, .present = m_dram_util_present},
+    {.name = "dram_utilization",
+     .unit = "fraction",
+     .desc = "DRAM bytes per cycle / the level's peak (banked)",
+     .how = STATS_HOW_F64,
+     .f64 = m_dram_utilization,
+     .present = m_dram_util_present},
 };
-const struct stats_descs machine_dram_util_stats_descs = {"dram", dram_util_desc, STATS_COUNT(dram_util_desc), 0,
-                                                          NULL, 0};
+const struct stats_descs machine_dram_util_stats_descs = {
+    "dram", dram_util_desc, STATS_COUNT(dram_util_desc), 0, NULL, 0};
 #undef MS
 
 struct m_emit {
@@ -1012,32 +1036,42 @@ static void m_slot(const struct stats_env *env, int slot, struct stats_table *t)
   case M_SLOT_L1: stats_emit(t, &machine_l1_stats_descs, &m->st, env); return;
   case M_SLOT_L2: stats_emit(t, &l2_stats_descs, &m->st.l2, env); return;
   case M_SLOT_DRAM: stats_emit(t, &dram_stats_descs, &m->st.dram, env); return;
-  case DRAM_STATS_SLOT_UTILIZATION: stats_emit(t, &machine_dram_util_stats_descs, &m->st, env); return;
+  case DRAM_STATS_SLOT_UTILIZATION:
+    stats_emit(t, &machine_dram_util_stats_descs, &m->st, env);
+    return;
   case DRAM_STATS_SLOT_LEVEL: dram_report(m->dram, t, m->st.cycles); return;
   case M_SLOT_ENGINE: stats_emit(t, &machine_engine_stats_descs, &m->st, env); return;
   default: CHECK(!"a slot the machine knows");
   }
 }
 
-void machine_stats_emit(const struct machine *m, struct stats_table *t, const char *const *class_names,
-                        unsigned classes, stats_slot_fn run, const void *run_ctx) {
+void machine_stats_emit(const struct machine *m, struct stats_table *t,
+                        const char *const *class_names, unsigned classes, stats_slot_fn run,
+                        const void *run_ctx) {
   const struct m_emit x = {m, run, run_ctx};
-  const struct stats_env env = {.cycles = m->st.cycles, .ctx = m, .class_names = class_names,
-                                .classes = classes, .slot = m_slot, .slot_ctx = &x};
+  const struct stats_env env = {.cycles = m->st.cycles,
+                                .ctx = m,
+                                .class_names = class_names,
+                                .classes = classes,
+                                .slot = m_slot,
+                                .slot_ctx = &x};
   stats_emit(t, &machine_stats_descs, &m->st, &env);
 }
 
 /* The timeline's columns (enum machine_tl_col), as timeline.csv writes them. */
 const struct timeline_col machine_tl_cols[] = {
-    {"dram_read_bytes", "bytes", "bytes the DRAM delivered in the window (a transfer split in proportion)",
+    {"dram_read_bytes", "bytes",
+     "bytes the DRAM delivered in the window (a transfer split in proportion)",
      MACHINE_TL_DRAM_READ_BYTES, 1, 2, false, false},
-    {"dram_write_bytes", "bytes", "bytes the DRAM wrote in the window", MACHINE_TL_DRAM_WRITE_BYTES, 1, 2, false,
+    {"dram_write_bytes", "bytes", "bytes the DRAM wrote in the window", MACHINE_TL_DRAM_WRITE_BYTES,
+     1, 2, false, false},
+    {"read_%s_bytes", "bytes", "of the bytes read, those of each data class",
+     MACHINE_TL_READ_CLASS0, MEM_CLASS_MAX, 2, true, false},
+    {"l2_accesses", "count", "accesses that reached the L2", MACHINE_TL_L2_ACCESSES, 1, 0, false,
      false},
-    {"read_%s_bytes", "bytes", "of the bytes read, those of each data class", MACHINE_TL_READ_CLASS0,
-     MEM_CLASS_MAX, 2, true, false},
-    {"l2_accesses", "count", "accesses that reached the L2", MACHINE_TL_L2_ACCESSES, 1, 0, false, false},
     {"l2_misses", "count", "those that missed", MACHINE_TL_L2_MISSES, 1, 0, false, false},
-    {"issued_ops", "cycles", "issue slots used, all cores", MACHINE_TL_ISSUED_OPS, 1, 0, false, false},
+    {"issued_ops", "cycles", "issue slots used, all cores", MACHINE_TL_ISSUED_OPS, 1, 0, false,
+     false},
     {"busy_threads", "threads", "mean threads with a ray ready, running or being switched to",
      MACHINE_TL_BUSY_THREAD_CYCLES, 1, 4, false, true},
 };

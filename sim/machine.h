@@ -36,7 +36,7 @@
 
 struct timeline;
 
-#define MACHINE_LG2_LINE 6 /* 64-byte lines everywhere */
+#define MACHINE_LG2_LINE 6              /* 64-byte lines everywhere */
 #define MACHINE_MAX_CONTEXTS (1u << 20) /* cores x threads_per_core x rays_per_thread */
 
 /* The fidelity ladder's rungs, cheapest first (README "Fidelity ladder"): an
@@ -100,25 +100,25 @@ enum machine_tl_col {
 };
 
 struct machine_stats {
-  uint64_t cycles;              /* last ray done and the channel drained */
+  uint64_t cycles; /* last ray done and the channel drained */
   uint64_t contexts, threads;
-  uint64_t issue_slots;         /* used, of cores x cycles */
-  uint64_t thread_busy_cycles;  /* a ray ready, running or being switched to */
-  uint64_t thread_wait_cycles;  /* live rays, all waiting on memory (or mem_wait) */
+  uint64_t issue_slots;          /* used, of cores x cycles */
+  uint64_t thread_busy_cycles;   /* a ray ready, running or being switched to */
+  uint64_t thread_wait_cycles;   /* live rays, all waiting on memory (or mem_wait) */
   uint64_t thread_parked_cycles; /* live rays, all parked (mem_park: no work) */
-  uint64_t thread_done_cycles;  /* no work left */
+  uint64_t thread_done_cycles;   /* no work left */
   uint64_t ray_switches, switch_cycles;
-  uint64_t blocks;              /* runs of a ray between waits */
+  uint64_t blocks; /* runs of a ray between waits */
   uint64_t loads, stores, computes;
-  uint64_t blocking_loads;      /* loads that left the L1 and suspended their ray */
-  uint64_t waits, wait_cycles;  /* mem_wait: a worker idle by its own choice */
-  uint64_t parks, wakes;        /* mem_park and mem_wake */
+  uint64_t blocking_loads;     /* loads that left the L1 and suspended their ray */
+  uint64_t waits, wait_cycles; /* mem_wait: a worker idle by its own choice */
+  uint64_t parks, wakes;       /* mem_park and mem_wake */
   uint64_t l1_accesses, l1_hits;
   struct l2_stats l2;       /* sim/l2.h, as of the end of the run */
   struct dram_stats dram;   /* sim/dram.h, likewise (the level's own: machine_dram) */
   struct hist load_latency; /* cycles from a load's issue to its data (L1 hits too) */
   uint64_t events;
-  uint64_t stacks_max;      /* coroutine stacks alive at once (parked contexts hold none) */
+  uint64_t stacks_max; /* coroutine stacks alive at once (parked contexts hold none) */
 };
 
 /* NULL if p is usable, else a description naming the key (for config errors
@@ -165,8 +165,8 @@ const struct machine_stats *machine_get_stats(const struct machine *m);
 /* The machine's numbers (sim/stats.h), over a struct machine_stats; the L1's
  * and the engine's, whose counters it keeps, and the DRAM utilization it
  * computes for the levels without their own. */
-extern const struct stats_descs machine_stats_descs, machine_l1_stats_descs, machine_engine_stats_descs,
-    machine_dram_util_stats_descs;
+extern const struct stats_descs machine_stats_descs, machine_l1_stats_descs,
+    machine_engine_stats_descs, machine_dram_util_stats_descs;
 /* Where the run's own numbers go in the machine's order: after `seconds`, and
  * after issue_slots_per_blocking_load. */
 enum { MACHINE_STATS_SLOT_RUN = 200, MACHINE_STATS_SLOT_RUN_MISSES };
@@ -174,8 +174,9 @@ enum { MACHINE_STATS_SLOT_RUN = 200, MACHINE_STATS_SLOT_RUN_MISSES };
  * to t, in their tables' order; per-class numbers for `classes` data classes
  * named class_names; run (NULL: none) fills the MACHINE_STATS_SLOT_RUN* slots
  * (its env: the machine's, slot_ctx = run_ctx). */
-void machine_stats_emit(const struct machine *m, struct stats_table *t, const char *const *class_names,
-                        unsigned classes, stats_slot_fn run, const void *run_ctx);
+void machine_stats_emit(const struct machine *m, struct stats_table *t,
+                        const char *const *class_names, unsigned classes, stats_slot_fn run,
+                        const void *run_ctx);
 
 /* ---- sampling (README "Sampling") ----
  * The counters of a running machine at the current cycle: what a window of
@@ -216,11 +217,11 @@ uint64_t machine_count_slots(const struct machine *m);
  * (CHECKed). */
 struct machine_costs {
   uint64_t items;
-  unsigned classes;              /* data classes counted, < MEM_CLASS_MAX */
-  uint64_t *issue_slots;         /* per item */
-  uint64_t *load_wait_cycles;    /* per item */
+  unsigned classes;                    /* data classes counted, < MEM_CLASS_MAX */
+  uint64_t *issue_slots;               /* per item */
+  uint64_t *load_wait_cycles;          /* per item */
   uint32_t *read_lines[MEM_CLASS_MAX]; /* per item, DRAM lines read by class */
-  uint32_t *write_lines;         /* per item, DRAM lines written back */
+  uint32_t *write_lines;               /* per item, DRAM lines written back */
 };
 
 /* Count costs for `items` items and data classes below `classes` (before

@@ -3,8 +3,8 @@
 #include "sim/machine_cfg.h"
 
 #include <math.h>
-#include <stdint.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -28,19 +28,20 @@ enum kind { K_U32, K_U64, K_F64, K_SIZE, K_WAYS, K_ENUM, K_MAPPING };
 struct key {
   const char *name; /* "section.key" or "key" */
   enum kind kind;
-  double lo, hi;    /* K_ENUM: 0 and the last value's index */
-  const char *def;  /* the default, as a config writes it */
-  const char *unit; /* of the value ("" for a count or a name) */
-  unsigned rungs;   /* R_*: the fidelity rungs that read it */
-  size_t off;       /* where it goes in struct machine_cfg (p: the machine's; work) */
+  double lo, hi;            /* K_ENUM: 0 and the last value's index */
+  const char *def;          /* the default, as a config writes it */
+  const char *unit;         /* of the value ("" for a count or a name) */
+  unsigned rungs;           /* R_*: the fidelity rungs that read it */
+  size_t off;               /* where it goes in struct machine_cfg (p: the machine's; work) */
   const char *const *names; /* K_ENUM: the values' names (a uint32_t index), hi + 1 of them */
-  const char *doc;  /* one line: what it is (README's key table) */
+  const char *doc;          /* one line: what it is (README's key table) */
 };
 
 static const char *const PAGE_NAMES[] = {"open", "close"};
 static const char *const FIDELITY_NAMES[MACHINE_FIDELITY_COUNT] = {"analytic", "fixed", "channel",
                                                                    "banked"};
-static const char *const QUEUE_NAMES[] = {"shared", "per_bank", "per_rank"}; /* enum dram_banked_queues */
+static const char *const QUEUE_NAMES[] = {"shared", "per_bank",
+                                          "per_rank"};            /* enum dram_banked_queues */
 static const char *const SHARING_NAMES[] = {"partition", "chip"}; /* renderer/policy/policy.h */
 
 /* Every machine key, one row each: name, kind, range, default, unit, rungs,
@@ -54,70 +55,124 @@ static const char *const SHARING_NAMES[] = {"partition", "chip"}; /* renderer/po
 #define W(f) offsetof(struct machine_cfg, work.f), NULL
 #define WE(f, names) offsetof(struct machine_cfg, work.f), names
 static const struct key KEYS[] = {
-    {"clock_ghz", K_F64, 1e-3, 1e3, "1.4", "GHz", R_ALL, P(clock_ghz), "the core clock; converts cycles to seconds (rays_per_second)"},
-    {"cores", K_U32, 1, 4096, "16", "", R_ALL, P(cores), "cores, each with an issue port and a private L1"},
-    {"threads_per_core", K_U32, 1, 256, "4", "", R_ALL, P(threads_per_core), "hardware threads a core, sharing its issue port round robin"},
-    {"rays_per_thread", K_U32, 1, 256, "2", "", R_ALL, P(rays_per_thread), "ray contexts a thread, which switches to another when one waits on memory"},
-    {"l1.size", K_SIZE, 0, 1ull << 30, "8KiB", "bytes", R_ALL, P(l1_size_bytes), "each core's private L1 (0: none)"},
-    {"l1.ways", K_WAYS, 1, 1u << 24, "4", "", R_ALL, P(l1_ways), "the L1's associativity (full: fully associative)"},
-    {"l1.latency", K_U32, 0, 1e6, "3", "cycles", R_ALL, P(l1_latency_cycles), "an L1 hit's load-use latency"},
-    {"l2.size", K_SIZE, 1, 1ull << 34, "4MiB", "bytes", R_ALL, P(l2_size_bytes), "the shared L2 (tags allocated as lines arrive)"},
-    {"l2.ways", K_WAYS, 1, 1u << 28, "16", "", R_ALL, P(l2_ways), "the L2's associativity (full: fully associative)"},
-    {"l2.latency", K_U32, 0, 1e6, "20", "cycles", R_ALL, P(l2_latency_cycles), "an L2 hit's latency"},
-    {"l2.banks", K_U32, 1, 4096, "8", "", R_ALL, P(l2_banks), "line-interleaved L2 banks, one access a cycle each"},
+    {"clock_ghz", K_F64, 1e-3, 1e3, "1.4", "GHz", R_ALL, P(clock_ghz),
+     "the core clock; converts cycles to seconds (rays_per_second)"},
+    {"cores", K_U32, 1, 4096, "16", "", R_ALL, P(cores),
+     "cores, each with an issue port and a private L1"},
+    {"threads_per_core", K_U32, 1, 256, "4", "", R_ALL, P(threads_per_core),
+     "hardware threads a core, sharing its issue port round robin"},
+    {"rays_per_thread", K_U32, 1, 256, "2", "", R_ALL, P(rays_per_thread),
+     "ray contexts a thread, which switches to another when one waits on memory"},
+    {"l1.size", K_SIZE, 0, 1ull << 30, "8KiB", "bytes", R_ALL, P(l1_size_bytes),
+     "each core's private L1 (0: none)"},
+    {"l1.ways", K_WAYS, 1, 1u << 24, "4", "", R_ALL, P(l1_ways),
+     "the L1's associativity (full: fully associative)"},
+    {"l1.latency", K_U32, 0, 1e6, "3", "cycles", R_ALL, P(l1_latency_cycles),
+     "an L1 hit's load-use latency"},
+    {"l2.size", K_SIZE, 1, 1ull << 34, "4MiB", "bytes", R_ALL, P(l2_size_bytes),
+     "the shared L2 (tags allocated as lines arrive)"},
+    {"l2.ways", K_WAYS, 1, 1u << 28, "16", "", R_ALL, P(l2_ways),
+     "the L2's associativity (full: fully associative)"},
+    {"l2.latency", K_U32, 0, 1e6, "20", "cycles", R_ALL, P(l2_latency_cycles),
+     "an L2 hit's latency"},
+    {"l2.banks", K_U32, 1, 4096, "8", "", R_ALL, P(l2_banks),
+     "line-interleaved L2 banks, one access a cycle each"},
     {"l2.mshrs", K_U32, 1, 1u << 20, "64", "", R_ALL, P(l2_mshrs), "L2 misses outstanding at once"},
-    {"l2.write_buffer", K_U32, 1, 1u << 20, "16", "lines", R_ALL, P(l2_write_buffer), "dirty victims waiting for the DRAM"},
+    {"l2.write_buffer", K_U32, 1, 1u << 20, "16", "lines", R_ALL, P(l2_write_buffer),
+     "dirty victims waiting for the DRAM"},
     /* Where dram.model stood (its successor), so columns keep their order. */
-    {"fidelity", K_ENUM, 0, MACHINE_FIDELITY_COUNT - 1, "banked", "", R_ALL, E(fidelity, FIDELITY_NAMES), "the rung of the fidelity ladder: an estimate, or the timed machine with the DRAM at that detail"},
-    {"dram.latency", K_U64, 0, 1e9, "50", "cycles", R_A | R_F | R_C, P(dram_latency_cycles), "a DRAM read's latency with an idle queue"},
-    {"dram.bytes_per_cycle", K_F64, 1e-6, 1e6, "13", "bytes a cycle", R_A | R_C, P(dram_bytes_per_cycle), "what the channel sustains"},
-    {"dram.queue_depth", K_U32, 1, 1u << 20, "16", "entries", R_C, P(dram_queue_depth), "the channel's request queue"},
-    {"dram.clock_mhz", K_U32, 1, 16000, "1200", "MHz", R_ALL, P(dram_clock_mhz), "the DRAM's own clock: the banked level's timing, the DRAM-cycle column of --dram-trace"},
-    {"dram.channels", K_U32, 1, 64, "1", "", R_B, B(channels), "independent channels (a power of two)"},
+    {"fidelity", K_ENUM, 0, MACHINE_FIDELITY_COUNT - 1, "banked", "", R_ALL,
+     E(fidelity, FIDELITY_NAMES),
+     "the rung of the fidelity ladder: an estimate, or the timed machine with the DRAM at that detail"},
+    {"dram.latency", K_U64, 0, 1e9, "50", "cycles", R_A | R_F | R_C, P(dram_latency_cycles),
+     "a DRAM read's latency with an idle queue"},
+    {"dram.bytes_per_cycle", K_F64, 1e-6, 1e6, "13", "bytes a cycle", R_A | R_C,
+     P(dram_bytes_per_cycle), "what the channel sustains"},
+    {"dram.queue_depth", K_U32, 1, 1u << 20, "16", "entries", R_C, P(dram_queue_depth),
+     "the channel's request queue"},
+    {"dram.clock_mhz", K_U32, 1, 16000, "1200", "MHz", R_ALL, P(dram_clock_mhz),
+     "the DRAM's own clock: the banked level's timing, the DRAM-cycle column of --dram-trace"},
+    {"dram.channels", K_U32, 1, 64, "1", "", R_B, B(channels),
+     "independent channels (a power of two)"},
     {"dram.ranks", K_U32, 1, 16, "2", "", R_B, B(ranks), "ranks a channel (a power of two)"},
-    {"dram.bank_groups", K_U32, 1, 16, "4", "", R_B, B(bank_groups), "bank groups a rank (a power of two)"},
-    {"dram.banks_per_group", K_U32, 1, 64, "4", "", R_B, B(banks_per_group), "banks a bank group (a power of two)"},
+    {"dram.bank_groups", K_U32, 1, 16, "4", "", R_B, B(bank_groups),
+     "bank groups a rank (a power of two)"},
+    {"dram.banks_per_group", K_U32, 1, 64, "4", "", R_B, B(banks_per_group),
+     "banks a bank group (a power of two)"},
     {"dram.rows", K_U32, 1, 1u << 24, "65536", "", R_B, B(rows), "rows a bank (a power of two)"},
-    {"dram.columns", K_U32, 1, 1u << 20, "1024", "", R_B, B(columns), "device columns a row (a power of two)"},
-    {"dram.bus_bytes", K_U32, 1, 64, "8", "bytes", R_B, B(bus_bytes), "a channel's data bus; bus_bytes x burst_length = 64"},
-    {"dram.burst_length", K_U32, 1, 64, "8", "", R_B, B(burst_length), "beats a burst (even; a burst takes half as many DRAM cycles)"},
-    {"dram.mapping", K_MAPPING, 0, 0, "rochrababgco", "", R_B, B(mapping), "address bits to ro(w) ch(annel) ra(nk) b(ank)g(roup) ba(nk) co(lumn), most significant first"},
-    {"dram.page_policy", K_ENUM, 0, 1, "open", "", R_B, E(dram_banked.page, PAGE_NAMES), "open: a row stays open after its access; close: precharged at once"},
-    {"dram.read_queue", K_U32, 1, 4096, "16", "entries", R_B, B(read_queue), "read transactions a channel holds"},
-    {"dram.write_queue", K_U32, 1, 4096, "16", "entries", R_B, B(write_queue), "write transactions a channel holds"},
-    {"dram.write_high", K_U32, 1, 4096, "16", "entries", R_B, B(write_high), "writes that start a write drain"},
-    {"dram.write_low", K_U32, 0, 4096, "8", "entries", R_B, B(write_low), "writes a drain stops at"},
-    {"dram.controller_cycles", K_U32, 0, 1000, "2", "DRAM cycles", R_B, B(controller_cycles), "from taking a request to its first command (at least 1 with command queues)"},
-    {"dram.queue_structure", K_ENUM, 0, 2, "per_bank", "", R_B, E(dram_banked.queue_structure, QUEUE_NAMES), "transaction queues feeding a command queue per bank or per rank, or one FR-FCFS queue a channel"},
-    {"dram.command_queue", K_U32, 1, 4096, "8", "entries", R_B, B(command_queue), "a command queue (per_bank, per_rank)"},
+    {"dram.columns", K_U32, 1, 1u << 20, "1024", "", R_B, B(columns),
+     "device columns a row (a power of two)"},
+    {"dram.bus_bytes", K_U32, 1, 64, "8", "bytes", R_B, B(bus_bytes),
+     "a channel's data bus; bus_bytes x burst_length = 64"},
+    {"dram.burst_length", K_U32, 1, 64, "8", "", R_B, B(burst_length),
+     "beats a burst (even; a burst takes half as many DRAM cycles)"},
+    {"dram.mapping", K_MAPPING, 0, 0, "rochrababgco", "", R_B, B(mapping),
+     "address bits to ro(w) ch(annel) ra(nk) b(ank)g(roup) ba(nk) co(lumn), most significant first"},
+    {"dram.page_policy", K_ENUM, 0, 1, "open", "", R_B, E(dram_banked.page, PAGE_NAMES),
+     "open: a row stays open after its access; close: precharged at once"},
+    {"dram.read_queue", K_U32, 1, 4096, "16", "entries", R_B, B(read_queue),
+     "read transactions a channel holds"},
+    {"dram.write_queue", K_U32, 1, 4096, "16", "entries", R_B, B(write_queue),
+     "write transactions a channel holds"},
+    {"dram.write_high", K_U32, 1, 4096, "16", "entries", R_B, B(write_high),
+     "writes that start a write drain"},
+    {"dram.write_low", K_U32, 0, 4096, "8", "entries", R_B, B(write_low),
+     "writes a drain stops at"},
+    {"dram.controller_cycles", K_U32, 0, 1000, "2", "DRAM cycles", R_B, B(controller_cycles),
+     "from taking a request to its first command (at least 1 with command queues)"},
+    {"dram.queue_structure", K_ENUM, 0, 2, "per_bank", "", R_B,
+     E(dram_banked.queue_structure, QUEUE_NAMES),
+     "transaction queues feeding a command queue per bank or per rank, or one FR-FCFS queue a channel"},
+    {"dram.command_queue", K_U32, 1, 4096, "8", "entries", R_B, B(command_queue),
+     "a command queue (per_bank, per_rank)"},
     {"dram.tCL", K_U32, 1, 1000, "17", "DRAM cycles", R_B, B(tCL), "read command to data"},
     {"dram.tCWL", K_U32, 1, 1000, "12", "DRAM cycles", R_B, B(tCWL), "write command to data"},
     {"dram.tRCD", K_U32, 1, 1000, "17", "DRAM cycles", R_B, B(tRCD), "activate to read or write"},
     {"dram.tRP", K_U32, 1, 1000, "17", "DRAM cycles", R_B, B(tRP), "precharge to activate"},
     {"dram.tRAS", K_U32, 1, 1000, "39", "DRAM cycles", R_B, B(tRAS), "activate to precharge"},
-    {"dram.tRC", K_U32, 1, 2000, "56", "DRAM cycles", R_B, B(tRC), "activate to activate, one bank (at least tRAS)"},
-    {"dram.tCCD_S", K_U32, 1, 1000, "4", "DRAM cycles", R_B, B(tCCD_S), "column to column, other bank group"},
-    {"dram.tCCD_L", K_U32, 1, 1000, "6", "DRAM cycles", R_B, B(tCCD_L), "column to column, same bank group"},
-    {"dram.tRRD_S", K_U32, 1, 1000, "4", "DRAM cycles", R_B, B(tRRD_S), "activate to activate, other bank group"},
-    {"dram.tRRD_L", K_U32, 1, 1000, "6", "DRAM cycles", R_B, B(tRRD_L), "activate to activate, same bank group"},
-    {"dram.tFAW", K_U32, 1, 10000, "26", "DRAM cycles", R_B, B(tFAW), "window of four activates, one rank"},
-    {"dram.tWR", K_U32, 1, 1000, "18", "DRAM cycles", R_B, B(tWR), "write recovery: write data to precharge"},
-    {"dram.tWTR_S", K_U32, 1, 1000, "3", "DRAM cycles", R_B, B(tWTR_S), "write data to read, other bank group"},
-    {"dram.tWTR_L", K_U32, 1, 1000, "9", "DRAM cycles", R_B, B(tWTR_L), "write data to read, same bank group"},
+    {"dram.tRC", K_U32, 1, 2000, "56", "DRAM cycles", R_B, B(tRC),
+     "activate to activate, one bank (at least tRAS)"},
+    {"dram.tCCD_S", K_U32, 1, 1000, "4", "DRAM cycles", R_B, B(tCCD_S),
+     "column to column, other bank group"},
+    {"dram.tCCD_L", K_U32, 1, 1000, "6", "DRAM cycles", R_B, B(tCCD_L),
+     "column to column, same bank group"},
+    {"dram.tRRD_S", K_U32, 1, 1000, "4", "DRAM cycles", R_B, B(tRRD_S),
+     "activate to activate, other bank group"},
+    {"dram.tRRD_L", K_U32, 1, 1000, "6", "DRAM cycles", R_B, B(tRRD_L),
+     "activate to activate, same bank group"},
+    {"dram.tFAW", K_U32, 1, 10000, "26", "DRAM cycles", R_B, B(tFAW),
+     "window of four activates, one rank"},
+    {"dram.tWR", K_U32, 1, 1000, "18", "DRAM cycles", R_B, B(tWR),
+     "write recovery: write data to precharge"},
+    {"dram.tWTR_S", K_U32, 1, 1000, "3", "DRAM cycles", R_B, B(tWTR_S),
+     "write data to read, other bank group"},
+    {"dram.tWTR_L", K_U32, 1, 1000, "9", "DRAM cycles", R_B, B(tWTR_L),
+     "write data to read, same bank group"},
     {"dram.tRTW", K_U32, 1, 1000, "10", "DRAM cycles", R_B, B(tRTW), "read to write"},
     {"dram.tRTP", K_U32, 1, 1000, "9", "DRAM cycles", R_B, B(tRTP), "read to precharge"},
-    {"dram.tREFI", K_U32, 0, 1u << 20, "9360", "DRAM cycles", R_B, B(tREFI), "refresh interval (0: no refresh)"},
+    {"dram.tREFI", K_U32, 0, 1u << 20, "9360", "DRAM cycles", R_B, B(tREFI),
+     "refresh interval (0: no refresh)"},
     {"dram.tRFC", K_U32, 1, 100000, "420", "DRAM cycles", R_B, B(tRFC), "refresh to activate"},
-    {"costs.node", K_U32, 0, 1e6, "7", "cycles", R_ALL, W(cost_node_cycles), "compute a k-d traversal step"},
-    {"costs.triangle", K_U32, 0, 1e6, "20", "cycles", R_ALL, W(cost_triangle_cycles), "compute a ray/triangle test"},
-    {"costs.shade", K_U32, 0, 1e6, "50", "cycles", R_ALL, W(cost_shade_cycles), "compute shading a hit (spawning its rays included)"},
-    {"costs.ray_switch", K_U32, 0, 1e6, "2", "cycles", R_ALL, P(cost_ray_switch_cycles), "a thread switching to another ray's registers"},
-    {"timeline.window", K_U64, 1, 1e12, "10000", "cycles", R_ALL, P(timeline_window_cycles), "a timeline.csv row (windows double past 4096 rows)"},
-    {"dynamic.sharing", K_ENUM, 0, 1, "chip", "", R_ALL, WE(dyn_sharing, SHARING_NAMES), "the dynamic and treelet policies' queue points: one a core (g_max divided) or chip-wide"},
-    {"sample.fraction", K_F64, 1e-6, 1, "1", "", R_ALL, P(sample_fraction), "share of work items simulated in detail, warm-up included (1: no sampling)"},
-    {"sample.units", K_U32, 0, 1u << 20, "0", "", R_ALL, P(sample_units), "strata of the work list, one detailed unit each (0: as many as fit, at most 40)"},
-    {"sample.warming", K_F64, 0, 1e6, "4", "", R_ALL, P(sample_warming), "items warmed without time before a unit, a multiple of its detailed items"},
-    {"sample.seed", K_U64, 0, 1e15, "1", "", R_ALL, P(sample_seed), "where each middle unit falls in its stratum"},
+    {"costs.node", K_U32, 0, 1e6, "7", "cycles", R_ALL, W(cost_node_cycles),
+     "compute a k-d traversal step"},
+    {"costs.triangle", K_U32, 0, 1e6, "20", "cycles", R_ALL, W(cost_triangle_cycles),
+     "compute a ray/triangle test"},
+    {"costs.shade", K_U32, 0, 1e6, "50", "cycles", R_ALL, W(cost_shade_cycles),
+     "compute shading a hit (spawning its rays included)"},
+    {"costs.ray_switch", K_U32, 0, 1e6, "2", "cycles", R_ALL, P(cost_ray_switch_cycles),
+     "a thread switching to another ray's registers"},
+    {"timeline.window", K_U64, 1, 1e12, "10000", "cycles", R_ALL, P(timeline_window_cycles),
+     "a timeline.csv row (windows double past 4096 rows)"},
+    {"dynamic.sharing", K_ENUM, 0, 1, "chip", "", R_ALL, WE(dyn_sharing, SHARING_NAMES),
+     "the dynamic and treelet policies' queue points: one a core (g_max divided) or chip-wide"},
+    {"sample.fraction", K_F64, 1e-6, 1, "1", "", R_ALL, P(sample_fraction),
+     "share of work items simulated in detail, warm-up included (1: no sampling)"},
+    {"sample.units", K_U32, 0, 1u << 20, "0", "", R_ALL, P(sample_units),
+     "strata of the work list, one detailed unit each (0: as many as fit, at most 40)"},
+    {"sample.warming", K_F64, 0, 1e6, "4", "", R_ALL, P(sample_warming),
+     "items warmed without time before a unit, a multiple of its detailed items"},
+    {"sample.seed", K_U64, 0, 1e15, "1", "", R_ALL, P(sample_seed),
+     "where each middle unit falls in its stratum"},
 };
 #undef P
 #undef B
@@ -314,8 +369,8 @@ static bool load_includes(struct machine_cfg *c, struct cfg_doc *d, const char *
     if (f->kind != CFG_SCALAR) return cfg_fail(d, f, "include", e, "expected a file name");
     enum scalar_why w = scalar_text(f->text);
     if (w != SCALAR_OK)
-      return cfg_fail(d, f, "include", e, "%s (got '%s', expected a file name)",
-                      scalar_why_text(w), f->text);
+      return cfg_fail(d, f, "include", e, "%s (got '%s', expected a file name)", scalar_why_text(w),
+                      f->text);
     char sub[1024];
     if (f->text[0] == '/') snprintf(sub, sizeof sub, "%s", f->text);
     else if ((size_t)snprintf(sub, sizeof sub, "%.*s%s", dir, path, f->text) >= sizeof sub)
@@ -406,8 +461,7 @@ bool machine_cfg_set(struct machine_cfg *c, const char *assignment, struct err *
   char where[300];
   snprintf(where, sizeof where, "--set %s", assignment);
   const char *eq = strchr(assignment, '=');
-  if (!eq)
-  {
+  if (!eq) {
     char keys[2048];
     machine_cfg_key_list(keys, sizeof keys);
     return err_set(e, where, 0, 0, "expected KEY=VALUE (keys: %s)", keys);
@@ -451,7 +505,9 @@ static bool check_cache(const struct machine_cfg *c, const char *lvl, uint64_t s
   snprintf(got, sizeof got, "%llu bytes", (unsigned long long)size);
   switch (cache_geometry(&cp)) {
   case CACHE_GEOMETRY_OK: return true;
-  case CACHE_GEOMETRY_SMALL: snprintf(msg, sizeof msg, "smaller than one %u-byte line", line); break;
+  case CACHE_GEOMETRY_SMALL:
+    snprintf(msg, sizeof msg, "smaller than one %u-byte line", line);
+    break;
   case CACHE_GEOMETRY_PARTIAL:
     snprintf(msg, sizeof msg, "not a whole number of %u-byte lines", line);
     break;
@@ -490,8 +546,7 @@ bool machine_cfg_check(const struct machine_cfg *c, struct err *e) {
   const unsigned model_seq = c->at[key_index("fidelity")].seq;
   for (unsigned i = 0; i < NKEYS; i++) {
     const struct machine_cfg_origin *o = &c->at[i];
-    if (!o->file[0] || o->included || o->seq < model_seq ||
-        (KEYS[i].rungs >> p->fidelity & 1u))
+    if (!o->file[0] || o->included || o->seq < model_seq || (KEYS[i].rungs >> p->fidelity & 1u))
       continue;
     char v[64], msg[160];
     machine_cfg_value(c, i, v, sizeof v);

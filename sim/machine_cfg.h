@@ -41,7 +41,7 @@ struct machine_cfg {
   struct machine_params p;
   struct machine_cfg_work work;
   struct machine_cfg_origin at[MACHINE_CFG_KEYS_MAX]; /* [0, machine_cfg_count()) */
-  unsigned seq; /* settings so far */
+  unsigned seq;                                       /* settings so far */
 };
 
 /* The default machine (configs/default.yaml). */

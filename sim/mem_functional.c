@@ -81,11 +81,11 @@ struct mem_functional {
   /* Repeats kept from the analyser, by class: [0] loads, [1] stores. */
   uint64_t repeats[MEM_CLASS_MAX][2];
   struct mem_functional_stats st;
-  struct fn_pipe *pipe; /* NULL: the analyser runs on the caller's thread */
-  uint64_t *fill;       /* the records of the batch being filled (a pipe's or local) */
-  uint32_t fill_n;      /* and how many it holds */
-  uint32_t fill_cap;    /* 0: records unused (lines under 32 bytes): one call a line */
-  bool fast_loads;      /* records in use and no din trace: fn_load's short path */
+  struct fn_pipe *pipe;           /* NULL: the analyser runs on the caller's thread */
+  uint64_t *fill;                 /* the records of the batch being filled (a pipe's or local) */
+  uint32_t fill_n;                /* and how many it holds */
+  uint32_t fill_cap;              /* 0: records unused (lines under 32 bytes): one call a line */
+  bool fast_loads;                /* records in use and no din trace: fn_load's short path */
   uint64_t local[FN_LOCAL_LINES]; /* the batch without a pipe */
 };
 
@@ -271,7 +271,8 @@ static void fn_load(void *ctx, uint64_t addr, uint32_t size_bytes, unsigned cls)
   CHECK_LT(cls, MEM_CLASS_MAX);
   b->st.loads[cls]++;
   b->st.bytes_loaded[cls] += size_bytes;
-  const uint64_t line = addr >> b->lg2_line, span = ((addr + (size_bytes - 1)) >> b->lg2_line) - line;
+  const uint64_t line = addr >> b->lg2_line,
+                 span = ((addr + (size_bytes - 1)) >> b->lg2_line) - line;
   if (!b->fast_loads || size_bytes == 0 || span > 1 || b->fill_n + 2 >= b->fill_cap) {
     fn_load_lines(b, addr, size_bytes, cls);
     return;

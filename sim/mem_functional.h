@@ -43,9 +43,9 @@ struct mem_port mem_functional_port(struct mem_functional *b);
 
 /* The analyser (borrowed), after the run: call lru_stack_finish and read
  * results. With an analyser thread, this waits until it has taken every line
- * so far; the caller may then read the analyser until its next access. Accesses that repeat the last line without changing its state skip
- * the analyser and are counted here; this call hands those counts over, so
- * call it again after any further access before reading results. */
+ * so far; the caller may then read the analyser until its next access. Accesses that repeat the
+ * last line without changing its state skip the analyser and are counted here; this call hands
+ * those counts over, so call it again after any further access before reading results. */
 struct lru_stack *mem_functional_stack(struct mem_functional *b);
 
 const struct mem_functional_stats *mem_functional_get_stats(const struct mem_functional *b);

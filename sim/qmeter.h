@@ -10,10 +10,10 @@
 
 struct qmeter {
   uint64_t entered, left;
-  uint64_t wait_sum;   /* cycles, over requests that left */
-  uint64_t area;       /* requests x cycles, up to `since` */
-  uint64_t len, max;   /* requests inside now, and the most at once */
-  uint64_t since;      /* cycle of the last change */
+  uint64_t wait_sum; /* cycles, over requests that left */
+  uint64_t area;     /* requests x cycles, up to `since` */
+  uint64_t len, max; /* requests inside now, and the most at once */
+  uint64_t since;    /* cycle of the last change */
 };
 
 static inline void qmeter_advance(struct qmeter *q, uint64_t t) {

@@ -20,7 +20,9 @@ static struct stats_entry *add(struct stats_table *t, const char *name, enum sta
   return x;
 }
 
-void stats_u64(struct stats_table *t, const char *name, uint64_t v) { add(t, name, STATS_U64)->u = v; }
+void stats_u64(struct stats_table *t, const char *name, uint64_t v) {
+  add(t, name, STATS_U64)->u = v;
+}
 
 void stats_f64(struct stats_table *t, const char *name, double v) {
   CHECK(isfinite(v));
@@ -182,7 +184,8 @@ const char *stats_uncovered(const struct stats_descs *g, char *buf, size_t len) 
     if (!seen[b]) {
       size_t e = b;
       while (e < g->struct_size && !seen[e]) e++;
-      snprintf(buf, len, "%s: bytes %zu..%zu of its stats struct (%zu bytes) are neither written "
+      snprintf(buf, len,
+               "%s: bytes %zu..%zu of its stats struct (%zu bytes) are neither written "
                "by a descriptor nor listed as skipped",
                g->component, b, e - 1, g->struct_size);
       r = buf;

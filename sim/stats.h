@@ -78,7 +78,7 @@ struct stats_env {
   const void *ctx;                /* the component's own (its parameters, clocks) */
   const char *const *class_names; /* data class names (the renderer's), for per-class numbers */
   unsigned classes;
-  stats_slot_fn slot;             /* fills a table's STATS_HOW_SLOT entries */
+  stats_slot_fn slot; /* fills a table's STATS_HOW_SLOT entries */
   const void *slot_ctx;
 };
 
@@ -122,19 +122,28 @@ struct stats_descs {
 
 #define STATS_FIELD_SIZE(T, f) sizeof(((T *)0)->f)
 /* A uint64_t counter written as it is. */
-#define STATS_FIELD(T, f, nm, un, ds)                                                      \
-  {.name = nm, .unit = un, .desc = ds, .how = STATS_HOW_FIELD, .off = offsetof(T, f),     \
-   .size = STATS_FIELD_SIZE(T, f)}
+#define STATS_FIELD(T, f, nm, un, ds)                                                              \
+  {                                                                                                \
+    .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_FIELD, .off = offsetof(T, f),             \
+    .size = STATS_FIELD_SIZE(T, f)                                                                 \
+  }
 /* A figure derived by fn, about field f. */
-#define STATS_F64(T, f, fn, nm, un, ds)                                                    \
-  {.name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .off = offsetof(T, f),       \
-   .size = STATS_FIELD_SIZE(T, f), .f64 = fn}
-#define STATS_U64(T, f, fn, nm, un, ds)                                                    \
-  {.name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .off = offsetof(T, f),       \
-   .size = STATS_FIELD_SIZE(T, f), .u64 = fn}
-#define STATS_SLOT(id) {.name = "", .unit = "", .desc = "", .how = STATS_HOW_SLOT, .slot = id}
-#define STATS_SKIP(T, f, reason) {offsetof(T, f), STATS_FIELD_SIZE(T, f), reason, NULL}
-#define STATS_SKIP_BY(T, f, table) {offsetof(T, f), STATS_FIELD_SIZE(T, f), "another table", &(table)}
+#define STATS_F64(T, f, fn, nm, un, ds)                                                            \
+  {                                                                                                \
+    .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .off = offsetof(T, f),               \
+    .size = STATS_FIELD_SIZE(T, f), .f64 = fn                                                      \
+  }
+#define STATS_U64(T, f, fn, nm, un, ds)                                                            \
+  {                                                                                                \
+    .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .off = offsetof(T, f),               \
+    .size = STATS_FIELD_SIZE(T, f), .u64 = fn                                                      \
+  }
+#define STATS_SLOT(id)                                                                             \
+  { .name = "", .unit = "", .desc = "", .how = STATS_HOW_SLOT, .slot = id }
+#define STATS_SKIP(T, f, reason)                                                                   \
+  { offsetof(T, f), STATS_FIELD_SIZE(T, f), reason, NULL }
+#define STATS_SKIP_BY(T, f, table)                                                                 \
+  { offsetof(T, f), STATS_FIELD_SIZE(T, f), "another table", &(table) }
 #define STATS_COUNT(a) ((unsigned)(sizeof(a) / sizeof((a)[0])))
 
 /* Append g's numbers for stats struct st to t, in table order. */

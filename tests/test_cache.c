@@ -124,8 +124,8 @@ static void test_lazy(void) {
       mism += hit[0] != hit[1];
       hits += hit[0];
     }
-    EXPECTF(mism == 0 && hits == 200000 - distinct, "ways %u: %llu disagreements, %llu hits", ways[k],
-            (unsigned long long)mism, (unsigned long long)hits);
+    EXPECTF(mism == 0 && hits == 200000 - distinct, "ways %u: %llu disagreements, %llu hits",
+            ways[k], (unsigned long long)mism, (unsigned long long)hits);
     const uint64_t ha = cache_host_bytes(a), hb = cache_host_bytes(b);
     printf("ways %u: 4 MiB holds %llu host bytes, 16 GiB %llu (%llu before any line)\n", ways[k],
            (unsigned long long)ha, (unsigned long long)hb, (unsigned long long)b0);

@@ -50,7 +50,10 @@ int main(void) {
       {"antiparallel up", {0, 0, -5}, {0, 0, 0}, {0, 0, -7}, CAMERA_BAD_UP},
       /* Parallel in decimal, not in floats: the cross product is rounding. */
       {"parallel, rounded", {0, 0, 0}, {1, 2, 3}, {2, 4, 6}, CAMERA_BAD_UP},
-      {"parallel, rounded, tiny", {0, 0, 0}, {0.1f, 0.2f, 0.3f}, {1e-31f, 2e-31f, 3e-31f},
+      {"parallel, rounded, tiny",
+       {0, 0, 0},
+       {0.1f, 0.2f, 0.3f},
+       {1e-31f, 2e-31f, 3e-31f},
        CAMERA_BAD_UP},
   };
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {

@@ -109,7 +109,8 @@ static void test_limits(void) {
   add(&t, "]\n");
   EXPECTF(load_error(t.s, buf, sizeof buf)[0] == '\0', "%s", buf);
   add(&t, "n: *m\n");
-  EXPECTF(strstr(load_error(t.s, buf, sizeof buf), "h.yaml:3:4: error: alias '*m': too many"), "%s", buf);
+  EXPECTF(strstr(load_error(t.s, buf, sizeof buf), "h.yaml:3:4: error: alias '*m': too many"), "%s",
+          buf);
 
   /* All nodes: the root map, key 'a', its list and N scalars: N + 3. */
   for (unsigned extra = 0; extra < 2; extra++) {
@@ -150,7 +151,8 @@ static void test_limits(void) {
   t.len = 0;
   for (int i = 0; i < 3000; i++) add(&t, "k%d: %d\n", i, i);
   add(&t, "k7: 1\nk2: 1\n");
-  EXPECTF(strstr(load_error(t.s, buf, sizeof buf), "h.yaml:3001:1: error: duplicate key 'k7' (first at line 8)"),
+  EXPECTF(strstr(load_error(t.s, buf, sizeof buf),
+                 "h.yaml:3001:1: error: duplicate key 'k7' (first at line 8)"),
           "%s", buf);
 
   /* Depth: a scalar CFG_MAX_DEPTH levels below the root passes; one level
@@ -176,7 +178,8 @@ static void test_limits(void) {
   add(&t, "*a");
   add_repeat(&t, "]", "", 24);
   add(&t, "\n");
-  EXPECTF(strstr(load_error(t.s, buf, sizeof buf), "h.yaml:2:28: error: alias '*a': nesting deeper than 64 levels"),
+  EXPECTF(strstr(load_error(t.s, buf, sizeof buf),
+                 "h.yaml:2:28: error: alias '*a': nesting deeper than 64 levels"),
           "%s", buf);
 
   /* Scalars: CFG_MAX_SCALAR_BYTES pass, one byte more fails at the scalar. */
@@ -188,8 +191,9 @@ static void test_limits(void) {
     load_error(t.s, buf, sizeof buf);
     if (!extra) EXPECTF(buf[0] == '\0', "%s", buf);
     else
-      EXPECTF(strstr(buf, "h.yaml:2:4: error: scalar too long (got 4097 bytes, expected at most 4096)"),
-              "%s", buf);
+      EXPECTF(
+          strstr(buf, "h.yaml:2:4: error: scalar too long (got 4097 bytes, expected at most 4096)"),
+          "%s", buf);
   }
 
   /* Size: CFG_MAX_FILE_BYTES pass (a long comment line), one more fails at
@@ -234,7 +238,8 @@ int main(void) {
       {"a: &x 1\nb: &x [1]\nk: *x\n", "t.yaml:2:4: error: k: wrong type (got a list"},
       {"a: &x 1\nk: *x\n", "t.yaml:1:1: error: a: unknown key 'a'"},
       {"a: &a [1, *a]\n", "t.yaml:1:11: error: alias '*a' refers to a node that contains it"},
-      {"k: *nowhere\n", "t.yaml:1:4: error: alias '*nowhere' refers to no anchor defined before it"},
+      {"k: *nowhere\n",
+       "t.yaml:1:4: error: alias '*nowhere' refers to no anchor defined before it"},
       {"k: *x\na: &x 1\n", "t.yaml:1:4: error: alias '*x' refers to no anchor defined before it"},
       {"? [1]\n: 2\n", "t.yaml:1:3: error: a key must be a plain word, not a list or map"},
       {"a: &x [1]\n*x : 2\n", "t.yaml:2:1: error: a key must be a plain word, not a list or map"},
@@ -244,13 +249,19 @@ int main(void) {
        * it, no leading zero; a NUL escape refused where it is written. */
       {"k: .5\n", ""},
       {"k: 2.5e-01\n", ""},
-      {"k: \" 3\"\n", "t.yaml:1:4: error: k: not a number: whitespace before or after it (got ' 3', expected a decimal number)"},
-      {"k: \"3 \"\n", "t.yaml:1:4: error: k: not a number: whitespace before or after it (got '3 '"},
-      {"k: \"\\n1.5\"\n", "t.yaml:1:4: error: k: not a number: whitespace before or after it (got '\\n1.5'"},
-      {"k: 01.5\n", "t.yaml:1:4: error: k: not a number: a leading zero, ambiguous between octal and decimal (got '01.5'"},
-      {"k: 1e-400\n", "t.yaml:1:4: error: k: not a number: too small (it would read as 0) (got '1e-400'"},
+      {"k: \" 3\"\n",
+       "t.yaml:1:4: error: k: not a number: whitespace before or after it (got ' 3', expected a decimal number)"},
+      {"k: \"3 \"\n",
+       "t.yaml:1:4: error: k: not a number: whitespace before or after it (got '3 '"},
+      {"k: \"\\n1.5\"\n",
+       "t.yaml:1:4: error: k: not a number: whitespace before or after it (got '\\n1.5'"},
+      {"k: 01.5\n",
+       "t.yaml:1:4: error: k: not a number: a leading zero, ambiguous between octal and decimal (got '01.5'"},
+      {"k: 1e-400\n",
+       "t.yaml:1:4: error: k: not a number: too small (it would read as 0) (got '1e-400'"},
       {"k: 0x8\n", "t.yaml:1:4: error: k: not a number (got '0x8'"},
-      {"k: \"4\\0xyz\"\n", "t.yaml:1:4: error: a NUL character (\\0) in a value (got '4\\0...', expected text without one)"},
+      {"k: \"4\\0xyz\"\n",
+       "t.yaml:1:4: error: a NUL character (\\0) in a value (got '4\\0...', expected text without one)"},
       {"k: \"4\\x00\"\n", "t.yaml:1:4: error: a NUL character (\\0) in a value"},
       {"k: \"4\\u0000\"\n", "t.yaml:1:4: error: a NUL character (\\0) in a value"},
       {"k: 1\n\"k\\0x\": 2\n", "t.yaml:2:1: error: a NUL character (\\0) in a key (got 'k\\0...'"},
@@ -262,8 +273,7 @@ int main(void) {
   char buf[2048];
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
     run_case(cases[i].text, buf, sizeof buf);
-    if (!cases[i].want[0])
-      EXPECTF(buf[0] == '\0', "case %zu: unexpected error: %s", i, buf);
+    if (!cases[i].want[0]) EXPECTF(buf[0] == '\0', "case %zu: unexpected error: %s", i, buf);
     else
       EXPECTF(strstr(buf, cases[i].want) != NULL, "case %zu: got '%s', want '%s'", i, buf,
               cases[i].want);
@@ -284,7 +294,8 @@ int main(void) {
   static const struct {
     const char *key, *want;
   } bad_u64[] = {
-      {"oct", "oct: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 0 to 100)"},
+      {"oct",
+       "oct: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 0 to 100)"},
       {"hex", "hex: not a whole number (got '0x40', expected 0 to 100)"},
       {"sp", "sp: not a whole number: whitespace before or after it (got ' 4', expected 0 to 100)"},
       {"big", "big: out of range (got 18446744073709551616, expected 0 to 100)"},
@@ -311,7 +322,8 @@ int main(void) {
   static const char *const pol[] = {"fifo", "lru", "random", NULL};
   EXPECT(cfg_enum(&d, cfg_get(&d.root, "policy"), "policy", pol, &which, &e) && which == 1);
   double v[3];
-  EXPECT(cfg_f64_list(&d, cfg_get(&d.root, "v"), "v", 3, -10, 10, v, &e) && v[1] == 2.5 && v[2] == -3);
+  EXPECT(cfg_f64_list(&d, cfg_get(&d.root, "v"), "v", 3, -10, 10, v, &e) && v[1] == 2.5 &&
+         v[2] == -3);
   bool b = false;
   EXPECT(cfg_bool(&d, cfg_get(&d.root, "b"), "b", &b, &e) && b);
   char s[4];

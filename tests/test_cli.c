@@ -4,8 +4,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "testing.h"
@@ -97,7 +97,7 @@ static void test_huge_scenes(void) {
              *flake = RTSIM_TMP "/huge_flake.yaml", *mesh = RTSIM_TMP "/huge_mesh.yaml",
              *ply = RTSIM_TMP "/huge_faces.ply";
   const char *cam = "camera: {from: [0, -5, 1], at: [0, 0, 0]}\ngeometry:\n";
-  write_file(room, cam, "  - {generator: room, detail: 200}\n", 23, ""); /* 102M */
+  write_file(room, cam, "  - {generator: room, detail: 200}\n", 23, "");  /* 102M */
   write_file(grove, cam, "  - {generator: grove, detail: 200}\n", 4, ""); /* 131M */
   write_file(flake, cam, "  - {generator: sphereflake, detail: 6, tessellation: 64}\n", 1, "");
   write_file(mesh, cam, "  - {mesh: huge_faces.ply}\n", 1, "");
@@ -113,13 +113,15 @@ static void test_huge_scenes(void) {
     const char *path, *want;
   } cases[] = {
       {RTSIM_TMP "/huge_room.yaml", "error: geometry[%u]: too many triangles: this entry builds "
-       "4446498, the scene would have "},
+                                    "4446498, the scene would have "},
       {RTSIM_TMP "/huge_grove.yaml", "error: geometry[%u]: too many triangles: this entry builds "
-       "32808512, the scene would have "},
-      {RTSIM_TMP "/huge_flake.yaml", "huge_flake.yaml:3:5: error: geometry[0]: too many "
+                                     "32808512, the scene would have "},
+      {RTSIM_TMP "/huge_flake.yaml",
+       "huge_flake.yaml:3:5: error: geometry[0]: too many "
        "triangles: this entry builds 29386555394, the scene would have 29386555394, expected at "
        "most "},
-      {RTSIM_TMP "/huge_mesh.yaml", "huge_mesh.yaml:3:5: error: geometry[0]: too many "
+      {RTSIM_TMP "/huge_mesh.yaml",
+       "huge_mesh.yaml:3:5: error: geometry[0]: too many "
        "triangles: this entry holds at least 120000000, the scene would have at least "
        "120000000, expected at most "},
   };
@@ -144,8 +146,8 @@ static void test_huge_scenes(void) {
     EXPECTF(found, "%s: got '%s', want '%s'", cases[i].path, out, cases[i].want);
     EXPECTF(count_lines(out) == 1, "%s: expected one line, got: %s", cases[i].path, out);
     EXPECTF(access(img, F_OK) != 0, "%s: output file left behind", cases[i].path);
-    EXPECTF(s < 5.0, "%s: refused after %.1f s (expected before building anything)",
-            cases[i].path, s);
+    EXPECTF(s < 5.0, "%s: refused after %.1f s (expected before building anything)", cases[i].path,
+            s);
   }
   unlink(room);
   unlink(grove);
@@ -168,10 +170,11 @@ static void test_importer_child(void) {
   static const struct {
     const char *mesh, *want;
   } cases[] = {
-      {"/usr/share/assimp/models/AC/nosurfaces.ac", "nosurfaces.ac: cannot import mesh: the "
+      {"/usr/share/assimp/models/AC/nosurfaces.ac",
+       "nosurfaces.ac: cannot import mesh: the "
        "importer (assimp, in a child process) gave no answer: it crashed (signal 11"},
       {"/usr/share/assimp/models/invalid/OutOfMemory.off", "OutOfMemory.off: cannot import mesh: "
-       "std::bad_alloc"},
+                                                           "std::bad_alloc"},
   };
   const char *scene = RTSIM_TMP "/importer_child.yaml", *img = RTSIM_TMP "/importer_child.exr";
   char cmd[2048], out[8192], item[512];
@@ -236,10 +239,11 @@ static void test_strict_inputs(void) {
     fclose(f);
   }
   rc = testing_run(cmd, out, sizeof out);
-  EXPECTF(rc == 2 &&
-              strstr(out, "<stdin>:2:4097: error: unexpected text after tmax (expected 9 fields)\n") &&
-              !strstr(out, ",-1\n") && !strstr(out, ",0\n") && count_lines(out) == 2,
-          "a row split in two: exit %d: %s", rc, out);
+  EXPECTF(
+      rc == 2 &&
+          strstr(out, "<stdin>:2:4097: error: unexpected text after tmax (expected 9 fields)\n") &&
+          !strstr(out, ",-1\n") && !strstr(out, ",0\n") && count_lines(out) == 2,
+      "a row split in two: exit %d: %s", rc, out);
   /* A row past the 1 MiB bound is refused, not read without end. */
   unlink(rays);
   snprintf(cmd, sizeof cmd,
@@ -248,7 +252,7 @@ static void test_strict_inputs(void) {
            RTSIM_BINARY, SCN);
   rc = testing_run(cmd, out, sizeof out);
   EXPECTF(rc == 2 && strstr(out, "<stdin>:2:1048577: error: row too long (got more than 1048576 "
-                                  "bytes, expected at most 1048576)"),
+                                 "bytes, expected at most 1048576)"),
           "huge row: exit %d: %s", rc, out);
 
   /* rtsim plot's table: a NUL byte cut the table short with exit 0. */
@@ -258,8 +262,10 @@ static void test_strict_inputs(void) {
     size_t len;
     const char *want;
   } tables[] = {
-      {TABLE("x,y\n1,2\n2,3\0\n3,4\n"), "cli_plot.csv:3:4: error: a NUL byte (expected text: a CSV holds none)"},
-      {TABLE("x,y\n1,2\n 2,3\n"), "cli_plot.csv:3:1: error: --x x: not a number: whitespace before or after it (got ' 2')"},
+      {TABLE("x,y\n1,2\n2,3\0\n3,4\n"),
+       "cli_plot.csv:3:4: error: a NUL byte (expected text: a CSV holds none)"},
+      {TABLE("x,y\n1,2\n 2,3\n"),
+       "cli_plot.csv:3:1: error: --x x: not a number: whitespace before or after it (got ' 2')"},
       {TABLE("x,y\n1,2\n2,03\n"), "cli_plot.csv:3:3: error: --y y: not a number: a leading zero"},
   };
 #undef TABLE
@@ -281,7 +287,8 @@ static void test_strict_inputs(void) {
 
   /* up: [0, 0, 1e-30] is a valid up: the image is the unit up's, bit for bit. */
   const char *a = RTSIM_TMP "/cli_up_unit.exr", *b = RTSIM_TMP "/cli_up_tiny.exr";
-  snprintf(cmd, sizeof cmd, "%s render %sgood_room_tiny.yaml -o %s --width 16 --height 12 && "
+  snprintf(cmd, sizeof cmd,
+           "%s render %sgood_room_tiny.yaml -o %s --width 16 --height 12 && "
            "%s render %sgood_camera_tiny_up.yaml -o %s --width 16 --height 12",
            RTSIM_BINARY, SCN, a, RTSIM_BINARY, SCN, b);
   rc = testing_run(cmd, out, sizeof out);
@@ -328,13 +335,14 @@ static void test_not_regular(void) {
        "cli_mesh_obj.yaml:3:11: error: geometry[0].mesh: " RTSIM_TMP
        "/cli_fifo.obj: cannot import mesh: ",
        NULL},
-      {"plot " RTSIM_TMP "/cli_fifo.csv --x a --y b -o x.png", "cli_fifo.csv: error: cannot read: ",
-       NULL},
+      {"plot " RTSIM_TMP "/cli_fifo.csv --x a --y b -o x.png",
+       "cli_fifo.csv: error: cannot read: ", NULL},
       {"dram-replay " RTSIM_SOURCE_DIR "/configs/tiny.yaml " RTSIM_TMP "/cli_fifo.trace",
        "cli_fifo.trace: error: cannot open: ", NULL},
-      {"render /dev/null -o x.exr", "/dev/null: error: cannot open: ",
-       "not a regular file (a character device)"},
-      {"render " SCN " -o x.exr", "/scenes/: error: cannot open: ", "not a regular file (a directory)"},
+      {"render /dev/null -o x.exr",
+       "/dev/null: error: cannot open: ", "not a regular file (a character device)"},
+      {"render " SCN " -o x.exr",
+       "/scenes/: error: cannot open: ", "not a regular file (a directory)"},
   };
   char cmd[2048], out[8192];
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
@@ -359,7 +367,8 @@ static void test_not_regular(void) {
 static void test_run_refuses_first(void) {
   char cmd[4096], out[8192];
   const char *dir = RTSIM_TMP "/cli_refuse";
-  snprintf(cmd, sizeof cmd, "rm -rf %s && %s run %s/configs/tiny.yaml %sgood_room_tiny.yaml -o %s "
+  snprintf(cmd, sizeof cmd,
+           "rm -rf %s && %s run %s/configs/tiny.yaml %sgood_room_tiny.yaml -o %s "
            "--width 4 --height 4 --rays primary",
            dir, RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, dir);
   EXPECTF(testing_run(cmd, out, sizeof out) == 0, "the first run: %s", out);
@@ -371,21 +380,23 @@ static void test_run_refuses_first(void) {
       /* more ray contexts than any host maps stacks for */
       "--width 8 --height 8 --set cores=4096 --set threads_per_core=16 --set rays_per_thread=16",
       /* a sampled run cannot record a whole run's DRAM trace */
-      "--width 64 --height 64 --set sample.fraction=0.5 --dram-trace " RTSIM_TMP "/cli_refuse.trace",
+      "--width 64 --height 64 --set sample.fraction=0.5 --dram-trace " RTSIM_TMP
+      "/cli_refuse.trace",
   };
   for (size_t i = 0; i < sizeof refused / sizeof refused[0]; i++)
     for (int fresh = 0; fresh < 2; fresh++) {
       const char *d = fresh ? RTSIM_TMP "/cli_refuse_new" : dir;
-      snprintf(cmd, sizeof cmd, "rm -rf %s/cli_refuse_new && %s run %s/configs/tiny.yaml "
+      snprintf(cmd, sizeof cmd,
+               "rm -rf %s/cli_refuse_new && %s run %s/configs/tiny.yaml "
                "%sgood_room_tiny.yaml -o %s %s",
                RTSIM_TMP, RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, d, refused[i]);
       int rc = testing_run(cmd, out, sizeof out);
       EXPECTF(rc == 2 && count_lines(out) == 1, "'%s': exit %d: %s", refused[i], rc, out);
-      if (fresh)
-        EXPECTF(access(d, F_OK) != 0, "'%s': the directory was made", refused[i]);
+      if (fresh) EXPECTF(access(d, F_OK) != 0, "'%s': the directory was made", refused[i]);
       else
         EXPECTF(stat(RTSIM_TMP "/cli_refuse/stats.json", &after) == 0 &&
-                    after.st_ino == before.st_ino && after.st_mtim.tv_nsec == before.st_mtim.tv_nsec,
+                    after.st_ino == before.st_ino &&
+                    after.st_mtim.tv_nsec == before.st_mtim.tv_nsec,
                 "'%s': the complete directory was touched", refused[i]);
     }
 }
@@ -396,32 +407,56 @@ int main(void) {
   static const struct {
     const char *file, *want;
   } bad[] = {
-      {"bad_syntax.yaml", "bad_syntax.yaml:2:1: error: YAML syntax: did not find expected ',' or '}'"},
-      {"bad_unknown_key.yaml", "bad_unknown_key.yaml:2:1: error: lites: unknown key 'lites' (expected one of: name, seed, image, camera"},
-      {"bad_type.yaml", "bad_type.yaml:4:12: error: camera.fov_deg: wrong type (got a list, expected a number)"},
-      {"bad_range.yaml", "bad_range.yaml:4:12: error: camera.fov_deg: out of range (got 200, expected 0.01 to 179)"},
-      {"bad_missing_camera.yaml", "bad_missing_camera.yaml:1:1: error: missing required key 'camera'"},
-      {"bad_generator.yaml", "bad_generator.yaml:3:16: error: geometry[0].generator: unknown value (got 'teapot', expected one of: sphereflake, grove, room)"},
-      {"bad_detail.yaml", "bad_detail.yaml:4:13: error: geometry[0].detail: out of range (got -1, expected 0.0001 to 200)"},
-      {"bad_material_ref.yaml", "bad_material_ref.yaml:4:15: error: geometry[0].material: no material named 'gold'"},
-      {"bad_mesh_missing.yaml", "bad_mesh_missing.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/no_such_mesh.obj: cannot import mesh: No such file or directory"},
-      {"bad_mesh_broken.yaml", "bad_mesh_broken.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA "/scenes/broken.ply:3: cannot import mesh: PLY header: element 'vertex': 3 instances of at least 12 bytes each cannot fit in the 2 bytes after the header"},
-      {"bad_light_key.yaml", "bad_light_key.yaml:3:5: error: lights[0]: missing required key 'position'"},
-      {"bad_camera_degenerate.yaml", "bad_camera_degenerate.yaml:1:31: error: camera.at: equals camera.from"},
-      {"bad_kd_splits.yaml", "bad_kd_splits.yaml:2:19: error: kd_tree.splits: unknown value (got 'perfect', expected one of: whole, clipped)"},
-      {"bad_color.yaml", "bad_color.yaml:3:20: error: materials.red.color[1]: out of range (got 2, expected 0 to 1)"},
+      {"bad_syntax.yaml",
+       "bad_syntax.yaml:2:1: error: YAML syntax: did not find expected ',' or '}'"},
+      {"bad_unknown_key.yaml",
+       "bad_unknown_key.yaml:2:1: error: lites: unknown key 'lites' (expected one of: name, seed, image, camera"},
+      {"bad_type.yaml",
+       "bad_type.yaml:4:12: error: camera.fov_deg: wrong type (got a list, expected a number)"},
+      {"bad_range.yaml",
+       "bad_range.yaml:4:12: error: camera.fov_deg: out of range (got 200, expected 0.01 to 179)"},
+      {"bad_missing_camera.yaml",
+       "bad_missing_camera.yaml:1:1: error: missing required key 'camera'"},
+      {"bad_generator.yaml",
+       "bad_generator.yaml:3:16: error: geometry[0].generator: unknown value (got 'teapot', expected one of: sphereflake, grove, room)"},
+      {"bad_detail.yaml",
+       "bad_detail.yaml:4:13: error: geometry[0].detail: out of range (got -1, expected 0.0001 to 200)"},
+      {"bad_material_ref.yaml",
+       "bad_material_ref.yaml:4:15: error: geometry[0].material: no material named 'gold'"},
+      {"bad_mesh_missing.yaml",
+       "bad_mesh_missing.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA
+       "/scenes/no_such_mesh.obj: cannot import mesh: No such file or directory"},
+      {"bad_mesh_broken.yaml",
+       "bad_mesh_broken.yaml:3:11: error: geometry[0].mesh: " RTSIM_TEST_DATA
+       "/scenes/broken.ply:3: cannot import mesh: PLY header: element 'vertex': 3 instances of at least 12 bytes each cannot fit in the 2 bytes after the header"},
+      {"bad_light_key.yaml",
+       "bad_light_key.yaml:3:5: error: lights[0]: missing required key 'position'"},
+      {"bad_camera_degenerate.yaml",
+       "bad_camera_degenerate.yaml:1:31: error: camera.at: equals camera.from"},
+      {"bad_kd_splits.yaml",
+       "bad_kd_splits.yaml:2:19: error: kd_tree.splits: unknown value (got 'perfect', expected one of: whole, clipped)"},
+      {"bad_color.yaml",
+       "bad_color.yaml:3:20: error: materials.red.color[1]: out of range (got 2, expected 0 to 1)"},
       {"bad_empty.yaml", "bad_empty.yaml: error: empty file"},
-      {"bad_width.yaml", "bad_width.yaml:2:16: error: image.width: out of range (got 0, expected 1 to 16384)"},
-      {"bad_generator_key.yaml", "bad_generator_key.yaml:5:5: error: geometry[0].tesselation: unknown key 'tesselation' (expected one of: generator, detail, tessellation, seed)"},
-      {"bad_both.yaml", "bad_both.yaml:3:5: error: geometry[0]: expected exactly one of 'generator' or 'mesh'"},
+      {"bad_width.yaml",
+       "bad_width.yaml:2:16: error: image.width: out of range (got 0, expected 1 to 16384)"},
+      {"bad_generator_key.yaml",
+       "bad_generator_key.yaml:5:5: error: geometry[0].tesselation: unknown key 'tesselation' (expected one of: generator, detail, tessellation, seed)"},
+      {"bad_both.yaml",
+       "bad_both.yaml:3:5: error: geometry[0]: expected exactly one of 'generator' or 'mesh'"},
       {"no_such_scene.yaml", "no_such_scene.yaml: error: cannot open: No such file or directory"},
       /* Strict numbers and strings (sim/scalar.h), a NUL escape, an up
        * parallel to the view however small. */
-      {"bad_width_leading_zero.yaml", "bad_width_leading_zero.yaml:1:16: error: image.width: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 16384)"},
-      {"bad_number_space.yaml", "bad_number_space.yaml:1:52: error: camera.fov_deg: not a number: whitespace before or after it (got ' 50', expected a decimal number)"},
-      {"bad_nul.yaml", "bad_nul.yaml:1:7: error: a NUL character (\\0) in a value (got 'room\\0...', expected text without one)"},
-      {"bad_mesh_space.yaml", "bad_mesh_space.yaml:3:11: error: geometry[0].mesh: whitespace before or after it (got 'tri.obj '"},
-      {"bad_camera_up_parallel.yaml", "bad_camera_up_parallel.yaml:1:47: error: camera.up: zero or parallel to the view direction"},
+      {"bad_width_leading_zero.yaml",
+       "bad_width_leading_zero.yaml:1:16: error: image.width: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 16384)"},
+      {"bad_number_space.yaml",
+       "bad_number_space.yaml:1:52: error: camera.fov_deg: not a number: whitespace before or after it (got ' 50', expected a decimal number)"},
+      {"bad_nul.yaml",
+       "bad_nul.yaml:1:7: error: a NUL character (\\0) in a value (got 'room\\0...', expected text without one)"},
+      {"bad_mesh_space.yaml",
+       "bad_mesh_space.yaml:3:11: error: geometry[0].mesh: whitespace before or after it (got 'tri.obj '"},
+      {"bad_camera_up_parallel.yaml",
+       "bad_camera_up_parallel.yaml:1:47: error: camera.up: zero or parallel to the view direction"},
   };
   char cmd[2048], out[8192];
   const char *img = RTSIM_TMP "/cli_out.exr";
@@ -431,8 +466,7 @@ int main(void) {
       if (which == 0)
         snprintf(cmd, sizeof cmd, "%s render %s%s -o %s --width 8 --height 8", RTSIM_BINARY, SCN,
                  bad[i].file, img);
-      else
-        snprintf(cmd, sizeof cmd, "%s export %s%s -o %s", RTSIM_BINARY, SCN, bad[i].file, img);
+      else snprintf(cmd, sizeof cmd, "%s export %s%s -o %s", RTSIM_BINARY, SCN, bad[i].file, img);
       int rc = testing_run(cmd, out, sizeof out);
       EXPECTF(rc == 2, "%s: exit %d, output: %s", bad[i].file, rc, out);
       EXPECTF(strstr(out, bad[i].want) != NULL, "%s: got '%s', want '%s'", bad[i].file, out,
@@ -454,50 +488,83 @@ int main(void) {
       {"frobnicate", "unknown command 'frobnicate'"},
       {"render", "missing SCENE.yaml"},
       {"render " SCN "good_room_tiny.yaml", "missing -o IMAGE.exr"},
-      {"render " SCN "good_room_tiny.yaml -o x.exr --width 0", "--width: got '0', expected a whole number from 1 to 16384"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --width 0",
+       "--width: got '0', expected a whole number from 1 to 16384"},
       {"render " SCN "good_room_tiny.yaml -o x.exr --width 12abc", "--width: got '12abc'"},
-      {"render " SCN "good_room_tiny.yaml -o x.exr --rays primary,glossy", "--rays: got 'primary,glossy'"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --rays primary,glossy",
+       "--rays: got 'primary,glossy'"},
       {"render " SCN "good_room_tiny.yaml -o x.exr --bogus", "unknown option '--bogus'"},
       {"render " SCN "good_room_tiny.yaml -o", "option -o needs a value"},
-      {"render " SCN "good_room_tiny.yaml -o /nonexistent/dir/x.exr --width 4 --height 4", "/nonexistent/dir/x.exr"},
+      {"render " SCN "good_room_tiny.yaml -o /nonexistent/dir/x.exr --width 4 --height 4",
+       "/nonexistent/dir/x.exr"},
       {"export", "missing SCENE.yaml"},
       {"hits", "missing SCENE.yaml"},
       {"bench --repeat 0 " SCN "good_room_tiny.yaml", "--repeat: got '0'"},
       {"bench --analyser 0", "--analyser: got '0'"},
-      {"bench --timed " RTSIM_TEST_DATA "/configs/bad_size_unit.yaml " SCN "good_room_tiny.yaml", "bad_size_unit.yaml:2:9: error: l2.size: not a size"},
+      {"bench --timed " RTSIM_TEST_DATA "/configs/bad_size_unit.yaml " SCN "good_room_tiny.yaml",
+       "bad_size_unit.yaml:2:9: error: l2.size: not a size"},
       {"bench --timed", "option --timed needs a value"},
-      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --sample 0 " SCN "good_room_tiny.yaml", "--sample: got '0', expected a fraction above 0 and at most 1"},
-      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --sample ' 0.5' " SCN "good_room_tiny.yaml", "--sample: got ' 0.5'"},
-      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --sample 0.01 --width 8 --height 8 " SCN "good_room_tiny.yaml", "--sample 0.01 on"},
+      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --sample 0 " SCN "good_room_tiny.yaml",
+       "--sample: got '0', expected a fraction above 0 and at most 1"},
+      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --sample ' 0.5' " SCN
+       "good_room_tiny.yaml",
+       "--sample: got ' 0.5'"},
+      {"bench --timed " RTSIM_SOURCE_DIR
+       "/configs/tiny.yaml --sample 0.01 --width 8 --height 8 " SCN "good_room_tiny.yaml",
+       "--sample 0.01 on"},
       {"bench --rays primary,glossy " SCN "good_room_tiny.yaml", "--rays: got 'primary,glossy'"},
 #ifndef RTSIM_HAVE_EMBREE
-      {"bench --embree " SCN "good_room_tiny.yaml", "--embree: this rtsim was built without Embree"},
+      {"bench --embree " SCN "good_room_tiny.yaml",
+       "--embree: this rtsim was built without Embree"},
 #endif
       {"bench --embree --rays primary,shadow " SCN "good_room_tiny.yaml", "--embree"},
-      {"render " SCN "good_room_tiny.yaml -o x.exr --policy fifo", "--policy: got 'fifo', expected one of: recursive, packet, dynamic"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --policy fifo",
+       "--policy: got 'fifo', expected one of: recursive, packet, dynamic"},
       {"traffic " SCN "good_room_tiny.yaml -o x.csv", "missing --rays"},
-      {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --policy fifo", "--policy: got 'fifo'"},
+      {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --policy fifo",
+       "--policy: got 'fifo'"},
       {"traffic " SCN "good_room_tiny.yaml --rays primary", "missing -o TABLE.csv"},
       {"trace " SCN "good_room_tiny.yaml --rays primary --policy packet", "missing --din FILE"},
       {"trace " SCN "good_room_tiny.yaml --din x.din --policy packet", "missing --rays"},
-      {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --dyn-batch many", "--dyn-batch: got 'many', expected a whole number from 0 to 4294967295"},
-      {"trace " SCN "good_room_tiny.yaml --din x.din --policy dynamic --rays primary --dyn-batch -3", "--dyn-batch: got '-3'"},
-      {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --dyn-ray-buffer 1e3", "--dyn-ray-buffer: got '1e3', expected a whole number from 0 to 4294967296"},
-      {"trace " SCN "good_room_tiny.yaml --din x.din --policy dynamic --rays primary --dyn-ray-buffer 99999999999", "--dyn-ray-buffer: got '99999999999'"},
-      {"trace " SCN "good_room_tiny.yaml --din x.din --policy packet --rays primary --cache 3000", "--cache: got '3000', expected a power of two from 1024 to 4194304"},
+      {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --dyn-batch many",
+       "--dyn-batch: got 'many', expected a whole number from 0 to 4294967295"},
+      {"trace " SCN
+       "good_room_tiny.yaml --din x.din --policy dynamic --rays primary --dyn-batch -3",
+       "--dyn-batch: got '-3'"},
+      {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --dyn-ray-buffer 1e3",
+       "--dyn-ray-buffer: got '1e3', expected a whole number from 0 to 4294967296"},
+      {"trace " SCN
+       "good_room_tiny.yaml --din x.din --policy dynamic --rays primary --dyn-ray-buffer 99999999999",
+       "--dyn-ray-buffer: got '99999999999'"},
+      {"trace " SCN "good_room_tiny.yaml --din x.din --policy packet --rays primary --cache 3000",
+       "--cache: got '3000', expected a power of two from 1024 to 4194304"},
       {"trace " SCN "good_room_tiny.yaml --din x.din --rays primary", "missing --policy"},
-      {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --threads 3", "--threads: got '3', expected a whole number from 1 to 2"},
-      {"trace " SCN "good_room_tiny.yaml --din x.din --policy recursive --rays primary --threads 0", "--threads: got '0', expected a whole number from 1 to 2"},
-      {"render " SCN "good_room_tiny.yaml -o x.exr --half=1", "rtsim render: error: option --half takes no value"},
+      {"traffic " SCN "good_room_tiny.yaml --rays primary -o x.csv --threads 3",
+       "--threads: got '3', expected a whole number from 1 to 2"},
+      {"trace " SCN "good_room_tiny.yaml --din x.din --policy recursive --rays primary --threads 0",
+       "--threads: got '0', expected a whole number from 1 to 2"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --half=1",
+       "rtsim render: error: option --half takes no value"},
       {"render " SCN "good_room_tiny.yaml -o x.exr -xo", "unknown option '-x'"},
-      {"render " SCN "good_room_tiny.yaml -o x.exr --seed -1", "--seed: got '-1', expected a whole number from 0 to 18446744073709551615"},
-      {"export " SCN "good_room_tiny.yaml " SCN "good_room_tiny.yaml -o x.ply", "expected one scene file, got 2"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --seed -1",
+       "--seed: got '-1', expected a whole number from 0 to 18446744073709551615"},
+      {"export " SCN "good_room_tiny.yaml " SCN "good_room_tiny.yaml -o x.ply",
+       "expected one scene file, got 2"},
       {"hits --rays primary", "unknown option '--rays'"},
-      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --width 4 --height 4 --dram-trace /nonexistent/dir/t.trace", "/nonexistent/dir/t.trace: error: cannot write the DRAM trace"},
-      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --dram-trace", "option --dram-trace needs a value"},
-      {"run " RTSIM_SOURCE_DIR "/configs/default.yaml " SCN "good_room_tiny.yaml -o xrun --set dram.latency=100", "--set dram.latency=100: error: dram.latency: not read by fidelity banked"},
-      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set dram.mapping=rorororororo", "--set dram.mapping=rorororororo: error: dram.mapping: not an address mapping"},
-      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set dram.queue_structure=fifo", "--set dram.queue_structure=fifo: error: dram.queue_structure: unknown value (got 'fifo', expected one of: shared, per_bank, per_rank)"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN
+       "good_room_tiny.yaml -o xrun --width 4 --height 4 --dram-trace /nonexistent/dir/t.trace",
+       "/nonexistent/dir/t.trace: error: cannot write the DRAM trace"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --dram-trace",
+       "option --dram-trace needs a value"},
+      {"run " RTSIM_SOURCE_DIR "/configs/default.yaml " SCN
+       "good_room_tiny.yaml -o xrun --set dram.latency=100",
+       "--set dram.latency=100: error: dram.latency: not read by fidelity banked"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN
+       "good_room_tiny.yaml -o xrun --set dram.mapping=rorororororo",
+       "--set dram.mapping=rorororororo: error: dram.mapping: not an address mapping"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN
+       "good_room_tiny.yaml -o xrun --set dram.queue_structure=fifo",
+       "--set dram.queue_structure=fifo: error: dram.queue_structure: unknown value (got 'fifo', expected one of: shared, per_bank, per_rank)"},
   };
   for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {
     snprintf(cmd, sizeof cmd, "cd %s && %s %s", RTSIM_TMP, RTSIM_BINARY, usage[i].args);
@@ -522,18 +589,33 @@ int main(void) {
   static const struct {
     const char *args, *want;
   } strict[] = {
-      {"render " SCN "good_room_tiny.yaml -o x.exr --width 010", "--width: got '010' (a leading zero, ambiguous between octal and decimal), expected a whole number from 1 to 16384"},
-      {"render " SCN "good_room_tiny.yaml -o x.exr --width ' 8'", "--width: got ' 8' (whitespace before or after it)"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --width 010",
+       "--width: got '010' (a leading zero, ambiguous between octal and decimal), expected a whole number from 1 to 16384"},
+      {"render " SCN "good_room_tiny.yaml -o x.exr --width ' 8'",
+       "--width: got ' 8' (whitespace before or after it)"},
       {"render " SCN "good_room_tiny.yaml -o x.exr --seed 00", "--seed: got '00' (a leading zero"},
       {"render " SCN "good_room_tiny.yaml -o x.exr --rays primary,", "--rays: got 'primary,'"},
       {"render " SCN "good_room_tiny.yaml -o x.exr --rays ''", "--rays: got ''"},
-      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --sample 00.5 " SCN "good_room_tiny.yaml", "--sample: got '00.5'"},
-      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set cores=010", "--set cores=010: error: cores: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 4096)"},
-      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set l2.size=010KiB", "--set l2.size=010KiB: error: l2.size: not a size: a leading zero"},
-      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN "good_room_tiny.yaml -o xrun --set 'clock_ghz=\n1.5'", "--set clock_ghz=\\n1.5: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5', expected a decimal number)"},
-      {"run " RTSIM_TEST_DATA "/configs/bad_nul.yaml " SCN "good_room_tiny.yaml -o xrun", "bad_nul.yaml:2:8: error: a NUL character (\\0) in a value (got '4\\0...'"},
-      {"run " RTSIM_TEST_DATA "/configs/bad_count_leading_zero.yaml " SCN "good_room_tiny.yaml -o xrun", "bad_count_leading_zero.yaml:2:8: error: cores: not a whole number: a leading zero"},
-      {"run " RTSIM_TEST_DATA "/configs/bad_size_leading_zero.yaml " SCN "good_room_tiny.yaml -o xrun", "bad_size_leading_zero.yaml:2:9: error: l2.size: not a size: a leading zero"},
+      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --sample 00.5 " SCN
+       "good_room_tiny.yaml",
+       "--sample: got '00.5'"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN
+       "good_room_tiny.yaml -o xrun --set cores=010",
+       "--set cores=010: error: cores: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 4096)"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN
+       "good_room_tiny.yaml -o xrun --set l2.size=010KiB",
+       "--set l2.size=010KiB: error: l2.size: not a size: a leading zero"},
+      {"run " RTSIM_SOURCE_DIR "/configs/tiny.yaml " SCN
+       "good_room_tiny.yaml -o xrun --set 'clock_ghz=\n1.5'",
+       "--set clock_ghz=\\n1.5: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5', expected a decimal number)"},
+      {"run " RTSIM_TEST_DATA "/configs/bad_nul.yaml " SCN "good_room_tiny.yaml -o xrun",
+       "bad_nul.yaml:2:8: error: a NUL character (\\0) in a value (got '4\\0...'"},
+      {"run " RTSIM_TEST_DATA "/configs/bad_count_leading_zero.yaml " SCN
+       "good_room_tiny.yaml -o xrun",
+       "bad_count_leading_zero.yaml:2:8: error: cores: not a whole number: a leading zero"},
+      {"run " RTSIM_TEST_DATA "/configs/bad_size_leading_zero.yaml " SCN
+       "good_room_tiny.yaml -o xrun",
+       "bad_size_leading_zero.yaml:2:9: error: l2.size: not a size: a leading zero"},
   };
   for (size_t i = 0; i < sizeof strict / sizeof strict[0]; i++) {
     snprintf(cmd, sizeof cmd, "cd %s && rm -rf xrun x.exr && %s %s", RTSIM_TMP, RTSIM_BINARY,
@@ -568,21 +650,32 @@ int main(void) {
   } csv[] = {
       {"id,ox,oy\\n", "<stdin>:1:1: error: header: got 'id,ox,oy'"},
       {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0\\n", "<stdin>:2:"},
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,x,1,0,0,0,inf\\n", "<stdin>:2:7: error: field 4 (oz): not a number (got 'x', expected a decimal number)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,x,1,0,0,0,inf\\n",
+       "<stdin>:2:7: error: field 4 (oz): not a number (got 'x', expected a decimal number)"},
       /* Strict fields: no whitespace, no leading zero, in range; inf only
        * as tmax; a NUL byte refused where it stands (it used to end the
        * row there, exit 0). */
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0, 0,0,1,0,0,0,inf\\n", "<stdin>:2:5: error: field 3 (oy): not a number: whitespace before or after it (got ' 0'"},
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,inf \\n", "<stdin>:2:17: error: field 9 (tmax): not a number: whitespace before or after it (got 'inf '"},
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n01,0,0,0,1,0,0,0,inf\\n", "<stdin>:2:1: error: id: not a whole number: a leading zero, ambiguous between octal and decimal (got '01'"},
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,00.5,0,0,1,0,0,0,inf\\n", "<stdin>:2:3: error: field 2 (ox): not a number: a leading zero"},
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,1e39\\n", "<stdin>:2:17: error: field 9 (tmax): not a number: too large (got '1e39', expected a decimal number or inf)"},
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,inf,0,0,1,0,0,0,inf\\n", "<stdin>:2:3: error: field 2 (ox): not a number (got 'inf', expected a decimal number)"},
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,nan\\n", "<stdin>:2:17: error: field 9 (tmax): not a number (got 'nan'"},
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,inf,\\n", "<stdin>:2:20: error: unexpected text after tmax (expected 9 fields)"},
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0.5,0.5,3,0,0,-1,0,inf\\0garbage\\n", "<stdin>:2:25: error: a NUL byte (expected text: a CSV holds none)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0, 0,0,1,0,0,0,inf\\n",
+       "<stdin>:2:5: error: field 3 (oy): not a number: whitespace before or after it (got ' 0'"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,inf \\n",
+       "<stdin>:2:17: error: field 9 (tmax): not a number: whitespace before or after it (got 'inf '"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n01,0,0,0,1,0,0,0,inf\\n",
+       "<stdin>:2:1: error: id: not a whole number: a leading zero, ambiguous between octal and decimal (got '01'"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,00.5,0,0,1,0,0,0,inf\\n",
+       "<stdin>:2:3: error: field 2 (ox): not a number: a leading zero"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,1e39\\n",
+       "<stdin>:2:17: error: field 9 (tmax): not a number: too large (got '1e39', expected a decimal number or inf)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,inf,0,0,1,0,0,0,inf\\n",
+       "<stdin>:2:3: error: field 2 (ox): not a number (got 'inf', expected a decimal number)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,nan\\n",
+       "<stdin>:2:17: error: field 9 (tmax): not a number (got 'nan'"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,0,0,1,0,0,0,inf,\\n",
+       "<stdin>:2:20: error: unexpected text after tmax (expected 9 fields)"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0.5,0.5,3,0,0,-1,0,inf\\0garbage\\n",
+       "<stdin>:2:25: error: a NUL byte (expected text: a CSV holds none)"},
       {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\0\\n", "<stdin>:1:31: error: a NUL byte"},
-      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n7,0,0,0,0,0,0,0,inf\\n", "<stdin>:2:1: error: ray 7: direction is zero"},
+      {"id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n7,0,0,0,0,0,0,0,inf\\n",
+       "<stdin>:2:1: error: ray 7: direction is zero"},
       {"", "<stdin>: error: no input"},
   };
   for (size_t i = 0; i < sizeof csv / sizeof csv[0]; i++) {
@@ -600,10 +693,11 @@ int main(void) {
 
   /* hits on a one-triangle mesh: exact, hand-computed answers. The mesh is the
    * triangle (0,0,0) (1,0,0) (0,1,0) scaled by 2. */
-  snprintf(cmd, sizeof cmd,
-           "printf 'id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0.5,0.5,3,0,0,-1,0,inf\\n2,5,5,3,0,0,-1,0,inf\\n"
-           "3,0.5,0.5,3,0,0,-2,0,1\\n4,0.5,0.5,-1,0,0,1,0,inf\\n' | %s hits %sgood_mesh.yaml",
-           RTSIM_BINARY, SCN);
+  snprintf(
+      cmd, sizeof cmd,
+      "printf 'id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0.5,0.5,3,0,0,-1,0,inf\\n2,5,5,3,0,0,-1,0,inf\\n"
+      "3,0.5,0.5,3,0,0,-2,0,1\\n4,0.5,0.5,-1,0,0,1,0,inf\\n' | %s hits %sgood_mesh.yaml",
+      RTSIM_BINARY, SCN);
   EXPECT(testing_run(cmd, out, sizeof out) == 0);
   EXPECTF(strcmp(out, "id,t,prim\n1,3,0\n2,inf,-1\n3,inf,-1\n4,1,0\n") == 0, "got: %s", out);
   return testing_done("test_cli");

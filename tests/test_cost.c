@@ -109,9 +109,9 @@ static void attribute(void *ctx, uint32_t worker_id, const uint32_t *pixels, uin
 
 struct result {
   struct machine_stats st;
-  int64_t *acc; /* the framebuffer's sums */
+  int64_t *acc;                         /* the framebuffer's sums */
   uint64_t sums[3 + TRACE_CLASS_COUNT]; /* slots, wait, write lines, read lines by class */
-  uint64_t nonzero_pixels; /* with issue slots */
+  uint64_t nonzero_pixels;              /* with issue slots */
 };
 
 static void render(const struct scene *s, const struct kd_tree *kd, enum policy_kind k,
@@ -173,7 +173,8 @@ static bool same_machine(const struct machine_stats *a, const struct machine_sta
          a->thread_wait_cycles == b->thread_wait_cycles && a->loads == b->loads &&
          a->stores == b->stores && a->load_latency.sum == b->load_latency.sum &&
          a->l2.fetch_bytes == b->l2.fetch_bytes && a->l2.writeback_bytes == b->l2.writeback_bytes &&
-         a->l2.stall_cycles[0] == b->l2.stall_cycles[0] && a->dram.read_bytes == b->dram.read_bytes &&
+         a->l2.stall_cycles[0] == b->l2.stall_cycles[0] &&
+         a->dram.read_bytes == b->dram.read_bytes &&
          a->dram.read_latency.sum == b->dram.read_latency.sum &&
          a->l2.write_buffer_hits == b->l2.write_buffer_hits;
 }
@@ -229,13 +230,13 @@ static void test_policies(const char *scene, const char *config, uint32_t l2_siz
 static void test_command(void) {
   static const char *const policies[] = {"recursive", "packet", "dynamic", "treelet"};
   static const char *const channels[] = {
-      "cost.issue_slots", "cost.load_wait_cycles", "cost.dram_write_bytes",
-      "cost.dram_read_bytes.geometry", "cost.dram_read_bytes.node", "cost.dram_read_bytes.ray",
+      "cost.issue_slots",           "cost.load_wait_cycles",
+      "cost.dram_write_bytes",      "cost.dram_read_bytes.geometry",
+      "cost.dram_read_bytes.node",  "cost.dram_read_bytes.ray",
       "cost.dram_read_bytes.queue", "cost.dram_read_bytes.other"};
-  static const char *const totals[] = {"issue_slots", "load_latency_cycles_sum",
-                                       "l2_writeback_bytes", "fetch_geometry_bytes",
-                                       "fetch_node_bytes", "fetch_ray_bytes",
-                                       "fetch_queue_bytes", "fetch_other_bytes"};
+  static const char *const totals[] = {
+      "issue_slots",      "load_latency_cycles_sum", "l2_writeback_bytes", "fetch_geometry_bytes",
+      "fetch_node_bytes", "fetch_ray_bytes",         "fetch_queue_bytes",  "fetch_other_bytes"};
   for (int i = 0; i < 4; i++) {
     char dir[512], cmd[2048], out[4096], png[600];
     snprintf(dir, sizeof dir, "%s/cost_%s", RTSIM_TMP, policies[i]);

@@ -205,10 +205,8 @@ static void test_backend_trace(void) {
     uint64_t addr = 4096 + (r % (120 * 64));
     uint32_t size = (r >> 20) % 3 == 0 ? 64 : (r >> 20) % 3 == 1 ? 8 : 128;
     unsigned cls = (unsigned)((r >> 40) % MEM_CLASS_MAX);
-    if ((r >> 50) % 4 == 0)
-      mem_store(&port, addr, size, cls);
-    else
-      mem_load(&port, addr, size, cls);
+    if ((r >> 50) % 4 == 0) mem_store(&port, addr, size, cls);
+    else mem_load(&port, addr, size, cls);
     mem_compute(&port, 10);
   }
   /* A line access is one record, or two (read, write) for a store to part of

@@ -25,7 +25,7 @@
 #define NREQ 400
 
 struct req {
-  uint64_t want;  /* cycle the client wants to send it */
+  uint64_t want; /* cycle the client wants to send it */
   bool write;
   uint64_t taken; /* cycle it was sent (filled by the run) */
   uint64_t done;  /* cycle it was served (filled by the run), UINT64_MAX before */
@@ -48,10 +48,8 @@ static bool can_take(struct client *c, uint64_t addr, bool w) {
 }
 
 static void take(struct client *c, uint64_t addr, bool w, uint64_t tag) {
-  if (c->dram)
-    dram_take(c->dram, addr, w, tag);
-  else
-    c->ops->take(c->level, addr, w, tag);
+  if (c->dram) dram_take(c->dram, addr, w, tag);
+  else c->ops->take(c->level, addr, w, tag);
 }
 
 static uint64_t addr_of(unsigned k) { return (uint64_t)k * 64 * 37; }
@@ -258,8 +256,8 @@ static void wrapper_case(enum dram_model model) {
       break;
     }
     /* 1400 MHz core, 1200 MHz DRAM: DRAM cycle of core cycle t is ceil(t * 6 / 7). */
-    bad += a != addr_of(k) || strcmp(op, r[k].write ? "WRITE" : "READ") != 0 ||
-           at != r[k].taken || done != r[k].done || dc_ != (at * 6 + 6) / 7;
+    bad += a != addr_of(k) || strcmp(op, r[k].write ? "WRITE" : "READ") != 0 || at != r[k].taken ||
+           done != r[k].done || dc_ != (at * 6 + 6) / 7;
     k++;
   }
   EXPECTF(bad == 0 && k == NREQ, "%s trace: %u of %u lines off", dram_model_names[model], bad, k);

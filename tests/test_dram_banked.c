@@ -78,7 +78,8 @@ static void h_finish(void *ctx, uint64_t arg) {
  * finish_at: the core cycle of finish (0: when the engine runs dry). done[i]:
  * request i's done cycle. Returns the level (caller destroys). */
 static struct dram_banked *run(const struct dram_banked_params *p, uint64_t core_khz,
-                               const struct rq *reqs, uint64_t n, uint64_t *done, uint64_t finish_at) {
+                               const struct rq *reqs, uint64_t n, uint64_t *done,
+                               uint64_t finish_at) {
   struct harness h;
   memset(&h, 0, sizeof h);
   h.e = engine_create();
@@ -95,7 +96,8 @@ static struct dram_banked *run(const struct dram_banked_params *p, uint64_t core
   if (finish_at) engine_at(h.e, finish_at, h_finish, &h, 0);
   engine_run(h.e);
   if (!finish_at) dram_banked_ops.finish(h.d);
-  EXPECTF(h.served == n, "served %llu of %llu", (unsigned long long)h.served, (unsigned long long)n);
+  EXPECTF(h.served == n, "served %llu of %llu", (unsigned long long)h.served,
+          (unsigned long long)n);
   EXPECT(h.nwait == 0);
   free(h.waiting);
   engine_destroy(h.e);
@@ -145,7 +147,8 @@ static void test_latencies(void) {
   /* Conflict arriving at 20, soon after the ACT at 0 (RD 16, done 36): PRE
    * waits for tRAS, max(20, 0 + 39, 16 + tRTP 9) = 39; ACT 55 (= tRP after,
    * and tRC 55 after the first ACT); RD 71; done 91. */
-  struct rq b[] = {{0, addr_of(&p, 0, 0, 0, 0, 7, 0), false}, {20, addr_of(&p, 0, 0, 0, 0, 9, 0), false}};
+  struct rq b[] = {{0, addr_of(&p, 0, 0, 0, 0, 7, 0), false},
+                   {20, addr_of(&p, 0, 0, 0, 0, 9, 0), false}};
   d = run(&p, 1200 * MHZ, b, 2, done, 0);
   EXPECTF(done[0] == 36 && done[1] == 91, "tRAS case: %llu %llu, expected 36 91",
           (unsigned long long)done[0], (unsigned long long)done[1]);
@@ -169,7 +172,8 @@ static void test_wtr(void) {
    * done 36. A read at 1 to the same bank and row waits for the write's column
    * command (the channel turns back to reads after it) and then for
    * WR + tCWL + B + tWTR_L = 16 + 16 + 4 + 9 = 45: data [61, 65), done 65. */
-  struct rq a[] = {{0, addr_of(&p, 0, 0, 0, 0, 3, 0), true}, {1, addr_of(&p, 0, 0, 0, 0, 3, 1), false}};
+  struct rq a[] = {{0, addr_of(&p, 0, 0, 0, 0, 3, 0), true},
+                   {1, addr_of(&p, 0, 0, 0, 0, 3, 1), false}};
   struct dram_banked *d = run(&p, 1200 * MHZ, a, 2, done, 0);
   EXPECTF(done[0] == 36 && done[1] == 65, "tWTR_L: %llu %llu, expected 36 65",
           (unsigned long long)done[0], (unsigned long long)done[1]);
@@ -177,7 +181,8 @@ static void test_wtr(void) {
   /* The read to another bank group instead: its ACT at 17 (after the WR at
    * 16; tRRD_S from the ACT at 0 long past), RD at max(17 + 16, 16 + 16 + 4 +
    * tWTR_S 3 = 39) = 39, done 39 + 20 = 59. */
-  struct rq b[] = {{0, addr_of(&p, 0, 0, 0, 0, 3, 0), true}, {1, addr_of(&p, 0, 0, 1, 0, 3, 0), false}};
+  struct rq b[] = {{0, addr_of(&p, 0, 0, 0, 0, 3, 0), true},
+                   {1, addr_of(&p, 0, 0, 1, 0, 3, 0), false}};
   d = run(&p, 1200 * MHZ, b, 2, done, 0);
   EXPECTF(done[0] == 36 && done[1] == 59, "tWTR_S: %llu %llu, expected 36 59",
           (unsigned long long)done[0], (unsigned long long)done[1]);
@@ -198,20 +203,22 @@ static void test_act_spacing(void) {
   struct dram_banked *d = run(&p, 1200 * MHZ, a, 5, done, 0);
   const uint64_t want[5] = {36, 40, 44, 48, 62};
   for (int i = 0; i < 5; i++)
-    EXPECTF(done[i] == want[i], "tFAW read %d: done %llu, expected %llu", i, (unsigned long long)done[i],
-            (unsigned long long)want[i]);
+    EXPECTF(done[i] == want[i], "tFAW read %d: done %llu, expected %llu", i,
+            (unsigned long long)done[i], (unsigned long long)want[i]);
   dram_banked_destroy(d);
   /* Same group, two banks: ACT 0 and 6 (tRRD_L), RD 16 and 22, done 36, 42. */
-  struct rq b[] = {{0, addr_of(&p, 0, 0, 0, 0, 5, 0), false}, {0, addr_of(&p, 0, 0, 0, 1, 5, 0), false}};
+  struct rq b[] = {{0, addr_of(&p, 0, 0, 0, 0, 5, 0), false},
+                   {0, addr_of(&p, 0, 0, 0, 1, 5, 0), false}};
   d = run(&p, 1200 * MHZ, b, 2, done, 0);
-  EXPECTF(done[0] == 36 && done[1] == 42, "tRRD_L: %llu %llu, expected 36 42", (unsigned long long)done[0],
-          (unsigned long long)done[1]);
+  EXPECTF(done[0] == 36 && done[1] == 42, "tRRD_L: %llu %llu, expected 36 42",
+          (unsigned long long)done[0], (unsigned long long)done[1]);
   dram_banked_destroy(d);
   /* Other group: ACT 0 and 4, RD 16 and 20, done 36, 40. */
-  struct rq c[] = {{0, addr_of(&p, 0, 0, 0, 0, 5, 0), false}, {0, addr_of(&p, 0, 0, 1, 0, 5, 0), false}};
+  struct rq c[] = {{0, addr_of(&p, 0, 0, 0, 0, 5, 0), false},
+                   {0, addr_of(&p, 0, 0, 1, 0, 5, 0), false}};
   d = run(&p, 1200 * MHZ, c, 2, done, 0);
-  EXPECTF(done[0] == 36 && done[1] == 40, "tRRD_S: %llu %llu, expected 36 40", (unsigned long long)done[0],
-          (unsigned long long)done[1]);
+  EXPECTF(done[0] == 36 && done[1] == 40, "tRRD_S: %llu %llu, expected 36 40",
+          (unsigned long long)done[0], (unsigned long long)done[1]);
   dram_banked_destroy(d);
 }
 
@@ -224,16 +231,19 @@ static void test_refresh(void) {
    * 9364 + 420 = 9784. A read at 9374: ACT 9784, RD 9800, done 9820. */
   struct rq a[] = {{9374, addr_of(&p, 0, 0, 0, 0, 1, 0), false}};
   struct dram_banked *d = run(&p, 1200 * MHZ, a, 1, done, 0);
-  EXPECTF(done[0] == 9820, "read during refresh: done %llu, expected 9820", (unsigned long long)done[0]);
+  EXPECTF(done[0] == 9820, "read during refresh: done %llu, expected 9820",
+          (unsigned long long)done[0]);
   EXPECT(dram_banked_get_stats(d)->refreshes == 1);
   dram_banked_destroy(d);
   /* An open bank (read at 9000: ACT 9000, RD 9016, done 9036): at 9364 PRE
    * (tRAS and tRTP long met), REF at 9380 (tRP), rank busy to 9800; a read at
    * 9370 to the open row: ACT 9800, RD 9816, done 9836. */
-  struct rq b[] = {{9000, addr_of(&p, 0, 0, 0, 0, 1, 0), false}, {9370, addr_of(&p, 0, 0, 0, 0, 1, 1), false}};
+  struct rq b[] = {{9000, addr_of(&p, 0, 0, 0, 0, 1, 0), false},
+                   {9370, addr_of(&p, 0, 0, 0, 0, 1, 1), false}};
   d = run(&p, 1200 * MHZ, b, 2, done, 0);
-  EXPECTF(done[0] == 9036 && done[1] == 9836, "refresh of an open bank: %llu %llu, expected 9036 9836",
-          (unsigned long long)done[0], (unsigned long long)done[1]);
+  EXPECTF(done[0] == 9036 && done[1] == 9836,
+          "refresh of an open bank: %llu %llu, expected 9036 9836", (unsigned long long)done[0],
+          (unsigned long long)done[1]);
   dram_banked_destroy(d);
 
   /* Long run, 2 channels x 4 ranks, reads every 97 cycles for 400000 cycles:
@@ -247,7 +257,10 @@ static void test_refresh(void) {
   uint64_t x = 12345;
   for (uint64_t i = 0; i < n; i++) {
     x = x * 6364136223846793005ull + 1442695040888963407ull;
-    r[i] = (struct rq){i * 97, addr_of(&p, (x >> 20) & 1, (x >> 22) & 3, (x >> 24) & 3, (x >> 26) & 3, (x >> 28) & 7, (x >> 32) & 127), false};
+    r[i] = (struct rq){i * 97,
+                       addr_of(&p, (x >> 20) & 1, (x >> 22) & 3, (x >> 24) & 3, (x >> 26) & 3,
+                               (x >> 28) & 7, (x >> 32) & 127),
+                       false};
   }
   d = run(&p, 1200 * MHZ, r, n, dn, 400000);
   const struct dram_banked_stats *s = dram_banked_get_stats(d);
@@ -309,19 +322,20 @@ static void test_act_bound(void) {
   EXPECTF(bad == 0, "%d windows of 5 ACTs within tFAW", bad);
   double rate = (double)(N - 1) / (double)(done[N - 1] - done[0]);
   double bound = 4.0 / 26.0;
-  EXPECTF(rate <= bound * (double)N / (N - 4) && rate >= 0.98 * bound, "ACT rate %.5f, tFAW bound %.5f", rate,
-          bound);
+  EXPECTF(rate <= bound * (double)N / (N - 4) && rate >= 0.98 * bound,
+          "ACT rate %.5f, tFAW bound %.5f", rate, bound);
   EXPECT(dram_banked_get_stats(d)->activates == N && dram_banked_get_stats(d)->precharges == N);
   dram_banked_destroy(d);
   /* Two banks (groups 0 and 1): ACT to ACT of a bank = RD (ACT + 16) ->
    * auto-precharge at max(ACT + tRAS 39, RD + tRTP 9) = ACT + 39 -> ACT + 39 +
    * tRP 16 = ACT + 55 = tRC: a bank's dones exactly 55 apart. */
-  for (int i = 0; i < 64; i++) r[i] = (struct rq){0, addr_of(&p, 0, 0, i % 2, 0, (uint64_t)i + 1, 0), false};
+  for (int i = 0; i < 64; i++)
+    r[i] = (struct rq){0, addr_of(&p, 0, 0, i % 2, 0, (uint64_t)i + 1, 0), false};
   d = run(&p, 1200 * MHZ, r, 64, done, 0);
   bad = 0;
   for (int i = 0; i + 2 < 64; i++) bad += done[i + 2] - done[i] != 55;
-  EXPECTF(bad == 0 && done[0] == 36 && done[1] == 40, "tRC bound: %d gaps off, first %llu %llu", bad,
-          (unsigned long long)done[0], (unsigned long long)done[1]);
+  EXPECTF(bad == 0 && done[0] == 36 && done[1] == 40, "tRC bound: %d gaps off, first %llu %llu",
+          bad, (unsigned long long)done[0], (unsigned long long)done[1]);
   dram_banked_destroy(d);
 }
 
@@ -333,7 +347,8 @@ static void test_page_policy(void) {
   uint64_t done[N];
   /* Spaced 100 apart: open page, first 36 then tCL + B = 20 each; close page,
    * tRCD + tCL + B = 36 each. */
-  for (int i = 0; i < N; i++) r[i] = (struct rq){100 * (uint64_t)i, addr_of(&p, 0, 0, 0, 0, 4, (uint64_t)i), false};
+  for (int i = 0; i < N; i++)
+    r[i] = (struct rq){100 * (uint64_t)i, addr_of(&p, 0, 0, 0, 0, 4, (uint64_t)i), false};
   for (int cp = 0; cp < 2; cp++) {
     p.page = cp ? DRAM_BANKED_CLOSE_PAGE : DRAM_BANKED_OPEN_PAGE;
     struct dram_banked *d = run(&p, 1200 * MHZ, r, N, done, 0);
@@ -349,11 +364,13 @@ static void test_page_policy(void) {
   for (int i = 0; i < N; i++) r[i].at = 0;
   p.page = DRAM_BANKED_OPEN_PAGE;
   struct dram_banked *d = run(&p, 1200 * MHZ, r, N, done, 0);
-  EXPECTF(done[N - 1] == 414, "open page stream: last %llu, expected 414", (unsigned long long)done[N - 1]);
+  EXPECTF(done[N - 1] == 414, "open page stream: last %llu, expected 414",
+          (unsigned long long)done[N - 1]);
   dram_banked_destroy(d);
   p.page = DRAM_BANKED_CLOSE_PAGE;
   d = run(&p, 1200 * MHZ, r, N, done, 0);
-  EXPECTF(done[N - 1] == 3501, "close page stream: last %llu, expected 3501", (unsigned long long)done[N - 1]);
+  EXPECTF(done[N - 1] == 3501, "close page stream: last %llu, expected 3501",
+          (unsigned long long)done[N - 1]);
   dram_banked_destroy(d);
 }
 
@@ -368,8 +385,9 @@ static void test_frfcfs(void) {
                    {1, addr_of(&p, 0, 0, 0, 0, 2, 0), false},
                    {2, addr_of(&p, 0, 0, 0, 0, 1, 1), false}};
   struct dram_banked *d = run(&p, 1200 * MHZ, a, 3, done, 0);
-  EXPECTF(done[0] == 36 && done[1] == 91 && done[2] == 42, "FR-FCFS: %llu %llu %llu, expected 36 91 42",
-          (unsigned long long)done[0], (unsigned long long)done[1], (unsigned long long)done[2]);
+  EXPECTF(done[0] == 36 && done[1] == 91 && done[2] == 42,
+          "FR-FCFS: %llu %llu %llu, expected 36 91 42", (unsigned long long)done[0],
+          (unsigned long long)done[1], (unsigned long long)done[2]);
   dram_banked_destroy(d);
   /* The starvation bound: 20 hits to row 1 queued behind one conflict (row 2)
    * at 0; the row serves A plus DRAM_BANKED_ROW_HIT_CAP - 1 more hits, then the
@@ -378,12 +396,14 @@ static void test_frfcfs(void) {
   uint64_t dn[22];
   b[0] = (struct rq){0, addr_of(&p, 0, 0, 0, 0, 1, 0), false};
   b[1] = (struct rq){0, addr_of(&p, 0, 0, 0, 0, 2, 0), false};
-  for (int i = 2; i < 22; i++) b[i] = (struct rq){0, addr_of(&p, 0, 0, 0, 0, 1, (uint64_t)i), false};
+  for (int i = 2; i < 22; i++)
+    b[i] = (struct rq){0, addr_of(&p, 0, 0, 0, 0, 1, (uint64_t)i), false};
   d = run(&p, 1200 * MHZ, b, 22, dn, 0);
   int before = 0;
   for (int i = 2; i < 22; i++) before += dn[i] < dn[1];
-  EXPECTF(before == DRAM_BANKED_ROW_HIT_CAP - 1, "%d younger hits went before the conflict, expected %u",
-          before, DRAM_BANKED_ROW_HIT_CAP - 1);
+  EXPECTF(before == DRAM_BANKED_ROW_HIT_CAP - 1,
+          "%d younger hits went before the conflict, expected %u", before,
+          DRAM_BANKED_ROW_HIT_CAP - 1);
   dram_banked_destroy(d);
 }
 
@@ -399,8 +419,10 @@ static void test_write_drain(void) {
   uint64_t done[NR + NW];
   /* 300 reads at 0 (one row, a hit stream: one per 6 cycles, ~1800 cycles)
    * keep reads queued; writes at 100, 110, ..., 170 to another group. */
-  for (int i = 0; i < NR; i++) r[i] = (struct rq){0, addr_of(&p, 0, 0, 0, 0, 1, (uint64_t)i % 128), false};
-  for (int i = 0; i < NW; i++) r[NR + i] = (struct rq){100 + 10 * (uint64_t)i, addr_of(&p, 0, 0, 1, 0, 1, (uint64_t)i), true};
+  for (int i = 0; i < NR; i++)
+    r[i] = (struct rq){0, addr_of(&p, 0, 0, 0, 0, 1, (uint64_t)i % 128), false};
+  for (int i = 0; i < NW; i++)
+    r[NR + i] = (struct rq){100 + 10 * (uint64_t)i, addr_of(&p, 0, 0, 1, 0, 1, (uint64_t)i), true};
   struct dram_banked *d = run(&p, 1200 * MHZ, r, NR + NW, done, 0);
   uint64_t last_read = 0;
   for (int i = 0; i < NR; i++)
@@ -411,8 +433,9 @@ static void test_write_drain(void) {
     drained += done[NR + i] < last_read;
   }
   EXPECTF(early == 0, "%d writes served before write_high was reached", early);
-  EXPECTF(drained == NW - 2, "%d writes drained while reads waited, expected %d (8 down to write_low 2)",
-          drained, NW - 2);
+  EXPECTF(drained == NW - 2,
+          "%d writes drained while reads waited, expected %d (8 down to write_low 2)", drained,
+          NW - 2);
   EXPECT(dram_banked_get_stats(d)->write_drains == 2);
   dram_banked_destroy(d);
 }
@@ -467,7 +490,8 @@ static void test_cq_latencies(void) {
   /* Two requests in one DRAM cycle: the channel takes one a cycle, the second
    * in the next (refused, then asked again): done 138 and 138 + 6 (its RD
    * tCCD_L after the first, its line the next column of the open row). */
-  struct rq b[] = {{100, addr_of(&p, 0, 0, 0, 0, 7, 0), false}, {100, addr_of(&p, 0, 0, 0, 0, 7, 1), false}};
+  struct rq b[] = {{100, addr_of(&p, 0, 0, 0, 0, 7, 0), false},
+                   {100, addr_of(&p, 0, 0, 0, 0, 7, 1), false}};
   d = run(&p, 1200 * MHZ, b, 2, done, 0);
   EXPECTF(done[0] == 138 && done[1] == 144, "one a cycle: %llu %llu, expected 138 144",
           (unsigned long long)done[0], (unsigned long long)done[1]);
@@ -501,8 +525,8 @@ static void test_cq_round_robin(void) {
   /* The shared FR-FCFS structure serves the older A first. */
   p = ddr4();
   d = run(&p, 1200 * MHZ, r, 6, done, 0);
-  EXPECTF(done[4] < done[5], "shared: A done %llu, B %llu, expected A first", (unsigned long long)done[4],
-          (unsigned long long)done[5]);
+  EXPECTF(done[4] < done[5], "shared: A done %llu, B %llu, expected A first",
+          (unsigned long long)done[4], (unsigned long long)done[5]);
   dram_banked_destroy(d);
 }
 
@@ -522,7 +546,8 @@ static void test_cq_write_drain(void) {
   p.write_low = 2;
   struct rq r[5];
   uint64_t done[5];
-  for (int i = 0; i < 3; i++) r[i] = (struct rq){(uint64_t)i, addr_of(&p, 0, 0, 0, 0, 1, (uint64_t)i), true};
+  for (int i = 0; i < 3; i++)
+    r[i] = (struct rq){(uint64_t)i, addr_of(&p, 0, 0, 0, 0, 1, (uint64_t)i), true};
   r[3] = (struct rq){3, addr_of(&p, 0, 0, 0, 0, 1, 5), false};
   r[4] = (struct rq){4, addr_of(&p, 0, 0, 0, 0, 1, 1), false};
   struct dram_banked *d = run(&p, 1200 * MHZ, r, 5, done, 0);
@@ -541,8 +566,9 @@ static void test_cq_write_drain(void) {
                    {1, addr_of(&p, 0, 0, 0, 0, 1, 1), true},
                    {500, addr_of(&p, 0, 0, 0, 0, 2, 0), false}};
   d = run(&p, 1200 * MHZ, b, 3, done, 0);
-  EXPECTF(done[0] == 2 && done[1] == 3 && done[2] == 538, "idle writes: %llu %llu %llu, expected 2 3 538",
-          (unsigned long long)done[0], (unsigned long long)done[1], (unsigned long long)done[2]);
+  EXPECTF(done[0] == 2 && done[1] == 3 && done[2] == 538,
+          "idle writes: %llu %llu %llu, expected 2 3 538", (unsigned long long)done[0],
+          (unsigned long long)done[1], (unsigned long long)done[2]);
   s = dram_banked_get_stats(d);
   EXPECT(s->writes == 2 && s->write_drains == 1 && s->row_conflicts == 1);
   EXPECT(s->dram_cycles >= 500 + DRAM_BANKED_IDLE_DRAIN_CYCLES);
@@ -590,7 +616,8 @@ static void test_decode(void) {
   EXPECT(c.channel == 1 && c.rank == 0 && c.bank_group == 2 && c.bank == 3 && c.row == 0x2A5 &&
          c.column == 0x55 * 8);
   dram_banked_decode(d, 0x20000ull, &c); /* bit 17: rank 1 only */
-  EXPECT(c.channel == 0 && c.rank == 1 && c.bank_group == 0 && c.bank == 0 && c.row == 0 && c.column == 0);
+  EXPECT(c.channel == 0 && c.rank == 1 && c.bank_group == 0 && c.bank == 0 && c.row == 0 &&
+         c.column == 0);
   dram_banked_destroy(d);
   /* "chrobabgraco" (DRAMsim3's default): co 6..12, ra 13, bg 14..15, ba
    * 16..17, ro 18..27, ch 28. ch 1 (0x10000000), ro 0x155 (<< 18 =
@@ -606,7 +633,8 @@ static void test_decode(void) {
 
 /* Random traffic: bursts of arrivals, 30% writes, a small footprint of rows
  * so hits, misses and conflicts all occur. */
-static void random_traffic(const struct dram_banked_params *p, uint64_t seed, struct rq *r, uint64_t n) {
+static void random_traffic(const struct dram_banked_params *p, uint64_t seed, struct rq *r,
+                           uint64_t n) {
   uint64_t x = seed * 0x9E3779B97F4A7C15ull + 1, t = 0;
   for (uint64_t i = 0; i < n; i++) {
     x ^= x << 13, x ^= x >> 7, x ^= x << 17;
@@ -615,9 +643,10 @@ static void random_traffic(const struct dram_banked_params *p, uint64_t seed, st
     x ^= x << 13, x ^= x >> 7, x ^= x << 17;
     r[i].at = t;
     r[i].write = x % 10 < 3;
-    r[i].addr = addr_of(p, (uint32_t)((x >> 8) % p->channels), (uint32_t)((x >> 12) % p->ranks),
-                        (uint32_t)((x >> 16) % p->bank_groups), (uint32_t)((x >> 20) % p->banks_per_group),
-                        (x >> 24) % 3, (x >> 30) % (p->columns / p->burst_length));
+    r[i].addr =
+        addr_of(p, (uint32_t)((x >> 8) % p->channels), (uint32_t)((x >> 12) % p->ranks),
+                (uint32_t)((x >> 16) % p->bank_groups), (uint32_t)((x >> 20) % p->banks_per_group),
+                (x >> 24) % 3, (x >> 30) % (p->columns / p->burst_length));
   }
 }
 
@@ -631,14 +660,22 @@ static void test_oracle_and_little(void) {
     enum dram_banked_queues qs;
     uint32_t cmdq, cc;
   } cfgs[] = {
-      {"rochrababgco", 1, 1, 4, 4, 32, 32, 24, 8, DRAM_BANKED_OPEN_PAGE, 1200, DRAM_BANKED_SHARED, 0, 0},
-      {"chrobabgraco", 2, 2, 4, 4, 16, 16, 12, 4, DRAM_BANKED_CLOSE_PAGE, 1400, DRAM_BANKED_SHARED, 0, 0},
-      {"rorabgbachco", 4, 4, 2, 2, 4, 4, 3, 1, DRAM_BANKED_OPEN_PAGE, 1000, DRAM_BANKED_SHARED, 0, 0},
-      {"robgbarachco", 2, 2, 4, 2, 8, 8, 6, 0, DRAM_BANKED_OPEN_PAGE, 2000, DRAM_BANKED_SHARED, 0, 0},
-      {"rochrababgco", 1, 2, 4, 4, 16, 16, 16, 8, DRAM_BANKED_OPEN_PAGE, 1400, DRAM_BANKED_PER_BANK, 8, 2},
-      {"chrobabgraco", 2, 2, 4, 4, 8, 8, 6, 2, DRAM_BANKED_CLOSE_PAGE, 1000, DRAM_BANKED_PER_BANK, 2, 1},
-      {"rorabgbachco", 2, 1, 4, 4, 16, 16, 12, 4, DRAM_BANKED_OPEN_PAGE, 2000, DRAM_BANKED_PER_RANK, 32, 3},
-      {"robgbarachco", 2, 4, 2, 2, 4, 4, 4, 0, DRAM_BANKED_OPEN_PAGE, 1200, DRAM_BANKED_PER_RANK, 3, 2},
+      {"rochrababgco", 1, 1, 4, 4, 32, 32, 24, 8, DRAM_BANKED_OPEN_PAGE, 1200, DRAM_BANKED_SHARED,
+       0, 0},
+      {"chrobabgraco", 2, 2, 4, 4, 16, 16, 12, 4, DRAM_BANKED_CLOSE_PAGE, 1400, DRAM_BANKED_SHARED,
+       0, 0},
+      {"rorabgbachco", 4, 4, 2, 2, 4, 4, 3, 1, DRAM_BANKED_OPEN_PAGE, 1000, DRAM_BANKED_SHARED, 0,
+       0},
+      {"robgbarachco", 2, 2, 4, 2, 8, 8, 6, 0, DRAM_BANKED_OPEN_PAGE, 2000, DRAM_BANKED_SHARED, 0,
+       0},
+      {"rochrababgco", 1, 2, 4, 4, 16, 16, 16, 8, DRAM_BANKED_OPEN_PAGE, 1400, DRAM_BANKED_PER_BANK,
+       8, 2},
+      {"chrobabgraco", 2, 2, 4, 4, 8, 8, 6, 2, DRAM_BANKED_CLOSE_PAGE, 1000, DRAM_BANKED_PER_BANK,
+       2, 1},
+      {"rorabgbachco", 2, 1, 4, 4, 16, 16, 12, 4, DRAM_BANKED_OPEN_PAGE, 2000, DRAM_BANKED_PER_RANK,
+       32, 3},
+      {"robgbarachco", 2, 4, 2, 2, 4, 4, 4, 0, DRAM_BANKED_OPEN_PAGE, 1200, DRAM_BANKED_PER_RANK, 3,
+       2},
   };
   enum { N = 1500, SEEDS = 6 };
   struct rq *r = xcalloc(N, sizeof *r);
@@ -716,12 +753,12 @@ static void test_problems(void) {
   struct dram_banked_params ok = ddr4();
   EXPECT(dram_banked_params_problem(&ok) == NULL);
   struct dram_banked_params p;
-#define BAD(stmt, key)                                                                     \
-  do {                                                                                     \
-    p = ok;                                                                                \
-    stmt;                                                                                  \
-    const char *m = dram_banked_params_problem(&p);                                        \
-    EXPECTF(m && !strncmp(m, key ":", strlen(key ":")), "%s: got %s", #stmt, m ? m : "NULL"); \
+#define BAD(stmt, key)                                                                             \
+  do {                                                                                             \
+    p = ok;                                                                                        \
+    stmt;                                                                                          \
+    const char *m = dram_banked_params_problem(&p);                                                \
+    EXPECTF(m && !strncmp(m, key ":", strlen(key ":")), "%s: got %s", #stmt, m ? m : "NULL");      \
   } while (0)
   BAD(p.channels = 3, "dram.channels");
   BAD(p.channels = 128, "dram.channels");

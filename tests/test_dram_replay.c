@@ -90,10 +90,12 @@ static const char *csv_get(const struct csv *c, const char *name) {
   return "";
 }
 
-static double csv_num(const struct csv *c, const char *name) { return strtod(csv_get(c, name), NULL); }
+static double csv_num(const struct csv *c, const char *name) {
+  return strtod(csv_get(c, name), NULL);
+}
 
 /* Expect column `name` of c to read `want` exactly. */
-#define EXPECT_COL(c, name, want)                                                               \
+#define EXPECT_COL(c, name, want)                                                                  \
   EXPECTF(!strcmp(csv_get(c, name), want), "%s: got %s, want %s", name, csv_get(c, name), want)
 
 /* A per-request file: index arrival taken done. */
@@ -154,10 +156,10 @@ static void test_fixed(void) {
   EXPECT_COL(&c, "reads", "4");
   EXPECT_COL(&c, "writes", "1");
   /* Every request is served 100 cycles after it arrives; nothing is refused. */
-  static const char *const hundred[] = {"read_latency_mean", "read_latency_p50", "read_latency_p95",
-                                        "read_latency_p99", "read_latency_max",
-                                        "read_latency_taken_mean", "read_latency_taken_max",
-                                        "write_latency_mean"};
+  static const char *const hundred[] = {"read_latency_mean",      "read_latency_p50",
+                                        "read_latency_p95",       "read_latency_p99",
+                                        "read_latency_max",       "read_latency_taken_mean",
+                                        "read_latency_taken_max", "write_latency_mean"};
   for (size_t i = 0; i < sizeof hundred / sizeof hundred[0]; i++) EXPECT_COL(&c, hundred[i], "100");
   EXPECT_COL(&c, "refused_wait_mean", "0");
   /* The span: the last arrival (1000) + 100 - the first (5). */
@@ -305,9 +307,11 @@ static void test_round_trip(void) {
     }
     if (i >= n || p[i].arrival != at || p[i].taken != at || p[i].done != done) {
       if (bad < 5)
-        fprintf(stderr, "request %zu: run %" PRIu64 " -> %" PRIu64 ", replay %" PRIu64 " %" PRIu64
-                        " -> %" PRIu64 "\n",
-                i, at, done, i < n ? p[i].arrival : 0, i < n ? p[i].taken : 0, i < n ? p[i].done : 0);
+        fprintf(stderr,
+                "request %zu: run %" PRIu64 " -> %" PRIu64 ", replay %" PRIu64 " %" PRIu64
+                " -> %" PRIu64 "\n",
+                i, at, done, i < n ? p[i].arrival : 0, i < n ? p[i].taken : 0,
+                i < n ? p[i].done : 0);
       bad++;
     }
     i++;
@@ -357,16 +361,17 @@ static void test_round_trip(void) {
  * and format) and the same cycles for every request. */
 static void test_formats(void) {
   char *readme = slurp(SRC "README.md");
-  EXPECTF(readme && strstr(readme, AWK_DRAMSIM3 " run.trace > dramsim3.trace"),
-          "README lacks: %s", AWK_DRAMSIM3);
+  EXPECTF(readme && strstr(readme, AWK_DRAMSIM3 " run.trace > dramsim3.trace"), "README lacks: %s",
+          AWK_DRAMSIM3);
   EXPECTF(readme && strstr(readme, AWK_RAMULATOR " run.trace > ramulator.trace"),
           "README lacks: %s", AWK_RAMULATOR);
   free(readme);
 
   char msg[4096];
-  int rc = testing_run(AWK_DRAMSIM3 " " DT "mixed.trace > " TMP "mixed_dramsim3.trace && " AWK_RAMULATOR
-                       " " DT "mixed.trace > " TMP "mixed_ramulator.trace",
-                       msg, sizeof msg);
+  int rc =
+      testing_run(AWK_DRAMSIM3 " " DT "mixed.trace > " TMP "mixed_dramsim3.trace && " AWK_RAMULATOR
+                               " " DT "mixed.trace > " TMP "mixed_ramulator.trace",
+                  msg, sizeof msg);
   EXPECTF(rc == 0, "awk: exit %d: %s", rc, msg);
   static const char *const name[3] = {"rtsim", "dramsim3", "ramulator"};
   static const char *const trace[3] = {DT "mixed.trace", TMP "mixed_dramsim3.trace",
@@ -408,7 +413,8 @@ static void test_formats(void) {
     const char *file;
     uint64_t arrival[8];
     size_t n;
-  } clocks[] = {{"clock.trace", {9, 10, 11}, 3}, {"clock_ramulator.trace", {0, 1, 2, 3, 4, 5, 5}, 7}};
+  } clocks[] = {{"clock.trace", {9, 10, 11}, 3},
+                {"clock_ramulator.trace", {0, 1, 2, 3, 4, 5, 5}, 7}};
   for (size_t k = 0; k < 2; k++) {
     char args[2048];
     snprintf(args, sizeof args,
@@ -420,8 +426,9 @@ static void test_formats(void) {
     struct per *p = per_load(TMP "clock.per", &n);
     EXPECT(n == clocks[k].n);
     for (size_t i = 0; i < n && i < clocks[k].n; i++)
-      EXPECTF(p[i].arrival == clocks[k].arrival[i], "%s: request %zu arrives in %" PRIu64
-              ", want %" PRIu64, clocks[k].file, i, p[i].arrival, clocks[k].arrival[i]);
+      EXPECTF(p[i].arrival == clocks[k].arrival[i],
+              "%s: request %zu arrives in %" PRIu64 ", want %" PRIu64, clocks[k].file, i,
+              p[i].arrival, clocks[k].arrival[i]);
     free(p);
   }
 }

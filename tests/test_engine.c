@@ -42,7 +42,10 @@ static void handler(void *ctx, uint64_t id) {
     s->spawn_left--;
     /* Same cycle, near, at the calendar's edge, or far. */
     uint64_t k = rnd(s) % 4, now = engine_now(s->e);
-    uint64_t d = k == 0 ? 0 : k == 1 ? rnd(s) % 100 : k == 2 ? ENGINE_WINDOW - 1 + rnd(s) % 3 : rnd(s) % 100000;
+    uint64_t d = k == 0   ? 0
+                 : k == 1 ? rnd(s) % 100
+                 : k == 2 ? ENGINE_WINDOW - 1 + rnd(s) % 3
+                          : rnd(s) % 100000;
     schedule(s, now + d);
   }
 }
@@ -55,14 +58,15 @@ static int cmp(const void *a, const void *b) {
 
 int main(void) {
   const uint64_t first = 2000, spawned = 200000, total = first + spawned;
-  struct state s = {engine_create(), calloc(total, sizeof(struct rec)), 0, 0, 42, spawned,
-                    calloc(total, sizeof(struct rec)), 0};
+  struct state s = {engine_create(), calloc(total, sizeof(struct rec)), 0, 0, 42,
+                    spawned,         calloc(total, sizeof(struct rec)), 0};
   for (uint64_t i = 0; i < first; i++) schedule(&s, rnd(&s) % (i & 1 ? 50 : 300000));
   EXPECT(engine_run(s.e) == total);
   EXPECT(s.n == total && engine_pending(s.e) == 0);
   qsort(s.sched, s.ns, sizeof *s.sched, cmp);
   uint64_t bad = 0;
-  for (uint64_t i = 0; i < total; i++) bad += s.log[i].at != s.sched[i].at || s.log[i].id != s.sched[i].id;
+  for (uint64_t i = 0; i < total; i++)
+    bad += s.log[i].at != s.sched[i].at || s.log[i].id != s.sched[i].id;
   EXPECTF(bad == 0, "%llu events out of (cycle, insertion) order", (unsigned long long)bad);
   engine_destroy(s.e);
   free(s.log);

@@ -37,8 +37,8 @@ static char out[1 << 16];
 
 static int run(const char *args, int w, int h) {
   char cmd[4096];
-  snprintf(cmd, sizeof cmd, "rm -rf %s && timeout 120 %s run %s %s --width %d --height %d -o %s %s", DIR,
-           RTSIM_BINARY, TINY, SCENE, w, h, DIR, args);
+  snprintf(cmd, sizeof cmd, "rm -rf %s && timeout 120 %s run %s %s --width %d --height %d -o %s %s",
+           DIR, RTSIM_BINARY, TINY, SCENE, w, h, DIR, args);
   return testing_run(cmd, out, sizeof out);
 }
 
@@ -74,7 +74,8 @@ static void check_finished(const char *what, bool image) {
   static const char *const files[] = {"stats.json", "stats.csv", "timeline.csv"};
   for (int f = 0; f < (timed ? 3 : 2); f++) {
     char *t = testing_slurp(DIR, files[f], NULL);
-    EXPECTF(t && !strstr(t, "nan") && !strstr(t, "inf"), "%s: %s missing or has nan/inf", what, files[f]);
+    EXPECTF(t && !strstr(t, "nan") && !strstr(t, "inf"), "%s: %s missing or has nan/inf", what,
+            files[f]);
     free(t);
   }
   if (image) {
@@ -89,25 +90,26 @@ static void check_finished(const char *what, bool image) {
          parked = testing_json_num(DIR, "thread_parked_fraction"),
          done = testing_json_num(DIR, "thread_done_fraction");
   if (timed)
-    EXPECTF(fabs(idle - wait - parked - done) < 1e-9, "%s: idle %g != wait %g + parked %g + done %g",
-            what, idle, wait, parked, done);
+    EXPECTF(fabs(idle - wait - parked - done) < 1e-9,
+            "%s: idle %g != wait %g + parked %g + done %g", what, idle, wait, parked, done);
   else
     EXPECTF(isnan(idle) && isnan(wait) && isnan(done), "%s: analytic states thread figures", what);
   double acc = testing_json_num(DIR, "l2_accesses"), miss = testing_json_num(DIR, "l2_misses"),
          rate = testing_json_num(DIR, "l2_miss_rate");
   EXPECTF(acc > 0 && miss <= acc && near(rate, miss / acc), "%s: l2 %g misses of %g, rate %g", what,
           miss, acc, rate);
-  double rb = testing_json_num(DIR, "dram_read_bytes"), wb = testing_json_num(DIR, "dram_write_bytes"),
-         rd = testing_json_num(DIR, "dram_reads"), wr = testing_json_num(DIR, "dram_writes"),
-         cyc = testing_json_num(DIR, "cycles"), bpc = testing_json_num(DIR, "dram_bytes_per_cycle");
+  double rb = testing_json_num(DIR, "dram_read_bytes"),
+         wb = testing_json_num(DIR, "dram_write_bytes"), rd = testing_json_num(DIR, "dram_reads"),
+         wr = testing_json_num(DIR, "dram_writes"), cyc = testing_json_num(DIR, "cycles"),
+         bpc = testing_json_num(DIR, "dram_bytes_per_cycle");
   EXPECTF(rb == 64 * rd && wb == 64 * wr && cyc > 0 && near(bpc, (rb + wb) / cyc),
-          "%s: DRAM %g/%g bytes for %g/%g requests, %g a cycle over %g cycles", what, rb, wb, rd, wr,
-          bpc, cyc);
+          "%s: DRAM %g/%g bytes for %g/%g requests, %g a cycle over %g cycles", what, rb, wb, rd,
+          wr, bpc, cyc);
   /* The timeline splits a transfer across windows to two decimals. */
   double tr = timeline_sum("dram_read_bytes"), tw = timeline_sum("dram_write_bytes");
   if (timed)
     EXPECTF(fabs(tr - rb) <= 0.01 * (rd + 1) && fabs(tw - wb) <= 0.01 * (wr + 1),
-          "%s: timeline %g/%g DRAM bytes, totals %g/%g", what, tr, tw, rb, wb);
+            "%s: timeline %g/%g DRAM bytes, totals %g/%g", what, tr, tw, rb, wb);
   EXPECTF(testing_json_num(DIR, "rays_traced") > 0, "%s: no rays", what);
 }
 
@@ -207,17 +209,30 @@ static void check_table(void) {
     const char *what, *args, *key;
     int w, h;
   } rows[] = {
-      {"smallest machine, 1x1 image", "--set cores=1 --set threads_per_core=1 --set rays_per_thread=1", "cores", 1, 1},
-      {"caches of one line", "--set l1.size=64 --set l1.ways=1 --set l2.size=64 --set l2.ways=full --set l2.mshrs=1 --set l2.write_buffer=1", "l2.size", W, H},
+      {"smallest machine, 1x1 image",
+       "--set cores=1 --set threads_per_core=1 --set rays_per_thread=1", "cores", 1, 1},
+      {"caches of one line",
+       "--set l1.size=64 --set l1.ways=1 --set l2.size=64 --set l2.ways=full --set l2.mshrs=1 --set l2.write_buffer=1",
+       "l2.size", W, H},
       {"largest caches", "--set l1.size=1GiB --set l2.size=16GiB", "l2.size", W, H},
-      {"largest caches, many cores", "--set cores=4096 --set l1.size=1GiB --set l2.size=16GiB", "cores", W, H},
+      {"largest caches, many cores", "--set cores=4096 --set l1.size=1GiB --set l2.size=16GiB",
+       "cores", W, H},
       {"fully associative 16 GiB L2", "--set l2.size=16GiB --set l2.ways=full", "l2.size", W, H},
-      {"no DRAM latency, widest channel", "--set fidelity=channel --set dram.latency=0 --set dram.bytes_per_cycle=1e6", "dram.latency", W, H},
-      {"slowest DRAM", "--set fidelity=channel --set dram.latency=1000000000 --set dram.bytes_per_cycle=1e-6", "dram.latency", W, H},
+      {"no DRAM latency, widest channel",
+       "--set fidelity=channel --set dram.latency=0 --set dram.bytes_per_cycle=1e6", "dram.latency",
+       W, H},
+      {"slowest DRAM",
+       "--set fidelity=channel --set dram.latency=1000000000 --set dram.bytes_per_cycle=1e-6",
+       "dram.latency", W, H},
       {"fixed latency 0", "--set fidelity=fixed --set dram.latency=0", "dram.latency", W, H},
-      {"dynamic, smallest machine", "--policy dynamic --set cores=1 --set threads_per_core=1 --set rays_per_thread=1", "cores", W, H},
-      {"dynamic, one-line L2", "--policy dynamic --set l2.size=64 --set l2.ways=full", "l2.size", W, H},
-      {"packet, one-line caches", "--policy packet --set l1.size=64 --set l1.ways=1 --set l2.size=64 --set l2.ways=full", "l2.size", W, H},
+      {"dynamic, smallest machine",
+       "--policy dynamic --set cores=1 --set threads_per_core=1 --set rays_per_thread=1", "cores",
+       W, H},
+      {"dynamic, one-line L2", "--policy dynamic --set l2.size=64 --set l2.ways=full", "l2.size", W,
+       H},
+      {"packet, one-line caches",
+       "--policy packet --set l1.size=64 --set l1.ways=1 --set l2.size=64 --set l2.ways=full",
+       "l2.size", W, H},
   };
   for (size_t i = 0; i < sizeof rows / sizeof rows[0]; i++)
     runs_or_refused(rows[i].what, rows[i].args, rows[i].key, rows[i].w, rows[i].h);
@@ -235,7 +250,8 @@ static void check_table(void) {
   if (rc == 0) check_finished(args, true);
   if (limit < 4096ull * 256) {
     uint64_t t = limit / 4096 + 1; /* 4096 cores x t threads x 1 ray > limit */
-    snprintf(args, sizeof args, "--set cores=4096 --set threads_per_core=%llu --set rays_per_thread=1",
+    snprintf(args, sizeof args,
+             "--set cores=4096 --set threads_per_core=%llu --set rays_per_thread=1",
              (unsigned long long)t);
     rc = run(args, W, H);
     EXPECTF(rc == 2, "%s: exit %d", args, rc);
@@ -269,20 +285,25 @@ static void check_scales(void) {
       EXPECT(f != NULL);
       return;
     }
-    fprintf(f, "camera: {from: [%.17g, %.17g, %.17g], at: [%.17g, %.17g, %.17g], up: [0, 0, 1], fov_deg: 60}\n",
-            from[0] * k, from[1] * k, from[2] * k, at[0] * k, at[1] * k, at[2] * k);
+    fprintf(
+        f,
+        "camera: {from: [%.17g, %.17g, %.17g], at: [%.17g, %.17g, %.17g], up: [0, 0, 1], fov_deg: 60}\n",
+        from[0] * k, from[1] * k, from[2] * k, at[0] * k, at[1] * k, at[2] * k);
     fprintf(f, "background: [0.6, 0.75, 0.95]\nambient: 0.15\nlights:\n");
     for (int l = 0; l < 3; l++)
-      fprintf(f, "  - {position: [%.17g, %.17g, %.17g], intensity: [%g, %g, %g]}\n", lights[l][0] * k,
-              lights[l][1] * k, lights[l][2] * k, power[l], power[l], power[l]);
+      fprintf(f, "  - {position: [%.17g, %.17g, %.17g], intensity: [%g, %g, %g]}\n",
+              lights[l][0] * k, lights[l][1] * k, lights[l][2] * k, power[l], power[l], power[l]);
     fprintf(f, "geometry:\n  - {mesh: extremes_room.ply, scale: %.17g}\n", k);
     fclose(f);
-    snprintf(cmd, sizeof cmd, "rm -rf %s && %s run %s %s --width 32 --height 32 --set l2.size=4MiB -o %s", DIR, RTSIM_BINARY,
-             TINY, yaml, DIR);
+    snprintf(cmd, sizeof cmd,
+             "rm -rf %s && %s run %s %s --width 32 --height 32 --set l2.size=4MiB -o %s", DIR,
+             RTSIM_BINARY, TINY, yaml, DIR);
     int rc = testing_run(cmd, out, sizeof out);
     EXPECTF(rc == 0, "scale %g: exit %d: %s", k, rc, out);
-    double cycles = testing_json_num(DIR, "cycles"), tests = testing_json_num(DIR, "triangle_tests"),
-           bytes = testing_json_num(DIR, "dram_read_bytes") + testing_json_num(DIR, "dram_write_bytes");
+    double cycles = testing_json_num(DIR, "cycles"),
+           tests = testing_json_num(DIR, "triangle_tests"),
+           bytes =
+               testing_json_num(DIR, "dram_read_bytes") + testing_json_num(DIR, "dram_write_bytes");
     if (i == 0) {
       ref_cycles = cycles;
       ref_tests = tests;
@@ -291,19 +312,23 @@ static void check_scales(void) {
       continue;
     }
     printf("scale %g: cycles %+.3f%%, triangle tests %+.3f%%, DRAM bytes %+.3f%%\n", k,
-           100 * (cycles / ref_cycles - 1), 100 * (tests / ref_tests - 1), 100 * (bytes / ref_bytes - 1));
+           100 * (cycles / ref_cycles - 1), 100 * (tests / ref_tests - 1),
+           100 * (bytes / ref_bytes - 1));
     bool pow2 = k == 0.5 || k == 8;
     double tol = pow2 ? 0 : 0.001;
-    EXPECTF(fabs(cycles - ref_cycles) <= tol * ref_cycles && fabs(tests - ref_tests) <= tol * ref_tests &&
-                fabs(bytes - ref_bytes) <= (pow2 ? 0 : 0.005) * ref_bytes,
-            "scale %g: %.0f cycles, %.0f triangle tests, %.0f DRAM bytes; at scale 1 %.0f, %.0f, %.0f", k,
-            cycles, tests, bytes, ref_cycles, ref_tests, ref_bytes);
+    EXPECTF(
+        fabs(cycles - ref_cycles) <= tol * ref_cycles &&
+            fabs(tests - ref_tests) <= tol * ref_tests &&
+            fabs(bytes - ref_bytes) <= (pow2 ? 0 : 0.005) * ref_bytes,
+        "scale %g: %.0f cycles, %.0f triangle tests, %.0f DRAM bytes; at scale 1 %.0f, %.0f, %.0f",
+        k, cycles, tests, bytes, ref_cycles, ref_tests, ref_bytes);
   }
 }
 
 int main(void) {
   char cmd[4096];
-  snprintf(cmd, sizeof cmd, "%s render %s --width %d --height %d -o %s", RTSIM_BINARY, SCENE, W, H, REF);
+  snprintf(cmd, sizeof cmd, "%s render %s --width %d --height %d -o %s", RTSIM_BINARY, SCENE, W, H,
+           REF);
   if (testing_run(cmd, out, sizeof out) != 0) {
     EXPECTF(0, "reference render: %s", out);
     return testing_done("test_extremes");

@@ -7,9 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "renderer/scene.h"
 #include "renderer/scene/gen.h"
 #include "renderer/scene/gen_util.h"
-#include "renderer/scene.h"
 #include "testing.h"
 
 /* A directed edge as raw vertex bits: equal only if bit-identical. */
@@ -154,8 +154,7 @@ static void test_sphereflake_geometry(void) {
     EXPECTF(dev_k < 1e-5 && outward, "child %u: deviation %g", k, dev_k);
     if (k == 1) {
       double e = 2.0 / 3.0 / sqrt(6.0);
-      EXPECTF(fabs(c.x - e) < 1e-6 && fabs(c.y - e) < 1e-6, "first child %g %g %g", c.x, c.y,
-              c.z);
+      EXPECTF(fabs(c.x - e) < 1e-6 && fabs(c.y - e) < 1e-6, "first child %g %g %g", c.x, c.y, c.z);
     }
   }
   EXPECTF(worst < 1e-6, "child distance off by %g", worst);
@@ -232,8 +231,7 @@ static uint32_t gen_count(gen_fn fn, double detail, uint64_t seed) {
 }
 
 static void test_procedural(const char *name, gen_fn fn, double target, double small_detail,
-                            const char *const *mats, int mat_count, vec3 lo_bound,
-                            vec3 hi_bound) {
+                            const char *const *mats, int mat_count, vec3 lo_bound, vec3 hi_bound) {
   struct scene a, b, c;
   scene_init(&a);
   scene_init(&b);
@@ -249,7 +247,8 @@ static void test_procedural(const char *name, gen_fn fn, double target, double s
   for (int i = 0; i < mat_count; i++) {
     int id = scene_find_material(&a, mats[i]);
     uint32_t used = 0;
-    for (uint32_t t = 0; id >= 0 && t < a.tri_count; t++) used += a.tris[t].material == (uint32_t)id;
+    for (uint32_t t = 0; id >= 0 && t < a.tri_count; t++)
+      used += a.tris[t].material == (uint32_t)id;
     EXPECTF(id >= 0 && used > 0, "%s: material %s unused", name, mats[i]);
   }
   vec3 lo, hi;
@@ -266,8 +265,7 @@ static void test_procedural(const char *name, gen_fn fn, double target, double s
   EXPECTF(small >= 1000 && small <= 8000, "%s: %u triangles at detail %g", name, small,
           small_detail);
   uint32_t half = gen_count(fn, 0.5, 7);
-  EXPECTF(fabs(half - 0.5 * target) <= 0.15 * target, "%s: %u triangles at detail 0.5", name,
-          half);
+  EXPECTF(fabs(half - 0.5 * target) <= 0.15 * target, "%s: %u triangles at detail 0.5", name, half);
   EXPECT(gen_count(fn, 2.0, 7) > 1.7 * target);
 
   /* A material the scene already defines is used, not replaced. */
@@ -284,14 +282,14 @@ static void test_procedural(const char *name, gen_fn fn, double target, double s
  * triangles actually built: every detail the thinning, the rounding of
  * tessellation levels and their clamps treat differently, several seeds. */
 static void test_count_formulas(void) {
-  static const double details[] = {1e-4, 0.013, 0.1, 0.37, 0.5, 0.618, 0.99, 1.0, 1.3,
-                                   2.0, 3.7, 9.0, 24.5};
+  static const double details[] = {1e-4, 0.013, 0.1, 0.37, 0.5, 0.618, 0.99,
+                                   1.0,  1.3,   2.0, 3.7,  9.0, 24.5};
   for (size_t i = 0; i < sizeof details / sizeof details[0]; i++)
     for (uint64_t seed = 1; seed <= 2; seed++) {
       double d = details[i];
       uint32_t room = gen_count(gen_room, d, seed * 77);
-      EXPECTF(room == gen_room_tri_count(d), "room detail %g seed %llu: built %u, formula %llu",
-              d, (unsigned long long)seed, room, (unsigned long long)gen_room_tri_count(d));
+      EXPECTF(room == gen_room_tri_count(d), "room detail %g seed %llu: built %u, formula %llu", d,
+              (unsigned long long)seed, room, (unsigned long long)gen_room_tri_count(d));
       if (d > 3.0) continue; /* 40 trees per unit of detail: the small ones tell */
       uint32_t grove = gen_count(gen_grove, d, seed * 77);
       EXPECTF(grove == gen_grove_tri_count(d), "grove detail %g seed %llu: built %u, formula %llu",
@@ -315,8 +313,8 @@ int main(void) {
   static const char *const grove_mats[] = {"bark", "leaf", "ground"};
   test_procedural("grove", gen_grove, 164000, 0.02, grove_mats, 3, v3(-40, -40, -0.3),
                   v3(40, 40, 20));
-  static const char *const room_mats[] = {"wall",   "floor",  "ceiling", "wood",
-                                          "fabric", "metal",  "mirror",  "ceramic"};
+  static const char *const room_mats[] = {"wall",   "floor", "ceiling", "wood",
+                                          "fabric", "metal", "mirror",  "ceramic"};
   test_procedural("room", gen_room, 47000, 0.05, room_mats, 8, v3(-0.06f, -0.06f, -0.06f),
                   v3(8.06f, 6.06f, 3.06f));
   /* A different seed moves trees but keeps the grove's size. */

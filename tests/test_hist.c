@@ -40,8 +40,8 @@ static void test_quantiles(uint64_t range, uint64_t seed) {
 }
 
 static void test_buckets(void) {
-  const uint64_t vals[] = {0, 1, 63, 64, 1023, 1024, 1025, 1039, 1040, 4095, 4096, 123456789,
-                           1ull << 40, UINT64_MAX};
+  const uint64_t vals[] = {0,    1,    63,   64,   1023,      1024,       1025,
+                           1039, 1040, 4095, 4096, 123456789, 1ull << 40, UINT64_MAX};
   for (unsigned i = 0; i < sizeof vals / sizeof vals[0]; i++) {
     struct hist *h = calloc(1, sizeof *h);
     hist_add(h, vals[i]);

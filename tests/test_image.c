@@ -129,9 +129,9 @@ static void test_float_round_trip(void) {
 static void test_half_round_trip(void) {
   static const char *const names[] = {"R", "G", "B"};
   /* Exactly representable in binary16: normals, subnormals, the extremes. */
-  static const float exact[] = {0.0f,     1.0f,         -1.0f,         0.5f,        -3.25f,
-                                65504.0f, -65504.0f,    6.1035156e-5f, 5.9604645e-8f, 1024.0f,
-                                0.099975586f, 2047.0f,  -0.33325195f};
+  static const float exact[] = {0.0f,         1.0f,      -1.0f,         0.5f,          -3.25f,
+                                65504.0f,     -65504.0f, 6.1035156e-5f, 5.9604645e-8f, 1024.0f,
+                                0.099975586f, 2047.0f,   -0.33325195f};
   const uint32_t n_exact = sizeof exact / sizeof exact[0];
   struct image im;
   image_init(&im, 23, 41, 3, names);
@@ -180,8 +180,7 @@ static void test_sizes(void) {
   for (uint32_t y = 0; y < 512; y++)
     for (uint32_t x = 0; x < 512; x++)
       for (uint32_t c = 0; c < 3; c++)
-        im.planes[c][y * 512 + x] =
-            (float)((x + y * (c + 1)) / 1024.0 + 0.02 * test_rng_unit(&r));
+        im.planes[c][y * 512 + x] = (float)((x + y * (c + 1)) / 1024.0 + 0.02 * test_rng_unit(&r));
   char ph[1024], pf[1024];
   tmp_path(ph, sizeof ph, "image_512_half.exr");
   tmp_path(pf, sizeof pf, "image_512_float.exr");
@@ -189,8 +188,8 @@ static void test_sizes(void) {
   EXPECT(image_write_exr(&im, ph, true, &e));
   EXPECT(image_write_exr(&im, pf, false, &e));
   long sh = file_size(ph), sf = file_size(pf);
-  printf("512x512 RGB noisy gradient, ZIP: half %ld bytes, float %ld bytes (raw %d / %d)\n", sh,
-         sf, 512 * 512 * 3 * 2, 512 * 512 * 3 * 4);
+  printf("512x512 RGB noisy gradient, ZIP: half %ld bytes, float %ld bytes (raw %d / %d)\n", sh, sf,
+         512 * 512 * 3 * 2, 512 * 512 * 3 * 4);
   EXPECT(sh > 0 && sf > sh);
   image_fini(&im);
   remove(ph);
@@ -276,8 +275,7 @@ static void test_foreign_files(void) {
       int row = i / 3, x = i % 3;
       float want_z = (float)(10 * (row - 2) + x) + 0.25f;
       EXPECTF(im.planes[z][i] == want_z, "Z[%d] = %g, want %g", i, im.planes[z][i], want_z);
-      EXPECTF(im.planes[y][i] == want_y[i], "Y[%d] = %g, want %g", i, im.planes[y][i],
-              want_y[i]);
+      EXPECTF(im.planes[y][i] == want_y[i], "Y[%d] = %g, want %g", i, im.planes[y][i], want_y[i]);
     }
   }
   image_fini(&im);

@@ -11,11 +11,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "renderer/scene/gen.h"
 #include "renderer/kdtree.h"
 #include "renderer/ray.h"
 #include "renderer/rng.h"
 #include "renderer/scene.h"
+#include "renderer/scene/gen.h"
 #include "renderer/trace.h"
 #include "testing.h"
 
@@ -30,12 +30,9 @@ static uint32_t fbits(float f) {
 
 static float v3_at(vec3 v, int a) { return a == 0 ? v.x : (a == 1 ? v.y : v.z); }
 static void v3_put(vec3 *v, int a, float f) {
-  if (a == 0)
-    v->x = f;
-  else if (a == 1)
-    v->y = f;
-  else
-    v->z = f;
+  if (a == 0) v->x = f;
+  else if (a == 1) v->y = f;
+  else v->z = f;
 }
 
 /* ---- scenes ---------------------------------------------------------------- */
@@ -49,8 +46,8 @@ static void soup_random(struct scene *s, uint64_t seed, int n) {
     vec3 v[3];
     for (int k = 0; k < 3; k++)
       v[k] = v3_add(c, v3(rnd(&g, -sz, sz), rnd(&g, -sz, sz), rnd(&g, -sz, sz)));
-    if (i % 37 == 0) v[2] = v[1];                                  /* repeated vertex */
-    if (i % 41 == 0) v[2] = v3_sub(v3_scale(v[1], 2.0f), v[0]);    /* collinear-ish */
+    if (i % 37 == 0) v[2] = v[1];                               /* repeated vertex */
+    if (i % 41 == 0) v[2] = v3_sub(v3_scale(v[1], 2.0f), v[0]); /* collinear-ish */
     scene_add_tri(s, v[0], v[1], v[2], NULL, 0);
   }
 }
@@ -97,7 +94,8 @@ static void voxels(struct scene *s, uint64_t seed, int w, float scale, float off
 #define H(x, y) h[(size_t)((y) + 1) * (size_t)(w + 2) + (size_t)((x) + 1)]
   for (int y = 0; y < w; y++)
     for (int x = 0; x < w; x++) H(x, y) = (int)rnd_u(&g, 5);
-#define P(x, y, z) v3((float)(x) * scale + offset, (float)(y) * scale + offset, (float)(z) * scale + offset)
+#define P(x, y, z)                                                                                 \
+  v3((float)(x)*scale + offset, (float)(y)*scale + offset, (float)(z)*scale + offset)
   for (int y = 0; y < w; y++)
     for (int x = 0; x < w; x++) {
       int z = H(x, y);
@@ -243,8 +241,8 @@ static uint32_t check_structure(const char *name, const struct scene *s, const s
   uint8_t *in_leaf = calloc(n ? n : 1, 1);
   struct walk_entry *stack = malloc((KD_DEPTH_LIMIT + 2) * sizeof *stack);
   int sp = 0;
-  stack[sp++] = (struct walk_entry){0, {kd->lo.x, kd->lo.y, kd->lo.z},
-                                    {kd->hi.x, kd->hi.y, kd->hi.z}, 0};
+  stack[sp++] =
+      (struct walk_entry){0, {kd->lo.x, kd->lo.y, kd->lo.z}, {kd->hi.x, kd->hi.y, kd->hi.z}, 0};
   uint32_t nodes = 0, leaves = 0, empty = 0, maxd = 0, maxp = 0, off_bound = 0;
   uint64_t refs = 0;
   int errors = 0;
@@ -307,7 +305,7 @@ static uint32_t check_structure(const char *name, const struct scene *s, const s
     }
     for (uint32_t p = 0; p < n; p++) {
       if (!in_leaf[p] && (clip ? must_hold(&tb[p], e.lo, e.hi) && meets_tri(&s->tris[p], e.lo, e.hi)
-                                    : must_hold(&tb[p], e.lo, e.hi))) {
+                               : must_hold(&tb[p], e.lo, e.hi))) {
         EXPECTF(0, "%s: leaf %u (depth %u) misses triangle %u overlapping it", name, e.node,
                 e.depth, p);
         errors++;
@@ -392,15 +390,14 @@ static struct ray make_test_ray(struct rng *g, const struct scene *s, const stru
   }
   default: /* outside, on a box face plane */
     o = v3_add(mid, v3(ext.x * rnd(g, -1, 1), ext.y * rnd(g, -1, 1), ext.z * rnd(g, -1, 1)));
-    v3_put(&o, (int)rnd_u(g, 3), (rng_u32(g) & 1) ? v3_at(lo, (int)(i % 3)) : v3_at(hi, (int)(i % 3)));
+    v3_put(&o, (int)rnd_u(g, 3),
+           (rng_u32(g) & 1) ? v3_at(lo, (int)(i % 3)) : v3_at(hi, (int)(i % 3)));
     break;
   }
   vec3 d;
   int dk = (i / 5) % 6;
   switch (dk) {
-  case 0:
-    d = v3(rnd(g, -1, 1), rnd(g, -1, 1), rnd(g, -1, 1));
-    break;
+  case 0: d = v3(rnd(g, -1, 1), rnd(g, -1, 1), rnd(g, -1, 1)); break;
   case 1: { /* axis-aligned */
     d = v3(0, 0, 0);
     v3_put(&d, (int)rnd_u(g, 3), (rng_u32(g) & 1) ? 1.0f : -1.0f);
@@ -615,7 +612,8 @@ static void compare_clip(const char *name, const struct scene *s, int nrays, uin
   uint64_t tc = tests_of(s, &kc, nrays, seed + 2), tw = tests_of(s, &kw, nrays, seed + 2);
   EXPECTF(tc < tw, "%s: clipping gave %llu triangle tests, whole bounds %llu", name,
           (unsigned long long)tc, (unsigned long long)tw);
-  fprintf(stderr, "%s: triangle tests clipped %llu, whole %llu; references clipped %llu, whole %llu\n",
+  fprintf(stderr,
+          "%s: triangle tests clipped %llu, whole %llu; references clipped %llu, whole %llu\n",
           name, (unsigned long long)tc, (unsigned long long)tw,
           (unsigned long long)kc.stats.leaf_prim_refs, (unsigned long long)kw.stats.leaf_prim_refs);
   kd_fini(&kc);

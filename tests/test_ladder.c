@@ -58,7 +58,8 @@ static void json_keys(const char *dir, struct keys *k) {
     if (strncmp(line, "  \"", 3) != 0) continue;
     char *end = strchr(line + 3, '"');
     if (!end) continue;
-    o += (size_t)snprintf(k->text + o, sizeof k->text - o, "%.*s\n", (int)(end - line - 3), line + 3);
+    o += (size_t)snprintf(k->text + o, sizeof k->text - o, "%.*s\n", (int)(end - line - 3),
+                          line + 3);
     k->n++;
   }
   free(j);
@@ -93,11 +94,12 @@ static bool analytic_own(const char *name) { return !strncmp(name, "analytic_", 
 /* The DRAM level's own report (README: level-specific): the channel's and the
  * banked level's numbers. */
 static bool dram_own(const char *name) {
-  static const char *const own[] = {"dram_utilization", "dram_fifo_", "dram_row_", "dram_activates",
-                                    "dram_precharges", "dram_refresh", "dram_write_drains",
-                                    "dram_write_forwards", "dram_write_merges", "dram_read_merges",
-                                    "dram_bus_utilization", "dram_bank_active_fraction",
-                                    "dram_read_queue_", "dram_write_queue_"};
+  static const char *const own[] = {
+      "dram_utilization",  "dram_fifo_",           "dram_row_",
+      "dram_activates",    "dram_precharges",      "dram_refresh",
+      "dram_write_drains", "dram_write_forwards",  "dram_write_merges",
+      "dram_read_merges",  "dram_bus_utilization", "dram_bank_active_fraction",
+      "dram_read_queue_",  "dram_write_queue_"};
   for (size_t i = 0; i < sizeof own / sizeof own[0]; i++)
     if (!strncmp(name, own[i], strlen(own[i]))) return true;
   return false;
@@ -105,20 +107,58 @@ static bool dram_own(const char *name) {
 
 /* What the analytic rung knows and must write, and what only time tells and
  * it must leave out (never a zero in its place). */
-static const char *const ANALYTIC_KNOWS[] = {
-    "cycles", "seconds", "rays_traced", "rays_per_second", "kd_node_visits", "triangle_tests",
-    "ray_contexts", "threads", "issue_slots", "core_utilization", "loads", "stores",
-    "blocking_loads", "issue_slots_per_blocking_load", "l1_accesses", "l1_hits", "l2_accesses",
-    "l2_hits", "l2_misses", "l2_miss_rate", "l2_fetch_bytes", "l2_writeback_bytes",
-    "fetch_geometry_bytes", "fetch_node_bytes", "fetch_ray_bytes", "dram_reads", "dram_writes",
-    "dram_read_bytes", "dram_write_bytes", "dram_bytes_per_cycle", "config", "revision", "wall_s",
-    "analytic_latency_bound_cycles", "analytic_bandwidth_bound_cycles"};
-static const char *const ANALYTIC_CANNOT[] = {
-    "thread_idle_fraction", "thread_wait_fraction", "ray_switches", "waits", "l2_mshr_merges",
-    "l2_stalls", "l2_bank_wait_cycles", "l2_miss_queue_requests", "backpressure_cycles",
-    "dram_read_latency_mean", "dram_read_latency_p99", "load_latency_mean", "events",
-    "coroutine_stacks_max", "timeline_window_cycles", "load_latency_histogram_cycles",
-    "dram_read_latency_histogram_cycles"};
+static const char *const ANALYTIC_KNOWS[] = {"cycles",
+                                             "seconds",
+                                             "rays_traced",
+                                             "rays_per_second",
+                                             "kd_node_visits",
+                                             "triangle_tests",
+                                             "ray_contexts",
+                                             "threads",
+                                             "issue_slots",
+                                             "core_utilization",
+                                             "loads",
+                                             "stores",
+                                             "blocking_loads",
+                                             "issue_slots_per_blocking_load",
+                                             "l1_accesses",
+                                             "l1_hits",
+                                             "l2_accesses",
+                                             "l2_hits",
+                                             "l2_misses",
+                                             "l2_miss_rate",
+                                             "l2_fetch_bytes",
+                                             "l2_writeback_bytes",
+                                             "fetch_geometry_bytes",
+                                             "fetch_node_bytes",
+                                             "fetch_ray_bytes",
+                                             "dram_reads",
+                                             "dram_writes",
+                                             "dram_read_bytes",
+                                             "dram_write_bytes",
+                                             "dram_bytes_per_cycle",
+                                             "config",
+                                             "revision",
+                                             "wall_s",
+                                             "analytic_latency_bound_cycles",
+                                             "analytic_bandwidth_bound_cycles"};
+static const char *const ANALYTIC_CANNOT[] = {"thread_idle_fraction",
+                                              "thread_wait_fraction",
+                                              "ray_switches",
+                                              "waits",
+                                              "l2_mshr_merges",
+                                              "l2_stalls",
+                                              "l2_bank_wait_cycles",
+                                              "l2_miss_queue_requests",
+                                              "backpressure_cycles",
+                                              "dram_read_latency_mean",
+                                              "dram_read_latency_p99",
+                                              "load_latency_mean",
+                                              "events",
+                                              "coroutine_stacks_max",
+                                              "timeline_window_cycles",
+                                              "load_latency_histogram_cycles",
+                                              "dram_read_latency_histogram_cycles"};
 
 /* Every rung on every small scene and policy on tiny.yaml: the image of
  * rtsim render (RGB) and the same file at every rung (bytes); the key sets. */
@@ -140,8 +180,8 @@ static void test_images_and_keys(void) {
           return;
         char img[2100];
         snprintf(img, sizeof img, "%s/image.exr", dir[r]);
-        EXPECTF(testing_same_rgb(ref, img), "%s, %s, %s: RGB differs from rtsim render's", SCENES[s],
-                POLICIES[p], RUNGS[r]);
+        EXPECTF(testing_same_rgb(ref, img), "%s, %s, %s: RGB differs from rtsim render's",
+                SCENES[s], POLICIES[p], RUNGS[r]);
         json_keys(dir[r], &k[r]);
         const bool timed = r > 0;
         EXPECTF(exists(dir[r], "timeline.csv") == timed && exists(dir[r], "traffic.png") == timed,
@@ -175,8 +215,8 @@ static void test_images_and_keys(void) {
                       im[first].height == im[r].height &&
                       !memcmp(im[first].planes[x], im[r].planes[y],
                               sizeof(float) * im[r].width * im[r].height),
-                  "%s, %s: %s of %s and %s differ", SCENES[s], POLICIES[p], same[c],
-                  RUNGS[first], RUNGS[r]);
+                  "%s, %s: %s of %s and %s differ", SCENES[s], POLICIES[p], same[c], RUNGS[first],
+                  RUNGS[r]);
         }
       for (unsigned r = 0; r < 4; r++)
         if (read[r]) image_fini(&im[r]);
@@ -196,7 +236,8 @@ static void test_images_and_keys(void) {
       EXPECT(!has_key(&k[1], "dram_utilization") && has_key(&k[2], "dram_utilization") &&
              has_key(&k[3], "dram_row_hits"));
       /* stats.csv: analytic's columns are fixed's, less what it cannot know. */
-      char *ca = testing_slurp(dir[0], "stats.csv", NULL), *cf = testing_slurp(dir[1], "stats.csv", NULL);
+      char *ca = testing_slurp(dir[0], "stats.csv", NULL),
+           *cf = testing_slurp(dir[1], "stats.csv", NULL);
       if (ca && cf) {
         ca[strcspn(ca, "\n")] = cf[strcspn(cf, "\n")] = '\0';
         char fixed_cols[16384];
@@ -237,16 +278,19 @@ static void test_exact(void) {
             run("default", SCENES[s], POLICIES[p], "fixed", more, 24, 16, df, out, sizeof out))
           return;
         /* The same work, seen the same way. */
-        static const char *const same[] = {"issue_slots", "loads", "stores", "blocking_loads",
-                                           "l1_hits", "l2_misses", "dram_read_bytes"};
+        static const char *const same[] = {"issue_slots",    "loads",   "stores",
+                                           "blocking_loads", "l1_hits", "l2_misses",
+                                           "dram_read_bytes"};
         for (size_t i = 0; i < sizeof same / sizeof *same; i++)
-          EXPECTF(testing_json_num(da, same[i]) == testing_json_num(df, same[i]), "%s, %s: %s %.0f, timed %.0f",
-                  SCENES[s], POLICIES[p], same[i], testing_json_num(da, same[i]), testing_json_num(df, same[i]));
+          EXPECTF(testing_json_num(da, same[i]) == testing_json_num(df, same[i]),
+                  "%s, %s: %s %.0f, timed %.0f", SCENES[s], POLICIES[p], same[i],
+                  testing_json_num(da, same[i]), testing_json_num(df, same[i]));
         EXPECT(testing_json_num(df, "dram_write_bytes") == 0);
         const double fixed = testing_json_num(df, "cycles"), est = testing_json_num(da, "cycles");
         const double b = testing_json_num(da, "blocking_loads");
-        const double hand = testing_json_num(da, "issue_slots") + (testing_json_num(da, "loads") - b) * 3 +
-                            b * 20 + round(testing_json_num(da, "analytic_blocking_miss_rate") * b) * lat[l];
+        const double hand = testing_json_num(da, "issue_slots") +
+                            (testing_json_num(da, "loads") - b) * 3 + b * 20 +
+                            round(testing_json_num(da, "analytic_blocking_miss_rate") * b) * lat[l];
         printf("1x1x1 fixed %u: %s, %s: timed %.0f, analytic %.0f, by hand %.0f\n", lat[l],
                SCENES[s], POLICIES[p], fixed, est, hand);
         /* Within 2 cycles: the estimate rounds a quotient of doubles up. */
@@ -278,7 +322,8 @@ static void test_default_machine(void) {
         return;
       const double a = testing_json_num(da, "cycles"), t = testing_json_num(db, "cycles");
       printf("default.yaml 32x32 %s, %s: analytic %.0f, banked %.0f (%.3f); host %.3f s, %.3f s\n",
-             SCENES[s], POLICIES[p], a, t, a / t, testing_json_num(da, "wall_s"), testing_json_num(db, "wall_s"));
+             SCENES[s], POLICIES[p], a, t, a / t, testing_json_num(da, "wall_s"),
+             testing_json_num(db, "wall_s"));
       EXPECTF(a <= 1.05 * t && a >= lo[p] * t, "%s, %s: analytic %.0f, banked %.0f (%.3f)",
               SCENES[s], POLICIES[p], a, t, a / t);
     }
@@ -316,13 +361,15 @@ static void test_refusals(void) {
   FILE *f = fopen(sweep, "w");
   EXPECT(f != NULL);
   if (!f) return;
-  fprintf(f, "machine: %s/configs/tiny.yaml\nworkload:\n  scene: %s/scenes/small/room.yaml\naxes:\n"
-             "  dram.model: [fixed, banked]\n",
+  fprintf(f,
+          "machine: %s/configs/tiny.yaml\nworkload:\n  scene: %s/scenes/small/room.yaml\naxes:\n"
+          "  dram.model: [fixed, banked]\n",
           RTSIM_SOURCE_DIR, RTSIM_SOURCE_DIR);
   fclose(f);
   snprintf(cmd, sizeof cmd, "%s sweep %s -o %s/ladder_sweep", RTSIM_BINARY, sweep, RTSIM_TMP);
   rc = testing_run(cmd, out, sizeof out);
-  EXPECTF(rc == 2 && strstr(out, "ladder_sweep.yaml:5:3: error: axes.dram.model: renamed to fidelity"),
+  EXPECTF(rc == 2 &&
+              strstr(out, "ladder_sweep.yaml:5:3: error: axes.dram.model: renamed to fidelity"),
           "exit %d: %s", rc, out);
 }
 

@@ -52,23 +52,17 @@ static void naive_free(struct naive *nv) {
 }
 
 static void nc_unlink(struct naive_cache *c, int32_t x) {
-  if (c->prev[x] >= 0)
-    c->next[c->prev[x]] = c->next[x];
-  else
-    c->head = c->next[x];
-  if (c->next[x] >= 0)
-    c->prev[c->next[x]] = c->prev[x];
-  else
-    c->tail = c->prev[x];
+  if (c->prev[x] >= 0) c->next[c->prev[x]] = c->next[x];
+  else c->head = c->next[x];
+  if (c->next[x] >= 0) c->prev[c->next[x]] = c->prev[x];
+  else c->tail = c->prev[x];
 }
 
 static void nc_push_front(struct naive_cache *c, int32_t x) {
   c->prev[x] = -1;
   c->next[x] = c->head;
-  if (c->head >= 0)
-    c->prev[c->head] = x;
-  else
-    c->tail = x;
+  if (c->head >= 0) c->prev[c->head] = x;
+  else c->tail = x;
   c->head = x;
 }
 
@@ -283,8 +277,7 @@ static void test_random(void) {
     struct trace t = {0};
     for (int k = 0; k < 40000; k++) {
       uint64_t r = rng_next(&rng);
-      tr_add(&t, (uint32_t)(r % 150), (int)((r >> 32) % 3),
-             (unsigned)((r >> 40) % MEM_CLASS_MAX));
+      tr_add(&t, (uint32_t)(r % 150), (int)((r >> 32) % 3), (unsigned)((r >> 40) % MEM_CLASS_MAX));
     }
     compare_all_maps("random, other geometry", &t, &q[g]);
     free(t.a);
@@ -339,10 +332,8 @@ static void test_adversarial(void) {
   {
     struct trace t = {0}; /* a hot set of 3 lines against a stream of fresh lines */
     for (uint32_t k = 0; k < 30000; k++) {
-      if (k % 3)
-        tr_add(&t, k % 2 + (k % 5 == 0), (k % 4) == 0, 3);
-      else
-        tr_add(&t, 10 + k, k % 9 == 0, 4);
+      if (k % 3) tr_add(&t, k % 2 + (k % 5 == 0), (k % 4) == 0, 3);
+      else tr_add(&t, 10 + k, k % 9 == 0, 4);
     }
     compare_all_maps("hot set vs stream", &t, &p);
     free(t.a);
@@ -430,7 +421,8 @@ static void test_batch(void) {
     if (lg2 <= all.lg2_max) p.lg2_min = p.lg2_max = lg2; /* else all 13 sizes */
     struct lru_stack *one = lru_stack_create(&p), *bat = lru_stack_create(&p);
     for (size_t k = 0; k < t.n; k++)
-      lru_stack_access(one, rec[k] >> 5, (enum lru_stack_op)(rec[k] & 3u), (unsigned)(rec[k] >> 2) & 7u);
+      lru_stack_access(one, rec[k] >> 5, (enum lru_stack_op)(rec[k] & 3u),
+                       (unsigned)(rec[k] >> 2) & 7u);
     for (size_t k = 0, len = 1; k < t.n; k += len, len = len * 3 % 4099 + 1) {
       if (len > t.n - k) len = t.n - k;
       lru_stack_access_batch(bat, rec + k, (uint32_t)len);

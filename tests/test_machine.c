@@ -70,7 +70,8 @@ static void miss_worker(void *arg, const struct machine_worker_info *info, struc
  * time. L here: l2.latency + one transfer cycle + dram.latency. */
 static void test_utilization(void) {
   const uint64_t c = 70;
-  const uint32_t cases[][2] = {{1, 1}, {1, 2}, {1, 3}, {2, 2}, {1, 4}, {4, 1}, {2, 4}, {4, 4}, {8, 2}};
+  const uint32_t cases[][2] = {{1, 1}, {1, 2}, {1, 3}, {2, 2}, {1, 4},
+                               {4, 1}, {2, 4}, {4, 4}, {8, 2}};
   for (unsigned i = 0; i < sizeof cases / sizeof cases[0]; i++) {
     struct machine_params p = base();
     p.threads_per_core = cases[i][0];
@@ -83,7 +84,8 @@ static void test_utilization(void) {
     double n = (double)p.threads_per_core * p.rays_per_thread;
     double model = fmin(1.0, n * (double)c / ((double)c + L));
     double util = (double)st->issue_slots / (double)st->cycles;
-    printf("T=%u R=%u: utilization %.4f, model %.4f\n", p.threads_per_core, p.rays_per_thread, util, model);
+    printf("T=%u R=%u: utilization %.4f, model %.4f\n", p.threads_per_core, p.rays_per_thread, util,
+           model);
     EXPECTF(fabs(util - model) <= 0.02 * model, "T=%u R=%u: utilization %.4f, model %.4f",
             p.threads_per_core, p.rays_per_thread, util, model);
     EXPECT(st->l2.misses == (uint64_t)n * k.iters);
@@ -161,7 +163,8 @@ struct poisson_kernel {
   double gap; /* mean cycles between stores */
 };
 
-static void poisson_worker(void *arg, const struct machine_worker_info *info, struct mem_port port) {
+static void poisson_worker(void *arg, const struct machine_worker_info *info,
+                           struct mem_port port) {
   const struct poisson_kernel *k = arg;
   (void)info;
   uint64_t s = k->seed;
@@ -191,7 +194,8 @@ static void test_md1(void) {
     double model = rhos[i] * D / (2.0 * (1.0 - rhos[i]));
     double area = level_stat(m, "dram_fifo_length_mean") * (double)st->cycles;
     double waits = w * (double)st->dram.reads;
-    printf("rho %.1f: mean wait %.2f, M/D/1 %.2f; Little area %.0f waits %.0f\n", rhos[i], w, model, area, waits);
+    printf("rho %.1f: mean wait %.2f, M/D/1 %.2f; Little area %.0f waits %.0f\n", rhos[i], w, model,
+           area, waits);
     EXPECTF(fabs(w - model) <= 0.05 * model, "rho %.1f: mean wait %.2f, M/D/1 %.2f", rhos[i], w,
             model);
     EXPECTF(fabs(area - waits) <= 0.01 * waits, "Little: area %.1f, waits %.1f", area, waits);
@@ -227,7 +231,8 @@ static void run_extreme(struct machine_params p, uint64_t iters, uint64_t c, con
   machine_run(m, miss_worker, &k, NULL, NULL);
   expect_sane(m, what);
   const struct machine_stats *st = machine_get_stats(m);
-  EXPECTF(st->l2.misses + st->l2.hits + st->l2.mshr_merges == st->l2.accesses, "%s: L2 counts", what);
+  EXPECTF(st->l2.misses + st->l2.hits + st->l2.mshr_merges == st->l2.accesses, "%s: L2 counts",
+          what);
   EXPECTF(st->loads == (uint64_t)p.cores * p.threads_per_core * p.rays_per_thread * iters,
           "%s: loads", what);
   machine_destroy(m);
@@ -352,8 +357,8 @@ static void test_queue_depth(void) {
       EXPECTF(q[j]->area == q[j]->wait_sum && q[j]->entered == q[j]->left && q[j]->len == 0,
               "depth %u queue %u: area %llu, waits %llu", depth[i], j,
               (unsigned long long)q[j]->area, (unsigned long long)q[j]->wait_sum);
-    EXPECTF(level_stat(m, "dram_fifo_length_max") <= depth[i], "depth %u: FIFO held %.0f",
-            depth[i], level_stat(m, "dram_fifo_length_max"));
+    EXPECTF(level_stat(m, "dram_fifo_length_max") <= depth[i], "depth %u: FIFO held %.0f", depth[i],
+            level_stat(m, "dram_fifo_length_max"));
     uint64_t by_reason = 0;
     for (unsigned r = 0; r < L2_STALL_COUNT; r++) by_reason += st->l2.stall_cycles[r];
     EXPECTF(by_reason <= st->l2.stall_queue.wait_sum && (by_reason > 0) == (st->l2.stalls > 0),
@@ -423,7 +428,8 @@ static void park_worker(void *arg, const struct machine_worker_info *info, struc
   mem_compute(&port, 10);
 }
 
-static struct machine_stats park_run(const struct machine_params *p, uint64_t iters, uint32_t **calls) {
+static struct machine_stats park_run(const struct machine_params *p, uint64_t iters,
+                                     uint32_t **calls) {
   struct park_kernel k = {iters, p->cores * p->threads_per_core * p->rays_per_thread, NULL};
   k.calls = calloc(k.contexts, sizeof *k.calls);
   struct machine *m = machine_create(p, 0);
@@ -474,8 +480,9 @@ static void test_park(void) {
   EXPECTF(sn.events >= s1.events + 2 * (n - 1) && sn.events <= s1.events + 2 * (n - 1) + many.cores,
           "%llu events with 255 parked contexts, %llu alone", (unsigned long long)sn.events,
           (unsigned long long)s1.events);
-  EXPECTF(sn.parks == n - 1 && sn.wakes == n - 1 && twice == n - 1, "parks %llu wakes %llu, %u called twice",
-          (unsigned long long)sn.parks, (unsigned long long)sn.wakes, twice);
+  EXPECTF(sn.parks == n - 1 && sn.wakes == n - 1 && twice == n - 1,
+          "parks %llu wakes %llu, %u called twice", (unsigned long long)sn.parks,
+          (unsigned long long)sn.wakes, twice);
   EXPECTF(sn.stacks_max <= 2, "%llu stacks alive at once", (unsigned long long)sn.stacks_max);
   EXPECT(sn.cycles >= s1.cycles && sn.thread_parked_cycles > 0);
 }

@@ -70,34 +70,53 @@ int main(void) {
   static const struct {
     const char *file, *want;
   } bad[] = {
-      {"bad_unknown_key.yaml", "bad_unknown_key.yaml:3:3: error: l2.sise: unknown key 'sise' (expected one of: size, ways, latency, banks, mshrs, write_buffer)"},
-      {"bad_top_key.yaml", "bad_top_key.yaml:1:1: error: core: unknown key 'core' (expected one of: clock_ghz,"},
+      {"bad_unknown_key.yaml",
+       "bad_unknown_key.yaml:3:3: error: l2.sise: unknown key 'sise' (expected one of: size, ways, latency, banks, mshrs, write_buffer)"},
+      {"bad_top_key.yaml",
+       "bad_top_key.yaml:1:1: error: core: unknown key 'core' (expected one of: clock_ghz,"},
       {"bad_size_unit.yaml", "bad_size_unit.yaml:2:9: error: l2.size: not a size (got '4MB'"},
-      {"bad_cores_zero.yaml", "bad_cores_zero.yaml:2:8: error: cores: out of range (got 0, expected 1 to 4096)"},
-      {"bad_bandwidth_zero.yaml", "bad_bandwidth_zero.yaml:3:20: error: dram.bytes_per_cycle: out of range"},
-      {"bad_l2_below_line.yaml", "bad_l2_below_line.yaml:2:9: error: l2.size: smaller than one 64-byte line (got 32 bytes)"},
-      {"bad_ways_divide.yaml", "bad_ways_divide.yaml:3:9: error: l2.ways: the ways must divide the number of lines (got 3 ways for 64 lines)"},
+      {"bad_cores_zero.yaml",
+       "bad_cores_zero.yaml:2:8: error: cores: out of range (got 0, expected 1 to 4096)"},
+      {"bad_bandwidth_zero.yaml",
+       "bad_bandwidth_zero.yaml:3:20: error: dram.bytes_per_cycle: out of range"},
+      {"bad_l2_below_line.yaml",
+       "bad_l2_below_line.yaml:2:9: error: l2.size: smaller than one 64-byte line (got 32 bytes)"},
+      {"bad_ways_divide.yaml",
+       "bad_ways_divide.yaml:3:9: error: l2.ways: the ways must divide the number of lines (got 3 ways for 64 lines)"},
       {"bad_section_type.yaml", "bad_section_type.yaml:1:5: error: l1: wrong type"},
-      {"bad_ways_word.yaml", "bad_ways_word.yaml:2:9: error: l2.ways: not a number of ways (got 'all'"},
-      {"bad_fraction.yaml", "bad_fraction.yaml:1:18: error: rays_per_thread: not a whole number (got '2.5'"},
+      {"bad_ways_word.yaml",
+       "bad_ways_word.yaml:2:9: error: l2.ways: not a number of ways (got 'all'"},
+      {"bad_fraction.yaml",
+       "bad_fraction.yaml:1:18: error: rays_per_thread: not a whole number (got '2.5'"},
       {"missing.yaml", "missing.yaml"},
-      {"bad_mapping.yaml", "bad_mapping.yaml:3:12: error: dram.mapping: not an address mapping (got 'rochrabagco'"},
-      {"bad_page.yaml", "bad_page.yaml:2:16: error: dram.page_policy: unknown value (got 'half', expected one of: open, close)"},
-      {"bad_model.yaml", "bad_model.yaml:2:11: error: fidelity: unknown value (got 'ddr5', expected one of: analytic, fixed, channel, banked)"},
-      {"bad_renamed_model.yaml", "bad_renamed_model.yaml:2:3: error: dram.model: renamed to fidelity, a top-level key"},
-      {"bad_queue_structure.yaml", "bad_queue_structure.yaml:2:20: error: dram.queue_structure: unknown value (got 'per_channel', expected one of: shared, per_bank, per_rank)"},
-      {"bad_dyn_sharing.yaml", "bad_dyn_sharing.yaml:2:12: error: dynamic.sharing: unknown value (got 'both', expected one of: partition, chip)"},
+      {"bad_mapping.yaml",
+       "bad_mapping.yaml:3:12: error: dram.mapping: not an address mapping (got 'rochrabagco'"},
+      {"bad_page.yaml",
+       "bad_page.yaml:2:16: error: dram.page_policy: unknown value (got 'half', expected one of: open, close)"},
+      {"bad_model.yaml",
+       "bad_model.yaml:2:11: error: fidelity: unknown value (got 'ddr5', expected one of: analytic, fixed, channel, banked)"},
+      {"bad_renamed_model.yaml",
+       "bad_renamed_model.yaml:2:3: error: dram.model: renamed to fidelity, a top-level key"},
+      {"bad_queue_structure.yaml",
+       "bad_queue_structure.yaml:2:20: error: dram.queue_structure: unknown value (got 'per_channel', expected one of: shared, per_bank, per_rank)"},
+      {"bad_dyn_sharing.yaml",
+       "bad_dyn_sharing.yaml:2:12: error: dynamic.sharing: unknown value (got 'both', expected one of: partition, chip)"},
       {"bad_trc.yaml", "bad_trc.yaml:3:8: error: dram.tRC: must be at least tRAS (got 20)"},
       {"bad_include_missing.yaml", "bad_include_missing.yaml:1:10: error: include: "},
       {"bad_include_cycle.yaml", "error: include: included files nest deeper than 8"},
       {"bad_include_inner.yaml", "bad_include_inner.yaml:2:25: error: include: "},
-      {"bad_include_map.yaml", "bad_include_map.yaml:2:3: error: include: expected a file name or a list of them"},
+      {"bad_include_map.yaml",
+       "bad_include_map.yaml:2:3: error: include: expected a file name or a list of them"},
       /* #17: a NUL escape cut the value ("4\0xyz" read as 4); counts read 010
        * as octal 8 while sizes read it as 10; whitespace was skipped. */
-      {"bad_nul.yaml", "bad_nul.yaml:2:8: error: a NUL character (\\0) in a value (got '4\\0...', expected text without one)"},
-      {"bad_count_leading_zero.yaml", "bad_count_leading_zero.yaml:2:8: error: cores: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 4096)"},
-      {"bad_size_leading_zero.yaml", "bad_size_leading_zero.yaml:2:9: error: l2.size: not a size: a leading zero, ambiguous between octal and decimal (got '010KiB'"},
-      {"bad_number_space.yaml", "bad_number_space.yaml:1:12: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5', expected a decimal number)"},
+      {"bad_nul.yaml",
+       "bad_nul.yaml:2:8: error: a NUL character (\\0) in a value (got '4\\0...', expected text without one)"},
+      {"bad_count_leading_zero.yaml",
+       "bad_count_leading_zero.yaml:2:8: error: cores: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 4096)"},
+      {"bad_size_leading_zero.yaml",
+       "bad_size_leading_zero.yaml:2:9: error: l2.size: not a size: a leading zero, ambiguous between octal and decimal (got '010KiB'"},
+      {"bad_number_space.yaml",
+       "bad_number_space.yaml:1:12: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5', expected a decimal number)"},
   };
   char buf[2048];
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
@@ -110,37 +129,49 @@ int main(void) {
   } sets[] = {
       {"cores=0", "--set cores=0: error: cores: out of range (got 0, expected 1 to 4096)"},
       {"l2.size=32", "--set l2.size=32: error: l2.size: smaller than one 64-byte line"},
-      {"dram.bytes_per_cycle=0", "--set dram.bytes_per_cycle=0: error: dram.bytes_per_cycle: out of range"},
+      {"dram.bytes_per_cycle=0",
+       "--set dram.bytes_per_cycle=0: error: dram.bytes_per_cycle: out of range"},
       {"l2.sise=1", "unknown key 'l2.sise' (expected one of: clock_ghz,"},
       {"cores", "expected KEY=VALUE"},
       {"l2.ways=full", ""},
       {"l2.size=1MiB", ""},
-      {"dram.bytes_per_cycle=0.01", "--set dram.bytes_per_cycle=0.01: error: dram.bytes_per_cycle: not read by fidelity banked (set fidelity to a rung that uses it) (got 0.01)"},
+      {"dram.bytes_per_cycle=0.01",
+       "--set dram.bytes_per_cycle=0.01: error: dram.bytes_per_cycle: not read by fidelity banked (set fidelity to a rung that uses it) (got 0.01)"},
       {"l1.size=0", ""},
-      {"l2.ways=7", "--set l2.ways=7: error: l2.ways: the ways must divide the number of lines (got 7 ways for 65536 lines)"},
+      {"l2.ways=7",
+       "--set l2.ways=7: error: l2.ways: the ways must divide the number of lines (got 7 ways for 65536 lines)"},
       {"l2.size=4000", "l2.size: not a whole number of 64-byte lines (got 4000 bytes)"},
       {"dram.tRC=10", "--set dram.tRC=10: error: dram.tRC: must be at least tRAS (got 10)"},
       {"dram.mapping=coco", "--set dram.mapping=coco: error: dram.mapping: not an address mapping"},
       {"dram.page_policy=close", ""},
       {"fidelity=banked", ""},
       {"fidelity=analytic", ""},
-      {"fidelity=lazy", "--set fidelity=lazy: error: fidelity: unknown value (got 'lazy', expected one of: analytic, fixed, channel, banked)"},
-      {"dram.model=banked", "--set dram.model=banked: error: dram.model: renamed to fidelity, a top-level key"},
+      {"fidelity=lazy",
+       "--set fidelity=lazy: error: fidelity: unknown value (got 'lazy', expected one of: analytic, fixed, channel, banked)"},
+      {"dram.model=banked",
+       "--set dram.model=banked: error: dram.model: renamed to fidelity, a top-level key"},
       {"dram.queue_structure=shared", ""},
-      {"dram.command_queue=0", "--set dram.command_queue=0: error: dram.command_queue: out of range (got 0, expected 1 to 4096)"},
-      {"dram.controller_cycles=0", "--set dram.controller_cycles=0: error: dram.controller_cycles: must be at least 1 with queue_structure per_bank or per_rank"},
+      {"dram.command_queue=0",
+       "--set dram.command_queue=0: error: dram.command_queue: out of range (got 0, expected 1 to 4096)"},
+      {"dram.controller_cycles=0",
+       "--set dram.controller_cycles=0: error: dram.controller_cycles: must be at least 1 with queue_structure per_bank or per_rank"},
       /* Strict values (sim/scalar.h), one rule for counts and sizes. */
       {"cores=10", ""},
-      {"cores=010", "--set cores=010: error: cores: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 4096)"},
-      {"cores=0x10", "--set cores=0x10: error: cores: not a whole number (got '0x10', expected 1 to 4096)"},
+      {"cores=010",
+       "--set cores=010: error: cores: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 4096)"},
+      {"cores=0x10",
+       "--set cores=0x10: error: cores: not a whole number (got '0x10', expected 1 to 4096)"},
       {"cores=+4", "cores: not a whole number (got '+4'"},
-      {"cores= 4", "--set cores= 4: error: cores: not a whole number: whitespace before or after it (got ' 4'"},
+      {"cores= 4",
+       "--set cores= 4: error: cores: not a whole number: whitespace before or after it (got ' 4'"},
       {"cores=4 ", "cores: not a whole number: whitespace before or after it (got '4 '"},
       {"cores=", "--set cores=: error: cores: not a whole number: empty (got ''"},
-      {"cores=99999999999999999999", "cores: out of range (got 99999999999999999999, expected 1 to 4096)"},
+      {"cores=99999999999999999999",
+       "cores: out of range (got 99999999999999999999, expected 1 to 4096)"},
       {"sample.seed=007", "sample.seed: not a whole number: a leading zero"},
       {"l2.size=1024KiB", ""},
-      {"l2.size=010KiB", "--set l2.size=010KiB: error: l2.size: not a size: a leading zero, ambiguous between octal and decimal (got '010KiB'"},
+      {"l2.size=010KiB",
+       "--set l2.size=010KiB: error: l2.size: not a size: a leading zero, ambiguous between octal and decimal (got '010KiB'"},
       {"l2.size=01024", "l2.size: not a size: a leading zero"},
       {"l1.size=00", "l1.size: not a size: a leading zero"},
       {"l2.size= 1MiB", "l2.size: not a size: whitespace before or after it (got ' 1MiB'"},
@@ -148,14 +179,19 @@ int main(void) {
       {"l2.size=1 MiB", "l2.size: not a size (got '1 MiB'"},
       {"l2.size=KiB", "l2.size: not a size (got 'KiB'"},
       {"l2.size=18446744073709551615KiB", "l2.size: out of range (got 18446744073709551615KiB"},
-      {"l2.ways=08", "--set l2.ways=08: error: l2.ways: not a number of ways: a leading zero, ambiguous between octal and decimal (got '08', expected 1 to 268435456 or full)"},
-      {"l2.ways= full", "l2.ways: not a number of ways: whitespace before or after it (got ' full'"},
-      {"clock_ghz= 2", "--set clock_ghz= 2: error: clock_ghz: not a number: whitespace before or after it (got ' 2', expected a decimal number)"},
-      {"clock_ghz=\n1.5", "--set clock_ghz=\\n1.5: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5'"},
+      {"l2.ways=08",
+       "--set l2.ways=08: error: l2.ways: not a number of ways: a leading zero, ambiguous between octal and decimal (got '08', expected 1 to 268435456 or full)"},
+      {"l2.ways= full",
+       "l2.ways: not a number of ways: whitespace before or after it (got ' full'"},
+      {"clock_ghz= 2",
+       "--set clock_ghz= 2: error: clock_ghz: not a number: whitespace before or after it (got ' 2', expected a decimal number)"},
+      {"clock_ghz=\n1.5",
+       "--set clock_ghz=\\n1.5: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5'"},
       {"clock_ghz=01.5", "clock_ghz: not a number: a leading zero"},
       {"clock_ghz=0.5", ""},
       {"clock_ghz=inf", "clock_ghz: not a number (got 'inf'"},
-      {"dram.mapping=rochrababgco ", "--set dram.mapping=rochrababgco : error: dram.mapping: not an address mapping"},
+      {"dram.mapping=rochrababgco ",
+       "--set dram.mapping=rochrababgco : error: dram.mapping: not an address mapping"},
       {"fidelity= banked", "fidelity: unknown value (got ' banked'"},
   };
   for (size_t i = 0; i < sizeof sets / sizeof sets[0]; i++) {
@@ -173,7 +209,8 @@ int main(void) {
     machine_cfg_defaults(&c);
     struct err e;
     memset(&e, 0, sizeof e);
-    EXPECTF(machine_cfg_load(&c, path, &e) && machine_cfg_check(&c, &e), "%s: %s", shipped[i], e.msg);
+    EXPECTF(machine_cfg_load(&c, path, &e) && machine_cfg_check(&c, &e), "%s: %s", shipped[i],
+            e.msg);
     if (i == 0) {
       struct machine_cfg d;
       machine_cfg_defaults(&d);
@@ -187,7 +224,8 @@ int main(void) {
   }
   /* An error inside an included file names that file too. */
   load_err("bad_include_inner.yaml", buf, sizeof buf);
-  EXPECTF(strstr(buf, "bad_cores_zero.yaml:2:8: error: cores: out of range") != NULL, "got '%s'", buf);
+  EXPECTF(strstr(buf, "bad_cores_zero.yaml:2:8: error: cores: out of range") != NULL, "got '%s'",
+          buf);
 
   /* Presets: include reads the fragment first, the file's own keys win. */
   {
@@ -205,8 +243,8 @@ int main(void) {
       snprintf(path, sizeof path, "%s/configs/dram/%s", RTSIM_SOURCE_DIR, presets[i]);
       machine_cfg_defaults(&p2);
       memset(&pe, 0, sizeof pe);
-      EXPECTF(machine_cfg_load(&p2, path, &pe) && machine_cfg_check(&p2, &pe), "%s: %s",
-              presets[i], pe.msg);
+      EXPECTF(machine_cfg_load(&p2, path, &pe) && machine_cfg_check(&p2, &pe), "%s: %s", presets[i],
+              pe.msg);
     }
   }
 
@@ -219,7 +257,8 @@ int main(void) {
     } after[] = {
         {"dram.latency=100", ""},
         {"dram.bytes_per_cycle=4", ""},
-        {"dram.queue_depth=4", "--set dram.queue_depth=4: error: dram.queue_depth: not read by fidelity analytic"},
+        {"dram.queue_depth=4",
+         "--set dram.queue_depth=4: error: dram.queue_depth: not read by fidelity analytic"},
         {"dram.tRC=60", "--set dram.tRC=60: error: dram.tRC: not read by fidelity analytic"},
     };
     for (size_t i = 0; i < sizeof after / sizeof after[0]; i++) {
@@ -231,9 +270,11 @@ int main(void) {
                 machine_cfg_set(&a, after[i].second, &ae) && machine_cfg_check(&a, &ae);
       buf[0] = '\0';
       if (!ok) err_format(&ae, buf, sizeof buf);
-      if (!after[i].want[0]) EXPECTF(ok, "%s after fidelity=analytic: got '%s'", after[i].second, buf);
-      else EXPECTF(!ok && strstr(buf, after[i].want), "%s after fidelity=analytic: got '%s'",
-                   after[i].second, buf);
+      if (!after[i].want[0])
+        EXPECTF(ok, "%s after fidelity=analytic: got '%s'", after[i].second, buf);
+      else
+        EXPECTF(!ok && strstr(buf, after[i].want), "%s after fidelity=analytic: got '%s'",
+                after[i].second, buf);
     }
   }
 
@@ -256,7 +297,8 @@ int main(void) {
   memset(&e, 0, sizeof e);
   EXPECT(!machine_cfg_set_at(&c, ways, "many", "s.yaml", 4, 12, &e));
   err_format(&e, buf, sizeof buf);
-  EXPECTF(strstr(buf, "s.yaml:4:12: error: l2.ways: not a number of ways (got 'many'"), "got '%s'", buf);
+  EXPECTF(strstr(buf, "s.yaml:4:12: error: l2.ways: not a number of ways (got 'many'"), "got '%s'",
+          buf);
   memset(&e, 0, sizeof e);
   EXPECT(machine_cfg_set_at(&c, ways, "7", "s.yaml", 5, 3, &e) && !machine_cfg_check(&c, &e));
   err_format(&e, buf, sizeof buf);

@@ -86,8 +86,8 @@ static void test_obj_quad(void) {
       EXPECTF(hit >= 0, "tri %u vertex %d (%g %g %g) is not a placed corner", i, k, t->v[k].x,
               t->v[k].y, t->v[k].z);
       if (hit >= 0) seen[hit] = true;
-      EXPECTF(v3_near(t->n[k], v3(0, 0.6f, 0.8f), 1e-6f), "normal %g %g %g", t->n[k].x,
-              t->n[k].y, t->n[k].z);
+      EXPECTF(v3_near(t->n[k], v3(0, 0.6f, 0.8f), 1e-6f), "normal %g %g %g", t->n[k].x, t->n[k].y,
+              t->n[k].z);
     }
   }
   EXPECT(seen[0] && seen[1] && seen[2] && seen[3]);
@@ -126,8 +126,7 @@ static void test_ply_ascii(void) {
   for (uint32_t i = 0; i < 4 && i < s.tri_count; i++) {
     EXPECT(s.tris[i].material == 3);
     for (int k = 0; k < 3; k++)
-      EXPECTF(v3_same(s.tris[i].v[k], placed(verts[faces[i][k]], &xf)), "face %u vertex %d", i,
-              k);
+      EXPECTF(v3_same(s.tris[i].v[k], placed(verts[faces[i][k]], &xf)), "face %u vertex %d", i, k);
   }
   /* Flat normals point out of the tetrahedron: face 0 lies in z = 0. */
   if (s.tri_count >= 1) EXPECT(v3_near(s.tris[0].n[0], v3(0, 0, -1), 1e-6f));
@@ -172,21 +171,22 @@ static void test_gltf(void) {
   char b64[128];
   base64(buf, sizeof buf, b64);
   char json[4096];
-  snprintf(json, sizeof json,
-           "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\n"
-           "\"nodes\":[{\"mesh\":0,\"translation\":[5,0,0],\"scale\":[2,2,2]},\n"
-           "          {\"mesh\":0,\"translation\":[0,0,-3]}],\n"
-           "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":1},"
-           "\"indices\":2}]}],\n"
-           "\"buffers\":[{\"byteLength\":80,\"uri\":\"data:application/octet-stream;base64,%s\"}],\n"
-           "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":0,\"byteLength\":36},\n"
-           "  {\"buffer\":0,\"byteOffset\":36,\"byteLength\":36},\n"
-           "  {\"buffer\":0,\"byteOffset\":72,\"byteLength\":6}],\n"
-           "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\","
-           "\"min\":[0,0,0],\"max\":[1,1,0]},\n"
-           "  {\"bufferView\":1,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},\n"
-           "  {\"bufferView\":2,\"componentType\":5123,\"count\":3,\"type\":\"SCALAR\"}]}\n",
-           b64);
+  snprintf(
+      json, sizeof json,
+      "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0,1]}],\n"
+      "\"nodes\":[{\"mesh\":0,\"translation\":[5,0,0],\"scale\":[2,2,2]},\n"
+      "          {\"mesh\":0,\"translation\":[0,0,-3]}],\n"
+      "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":1},"
+      "\"indices\":2}]}],\n"
+      "\"buffers\":[{\"byteLength\":80,\"uri\":\"data:application/octet-stream;base64,%s\"}],\n"
+      "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":0,\"byteLength\":36},\n"
+      "  {\"buffer\":0,\"byteOffset\":36,\"byteLength\":36},\n"
+      "  {\"buffer\":0,\"byteOffset\":72,\"byteLength\":6}],\n"
+      "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\","
+      "\"min\":[0,0,0],\"max\":[1,1,0]},\n"
+      "  {\"bufferView\":1,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},\n"
+      "  {\"bufferView\":2,\"componentType\":5123,\"count\":3,\"type\":\"SCALAR\"}]}\n",
+      b64);
   char path[1024];
   tmp_path(path, sizeof path, "instanced.gltf");
   EXPECT(write_text(path, json));
@@ -339,8 +339,8 @@ static void expect_import_fails(const char *path) {
 
 static void test_broken(void) {
   static const char *const fixtures[] = {
-      "obj_bad_index.obj",  "obj_empty.obj",         "obj_garbage.obj",
-      "obj_lines_only.obj", "obj_overflow.obj",      "ply_truncated_binary.ply",
+      "obj_bad_index.obj",     "obj_empty.obj",           "obj_garbage.obj",
+      "obj_lines_only.obj",    "obj_overflow.obj",        "ply_truncated_binary.ply",
       "ply_no_end_header.ply", "ply_truncated_ascii.ply",
   };
   char path[1024];

@@ -131,8 +131,8 @@ static void test_lines(void) {
   s = plot(t, "--x rays_per_thread --y dram_bytes --lines dram.latency --panels scene");
   if (s) {
     const char *y = lines_with(s, "set ytics");
-    EXPECTF(strstr(y, "'40 MB' 40000000") && !strstr(y, "e+") && !strstr(y, "e0"),
-            "byte ticks: %s", y);
+    EXPECTF(strstr(y, "'40 MB' 40000000") && !strstr(y, "e+") && !strstr(y, "e0"), "byte ticks: %s",
+            y);
     /* A sweep's x values are the ticks. */
     EXPECTF(strstr(s, "set xtics ('1' 1, '2' 2)"), "x ticks: %s", lines_with(s, "set xtics"));
     free(s);
@@ -165,8 +165,8 @@ static void test_lines(void) {
                "scene -o " T "out.svg",
                RTSIM_BINARY, t);
   char *svg = read_all(T "out.svg");
-  EXPECTF(rc == 0 && svg && strstr(svg, "<svg") &&
-              count(svg, "dram.latency = 25 cycles") == 1 && strstr(svg, "cores = 16"),
+  EXPECTF(rc == 0 && svg && strstr(svg, "<svg") && count(svg, "dram.latency = 25 cycles") == 1 &&
+              strstr(svg, "cores = 16"),
           "svg: exit %d: %s", rc, out);
   free(svg);
   rc = run("%s plot %s --x rays_per_thread --y cycles --where scene=a --lines dram.latency -o " T
@@ -200,11 +200,13 @@ static void test_bars(void) {
   }
   /* --order: the paper's order of the groups, and of the lines where it names
    * them (4194304 first; 524288, not named, after it). */
-  s = plot(t, "--x policy --y cycles --lines l2.size --order recursive,packet,dynamic,4194304,nope");
+  s = plot(t,
+           "--x policy --y cycles --lines l2.size --order recursive,packet,dynamic,4194304,nope");
   if (s) {
     EXPECTF(strstr(s, "set xtics ('recursive' 0, 'packet' 1, 'dynamic' 2)"), "ordered groups: %s",
             lines_with(s, "set xtics"));
-    const char *a = strstr(s, "title 'l2.size = 4 MiB'"), *b = strstr(s, "title 'l2.size = 512 KiB'");
+    const char *a = strstr(s, "title 'l2.size = 4 MiB'"),
+               *b = strstr(s, "title 'l2.size = 512 KiB'");
     EXPECTF(a && b && a < b, "ordered lines: %s", lines_with(s, "title"));
     free(s);
   }
@@ -214,8 +216,8 @@ static void test_bars(void) {
   if (s) {
     EXPECTF(strstr(s, " 3000000 4000000\n") && strstr(s, " 0 3000000\n"), "stacks: %s", s);
     EXPECT(strstr(s, "title 'geometry'") && strstr(s, "title 'ray'"));
-    EXPECTF(strstr(s, "'512 KiB'") && strstr(s, "set label 'recursive' at first 2"),
-            "labels: %s", lines_with(s, "set"));
+    EXPECTF(strstr(s, "'512 KiB'") && strstr(s, "set label 'recursive' at first 2"), "labels: %s",
+            lines_with(s, "set"));
     EXPECT(strstr(s, "set ylabel 'fetch_*_bytes (bytes)'"));
     free(s);
   }
@@ -235,8 +237,8 @@ static void test_points(void) {
   write_file(t, "rung,speedup,error\nfixed,2,0.5\nfixed,2,3\nfixed,4,1\nanalytic,8,20\n");
   char *s = plot(t, "--x speedup --y error --lines rung --points --logx --logy");
   if (s) {
-    EXPECTF(count(s, "with points") == 4 && !strstr(s, "linespoints"),
-            "not markers only: %s", lines_with(s, "plot"));
+    EXPECTF(count(s, "with points") == 4 && !strstr(s, "linespoints"), "not markers only: %s",
+            lines_with(s, "plot"));
     EXPECT(strstr(s, "title 'rung = fixed'") != NULL);
     free(s);
   }
@@ -259,7 +261,8 @@ static void test_refusals(void) {
        "--own-y and --yrange: choose one"},
       {T "bars.csv", "--x policy --y cycles --lines l2.size --logy",
        "--x policy holds text: bars have no numeric x and start at 0 (got --logy)"},
-      {T "bars.csv", "--x policy --y cycles --stack --mark-x 2", "--mark-x: not with --stack (bars have no numeric x"},
+      {T "bars.csv", "--x policy --y cycles --stack --mark-x 2",
+       "--mark-x: not with --stack (bars have no numeric x"},
       {T "bars.csv", "--x policy --y cycles,fetch_ray_bytes --stack",
        "--y: cycles (cycles) and fetch_ray_bytes (bytes) cannot share an axis"},
       {T "bars.csv", "--x policy --y fetch_geometry_bytes,fetch_ray_bytes --lines l2.size",

@@ -99,9 +99,7 @@ static bool read_bb(const char *name, const struct bb *b, struct ply_mesh *m, st
   return ply_read_file(path, m, e);
 }
 
-static const char *fmt_name(bool big) {
-  return big ? "binary_big_endian" : "binary_little_endian";
-}
+static const char *fmt_name(bool big) { return big ? "binary_big_endian" : "binary_little_endian"; }
 
 /* A binary file of one triangle whose first data byte is each of the bytes
  * assimp skipped, in both byte orders: read exactly, bit for bit. */
@@ -114,9 +112,11 @@ static void test_whitespace_first_byte(void) {
       const uint32_t rest[8] = {0x40000000u, 0xc0400000u, 0x3e99999au, 0x00000000u,
                                 0x80000000u, 0x3f800000u, 0x41200000u, 0xbf000000u};
       struct bb b = {.n = 0};
-      bb_fmt(&b, "ply\nformat %s 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                 "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
-                 "end_header\n", fmt_name(big));
+      bb_fmt(&b,
+             "ply\nformat %s 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+             "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+             "end_header\n",
+             fmt_name(big));
       size_t first = b.n;
       bb_f32bits(&b, x, big);
       for (int k = 0; k < 8; k++) bb_f32bits(&b, rest[k], big);
@@ -147,10 +147,11 @@ static void test_scalar_types(void) {
         double vals[6] = {is_signed ? -5 : 5, 7, 100, 0, 1, is_signed ? -128 : 255};
         if (t >= 6) vals[0] = 0.1, vals[1] = -2.25, vals[2] = 1e-3;
         struct bb b = {.n = 0};
-        bb_fmt(&b, "ply\nformat %s 1.0\ncomment types\nelement vertex 3\nproperty %s x\n"
-                   "property %s y\nproperty %s z\nelement face 1\n"
-                   "property list uchar uint vertex_indices\nend_header\n", fmt_name(big), tn,
-               tn, tn);
+        bb_fmt(&b,
+               "ply\nformat %s 1.0\ncomment types\nelement vertex 3\nproperty %s x\n"
+               "property %s y\nproperty %s z\nelement face 1\n"
+               "property list uchar uint vertex_indices\nend_header\n",
+               fmt_name(big), tn, tn, tn);
         for (int k = 0; k < 6; k++) bb_val(&b, t, vals[k], big);
         bb_val(&b, t, 3, big); /* third vertex: (3, 3, 3) */
         bb_val(&b, t, 3, big);
@@ -177,10 +178,11 @@ static void test_list_types(void) {
       for (int ii = 0; ii < 6; ii++) {
         int ct = ints[ci], it = ints[ii];
         struct bb b = {.n = 0};
-        bb_fmt(&b, "ply\nformat %s 1.0\nelement vertex 4\nproperty double x\n"
-                   "property double y\nproperty double z\nelement face 2\n"
-                   "property list %s %s vertex_index\nend_header\n", fmt_name(big),
-               type_name[ct], type_name[it]);
+        bb_fmt(&b,
+               "ply\nformat %s 1.0\nelement vertex 4\nproperty double x\n"
+               "property double y\nproperty double z\nelement face 2\n"
+               "property list %s %s vertex_index\nend_header\n",
+               fmt_name(big), type_name[ct], type_name[it]);
         const double q[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
         for (int v = 0; v < 4; v++)
           for (int k = 0; k < 3; k++) bb_val(&b, 7, q[v][k], big);
@@ -193,8 +195,7 @@ static void test_list_types(void) {
         struct ply_mesh m;
         struct err e;
         bool ok = read_bb("lists.ply", &b, &m, &e);
-        EXPECTF(ok, "count %s index %s %s: %s", type_name[ct], type_name[it], fmt_name(big),
-                e.msg);
+        EXPECTF(ok, "count %s index %s %s: %s", type_name[ct], type_name[it], fmt_name(big), e.msg);
         static const uint32_t want[9] = {0, 1, 2, 0, 2, 3, 3, 2, 1};
         EXPECT(!ok || m.tri_count == 3);
         if (ok && m.tri_count == 3) EXPECT(memcmp(m.tri, want, sizeof want) == 0);
@@ -206,17 +207,18 @@ static void test_list_types(void) {
  * property, normals, an extra element with a float list, a pentagon. */
 static void test_ascii(void) {
   struct bb b = {.n = 0};
-  bb_str(&b, "ply\r\nformat ascii 1.0\r\ncomment made by hand\r\nobj_info none\r\n"
-             "element vertex 5\r\nproperty float32 x\r\nproperty float32 y\r\n"
-             "property float32 z\r\nproperty uchar red\r\nproperty float nx\r\n"
-             "property float ny\r\nproperty float nz\r\n"
-             "element face 2\r\nproperty uchar flags\r\nproperty list uint8 int32 vertex_indices\r\n"
-             "element edge 1\r\nproperty list uchar float weights\r\nend_header\r\n"
-             "0 0 0 255 0 0 1\r\n1 0 0 0 0 0 1\r\n  1.5 1 0 7 0 0 2\r\n0.1 2 -0 1 0 0 1\r\n"
-             "-1e-3 1 0 1 0 1 0\r\n"
-             "9 5 0 1 2 3 4\r\n\r\n"
-             "0 3 4 0 2\r\n"
-             "3 0.5 -1 2e3   \r\n\r\n  \n");
+  bb_str(&b,
+         "ply\r\nformat ascii 1.0\r\ncomment made by hand\r\nobj_info none\r\n"
+         "element vertex 5\r\nproperty float32 x\r\nproperty float32 y\r\n"
+         "property float32 z\r\nproperty uchar red\r\nproperty float nx\r\n"
+         "property float ny\r\nproperty float nz\r\n"
+         "element face 2\r\nproperty uchar flags\r\nproperty list uint8 int32 vertex_indices\r\n"
+         "element edge 1\r\nproperty list uchar float weights\r\nend_header\r\n"
+         "0 0 0 255 0 0 1\r\n1 0 0 0 0 0 1\r\n  1.5 1 0 7 0 0 2\r\n0.1 2 -0 1 0 0 1\r\n"
+         "-1e-3 1 0 1 0 1 0\r\n"
+         "9 5 0 1 2 3 4\r\n\r\n"
+         "0 3 4 0 2\r\n"
+         "3 0.5 -1 2e3   \r\n\r\n  \n");
   struct ply_mesh m;
   struct err e;
   bool ok = read_bb("ascii.ply", &b, &m, &e);
@@ -262,8 +264,9 @@ static void expect_refused(const char *label, const void *data, size_t n, const 
   ply_mesh_fini(&m);
 }
 
-#define HDR_V3(fmt) "ply\nformat " fmt " 1.0\nelement vertex 3\nproperty float x\n" \
-                    "property float y\nproperty float z\nelement face 1\n"
+#define HDR_V3(fmt)                                                                                \
+  "ply\nformat " fmt " 1.0\nelement vertex 3\nproperty float x\n"                                  \
+  "property float y\nproperty float z\nelement face 1\n"
 #define IDX "property list uchar int vertex_indices\nend_header\n"
 
 static void test_malformed_header(void) {
@@ -286,8 +289,8 @@ static void test_malformed_header(void) {
        "list count type must be an integer type", 4},
       {"unknown keyword", "ply\nformat ascii 1.0\nelemnt vertex 1\n", "unknown keyword 'elemnt'",
        3},
-      {"property first", "ply\nformat ascii 1.0\nproperty float x\n",
-       "property before any element", 3},
+      {"property first", "ply\nformat ascii 1.0\nproperty float x\n", "property before any element",
+       3},
       {"element before format", "ply\nelement vertex 1\n", "element before the format line", 2},
       {"no format", "ply\nend_header\n", "no format line", 2},
       {"count not a number", "ply\nformat ascii 1.0\nelement vertex -3\n",
@@ -296,14 +299,20 @@ static void test_malformed_header(void) {
        "count is not a whole number", 3},
       {"no end_header (37 bytes)", "ply\nformat binary_little_endian 1.0\ne", "not terminated", 3},
       {"binary in header", "ply\nformat ascii 1.0\ncomment \x01\n", "byte 0x01 is not text", 3},
-      {"duplicate property", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
-       "property float x\n", "property 'x' declared twice", 5},
+      {"duplicate property",
+       "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+       "property float x\n",
+       "property 'x' declared twice", 5},
       {"no vertex element", "ply\nformat ascii 1.0\nelement face 0\n" IDX, "no 'vertex' element",
        0},
-      {"no face element", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\n"
-       "end_header\n", "no 'face' element", 0},
-      {"no z", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
-       "element face 0\n" IDX, "element 'vertex' has no property 'z'", 3},
+      {"no face element",
+       "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\n"
+       "end_header\n",
+       "no 'face' element", 0},
+      {"no z",
+       "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+       "element face 0\n" IDX,
+       "element 'vertex' has no property 'z'", 3},
       {"no index list", HDR_V3("ascii") "property uchar flags\nend_header\n",
        "has no property 'vertex_indices'", 7},
       {"float indices", HDR_V3("ascii") "property list uchar float vertex_indices\nend_header\n",
@@ -312,7 +321,8 @@ static void test_malformed_header(void) {
        "must be a list of an integer type", 7},
       {"counts cannot fit", HDR_V3("binary_little_endian") IDX "\x01\x02",
        "element 'vertex': 3 instances of at least 12 bytes each cannot fit in the 2 bytes", 3},
-      {"element without properties", "ply\nformat ascii 1.0\nelement blob 5\nelement vertex 0\nproperty float x\n"
+      {"element without properties",
+       "ply\nformat ascii 1.0\nelement blob 5\nelement vertex 0\nproperty float x\n"
        "property float y\nproperty float z\nelement face 0\n" IDX "1\n",
        "element 'blob' has 5 instances but no properties", 3},
   };
@@ -331,8 +341,7 @@ static void test_malformed_header(void) {
   bb_str(&b, "ply\nformat ascii 1.0\nelement vertex 3");
   for (int i = 0; i < 3000; i++) bb_str(&b, " ");
   bb_str(&b, "\n");
-  expect_refused("long line", b.d, b.n, "line too long (got 3016 bytes, expected at most 1023)",
-                 3);
+  expect_refused("long line", b.d, b.n, "line too long (got 3016 bytes, expected at most 1023)", 3);
   printf("malformed headers:\n");
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++)
     expect_refused(cases[i].label, cases[i].text, strlen(cases[i].text), cases[i].want,
@@ -355,13 +364,17 @@ static void test_malformed_data(void) {
   struct bb ok_file = b; /* a correct file, for the trailing-data case */
   b.n -= 3;
   /* 3 * 12 + 13 = 49 bytes promised, 46 present: refused from the header... */
-  expect_refused("truncated binary", b.d, b.n, "element 'face': 1 instances of at least 13 bytes "
-                 "each cannot fit", 7);
+  expect_refused("truncated binary", b.d, b.n,
+                 "element 'face': 1 instances of at least 13 bytes "
+                 "each cannot fit",
+                 7);
   /* ... so make the list longer than its minimum to reach the data reader. */
   b = ok_file;
   b.d[data + 36] = 4; /* a quad whose fourth index is missing */
-  snprintf(want, sizeof want, "byte %zu: PLY data: element 'face' 0, property 'vertex_indices': "
-           "truncated (needs 4 bytes, the file ends after 0)", data + 36 + 13);
+  snprintf(want, sizeof want,
+           "byte %zu: PLY data: element 'face' 0, property 'vertex_indices': "
+           "truncated (needs 4 bytes, the file ends after 0)",
+           data + 36 + 13);
   expect_refused("truncated binary list", b.d, b.n, want, 0);
 
   b = ok_file;
@@ -371,8 +384,10 @@ static void test_malformed_data(void) {
 
   b = ok_file;
   b.d[data + 36 + 5] = 3; /* second index: 3 of 3 vertices */
-  snprintf(want, sizeof want, "byte %zu: PLY data: element 'face' 0, property 'vertex_indices': "
-           "vertex index out of range (got 3, the file has 3 vertices)", data + 36 + 5);
+  snprintf(want, sizeof want,
+           "byte %zu: PLY data: element 'face' 0, property 'vertex_indices': "
+           "vertex index out of range (got 3, the file has 3 vertices)",
+           data + 36 + 5);
   expect_refused("binary index out of range", b.d, b.n, want, 0);
 
   b = ok_file;
@@ -381,14 +396,18 @@ static void test_malformed_data(void) {
 
   b = ok_file;
   b.d[data + 36] = 2; /* two indices, then 4 bytes nobody asked for */
-  snprintf(want, sizeof want, "byte %zu: PLY data: element 'face' 0, property 'vertex_indices': "
-           "a face needs at least 3 vertices (got 2)", data + 36);
+  snprintf(want, sizeof want,
+           "byte %zu: PLY data: element 'face' 0, property 'vertex_indices': "
+           "a face needs at least 3 vertices (got 2)",
+           data + 36);
   expect_refused("binary face of 2", b.d, b.n, want, 0);
 
   b = ok_file;
   memcpy(b.d + data + 4, "\x00\x00\xc0\x7f", 4); /* y of vertex 0: NaN */
-  snprintf(want, sizeof want, "byte %zu: PLY data: element 'vertex' 0, property 'y': coordinate "
-           "is not a finite float", data + 4);
+  snprintf(want, sizeof want,
+           "byte %zu: PLY data: element 'vertex' 0, property 'y': coordinate "
+           "is not a finite float",
+           data + 4);
   expect_refused("binary NaN", b.d, b.n, want, 0);
 
   b.n = 0; /* a double that overflows float */
@@ -397,8 +416,10 @@ static void test_malformed_data(void) {
   bb_val(&b, 7, 0, true);
   bb_val(&b, 7, 1e300, true);
   bb_val(&b, 7, 0, true);
-  expect_refused("double overflows float", b.d, b.n, "property 'y': coordinate is not a finite "
-                 "float (got 1e+300)", 0);
+  expect_refused("double overflows float", b.d, b.n,
+                 "property 'y': coordinate is not a finite "
+                 "float (got 1e+300)",
+                 0);
 
   static const struct {
     const char *label, *data, *want;
@@ -415,8 +436,10 @@ static void test_malformed_data(void) {
       {"ascii index range", "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
        "vertex index out of range (got 7, the file has 3 vertices)", 13},
       {"ascii negative index", "0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n", "(got -1,", 13},
-      {"ascii float index", "0 0 0\n1 0 0\n0 1 0\n3 0 1.0 2\n", "not a whole number of type int (got '1.0'", 13},
-      {"ascii count range", "0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n", "not a whole number of type uchar (got '300'", 13},
+      {"ascii float index", "0 0 0\n1 0 0\n0 1 0\n3 0 1.0 2\n",
+       "not a whole number of type int (got '1.0'", 13},
+      {"ascii count range", "0 0 0\n1 0 0\n0 1 0\n300 0 1 2\n",
+       "not a whole number of type uchar (got '300'", 13},
       {"ascii face of 2", "0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "at least 3 vertices (got 2)", 13},
       {"ascii inf", "0 0 0\ninf 0 0\n0 1 0\n3 0 1 2\n", "coordinate is not a finite float", 11},
       {"ascii nan", "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", "coordinate is not a finite float", 11},
@@ -491,8 +514,10 @@ static bool same_file(const char *a, const char *b) {
 
 static void write_scene(const char *path, const char *mesh, const char *extra) {
   char text[1024];
-  snprintf(text, sizeof text, "camera: {from: [0.7, 0.6, 1.6], at: [5.5, 4.6, 0.9], up: [0, 0, 1]}\n"
-           "geometry:\n  - {mesh: %s%s}\n", mesh, extra);
+  snprintf(text, sizeof text,
+           "camera: {from: [0.7, 0.6, 1.6], at: [5.5, 4.6, 0.9], up: [0, 0, 1]}\n"
+           "geometry:\n  - {mesh: %s%s}\n",
+           mesh, extra);
   CHECK(write_bytes(path, text, strlen(text)));
 }
 
@@ -539,8 +564,8 @@ static void test_cli_room(void) {
     unsigned long long nv = 3ull * 5690;
     for (size_t k = 0; k < 3 * nv; k++) {
       unsigned char *p = d + at + 4 * k;
-      uint32_t u = (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
-                   (uint32_t)p[3] << 24;
+      uint32_t u =
+          (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
       float x;
       memcpy(&x, &u, 4);
       x = (float)((double)x * 0.1);
@@ -594,8 +619,8 @@ static void test_cli_hostile(void) {
     EXPECTF(rc == 2, "%s: exit %d (124: timed out): %s", cases[i].name, rc, out);
     EXPECTF(strstr(out, cases[i].want) != NULL, "%s: got '%s', want '%s'", cases[i].name, out,
             cases[i].want);
-    EXPECTF(strstr(out, "ply_hostile.yaml:3:") != NULL, "%s: no scene position: %s",
-            cases[i].name, out);
+    EXPECTF(strstr(out, "ply_hostile.yaml:3:") != NULL, "%s: no scene position: %s", cases[i].name,
+            out);
     EXPECTF(count_lines(out) == 1, "%s: expected one line: %s", cases[i].name, out);
     EXPECTF(access(img, F_OK) != 0, "%s: image left behind", cases[i].name);
   }

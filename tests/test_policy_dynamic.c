@@ -37,7 +37,7 @@ struct counter {
   struct testing_slots slots;
   uint64_t class_bad;
   uint64_t other_ray; /* ray accesses outside the queues and the camera array */
-  uint8_t *cam;        /* per pixel: times its primary ray was read */
+  uint8_t *cam;       /* per pixel: times its primary ray was read */
   uint64_t npix, cam_bad;
 };
 
@@ -48,25 +48,27 @@ static void on_access(void *ctx, uint64_t addr, uint32_t size, unsigned cls, int
     uint64_t e = (addr - c->l.qtable_base) / 8;
     if (e + 1 > c->max_table) c->max_table = e + 1;
     c->table_bad += (addr - c->l.qtable_base) % 8 != 0;
-    if (store)
-      c->table_stores++;
-    else
-      c->table_loads++;
+    if (store) c->table_stores++;
+    else c->table_loads++;
   } else if (addr >= c->l.queue_base && addr < c->l.ray_base) {
     c->class_bad += cls != TRACE_CLASS_RAY || size != 64 || (addr - c->l.queue_base) % 64 != 0;
     testing_slots_access(&c->slots, (addr - c->l.queue_base) / 64, store);
   } else if (addr >= c->l.camera_base) {
     uint64_t k = (addr - c->l.camera_base) / 64;
-    c->cam_bad += store || cls != TRACE_CLASS_RAY || size != 64 || (addr - c->l.camera_base) % 64 != 0 ||
-                  k >= c->npix;
+    c->cam_bad += store || cls != TRACE_CLASS_RAY || size != 64 ||
+                  (addr - c->l.camera_base) % 64 != 0 || k >= c->npix;
     if (k < c->npix) c->cam[k]++;
   } else if (cls == TRACE_CLASS_RAY) {
     c->other_ray++;
   }
 }
 
-static void on_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) { on_access(ctx, addr, size, cls, 0); }
-static void on_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) { on_access(ctx, addr, size, cls, 1); }
+static void on_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  on_access(ctx, addr, size, cls, 0);
+}
+static void on_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  on_access(ctx, addr, size, cls, 1);
+}
 
 static const struct mem_ops COUNTER_OPS = {on_load, on_store, NULL, NULL, NULL, NULL};
 
@@ -114,13 +116,14 @@ static void result_fini(struct result *r) {
 }
 
 /* The schedule's shape at a cache size (what the policy computes). */
-static void plan(const struct world *w, uint64_t cache, struct qpoint_set *qs, struct qpoint_budget *b) {
+static void plan(const struct world *w, uint64_t cache, struct qpoint_set *qs,
+                 struct qpoint_budget *b) {
   uint32_t *tris = malloc(w->kd.node_count * sizeof *tris);
   qpoint_subtree_tris(&w->kd, tris);
   struct policy_params pp;
   policy_params_default(&pp);
-  struct qpoint_reserve r = {cache, pp.dyn_node_share, pp.dyn_table_share, pp.dyn_ray_share,
-                             pp.dyn_ray_buffer_bytes, 1};
+  struct qpoint_reserve r = {
+      cache, pp.dyn_node_share, pp.dyn_table_share, pp.dyn_ray_share, pp.dyn_ray_buffer_bytes, 1};
   qpoint_plan(qs, b, &w->kd, tris, 128, &r);
   free(tris);
 }
@@ -133,8 +136,8 @@ static void check_scene(const char *name) {
     EXPECTF(0, "cannot load %s", path);
     return;
   }
-  const uint32_t all = RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) |
-                       RAY_MASK(RAY_DIFFUSE);
+  const uint32_t all =
+      RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) | RAY_MASK(RAY_DIFFUSE);
   const uint32_t noshadow = all & ~RAY_MASK(RAY_SHADOW);
   const uint32_t size = 40;
   const uint64_t caches[] = {1024, 16384, 256 * 1024, 64u << 20};
@@ -161,14 +164,16 @@ static void check_scene(const char *name) {
       EXPECTF(leaves > 0 && oversized > 0, "%s 1 KB: %u queue points, %u leaves, %u oversized",
               name, qs.count, leaves, oversized);
     }
-    if (caches[c] == 64u << 20) EXPECTF(qs.count == 1 && qs.qnode[0] == 0, "%s 64 MB: %u queue points", name, qs.count);
+    if (caches[c] == 64u << 20)
+      EXPECTF(qs.count == 1 && qs.qnode[0] == 0, "%s 64 MB: %u queue points", name, qs.count);
     const uint32_t queues = qs.count;
     qpoint_fini(&qs);
 
     struct counter cnt;
     struct result dy;
     render(&w, POLICY_DYNAMIC, all, size, caches[c], &cnt, &dy);
-    EXPECTF(memcmp(dy.fb.acc, ref.fb.acc, fb_bytes) == 0, "%s %u KB: image differs from recursive", name, kb);
+    EXPECTF(memcmp(dy.fb.acc, ref.fb.acc, fb_bytes) == 0, "%s %u KB: image differs from recursive",
+            name, kb);
     EXPECTF(memcmp(dy.st.rays, ref.st.rays, sizeof ref.st.rays) == 0,
             "%s %u KB: rays %llu/%llu/%llu/%llu, recursive %llu/%llu/%llu/%llu", name, kb,
             (unsigned long long)dy.st.rays[0], (unsigned long long)dy.st.rays[1],
@@ -186,8 +191,8 @@ static void check_scene(const char *name) {
     /* Each enqueue reads and writes its table entry; so does each drain. */
     EXPECT(cnt.table_loads == cnt.table_stores && cnt.table_bad == 0 && cnt.class_bad == 0);
     EXPECT(cnt.table_loads >= ref.st.rays[RAY_PRIMARY] / 2);
-    EXPECTF(cnt.max_table <= queues, "%s %u KB: table entries %llu of %u",
-            name, kb, (unsigned long long)cnt.max_table, queues);
+    EXPECTF(cnt.max_table <= queues, "%s %u KB: table entries %llu of %u", name, kb,
+            (unsigned long long)cnt.max_table, queues);
     if (caches[c] == 64u << 20) EXPECT(cnt.max_table == 1);
     /* Rays wait only in queues; each primary ray is read from the camera once. */
     EXPECT(cnt.other_ray == 0 && cnt.cam_bad == 0);
@@ -201,15 +206,17 @@ static void check_scene(const char *name) {
       struct counter cb;
       struct result db;
       render_batch(&w, POLICY_DYNAMIC, all, size, caches[c], 7, &cb, &db);
-      EXPECTF(memcmp(db.fb.acc, ref.fb.acc, fb_bytes) == 0, "%s batch 7: image differs from recursive", name);
+      EXPECTF(memcmp(db.fb.acc, ref.fb.acc, fb_bytes) == 0,
+              "%s batch 7: image differs from recursive", name);
       EXPECT(memcmp(db.st.rays, ref.st.rays, sizeof ref.st.rays) == 0);
       EXPECT(db.st.spawned == ref.st.spawned && db.st.terminated == ref.st.terminated);
       bool once7 = true;
       for (uint64_t k = 0; k < cb.npix; k++) once7 &= cb.cam[k] == 1;
       EXPECT(testing_slots_left(&cb.slots) == 0 && cb.slots.bad == 0 &&
              cb.slots.loads == cb.slots.stores && once7);
-      EXPECTF(db.st.ray_slots_max < dy.st.ray_slots_max, "%s batch 7: %llu rays queued at most, unbatched %llu",
-              name, (unsigned long long)db.st.ray_slots_max, (unsigned long long)dy.st.ray_slots_max);
+      EXPECTF(db.st.ray_slots_max < dy.st.ray_slots_max,
+              "%s batch 7: %llu rays queued at most, unbatched %llu", name,
+              (unsigned long long)db.st.ray_slots_max, (unsigned long long)dy.st.ray_slots_max);
       testing_slots_fini(&cb.slots);
       free(cb.cam);
       result_fini(&db);
@@ -225,12 +232,12 @@ static void check_scene(const char *name) {
     struct result tl;
     memset(&tc, 0, sizeof tc);
     render(&w, POLICY_TREELET, all, size, caches[c], &tc, &tl);
-    EXPECTF(memcmp(tl.fb.acc, ref.fb.acc, fb_bytes) == 0, "%s %u KB: treelet image differs from recursive",
-            name, kb);
+    EXPECTF(memcmp(tl.fb.acc, ref.fb.acc, fb_bytes) == 0,
+            "%s %u KB: treelet image differs from recursive", name, kb);
     EXPECT(memcmp(tl.st.rays, ref.st.rays, sizeof ref.st.rays) == 0);
     EXPECT(tl.st.spawned == ref.st.spawned && tl.st.terminated == ref.st.terminated);
-    EXPECTF(testing_slots_left(&tc.slots) == 0 && tc.slots.bad == 0 && tc.slots.loads == tc.slots.stores &&
-                tc.slots.stores >= ref.st.rays[RAY_PRIMARY],
+    EXPECTF(testing_slots_left(&tc.slots) == 0 && tc.slots.bad == 0 &&
+                tc.slots.loads == tc.slots.stores && tc.slots.stores >= ref.st.rays[RAY_PRIMARY],
             "%s %u KB treelet: queue slots: %llu stores, %llu loads, %llu bad", name, kb,
             (unsigned long long)tc.slots.stores, (unsigned long long)tc.slots.loads,
             (unsigned long long)tc.slots.bad);
@@ -242,7 +249,8 @@ static void check_scene(const char *name) {
     result_fini(&tl);
     struct result tn;
     render(&w, POLICY_TREELET, noshadow, size, caches[c], NULL, &tn);
-    EXPECTF(memcmp(tn.fb.acc, ref_ns.fb.acc, fb_bytes) == 0 && tn.ts.tri_tests == ref_ns.ts.tri_tests &&
+    EXPECTF(memcmp(tn.fb.acc, ref_ns.fb.acc, fb_bytes) == 0 &&
+                tn.ts.tri_tests == ref_ns.ts.tri_tests &&
                 memcmp(tn.fb.cost_tris, ref_ns.fb.cost_tris, sizeof(uint32_t) * size * size) == 0,
             "%s %u KB treelet (no shadows): %llu triangle tests, recursive %llu", name, kb,
             (unsigned long long)tn.ts.tri_tests, (unsigned long long)ref_ns.ts.tri_tests);
@@ -251,9 +259,10 @@ static void check_scene(const char *name) {
     /* No shadow rays: the very same closest-hit work as recursive. */
     struct result dn;
     render(&w, POLICY_DYNAMIC, noshadow, size, caches[c], NULL, &dn);
-    EXPECTF(memcmp(dn.fb.acc, ref_ns.fb.acc, fb_bytes) == 0, "%s %u KB (no shadows): image differs", name, kb);
-    EXPECTF(dn.ts.tri_tests == ref_ns.ts.tri_tests, "%s %u KB: %llu triangle tests, recursive %llu", name, kb,
-            (unsigned long long)dn.ts.tri_tests, (unsigned long long)ref_ns.ts.tri_tests);
+    EXPECTF(memcmp(dn.fb.acc, ref_ns.fb.acc, fb_bytes) == 0, "%s %u KB (no shadows): image differs",
+            name, kb);
+    EXPECTF(dn.ts.tri_tests == ref_ns.ts.tri_tests, "%s %u KB: %llu triangle tests, recursive %llu",
+            name, kb, (unsigned long long)dn.ts.tri_tests, (unsigned long long)ref_ns.ts.tri_tests);
     EXPECT(memcmp(dn.tested, ref_ns.tested, tested_bytes) == 0);
     EXPECT(dn.ts.node_visits >= ref_ns.ts.node_visits);
     /* Per-pixel triangle tests are the recursive ones too. */

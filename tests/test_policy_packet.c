@@ -21,9 +21,8 @@
 #include "sim/err.h"
 #include "testing.h"
 
-#define ALL_RAYS                                                                          \
-  (RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) |                 \
-   RAY_MASK(RAY_DIFFUSE))
+#define ALL_RAYS                                                                                   \
+  (RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) | RAY_MASK(RAY_DIFFUSE))
 
 struct world {
   const char *name;
@@ -164,7 +163,8 @@ static void test_traversal(struct world *w) {
     for (uint32_t ty = 0; ty < 8; ty++)
       for (uint32_t tx = 0; tx < 8; tx++)
         for (uint32_t y = 0; y < 8; y++)
-          for (uint32_t x = 0; x < 8; x++) camera_primary(&cf, tx * 8 + x, ty * 8 + y, 3, &set[n++]);
+          for (uint32_t x = 0; x < 8; x++)
+            camera_primary(&cf, tx * 8 + x, ty * 8 + y, 3, &set[n++]);
     snprintf(what, sizeof what, "%s camera", w->name);
     packets_of(&tr, pk, set, n, what, &cs);
     uint64_t fewer = 0, packet_total = 0, single_total = 0;
@@ -205,15 +205,16 @@ static void test_traversal(struct world *w) {
    * rays that miss the root box, mixed into packets with ordinary ones. */
   {
     uint32_t n = 0;
-    static const float axes[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    static const float axes[6][3] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
+                                     {0, -1, 0}, {0, 0, 1},  {0, 0, -1}};
     for (uint32_t i = 0; i < 384; i++) {
       vec3 o = v3(lo.x + ext.x * rnd(&g, 0.0f, 1.0f), lo.y + ext.y * rnd(&g, 0.0f, 1.0f),
                   lo.z + ext.z * rnd(&g, 0.0f, 1.0f));
       const float *a = axes[i % 6];
       switch (i % 8) {
-      case 0: set[n++] = make_ray(o, v3(0, 0, 0), 0, INFINITY); break;        /* no direction */
-      case 1: set[n++] = make_ray(o, v3(NAN, 0, 1), 0, INFINITY); break;      /* NaN */
-      case 2: set[n++] = make_ray(o, v3(0, 0, 1), 1.0f, 1.0f); break;         /* empty extent */
+      case 0: set[n++] = make_ray(o, v3(0, 0, 0), 0, INFINITY); break;   /* no direction */
+      case 1: set[n++] = make_ray(o, v3(NAN, 0, 1), 0, INFINITY); break; /* NaN */
+      case 2: set[n++] = make_ray(o, v3(0, 0, 1), 1.0f, 1.0f); break;    /* empty extent */
       case 3: /* beside the box, pointing away */
         set[n++] = make_ray(v3_add(hi, v3(1, 1, 1)), v3(1, 0.5f, 0.25f), 0, INFINITY);
         break;
@@ -276,8 +277,8 @@ static void test_traversal(struct world *w) {
   EXPECTF(cs.mismatches == 0, "%s: %d of %d rays differ between packet and single traversal",
           w->name, cs.mismatches, cs.rays);
   EXPECTF(cs.hits > cs.rays / 10, "%s: only %d hits in %d rays", w->name, cs.hits, cs.rays);
-  fprintf(stderr, "%s: %d packets, %d rays, %d hits, %d mismatches\n", w->name, cs.packets,
-          cs.rays, cs.hits, cs.mismatches);
+  fprintf(stderr, "%s: %d packets, %d rays, %d hits, %d mismatches\n", w->name, cs.packets, cs.rays,
+          cs.hits, cs.mismatches);
   free(set);
   trace_packet_destroy(pk);
 }
@@ -317,15 +318,16 @@ static void test_policy(struct world *w, uint32_t width, uint32_t height) {
   EXPECTF(memcmp(rec.fb.acc, pkt.fb.acc, 3 * npix * sizeof *rec.fb.acc) == 0,
           "%s %ux%u: packet framebuffer differs from recursive", w->name, width, height);
   for (int t = 0; t < RAY_TYPE_COUNT; t++)
-    EXPECTF(rec.st.rays[t] == pkt.st.rays[t], "%s %ux%u: %d rays of type %d, recursive %llu", w->name,
-            width, height, (int)pkt.st.rays[t], t, (unsigned long long)rec.st.rays[t]);
+    EXPECTF(rec.st.rays[t] == pkt.st.rays[t], "%s %ux%u: %d rays of type %d, recursive %llu",
+            w->name, width, height, (int)pkt.st.rays[t], t, (unsigned long long)rec.st.rays[t]);
   EXPECT(pkt.st.spawned == pkt.st.terminated && pkt.st.spawned == rec.st.spawned);
   EXPECT(pkt.st.rays[RAY_PRIMARY] == npix);
   /* Every primary ray is read from the camera's array once; every ray written
    * to a packet buffer is read back once, inside the region. */
   uint64_t total = render_stats_total(&pkt.st);
   EXPECT(pkt.cnt.cam_loads == npix && rec.cnt.cam_loads == npix);
-  EXPECTF(pkt.cnt.stores[TRACE_CLASS_RAY] == total && pkt.cnt.loads[TRACE_CLASS_RAY] == total + npix,
+  EXPECTF(pkt.cnt.stores[TRACE_CLASS_RAY] == total &&
+              pkt.cnt.loads[TRACE_CLASS_RAY] == total + npix,
           "%s: ray stores %llu loads %llu rays %llu", w->name,
           (unsigned long long)pkt.cnt.stores[TRACE_CLASS_RAY],
           (unsigned long long)pkt.cnt.loads[TRACE_CLASS_RAY], (unsigned long long)total);
@@ -361,9 +363,11 @@ static void test_coherence(struct world *w) {
           (unsigned long long)rec.cnt.loads[TRACE_CLASS_GEOMETRY]);
   EXPECT(pkt.cnt.loads[TRACE_CLASS_NODE] < rec.cnt.loads[TRACE_CLASS_NODE]);
   /* Primary rays mostly visit nodes in their own order: about the same tests. */
-  EXPECTF(pkt.ts.tri_tests <= rec.ts.tri_tests + rec.ts.tri_tests / 10, "%s: %llu tests, recursive %llu", w->name,
-          (unsigned long long)pkt.ts.tri_tests, (unsigned long long)rec.ts.tri_tests);
-  fprintf(stderr, "%s primary 64x64: triangle loads %llu (recursive %llu), node loads %llu (%llu)\n",
+  EXPECTF(pkt.ts.tri_tests <= rec.ts.tri_tests + rec.ts.tri_tests / 10,
+          "%s: %llu tests, recursive %llu", w->name, (unsigned long long)pkt.ts.tri_tests,
+          (unsigned long long)rec.ts.tri_tests);
+  fprintf(stderr,
+          "%s primary 64x64: triangle loads %llu (recursive %llu), node loads %llu (%llu)\n",
           w->name, (unsigned long long)pkt.cnt.loads[TRACE_CLASS_GEOMETRY],
           (unsigned long long)rec.cnt.loads[TRACE_CLASS_GEOMETRY],
           (unsigned long long)pkt.cnt.loads[TRACE_CLASS_NODE],

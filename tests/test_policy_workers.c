@@ -90,8 +90,8 @@ struct render {
 static void render_init(struct render *r, struct world *w, uint32_t width, uint32_t height) {
   memset(r, 0, sizeof *r);
   r->sc = (struct shade_ctx){&w->s,
-                             RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) |
-                                 RAY_MASK(RAY_SPECULAR) | RAY_MASK(RAY_DIFFUSE),
+                             RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) |
+                                 RAY_MASK(RAY_DIFFUSE),
                              7, 0};
   testing_policy_setup(&r->ps, &w->s, &w->kd, &r->sc, &r->res.fb);
   fb_init(&r->res.fb, width, height, r->ps.layout.fb_base);
@@ -126,9 +126,9 @@ static int same_result(const struct result *a, const struct result *b, uint32_t 
   return memcmp(a->fb.acc, b->fb.acc, 3 * npix * sizeof *a->fb.acc) == 0 &&
          memcmp(a->fb.cost_nodes, b->fb.cost_nodes, npix * sizeof *a->fb.cost_nodes) == 0 &&
          memcmp(a->fb.cost_tris, b->fb.cost_tris, npix * sizeof *a->fb.cost_tris) == 0 &&
-         memcmp(a->st.rays, b->st.rays, sizeof a->st.rays) == 0 &&
-         a->st.spawned == b->st.spawned && a->st.terminated == b->st.terminated &&
-         a->ts.node_visits == b->ts.node_visits && a->ts.tri_tests == b->ts.tri_tests &&
+         memcmp(a->st.rays, b->st.rays, sizeof a->st.rays) == 0 && a->st.spawned == b->st.spawned &&
+         a->st.terminated == b->st.terminated && a->ts.node_visits == b->ts.node_visits &&
+         a->ts.tri_tests == b->ts.tri_tests &&
          memcmp(a->tested, b->tested, (tri_count / 64 + 1) * sizeof *a->tested) == 0;
 }
 
@@ -204,8 +204,7 @@ static void run_workers(struct world *w, enum policy_kind k, uint32_t width, uin
   for (uint32_t i = 0; i < WORKERS; i++) {
     EXPECTF(rc[i].ray_outside == 0,
             "%s %s: worker %u made %llu of %llu ray accesses outside its region", policy_name(k),
-            what, i, (unsigned long long)rc[i].ray_outside,
-            (unsigned long long)rc[i].ray_accesses);
+            what, i, (unsigned long long)rc[i].ray_outside, (unsigned long long)rc[i].ray_accesses);
     EXPECTF(scratch[i] == (rc[i].count > 0), "%s %s: worker %u scratch %d with %llu accesses",
             policy_name(k), what, i, scratch[i], (unsigned long long)rc[i].count);
   }
@@ -251,7 +250,8 @@ static void check_policy(struct world *w, enum policy_kind k, uint32_t width, ui
   }
   EXPECT(ref_rec.ray_outside == 0 && ref_rec.ray_accesses > 0);
   for (int s = 0; s < SCHEDULE_COUNT; s++)
-    if ((k != POLICY_DYNAMIC && k != POLICY_TREELET) || s != NESTED) /* a nested dynamic worker would wait on its host */
+    if ((k != POLICY_DYNAMIC && k != POLICY_TREELET) ||
+        s != NESTED) /* a nested dynamic worker would wait on its host */
       run_workers(w, k, width, height, (enum schedule)s, &ref, &ref_rec);
   render_fini(&ref);
 }

@@ -24,7 +24,7 @@
  * A = 26: shared triangles count once in every subtree. */
 
 static const uint32_t FIG_ABOVE[15] = {8, 5, 4, 0, 0, 7, 0, 0, 12, 11, 0, 0, 14, 0, 0};
-static const uint32_t FIG_LEAF[8][2] = {{0, 5}, {5, 9}, {6, 11}, {11, 15},
+static const uint32_t FIG_LEAF[8][2] = {{0, 5},   {5, 9},   {6, 11},  {11, 15},
                                         {10, 15}, {15, 19}, {16, 21}, {21, 25}};
 static const uint32_t FIG_TRIS[15] = {26, 16, 10, 6, 5, 10, 6, 5, 16, 10, 6, 5, 10, 6, 5};
 
@@ -54,7 +54,8 @@ static void check_figure1(void) {
   figure1_tree(&kd);
   uint32_t tris[15];
   qpoint_subtree_tris(&kd, tris);
-  for (int i = 0; i < 15; i++) EXPECTF(tris[i] == FIG_TRIS[i], "node %d: %u distinct, want %u", i, tris[i], FIG_TRIS[i]);
+  for (int i = 0; i < 15; i++)
+    EXPECTF(tris[i] == FIG_TRIS[i], "node %d: %u distinct, want %u", i, tris[i], FIG_TRIS[i]);
 
   static const uint32_t A[] = {0}, B[] = {1, 8}, C[] = {2, 5, 9, 12},
                         D[] = {3, 4, 6, 7, 10, 11, 13, 14};
@@ -63,11 +64,11 @@ static void check_figure1(void) {
     const uint32_t *want;
     uint32_t n;
   } cases[] = {
-      {1000, A, 1}, {26, A, 1},  /* g_max >= 26: the root, Whitted */
-      {25, B, 2},   {16, B, 2},  /* 26 > g_max >= 16: B */
-      {15, C, 4},   {10, C, 4},  /* 16 > g_max >= 10: C */
-      {9, D, 8},    {6, D, 8},   {5, D, 8}, /* below: the leaves */
-      {1, D, 8},    {0, D, 8},   /* leaves even when they exceed g_max */
+      {1000, A, 1}, {26, A, 1},            /* g_max >= 26: the root, Whitted */
+      {25, B, 2},   {16, B, 2},            /* 26 > g_max >= 16: B */
+      {15, C, 4},   {10, C, 4},            /* 16 > g_max >= 10: C */
+      {9, D, 8},    {6, D, 8},  {5, D, 8}, /* below: the leaves */
+      {1, D, 8},    {0, D, 8},             /* leaves even when they exceed g_max */
   };
   for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
     struct qpoint_set qs;
@@ -184,13 +185,15 @@ static void check_scene(const char *path) {
   EXPECTF(mono == 0, "%s: %d nodes break monotonicity", path, mono);
 
   /* Selections over a range of bounds (in bytes of 128-byte triangles). */
-  const uint64_t bounds[] = {0, 128, 1000, 16384, 1u << 20, (uint64_t)tris[0] * 128, UINT64_MAX / 256};
+  const uint64_t bounds[] = {
+      0, 128, 1000, 16384, 1u << 20, (uint64_t)tris[0] * 128, UINT64_MAX / 256};
   uint32_t prev = UINT32_MAX;
   for (size_t c = 0; c < sizeof bounds / sizeof bounds[0]; c++) {
     struct qpoint_set qs;
     qpoint_select(&qs, &kd, tris, 128, bounds[c]);
     /* Walk every root-to-leaf path counting queue points on it. */
-    uint32_t *above_qp = calloc(n, sizeof *above_qp); /* queue points on the path to i, excluding i */
+    uint32_t *above_qp =
+        calloc(n, sizeof *above_qp); /* queue points on the path to i, excluding i */
     int wrong = 0, fit = 0, first = 0;
     for (uint32_t i = 0; i < n; i++) {
       struct kd_node nd = qs.nodes[i];

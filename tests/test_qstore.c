@@ -76,7 +76,8 @@ static void live_set(struct model *m, uint64_t slot, uint8_t v) {
 static uint32_t chunks_needed(const struct model *m) {
   uint32_t c = 0;
   for (int s = 0; s < SETS; s++)
-    for (int q = 0; q < QUEUES; q++) c += (m->q[s][q].n + QSTORE_CHUNK_RAYS - 1) / QSTORE_CHUNK_RAYS;
+    for (int q = 0; q < QUEUES; q++)
+      c += (m->q[s][q].n + QSTORE_CHUNK_RAYS - 1) / QSTORE_CHUNK_RAYS;
   for (int d = 0; d < DRAINS; d++)
     if (m->dr[d].on || m->dr[d].nout) c += (m->dr[d].n + QSTORE_CHUNK_RAYS - 1) / QSTORE_CHUNK_RAYS;
   return c;
@@ -138,8 +139,10 @@ static void op_push(struct model *m, struct qstore *st, bool with_port) {
     qstore_write(st, &p, qi, slot);
     /* Table load, ray store (then marked stored), table store. */
     EXPECT(rc.n == 3);
-    EXPECT(rc.addr[0] == TABLE + 8ull * qi && !rc.store[0] && rc.size[0] == 8 && rc.cls[0] == TRACE_CLASS_QUEUE);
-    EXPECT(rc.addr[1] == BUFS + 64 * slot && rc.store[1] && rc.size[1] == 64 && rc.cls[1] == TRACE_CLASS_RAY);
+    EXPECT(rc.addr[0] == TABLE + 8ull * qi && !rc.store[0] && rc.size[0] == 8 &&
+           rc.cls[0] == TRACE_CLASS_QUEUE);
+    EXPECT(rc.addr[1] == BUFS + 64 * slot && rc.store[1] && rc.size[1] == 64 &&
+           rc.cls[1] == TRACE_CLASS_RAY);
     EXPECT(rc.addr[2] == TABLE + 8ull * qi && rc.store[2] && rc.size[2] == 8);
     EXPECT(!rc.stored_at[0] && !rc.stored_at[1] && rc.stored_at[2]);
   } else {
@@ -154,7 +157,8 @@ static void op_push(struct model *m, struct qstore *st, bool with_port) {
 static uint32_t expected_take(const struct model *m) {
   uint32_t best = QUEUES;
   for (uint32_t q = 0; q < QUEUES; q++)
-    if (!m->held[q] && m->q[0][q].n > 0 && (best == QUEUES || m->q[0][q].n > m->q[0][best].n)) best = q;
+    if (!m->held[q] && m->q[0][q].n > 0 && (best == QUEUES || m->q[0][q].n > m->q[0][best].n))
+      best = q;
   return best;
 }
 
@@ -173,8 +177,8 @@ static void op_take(struct model *m, struct qstore *st) {
     struct rec rc = {.st = st};
     struct mem_port p = {&REC_OPS, &rc};
     qstore_touch(st, &p, qi);
-    EXPECT(rc.n == 2 && rc.addr[0] == TABLE + 8ull * qi && !rc.store[0] && rc.addr[1] == rc.addr[0] &&
-           rc.store[1]);
+    EXPECT(rc.n == 2 && rc.addr[0] == TABLE + 8ull * qi && !rc.store[0] &&
+           rc.addr[1] == rc.addr[0] && rc.store[1]);
   }
   struct list *l = &m->q[0][qi];
   t->on = true;
@@ -199,7 +203,8 @@ static void op_step(struct model *m, struct qstore *st, struct tdrain *t) {
   const uint64_t slot = qstore_cur_slot(&t->k);
   const struct ray *r = qstore_ray(st, slot);
   EXPECTF(r->pixel == t->exp[t->pos] && r->o.x == (float)t->exp[t->pos],
-          "pass %u of %u, ray %u: id %u, expected %u", t->pass, t->passes, t->pos, r->pixel, t->exp[t->pos]);
+          "pass %u of %u, ray %u: id %u, expected %u", t->pass, t->passes, t->pos, r->pixel,
+          t->exp[t->pos]);
   EXPECT(slot < m->live_cap && m->live[slot]);
   if (last) {
     qstore_chunk_hold(st, qstore_slot_chunk(slot));

@@ -83,8 +83,8 @@ int main(void) {
 
   struct world w;
   if (!load(&w, RTSIM_SOURCE_DIR "/scenes/small/sphereflake.yaml")) return 1;
-  const uint32_t all = RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) |
-                       RAY_MASK(RAY_DIFFUSE);
+  const uint32_t all =
+      RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) | RAY_MASK(RAY_DIFFUSE);
   const uint32_t size = 48;
 
   /* Determinism and conservation with every ray type. */
@@ -98,9 +98,11 @@ int main(void) {
   EXPECT(s1.rays[RAY_PRIMARY] == (uint64_t)size * size);
   EXPECT(s1.rays[RAY_SHADOW] > 0 && s1.rays[RAY_SPECULAR] > 0 && s1.rays[RAY_DIFFUSE] > 0);
   /* Shadow rays: at most one per light per non-shadow ray. */
-  EXPECT(s1.rays[RAY_SHADOW] <= 3 * (s1.rays[RAY_PRIMARY] + s1.rays[RAY_SPECULAR] + s1.rays[RAY_DIFFUSE]));
+  EXPECT(s1.rays[RAY_SHADOW] <=
+         3 * (s1.rays[RAY_PRIMARY] + s1.rays[RAY_SPECULAR] + s1.rays[RAY_DIFFUSE]));
   /* Diffuse rays come in rounds of at most 9. */
-  EXPECT(s1.rays[RAY_DIFFUSE] <= 9 * (s1.rays[RAY_PRIMARY] + s1.rays[RAY_SPECULAR] + s1.rays[RAY_DIFFUSE] / 9 + 1));
+  EXPECT(s1.rays[RAY_DIFFUSE] <=
+         9 * (s1.rays[RAY_PRIMARY] + s1.rays[RAY_SPECULAR] + s1.rays[RAY_DIFFUSE] / 9 + 1));
   fb_fini(&f2);
 
   /* Primary rays only: a pixel whose ray misses (brute force) is exactly the
@@ -142,7 +144,8 @@ int main(void) {
   char cmd[2048], out[8192];
   const char *a = RTSIM_TMP "/render_a.exr", *b = RTSIM_TMP "/render_b.exr";
   for (int k = 0; k < 2; k++) {
-    snprintf(cmd, sizeof cmd, "%s render %s/scenes/small/sphereflake.yaml -o %s --width %u --height %u --seed 7",
+    snprintf(cmd, sizeof cmd,
+             "%s render %s/scenes/small/sphereflake.yaml -o %s --width %u --height %u --seed 7",
              RTSIM_BINARY, RTSIM_SOURCE_DIR, k ? b : a, size, size);
     EXPECTF(testing_run(cmd, out, sizeof out) == 0, "%s", out);
   }

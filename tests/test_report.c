@@ -18,10 +18,11 @@ static int count(const char *hay, const char *needle) {
 int main(void) {
   static char out[1 << 20];
   char cmd[2048];
-  snprintf(cmd, sizeof cmd,
-           "cd %s && rm -rf %s/report && RTSIM=%s SCENES=scenes/small sh results/traffic/run.sh %s/report 16 2 "
-           "2>/dev/null && cat %s/report/all.csv",
-           RTSIM_SOURCE_DIR, RTSIM_TMP, RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
+  snprintf(
+      cmd, sizeof cmd,
+      "cd %s && rm -rf %s/report && RTSIM=%s SCENES=scenes/small sh results/traffic/run.sh %s/report 16 2 "
+      "2>/dev/null && cat %s/report/all.csv",
+      RTSIM_SOURCE_DIR, RTSIM_TMP, RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
   EXPECT(testing_run(cmd, out, sizeof out) == 0);
   EXPECT(count(out, "\n") == 1 + 12 * 3 * 13);
   EXPECT(count(out, ",recursive,") == 12 * 13);

@@ -20,11 +20,11 @@
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
-#include "sim/lru_stack.h"
-#include "sim/dram.h"
-#include "sim/machine.h"
 #include "sim/coro.h"
+#include "sim/dram.h"
 #include "sim/err.h"
+#include "sim/lru_stack.h"
+#include "sim/machine.h"
 #include "sim/machine_cfg.h"
 #include "sim/mem_functional.h"
 #include "testing.h"
@@ -137,7 +137,9 @@ static void w_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   qcheck_access(p->q, addr, cls, 1);
   mem_store(&p->in, addr, size, cls);
 }
-static void w_compute(void *ctx, uint64_t cycles) { mem_compute(&((struct wport *)ctx)->in, cycles); }
+static void w_compute(void *ctx, uint64_t cycles) {
+  mem_compute(&((struct wport *)ctx)->in, cycles);
+}
 static void w_wait(void *ctx, uint64_t cycles) { mem_wait(&((struct wport *)ctx)->in, cycles); }
 static void w_park(void *ctx) { CHECK(mem_park(&((struct wport *)ctx)->in)); }
 static void w_wake(void *ctx, uint32_t id) { mem_wake(&((struct wport *)ctx)->in, id); }
@@ -240,7 +242,8 @@ static int same_image(const struct framebuffer *a, const struct framebuffer *b) 
 /* Policies kinds[first..last) of the four below. */
 static void test_cross_check(struct world *w, unsigned first, unsigned last) {
   const uint32_t mask = RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_DIFFUSE);
-  const enum policy_kind kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC, POLICY_TREELET};
+  const enum policy_kind kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC,
+                                    POLICY_TREELET};
   const unsigned sizes[] = {12, 16};
   /* Every DRAM level: ideal memory (fixed, latency 0), channels from fast to
    * starved, and banked DDR4 (open page, one channel; close page, two). */
@@ -289,7 +292,8 @@ static void test_cross_check(struct world *w, unsigned first, unsigned last) {
         EXPECTF(st.l2.fetch_bytes + back == fetch && st.l2.writeback_bytes <= wb &&
                     wb <= st.l2.writeback_bytes + back,
                 "%s at 2^%u, DRAM %s %llu cycles %.1f B/c: timed %llu/%llu, functional %llu/%llu",
-                policy_name(kinds[k]), sizes[s], dram_model_names[machine_fidelity_dram(drams[d].model)],
+                policy_name(kinds[k]), sizes[s],
+                dram_model_names[machine_fidelity_dram(drams[d].model)],
                 (unsigned long long)drams[d].latency, drams[d].bw,
                 (unsigned long long)st.l2.fetch_bytes, (unsigned long long)st.l2.writeback_bytes,
                 (unsigned long long)fetch, (unsigned long long)wb);
@@ -305,8 +309,8 @@ static void test_cross_check(struct world *w, unsigned first, unsigned last) {
  * contexts on three cores, and one context; its queues checked throughout.
  * With all false (the other scenes): dynamic on tiny.yaml and 1 x 1 x 1 only. */
 static void test_many_workers(struct world *w, const char *scene, bool all) {
-  const uint32_t mask = RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) |
-                        RAY_MASK(RAY_DIFFUSE);
+  const uint32_t mask =
+      RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) | RAY_MASK(RAY_DIFFUSE);
   const struct tcfg tiny = shipped_config("tiny");
   struct render ref;
   struct machine_stats st;
@@ -316,7 +320,8 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
   for (int k = 0; all && k < 2; k++) {
     struct render r;
     timed(w, k ? POLICY_PACKET : POLICY_RECURSIVE, mask, &tiny, &st, &r);
-    EXPECTF(same_image(&ref.fb, &r.fb), "%s on tiny.yaml: image differs", k ? "packet" : "recursive");
+    EXPECTF(same_image(&ref.fb, &r.fb), "%s on tiny.yaml: image differs",
+            k ? "packet" : "recursive");
     EXPECT(st.l2.mshr_merges > 0 && st.l2.misses > 0 && st.issue_slots > 0);
     fb_fini(&r.fb);
   }
@@ -324,7 +329,8 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
    * DRAM bytes conserved. */
   struct tcfg banked = tiny;
   banked.p.fidelity = MACHINE_FIDELITY_BANKED;
-  const enum policy_kind all_kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC, POLICY_TREELET};
+  const enum policy_kind all_kinds[] = {POLICY_RECURSIVE, POLICY_PACKET, POLICY_DYNAMIC,
+                                        POLICY_TREELET};
   for (unsigned k = 0; k < 4; k++) {
     struct render r;
     timed(w, all_kinds[k], mask, &banked, &st, &r);
@@ -348,9 +354,12 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
   const struct {
     const char *name;
     const struct tcfg *c;
-  } dyn[] = {{"tiny.yaml", &tiny}, {"tiny.yaml, 4 KiB L2", &small_l2},
-             {"tiny.yaml, 3 x 3 x 3, 16 KiB L2", &many}, {"1 x 1 x 1", &one},
-             {"tiny.yaml, chip", &chip}, {"tiny.yaml, 3 x 3 x 3, 4 KiB L2, chip", &chip_small}};
+  } dyn[] = {{"tiny.yaml", &tiny},
+             {"tiny.yaml, 4 KiB L2", &small_l2},
+             {"tiny.yaml, 3 x 3 x 3, 16 KiB L2", &many},
+             {"1 x 1 x 1", &one},
+             {"tiny.yaml, chip", &chip},
+             {"tiny.yaml, 3 x 3 x 3, 4 KiB L2, chip", &chip_small}};
   for (unsigned i = 0; i < sizeof dyn / sizeof dyn[0]; i++) {
     const struct tcfg *c = dyn[i].c;
     const struct machine_params *p = &c->p;
@@ -369,7 +378,8 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
       struct kd_node nd = qs.nodes[qs.qnode[q]];
       oversized += kd_is_leaf(nd) && kd_leaf_count(nd) > bt;
     }
-    if (c == &small_l2 || c == &chip_small) EXPECTF(oversized > 0, "%s: no leaf over g_max (%u queue points)", dyn[i].name, qs.count);
+    if (c == &small_l2 || c == &chip_small)
+      EXPECTF(oversized > 0, "%s: no leaf over g_max (%u queue points)", dyn[i].name, qs.count);
     EXPECT(group == 1);
     const uint32_t queues = qs.count;
     qpoint_fini(&qs);
@@ -378,7 +388,8 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
     struct render_stats rs;
     struct qcheck q;
     timed_q(w, POLICY_DYNAMIC, mask, c, &st, &r, &rs, &q);
-    EXPECTF(same_image(&ref.fb, &r.fb), "%s, dynamic on %s: image differs from recursive's", scene, dyn[i].name);
+    EXPECTF(same_image(&ref.fb, &r.fb), "%s, dynamic on %s: image differs from recursive's", scene,
+            dyn[i].name);
     EXPECTF(memcmp(rs.rays, ref_rs.rays, sizeof rs.rays) == 0 && rs.spawned == ref_rs.spawned &&
                 rs.terminated == rs.spawned,
             "dynamic on %s: rays %llu/%llu/%llu/%llu, spawned %llu, terminated %llu; recursive "
@@ -396,16 +407,17 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
             "dynamic on %s: queue slots %llu stored, %llu loaded, %llu out of order, %llu left",
             dyn[i].name, (unsigned long long)sl->stores, (unsigned long long)sl->loads,
             (unsigned long long)(sl->bad + q.bad), (unsigned long long)left);
-    EXPECTF(q.table_max <= queues, "dynamic on %s: table entry %llu of %u queue points", dyn[i].name,
-            (unsigned long long)q.table_max, queues);
+    EXPECTF(q.table_max <= queues, "dynamic on %s: table entry %llu of %u queue points",
+            dyn[i].name, (unsigned long long)q.table_max, queues);
     /* Several contexts share the work: some park until there is some for
      * them, and every one parked is woken; one never parks. Nobody polls. */
     EXPECTF(st.waits == 0 && (workers == 1 ? st.parks == 0 : st.parks > 0) && st.wakes == st.parks,
             "dynamic on %s: %llu waits, %llu parks, %llu wakes", dyn[i].name,
-            (unsigned long long)st.waits, (unsigned long long)st.parks, (unsigned long long)st.wakes);
-    printf("%s, dynamic on %s: %llu cycles, core utilization %.3f, %llu parks, %llu events\n", scene,
-           dyn[i].name,
-           (unsigned long long)st.cycles, (double)st.issue_slots / ((double)p->cores * (double)st.cycles),
+            (unsigned long long)st.waits, (unsigned long long)st.parks,
+            (unsigned long long)st.wakes);
+    printf("%s, dynamic on %s: %llu cycles, core utilization %.3f, %llu parks, %llu events\n",
+           scene, dyn[i].name, (unsigned long long)st.cycles,
+           (double)st.issue_slots / ((double)p->cores * (double)st.cycles),
            (unsigned long long)st.parks, (unsigned long long)st.events);
     testing_slots_fini(&q.slots);
     fb_fini(&r.fb);
@@ -416,7 +428,8 @@ static void test_many_workers(struct world *w, const char *scene, bool all) {
     if (c != &small_l2 && c != &many && c != &chip_small) continue;
     struct qcheck tq;
     timed_q(w, POLICY_TREELET, mask, c, &st, &r, &rs, &tq);
-    EXPECTF(same_image(&ref.fb, &r.fb), "%s, treelet on %s: image differs from recursive's", scene, dyn[i].name);
+    EXPECTF(same_image(&ref.fb, &r.fb), "%s, treelet on %s: image differs from recursive's", scene,
+            dyn[i].name);
     EXPECTF(memcmp(rs.rays, ref_rs.rays, sizeof rs.rays) == 0 && rs.terminated == rs.spawned,
             "treelet on %s: rays differ from recursive's", dyn[i].name);
     EXPECTF(tq.bad == 0 && tq.slots.bad == 0 && testing_slots_left(&tq.slots) == 0 &&
@@ -481,7 +494,8 @@ static void test_machine_plan(void) {
           EXPECTF(bc.node_bytes == nodes && bc.ray_bytes == rays &&
                       bc.gmax_bytes == (S > usedc ? S - usedc : 0) && qc.count <= qs.count,
                   "%s, %s, L2 %llu, chip: g_max %llu, %u queue points (partition %u)", scenes[si],
-                  cfgs[ci], (unsigned long long)S, (unsigned long long)bc.gmax_bytes, qc.count, qs.count);
+                  cfgs[ci], (unsigned long long)S, (unsigned long long)bc.gmax_bytes, qc.count,
+                  qs.count);
           qpoint_fini(&qc);
         }
         EXPECT(bt == (b.gmax_bytes / 128 ? b.gmax_bytes / 128 : 1) && group == 1);
@@ -491,8 +505,9 @@ static void test_machine_plan(void) {
           bool leaf = kd_is_leaf(qs.nodes[n]);
           if ((uint64_t)tris[n] * 128 <= b.gmax_bytes) continue;
           over++;
-          EXPECTF(leaf, "%s, %s, L2 %llu: queue point %u holds %u triangles, g_max %llu", scenes[si],
-                  cfgs[ci], (unsigned long long)S, n, tris[n], (unsigned long long)b.gmax_bytes);
+          EXPECTF(leaf, "%s, %s, L2 %llu: queue point %u holds %u triangles, g_max %llu",
+                  scenes[si], cfgs[ci], (unsigned long long)S, n, tris[n],
+                  (unsigned long long)b.gmax_bytes);
           EXPECT((uint64_t)bt * 128 <= b.gmax_bytes || bt == 1);
         }
         if (li == 0)
@@ -551,7 +566,8 @@ static void test_command(void) {
     int rc = testing_run(cmd, out, sizeof out);
     EXPECTF(rc == 0, "%s: exit %d: %s", cmd, rc, out);
     const char *files[] = {"image.exr", "stats.json", "stats.csv", "timeline.csv", "traffic.png"};
-    for (int f = 0; f < 5; f++) EXPECTF(exists(dirs[i], files[f]), "%s/%s missing", dirs[i], files[f]);
+    for (int f = 0; f < 5; f++)
+      EXPECTF(exists(dirs[i], files[f]), "%s/%s missing", dirs[i], files[f]);
     char img[2048];
     snprintf(img, sizeof img, "%s/image.exr", dirs[i]);
     EXPECTF(testing_same_rgb(ref, img), "%s: RGB differs from rtsim render's", dirs[i]);
@@ -603,7 +619,8 @@ static void test_command(void) {
       {"run CFG SCN -o DIR --set l2.size=32", "l2.size: smaller than one 64-byte line"},
       {"run CFG SCN -o DIR --set dram.bytes_per_cycle=0", "dram.bytes_per_cycle: out of range"},
       {"run CFG SCN -o DIR --set l3.size=1", "unknown key 'l3.size'"},
-      {"run " RTSIM_TEST_DATA "/configs/bad_size_unit.yaml SCN -o DIR", "bad_size_unit.yaml:2:9: error: l2.size"},
+      {"run " RTSIM_TEST_DATA "/configs/bad_size_unit.yaml SCN -o DIR",
+       "bad_size_unit.yaml:2:9: error: l2.size"},
       {"run CFG SCN -o DIR --policy fastest", "--policy: got 'fastest'"},
       {"run CFG -o DIR", "expected MACHINE.yaml SCENE.yaml, got 1 file"},
       {"run CFG SCN", "missing -o OUTDIR"},
@@ -656,11 +673,12 @@ static void test_idle_contexts(void) {
   for (int i = 0; i < 2; i++) {
     char dir[1024];
     snprintf(dir, sizeof dir, "%s/run_idle_%d", RTSIM_TMP, i);
-    snprintf(cmd, sizeof cmd,
-             "%s run %s/configs/tiny.yaml %s/scenes/small/room.yaml --policy dynamic --rays primary "
-             "--width 1 --height 1 --set cores=32 --set threads_per_core=%s --set rays_per_thread=%s "
-             "--set l1.size=0 -o %s",
-             RTSIM_BINARY, RTSIM_SOURCE_DIR, RTSIM_SOURCE_DIR, shape[i], shape[i], dir);
+    snprintf(
+        cmd, sizeof cmd,
+        "%s run %s/configs/tiny.yaml %s/scenes/small/room.yaml --policy dynamic --rays primary "
+        "--width 1 --height 1 --set cores=32 --set threads_per_core=%s --set rays_per_thread=%s "
+        "--set l1.size=0 -o %s",
+        RTSIM_BINARY, RTSIM_SOURCE_DIR, RTSIM_SOURCE_DIR, shape[i], shape[i], dir);
     int rc = testing_run(cmd, out, sizeof out);
     EXPECTF(rc == 0, "exit %d: %s", rc, out);
     ev[i] = testing_json_num(dir, "events");
@@ -670,7 +688,8 @@ static void test_idle_contexts(void) {
   const double more = 512 - 32;
   EXPECTF(ev[1] - ev[0] >= 2 * more && ev[1] - ev[0] <= 2 * more + 32,
           "%.0f events with 512 contexts, %.0f with 32", ev[1], ev[0]);
-  EXPECTF(parks[1] - parks[0] == more, "%.0f parks with 512 contexts, %.0f with 32", parks[1], parks[0]);
+  EXPECTF(parks[1] - parks[0] == more, "%.0f parks with 512 contexts, %.0f with 32", parks[1],
+          parks[0]);
   EXPECT(cycles[0] > 10000 && cycles[1] > 10000);
 }
 
@@ -697,7 +716,8 @@ static void test_command_extremes(void) {
   char cmd[4096], out[8192];
   const char *dir = RTSIM_TMP "/run_extreme";
   for (unsigned i = 0; i < sizeof sets / sizeof sets[0]; i++) {
-    snprintf(cmd, sizeof cmd, "%s run %s/configs/tiny.yaml %s/scenes/small/room.yaml --width 6 --height 4 %s -o %s",
+    snprintf(cmd, sizeof cmd,
+             "%s run %s/configs/tiny.yaml %s/scenes/small/room.yaml --width 6 --height 4 %s -o %s",
              RTSIM_BINARY, RTSIM_SOURCE_DIR, RTSIM_SOURCE_DIR, sets[i], dir);
     int rc = testing_run(cmd, out, sizeof out);
     EXPECTF(rc == 0, "%s: exit %d: %s", sets[i], rc, out);
@@ -707,8 +727,8 @@ static void test_command_extremes(void) {
       snprintf(p, sizeof p, "cat %s/%s", dir, files[f]);
       static char text[1 << 20];
       testing_run(p, text, sizeof text);
-      EXPECTF(!strstr(text, "nan") && !strstr(text, "inf") && strlen(text) > 10, "%s: %s: nan or inf",
-              sets[i], files[f]);
+      EXPECTF(!strstr(text, "nan") && !strstr(text, "inf") && strlen(text) > 10,
+              "%s: %s: nan or inf", sets[i], files[f]);
     }
   }
 }

@@ -33,8 +33,8 @@ static void expect_near(const char *f, const char *s, const char *name, double t
   double full = testing_json_num(f, name), est = testing_json_num(s, name);
   double lo = testing_json_num(s, lo_name), hi = testing_json_num(s, hi_name);
   double err = (est - full) / full;
-  printf("%s: %s full %.6g, sampled %.6g [%.6g, %.6g], error %+.2f%%\n", s, name, full, est, lo,
-         hi, 100 * err);
+  printf("%s: %s full %.6g, sampled %.6g [%.6g, %.6g], error %+.2f%%\n", s, name, full, est, lo, hi,
+         100 * err);
   EXPECTF(fabs(err) <= tol, "%s: %s %.6g against the full run's %.6g (%+.2f%%, tolerance %.0f%%)",
           s, name, est, full, 100 * err, 100 * tol);
   EXPECTF(lo <= est && est <= hi && lo < hi, "%s: %s's interval [%g, %g] around %g", s, name, lo,
@@ -109,8 +109,8 @@ static void test_packet(void) {
   snprintf(full, sizeof full, "%s/smp_pk_full", RTSIM_TMP);
   snprintf(samp, sizeof samp, "%s/smp_pk_s", RTSIM_TMP);
   EXPECT(run("sphereflake", "packet", 128, 128, "", full, out, sizeof out) == 0);
-  int rc = run("sphereflake", "packet", 128, 128, "--set sample.fraction=0.5", samp, out,
-               sizeof out);
+  int rc =
+      run("sphereflake", "packet", 128, 128, "--set sample.fraction=0.5", samp, out, sizeof out);
   EXPECTF(rc == 0, "sampled packet run: exit %d: %s", rc, out);
   if (rc) return;
   EXPECT(testing_json_num(full, "issue_slots") == testing_json_num(samp, "issue_slots"));

@@ -13,7 +13,7 @@
 #include "testing.h"
 
 static const char *why_name(enum scalar_why w) {
-  static const char *const names[] = {"OK",     "EMPTY",     "SPACE",    "CONTROL",
+  static const char *const names[] = {"OK",           "EMPTY",  "SPACE",    "CONTROL",
                                       "LEADING_ZERO", "SYNTAX", "OVERFLOW", "UNDERFLOW"};
   return (unsigned)w < sizeof names / sizeof names[0] ? names[w] : "?";
 }
@@ -63,8 +63,7 @@ static void test_u64(void) {
             why_name(cases[i].want));
     if (cases[i].want == SCALAR_OK)
       EXPECTF(v == cases[i].value, "u64 '%s': got %llu", cases[i].text, (unsigned long long)v);
-    else
-      EXPECTF(v == 12345, "u64 '%s': the output was written on failure", cases[i].text);
+    else EXPECTF(v == 12345, "u64 '%s': the output was written on failure", cases[i].text);
   }
   /* The first n bytes only (a size's digits before its unit). */
   uint64_t v = 0;
@@ -137,8 +136,7 @@ static void test_f64(void) {
             why_name(cases[i].want));
     if (cases[i].want == SCALAR_OK)
       EXPECTF(v == cases[i].value, "f64 '%s': got %.17g", cases[i].text, v);
-    else
-      EXPECTF(v == 12345, "f64 '%s': the output was written on failure", cases[i].text);
+    else EXPECTF(v == 12345, "f64 '%s': the output was written on failure", cases[i].text);
   }
   double z = 1;
   EXPECT(scalar_f64("-0", &z) == SCALAR_OK && z == 0 && signbit(z));

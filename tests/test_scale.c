@@ -99,8 +99,9 @@ static void check_scene(const char *file, bool clip) {
   struct scale_counts ref;
   EXPECTF(measure(path, 1.0, clip, &ref), "%s: cannot load", path);
   if (ref.hits == 0) return;
-  fprintf(stderr, "%s %s scale 1: %llu node visits, %llu triangle tests, %llu hits, %llu occluded\n",
-          file, splits, (unsigned long long)ref.node_visits, (unsigned long long)ref.tri_tests,
+  fprintf(stderr,
+          "%s %s scale 1: %llu node visits, %llu triangle tests, %llu hits, %llu occluded\n", file,
+          splits, (unsigned long long)ref.node_visits, (unsigned long long)ref.tri_tests,
           (unsigned long long)ref.hits, (unsigned long long)ref.occluded);
   static const double exact[] = {0x1p-10, 0.5, 8.0};
   for (size_t i = 0; i < sizeof exact / sizeof exact[0]; i++) {
@@ -118,12 +119,15 @@ static void check_scene(const char *file, bool clip) {
     struct scale_counts c;
     if (!measure(path, other[i], clip, &c)) continue;
     double dv = rel(c.node_visits, ref.node_visits), dt = rel(c.tri_tests, ref.tri_tests);
-    fprintf(stderr, "%s %s scale %g: node visits %+.4f%%, triangle tests %+.4f%%, hits %llu, occluded %llu\n",
-            file, splits, other[i], 100.0 * ((double)c.node_visits / (double)ref.node_visits - 1.0),
-            100.0 * ((double)c.tri_tests / (double)ref.tri_tests - 1.0),
-            (unsigned long long)c.hits, (unsigned long long)c.occluded);
-    EXPECTF(dv <= tol && dt <= tol, "%s %s scale %g: node visits off by %.4f%%, triangle tests by %.4f%%",
-            file, splits, other[i], 100.0 * dv, 100.0 * dt);
+    fprintf(
+        stderr,
+        "%s %s scale %g: node visits %+.4f%%, triangle tests %+.4f%%, hits %llu, occluded %llu\n",
+        file, splits, other[i], 100.0 * ((double)c.node_visits / (double)ref.node_visits - 1.0),
+        100.0 * ((double)c.tri_tests / (double)ref.tri_tests - 1.0), (unsigned long long)c.hits,
+        (unsigned long long)c.occluded);
+    EXPECTF(dv <= tol && dt <= tol,
+            "%s %s scale %g: node visits off by %.4f%%, triangle tests by %.4f%%", file, splits,
+            other[i], 100.0 * dv, 100.0 * dt);
     /* Rounding the scaled vertices may move an edge by a float: a ray may change. */
     EXPECTF(rel(c.hits, ref.hits) <= tol && rel(c.occluded, ref.occluded) <= tol,
             "%s %s scale %g: %llu hits (%llu at scale 1), %llu occluded (%llu)", file, splits,

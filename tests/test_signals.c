@@ -152,8 +152,8 @@ static void test_run_rerun(void) {
   int old_seen = 0, new_seen = 0;
   for (int moment = 0; moment < 3; moment++) {
     run("rm -rf %s && cp -a %s %s && echo keep > %s/command.sh", dir, ref1, dir, dir);
-    const char *argv[] = {RTSIM_BINARY, "run", TINY, ROOM_TINY, "-o", dir, RUN_ARGS,
-                          "--seed", "2", NULL};
+    const char *argv[] = {RTSIM_BINARY, "run",    TINY,     ROOM_TINY, "-o",
+                          dir,          RUN_ARGS, "--seed", "2",       NULL};
     pid_t pid = start(argv);
     char sibling[4096], sib_image[4200];
     snprintf(sibling, sizeof sibling, "%s/.sig_run.run-%ld", RTSIM_TMP, (long)pid);
@@ -218,7 +218,8 @@ static void write_sweep(const char *path) {
   FILE *f = fopen(path, "w");
   EXPECT(f != NULL);
   if (!f) return;
-  fprintf(f, "machine: %s\nworkload:\n  scene: %s/scenes/small/room.yaml\n  height: 72\n"
+  fprintf(f,
+          "machine: %s\nworkload:\n  scene: %s/scenes/small/room.yaml\n  height: 72\n"
           "axes:\n  width: [8, 96]\n",
           TINY, RTSIM_SOURCE_DIR);
   fclose(f);

@@ -74,9 +74,9 @@ static void test_f64(void) {
   expect_f64(0.1, "0.1");
   expect_f64(-2.25, "-2.25");
   expect_f64(1e300, "1e+300");
-  expect_f64(1.0 / 3.0, "0.3333333333333333");           /* 16 digits */
-  expect_f64(9007199254740992.0, "9007199254740992");      /* 2^53: 16 digits */
-  expect_f64(0.1 + 0.2, "0.30000000000000004");           /* 17 digits */
+  expect_f64(1.0 / 3.0, "0.3333333333333333");        /* 16 digits */
+  expect_f64(9007199254740992.0, "9007199254740992"); /* 2^53: 16 digits */
+  expect_f64(0.1 + 0.2, "0.30000000000000004");       /* 17 digits */
   expect_f64(1.7976931348623157e308, "1.7976931348623157e+308");
   expect_f64(5e-324, "4.94065645841247e-324"); /* 15 digits read it back; not "5e-324" */
   expect_f64(1386126720.0, "1386126720");
@@ -84,8 +84,12 @@ static void test_f64(void) {
   static const struct {
     double v;
     const char *want;
-  } shortest[] = {{1.4, "1.4"}, {1000, "1e+03"}, {1386126720.0, "1.38612672e+09"},
-                  {5e-324, "5e-324"}, {0.1 + 0.2, "0.30000000000000004"}, {1e-6, "1e-06"}};
+  } shortest[] = {{1.4, "1.4"},
+                  {1000, "1e+03"},
+                  {1386126720.0, "1.38612672e+09"},
+                  {5e-324, "5e-324"},
+                  {0.1 + 0.2, "0.30000000000000004"},
+                  {1e-6, "1e-06"}};
   for (size_t i = 0; i < sizeof shortest / sizeof shortest[0]; i++) {
     char buf[64];
     stats_f64_text(shortest[i].v, 1, buf, sizeof buf);
@@ -221,7 +225,8 @@ static const struct stats_desc toy_sub_desc[] = {
     STATS_FIELD(struct toy_sub, y, "y", "count", "y"),
 };
 static const struct stats_descs toy_sub = {"sub", toy_sub_desc, 2, sizeof(struct toy_sub), NULL, 0};
-static const struct stats_descs toy_sub_short = {"sub", toy_sub_desc, 1, sizeof(struct toy_sub), NULL, 0};
+static const struct stats_descs toy_sub_short = {
+    "sub", toy_sub_desc, 1, sizeof(struct toy_sub), NULL, 0};
 static const struct stats_desc toy_desc[] = {
     STATS_FIELD(struct toy_stats, a, "a", "count", "a"),
     STATS_FIELD(struct toy_stats, c, "c", "count", "c"),
@@ -253,9 +258,9 @@ static void test_uncovered(void) {
  * only when present, in place of another's: dram_utilization) and say a unit. */
 static void test_components(void) {
   const struct stats_descs *const all[] = {
-      &machine_stats_descs,      &machine_l1_stats_descs,  &machine_engine_stats_descs,
-      &machine_dram_util_stats_descs, &l2_stats_descs,     &dram_stats_descs,
-      &dram_channel_stats_descs, &dram_banked_stats_descs};
+      &machine_stats_descs,           &machine_l1_stats_descs, &machine_engine_stats_descs,
+      &machine_dram_util_stats_descs, &l2_stats_descs,         &dram_stats_descs,
+      &dram_channel_stats_descs,      &dram_banked_stats_descs};
   const unsigned n = sizeof all / sizeof all[0];
   char buf[256];
   for (unsigned i = 0; i < n; i++) {
@@ -284,7 +289,8 @@ static void test_timeline_cols(void) {
     for (unsigned k = 0; k < c->span && c->col + k < MACHINE_TL_COLS; k++) seen[c->col + k]++;
     EXPECT(c->col + c->span <= MACHINE_TL_COLS);
   }
-  for (unsigned i = 0; i < MACHINE_TL_COLS; i++) EXPECTF(seen[i] == 1, "timeline column %u: %u descriptors", i, seen[i]);
+  for (unsigned i = 0; i < MACHINE_TL_COLS; i++)
+    EXPECTF(seen[i] == 1, "timeline column %u: %u descriptors", i, seen[i]);
 }
 
 /* The README's table of numbers is `rtsim run --help-stats-markdown`. */

@@ -105,7 +105,8 @@ static void test_expansion(void) {
     if (nl) *nl = '\0';
     EXPECTF(!strncmp(line, RTSIM_BINARY " sweep /", strlen(RTSIM_BINARY) + 8),
             "line %d does not start with the absolute program: %s", i, line);
-    EXPECTF(strstr(line, want) && !strcmp(line + strlen(line) - strlen(GOOD_NAMES[i]), GOOD_NAMES[i]),
+    EXPECTF(strstr(line, want) &&
+                !strcmp(line + strlen(line) - strlen(GOOD_NAMES[i]), GOOD_NAMES[i]),
             "line %d: want %s in %s", k, want, line);
     struct stat sb;
     char dir[4096], cmd[8192];
@@ -128,9 +129,9 @@ static void test_expansion(void) {
              RTSIM_TMP) == 0);
   EXPECTF(count_lines(out) == 8, "names.yaml: %s", out);
   static const char *const names[] = {
-      "scene=room,rays=primary,width=4",        "scene=room,rays=primary,width=8",
-      "scene=room,rays=primary+shadow,width=4", "scene=room,rays=primary+shadow,width=8",
-      "scene=grove,rays=primary,width=4",       "scene=grove,rays=primary,width=8",
+      "scene=room,rays=primary,width=4",         "scene=room,rays=primary,width=8",
+      "scene=room,rays=primary+shadow,width=4",  "scene=room,rays=primary+shadow,width=8",
+      "scene=grove,rays=primary,width=4",        "scene=grove,rays=primary,width=8",
       "scene=grove,rays=primary+shadow,width=4", "scene=grove,rays=primary+shadow,width=8"};
   for (int i = 0; i < 8; i++) {
     char want[512];
@@ -141,7 +142,8 @@ static void test_expansion(void) {
   while (last > out && last[-1] != '\n') last--;
   EXPECTF(strstr(out, "rays=primary+shadow,width=8\n") < strchr(out, '\n') + 1,
           "the first job is not a widest, two-ray-type point: %s", out);
-  EXPECTF(strstr(last, "rays=primary,width=4\n") != NULL, "the last job is not a small one: %s", last);
+  EXPECTF(strstr(last, "rays=primary,width=4\n") != NULL, "the last job is not a small one: %s",
+          last);
   char *sh = read_all(RTSIM_TMP "/sw_names/scene=room,rays=primary+shadow,width=8/command.sh");
   EXPECTF(sh && strstr(sh, "--rays primary,shadow --width 8 --height 4"), "workload arguments: %s",
           sh ? sh : "(no command.sh)");
@@ -173,29 +175,43 @@ static void test_bad_files(void) {
   static const struct {
     const char *file, *want;
   } bad[] = {
-      {"bad_top_key.yaml", "bad_top_key.yaml:3:1: error: axis: unknown key 'axis' (expected one of: machine, workload, set, axes, zip)"},
-      {"bad_axis_key.yaml", "bad_axis_key.yaml:5:3: error: axes.l2.sise: unknown key 'l2.sise' (expected a machine config key: clock_ghz,"},
+      {"bad_top_key.yaml",
+       "bad_top_key.yaml:3:1: error: axis: unknown key 'axis' (expected one of: machine, workload, set, axes, zip)"},
+      {"bad_axis_key.yaml",
+       "bad_axis_key.yaml:5:3: error: axes.l2.sise: unknown key 'l2.sise' (expected a machine config key: clock_ghz,"},
       {"bad_value.yaml", "bad_value.yaml:4:20: error: l2.size: not a size (got '32MB'"},
-      {"bad_relation.yaml", "bad_relation.yaml:6:16: error: l2.ways: the ways must divide the number of lines (got 3 ways for 256 lines) [point l2.size=16KiB,l2.ways=3]"},
+      {"bad_relation.yaml",
+       "bad_relation.yaml:6:16: error: l2.ways: the ways must divide the number of lines (got 3 ways for 256 lines) [point l2.size=16KiB,l2.ways=3]"},
       {"bad_empty_axis.yaml", "bad_empty_axis.yaml:5:20: error: axes.rays_per_thread: empty list"},
-      {"bad_zip_length.yaml", "bad_zip_length.yaml:5:14: error: zip[0]: l2.ways: 3 values, but l2.size has 2"},
-      {"bad_twice.yaml", "bad_twice.yaml:6:5: error: zip[0].l2.size: 'l2.size' is given twice (also in axes at line 4"},
+      {"bad_zip_length.yaml",
+       "bad_zip_length.yaml:5:14: error: zip[0]: l2.ways: 3 values, but l2.size has 2"},
+      {"bad_twice.yaml",
+       "bad_twice.yaml:6:5: error: zip[0].l2.size: 'l2.size' is given twice (also in axes at line 4"},
       {"bad_dup_value.yaml", "bad_dup_value.yaml:4:17: error: axes.cores[2]: '1' is listed twice"},
-      {"bad_zip_row.yaml", "bad_zip_row.yaml:4:52: error: zip[0]: the values at index 3 (one from each key) repeat those at index 1 (line 4)"},
+      {"bad_zip_row.yaml",
+       "bad_zip_row.yaml:4:52: error: zip[0]: the values at index 3 (one from each key) repeat those at index 1 (line 4)"},
       {"bad_policy.yaml", "bad_policy.yaml:4:23: error: policy: unknown policy (got 'fastest'"},
-      {"bad_rays.yaml", "bad_rays.yaml:4:19: error: rays: not a list of ray types (got 'primary,glossy'"},
+      {"bad_rays.yaml",
+       "bad_rays.yaml:4:19: error: rays: not a list of ray types (got 'primary,glossy'"},
       /* #19 item 6: YAML splits [primary, shadow,specular] into three values. */
-      {"bad_rays_flow.yaml", "bad_rays_flow.yaml:4:19: error: axes.rays[1]: 'shadow,specular' unquoted in a flow list is two values, so two points (quote it, \"shadow,specular\", for one point"},
-      {"bad_scene_missing.yaml", "bad_scene_missing.yaml:3:44: error: axes.scene[1]: cannot open '../../../scenes/small/hall.yaml'"},
-      {"bad_names.yaml", "bad_names.yaml:4:44: error: scene: two points would share the directory name 'scene=room'"},
+      {"bad_rays_flow.yaml",
+       "bad_rays_flow.yaml:4:19: error: axes.rays[1]: 'shadow,specular' unquoted in a flow list is two values, so two points (quote it, \"shadow,specular\", for one point"},
+      {"bad_scene_missing.yaml",
+       "bad_scene_missing.yaml:3:44: error: axes.scene[1]: cannot open '../../../scenes/small/hall.yaml'"},
+      {"bad_names.yaml",
+       "bad_names.yaml:4:44: error: scene: two points would share the directory name 'scene=room'"},
       {"bad_no_scene.yaml", "bad_no_scene.yaml:2:11: error: workload: missing the scene"},
       {"bad_set_key.yaml", "bad_set_key.yaml:4:3: error: set.policy: unknown key 'policy'"},
-      {"bad_nested.yaml", "bad_nested.yaml:4:14: error: axes.cores[1]: wrong type (got a list, expected one value)"},
+      {"bad_nested.yaml",
+       "bad_nested.yaml:4:14: error: axes.cores[1]: wrong type (got a list, expected one value)"},
       {"bad_machine.yaml", "configs/bad_size_unit.yaml:2:9: error: l2.size: not a size"},
       /* #17: "\n1.5" was taken as 1.5 and broke --emit-jobs' one line a point. */
-      {"bad_value_newline.yaml", "bad_value_newline.yaml:4:18: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5', expected a decimal number)"},
-      {"bad_width_leading_zero.yaml", "bad_width_leading_zero.yaml:2:59: error: width: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 16384)"},
-      {"bad_path_space.yaml", "bad_path_space.yaml:1:10: error: machine: whitespace before or after it (got '../../../configs/tiny.yaml '"},
+      {"bad_value_newline.yaml",
+       "bad_value_newline.yaml:4:18: error: clock_ghz: not a number: whitespace before or after it (got '\\n1.5', expected a decimal number)"},
+      {"bad_width_leading_zero.yaml",
+       "bad_width_leading_zero.yaml:2:59: error: width: not a whole number: a leading zero, ambiguous between octal and decimal (got '010', expected 1 to 16384)"},
+      {"bad_path_space.yaml",
+       "bad_path_space.yaml:1:10: error: machine: whitespace before or after it (got '../../../configs/tiny.yaml '"},
   };
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
     run("rm -rf %s/sw_bad", RTSIM_TMP);
@@ -252,13 +268,17 @@ static void test_run_and_merge(void) {
   EXPECTF(!strncmp(t, head, strlen(head)), "header: %.200s", t);
   EXPECT(count_lines(t) == 9);
   /* Rows in natural order of the names; a swept size takes its resolved value. */
-  EXPECTF(strstr(t, "\n\"policy=packet,rays_per_thread=1,l2.size=16KiB,l2.ways=4\",packet,1,16384,4,room-small,"),
-          "first row: %.300s", strchr(t, '\n'));
+  EXPECTF(
+      strstr(
+          t,
+          "\n\"policy=packet,rays_per_thread=1,l2.size=16KiB,l2.ways=4\",packet,1,16384,4,room-small,"),
+      "first row: %.300s", strchr(t, '\n'));
   free(t);
   /* Rerunning finds everything complete and runs nothing. */
   int rc = run("%s sweep %s -o %s/sw_ref", RTSIM_BINARY, GOOD, RTSIM_TMP);
   EXPECTF(rc == 0 && strstr(out, "8 points, 8 complete, running 0"), "rerun: %d %s", rc, out);
-  EXPECT(run("(%s sweep %s -o %s/sw_ref --emit-jobs 2>/dev/null)", RTSIM_BINARY, GOOD, RTSIM_TMP) == 0 &&
+  EXPECT(run("(%s sweep %s -o %s/sw_ref --emit-jobs 2>/dev/null)", RTSIM_BINARY, GOOD, RTSIM_TMP) ==
+             0 &&
          out[0] == '\0');
   /* The same DIR with a changed sweep is refused, not mixed. */
   rc = run("%s sweep %sgood_changed.yaml -o %s/sw_ref", RTSIM_BINARY, SW, RTSIM_TMP);
@@ -318,7 +338,8 @@ static void test_failing_point(void) {
   EXPECT(complete_points(dir) == 7);
   char want[512];
   snprintf(want, sizeof want, "1 point failed");
-  EXPECTF(strstr(out, want) && strstr(out, bad) && strstr(out, "Is a directory"), "summary: %s", out);
+  EXPECTF(strstr(out, want) && strstr(out, bad) && strstr(out, "Is a directory"), "summary: %s",
+          out);
   char err_path[4096];
   snprintf(err_path, sizeof err_path, "%s/%s/error.txt", dir, bad);
   char *err = read_all(err_path);
@@ -357,7 +378,8 @@ static void test_jobs_elsewhere(void) {
                "--will-cite -j 2)",
                RTSIM_TMP, RTSIM_BINARY, GOOD);
   EXPECTF(rc == 0, "parallel: exit %d: %s", rc, out);
-  rc = run("%s merge %s/sw_par -o %s/sw_par.csv --reproducible", RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
+  rc =
+      run("%s merge %s/sw_par -o %s/sw_par.csv --reproducible", RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
   EXPECTF(rc == 0 && same_text(RTSIM_TMP "/sw_par.csv", RTSIM_TMP "/sw_ref.csv"),
           "the table through GNU parallel differs (%d: %s)", rc, out);
 
@@ -405,8 +427,8 @@ static void test_jobs_elsewhere(void) {
   rc = run("unset SLURM_ARRAY_TASK_ID; sh %s.submitted", sl);
   EXPECTF(rc == 2 && strstr(out, "no task ''"), "no task id: %d %s", rc, out);
   /* So does a line naming a point the sweep does not have (an edited file). */
-  rc = run("%s sweep %s -o %s -j 1 --point policy=packet,rays_per_thread=3", RTSIM_BINARY, GOOD,
-           sl);
+  rc =
+      run("%s sweep %s -o %s -j 1 --point policy=packet,rays_per_thread=3", RTSIM_BINARY, GOOD, sl);
   EXPECTF(rc == 2 && strstr(out, "error: --point 'policy=packet,rays_per_thread=3': no such point"),
           "unknown point: %d %s", rc, out);
   rc = run("%s sweep %s -o %s --point ''", RTSIM_BINARY, GOOD, sl);
@@ -422,9 +444,10 @@ static void test_status(void) {
   int rc = run("%s sweep %s -o %s --status", RTSIM_BINARY, GOOD, dir);
   EXPECTF(rc == 1 && strstr(out, ": 8 points: 0 complete, 0 failed, 0 running, 8 not run\n"),
           "before: %d %s", rc, out);
-  EXPECT(!exists(RTSIM_TMP "/sw_status/" "policy=recursive,rays_per_thread=1,l2.size=16KiB,l2.ways=4"));
-  rc = run("%s sweep %s -o %s -j 2 --point %s --point %s --point %s --point %s", RTSIM_BINARY,
-           GOOD, dir, GOOD_NAMES[0], GOOD_NAMES[1], GOOD_NAMES[2], GOOD_NAMES[3]);
+  EXPECT(!exists(RTSIM_TMP "/sw_status/"
+                           "policy=recursive,rays_per_thread=1,l2.size=16KiB,l2.ways=4"));
+  rc = run("%s sweep %s -o %s -j 2 --point %s --point %s --point %s --point %s", RTSIM_BINARY, GOOD,
+           dir, GOOD_NAMES[0], GOOD_NAMES[1], GOOD_NAMES[2], GOOD_NAMES[3]);
   EXPECTF(rc == 1, "four points, one failing: %d %s", rc, out);
   char lock[8192];
   snprintf(lock, sizeof lock, "%s/%s", dir, GOOD_NAMES[4]);
@@ -482,14 +505,16 @@ static void test_moved(void) {
   EXPECTF(rc == 0 && strstr(out, "8 points, 8 complete, running 0"), "copied: %d %s", rc, out);
   /* As if the whole tree, this directory in it, had lived at /gone/tree:
    * every path in the commands, -o's included, under a root that is no more. */
-  rc = run("cd %s && for f in */command.sh; do sed -i -e 's|/sw_ref/|/sw_moved/|' -e "
-           "'s|%s/|/gone/tree/|g' \"$f\"; done && grep -q /gone/tree/configs/tiny.yaml */command.sh",
-           dir, RTSIM_SOURCE_DIR);
+  rc =
+      run("cd %s && for f in */command.sh; do sed -i -e 's|/sw_ref/|/sw_moved/|' -e "
+          "'s|%s/|/gone/tree/|g' \"$f\"; done && grep -q /gone/tree/configs/tiny.yaml */command.sh",
+          dir, RTSIM_SOURCE_DIR);
   EXPECTF(rc == 0, "rewriting the commands: %d %s", rc, out);
   rc = run("%s sweep %s -o %s", RTSIM_BINARY, GOOD, dir);
   EXPECTF(rc == 0 && strstr(out, "8 points, 8 complete, running 0"), "moved tree: %d %s", rc, out);
-  rc = run("sed -i 's|/gone/tree/configs/tiny.yaml|/gone/tree/configs/other.yaml|' '%s/%s/command.sh'",
-           dir, GOOD_NAMES[3]);
+  rc = run(
+      "sed -i 's|/gone/tree/configs/tiny.yaml|/gone/tree/configs/other.yaml|' '%s/%s/command.sh'",
+      dir, GOOD_NAMES[3]);
   rc = run("%s sweep %s -o %s", RTSIM_BINARY, GOOD, dir);
   EXPECTF(rc == 2 && strstr(out, "was made by another command"), "another config: %d %s", rc, out);
 }
@@ -514,8 +539,8 @@ static void test_provenance(void) {
     double wall = 0, rss = 0;
     char h[256] = "", rev[256] = "";
     int got = c > r ? sscanf(c + 1, "%lf,%lf,%255[^,],%255[^\n]", &wall, &rss, h, rev) : 0;
-    EXPECTF(got == 4 && wall > 0 && rss > 0 && !strcmp(h, host) && rev[0],
-            "provenance cells: %.*s", (int)(end - c), c);
+    EXPECTF(got == 4 && wall > 0 && rss > 0 && !strcmp(h, host) && rev[0], "provenance cells: %.*s",
+            (int)(end - c), c);
     rows++;
   }
   EXPECT(rows == 8);
@@ -530,12 +555,15 @@ static void test_provenance(void) {
   rc = run("%s merge %s -o %s.csv", RTSIM_BINARY, mixed, mixed);
   EXPECTF(rc == 0 && exists(RTSIM_TMP "/sw_mixed.csv"), "mixed: %d %s", rc, out);
   EXPECTF(strstr(out, "merge: warning: points from different builds: revision '") &&
-              strstr(out, "'v0-old' (" "policy=recursive,rays_per_thread=2,l2.size=16KiB,l2.ways=4)"),
+              strstr(out, "'v0-old' ("
+                          "policy=recursive,rays_per_thread=2,l2.size=16KiB,l2.ways=4)"),
           "revision warning: %s", out);
-  EXPECTF(strstr(out, "merge: warning: a scene changed between points of scene room-small: "
-                      "scene_hash '") &&
-              strstr(out, "'0123456789abcdef' (policy=packet,rays_per_thread=2,l2.size=16KiB,l2.ways=4)"),
-          "scene hash warning: %s", out);
+  EXPECTF(
+      strstr(out, "merge: warning: a scene changed between points of scene room-small: "
+                  "scene_hash '") &&
+          strstr(out,
+                 "'0123456789abcdef' (policy=packet,rays_per_thread=2,l2.size=16KiB,l2.ways=4)"),
+      "scene hash warning: %s", out);
 }
 
 static void write_text(const char *path, const char *text) {
@@ -617,13 +645,18 @@ static void test_plot(void) {
   static const struct {
     const char *args, *want;
   } bad[] = {
-      {"--x rays_per_thread --y cycls", "sw_ref.csv:1: error: --y: no column 'cycls' (columns: point, policy, rays_per_thread,"},
+      {"--x rays_per_thread --y cycls",
+       "sw_ref.csv:1: error: --y: no column 'cycls' (columns: point, policy, rays_per_thread,"},
       {"--x rays_per_thread --y cycles --lines polcy", "--lines: no column 'polcy'"},
       {"--x rays_per_thread --y cycles --where l3.size=1", "--where: no column 'l3.size'"},
-      {"--x rays_per_thread --y cycles --lines policy", "differ in l2.size, l2.ways: fix it with --where"},
-      {"--x policy --y cycles", "sw_ref.csv:3: error: rows at lines 2 and 3 fall on the same bar at policy = packet but differ in"},
-      {"--x rays_per_thread --y fetch_queue_bytes --lines policy --panels l2.size --logy", "a value must be positive on a log scale"},
-      {"--x rays_per_thread --y cycles --where l2.size=16KiB", "--where l2.size=16KiB: no row has it (the column holds: 16384, 32768)"},
+      {"--x rays_per_thread --y cycles --lines policy",
+       "differ in l2.size, l2.ways: fix it with --where"},
+      {"--x policy --y cycles",
+       "sw_ref.csv:3: error: rows at lines 2 and 3 fall on the same bar at policy = packet but differ in"},
+      {"--x rays_per_thread --y fetch_queue_bytes --lines policy --panels l2.size --logy",
+       "a value must be positive on a log scale"},
+      {"--x rays_per_thread --y cycles --where l2.size=16KiB",
+       "--where l2.size=16KiB: no row has it (the column holds: 16384, 32768)"},
   };
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
     run("rm -f %s/sw_bad.png", RTSIM_TMP);
@@ -639,7 +672,8 @@ static void write_sweep(const char *path, const char *scene, const char *axes) {
   FILE *f = fopen(path, "w");
   EXPECT(f != NULL);
   if (!f) return;
-  fprintf(f, "machine: %s/configs/tiny.yaml\nworkload:\n  scene: %s\n  rays: primary\n"
+  fprintf(f,
+          "machine: %s/configs/tiny.yaml\nworkload:\n  scene: %s\n  rays: primary\n"
           "  width: 4\n  height: 4\naxes:\n%s",
           RTSIM_SOURCE_DIR, scene, axes);
   fclose(f);
@@ -672,9 +706,10 @@ static void test_bounded(void) {
     run("rm -rf %s", dir);
     int rc = run("%s sweep %s -o %s%s", RTSIM_BINARY, file, dir, emit ? " --emit-jobs" : "");
     EXPECTF(rc == 2 && count_lines(out) == 1 &&
-                strstr(out, "sw_cap.yaml:10:3: error: timeline.window: the sweep has 1000000 points "
-                            "(expected at most 10000: fewer values, or raise the cap with rtsim "
-                            "sweep --max-points N, up to 1000000)"),
+                strstr(out,
+                       "sw_cap.yaml:10:3: error: timeline.window: the sweep has 1000000 points "
+                       "(expected at most 10000: fewer values, or raise the cap with rtsim "
+                       "sweep --max-points N, up to 1000000)"),
             "a million points: exit %d: %s", rc, out);
     EXPECTF(!exists(dir), "a refused sweep made its directory");
   }

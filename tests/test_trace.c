@@ -64,8 +64,8 @@ static void test_exact_hits(void) {
     EXPECTF(ok && fabsf(t - 2.0f * s) <= 4e-7f * s && fabsf(b1 - 0.25f) < 1e-6f &&
                 fabsf(b2 - 0.25f) < 1e-6f,
             "scale %g: t %.9g b %g %g", s, t, b1, b2);
-    ok = tri_hit(sc(a, s), sc(b, s), sc(c, s), sc(v3(0.3f, 0.2f, 1.5f), s),
-                 v3(-0.1f, 0.2f, -1.0f), 0, INFINITY, &t, &b1, &b2);
+    ok = tri_hit(sc(a, s), sc(b, s), sc(c, s), sc(v3(0.3f, 0.2f, 1.5f), s), v3(-0.1f, 0.2f, -1.0f),
+                 0, INFINITY, &t, &b1, &b2);
     /* o + 1.5 d = (0.15, 0.5, 0) in unscaled units. */
     EXPECTF(ok && fabsf(t - 1.5f * s) <= 1e-6f * s && fabsf(b1 - 0.15f) < 1e-5f &&
                 fabsf(b2 - 0.5f) < 1e-5f,
@@ -74,8 +74,7 @@ static void test_exact_hits(void) {
 }
 
 static void test_tmin_tmax(void) {
-  vec3 a = v3(0, 0, 0), b = v3(1, 0, 0), c = v3(0, 1, 0), o = v3(0.25f, 0.25f, 2),
-       d = v3(0, 0, -1);
+  vec3 a = v3(0, 0, 0), b = v3(1, 0, 0), c = v3(0, 1, 0), o = v3(0.25f, 0.25f, 2), d = v3(0, 0, -1);
   float t, b1, b2;
   EXPECT(!tri_hit(a, b, c, o, d, 0, 2.0f, &t, &b1, &b2));
   EXPECT(tri_hit(a, b, c, o, d, 0, nextafterf(2.0f, INFINITY), &t, &b1, &b2) && t == 2.0f);
@@ -122,14 +121,11 @@ static void test_shared_edge(void) {
         float u = i == 0 ? 0.5f : (i < 64 ? (float)i / 64.0f : rnd(&g, 0.01f, 0.99f));
         vec3 q = v3(u * s, u * s, 0);
         vec3 d;
-        if (i < 200)
-          d = v3(0, 0, -1);
-        else if (i < 400)
-          /* Grazing: elevation down to ~1e-3 rad. */
+        if (i < 200) d = v3(0, 0, -1);
+        else if (i < 400) /* Grazing: elevation down to ~1e-3 rad. */
           d = v3_norm(v3(cosf(rnd(&g, 0, 6.3f)), sinf(rnd(&g, 0, 6.3f)),
                          -powf(10.0f, rnd(&g, -3.0f, -1.0f))));
-        else
-          d = dir_around(v3(0, 0, -1), rnd(&g, fold ? 0.8f : 0.05f, 1.0f), rnd(&g, 0, 6.3f));
+        else d = dir_around(v3(0, 0, -1), rnd(&g, fold ? 0.8f : 0.05f, 1.0f), rnd(&g, 0, 6.3f));
         if (fold && d.z > -0.8f) continue; /* the fold is only crossed by steep rays */
         float back = rnd(&g, 0.5f, 4.0f) * s;
         vec3 o = v3_sub(q, v3_scale(d, back));
@@ -195,8 +191,8 @@ static void test_parallel_and_grazing(void) {
     /* In the plane z = 0, through the interior; just above; just below. */
     EXPECT(!tri_hit(a, b, c, sc(v3(-1, 0.25f, 0), s), v3(1, 0, 0), 0, INFINITY, &t, &b1, &b2));
     EXPECT(!tri_hit(a, b, c, sc(v3(-1, 0.25f, 1e-7f), s), v3(1, 0, 0), 0, INFINITY, &t, &b1, &b2));
-    EXPECT(!tri_hit(a, b, c, sc(v3(-1, 0.25f, -1e-7f), s), v3(1, 0.3f, 0), 0, INFINITY, &t, &b1,
-                    &b2));
+    EXPECT(
+        !tri_hit(a, b, c, sc(v3(-1, 0.25f, -1e-7f), s), v3(1, 0.3f, 0), 0, INFINITY, &t, &b1, &b2));
     /* Grazing along edges, in the plane: along a-b, along the hypotenuse. */
     EXPECT(!tri_hit(a, b, c, sc(v3(-1, 0, 0), s), v3(1, 0, 0), 0, INFINITY, &t, &b1, &b2));
     EXPECT(!tri_hit(a, b, c, sc(v3(2, -1, 0), s), v3(-1, 1, 0), 0, INFINITY, &t, &b1, &b2));
@@ -206,8 +202,8 @@ static void test_parallel_and_grazing(void) {
     /* A tilted plane x + y = 1 containing the ray exactly, and parallel off it. */
     vec3 ta = sc(v3(1, 0, 0), s), tb = sc(v3(0, 1, 0), s), tc = sc(v3(0.5f, 0.5f, 1), s);
     EXPECT(!tri_hit(ta, tb, tc, sc(v3(2, -1, 0.3f), s), v3(-1, 1, 0), 0, INFINITY, &t, &b1, &b2));
-    EXPECT(!tri_hit(ta, tb, tc, sc(v3(2, -0.999f, 0.3f), s), v3(-1, 1, 0), 0, INFINITY, &t, &b1,
-                    &b2));
+    EXPECT(
+        !tri_hit(ta, tb, tc, sc(v3(2, -0.999f, 0.3f), s), v3(-1, 1, 0), 0, INFINITY, &t, &b1, &b2));
     EXPECT(!tri_hit(ta, tb, tc, sc(v3(1.5f, -0.5f, 0.25f), s), v3(-1, 1, 0), 0, INFINITY, &t, &b1,
                     &b2));
   }
@@ -262,12 +258,9 @@ static void build_sphere(struct scene *s, vec3 ctr, float rad, int nlat, int nlo
         p[k] = v3_add(ctr, v3((float)(rad * sin(th) * cos(ph)), (float)(rad * sin(th) * sin(ph)),
                               (float)(rad * cos(th))));
       }
-      if (i == 0)
-        scene_add_tri(s, p[0], p[1], p[2], NULL, 0);
-      else if (i == nlat - 1)
-        scene_add_tri(s, p[0], p[1], p[3], NULL, 0);
-      else
-        add_quad(s, p[0], p[1], p[2], p[3]);
+      if (i == 0) scene_add_tri(s, p[0], p[1], p[2], NULL, 0);
+      else if (i == nlat - 1) scene_add_tri(s, p[0], p[1], p[3], NULL, 0);
+      else add_quad(s, p[0], p[1], p[2], p[3]);
     }
 }
 
@@ -293,10 +286,8 @@ static void build_plane(struct scene *s, vec3 ctr, float size, int n) {
 static void self_isect_case(const char *name, int is_plane, vec3 ctr, float size) {
   struct scene s;
   scene_init(&s);
-  if (is_plane)
-    build_plane(&s, ctr, size, 48);
-  else
-    build_sphere(&s, ctr, size, 40, 60);
+  if (is_plane) build_plane(&s, ctr, size, 48);
+  else build_sphere(&s, ctr, size, 40, 60);
   struct kd_tree kd;
   struct kd_build_params bp;
   kd_build_params_default(&bp);
@@ -306,9 +297,8 @@ static void self_isect_case(const char *name, int is_plane, vec3 ctr, float size
   struct rng g = rng_make(14, (uint64_t)is_plane * 7 + (uint64_t)(size * 1000.0f));
   int primaries = 0, spawned = 0, self_hits = 0, brute_hits = 0, inward_bad = 0;
   for (int i = 0; i < 1500; i++) {
-    vec3 aim = v3_add(ctr, v3_scale(v3(rnd(&g, -0.4f, 0.4f), rnd(&g, -0.4f, 0.4f),
-                                       rnd(&g, -0.4f, 0.4f)),
-                                    size));
+    vec3 aim = v3_add(
+        ctr, v3_scale(v3(rnd(&g, -0.4f, 0.4f), rnd(&g, -0.4f, 0.4f), rnd(&g, -0.4f, 0.4f)), size));
     vec3 d = v3_norm(v3(rnd(&g, -1, 1), rnd(&g, -1, 1), rnd(&g, -1, 1)));
     struct ray r = make_ray(v3_sub(aim, v3_scale(d, 3.0f * size)), d, 0, INFINITY);
     struct trace_hit h;
@@ -408,14 +398,15 @@ static void count_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
     c->node_loads++;
   else if (cls == TRACE_CLASS_NODE && size == 4 && in_region(addr, c->l.prim_idx_base))
     c->idx_loads++;
-  else if (cls == TRACE_CLASS_GEOMETRY && size == c->l.tri_bytes && in_region(addr, c->l.tri_base) &&
-           (addr - c->l.tri_base) % c->l.tri_bytes == 0)
+  else if (cls == TRACE_CLASS_GEOMETRY && size == c->l.tri_bytes &&
+           in_region(addr, c->l.tri_base) && (addr - c->l.tri_base) % c->l.tri_bytes == 0)
     c->tri_loads++;
-  else
-    c->bad++;
+  else c->bad++;
 }
 
-static void count_compute(void *ctx, uint64_t cycles) { ((struct count_ctx *)ctx)->cycles += cycles; }
+static void count_compute(void *ctx, uint64_t cycles) {
+  ((struct count_ctx *)ctx)->cycles += cycles;
+}
 
 static void test_memory_announcements(void) {
   struct scene s;

@@ -114,7 +114,8 @@ int main(void) {
     char want[1024];
     snprintf(want, sizeof want,
              "dineroIV -informat d -l1-ubsize 64 -l1-usize 8k -l1-uassoc 128 -l1-urepl l "
-             "-l1-uwback a -l1-uwalloc f < %s\n", din);
+             "-l1-uwback a -l1-uwalloc f < %s\n",
+             din);
     EXPECTF(strstr(out, want) != NULL, "replay command missing or wrong: %s", out);
     struct replay r;
     for (int k = 0; k < SIZES; k++) {
@@ -153,11 +154,14 @@ int main(void) {
   /* The traffic table: header, 13 recursive rows with relative columns 1. */
   const char *csv = RTSIM_TMP "/traffic_test.csv";
   unlink(csv);
-  snprintf(cmd, sizeof cmd,
-           "%s traffic %s/scenes/small/room.yaml --policy recursive --rays shadow --width 24 --height 24 -o %s && cat %s",
-           RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
+  snprintf(
+      cmd, sizeof cmd,
+      "%s traffic %s/scenes/small/room.yaml --policy recursive --rays shadow --width 24 --height 24 -o %s && cat %s",
+      RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
   EXPECT(testing_run(cmd, out, sizeof out) == 0);
-  const char *row = strstr(out, "scene,rays,width,height,policy,cache_bytes,frac_pot_vis,geometry_mb,total_mb,rel_geometry,rel_total");
+  const char *row = strstr(
+      out,
+      "scene,rays,width,height,policy,cache_bytes,frac_pot_vis,geometry_mb,total_mb,rel_geometry,rel_total");
   EXPECT(row != NULL);
   int rows = 0;
   for (const char *q = row ? strchr(row, '\n') : NULL; q && q[1]; q = strchr(q + 1, '\n')) {
@@ -171,9 +175,10 @@ int main(void) {
   static const char *const queued[] = {"dynamic", "treelet"};
   const unsigned long long want_8k[] = {dyn_misses_8k, tl_misses_8k};
   for (int q = 0; q < 2; q++) {
-    snprintf(cmd, sizeof cmd,
-             "%s traffic %s/scenes/small/room.yaml --policy %s --rays shadow --width 24 --height 24 -o %s && cat %s",
-             RTSIM_BINARY, RTSIM_SOURCE_DIR, queued[q], csv, csv);
+    snprintf(
+        cmd, sizeof cmd,
+        "%s traffic %s/scenes/small/room.yaml --policy %s --rays shadow --width 24 --height 24 -o %s && cat %s",
+        RTSIM_BINARY, RTSIM_SOURCE_DIR, queued[q], csv, csv);
     EXPECT(testing_run(cmd, out, sizeof out) == 0);
     char key[32];
     snprintf(key, sizeof key, ",%s,8192,", queued[q]);
@@ -183,36 +188,39 @@ int main(void) {
     /* After cache_bytes: frac, geometry_mb, total_mb, rel x2, then fetch by class. */
     double f0, f1, f2, f3, f4;
     unsigned long long fc[5];
-    EXPECT(sscanf(row8 + strlen(key), "%lf,%lf,%lf,%lf,%lf,%llu,%llu,%llu,%llu,%llu", &f0, &f1, &f2, &f3,
-                  &f4, &fc[0], &fc[1], &fc[2], &fc[3], &fc[4]) == 10);
+    EXPECT(sscanf(row8 + strlen(key), "%lf,%lf,%lf,%lf,%lf,%llu,%llu,%llu,%llu,%llu", &f0, &f1, &f2,
+                  &f3, &f4, &fc[0], &fc[1], &fc[2], &fc[3], &fc[4]) == 10);
     unsigned long long lines = (fc[0] + fc[1] + fc[2] + fc[3] + fc[4]) / 64;
-    EXPECTF(want_8k[q] > 0 && lines == want_8k[q], "%s 8 KB: table %llu lines, trace %llu", queued[q],
-            lines, want_8k[q]);
+    EXPECTF(want_8k[q] > 0 && lines == want_8k[q], "%s 8 KB: table %llu lines, trace %llu",
+            queued[q], lines, want_8k[q]);
   }
 
   /* The whole table, every policy, is the same byte for byte whichever
    * thread the analyser runs on (diffuse rays: dynamic's generations too). */
   {
     char one[16384];
-    snprintf(cmd, sizeof cmd,
-             "%s traffic %s/scenes/small/room.yaml --policy all --rays diffuse --width 16 --height 16 "
-             "--threads 1 -o %s > /dev/null && cat %s",
-             RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
+    snprintf(
+        cmd, sizeof cmd,
+        "%s traffic %s/scenes/small/room.yaml --policy all --rays diffuse --width 16 --height 16 "
+        "--threads 1 -o %s > /dev/null && cat %s",
+        RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
     EXPECT(testing_run(cmd, one, sizeof one) == 0);
-    snprintf(cmd, sizeof cmd,
-             "%s traffic %s/scenes/small/room.yaml --policy all --rays diffuse --width 16 --height 16 "
-             "--threads 2 -o %s > /dev/null && cat %s",
-             RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
+    snprintf(
+        cmd, sizeof cmd,
+        "%s traffic %s/scenes/small/room.yaml --policy all --rays diffuse --width 16 --height 16 "
+        "--threads 2 -o %s > /dev/null && cat %s",
+        RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
     EXPECT(testing_run(cmd, out, sizeof out) == 0);
-    EXPECTF(strlen(one) > 1000 && strcmp(one, out) == 0, "threads 1:\n%.300s\nthreads 2:\n%.300s", one,
-            out);
+    EXPECTF(strlen(one) > 1000 && strcmp(one, out) == 0, "threads 1:\n%.300s\nthreads 2:\n%.300s",
+            one, out);
   }
 
   /* Without --cache the replay command is for 512 KB: 8192 ways. --help shows
    * the same, and nowhere the direct-mapped -l1-uassoc 0. */
-  snprintf(cmd, sizeof cmd,
-           "%s trace %s/scenes/small/room.yaml --policy packet --rays primary --width 4 --height 4 --din %s",
-           RTSIM_BINARY, RTSIM_SOURCE_DIR, din);
+  snprintf(
+      cmd, sizeof cmd,
+      "%s trace %s/scenes/small/room.yaml --policy packet --rays primary --width 4 --height 4 --din %s",
+      RTSIM_BINARY, RTSIM_SOURCE_DIR, din);
   EXPECT(testing_run(cmd, out, sizeof out) == 0);
   EXPECTF(strstr(out, "-l1-usize 512k -l1-uassoc 8192 ") != NULL, "%s", out);
   snprintf(cmd, sizeof cmd, "%s trace --help", RTSIM_BINARY);
@@ -221,12 +229,14 @@ int main(void) {
           "%s", out);
   /* The dynamic settings are columns of every row: as given, and changing the
    * dynamic rows only (one ray of buffer frees cache for geometry). */
-  snprintf(cmd, sizeof cmd,
-           "%s traffic %s/scenes/small/room.yaml --rays shadow --width 24 --height 24 --dyn-batch 7 "
-           "--dyn-ray-buffer 0 -o %s && cat %s",
-           RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
+  snprintf(
+      cmd, sizeof cmd,
+      "%s traffic %s/scenes/small/room.yaml --rays shadow --width 24 --height 24 --dyn-batch 7 "
+      "--dyn-ray-buffer 0 -o %s && cat %s",
+      RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
   EXPECT(testing_run(cmd, out, sizeof out) == 0);
-  EXPECT(strstr(out, ",pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes,kd_splits\n") != NULL);
+  EXPECT(strstr(out, ",pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes,kd_splits\n") !=
+         NULL);
   int tagged = 0;
   for (const char *q = strstr(out, "\nroom"); q; q = strchr(q + 1, '\n')) {
     const char *eol = strchr(q + 1, '\n');
@@ -237,17 +247,23 @@ int main(void) {
           3 * SIZES);
 
   /* Bad command lines: exit 2. */
-  snprintf(cmd, sizeof cmd, "%s traffic %s/scenes/small/room.yaml --rays glossy -o %s", RTSIM_BINARY,
-           RTSIM_SOURCE_DIR, csv);
+  snprintf(cmd, sizeof cmd, "%s traffic %s/scenes/small/room.yaml --rays glossy -o %s",
+           RTSIM_BINARY, RTSIM_SOURCE_DIR, csv);
   EXPECT(testing_run(cmd, out, sizeof out) == 2 && strstr(out, "--rays: got 'glossy'"));
-  snprintf(cmd, sizeof cmd, "%s trace %s/scenes/small/room.yaml --rays primary --policy fifo --din %s",
-           RTSIM_BINARY, RTSIM_SOURCE_DIR, din);
+  snprintf(cmd, sizeof cmd,
+           "%s trace %s/scenes/small/room.yaml --rays primary --policy fifo --din %s", RTSIM_BINARY,
+           RTSIM_SOURCE_DIR, din);
   EXPECT(testing_run(cmd, out, sizeof out) == 2 && strstr(out, "--policy: got 'fifo'"));
-  snprintf(cmd, sizeof cmd, "%s trace %s/scenes/small/room.yaml --rays primary --policy dynamic --cache 3000 --din %s",
-           RTSIM_BINARY, RTSIM_SOURCE_DIR, din);
-  EXPECT(testing_run(cmd, out, sizeof out) == 2 && strstr(out, "--cache: got '3000', expected a power of two"));
-  snprintf(cmd, sizeof cmd, "%s trace %s/scenes/small/room.yaml --rays primary --policy recursive --din /nonexistent/x.din",
-           RTSIM_BINARY, RTSIM_SOURCE_DIR);
+  snprintf(
+      cmd, sizeof cmd,
+      "%s trace %s/scenes/small/room.yaml --rays primary --policy dynamic --cache 3000 --din %s",
+      RTSIM_BINARY, RTSIM_SOURCE_DIR, din);
+  EXPECT(testing_run(cmd, out, sizeof out) == 2 &&
+         strstr(out, "--cache: got '3000', expected a power of two"));
+  snprintf(
+      cmd, sizeof cmd,
+      "%s trace %s/scenes/small/room.yaml --rays primary --policy recursive --din /nonexistent/x.din",
+      RTSIM_BINARY, RTSIM_SOURCE_DIR);
   EXPECT(testing_run(cmd, out, sizeof out) == 2 && strstr(out, "/nonexistent/x.din"));
   return testing_done("test_traffic");
 }

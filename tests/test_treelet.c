@@ -8,9 +8,9 @@
 #include <string.h>
 
 #include "renderer/kdtree.h"
+#include "renderer/policy/treelet.h"
 #include "renderer/scene.h"
 #include "renderer/scene/scene_file.h"
-#include "renderer/policy/treelet.h"
 #include "sim/err.h"
 #include "testing.h"
 
@@ -47,7 +47,8 @@ static void expect_partition(const struct treelet_set *ts, const char *what, uin
                              const uint32_t *of, const uint32_t *root, const uint64_t *bytes) {
   int same = ts->count == count;
   for (uint32_t i = 0; same && i < 5; i++) same = ts->of[i] == of[i];
-  for (uint32_t t = 0; same && t < count; t++) same = ts->root[t] == root[t] && ts->bytes[t] == bytes[t];
+  for (uint32_t t = 0; same && t < count; t++)
+    same = ts->root[t] == root[t] && ts->bytes[t] == bytes[t];
   EXPECTF(same, "%s: %u treelets, of = %u %u %u %u %u, bytes[0] %llu", what, ts->count, ts->of[0],
           ts->of[1], ts->of[2], ts->of[3], ts->of[4], (unsigned long long)ts->bytes[0]);
 }
@@ -167,7 +168,8 @@ static void check_scene(const char *path) {
       over += bytes[t] - empty[t] > budgets[c] && !(bytes[t] - empty[t] == root_alone);
       for (uint32_t i = 0; i < n; i++) /* reset the stamps for the next treelet's count */
         if (ts.of[i] == t && kd_is_leaf(kd.nodes[i]))
-          for (uint32_t k = 0; k < kd_leaf_count(kd.nodes[i]); k++) stamp[kd.prims[kd_leaf_offset(kd.nodes[i]) + k]] = 0;
+          for (uint32_t k = 0; k < kd_leaf_count(kd.nodes[i]); k++)
+            stamp[kd.prims[kd_leaf_offset(kd.nodes[i]) + k]] = 0;
       if (t > 500) break; /* brute force is quadratic: a sample of treelets */
     }
     EXPECTF(out_of_range == 0 && disconnected == 0 && bad_root == 0, "%s budget %llu: %d/%d/%d",

@@ -111,10 +111,8 @@ void testing_slots_access(struct testing_slots *t, uint64_t k, bool store) {
   }
   t->bad += t->pending[k] != !store; /* overwritten before read, or read unstored */
   t->pending[k] = (uint8_t)store;
-  if (store)
-    t->stores++;
-  else
-    t->loads++;
+  if (store) t->stores++;
+  else t->loads++;
 }
 
 uint64_t testing_slots_left(const struct testing_slots *t) {

@@ -9,24 +9,24 @@
 extern int testing_failures;
 extern int testing_checks;
 
-#define EXPECT(cond)                                                               \
-  do {                                                                             \
-    testing_checks++;                                                              \
-    if (!(cond)) {                                                                 \
-      testing_failures++;                                                          \
-      fprintf(stderr, "%s:%d: FAILED: %s\n", __FILE__, __LINE__, #cond);           \
-    }                                                                              \
+#define EXPECT(cond)                                                                               \
+  do {                                                                                             \
+    testing_checks++;                                                                              \
+    if (!(cond)) {                                                                                 \
+      testing_failures++;                                                                          \
+      fprintf(stderr, "%s:%d: FAILED: %s\n", __FILE__, __LINE__, #cond);                           \
+    }                                                                                              \
   } while (0)
 
-#define EXPECTF(cond, ...)                                                         \
-  do {                                                                             \
-    testing_checks++;                                                              \
-    if (!(cond)) {                                                                 \
-      testing_failures++;                                                          \
-      fprintf(stderr, "%s:%d: FAILED: %s: ", __FILE__, __LINE__, #cond);           \
-      fprintf(stderr, __VA_ARGS__);                                                \
-      fputc('\n', stderr);                                                         \
-    }                                                                              \
+#define EXPECTF(cond, ...)                                                                         \
+  do {                                                                                             \
+    testing_checks++;                                                                              \
+    if (!(cond)) {                                                                                 \
+      testing_failures++;                                                                          \
+      fprintf(stderr, "%s:%d: FAILED: %s: ", __FILE__, __LINE__, #cond);                           \
+      fprintf(stderr, __VA_ARGS__);                                                                \
+      fputc('\n', stderr);                                                                         \
+    }                                                                                              \
   } while (0)
 
 /* Print a summary line and return the failure count (use as main's return). */

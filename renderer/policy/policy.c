@@ -15,7 +15,8 @@
 static const char *const NAMES[POLICY_COUNT] = {"recursive", "packet", "dynamic", "treelet"};
 
 static const struct policy_module *const MODULES[POLICY_COUNT] = {
-    &policy_recursive_module, &policy_packet_module, &policy_dynamic_module, &policy_treelet_module};
+    &policy_recursive_module, &policy_packet_module, &policy_dynamic_module,
+    &policy_treelet_module};
 
 void policy_params_default(struct policy_params *p) {
   memset(p, 0, sizeof *p);
@@ -49,7 +50,10 @@ void policy_list(char *buf, size_t cap, const char *last) {
   size_t n = 0;
   buf[0] = '\0';
   for (int i = 0; i < POLICY_COUNT && n < cap; i++)
-    n += (size_t)snprintf(buf + n, cap - n, "%s%s", i == 0 ? "" : i + 1 < POLICY_COUNT ? ", " : last,
+    n += (size_t)snprintf(buf + n, cap - n, "%s%s",
+                          i == 0                 ? ""
+                          : i + 1 < POLICY_COUNT ? ", "
+                                                 : last,
                           NAMES[i]);
 }
 
@@ -144,8 +148,8 @@ void policy_job_destroy(struct policy_job *job) {
 
 uint64_t policy_job_total(const struct policy_job *job) { return job->total; }
 
-void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_t id,
-                        uint32_t core, uint32_t thread, struct mem_port port) {
+void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_t id, uint32_t core,
+                        uint32_t thread, struct mem_port port) {
   CHECK_LT(id, job->workers);
   CHECK_LT(core, job->cores);
   const struct policy_setup *s = &job->setup;

@@ -52,8 +52,8 @@ enum policy_dyn_sharing { POLICY_DYN_PARTITION = 0, POLICY_DYN_CHIP = 1 };
 enum policy_item { POLICY_ITEM_DETAIL, POLICY_ITEM_PORT, POLICY_ITEM_HOLD };
 
 struct policy_params {
-  uint32_t packet_dim;   /* packet: packets are packet_dim x packet_dim pixels (8) */
-  uint64_t cache_bytes;  /* dynamic: the cache size the schedule is made for */
+  uint32_t packet_dim;  /* packet: packets are packet_dim x packet_dim pixels (8) */
+  uint64_t cache_bytes; /* dynamic: the cache size the schedule is made for */
   /* dynamic: what the cache holds besides geometry (section 2.2), each capped
    * by a share of cache_bytes: k-d nodes up to 1/dyn_node_share (4: the paper's
    * 1 MB of 4 MB), the queue table (8 bytes a queue point) up to
@@ -127,9 +127,9 @@ void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32
 struct policy_setup {
   const struct scene *scene;
   const struct kd_tree *kd;
-  struct trace_layout layout;     /* simulated addresses of every region */
+  struct trace_layout layout; /* simulated addresses of every region */
   const struct shade_ctx *sc;
-  struct framebuffer *fb;         /* its size is the image size */
+  struct framebuffer *fb; /* its size is the image size */
   /* Optional bit set, one bit a triangle, set when any worker tests it against
    * a ray (the potentially visible geometry). NULL: not tracked. */
   uint64_t *tested;
@@ -179,10 +179,10 @@ struct policy_worker {
    * ray_base is its own ray region: setup ray_base + id x
    * policy_ray_region_bytes (worker 0 keeps the setup's ray_base). */
   struct trace_ctx tr;
-  struct render_stats st;         /* its own counters */
-  uint32_t id;                    /* 0 .. workers-1: selects its ray region */
-  uint32_t core, thread;          /* where it runs (plain integers; core < cores) */
-  void *scratch;                  /* the policy's, allocated on its first work item */
+  struct render_stats st; /* its own counters */
+  uint32_t id;            /* 0 .. workers-1: selects its ray region */
+  uint32_t core, thread;  /* where it runs (plain integers; core < cores) */
+  void *scratch;          /* the policy's, allocated on its first work item */
   /* Set by a step that parked w (mem_park: it has nothing to do until another
    * worker wakes it); policy_job_work returns then. */
   bool parked;
@@ -208,8 +208,8 @@ uint64_t policy_ray_region_bytes(enum policy_kind k);
 /* Set up worker w of job: id < workers (each id once), core < cores; its
  * accesses go through port. Allocates nothing (scratch comes with its first
  * work item, so idle workers cost nothing). */
-void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_t id,
-                        uint32_t core, uint32_t thread, struct mem_port port);
+void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_t id, uint32_t core,
+                        uint32_t thread, struct mem_port port);
 
 /* Take the next work item and do all of it: claim it from the job (before any
  * access), trace, shade, trace what it spawns. False, with no access made,

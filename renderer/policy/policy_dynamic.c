@@ -69,10 +69,10 @@
 #include "renderer/policy/qpoint.h"
 #include "renderer/policy/qstore.h"
 #include "renderer/policy/qwalk.h"
+#include "renderer/policy/treelet.h"
 #include "renderer/scene.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
-#include "renderer/policy/treelet.h"
 #include "sim/err.h"
 
 #define DYN_NONE UINT32_MAX
@@ -114,8 +114,8 @@ struct dyn {
   struct qwalk_tree wt; /* the tree with qs's queue points */
   struct qstore st;
   struct qdrain_set ds;
-  uint32_t *order;  /* primary rays (work items) in Hilbert order */
-  uint64_t batch;   /* primary rays a work item admits */
+  uint32_t *order; /* primary rays (work items) in Hilbert order */
+  uint64_t batch;  /* primary rays a work item admits */
   /* The batch being traced: primary rays [lo, hi), the next to admit, the
    * admissions under way; its phase; the rays of the phase's queue set that
    * are queued or being traced (a phase ends when none are). */
@@ -161,10 +161,8 @@ static void park(struct dyn_worker *x, struct dyn_parked *l) {
   const uint32_t id = x->wk->id;
   if (l) {
     d->park_next[id] = DYN_NONE;
-    if (l->tail == DYN_NONE)
-      l->head = id;
-    else
-      d->park_next[l->tail] = id;
+    if (l->tail == DYN_NONE) l->head = id;
+    else d->park_next[l->tail] = id;
     l->tail = id;
   }
   d->parked++;
@@ -249,7 +247,8 @@ static void progress(struct dyn_worker *x) {
 /* A ray ends: a shadow ray adds its light, any other is shaded now (its hit
  * is the walk's best; a miss has t = tmax, as trace_closest gives it) and its
  * children wait in pend until this ray's work is counted. */
-static void terminate(struct dyn_worker *x, struct ray *r, const struct qwalk *w, enum qwalk_end e) {
+static void terminate(struct dyn_worker *x, struct ray *r, const struct qwalk *w,
+                      enum qwalk_end e) {
   const struct policy_setup *s = &x->job->setup;
   x->st->rays[r->type]++;
   x->st->terminated++;
@@ -285,8 +284,7 @@ static void route(struct dyn_worker *x, struct ray *r, const struct qwalk *w, en
 
 /* Per-pixel cost: the work this worker's tracer counted for a ray since the
  * marks (its own counters: others' work never lands in them). */
-static void cost_add(const struct dyn_worker *x, uint32_t pixel, uint64_t nodes0,
-                     uint64_t tris0) {
+static void cost_add(const struct dyn_worker *x, uint32_t pixel, uint64_t nodes0, uint64_t tris0) {
   struct framebuffer *fb = x->job->setup.fb;
   fb->cost_nodes[pixel] += (uint32_t)(x->tr->stats.node_visits - nodes0);
   fb->cost_tris[pixel] += (uint32_t)(x->tr->stats.tri_tests - tris0);
@@ -405,7 +403,8 @@ static void trace_leaf_claim(struct dyn_worker *x) {
       over = false;
     } else {
       qwalk_to(&d->wt, tr, &w, cl->node);
-      route(x, &r, &w, d->tl_of ? qwalk_leave_treelet(&w) : qwalk_leave(&d->wt, tr, &w), DYN_SET_NOW);
+      route(x, &r, &w, d->tl_of ? qwalk_leave_treelet(&w) : qwalk_leave(&d->wt, tr, &w),
+            DYN_SET_NOW);
     }
     cost_add(x, r.pixel, n0, t0);
     flush(x);
@@ -457,10 +456,8 @@ static bool trace_claim(struct dyn_worker *x) {
     return false;
   }
   x->holding = false;
-  if (x->cl.leaf)
-    trace_leaf_claim(x);
-  else
-    trace_subtree_claim(x);
+  if (x->cl.leaf) trace_leaf_claim(x);
+  else trace_subtree_claim(x);
   if (qdrain_claim_done(&d->ds, &x->cl)) wake(x, &d->pass[x->cl.drain], UINT64_MAX);
   return true;
 }
@@ -536,7 +533,9 @@ static bool advance(struct dyn *d) {
 
 /* ---- the module --------------------------------------------------------------- */
 
-static uint32_t clamp_u32(uint64_t v) { return v == 0 ? 1 : (v > UINT32_MAX ? UINT32_MAX : (uint32_t)v); }
+static uint32_t clamp_u32(uint64_t v) {
+  return v == 0 ? 1 : (v > UINT32_MAX ? UINT32_MAX : (uint32_t)v);
+}
 
 /* policy_dynamic_plan with the subtree triangle counts given (tris,
  * qpoint_subtree_tris of kd). */
@@ -548,12 +547,12 @@ static void plan_counted(const struct policy_params *p, uint32_t workers, uint32
   CHECK_GE(cores, 1);
   CHECK_LE(cores, workers);
   CHECK_GT(tri_bytes, 0);
-  const uint64_t rays = p->dyn_ray_buffer_bytes ? p->dyn_ray_buffer_bytes
-                                                : (uint64_t)workers * sizeof(struct ray);
+  const uint64_t rays =
+      p->dyn_ray_buffer_bytes ? p->dyn_ray_buffer_bytes : (uint64_t)workers * sizeof(struct ray);
   /* Geometry resident at once: one queue point a core, or one for the chip. */
   const uint32_t holders = p->dyn_sharing == POLICY_DYN_CHIP ? 1 : cores;
-  struct qpoint_reserve res = {p->cache_bytes, p->dyn_node_share, p->dyn_table_share,
-                               p->dyn_ray_share, rays, holders};
+  struct qpoint_reserve res = {
+      p->cache_bytes, p->dyn_node_share, p->dyn_table_share, p->dyn_ray_share, rays, holders};
   qpoint_plan(qs, b, kd, tris, tri_bytes, &res);
   *block_tris = clamp_u32(b->gmax_bytes / tri_bytes);
   *group = clamp_u32(b->ray_bytes / sizeof(struct ray) / workers);

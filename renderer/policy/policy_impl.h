@@ -36,16 +36,16 @@ struct policy_job {
   const struct policy_module *mod;
   struct policy_setup setup;
   struct policy_params params;
-  struct camera_frame cf;       /* the scene's camera at the image size */
+  struct camera_frame cf; /* the scene's camera at the image size */
   uint32_t workers, cores;
-  uint32_t live;                /* workers initialised and not yet finished */
+  uint32_t live; /* workers initialised and not yet finished */
   /* The shared work list: items [next, total) are still to be claimed. */
   uint64_t total, next;
-  uint64_t done;                /* items finished, for progress */
-  uint64_t progress_every;      /* report every this many items; 0: the module reports */
-  struct render_stats st;       /* sums of the finished workers */
+  uint64_t done;           /* items finished, for progress */
+  uint64_t progress_every; /* report every this many items; 0: the module reports */
+  struct render_stats st;  /* sums of the finished workers */
   struct trace_stats ts;
-  void *shared;                 /* the module's shared state */
+  void *shared; /* the module's shared state */
 };
 
 /* Claim up to n work items for the caller: returns how many (0: none left)

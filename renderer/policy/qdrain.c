@@ -85,14 +85,14 @@ static void preload_leaf(struct trace_ctx *tr, struct kd_node nd, uint32_t j0, u
   uint32_t off = kd_leaf_offset(nd);
   for (uint32_t j = j0; j < j1; j++) {
     uint32_t p = trav_leaf_prim(tr, off + j);
-    mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p, tr->layout.tri_bytes,
-             TRACE_CLASS_GEOMETRY);
+    mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p,
+             tr->layout.tri_bytes, TRACE_CLASS_GEOMETRY);
   }
 }
 
 /* Entries [*j0, *j1) of leaf nd that pass `block` tests. */
-static void block_range(const struct qdrain_set *ds, struct kd_node nd, uint32_t block, uint32_t *j0,
-                        uint32_t *j1) {
+static void block_range(const struct qdrain_set *ds, struct kd_node nd, uint32_t block,
+                        uint32_t *j0, uint32_t *j1) {
   const uint32_t cnt = kd_leaf_count(nd), bt = ds->block_tris;
   *j0 = block * bt;
   *j1 = cnt - *j0 > bt ? *j0 + bt : cnt;

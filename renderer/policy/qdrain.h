@@ -52,12 +52,12 @@ struct qdrain_core {
 
 /* Caller-provided storage: qdrain_init, qdrain_fini. */
 struct qdrain_set {
-  struct qstore *st;            /* borrowed */
-  const struct qpoint_set *qs;  /* borrowed: queue i is at node qs->qnode[i] */
-  uint32_t block_tris;          /* triangles of an oversized leaf processed at once */
-  uint32_t group;               /* rays a worker takes at once at a leaf */
+  struct qstore *st;           /* borrowed */
+  const struct qpoint_set *qs; /* borrowed: queue i is at node qs->qnode[i] */
+  uint32_t block_tris;         /* triangles of an oversized leaf processed at once */
+  uint32_t group;              /* rays a worker takes at once at a leaf */
   uint32_t cores;
-  struct qdrain *drain;         /* one a core */
+  struct qdrain *drain; /* one a core */
   struct qdrain_core *core;
   /* Chip-wide sharing (qdrain_share_chip): a core takes a free queue only
    * while the drains have fewer than feed rays left to hand out (handout). */
@@ -75,9 +75,9 @@ struct qdrain_set {
 /* The rays a worker took at once from a drain (slot indices: qstore_ray). */
 struct qdrain_claim {
   uint32_t drain, seq, node, j0, j1; /* at a leaf: entries [j0, j1) of its geometry */
-  bool leaf, last; /* last: the last pass, which lets the rays go on */
+  bool leaf, last;                   /* last: the last pass, which lets the rays go on */
   uint32_t n;
-  uint64_t *slot;  /* group entries (qdrain_claim_init) */
+  uint64_t *slot; /* group entries (qdrain_claim_init) */
   /* The pixels of the rays of a queue point its worker took or started a
    * pass of (trace_attribute: their shared work), grown as needed. */
   uint32_t *pixels;

@@ -46,8 +46,8 @@ void qpoint_subtree_tris(const struct kd_tree *kd, uint32_t *out) {
    * triangles once. The lowest common ancestor of two leaves: the deeper one
    * climbs to the other's depth, then both climb until they meet; a
    * triangle's consecutive leaves are near each other, so the climb is short.
-   * A repeated reference (a == b) cancels itself. Sums are kept in out modulo 2^32: a partial sum may go
-   * below zero, every final one is a count. */
+   * A repeated reference (a == b) cancels itself. Sums are kept in out modulo 2^32: a partial sum
+   * may go below zero, every final one is a count. */
   memset(out, 0, (uint64_t)n * sizeof *out);
   for (uint32_t i = 0; i < n; i++) {
     struct kd_node nd = kd->nodes[i];
@@ -150,10 +150,8 @@ int64_t qpoint_index(const struct qpoint_set *qs, uint32_t n) {
   uint32_t lo = 0, hi = qs->count;
   while (lo < hi) {
     uint32_t mid = lo + (hi - lo) / 2;
-    if (qs->qnode[mid] < n)
-      lo = mid + 1;
-    else
-      hi = mid;
+    if (qs->qnode[mid] < n) lo = mid + 1;
+    else hi = mid;
   }
   return lo < qs->count && qs->qnode[lo] == n ? (int64_t)lo : -1;
 }

@@ -51,9 +51,9 @@ struct qpoint_set {
   const struct kd_node *nodes; /* the tree's nodes, node_count of them */
   uint64_t *mark;              /* bit n set: node n is a queue point */
   uint32_t node_count;
-  uint32_t *qnode;       /* node index of queue point q, increasing */
-  uint32_t count;        /* number of queue points */
-  uint64_t gmax_bytes;   /* the bound it was made for */
+  uint32_t *qnode;     /* node index of queue point q, increasing */
+  uint32_t count;      /* number of queue points */
+  uint64_t gmax_bytes; /* the bound it was made for */
 };
 
 /* A bitmap of n nodes, all clear (free it). */

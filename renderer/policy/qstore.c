@@ -129,10 +129,8 @@ uint64_t qstore_push(struct qstore *st, uint32_t set, uint32_t qi, const struct 
   struct qstore_queue *q = &st->set[set][qi];
   if (q->tail == QSTORE_NONE || q->tail_fill == QSTORE_CHUNK_RAYS) {
     uint32_t c = chunk_alloc(st);
-    if (q->tail == QSTORE_NONE)
-      q->head = c;
-    else
-      st->chunk_next[q->tail] = c;
+    if (q->tail == QSTORE_NONE) q->head = c;
+    else st->chunk_next[q->tail] = c;
     q->tail = c;
     q->tail_fill = 0;
   }
@@ -146,7 +144,9 @@ uint64_t qstore_push(struct qstore *st, uint32_t set, uint32_t qi, const struct 
   return slot;
 }
 
-static uint64_t table_addr(const struct qstore *st, uint32_t qi) { return st->qtable_base + 8ull * qi; }
+static uint64_t table_addr(const struct qstore *st, uint32_t qi) {
+  return st->qtable_base + 8ull * qi;
+}
 
 void qstore_write(struct qstore *st, const struct mem_port *mem, uint32_t qi, uint64_t slot) {
   mem_load(mem, table_addr(st, qi), 8, TRACE_CLASS_QUEUE);

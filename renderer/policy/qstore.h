@@ -90,16 +90,22 @@ uint64_t qstore_push(struct qstore *st, uint32_t set, uint32_t qi, const struct 
 void qstore_write(struct qstore *st, const struct mem_port *mem, uint32_t qi, uint64_t slot);
 
 /* Whether slot's enqueue has issued its store (see the hazards above). */
-static inline bool qstore_stored(const struct qstore *st, uint64_t slot) { return st->stored[slot] != 0; }
+static inline bool qstore_stored(const struct qstore *st, uint64_t slot) {
+  return st->stored[slot] != 0;
+}
 
 /* The host record of slot (valid while the slot holds its ray). */
-static inline struct ray *qstore_ray(const struct qstore *st, uint64_t slot) { return &st->pool[slot]; }
+static inline struct ray *qstore_ray(const struct qstore *st, uint64_t slot) {
+  return &st->pool[slot];
+}
 
 /* The node a queued ray resumes at, where its queue does not tell it (the
  * treelet policy: a ray enters a treelet at its root or at a node its stack
  * holds). 0 at the push. Host only: the 64-byte record has no room for it,
  * where a real one would carry 4 more bytes (as it would carry its hit's t). */
-static inline uint32_t qstore_entry(const struct qstore *st, uint64_t slot) { return st->entry[slot]; }
+static inline uint32_t qstore_entry(const struct qstore *st, uint64_t slot) {
+  return st->entry[slot];
+}
 static inline void qstore_set_entry(struct qstore *st, uint64_t slot, uint32_t node) {
   st->entry[slot] = node;
 }
@@ -108,7 +114,9 @@ static inline uint64_t qstore_slot_addr(const struct qstore *st, uint64_t slot) 
   return st->queue_base + slot * sizeof(struct ray);
 }
 
-static inline uint32_t qstore_slot_chunk(uint64_t slot) { return (uint32_t)(slot / QSTORE_CHUNK_RAYS); }
+static inline uint32_t qstore_slot_chunk(uint64_t slot) {
+  return (uint32_t)(slot / QSTORE_CHUNK_RAYS);
+}
 
 /* Rays queued in queue qi of set `set` (a held queue: those that arrived
  * since it was taken). */

@@ -33,8 +33,8 @@ static void restore_hit(const struct qwalk_tree *t, const struct trace_isect_ray
   CHECK_GE(r->hit_prim, 0);
   CHECK_LT((uint32_t)r->hit_prim, t->s->tri_count);
   const struct scene_tri *tri = &t->s->tris[r->hit_prim];
-  bool ok = trace_isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, r->tmax, &h->t, &h->b1,
-                            &h->b2);
+  bool ok =
+      trace_isect_tri(ir, tri->v[0], tri->v[1], tri->v[2], r->tmin, r->tmax, &h->t, &h->b1, &h->b2);
   CHECK(ok);
   h->prim = r->hit_prim;
 }
@@ -63,7 +63,8 @@ bool qwalk_init(const struct qwalk_tree *t, struct qwalk *w, const struct ray *r
   return true;
 }
 
-bool qwalk_leaf(struct trace_ctx *tr, struct qwalk *w, struct kd_node nd, uint32_t j0, uint32_t j1) {
+bool qwalk_leaf(struct trace_ctx *tr, struct qwalk *w, struct kd_node nd, uint32_t j0,
+                uint32_t j1) {
   return trav_leaf(tr, &w->ir, w->tmin, w->ignore, w->any, nd, j0, j1, &w->best);
 }
 
@@ -73,8 +74,8 @@ static bool walk_pop(struct qwalk *w, int floor) {
   return trav_pop(w->stack, &w->sp, floor, &w->best, &w->ni, &w->t0, &w->t1);
 }
 
-enum qwalk_end qwalk_run(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w, int floor,
-                         bool to_queue) {
+enum qwalk_end qwalk_run(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w,
+                         int floor, bool to_queue) {
   for (;;) {
     trav_announce_node(tr, w->ni, 1);
     struct kd_node nd = t->nodes[w->ni];

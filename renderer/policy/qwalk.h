@@ -75,8 +75,8 @@ bool qwalk_leaf(struct trace_ctx *tr, struct qwalk *w, struct kd_node nd, uint32
 /* Walk on from the current node. In a queue point's subtree (to_queue false)
  * run until its pending nodes (those above stack depth floor) are done; above
  * the queue points (to_queue true) stop at the first queue point reached. */
-enum qwalk_end qwalk_run(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w, int floor,
-                         bool to_queue);
+enum qwalk_end qwalk_run(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w,
+                         int floor, bool to_queue);
 
 /* Rebuild the walk at queue point q: descend from the root along the path to
  * q, pushing (and popping) what the uncut traversal did there. */

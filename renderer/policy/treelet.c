@@ -51,9 +51,9 @@ static void children(const struct kd_tree *kd, const struct cand *c, struct cand
 
 struct former {
   const struct kd_tree *kd;
-  const uint32_t *tris;  /* distinct triangles in each subtree */
-  uint32_t *stamp;       /* stamp[p] == t + 1: triangle p is in treelet t */
-  uint32_t *fresh;       /* the triangles a trial just stamped */
+  const uint32_t *tris; /* distinct triangles in each subtree */
+  uint32_t *stamp;      /* stamp[p] == t + 1: triangle p is in treelet t */
+  uint32_t *fresh;      /* the triangles a trial just stamped */
   struct cand *heap;
   uint32_t heap_n, heap_cap;
   uint32_t *stack;
@@ -194,10 +194,8 @@ void treelet_build(struct treelet_set *ts, const struct kd_tree *kd, uint32_t tr
       struct cand kids[2];
       children(kd, &c, kids);
       for (int k = 0; k < 2; k++) {
-        if (tris[kids[k].node] == 0)
-          bytes += absorb(&f, ts, kids[k].node, t);
-        else
-          heap_push(&f, kids[k]);
+        if (tris[kids[k].node] == 0) bytes += absorb(&f, ts, kids[k].node, t);
+        else heap_push(&f, kids[k]);
       }
     }
     ts->bytes[t] = bytes;

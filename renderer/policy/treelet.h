@@ -28,12 +28,12 @@
 struct kd_tree;
 
 struct treelet_set {
-  uint32_t *of;       /* of[n]: the treelet of node n, n < node_count */
-  uint32_t *root;     /* root[t]: the node treelet t starts at; root[0] = 0 */
-  uint64_t *bytes;    /* bytes[t]: 8 a node + tri_bytes a distinct triangle */
-  uint32_t count;     /* treelets (0 for an empty tree) */
+  uint32_t *of;    /* of[n]: the treelet of node n, n < node_count */
+  uint32_t *root;  /* root[t]: the node treelet t starts at; root[0] = 0 */
+  uint64_t *bytes; /* bytes[t]: 8 a node + tri_bytes a distinct triangle */
+  uint32_t count;  /* treelets (0 for an empty tree) */
   uint32_t node_count;
-  uint64_t budget;    /* the bound they were made for */
+  uint64_t budget; /* the bound they were made for */
 };
 
 /* Partition kd for a budget in bytes. A treelet exceeds the budget only when

@@ -9,8 +9,8 @@
 #include <stddef.h>
 #include <stdlib.h>
 
-#include "renderer/scene/gen_util.h"
 #include "renderer/scene.h"
+#include "renderer/scene/gen_util.h"
 #include "sim/err.h"
 
 struct gen_frame gen_frame_at(gen_d3 o) {
@@ -64,8 +64,8 @@ void gen_grid(struct scene *s, gen_d3 o, gen_d3 eu, gen_d3 ev, uint32_t nu, uint
       for (int k = 0; k < 4; k++) {
         /* Corner order i,j / i+1,j / i+1,j+1 / i,j+1 (counter-clockwise). */
         uint32_t ci = i + (uint32_t)(k == 1 || k == 2), cj = j + (uint32_t)(k >= 2);
-        c[k] = gen_d3_add(o, gen_d3_add(gen_d3_scale(eu, (double)ci / nu),
-                                        gen_d3_scale(ev, (double)cj / nv)));
+        c[k] = gen_d3_add(
+            o, gen_d3_add(gen_d3_scale(eu, (double)ci / nu), gen_d3_scale(ev, (double)cj / nv)));
       }
       gen_quad(s, c[0], c[1], c[2], c[3], mat);
     }
@@ -161,9 +161,9 @@ void gen_lathe(struct scene *s, const struct gen_frame *f, const double *r, cons
   }
   for (uint32_t i = 0; i < n; i++)
     for (uint32_t j = 0; j < sides; j++)
-      ring[i * sides + j] = r[i] == 0.0 ? gen_frame_point(f, 0, 0, z[i])
-                                        : gen_frame_point(f, r[i] * cs[2 * j],
-                                                          r[i] * cs[2 * j + 1], z[i]);
+      ring[i * sides + j] = r[i] == 0.0
+                                ? gen_frame_point(f, 0, 0, z[i])
+                                : gen_frame_point(f, r[i] * cs[2 * j], r[i] * cs[2 * j + 1], z[i]);
   for (uint32_t i = 0; i + 1 < n; i++) {
     if (r[i] == 0.0 && r[i + 1] == 0.0) continue;
     /* Outward normal of this profile segment in the (r, z) plane: the solid

@@ -9,9 +9,9 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "renderer/scene/gen_util.h"
 #include "renderer/rng.h"
 #include "renderer/scene.h"
+#include "renderer/scene/gen_util.h"
 #include "sim/err.h"
 
 #define GROVE_TREES_AT_DETAIL_1 40 /* 40 trees of 4101 triangles + ground = 164,552 */

@@ -5,16 +5,16 @@
  * of it is visible from any one viewpoint.
  * Scaling: furniture is always built; "clutter" (cups, plates, vases, bowls,
  * balls, books) fills a fixed list of slots. Below detail 1 slots are thinned
- * in proportion to detail; above it tessellation alone grows. Which slots are filled depends on detail, never on
- * the seed, so the seed changes sizes and positions but not the triangle count. */
+ * in proportion to detail; above it tessellation alone grows. Which slots are filled depends on
+ * detail, never on the seed, so the seed changes sizes and positions but not the triangle count. */
 #include "renderer/scene/gen.h"
 
 #include <math.h>
 #include <stdbool.h>
 
-#include "renderer/scene/gen_util.h"
 #include "renderer/rng.h"
 #include "renderer/scene.h"
+#include "renderer/scene/gen_util.h"
 #include "sim/err.h"
 
 #define ROOM_X 8.0
@@ -35,10 +35,10 @@
 struct room_ctx {
   struct scene *s;
   struct rng rng;
-  double keep;       /* fraction of clutter slots filled, (0, 1] */
-  double tess_scale; /* multiplies clutter tessellation levels given at detail 1 */
+  double keep;        /* fraction of clutter slots filled, (0, 1] */
+  double tess_scale;  /* multiplies clutter tessellation levels given at detail 1 */
   double fixed_scale; /* the same for furniture and fixtures, always built */
-  uint64_t slot;     /* clutter slots met so far */
+  uint64_t slot;      /* clutter slots met so far */
   uint32_t wall, floor_mat, ceiling, wood, fabric, metal, mirror, ceramic;
 };
 
@@ -75,8 +75,8 @@ static void room_box(struct room_ctx *c, double x0, double y0, double z0, double
 }
 
 /* Box with half extents (hx, hy, hz) centred at local (x, y, z) of frame f. */
-static void room_box_in(struct room_ctx *c, const struct gen_frame *f, double x, double y,
-                        double z, double hx, double hy, double hz, uint32_t mat) {
+static void room_box_in(struct room_ctx *c, const struct gen_frame *f, double x, double y, double z,
+                        double hx, double hy, double hz, uint32_t mat) {
   struct gen_frame g = *f;
   g.o = gen_frame_point(f, x, y, z);
   gen_box(c->s, &g, hx, hy, hz, mat);
@@ -121,12 +121,8 @@ static void room_vase(struct room_ctx *c, gen_d3 base, double rad, double h, int
     case 0: /* round belly, narrow neck, flared lip */
       sh = 0.4 + 0.6 * sin(GEN_PI * fmin(t * 1.1, 1.0)) + 0.3 * t * t * t * t;
       break;
-    case 1: /* tall and slightly tapered */
-      sh = 0.75 + 0.25 * cos(GEN_PI * t);
-      break;
-    default: /* amphora: widest high up */
-      sh = 0.45 + 0.55 * sin(GEN_PI * t * 0.8);
-      break;
+    case 1: /* tall and slightly tapered */ sh = 0.75 + 0.25 * cos(GEN_PI * t); break;
+    default: /* amphora: widest high up */ sh = 0.45 + 0.55 * sin(GEN_PI * t * 0.8); break;
     }
     r[n] = rad * sh;
     z[n++] = h * t;
@@ -202,10 +198,8 @@ static void room_book_stack(struct room_ctx *c, double x, double y, double z, in
 /* The bookcase's shelves, bottom up, in room_shelf_row's letters. */
 #define ROOM_SHELVES 5
 static const char *const room_shelf_rows[ROOM_SHELVES] = {
-    "BBBBBBBBBBBBBBBBBBBBBBBBV",
-    "BBBBBBBBBBBBBBOOBBBBBBBBBBC",
-    "VBBBBBBBBBBBBBBBBSV",
-    "BBBBBBBBBBBBBBBBBBOCWBBBBBB",
+    "BBBBBBBBBBBBBBBBBBBBBBBBV", "BBBBBBBBBBBBBBOOBBBBBBBBBBC",
+    "VBBBBBBBBBBBBBBBBSV",       "BBBBBBBBBBBBBBBBBBOCWBBBBBB",
     "CVBBBBBBBBBBBBOV",
 };
 
@@ -216,20 +210,38 @@ enum room_item { ROOM_BOOK, ROOM_VASE, ROOM_BALL, ROOM_CUP, ROOM_STACK, ROOM_BOW
 /* Fill a shelf row x0..x1 (depth y0..y1, back at y1, floor z, clear height
  * hmax) with the items of `pattern` (B book, V vase, O ball, C cup, S stack,
  * W bowl), squeezed to fit and spaced evenly between non-book neighbours. */
-static void room_shelf_row(struct room_ctx *c, double x0, double x1, double y0, double y1,
-                           double z, double hmax, const char *pattern) {
+static void room_shelf_row(struct room_ctx *c, double x0, double x1, double y0, double y1, double z,
+                           double hmax, const char *pattern) {
   enum room_item kind[ROOM_ROW_MAX];
   double w[ROOM_ROW_MAX], a[ROOM_ROW_MAX], b[ROOM_ROW_MAX];
   int n = 0;
   double sum = 0;
   for (const char *p = pattern; *p && n < ROOM_ROW_MAX; p++) {
     switch (*p) {
-    case 'B': kind[n] = ROOM_BOOK; w[n] = room_unif(c, 0.025, 0.05); break;
-    case 'V': kind[n] = ROOM_VASE; w[n] = 2 * room_unif(c, 0.05, 0.08); break;
-    case 'O': kind[n] = ROOM_BALL; w[n] = 2 * room_unif(c, 0.04, 0.07); break;
-    case 'C': kind[n] = ROOM_CUP; w[n] = 2 * 0.045; break;
-    case 'S': kind[n] = ROOM_STACK; w[n] = room_unif(c, 0.2, 0.26); break;
-    case 'W': kind[n] = ROOM_BOWL; w[n] = 2 * 0.09; break;
+    case 'B':
+      kind[n] = ROOM_BOOK;
+      w[n] = room_unif(c, 0.025, 0.05);
+      break;
+    case 'V':
+      kind[n] = ROOM_VASE;
+      w[n] = 2 * room_unif(c, 0.05, 0.08);
+      break;
+    case 'O':
+      kind[n] = ROOM_BALL;
+      w[n] = 2 * room_unif(c, 0.04, 0.07);
+      break;
+    case 'C':
+      kind[n] = ROOM_CUP;
+      w[n] = 2 * 0.045;
+      break;
+    case 'S':
+      kind[n] = ROOM_STACK;
+      w[n] = room_unif(c, 0.2, 0.26);
+      break;
+    case 'W':
+      kind[n] = ROOM_BOWL;
+      w[n] = 2 * 0.09;
+      break;
     default: continue;
     }
     a[n] = room_unif(c, 0, 1);
@@ -263,9 +275,7 @@ static void room_shelf_row(struct room_ctx *c, double x0, double x1, double y0, 
     case ROOM_CUP:
       if (room_keep(c)) room_cup(c, gen_d3_make(xc, yc, z), wi / 2 / 1.08, 0.09, c->ceramic);
       break;
-    case ROOM_STACK:
-      room_book_stack(c, xc, yc, z, 4, wi, (y1 - y0) * 0.8);
-      break;
+    case ROOM_STACK: room_book_stack(c, xc, yc, z, 4, wi, (y1 - y0) * 0.8); break;
     case ROOM_BOWL:
       if (room_keep(c)) room_bowl(c, gen_d3_make(xc, yc, z), wi / 2, c->ceramic);
       break;
@@ -279,8 +289,8 @@ static void room_shelf_row(struct room_ctx *c, double x0, double x1, double y0, 
 /* A wall plane on breakpoints us x vs along unit axes du, dv from o (du x dv
  * is the front), leaving out cell (hole_i, hole_j) (-1: none). Vertices are
  * shared by construction: each comes from one (i, j). */
-static void room_wall(struct room_ctx *c, gen_d3 o, gen_d3 du, gen_d3 dv, const double *us,
-                      int nu, const double *vs, int nv, int hole_i, int hole_j, uint32_t mat) {
+static void room_wall(struct room_ctx *c, gen_d3 o, gen_d3 du, gen_d3 dv, const double *us, int nu,
+                      const double *vs, int nv, int hole_i, int hole_j, uint32_t mat) {
   for (int j = 0; j + 1 < nv; j++)
     for (int i = 0; i + 1 < nu; i++) {
       if (i == hole_i && j == hole_j) continue;
@@ -297,10 +307,10 @@ static void room_shell(struct room_ctx *c) {
   const double e = ROOM_OVERHANG, X = ROOM_X, Y = ROOM_Y, Z = ROOM_Z;
   gen_d3 ex = gen_d3_make(1, 0, 0), ey = gen_d3_make(0, 1, 0), ez = gen_d3_make(0, 0, 1);
   /* Floor (faces +z) and ceiling (faces -z), split so no triangle is huge. */
-  gen_grid(c->s, gen_d3_make(-e, -e, 0), gen_d3_make(X + 2 * e, 0, 0),
-           gen_d3_make(0, Y + 2 * e, 0), 8, 6, c->floor_mat);
-  gen_grid(c->s, gen_d3_make(-e, -e, Z), gen_d3_make(0, Y + 2 * e, 0),
-           gen_d3_make(X + 2 * e, 0, 0), 4, 4, c->ceiling);
+  gen_grid(c->s, gen_d3_make(-e, -e, 0), gen_d3_make(X + 2 * e, 0, 0), gen_d3_make(0, Y + 2 * e, 0),
+           8, 6, c->floor_mat);
+  gen_grid(c->s, gen_d3_make(-e, -e, Z), gen_d3_make(0, Y + 2 * e, 0), gen_d3_make(X + 2 * e, 0, 0),
+           4, 4, c->ceiling);
   double zs[4] = {-e, 1.0, 2.2, Z + e};
   double xs_front[5] = {-e, 2.0, 4.0, 6.0, X + e};
   double ys[4] = {-e, 2.0, 4.0, Y + e};
@@ -363,8 +373,8 @@ static void room_chair(struct room_ctx *c, double x, double y, double a) {
   f.v = gen_d3_make(-sin(a), cos(a), 0);
   const double s = 0.2, leg = 0.018;
   for (int i = 0; i < 4; i++)
-    room_box_in(c, &f, i & 1 ? s - leg : -s + leg, i & 2 ? s - leg : -s + leg, 0.22, leg, leg,
-                0.22, c->wood);
+    room_box_in(c, &f, i & 1 ? s - leg : -s + leg, i & 2 ? s - leg : -s + leg, 0.22, leg, leg, 0.22,
+                c->wood);
   room_box_in(c, &f, 0, 0, 0.46, s + 0.01, s + 0.01, 0.02, c->wood);
   room_box_in(c, &f, 0, 0, 0.49, s - 0.02, s - 0.03, 0.01, c->fabric);
   for (int i = 0; i < 2; i++) /* back posts, rail and two slats behind the seat */
@@ -397,10 +407,10 @@ static void room_table(struct room_ctx *c) {
 /* Place settings, fruit, a vase and a small mirror ball on the table. */
 static void room_table_clutter(struct room_ctx *c) {
   const double top = 0.77;
-  static const double settings[6][4] = {
-      /* plate x, y, cup dx, dy */
-      {3.15, 2.52, 0.17, -0.08}, {4.05, 2.52, 0.17, -0.08}, {3.15, 3.08, -0.17, 0.08},
-      {4.05, 3.08, -0.17, 0.08}, {2.92, 2.8, -0.06, 0.19}, {4.28, 2.8, 0.06, -0.19}};
+  static const double settings[6][4] = {/* plate x, y, cup dx, dy */
+                                        {3.15, 2.52, 0.17, -0.08}, {4.05, 2.52, 0.17, -0.08},
+                                        {3.15, 3.08, -0.17, 0.08}, {4.05, 3.08, -0.17, 0.08},
+                                        {2.92, 2.8, -0.06, 0.19},  {4.28, 2.8, 0.06, -0.19}};
   for (int i = 0; i < 6; i++) {
     double dx = room_unif(c, -0.02, 0.02), dy = room_unif(c, -0.02, 0.02);
     double h = room_unif(c, 0.08, 0.1);
@@ -434,16 +444,15 @@ static void room_bookcase(struct room_ctx *c) {
     double z = 0.08 + 0.44 * i;
     if (i > 0) room_box(c, x0 + b, y0, z - b, x1 - b, y1 - 0.02, z, c->wood);
     double top = i < 4 ? z + 0.44 - b : 2.2 - b;
-    room_shelf_row(c, x0 + b, x1 - b, y0 + 0.01, y1 - 0.02, z, top - z - 0.01,
-                   room_shelf_rows[i]);
+    room_shelf_row(c, x0 + b, x1 - b, y0 + 0.01, y1 - 0.02, z, top - z - 0.01, room_shelf_rows[i]);
   }
 }
 
 static void room_sofa(struct room_ctx *c) {
   const double x0 = 7.05, x1 = 7.97, y0 = 1.8, y1 = 4.2;
-  room_box(c, x0, y0 + 0.15, 0.08, x1, y1 - 0.15, 0.3, c->fabric);  /* base */
+  room_box(c, x0, y0 + 0.15, 0.08, x1, y1 - 0.15, 0.3, c->fabric);        /* base */
   room_box(c, x1 - 0.22, y0 + 0.15, 0.3, x1, y1 - 0.15, 0.85, c->fabric); /* back */
-  room_box(c, x0, y0, 0.08, x1, y0 + 0.15, 0.6, c->fabric);          /* arms */
+  room_box(c, x0, y0, 0.08, x1, y0 + 0.15, 0.6, c->fabric);               /* arms */
   room_box(c, x0, y1 - 0.15, 0.08, x1, y1, 0.6, c->fabric);
   for (int i = 0; i < 3; i++) { /* seat and back cushions */
     double ya = y0 + 0.15 + 0.7 * i + 0.005, yb = ya + 0.69;
@@ -527,7 +536,9 @@ static void room_scales(struct room_ctx *c, double detail) {
  * the shelves come none; after them the coffee table (fruit bowl: a bowl and
  * 5 balls; vase; 3 books), the sideboard (3 vases, fruit bowl, 3 cups), the
  * floor vase, and the table (6 plates with cups, fruit bowl, vase). */
-static const char *const room_clutter_after_shelves = "WOOOOOVBBB" "VVVWOOOOOCCC" "V"
+static const char *const room_clutter_after_shelves = "WOOOOOVBBB"
+                                                      "VVVWOOOOOCCC"
+                                                      "V"
                                                       "PCPCPCPCPCPCWOOOOOV";
 
 /* Triangles of one clutter item of kind `letter` at c's scales: lathe
@@ -542,7 +553,8 @@ static uint64_t room_item_tri_count(const struct room_ctx *c, char letter) {
   uint64_t ball = room_res(c, ROOM_BALL_TESS, 2);
   switch (letter) {
   case 'B': return 12;
-  case 'C': case 'P': return 8 * sides;     /* 6-point profiles */
+  case 'C':
+  case 'P': return 8 * sides;                /* 6-point profiles */
   case 'V': return (2 * vase_k + 6) * sides; /* k + 5 points */
   case 'W': return (4 * bowl_k + 4) * sides; /* 2k + 4 points */
   case 'O': return gen_sphere_tri_count((uint32_t)ball);

@@ -7,8 +7,8 @@
 
 #include <math.h>
 
-#include "renderer/scene/gen_util.h"
 #include "renderer/scene.h"
+#include "renderer/scene/gen_util.h"
 #include "sim/err.h"
 
 /* SPD matrices act on row vectors: p' = p M. */
@@ -90,8 +90,8 @@ void gen_sphereflake(struct scene *s, uint32_t levels, uint32_t tess) {
   uint32_t flake = scene_material_or_default(s, "flake", v3(1.0f, 0.9f, 0.7f), 0.5f, 0.5f);
   uint32_t floor_mat = scene_material_or_default(s, "floor", v3(1.0f, 0.75f, 0.33f), 1.0f, 0.0f);
   /* Floor square at z = -radius/2 of the enclosing unit sphere, facing up. */
-  gen_quad(s, gen_d3_make(-12, -12, -0.5), gen_d3_make(12, -12, -0.5),
-           gen_d3_make(12, 12, -0.5), gen_d3_make(-12, 12, -0.5), floor_mat);
+  gen_quad(s, gen_d3_make(-12, -12, -0.5), gen_d3_make(12, -12, -0.5), gen_d3_make(12, 12, -0.5),
+           gen_d3_make(-12, 12, -0.5), floor_mat);
   struct flake_ctx c;
   c.s = s;
   c.tess = tess;

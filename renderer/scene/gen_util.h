@@ -19,7 +19,9 @@ struct scene;
 #define GEN_PI 3.14159265358979323846
 
 /* Double-precision point or direction used while building geometry. */
-typedef struct { double x, y, z; } gen_d3;
+typedef struct {
+  double x, y, z;
+} gen_d3;
 
 static inline gen_d3 gen_d3_make(double x, double y, double z) {
   gen_d3 r = {x, y, z};

@@ -1,8 +1,8 @@
 /* Mesh import (PLY through renderer/scene/ply.c, everything else through assimp's
  * C API) and PLY export of the scene's triangles. Import is two passes over
  * the loaded mesh: the first counts triangles and validates every vertex, the
- * second appends, so a bad file never leaves half a mesh in the scene. Export writes 3 unshared vertices per face so face i is
- * primitive i with its vertices in stored order, byte for byte. */
+ * second appends, so a bad file never leaves half a mesh in the scene. Export writes 3 unshared
+ * vertices per face so face i is primitive i with its vertices in stored order, byte for byte. */
 #include "renderer/scene/meshio.h"
 
 #include <errno.h>
@@ -19,8 +19,8 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
-#include "renderer/scene/ply.h"
 #include "renderer/scene.h"
+#include "renderer/scene/ply.h"
 #include "sim/err.h"
 #include "sim/outfile.h"
 
@@ -76,18 +76,23 @@ static bool meshio_check_raw(const struct aiScene *as, const char *path, struct 
     for (unsigned fi = 0; fi < m->mNumFaces; fi++) {
       const struct aiFace *f = &m->mFaces[fi];
       if (f->mNumIndices == 0)
-        return err_set(e, path, 0, 0, "cannot import mesh: mesh %u face %u has no vertices "
-                       "(truncated file?)", mi, fi);
+        return err_set(e, path, 0, 0,
+                       "cannot import mesh: mesh %u face %u has no vertices "
+                       "(truncated file?)",
+                       mi, fi);
       for (unsigned k = 0; k < f->mNumIndices; k++)
         if (f->mIndices[k] >= m->mNumVertices)
-          return err_set(e, path, 0, 0, "cannot import mesh: mesh %u face %u: vertex index %u "
-                         "out of range (mesh has %u vertices)", mi, fi, f->mIndices[k],
-                         m->mNumVertices);
+          return err_set(e, path, 0, 0,
+                         "cannot import mesh: mesh %u face %u: vertex index %u "
+                         "out of range (mesh has %u vertices)",
+                         mi, fi, f->mIndices[k], m->mNumVertices);
       if (f->mNumIndices > 3) has_polygon = true;
     }
     if ((m->mPrimitiveTypes & aiPrimitiveType_POLYGON) && !has_polygon)
-      return err_set(e, path, 0, 0, "cannot import mesh: mesh %u is flagged as holding polygons "
-                     "but has none (truncated or malformed file?)", mi);
+      return err_set(e, path, 0, 0,
+                     "cannot import mesh: mesh %u is flagged as holding polygons "
+                     "but has none (truncated or malformed file?)",
+                     mi);
   }
   return true;
 }
@@ -106,13 +111,16 @@ static bool meshio_import_ply(struct scene *s, const char *path, const struct me
     return err_set(e, pe.file, pe.line, pe.col, "cannot import mesh: %s", pe.msg);
   bool ok = false;
   if (m.tri_count == 0) {
-    err_set(e, path, 0, 0, "cannot import mesh: file holds no triangles (its face element is "
+    err_set(e, path, 0, 0,
+            "cannot import mesh: file holds no triangles (its face element is "
             "empty)");
     goto done;
   }
   if (m.tri_count > max_tris || m.tri_count > UINT32_MAX - s->tri_count) {
-    err_set(e, path, 0, 0, "cannot import mesh: too many triangles (got %u, the scene has room "
-            "for %llu)", m.tri_count, (unsigned long long)max_tris);
+    err_set(e, path, 0, 0,
+            "cannot import mesh: too many triangles (got %u, the scene has room "
+            "for %llu)",
+            m.tri_count, (unsigned long long)max_tris);
     goto done;
   }
   /* Pass 1: every placed vertex of every triangle is finite. */
@@ -122,8 +130,10 @@ static bool meshio_import_ply(struct scene *s, const char *path, const struct me
       struct aiVector3D a = {p[0], p[1], p[2]};
       vec3 q = meshio_place(&a, xf);
       if (!meshio_finite(q)) {
-        err_set(e, path, 0, 0, "cannot import mesh: triangle %u has a non-finite vertex after "
-                "placement (got %g %g %g)", i, (double)q.x, (double)q.y, (double)q.z);
+        err_set(e, path, 0, 0,
+                "cannot import mesh: triangle %u has a non-finite vertex after "
+                "placement (got %g %g %g)",
+                i, (double)q.x, (double)q.y, (double)q.z);
         goto done;
       }
     }
@@ -172,9 +182,9 @@ bool meshio_estimate(const char *path, uint64_t *least, uint64_t *most, struct e
  * a runaway allocation in it becomes one error naming the file. The child
  * sends a head, then `count` triangles already placed, so the parent adds
  * exactly the floats the in-process import added. */
-#define MESHIO_CHILD_CPU_S 60      /* CPU seconds (RLIMIT_CPU) */
-#define MESHIO_CHILD_WALL_S 120    /* wall seconds (alarm), for a child stuck waiting */
-#define MESHIO_CHILD_MEM_SHARE 4   /* it may map 1/4 of physical memory past the parent */
+#define MESHIO_CHILD_CPU_S 60    /* CPU seconds (RLIMIT_CPU) */
+#define MESHIO_CHILD_WALL_S 120  /* wall seconds (alarm), for a child stuck waiting */
+#define MESHIO_CHILD_MEM_SHARE 4 /* it may map 1/4 of physical memory past the parent */
 
 struct meshio_wire_head {
   uint32_t ok;
@@ -234,7 +244,8 @@ static bool meshio_assimp_send(const char *path, const struct meshio_xform *xf, 
    * to the deleted importer and is not reachable from the C API. */
   as = aiApplyPostProcessing(as, MESHIO_POST_FLAGS);
   if (!as)
-    return err_set(e, path, 0, 0, "cannot import mesh: assimp post-processing "
+    return err_set(e, path, 0, 0,
+                   "cannot import mesh: assimp post-processing "
                    "(triangulation, node transforms) failed");
 
   /* Pass 1: count triangles and check every placed vertex is finite. */
@@ -247,15 +258,18 @@ static bool meshio_assimp_send(const char *path, const struct meshio_xform *xf, 
       for (int k = 0; k < 3; k++) {
         /* Checked before post-processing; keep the read safe regardless. */
         if (f->mIndices[k] >= m->mNumVertices) {
-          err_set(e, path, 0, 0, "cannot import mesh: mesh %u face %u: vertex index %u out "
-                  "of range (mesh has %u vertices)", mi, fi, f->mIndices[k], m->mNumVertices);
+          err_set(e, path, 0, 0,
+                  "cannot import mesh: mesh %u face %u: vertex index %u out "
+                  "of range (mesh has %u vertices)",
+                  mi, fi, f->mIndices[k], m->mNumVertices);
           goto done;
         }
         vec3 p = meshio_place(&m->mVertices[f->mIndices[k]], xf);
         if (!meshio_finite(p)) {
-          err_set(e, path, 0, 0, "cannot import mesh: mesh %u face %u has a non-finite vertex "
-                  "after placement (got %g %g %g)", mi, fi, (double)p.x, (double)p.y,
-                  (double)p.z);
+          err_set(e, path, 0, 0,
+                  "cannot import mesh: mesh %u face %u has a non-finite vertex "
+                  "after placement (got %g %g %g)",
+                  mi, fi, (double)p.x, (double)p.y, (double)p.z);
           goto done;
         }
       }
@@ -319,9 +333,9 @@ static _Noreturn void meshio_child(const char *path, const struct meshio_xform *
   FILE *statm = fopen("/proc/self/statm", "r");
   if (statm && fscanf(statm, "%llu", &mapped) == 1 && pages > 0 && page > 0) {
     struct rlimit as = {0, 0};
-    as.rlim_cur = as.rlim_max = (rlim_t)(mapped * (unsigned long long)page +
-                                         (unsigned long long)pages * (unsigned long long)page /
-                                             MESHIO_CHILD_MEM_SHARE);
+    as.rlim_cur = as.rlim_max =
+        (rlim_t)(mapped * (unsigned long long)page +
+                 (unsigned long long)pages * (unsigned long long)page / MESHIO_CHILD_MEM_SHARE);
     setrlimit(RLIMIT_AS, &as);
   }
   if (statm) fclose(statm);
@@ -346,8 +360,10 @@ static void meshio_child_death(int status, char *out, size_t cap) {
     else if (sig == SIGALRM)
       snprintf(out, cap, "it passed its time limit of %d s", MESHIO_CHILD_WALL_S);
     else
-      snprintf(out, cap, "it crashed (signal %d, %s; or ran out of its memory limit of 1/%d of "
-               "physical memory)", sig, strsignal(sig), MESHIO_CHILD_MEM_SHARE);
+      snprintf(out, cap,
+               "it crashed (signal %d, %s; or ran out of its memory limit of 1/%d of "
+               "physical memory)",
+               sig, strsignal(sig), MESHIO_CHILD_MEM_SHARE);
   } else {
     snprintf(out, cap, "it stopped (exit status %d; out of memory?)",
              WIFEXITED(status) ? WEXITSTATUS(status) : -1);
@@ -388,8 +404,10 @@ bool meshio_import(struct scene *s, const char *path, const struct meshio_xform 
     goto reap;
   }
   if (h.count > max_tris || h.count > (uint64_t)UINT32_MAX - s->tri_count) {
-    err_set(e, path, 0, 0, "cannot import mesh: too many triangles (got %llu, the scene has "
-            "room for %llu)", (unsigned long long)h.count, (unsigned long long)max_tris);
+    err_set(e, path, 0, 0,
+            "cannot import mesh: too many triangles (got %llu, the scene has "
+            "room for %llu)",
+            (unsigned long long)h.count, (unsigned long long)max_tris);
     goto reap;
   }
   scene_reserve(s, s->tri_count + (uint32_t)h.count);
@@ -423,8 +441,10 @@ reap:
   if (!verdict) {
     char why[256];
     meshio_child_death(status, why, sizeof why);
-    err_set(e, path, 0, 0, "cannot import mesh: the importer (assimp, in a child process) "
-            "gave no answer: %s", why);
+    err_set(e, path, 0, 0,
+            "cannot import mesh: the importer (assimp, in a child process) "
+            "gave no answer: %s",
+            why);
     ok = false;
   }
   if (!ok) s->tri_count = before; /* nothing of a failed mesh stays */
@@ -449,8 +469,10 @@ bool meshio_export_ply(const struct scene *s, const char *path, struct err *e) {
   /* PLY vertex indices are signed 32-bit: 3n - 1 must fit. */
   uint64_t n = s->tri_count;
   if (3 * n > (uint64_t)INT32_MAX + 1) {
-    err_set(e, path, 0, 0, "cannot write PLY: too many triangles for int indices (got %llu, "
-            "max %lld)", (unsigned long long)n, ((long long)INT32_MAX + 1) / 3);
+    err_set(e, path, 0, 0,
+            "cannot write PLY: too many triangles for int indices (got %llu, "
+            "max %lld)",
+            (unsigned long long)n, ((long long)INT32_MAX + 1) / 3);
     goto done;
   }
   if (!outfile_open(&out, path, "PLY", e)) goto done;

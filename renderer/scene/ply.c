@@ -48,8 +48,16 @@ static const struct {
 enum { PLY_NAME_MAX = 64, PLY_WORDS_MAX = 8, PLY_TOKEN_MAX = 64 };
 
 /* What a property feeds, if anything. */
-enum ply_role { PLY_ROLE_NONE, PLY_ROLE_X, PLY_ROLE_Y, PLY_ROLE_Z, PLY_ROLE_NX, PLY_ROLE_NY,
-                PLY_ROLE_NZ, PLY_ROLE_INDICES };
+enum ply_role {
+  PLY_ROLE_NONE,
+  PLY_ROLE_X,
+  PLY_ROLE_Y,
+  PLY_ROLE_Z,
+  PLY_ROLE_NX,
+  PLY_ROLE_NY,
+  PLY_ROLE_NZ,
+  PLY_ROLE_INDICES
+};
 
 struct ply_prop {
   char name[PLY_NAME_MAX];
@@ -78,8 +86,8 @@ struct ply_value {
 struct ply_reader {
   const unsigned char *buf;
   size_t len, pos;
-  uint64_t file_len;  /* bytes in the whole file: len, or more when buf is its header */
-  uint64_t slack;     /* data bytes past every element's fewest (ply_check_counts) */
+  uint64_t file_len; /* bytes in the whole file: len, or more when buf is its header */
+  uint64_t slack;    /* data bytes past every element's fewest (ply_check_counts) */
   const char *name;
   struct err *e;
   enum ply_format fmt;
@@ -95,15 +103,16 @@ static bool ply_same_word(const char *a, const char *b) { return strcmp(a, b) ==
 
 static int ply_type_of(const char *word) {
   for (int t = 0; t < PLY_TYPE_COUNT; t++)
-    if (ply_same_word(word, ply_types[t].name) || ply_same_word(word, ply_types[t].alias))
-      return t;
+    if (ply_same_word(word, ply_types[t].name) || ply_same_word(word, ply_types[t].alias)) return t;
   return -1;
 }
 
 static bool ply_unknown_type(struct ply_reader *r, int line, const char *word) {
-  return err_set(r->e, r->name, line, 0, "PLY header: unknown type '%s' (expected one of: char, "
+  return err_set(r->e, r->name, line, 0,
+                 "PLY header: unknown type '%s' (expected one of: char, "
                  "uchar, short, ushort, int, uint, float, double, int8, uint8, int16, uint16, "
-                 "int32, uint32, float32, float64)", word);
+                 "int32, uint32, float32, float64)",
+                 word);
 }
 
 /* Split a header line (NUL-terminated, no line break) at spaces and tabs. */
@@ -136,15 +145,21 @@ static bool ply_parse_count(const char *s, uint64_t *out) {
 static bool ply_add_elem(struct ply_reader *r, int line, const char *name, const char *count) {
   for (size_t i = 0; i < r->nelems; i++)
     if (ply_same_word(r->elems[i].name, name))
-      return err_set(r->e, r->name, line, 0, "PLY header: element '%s' declared twice (first at "
-                     "line %d)", name, r->elems[i].line);
+      return err_set(r->e, r->name, line, 0,
+                     "PLY header: element '%s' declared twice (first at "
+                     "line %d)",
+                     name, r->elems[i].line);
   if (strlen(name) >= PLY_NAME_MAX)
-    return err_set(r->e, r->name, line, 0, "PLY header: element name too long (got %zu bytes, "
-                   "expected at most %d)", strlen(name), PLY_NAME_MAX - 1);
+    return err_set(r->e, r->name, line, 0,
+                   "PLY header: element name too long (got %zu bytes, "
+                   "expected at most %d)",
+                   strlen(name), PLY_NAME_MAX - 1);
   uint64_t n;
   if (!ply_parse_count(count, &n))
-    return err_set(r->e, r->name, line, 0, "PLY header: element '%s': count is not a whole "
-                   "number (got '%s')", name, count);
+    return err_set(r->e, r->name, line, 0,
+                   "PLY header: element '%s': count is not a whole "
+                   "number (got '%s')",
+                   name, count);
   if (r->nelems == r->cap) {
     r->cap = r->cap ? 2 * r->cap : 4;
     r->elems = xrealloc(r->elems, r->cap * sizeof *r->elems);
@@ -166,34 +181,44 @@ static bool ply_add_prop(struct ply_reader *r, int line, char **w, int nw) {
   const char *name;
   if (nw >= 2 && ply_same_word(w[1], "list")) {
     if (nw != 5)
-      return err_set(r->e, r->name, line, 0, "PLY header: expected 'property list COUNT_TYPE "
-                     "ITEM_TYPE NAME' (got %d words)", nw);
+      return err_set(r->e, r->name, line, 0,
+                     "PLY header: expected 'property list COUNT_TYPE "
+                     "ITEM_TYPE NAME' (got %d words)",
+                     nw);
     int ct = ply_type_of(w[2]), it = ply_type_of(w[3]);
     if (ct < 0) return ply_unknown_type(r, line, w[2]);
     if (it < 0) return ply_unknown_type(r, line, w[3]);
     if (ply_types[ct].is_float)
-      return err_set(r->e, r->name, line, 0, "PLY header: property '%s': list count type must be "
-                     "an integer type (got '%s')", w[4], w[2]);
+      return err_set(r->e, r->name, line, 0,
+                     "PLY header: property '%s': list count type must be "
+                     "an integer type (got '%s')",
+                     w[4], w[2]);
     p.is_list = true;
     p.count_type = (enum ply_type)ct;
     p.type = (enum ply_type)it;
     name = w[4];
   } else {
     if (nw != 3)
-      return err_set(r->e, r->name, line, 0, "PLY header: expected 'property TYPE NAME' (got %d "
-                     "words)", nw);
+      return err_set(r->e, r->name, line, 0,
+                     "PLY header: expected 'property TYPE NAME' (got %d "
+                     "words)",
+                     nw);
     int t = ply_type_of(w[1]);
     if (t < 0) return ply_unknown_type(r, line, w[1]);
     p.type = (enum ply_type)t;
     name = w[2];
   }
   if (strlen(name) >= PLY_NAME_MAX)
-    return err_set(r->e, r->name, line, 0, "PLY header: property name too long (got %zu bytes, "
-                   "expected at most %d)", strlen(name), PLY_NAME_MAX - 1);
+    return err_set(r->e, r->name, line, 0,
+                   "PLY header: property name too long (got %zu bytes, "
+                   "expected at most %d)",
+                   strlen(name), PLY_NAME_MAX - 1);
   for (size_t i = 0; i < el->nprops; i++)
     if (ply_same_word(el->props[i].name, name))
-      return err_set(r->e, r->name, line, 0, "PLY header: element '%s': property '%s' declared "
-                     "twice", el->name, name);
+      return err_set(r->e, r->name, line, 0,
+                     "PLY header: element '%s': property '%s' declared "
+                     "twice",
+                     el->name, name);
   memcpy(p.name, name, strlen(name) + 1);
   if (el->nprops == el->cap) {
     el->cap = el->cap ? 2 * el->cap : 4;
@@ -217,13 +242,15 @@ static bool ply_assign_roles(struct ply_reader *r) {
   }
   if (!r->vertex) return err_set(r->e, r->name, 0, 0, "PLY header: no 'vertex' element");
   if (!r->face)
-    return err_set(r->e, r->name, 0, 0, "PLY header: no 'face' element (rtsim imports "
+    return err_set(r->e, r->name, 0, 0,
+                   "PLY header: no 'face' element (rtsim imports "
                    "triangles, not point clouds)");
   struct ply_elem *v = r->vertex, *f = r->face;
   if (v->count > UINT32_MAX || f->count > UINT32_MAX)
     return err_set(r->e, r->name, v->count > UINT32_MAX ? v->line : f->line, 0,
                    "PLY header: element '%s': too many instances (got %llu, expected at most "
-                   "%u)", v->count > UINT32_MAX ? "vertex" : "face",
+                   "%u)",
+                   v->count > UINT32_MAX ? "vertex" : "face",
                    (unsigned long long)(v->count > UINT32_MAX ? v->count : f->count), UINT32_MAX);
   int have_n = 0;
   bool have[3] = {false, false, false};
@@ -231,16 +258,20 @@ static bool ply_assign_roles(struct ply_reader *r) {
     for (size_t k = 0; k < sizeof vroles / sizeof vroles[0]; k++)
       if (ply_same_word(v->props[i].name, vroles[k].name)) {
         if (v->props[i].is_list)
-          return err_set(r->e, r->name, v->line, 0, "PLY header: vertex property '%s' is a list "
-                         "(expected a scalar)", v->props[i].name);
+          return err_set(r->e, r->name, v->line, 0,
+                         "PLY header: vertex property '%s' is a list "
+                         "(expected a scalar)",
+                         v->props[i].name);
         v->props[i].role = vroles[k].role;
         if (k < 3) have[k] = true;
         else have_n++;
       }
   for (int k = 0; k < 3; k++)
     if (!have[k])
-      return err_set(r->e, r->name, v->line, 0, "PLY header: element 'vertex' has no property "
-                     "'%s'", vroles[k].name);
+      return err_set(r->e, r->name, v->line, 0,
+                     "PLY header: element 'vertex' has no property "
+                     "'%s'",
+                     vroles[k].name);
   /* Normals only when all three are there: a partial set is ignored. */
   if (have_n != 3)
     for (size_t i = 0; i < v->nprops; i++)
@@ -250,16 +281,20 @@ static bool ply_assign_roles(struct ply_reader *r) {
     if (ply_same_word(f->props[i].name, "vertex_indices") ||
         ply_same_word(f->props[i].name, "vertex_index")) {
       if (idx)
-        return err_set(r->e, r->name, f->line, 0, "PLY header: element 'face' has both "
+        return err_set(r->e, r->name, f->line, 0,
+                       "PLY header: element 'face' has both "
                        "'vertex_indices' and 'vertex_index'");
       idx = &f->props[i];
     }
   if (!idx)
-    return err_set(r->e, r->name, f->line, 0, "PLY header: element 'face' has no property "
+    return err_set(r->e, r->name, f->line, 0,
+                   "PLY header: element 'face' has no property "
                    "'vertex_indices' (or 'vertex_index')");
   if (!idx->is_list || ply_types[idx->type].is_float)
-    return err_set(r->e, r->name, f->line, 0, "PLY header: face property '%s' must be a list of "
-                   "an integer type", idx->name);
+    return err_set(r->e, r->name, f->line, 0,
+                   "PLY header: face property '%s' must be a list of "
+                   "an integer type",
+                   idx->name);
   idx->role = PLY_ROLE_INDICES;
   return true;
 }
@@ -269,13 +304,11 @@ static uint64_t ply_min_bytes(const struct ply_reader *r, const struct ply_elem 
   uint64_t n = 0;
   for (size_t i = 0; i < el->nprops; i++) {
     const struct ply_prop *p = &el->props[i];
-    bool idx = p->role == PLY_ROLE_INDICES; /* at least 3 items */
-    if (r->fmt == PLY_FMT_ASCII)
-      n += 2 * (idx ? 4 : 1); /* a digit and a separator per value */
+    bool idx = p->role == PLY_ROLE_INDICES;              /* at least 3 items */
+    if (r->fmt == PLY_FMT_ASCII) n += 2 * (idx ? 4 : 1); /* a digit and a separator per value */
     else if (p->is_list)
       n += ply_types[p->count_type].size + (idx ? 3 * ply_types[p->type].size : 0);
-    else
-      n += ply_types[p->type].size;
+    else n += ply_types[p->type].size;
   }
   return n;
 }
@@ -288,11 +321,14 @@ static bool ply_check_counts(struct ply_reader *r) {
     const struct ply_elem *el = &r->elems[i];
     if (el->count == 0) continue;
     if (el->nprops == 0)
-      return err_set(r->e, r->name, el->line, 0, "PLY header: element '%s' has %llu instances "
-                     "but no properties", el->name, (unsigned long long)el->count);
+      return err_set(r->e, r->name, el->line, 0,
+                     "PLY header: element '%s' has %llu instances "
+                     "but no properties",
+                     el->name, (unsigned long long)el->count);
     uint64_t min = ply_min_bytes(r, el);
     if (el->count > budget / min)
-      return err_set(r->e, r->name, el->line, 0, "PLY header: element '%s': %llu instances of "
+      return err_set(r->e, r->name, el->line, 0,
+                     "PLY header: element '%s': %llu instances of "
                      "at least %llu bytes each cannot fit in the %llu bytes after the header",
                      el->name, (unsigned long long)el->count, (unsigned long long)min,
                      (unsigned long long)(r->file_len - r->pos));
@@ -330,7 +366,8 @@ static bool ply_parse_header(struct ply_reader *r) {
     lineno++;
     const unsigned char *nl = memchr(b + pos, '\n', n - pos);
     if (!nl)
-      return err_set(r->e, r->name, lineno, 0, "PLY header: not terminated (no end_header line "
+      return err_set(r->e, r->name, lineno, 0,
+                     "PLY header: not terminated (no end_header line "
                      "before the end of the file; truncated?)");
     size_t end = (size_t)(nl - b), ll = end - pos;
     if (ll > 0 && b[end - 1] == '\r') ll--;
@@ -340,10 +377,13 @@ static bool ply_parse_header(struct ply_reader *r) {
                        b[pos + i]);
     if (ll >= sizeof line) {
       /* Comments may be long; nothing else needs to be. */
-      bool remark = ply_starts_word(b + pos, ll, "comment") || ply_starts_word(b + pos, ll, "obj_info");
+      bool remark =
+          ply_starts_word(b + pos, ll, "comment") || ply_starts_word(b + pos, ll, "obj_info");
       if (!remark || lineno == 1)
-        return err_set(r->e, r->name, lineno, 0, "PLY header: line too long (got %zu bytes, "
-                       "expected at most %zu)", ll, sizeof line - 1);
+        return err_set(r->e, r->name, lineno, 0,
+                       "PLY header: line too long (got %zu bytes, "
+                       "expected at most %zu)",
+                       ll, sizeof line - 1);
       pos = end + 1;
       continue;
     }
@@ -353,8 +393,7 @@ static bool ply_parse_header(struct ply_reader *r) {
     if (lineno == 1) continue; /* "ply", checked above */
     char *w[PLY_WORDS_MAX];
     int nw = ply_split(line, w);
-    if (nw == 0)
-      return err_set(r->e, r->name, lineno, 0, "PLY header: empty line");
+    if (nw == 0) return err_set(r->e, r->name, lineno, 0, "PLY header: empty line");
     if (ply_same_word(w[0], "comment") || ply_same_word(w[0], "obj_info")) continue;
     if (nw > PLY_WORDS_MAX)
       return err_set(r->e, r->name, lineno, 0, "PLY header: too many words on a '%s' line", w[0]);
@@ -364,23 +403,31 @@ static bool ply_parse_header(struct ply_reader *r) {
       if (r->nelems)
         return err_set(r->e, r->name, lineno, 0, "PLY header: format line after an element");
       if (nw != 3)
-        return err_set(r->e, r->name, lineno, 0, "PLY header: expected 'format FORMAT 1.0' (got "
-                       "%d words)", nw);
+        return err_set(r->e, r->name, lineno, 0,
+                       "PLY header: expected 'format FORMAT 1.0' (got "
+                       "%d words)",
+                       nw);
       if (ply_same_word(w[1], "ascii")) r->fmt = PLY_FMT_ASCII;
       else if (ply_same_word(w[1], "binary_little_endian")) r->fmt = PLY_FMT_LE;
       else if (ply_same_word(w[1], "binary_big_endian")) r->fmt = PLY_FMT_BE;
       else
-        return err_set(r->e, r->name, lineno, 0, "PLY header: unknown format '%s' (expected "
-                       "ascii, binary_little_endian or binary_big_endian)", w[1]);
+        return err_set(r->e, r->name, lineno, 0,
+                       "PLY header: unknown format '%s' (expected "
+                       "ascii, binary_little_endian or binary_big_endian)",
+                       w[1]);
       if (!ply_same_word(w[2], "1.0"))
-        return err_set(r->e, r->name, lineno, 0, "PLY header: unsupported version '%s' "
-                       "(expected 1.0)", w[2]);
+        return err_set(r->e, r->name, lineno, 0,
+                       "PLY header: unsupported version '%s' "
+                       "(expected 1.0)",
+                       w[2]);
     } else if (ply_same_word(w[0], "element")) {
       if (r->fmt == PLY_FMT_NONE)
         return err_set(r->e, r->name, lineno, 0, "PLY header: element before the format line");
       if (nw != 3)
-        return err_set(r->e, r->name, lineno, 0, "PLY header: expected 'element NAME COUNT' "
-                       "(got %d words)", nw);
+        return err_set(r->e, r->name, lineno, 0,
+                       "PLY header: expected 'element NAME COUNT' "
+                       "(got %d words)",
+                       nw);
       if (!ply_add_elem(r, lineno, w[1], w[2])) return false;
     } else if (ply_same_word(w[0], "property")) {
       if (!ply_add_prop(r, lineno, w, nw)) return false;
@@ -389,8 +436,10 @@ static bool ply_parse_header(struct ply_reader *r) {
         return err_set(r->e, r->name, lineno, 0, "PLY header: unexpected text after end_header");
       ended = true;
     } else {
-      return err_set(r->e, r->name, lineno, 0, "PLY header: unknown keyword '%s' (expected one "
-                     "of: format, element, property, comment, obj_info, end_header)", w[0]);
+      return err_set(r->e, r->name, lineno, 0,
+                     "PLY header: unknown keyword '%s' (expected one "
+                     "of: format, element, property, comment, obj_info, end_header)",
+                     w[0]);
     }
   }
   if (r->fmt == PLY_FMT_NONE)
@@ -458,8 +507,8 @@ static bool ply_is_blank(unsigned char c) { return c == ' ' || c == '\t'; }
 
 /* Skip whitespace and line breaks before an ASCII instance, counting lines. */
 static void ply_skip_lines(struct ply_reader *r) {
-  while (r->pos < r->len && (ply_is_blank(r->buf[r->pos]) || r->buf[r->pos] == '\r' ||
-                             r->buf[r->pos] == '\n')) {
+  while (r->pos < r->len &&
+         (ply_is_blank(r->buf[r->pos]) || r->buf[r->pos] == '\r' || r->buf[r->pos] == '\n')) {
     if (r->buf[r->pos] == '\n') {
       r->line++;
       r->line_start = r->pos + 1;
@@ -499,9 +548,10 @@ static bool ply_read_ascii(struct ply_reader *r, enum ply_type t, const struct p
     }
     int64_t i = neg ? -(int64_t)u : (int64_t)u;
     if (!ok || i < ply_types[t].lo || i > ply_types[t].hi) {
-      snprintf(what, sizeof what, "not a whole number of type %s (got '%s', expected %lld to "
-               "%lld)", ply_types[t].name, tok, (long long)ply_types[t].lo,
-               (long long)ply_types[t].hi);
+      snprintf(what, sizeof what,
+               "not a whole number of type %s (got '%s', expected %lld to "
+               "%lld)",
+               ply_types[t].name, tok, (long long)ply_types[t].lo, (long long)ply_types[t].hi);
       return ply_data_error(r, s, w, what);
     }
     v->is_int = true;
@@ -531,8 +581,8 @@ static bool ply_end_line(struct ply_reader *r, const struct ply_elem *el, uint64
   if (r->pos == r->len || r->buf[r->pos] == '\n') return true;
   return err_set(r->e, r->name, r->line, (int)(r->pos - r->line_start) + 1,
                  "PLY data: element '%s' %llu: unexpected text after its %zu properties "
-                 "(expected the end of the line)", el->name, (unsigned long long)index,
-                 el->nprops);
+                 "(expected the end of the line)",
+                 el->name, (unsigned long long)index, el->nprops);
 }
 
 static void ply_push_tri(struct ply_reader *r, struct ply_mesh *m, uint32_t a, uint32_t b,
@@ -560,9 +610,10 @@ static bool ply_read_list(struct ply_reader *r, struct ply_mesh *m, const struct
     if (r->fmt != PLY_FMT_ASCII) {
       uint64_t need = count * ply_types[p->type].size;
       if (need > r->len - r->pos) {
-        snprintf(what, sizeof what, "truncated list (%llu items need %llu bytes, the file ends "
-                 "after %zu)", (unsigned long long)count, (unsigned long long)need,
-                 r->len - r->pos);
+        snprintf(what, sizeof what,
+                 "truncated list (%llu items need %llu bytes, the file ends "
+                 "after %zu)",
+                 (unsigned long long)count, (unsigned long long)need, r->len - r->pos);
         return ply_data_error(r, r->pos, w, what);
       }
       r->pos += need;
@@ -581,8 +632,10 @@ static bool ply_read_list(struct ply_reader *r, struct ply_mesh *m, const struct
   for (uint64_t k = 0; k < count; k++) {
     if (!ply_read_value(r, p->type, w, &v, &at)) return false;
     if (v.i < 0 || (uint64_t)v.i >= m->vertex_count) {
-      snprintf(what, sizeof what, "vertex index out of range (got %lld, the file has %u "
-               "vertices)", (long long)v.i, m->vertex_count);
+      snprintf(what, sizeof what,
+               "vertex index out of range (got %lld, the file has %u "
+               "vertices)",
+               (long long)v.i, m->vertex_count);
       return ply_data_error(r, at, w, what);
     }
     uint32_t cur = (uint32_t)v.i;
@@ -641,8 +694,10 @@ static bool ply_read_data(struct ply_reader *r, struct ply_mesh *m) {
       return err_set(r->e, r->name, r->line, (int)(r->pos - r->line_start) + 1,
                      "PLY data: unexpected text after the last element");
   } else if (r->pos != r->len) {
-    return err_set(r->e, r->name, 0, 0, "byte %zu: PLY data: %zu bytes of trailing data after "
-                   "the last element", r->pos, r->len - r->pos);
+    return err_set(r->e, r->name, 0, 0,
+                   "byte %zu: PLY data: %zu bytes of trailing data after "
+                   "the last element",
+                   r->pos, r->len - r->pos);
   }
   return true;
 }
@@ -758,8 +813,8 @@ bool ply_read_header_file(const char *path, struct ply_counts *c, struct err *e)
 
 bool ply_claims(const char *path) {
   size_t n = strlen(path);
-  if (n >= 4 && path[n - 4] == '.' && (path[n - 3] | 0x20) == 'p' &&
-      (path[n - 2] | 0x20) == 'l' && (path[n - 1] | 0x20) == 'y')
+  if (n >= 4 && path[n - 4] == '.' && (path[n - 3] | 0x20) == 'p' && (path[n - 2] | 0x20) == 'l' &&
+      (path[n - 1] | 0x20) == 'y')
     return true;
   const char *why;
   FILE *f = err_fopen_regular(path, &why);

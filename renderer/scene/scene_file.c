@@ -8,9 +8,9 @@
 #include <unistd.h>
 
 #include "renderer/camera.h"
+#include "renderer/scene.h"
 #include "renderer/scene/gen.h"
 #include "renderer/scene/meshio.h"
-#include "renderer/scene.h"
 #include "sim/cfg.h"
 #include "sim/err.h"
 
@@ -25,8 +25,8 @@ static void join_path(char *out, size_t cap, const char *path, const char *key) 
 
 static vec3 to_vec3(const double v[3]) { return v3((float)v[0], (float)v[1], (float)v[2]); }
 
-static bool opt_vec3(const struct cfg_doc *d, struct cfg_node *m, const char *key,
-                     const char *path, double lo, double hi, vec3 *out, struct err *e) {
+static bool opt_vec3(const struct cfg_doc *d, struct cfg_node *m, const char *key, const char *path,
+                     double lo, double hi, vec3 *out, struct err *e) {
   struct cfg_node *n = cfg_get(m, key);
   if (!n) return true;
   char p[128];
@@ -40,13 +40,12 @@ static bool opt_vec3(const struct cfg_doc *d, struct cfg_node *m, const char *ke
 static bool req_vec3(const struct cfg_doc *d, struct cfg_node *m, const struct cfg_node *owner,
                      const char *key, const char *path, double lo, double hi, vec3 *out,
                      struct err *e) {
-  if (!cfg_get(m, key))
-    return cfg_fail(d, owner, path, e, "missing required key '%s'", key);
+  if (!cfg_get(m, key)) return cfg_fail(d, owner, path, e, "missing required key '%s'", key);
   return opt_vec3(d, m, key, path, lo, hi, out, e);
 }
 
-static bool opt_f64(const struct cfg_doc *d, struct cfg_node *m, const char *key,
-                    const char *path, double lo, double hi, double *out, struct err *e) {
+static bool opt_f64(const struct cfg_doc *d, struct cfg_node *m, const char *key, const char *path,
+                    double lo, double hi, double *out, struct err *e) {
   struct cfg_node *n = cfg_get(m, key);
   if (!n) return true;
   char p[128];
@@ -54,8 +53,8 @@ static bool opt_f64(const struct cfg_doc *d, struct cfg_node *m, const char *key
   return cfg_f64(d, n, p, lo, hi, out, e);
 }
 
-static bool opt_u64(const struct cfg_doc *d, struct cfg_node *m, const char *key,
-                    const char *path, uint64_t lo, uint64_t hi, uint64_t *out, struct err *e) {
+static bool opt_u64(const struct cfg_doc *d, struct cfg_node *m, const char *key, const char *path,
+                    uint64_t lo, uint64_t hi, uint64_t *out, struct err *e) {
   struct cfg_node *n = cfg_get(m, key);
   if (!n) return true;
   char p[128];
@@ -113,8 +112,7 @@ static bool load_lights(const struct cfg_doc *d, struct cfg_node *n, struct scen
     struct scene_light *L = &s->lights[i];
     L->intensity = v3(1, 1, 1);
     if (!req_vec3(d, l, l, "position", p, -1e30, 1e30, &L->pos, e) ||
-        !opt_vec3(d, l, "intensity", p, 0, 1e30, &L->intensity, e) ||
-        !cfg_check_keys(d, l, p, e))
+        !opt_vec3(d, l, "intensity", p, 0, 1e30, &L->intensity, e) || !cfg_check_keys(d, l, p, e))
       return false;
   }
   s->light_count = n->count;
@@ -140,8 +138,7 @@ static bool load_materials(const struct cfg_doc *d, struct cfg_node *n, struct s
     double diffuse = 1.0, mirror = 0.0;
     if (!opt_vec3(d, m, "color", p, 0, 1, &mat.color, e) ||
         !opt_f64(d, m, "diffuse", p, 0, 1, &diffuse, e) ||
-        !opt_f64(d, m, "mirror", p, 0, 1, &mirror, e) ||
-        !cfg_check_keys(d, m, p, e))
+        !opt_f64(d, m, "mirror", p, 0, 1, &mirror, e) || !cfg_check_keys(d, m, p, e))
       return false;
     mat.diffuse = (float)diffuse;
     mat.mirror = (float)mirror;
@@ -193,10 +190,8 @@ static bool load_generator(const struct cfg_doc *d, struct cfg_node *g, const ch
   } else {
     uint64_t n = kind == 1 ? gen_grove_tri_count(detail) : gen_room_tri_count(detail);
     if (count) *count = n;
-    else if (kind == 1)
-      gen_grove(s, detail, seed);
-    else
-      gen_room(s, detail, seed);
+    else if (kind == 1) gen_grove(s, detail, seed);
+    else gen_room(s, detail, seed);
   }
   /* The estimate is exact: what the scene file checked is what was built. */
   if (!count) {
@@ -236,13 +231,11 @@ static bool load_mesh(const struct cfg_doc *d, struct cfg_node *g, const char *p
   struct meshio_xform xf = {1.0f, v3(0, 0, 0)};
   double scale = 1.0;
   if (!opt_f64(d, g, "scale", p, 1e-30, 1e30, &scale, e) ||
-      !opt_vec3(d, g, "translate", p, -1e30, 1e30, &xf.translate, e) ||
-      !cfg_check_keys(d, g, p, e))
+      !opt_vec3(d, g, "translate", p, -1e30, 1e30, &xf.translate, e) || !cfg_check_keys(d, g, p, e))
     return false;
   xf.scale = (float)scale;
   char full[1024];
-  if (file[0] == '/')
-    snprintf(full, sizeof full, "%s", file);
+  if (file[0] == '/') snprintf(full, sizeof full, "%s", file);
   else {
     char dir[600];
     dir_of(scene_path, dir, sizeof dir);
@@ -266,7 +259,8 @@ static bool load_mesh(const struct cfg_doc *d, struct cfg_node *g, const char *p
 static bool load_geometry(const struct cfg_doc *d, struct cfg_node *n, const char *scene_path,
                           struct scene *s, struct err *e) {
   if (!cfg_expect_seq(d, n, "geometry", e)) return false;
-  if (n->count == 0) return cfg_fail(d, n, "geometry", e, "empty list (expected at least one item)");
+  if (n->count == 0)
+    return cfg_fail(d, n, "geometry", e, "empty list (expected at least one item)");
   /* Pass 0 checks every entry and adds up its triangles (exact for the
    * generators, a PLY header's face count for meshes) against the cap before
    * anything is built; pass 1 builds, and refuses a mesh whose file holds
@@ -288,13 +282,14 @@ static bool load_geometry(const struct cfg_doc *d, struct cfg_node *n, const cha
         return false;
       total += k;
       if (pass == 0 && (k > cap || total > cap))
-        return cfg_fail(d, g, p, e, "too many triangles: this entry %s %llu, the scene would "
+        return cfg_fail(d, g, p, e,
+                        "too many triangles: this entry %s %llu, the scene would "
                         "have %s%llu, expected at most %llu (about %u bytes of host memory a "
                         "triangle, scene and k-d tree, within half of this host's memory; "
-                        "README: Limits)", is_gen ? "builds" : "holds at least",
-                        (unsigned long long)k, is_gen ? "" : "at least ",
-                        (unsigned long long)total, (unsigned long long)cap,
-                        SCENE_FILE_HOST_BYTES_PER_TRIANGLE);
+                        "README: Limits)",
+                        is_gen ? "builds" : "holds at least", (unsigned long long)k,
+                        is_gen ? "" : "at least ", (unsigned long long)total,
+                        (unsigned long long)cap, SCENE_FILE_HOST_BYTES_PER_TRIANGLE);
     }
     if (pass == 0) scene_reserve(s, (uint32_t)total);
   }
@@ -342,8 +337,7 @@ bool scene_file_load(struct scene *s, const char *path, struct err *e) {
     goto done;
   }
   /* Check the top level before generating geometry, which can take seconds. */
-  if (!cfg_check_keys(&d, r, "", e))
-    goto done;
+  if (!cfg_check_keys(&d, r, "", e)) goto done;
   ok = load_geometry(&d, n, path, s, e);
 done:
   cfg_free(&d);

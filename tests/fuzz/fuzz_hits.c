@@ -17,18 +17,17 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
-static const char SCENE[] =
-    "camera: {from: [0, -8, 3], at: [0, 0, 0]}\n"
-    "geometry:\n"
-    "  - {generator: sphereflake, detail: 1, tessellation: 2}\n";
+static const char SCENE[] = "camera: {from: [0, -8, 3], at: [0, 0, 0]}\n"
+                            "geometry:\n"
+                            "  - {generator: sphereflake, detail: 1, tessellation: 2}\n";
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   static struct app_world w;
   static struct trace_ctx tr;
   static FILE *out;
   if (!out) {
-    CHECK(app_world_load(&w, fuzz_file("hits-scene.yaml", (const uint8_t *)SCENE,
-                                       sizeof SCENE - 1)));
+    CHECK(
+        app_world_load(&w, fuzz_file("hits-scene.yaml", (const uint8_t *)SCENE, sizeof SCENE - 1)));
     struct trace_layout layout;
     trace_layout_default(&layout);
     trace_init(&tr, &w.scene, &w.kd, mem_port_native(), &layout);

@@ -25,8 +25,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 static const struct {
   const char *name;
   bool value;
-} OPTIONS[] = {{"--x", true},     {"--y", true},     {"--lines", true}, {"--panels", true},
-               {"--where", true}, {"--logx", false}, {"--logy", false}, {"--mark-x", true},
+} OPTIONS[] = {{"--x", true},     {"--y", true},      {"--lines", true},  {"--panels", true},
+               {"--where", true}, {"--logx", false},  {"--logy", false},  {"--mark-x", true},
                {"--bars", false}, {"--stack", false}, {"--own-y", false}, {"--yrange", true}};
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {

@@ -10,9 +10,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "renderer/scene.h"
 #include "renderer/scene/gen.h"
 #include "renderer/scene/meshio.h"
-#include "renderer/scene.h"
 #include "sim/err.h"
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
@@ -32,9 +32,15 @@ static void remove_dir(void) {
 /* Folders made real in the scratch folder (parents first), each holding a
  * link to every entry of the repository's folder of the same name that is
  * not itself in this list; the inputs are written into them. */
-static const char *const MIRRORED[] = {"",          "configs",         "configs/sweeps",
-                                       "tests",     "tests/data",      "tests/data/configs",
-                                       "tests/data/scenes", "tests/data/sweeps", NULL};
+static const char *const MIRRORED[] = {"",
+                                       "configs",
+                                       "configs/sweeps",
+                                       "tests",
+                                       "tests/data",
+                                       "tests/data/configs",
+                                       "tests/data/scenes",
+                                       "tests/data/sweeps",
+                                       NULL};
 
 static void link_entries(const char *rel) {
   char src[1024], dst[1024];
@@ -152,8 +158,7 @@ uint64_t __wrap_gen_room_tri_count(double detail) {
 void __wrap_gen_sphereflake(struct scene *s, uint32_t levels, uint32_t tess) {
   if (__real_gen_sphereflake_tri_count(levels, tess) <= FUZZ_GEN_TRIANGLES)
     __real_gen_sphereflake(s, levels, tess);
-  else
-    stand_in(s, scene_material_or_default(s, "flake", v3(1, 1, 1), 1, 0));
+  else stand_in(s, scene_material_or_default(s, "flake", v3(1, 1, 1), 1, 0));
 }
 
 void __wrap_gen_grove(struct scene *s, double detail, uint64_t seed) {
