@@ -260,6 +260,14 @@ uint64_t cache_host_bytes(const struct cache *c) {
   return b + (c->table ? (c->table_mask + 1) * sizeof *c->table : 0);
 }
 
+/* The index in st->vec of line's valid slot, or -1: only the used slots can
+ * hold a line (a line is in one slot at most). */
+static inline int64_t scan_used(const struct set *st, uint64_t line) {
+  for (uint32_t k = 0; k < st->used; k++)
+    if (st->vec[k].line == line && (st->vec[k].flags & F_VALID)) return k;
+  return -1;
+}
+
 uint32_t cache_find(const struct cache *c, uint64_t line) {
   if (c->flat) {
     /* Slots past the set's used ones are zeros, never valid. */
@@ -272,12 +280,8 @@ uint32_t cache_find(const struct cache *c, uint64_t line) {
   }
   if (c->scan) {
     const uint64_t s = set_of_line(c, line);
-    const struct set *st = set_peek(c, s);
-    /* Only the used slots can hold a line (a line is in one slot at most). */
-    for (uint32_t k = 0; k < st->used; k++)
-      if (st->vec[k].line == line && (st->vec[k].flags & F_VALID))
-        return (uint32_t)(s * c->ways + c->ways - 1 - k);
-    return CACHE_NONE;
+    const int64_t k = scan_used(set_peek(c, s), line);
+    return k < 0 ? CACHE_NONE : (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
   }
   uint64_t i = hash_of(c, line);
   for (;;) {
@@ -321,12 +325,10 @@ uint32_t cache_use(struct cache *c, uint64_t line) {
   struct set *page = c->set_pages[s / SET_PAGE];
   if (!page) return CACHE_NONE;
   struct set *st = &page[s % SET_PAGE];
-  for (uint32_t k = 0; k < st->used; k++)
-    if (st->vec[k].line == line && (st->vec[k].flags & F_VALID)) {
-      st->vec[k].stamp = ++c->uses;
-      return (uint32_t)(s * c->ways + c->ways - 1 - k);
-    }
-  return CACHE_NONE;
+  const int64_t k = scan_used(st, line);
+  if (k < 0) return CACHE_NONE;
+  st->vec[k].stamp = ++c->uses;
+  return (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
 }
 
 uint32_t cache_victim(const struct cache *c, uint64_t line) {

@@ -187,6 +187,22 @@ static void analyse(struct mem_functional *b, uint64_t line, enum lru_stack_op o
   }
 }
 
+/* The last line again, same class, and no clean line to dirty: a hit in every
+ * size that changes nothing but counters (a quarter of the accesses on grove).
+ * Counted here (true: skip the analyser's call; mem_functional_stack hands the
+ * counts over); otherwise the line becomes the last one. A whole-line store to
+ * it is such a store too: no fetch either way. */
+static inline bool fn_repeat(struct mem_functional *b, uint64_t line, unsigned cls, bool store) {
+  if (line == b->last_line && cls == b->last_cls && (!store || b->last_dirty)) {
+    b->repeats[cls][store]++;
+    return true;
+  }
+  b->last_dirty = store || (line == b->last_line && b->last_dirty);
+  b->last_line = line;
+  b->last_cls = cls;
+  return false;
+}
+
 /* Feed every line of [addr, addr + size) to the analyser (and the trace). A
  * store covering a line whole allocates it without a fetch (LRU_STACK_WRITE_LINE);
  * a store to part of a line fetches it first (LRU_STACK_WRITE). In the din trace the
@@ -199,19 +215,7 @@ static inline void fn_line(struct mem_functional *b, uint64_t line, enum lru_sta
     if (op != LRU_STACK_WRITE_LINE) din_writer_record(b->din, a, false);
     if (op != LRU_STACK_READ) din_writer_record(b->din, a, true);
   }
-  /* The last line again, same class, and no clean line to dirty: a hit in every
-   * size that changes nothing but counters (a quarter of the accesses on grove).
-   * Count it here and skip the analyser's call; mem_functional_stack hands the
-   * counts over. A whole-line store to it is such a store too: no fetch either way. */
-  const bool store = op != LRU_STACK_READ;
-  if (line == b->last_line && cls == b->last_cls && (!store || b->last_dirty)) {
-    b->repeats[cls][store]++;
-    return;
-  }
-  b->last_dirty = store || (line == b->last_line && b->last_dirty);
-  b->last_line = line;
-  b->last_cls = cls;
-  analyse(b, line, op, cls);
+  if (!fn_repeat(b, line, cls, op != LRU_STACK_READ)) analyse(b, line, op, cls);
 }
 
 static inline void fn_access(struct mem_functional *b, uint64_t addr, uint32_t size, bool is_store,
@@ -250,15 +254,7 @@ static __attribute__((noinline)) void fn_load_lines(struct mem_functional *b, ui
 
 /* fn_line for a load of one line that the batch has room for. */
 static inline void fast_load_line(struct mem_functional *b, uint64_t line, unsigned cls) {
-  const bool same = line == b->last_line;
-  if (same && cls == b->last_cls) {
-    b->repeats[cls][0]++;
-    return;
-  }
-  b->last_dirty = same && b->last_dirty;
-  b->last_line = line;
-  b->last_cls = cls;
-  b->fill[b->fill_n++] = FN_REC(line, LRU_STACK_READ, cls);
+  if (!fn_repeat(b, line, cls, false)) b->fill[b->fill_n++] = FN_REC(line, LRU_STACK_READ, cls);
 }
 
 /* Most loads (a node, a triangle, a ray) fall within one or two lines: that
