@@ -178,7 +178,9 @@ struct dram_banked_params {
   bool tick_every_cycle; /* test only: wake every DRAM cycle while work is queued */
 };
 
-/* NULL if p is usable, else "dram.KEY: what is wrong" (a constant string). */
+/* NULL if p is usable, else "dram.KEY: what is wrong" (a constant string):
+ * powers of two and the rules between keys. Each key's range is the key
+ * table's (machine_cfg_range_problem), checked before a machine is built. */
 const char *dram_banked_params_problem(const struct dram_banked_params *p);
 
 /* Is s a usable mapping: six two-letter fields, each of ro ch ra bg ba co once? */

@@ -82,10 +82,6 @@ struct l2 {
 const char *l2_params_problem(const struct l2_params *p) {
   struct cache_params c = {p->size_bytes, p->ways, L2_LG2_LINE};
   if (cache_params_problem(&c)) return "l2: size and ways do not make a cache of 64-byte lines";
-  if (p->banks < 1 || p->banks > 4096) return "l2.banks: must be 1 to 4096";
-  if (p->mshrs < 1 || p->mshrs > (1u << 20)) return "l2.mshrs: must be 1 to 2^20";
-  if (p->write_buffer < 1 || p->write_buffer > (1u << 20))
-    return "l2.write_buffer: must be 1 to 2^20";
   return NULL;
 }
 

@@ -19,6 +19,7 @@
 #include "sim/engine.h"
 #include "sim/err.h"
 #include "sim/l2.h"
+#include "sim/machine_cfg.h"
 #include "sim/stats.h"
 #include "sim/timeline.h"
 
@@ -146,16 +147,9 @@ double machine_dram_peak_bytes_per_cycle(const struct machine_params *p) {
   }
 }
 
-const char *machine_params_problem(const struct machine_params *p) {
-  if (!(p->clock_ghz > 0) || !isfinite(p->clock_ghz) || p->clock_ghz > 1000)
-    return "clock_ghz: must be above 0 and at most 1000";
-  if (p->fidelity >= MACHINE_FIDELITY_COUNT)
-    return "fidelity: expected analytic, fixed, channel or banked";
-  if (p->cores < 1 || p->cores > 4096) return "cores: must be 1 to 4096";
-  if (p->threads_per_core < 1 || p->threads_per_core > 256)
-    return "threads_per_core: must be 1 to 256";
-  if (p->rays_per_thread < 1 || p->rays_per_thread > 256)
-    return "rays_per_thread: must be 1 to 256";
+const char *machine_params_problem(const struct machine_params *p, char *buf, size_t cap) {
+  const char *why = machine_cfg_range_problem(p, buf, cap);
+  if (why) return why;
   if ((uint64_t)p->cores * p->threads_per_core * p->rays_per_thread > MACHINE_MAX_CONTEXTS)
     return "cores x threads_per_core x rays_per_thread: at most 2^20 ray contexts";
   if (p->l1_size_bytes) {
@@ -163,12 +157,9 @@ const char *machine_params_problem(const struct machine_params *p) {
     if (cache_params_problem(&c)) return "l1: size and ways do not make a cache of 64-byte lines";
   }
   struct l2_params l2 = l2_params_of(p);
-  const char *why = l2_params_problem(&l2);
-  if (why) return why;
+  if ((why = l2_params_problem(&l2))) return why;
   struct dram_params d = machine_dram_params(p);
-  if ((why = dram_params_problem(&d))) return why;
-  if (p->timeline_window_cycles < 1) return "timeline.window: must be at least 1";
-  return NULL;
+  return dram_params_problem(&d);
 }
 
 /* ---- threads ---- */
@@ -726,7 +717,8 @@ void machine_probe(const struct machine *m, struct machine_probe *out) {
 /* ---- machine ---- */
 
 static struct machine *create(const struct machine_params *p, uint64_t stack_bytes, bool paint) {
-  CHECK(machine_params_problem(p) == NULL);
+  char why[MACHINE_PROBLEM_MAX];
+  CHECK(machine_params_problem(p, why, sizeof why) == NULL);
   CHECK(p->fidelity != MACHINE_FIDELITY_ANALYTIC);
   struct machine *m = xcalloc(1, sizeof *m);
   m->p = *p;
