@@ -399,7 +399,14 @@ static bool write_timeline(const struct run_output_report *r, struct err *e) {
   return outfile_commit(&o, e);
 }
 
-/* DRAM bytes per cycle over the run by data class, read from timeline.csv. */
+/* timeline.csv's header of the machine's timeline column col. */
+static void tl_header(unsigned col, char *buf, size_t len) {
+  timeline_col_header(machine_tl_cols, machine_tl_col_count, col, trace_class_names, buf, len);
+}
+
+/* DRAM bytes per cycle over the run by data class, read from timeline.csv by
+ * the columns' header names (from the machine's column table), so a column
+ * added to the timeline cannot shift the plot. */
 static bool write_plot(const struct run_output_report *r, struct err *e) {
   char csv[4200], final[4200], cmd[8192];
   snprintf(csv, sizeof csv, "%s/timeline.csv", r->out_dir);
@@ -411,22 +418,33 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
     outfile_abort(&o);
     return err_set(e, final, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
   }
+  char rd[64], wr[64], cls[64];
+  tl_header(MACHINE_TL_DRAM_READ_BYTES, rd, sizeof rd);
+  tl_header(MACHINE_TL_DRAM_WRITE_BYTES, wr, sizeof wr);
+  /* The window's middle, in millions of cycles (timeline_write_csv's first two
+   * columns: the window's start and length). */
+  static const char x[] = "((column(\"cycle\")+column(\"cycles\")/2)/1e6)";
   int n = snprintf(
       cmd, sizeof cmd,
       "set terminal pngcairo size 1000,560 noenhanced\nset output '%s'\n"
-      "set datafile separator ','\nset key outside right top\n"
+      "set datafile separator ','\nset datafile columnheaders\nset key outside right top\n"
       "set title 'DRAM traffic per cycle: %s, %s policy, %ux%u (window %llu cycles)'\n"
       "set xlabel 'simulated time (million cycles)'\n"
       "set ylabel 'DRAM bytes per cycle'\nset grid\nset yrange [0:*]\n"
-      "plot '%s' using (($1+$2/2)/1e6):(($3+$4)/$2) with steps lw 2 lc rgb 'black' title 'all (read + write)'",
+      "plot '%s' using %s:((column(\"%s\")+column(\"%s\"))/column(\"cycles\")) with steps lw 2 "
+      "lc rgb 'black' title 'all (read + write)'",
       o.tmp, r->scene_name, r->policy, r->width, r->height,
-      (unsigned long long)machine_timeline(r->machine)->window, csv);
-  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++)
+      (unsigned long long)machine_timeline(r->machine)->window, csv, x, rd, wr);
+  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) {
+    tl_header(MACHINE_TL_READ_CLASS0 + c, cls, sizeof cls);
     n += snprintf(cmd + n, sizeof cmd - (size_t)n,
-                  ", '' using (($1+$2/2)/1e6):($%u/$2) with steps title 'read: %s'", 5 + c,
-                  trace_class_names[c]);
+                  ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps title 'read: %s'",
+                  x, cls, trace_class_names[c]);
+  }
   snprintf(cmd + n, sizeof cmd - (size_t)n,
-           ", '' using (($1+$2/2)/1e6):($4/$2) with steps dt 2 title 'write-backs'\n");
+           ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps dt 2 title "
+           "'write-backs'\n",
+           x, wr);
   fputs(cmd, gp);
   if (pclose(gp) != 0) {
     outfile_abort(&o);
