@@ -120,6 +120,7 @@ struct dram_banked {
   /* Occupancy integrals by time, per queue kind. */
   uint64_t q_len[2], q_last[2];
   bool space_due;
+  uint64_t finished_dram_cycles; /* the cursor when finished */
   struct dram_banked_stats st;
 };
 
@@ -526,7 +527,6 @@ static void issue_column(struct dram_banked *d, struct channel *c, int qk, uint3
   d->space_due = true;
   uint64_t done = dram_clock_to_core(d->clk, (uint64_t)end);
   CHECK_GE(done, engine_now(d->e));
-  if (qk == RD_Q) d->st.read_latency_sum_cycles += done - r.take_core;
   d->inflight++;
   engine_at(d->e, done, on_done, d, r.tag);
 }
@@ -748,7 +748,6 @@ static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t q
   if (r.write) return; /* posted: served when it arrived */
   uint64_t done = dram_clock_to_core(d->clk, (uint64_t)end);
   CHECK_GE(done, engine_now(d->e));
-  d->st.read_latency_sum_cycles += done - r.take_core;
   d->inflight++;
   engine_at(d->e, done, on_done, d, r.tag);
   /* Reads of the same line that arrived while it waited. */
@@ -1042,7 +1041,7 @@ static void banked_finish(void *self) {
       if (end > bk->act_at) d->st.bank_open_cycles += (uint64_t)(end - bk->act_at);
       bk->act_at = -1;
     }
-  d->st.dram_cycles = (uint64_t)d->cursor;
+  d->finished_dram_cycles = (uint64_t)d->cursor;
 }
 
 static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
@@ -1100,8 +1099,14 @@ static const struct stats_desc banked_desc[] = {
                 "requests that found their bank closed"),
     STATS_FIELD(struct dram_banked_stats, row_conflicts, "dram_row_conflicts", "count",
                 "requests that found another row open"),
-    STATS_F64(struct dram_banked_stats, reads, bk_row_hit_rate, "dram_row_hit_rate", "fraction",
-              "row hits / requests (reads and writes)"),
+    {.name = "dram_row_hit_rate",
+     .unit = "fraction",
+     .desc = "row hits / requests (reads and writes)",
+     .how = STATS_HOW_F64,
+     .off = offsetof(struct dram_banked_stats, reads), /* reads and writes, side by side */
+     .size =
+         offsetof(struct dram_banked_stats, row_hits) - offsetof(struct dram_banked_stats, reads),
+     .f64 = bk_row_hit_rate},
     STATS_FIELD(struct dram_banked_stats, activates, "dram_activates", "count", "row activations"),
     STATS_FIELD(struct dram_banked_stats, precharges, "dram_precharges", "count",
                 "precharges, auto-precharges included"),
@@ -1123,20 +1128,12 @@ static const struct stats_desc banked_desc[] = {
     BK_QUEUE(0, "read", "reads"),
     BK_QUEUE(1, "write", "writes"),
 };
-static const struct stats_skip banked_skip[] = {
-    STATS_SKIP(struct dram_banked_stats, writes,
-               "read with reads by dram_row_hit_rate and the write queue's mean"),
-    STATS_SKIP(struct dram_banked_stats, read_latency_sum_cycles,
-               "the same as the read latency every level reports (dram_read_latency_mean)"),
-    STATS_SKIP(struct dram_banked_stats, dram_cycles,
-               "the figures use the run's length in DRAM cycles"),
-};
 const struct stats_descs dram_banked_stats_descs = {"dram banked",
                                                     banked_desc,
                                                     STATS_COUNT(banked_desc),
                                                     sizeof(struct dram_banked_stats),
-                                                    banked_skip,
-                                                    STATS_COUNT(banked_skip)};
+                                                    NULL,
+                                                    0};
 
 static void banked_report(const void *self, struct stats_table *t, uint64_t cycles) {
   const struct dram_banked *d = self;
@@ -1151,6 +1148,10 @@ const struct dram_level_ops dram_banked_ops = {banked_can_take, banked_take, ban
 
 const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d) {
   return &d->st;
+}
+
+uint64_t dram_banked_finished_cycles(const struct dram_banked *d) {
+  return d->finished_dram_cycles;
 }
 
 struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint64_t core_khz,

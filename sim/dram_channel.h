@@ -29,14 +29,13 @@ struct dram_channel_params {
 };
 
 struct dram_channel_stats {
-  uint64_t requests;
   dram_tick busy_ticks;     /* transfer time */
   dram_tick wait_ticks_sum; /* from take to the start of the transfer (the FIFO wait), exact */
+  uint64_t requests;        /* the wait's mean's divisor (beside the sum it divides) */
   /* The FIFO's occupancy integral, by time (in cycles x requests), apart from
    * the waits, for Little's law; complete after finish. */
   double fifo_area;
   uint32_t fifo_max;
-  dram_tick last_end_ticks; /* when the channel is next free */
 };
 
 struct dram_channel;

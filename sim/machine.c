@@ -877,6 +877,10 @@ static double m_core_utilization(const void *st, const struct stats_env *env) {
 static double m_thread_cycles(const void *st) {
   return (double)M_ST(st)->threads * (double)M_ST(st)->cycles;
 }
+static double m_busy_fraction(const void *st, const struct stats_env *env) {
+  (void)env;
+  return m_ratio((double)M_ST(st)->thread_busy_cycles, m_thread_cycles(st));
+}
 static double m_idle_fraction(const void *st, const struct stats_env *env) {
   (void)env;
   const struct machine_stats *s = st;
@@ -921,6 +925,8 @@ static const struct stats_desc machine_desc[] = {
                 "issue slots used (compute, loads, stores)"),
     STATS_F64(MS, issue_slots, m_core_utilization, "core_utilization", "fraction",
               "issue slots used / cores x cycles"),
+    STATS_F64(MS, thread_busy_cycles, m_busy_fraction, "thread_busy_fraction", "fraction",
+              "thread-cycles with a ray ready, running or being switched to"),
     STATS_F64(MS, thread_done_cycles, m_idle_fraction, "thread_idle_fraction", "fraction",
               "thread-cycles with no ray ready: waiting, parked or done"),
     STATS_F64(MS, thread_wait_cycles, m_wait_fraction, "thread_wait_fraction", "fraction",
@@ -932,12 +938,16 @@ static const struct stats_desc machine_desc[] = {
     STATS_FIELD(MS, ray_switches, "ray_switches", "count",
                 "a thread taking another ray than its last"),
     STATS_FIELD(MS, switch_cycles, "ray_switch_cycles", "cycles", "thread cycles paid for them"),
+    STATS_FIELD(MS, blocks, "ray_blocks", "count",
+                "runs of a ray between waits: issuing until it waits, parks or ends"),
     STATS_FIELD(MS, waits, "waits", "count", "mem_wait calls: a worker idle by its own choice"),
     STATS_FIELD(MS, wait_cycles, "wait_cycles", "cycles", "cycles they asked for"),
     STATS_FIELD(MS, parks, "parks", "count", "mem_park calls: a context leaving with no work"),
     STATS_FIELD(MS, wakes, "wakes", "count", "mem_wake calls"),
     STATS_FIELD(MS, loads, "loads", "count", "loads issued"),
     STATS_FIELD(MS, stores, "stores", "count", "stores issued"),
+    STATS_FIELD(MS, computes, "computes", "count",
+                "compute steps issued (their cycles are in issue_slots)"),
     STATS_FIELD(MS, blocking_loads, "blocking_loads", "count",
                 "loads that left the L1 and suspended their ray"),
     STATS_F64(MS, blocking_loads, m_slots_per_blocking_load, "issue_slots_per_blocking_load",
@@ -956,9 +966,6 @@ static const struct stats_desc machine_desc[] = {
                 "coroutine stacks alive at once (parked contexts hold none)"),
 };
 static const struct stats_skip machine_skip[] = {
-    STATS_SKIP(MS, thread_busy_cycles, "the rest of the thread-cycles: 1 - thread_idle_fraction"),
-    STATS_SKIP(MS, blocks, "the progress report's clock: not a figure of the machine"),
-    STATS_SKIP(MS, computes, "not written yet (issue_slots counts their slots)"),
     STATS_SKIP_BY(MS, l1_accesses, machine_l1_stats_descs),
     STATS_SKIP_BY(MS, l1_hits, machine_l1_stats_descs),
     STATS_SKIP_BY(MS, l2, l2_stats_descs),
