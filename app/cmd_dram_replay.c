@@ -59,6 +59,8 @@ static const char HELP[] =
     "                        --set fidelity=banked --set clock_ghz=1.2\n"
     "  --per-request FILE    also write 'index arrival_cycle taken_cycle done_cycle'\n"
     "                        (core cycles) for every request, in trace order\n"
+    "  --help-stats          list the replay's own numbers: name, unit, what it is\n"
+    "                        (the level's are rtsim run --help-stats' dram rows)\n"
     "  -h, --help            this text\n";
 
 #define REPLAY_LINE_MAX 4096          /* bytes a line, its newline not counted */
@@ -509,11 +511,18 @@ int cmd_dram_replay(int argc, char **argv) {
                           0}; /* at most one an argument */
   struct replay *p = NULL;
   FILE *in = NULL;
+  bool help_stats = false;
   const struct opts_spec spec[] = {OPTS_PARSE("set", 0, &sets, app_sets_add, "KEY=VALUE"),
-                                   OPTS_STR("per-request", 0, &per_path), OPTS_END};
+                                   OPTS_STR("per-request", 0, &per_path),
+                                   OPTS_FLAG("help-stats", 0, &help_stats), OPTS_END};
   struct opts_args args;
   int rc = opts_parse("dram-replay", HELP, spec, argc, argv, &args);
   if (rc != OPTS_GO) goto done;
+  if (help_stats) {
+    stats_write_help(&replay_stats_descs, stdout);
+    rc = fflush(stdout) == 0 ? 0 : 1;
+    goto done;
+  }
   rc = APP_EXIT_USAGE;
   if (args.n != 2) {
     app_usage_error("dram-replay", "expected MACHINE.yaml TRACE, got %d file%s", args.n,
