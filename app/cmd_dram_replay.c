@@ -8,6 +8,7 @@
 #include "app/app.h"
 
 #include <errno.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -58,6 +59,8 @@ static const char HELP[] =
     "                        --set fidelity=banked --set clock_ghz=1.2\n"
     "  --per-request FILE    also write 'index arrival_cycle taken_cycle done_cycle'\n"
     "                        (core cycles) for every request, in trace order\n"
+    "  --help-stats          list the replay's own numbers: name, unit, what it is\n"
+    "                        (the level's are rtsim run --help-stats' dram rows)\n"
     "  -h, --help            this text\n";
 
 #define REPLAY_LINE_MAX 4096          /* bytes a line, its newline not counted */
@@ -371,44 +374,133 @@ static void on_done(void *ctx, uint64_t idx) {
 
 static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 
-/* The CSV row: the replay's own numbers, then the level's. */
+/* ---- the replay's numbers, declared once (st: the struct replay; env->ctx:
+ * the machine params; env->cycles: first arrival to last done) ---- */
+
+static const struct replay *rp(const void *st) { return st; }
+static const struct machine_params *rmp(const struct stats_env *env) { return env->ctx; }
+static uint64_t r_requests(const void *st, const struct stats_env *env) {
+  (void)env;
+  return rp(st)->reads + rp(st)->writes;
+}
+/* DRAM clock cycles per core cycle. */
+static double r_to_dram(const struct stats_env *env) {
+  return (double)rmp(env)->dram_clock_mhz * 1000.0 / (double)machine_core_khz(rmp(env));
+}
+static double r_bpc(const void *st, const struct stats_env *env) {
+  return ratio((double)REPLAY_LINE_BYTES * (double)r_requests(st, env), (double)env->cycles);
+}
+static double r_clock_ghz(const void *st, const struct stats_env *env) {
+  (void)st;
+  return rmp(env)->clock_ghz;
+}
+static uint64_t r_clock_mhz(const void *st, const struct stats_env *env) {
+  (void)st;
+  return rmp(env)->dram_clock_mhz;
+}
+static uint64_t r_cycles(const void *st, const struct stats_env *env) {
+  (void)st;
+  return env->cycles;
+}
+static double r_lat_mean(const void *st, const struct stats_env *env) {
+  (void)env;
+  return hist_mean(&rp(st)->read_latency);
+}
+static uint64_t r_p50(const void *st, const struct stats_env *env) {
+  (void)env;
+  return hist_quantile(&rp(st)->read_latency, 0.50);
+}
+static uint64_t r_p95(const void *st, const struct stats_env *env) {
+  (void)env;
+  return hist_quantile(&rp(st)->read_latency, 0.95);
+}
+static uint64_t r_p99(const void *st, const struct stats_env *env) {
+  (void)env;
+  return hist_quantile(&rp(st)->read_latency, 0.99);
+}
+static uint64_t r_lat_max(const void *st, const struct stats_env *env) {
+  (void)env;
+  return rp(st)->read_latency.max;
+}
+static double r_taken_mean(const void *st, const struct stats_env *env) {
+  (void)env;
+  return hist_mean(&dram_get_stats(rp(st)->dram)->read_latency);
+}
+static uint64_t r_taken_max(const void *st, const struct stats_env *env) {
+  (void)env;
+  return dram_get_stats(rp(st)->dram)->read_latency.max;
+}
+static double r_write_mean(const void *st, const struct stats_env *env) {
+  (void)env;
+  return ratio((double)rp(st)->write_latency_sum, (double)rp(st)->writes);
+}
+static double r_wait_mean(const void *st, const struct stats_env *env) {
+  return ratio((double)rp(st)->wait_sum, (double)r_requests(st, env));
+}
+static double r_gbps(const void *st, const struct stats_env *env) {
+  return r_bpc(st, env) * rmp(env)->clock_ghz;
+}
+static double r_mean_dram(const void *st, const struct stats_env *env) {
+  return r_lat_mean(st, env) * r_to_dram(env);
+}
+static double r_p50_dram(const void *st, const struct stats_env *env) {
+  return (double)r_p50(st, env) * r_to_dram(env);
+}
+static double r_p95_dram(const void *st, const struct stats_env *env) {
+  return (double)r_p95(st, env) * r_to_dram(env);
+}
+static double r_p99_dram(const void *st, const struct stats_env *env) {
+  return (double)r_p99(st, env) * r_to_dram(env);
+}
+
+#define RU(fn, nm, un, ds)                                                                         \
+  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .u64 = fn }
+#define RF(fn, nm, un, ds)                                                                         \
+  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .f64 = fn }
+static const struct stats_desc replay_desc[] = {
+    RF(r_clock_ghz, "clock_ghz", "GHz", "the core clock (the config's)"),
+    RU(r_clock_mhz, "dram.clock_mhz", "MHz", "the DRAM's clock (the config's)"),
+    RU(r_requests, "requests", "count", "requests replayed"),
+    STATS_FIELD(struct replay, reads, "reads", "count", "reads served"),
+    STATS_FIELD(struct replay, writes, "writes", "count", "writes served"),
+    STATS_FIELD(struct replay, first_arrival, "first_arrival_cycle", "cycles",
+                "the first request's arrival"),
+    STATS_FIELD(struct replay, last_done, "last_done_cycle", "cycles", "the last request served"),
+    RU(r_cycles, "cycles", "cycles", "from the first arrival to the last served"),
+    RF(r_lat_mean, "read_latency_mean", "cycles", "a read's latency from its arrival, mean"),
+    RU(r_p50, "read_latency_p50", "cycles", "its median"),
+    RU(r_p95, "read_latency_p95", "cycles", "its 95th percentile"),
+    RU(r_p99, "read_latency_p99", "cycles", "its 99th percentile"),
+    RU(r_lat_max, "read_latency_max", "cycles", "its largest"),
+    RF(r_taken_mean, "read_latency_taken_mean", "cycles",
+       "a read's latency from the DRAM taking it, mean"),
+    RU(r_taken_max, "read_latency_taken_max", "cycles", "its largest"),
+    RF(r_write_mean, "write_latency_mean", "cycles", "a write's latency from its arrival, mean"),
+    RF(r_wait_mean, "refused_wait_mean", "cycles",
+       "cycles a request waited past its arrival for the DRAM to take it, mean"),
+    RF(r_bpc, "bytes_per_cycle", "bytes a cycle", "64-byte lines moved / cycles"),
+    RF(r_gbps, "gb_per_s", "GB/s", "bytes_per_cycle at clock_ghz"),
+    RF(r_mean_dram, "read_latency_mean_dram_cycles", "DRAM cycles",
+       "read_latency_mean in DRAM clock cycles"),
+    RF(r_p50_dram, "read_latency_p50_dram_cycles", "DRAM cycles", "read_latency_p50 likewise"),
+    RF(r_p95_dram, "read_latency_p95_dram_cycles", "DRAM cycles", "read_latency_p95 likewise"),
+    RF(r_p99_dram, "read_latency_p99_dram_cycles", "DRAM cycles", "read_latency_p99 likewise"),
+};
+#undef RU
+#undef RF
+static const struct stats_descs replay_stats_descs = {
+    "dram-replay", replay_desc, STATS_COUNT(replay_desc), 0, NULL, 0};
+
+/* The CSV row: what was replayed, the replay's own numbers, then the level's. */
 static void report(const struct replay *p, const char *path, const char *format,
                    const struct machine_cfg *mc, struct stats_table *t) {
   const struct machine_params *mp = &mc->p;
-  const struct dram_stats *ds = dram_get_stats(p->dram);
-  const uint64_t requests = p->reads + p->writes, cycles = p->last_done - p->first_arrival;
-  /* DRAM clock cycles per core cycle. */
-  const double to_dram = (double)mp->dram_clock_mhz * 1000.0 / (double)machine_core_khz(mp);
-  const double bpc = ratio((double)REPLAY_LINE_BYTES * (double)requests, (double)cycles);
   stats_str(t, "trace", path);
   stats_str(t, "trace_format", format);
   stats_str(t, "fidelity", dram_model_names[machine_fidelity_dram(mp->fidelity)]);
-  stats_f64(t, "clock_ghz", mp->clock_ghz);
-  stats_u64(t, "dram.clock_mhz", mp->dram_clock_mhz);
-  stats_u64(t, "requests", requests);
-  stats_u64(t, "reads", p->reads);
-  stats_u64(t, "writes", p->writes);
-  stats_u64(t, "first_arrival_cycle", p->first_arrival);
-  stats_u64(t, "last_done_cycle", p->last_done);
-  stats_u64(t, "cycles", cycles);
-  stats_f64(t, "read_latency_mean", hist_mean(&p->read_latency));
-  stats_u64(t, "read_latency_p50", hist_quantile(&p->read_latency, 0.50));
-  stats_u64(t, "read_latency_p95", hist_quantile(&p->read_latency, 0.95));
-  stats_u64(t, "read_latency_p99", hist_quantile(&p->read_latency, 0.99));
-  stats_u64(t, "read_latency_max", p->read_latency.max);
-  stats_f64(t, "read_latency_taken_mean", hist_mean(&ds->read_latency));
-  stats_u64(t, "read_latency_taken_max", ds->read_latency.max);
-  stats_f64(t, "write_latency_mean", ratio((double)p->write_latency_sum, (double)p->writes));
-  stats_f64(t, "refused_wait_mean", ratio((double)p->wait_sum, (double)requests));
-  stats_f64(t, "bytes_per_cycle", bpc);
-  stats_f64(t, "gb_per_s", bpc * mp->clock_ghz);
-  stats_f64(t, "read_latency_mean_dram_cycles", hist_mean(&p->read_latency) * to_dram);
-  stats_f64(t, "read_latency_p50_dram_cycles",
-            (double)hist_quantile(&p->read_latency, 0.50) * to_dram);
-  stats_f64(t, "read_latency_p95_dram_cycles",
-            (double)hist_quantile(&p->read_latency, 0.95) * to_dram);
-  stats_f64(t, "read_latency_p99_dram_cycles",
-            (double)hist_quantile(&p->read_latency, 0.99) * to_dram);
+  const uint64_t cycles = p->last_done - p->first_arrival;
+  const struct stats_env env = {.cycles = cycles, .ctx = mp};
+  stats_emit(t, &replay_stats_descs, p, &env);
   dram_report(p->dram, t, cycles);
 }
 
@@ -419,11 +511,18 @@ int cmd_dram_replay(int argc, char **argv) {
                           0}; /* at most one an argument */
   struct replay *p = NULL;
   FILE *in = NULL;
+  bool help_stats = false;
   const struct opts_spec spec[] = {OPTS_PARSE("set", 0, &sets, app_sets_add, "KEY=VALUE"),
-                                   OPTS_STR("per-request", 0, &per_path), OPTS_END};
+                                   OPTS_STR("per-request", 0, &per_path),
+                                   OPTS_FLAG("help-stats", 0, &help_stats), OPTS_END};
   struct opts_args args;
   int rc = opts_parse("dram-replay", HELP, spec, argc, argv, &args);
   if (rc != OPTS_GO) goto done;
+  if (help_stats) {
+    stats_write_help(&replay_stats_descs, stdout);
+    rc = fflush(stdout) == 0 ? 0 : 1;
+    goto done;
+  }
   rc = APP_EXIT_USAGE;
   if (args.n != 2) {
     app_usage_error("dram-replay", "expected MACHINE.yaml TRACE, got %d file%s", args.n,

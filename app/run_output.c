@@ -2,6 +2,7 @@
  * written as stats.json members and one stats.csv row in the same order. */
 #include "app/run_output.h"
 
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
@@ -91,64 +92,6 @@ static void identity(const struct run_output_report *r, struct stats_table *t) {
   stats_u64(t, "seed", r->seed);
 }
 
-/* Fidelity analytic: what its counts and estimate know, under the timed
- * rungs' names and in their order; what only time tells (threads' idle
- * time, switches, waits, merges, stalls, queues, latencies, events) is
- * absent. Then its own numbers, analytic_* (README "Fidelity ladder"). */
-static void measured_analytic(const struct run_output_report *r, struct stats_table *t) {
-  const struct analytic_counts *n = &r->analytic->counts;
-  const struct analytic_estimate *a = &r->analytic->est;
-  const struct machine_params *p = &r->cfg->p;
-  const double cyc = (double)a->cycles;
-  const uint64_t rays = render_stats_total(r->rstats);
-  const double seconds = cyc / (p->clock_ghz * 1e9);
-  const uint64_t threads = (uint64_t)p->cores * p->threads_per_core;
-  stats_u64(t, "cycles", a->cycles);
-  stats_f64(t, "seconds", seconds);
-  stats_u64(t, "rays_traced", rays);
-  stats_f64(t, "rays_per_second", ratio((double)rays, seconds));
-  stats_u64(t, "kd_node_visits", r->tstats->node_visits);
-  stats_u64(t, "triangle_tests", r->tstats->tri_tests);
-  stats_u64(t, "ray_contexts", threads * p->rays_per_thread);
-  stats_u64(t, "threads", threads);
-  stats_u64(t, "issue_slots", n->issue_slots);
-  stats_f64(t, "core_utilization", ratio((double)n->issue_slots, (double)p->cores * cyc));
-  stats_u64(t, "loads", n->loads);
-  stats_u64(t, "stores", n->stores);
-  stats_u64(t, "blocking_loads", n->blocking_loads);
-  stats_f64(t, "issue_slots_per_blocking_load",
-            ratio((double)n->issue_slots, (double)n->blocking_loads));
-  uint64_t geo_misses =
-      (n->fetch_bytes_by_class[TRACE_CLASS_GEOMETRY] + n->fetch_bytes_by_class[TRACE_CLASS_NODE]) /
-      64;
-  stats_f64(t, "issue_slots_per_geometry_miss", ratio((double)n->issue_slots, (double)geo_misses));
-  stats_u64(t, "l1_accesses", n->l1_accesses);
-  stats_u64(t, "l1_hits", n->l1_hits);
-  stats_u64(t, "l2_accesses", n->l2_accesses);
-  stats_u64(t, "l2_hits", n->l2_hits);
-  stats_u64(t, "l2_misses", n->l2_misses);
-  stats_f64(t, "l2_miss_rate", ratio((double)n->l2_misses, (double)n->l2_accesses));
-  stats_u64(t, "l2_whole_line_allocs", n->l2_whole_line_allocs);
-  stats_u64(t, "l2_fetch_bytes", n->fetch_bytes);
-  stats_u64(t, "l2_writeback_bytes", n->writeback_bytes);
-  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) {
-    char name[64];
-    snprintf(name, sizeof name, "fetch_%s_bytes", trace_class_names[c]);
-    stats_u64(t, name, n->fetch_bytes_by_class[c]);
-  }
-  stats_u64(t, "dram_reads", n->fetch_bytes / 64);
-  stats_u64(t, "dram_writes", n->writeback_bytes / 64);
-  stats_u64(t, "dram_read_bytes", n->fetch_bytes);
-  stats_u64(t, "dram_write_bytes", n->writeback_bytes);
-  stats_f64(t, "dram_bytes_per_cycle", ratio((double)(n->fetch_bytes + n->writeback_bytes), cyc));
-  stats_f64(t, "analytic_slots_per_blocking_load", a->slots_per_blocking);
-  stats_f64(t, "analytic_blocking_miss_rate", a->blocking_miss_rate);
-  stats_f64(t, "analytic_load_latency_cycles", a->load_latency_cycles);
-  stats_f64(t, "analytic_core_utilization", a->core_utilization);
-  stats_f64(t, "analytic_latency_bound_cycles", a->latency_bound_cycles);
-  stats_f64(t, "analytic_bandwidth_bound_cycles", a->bandwidth_bound_cycles);
-}
-
 /* ---- the run's own numbers, at the machine's slots (README "Numbers") ----
  * The workload's counts (the renderer's) and figures of the machine that need
  * the renderer's data classes; st: the struct run_output_report. */
@@ -220,10 +163,198 @@ static void run_slot(const struct stats_env *env, int slot, struct stats_table *
   else stats_emit(t, &run_output_misses_stats_descs, r, env);
 }
 
+/* ---- fidelity analytic's numbers ----
+ * What its counts and estimate know, under the timed rungs' names and in
+ * their order; what only time tells (threads' idle time, switches, waits,
+ * merges, stalls, queues, latencies, events) is absent. Then its own numbers,
+ * analytic_* (README "Fidelity ladder"). st: the struct app_analytic; env->ctx:
+ * the struct run_output_report. */
+
+#define AN(f) offsetof(struct app_analytic, f), STATS_FIELD_SIZE(struct app_analytic, f)
+static const struct analytic_counts *an_n(const void *st) {
+  return &((const struct app_analytic *)st)->counts;
+}
+static const struct machine_params *an_p(const struct stats_env *env) {
+  return &((const struct run_output_report *)env->ctx)->cfg->p;
+}
+static uint64_t an_threads(const void *st, const struct stats_env *env) {
+  (void)st;
+  return (uint64_t)an_p(env)->cores * an_p(env)->threads_per_core;
+}
+static uint64_t an_contexts(const void *st, const struct stats_env *env) {
+  return an_threads(st, env) * an_p(env)->rays_per_thread;
+}
+static double an_seconds(const void *st, const struct stats_env *env) {
+  (void)st;
+  return (double)env->cycles / (an_p(env)->clock_ghz * 1e9);
+}
+static uint64_t an_rays(const void *st, const struct stats_env *env) {
+  (void)st;
+  return run_rays(env->ctx, env);
+}
+static double an_rays_per_second(const void *st, const struct stats_env *env) {
+  return ratio((double)an_rays(st, env), an_seconds(st, env));
+}
+static uint64_t an_node_visits(const void *st, const struct stats_env *env) {
+  (void)st;
+  return run_node_visits(env->ctx, env);
+}
+static uint64_t an_tri_tests(const void *st, const struct stats_env *env) {
+  (void)st;
+  return run_tri_tests(env->ctx, env);
+}
+static double an_core_utilization(const void *st, const struct stats_env *env) {
+  return ratio((double)an_n(st)->issue_slots, (double)an_p(env)->cores * (double)env->cycles);
+}
+static double an_slots_per_blocking_load(const void *st, const struct stats_env *env) {
+  (void)env;
+  return ratio((double)an_n(st)->issue_slots, (double)an_n(st)->blocking_loads);
+}
+static double an_slots_per_geometry_miss(const void *st, const struct stats_env *env) {
+  (void)env;
+  const uint64_t *by = an_n(st)->fetch_bytes_by_class;
+  uint64_t geo_misses = (by[TRACE_CLASS_GEOMETRY] + by[TRACE_CLASS_NODE]) / 64;
+  return ratio((double)an_n(st)->issue_slots, (double)geo_misses);
+}
+static double an_l2_miss_rate(const void *st, const struct stats_env *env) {
+  (void)env;
+  return ratio((double)an_n(st)->l2_misses, (double)an_n(st)->l2_accesses);
+}
+static uint64_t an_dram_reads(const void *st, const struct stats_env *env) {
+  (void)env;
+  return an_n(st)->fetch_bytes / 64;
+}
+static uint64_t an_dram_writes(const void *st, const struct stats_env *env) {
+  (void)env;
+  return an_n(st)->writeback_bytes / 64;
+}
+static double an_dram_bytes_per_cycle(const void *st, const struct stats_env *env) {
+  return ratio((double)(an_n(st)->fetch_bytes + an_n(st)->writeback_bytes), (double)env->cycles);
+}
+#define AN_EST(f)                                                                                  \
+  static double an_est_##f(const void *st, const struct stats_env *env) {                          \
+    (void)env;                                                                                     \
+    return ((const struct app_analytic *)st)->est.f;                                               \
+  }
+AN_EST(slots_per_blocking)
+AN_EST(blocking_miss_rate)
+AN_EST(load_latency_cycles)
+AN_EST(core_utilization)
+AN_EST(latency_bound_cycles)
+AN_EST(bandwidth_bound_cycles)
+#undef AN_EST
+
+#define AN_FIELD(f, nm, un, ds) STATS_FIELD(struct app_analytic, f, nm, un, ds)
+#define AN_U64(f, fn, nm, un, ds)                                                                  \
+  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, AN(f), .u64 = fn }
+#define AN_F64(f, fn, nm, un, ds)                                                                  \
+  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, AN(f), .f64 = fn }
+#define AN_ENV_U64(fn, nm, un, ds)                                                                 \
+  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .u64 = fn }
+#define AN_ENV_F64(fn, nm, un, ds)                                                                 \
+  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .f64 = fn }
+static const struct stats_desc analytic_desc[] = {
+    AN_FIELD(est.cycles, "cycles", "cycles", "the estimate: the larger of its two bounds"),
+    AN_ENV_F64(an_seconds, "seconds", "seconds", "the estimate at clock_ghz"),
+    AN_ENV_U64(an_rays, "rays_traced", "count", "rays traced, every kind"),
+    AN_ENV_F64(an_rays_per_second, "rays_per_second", "per second", "rays traced / seconds"),
+    AN_ENV_U64(an_node_visits, "kd_node_visits", "count", "k-d tree nodes visited"),
+    AN_ENV_U64(an_tri_tests, "triangle_tests", "count", "ray-triangle tests"),
+    AN_ENV_U64(an_contexts, "ray_contexts", "count", "ray contexts: cores x threads x rays"),
+    AN_ENV_U64(an_threads, "threads", "count", "hardware threads: cores x threads_per_core"),
+    AN_FIELD(counts.issue_slots, "issue_slots", "cycles",
+             "issue slots the work takes (compute, loads, stores)"),
+    AN_F64(counts.issue_slots, an_core_utilization, "core_utilization", "fraction",
+           "issue slots / cores x cycles"),
+    AN_FIELD(counts.loads, "loads", "count", "loads"),
+    AN_FIELD(counts.stores, "stores", "count", "stores"),
+    AN_FIELD(counts.blocking_loads, "blocking_loads", "count",
+             "loads of a line the L1 did not hold"),
+    AN_F64(counts.blocking_loads, an_slots_per_blocking_load, "issue_slots_per_blocking_load",
+           "cycles", "issue slots / blocking loads"),
+    AN_F64(counts.fetch_bytes_by_class, an_slots_per_geometry_miss, "issue_slots_per_geometry_miss",
+           "cycles", "issue slots / lines of triangles or k-d nodes read from the DRAM"),
+    AN_FIELD(counts.l1_accesses, "l1_accesses", "count", "lines of loads reaching the L1s"),
+    AN_FIELD(counts.l1_hits, "l1_hits", "count", "those the L1 held"),
+    AN_FIELD(counts.l2_accesses, "l2_accesses", "count", "accesses that reached the L2"),
+    AN_FIELD(counts.l2_hits, "l2_hits", "count", "those the L2 held"),
+    AN_FIELD(counts.l2_misses, "l2_misses", "count", "those it fetched from the DRAM"),
+    AN_F64(counts.l2_misses, an_l2_miss_rate, "l2_miss_rate", "fraction",
+           "l2_misses / l2_accesses"),
+    AN_FIELD(counts.l2_whole_line_allocs, "l2_whole_line_allocs", "count",
+             "lines a store wrote whole, allocated without a fetch"),
+    AN_FIELD(counts.fetch_bytes, "l2_fetch_bytes", "bytes", "bytes the L2 fetched from the DRAM"),
+    AN_FIELD(counts.writeback_bytes, "l2_writeback_bytes", "bytes",
+             "bytes the L2 wrote back to the DRAM"),
+    {.name = "fetch_%s_bytes",
+     .unit = "bytes",
+     .desc = "of the bytes fetched, those of each data class",
+     .how = STATS_HOW_FIELD,
+     AN(counts.fetch_bytes_by_class),
+     .per_class = true},
+    AN_U64(counts.fetch_bytes, an_dram_reads, "dram_reads", "count", "lines read from the DRAM"),
+    AN_U64(counts.writeback_bytes, an_dram_writes, "dram_writes", "count",
+           "lines written to the DRAM"),
+    AN_FIELD(counts.fetch_bytes, "dram_read_bytes", "bytes", "bytes read from the DRAM"),
+    AN_FIELD(counts.writeback_bytes, "dram_write_bytes", "bytes", "bytes written to the DRAM"),
+    AN_F64(counts.fetch_bytes, an_dram_bytes_per_cycle, "dram_bytes_per_cycle", "bytes a cycle",
+           "DRAM bytes read and written / cycles"),
+    AN_F64(est.slots_per_blocking, an_est_slots_per_blocking, "analytic_slots_per_blocking_load",
+           "cycles", "c: issue slots per blocking load (0 when no load blocks)"),
+    AN_F64(est.blocking_miss_rate, an_est_blocking_miss_rate, "analytic_blocking_miss_rate",
+           "fraction", "the share of blocking loads that miss the L2"),
+    AN_F64(est.load_latency_cycles, an_est_load_latency_cycles, "analytic_load_latency_cycles",
+           "cycles", "L: the cycles a ray gives up its issue slots per blocking load"),
+    AN_F64(est.core_utilization, an_est_core_utilization, "analytic_core_utilization", "fraction",
+           "u = min(1, n c / (c + L)), n the ray contexts a core"),
+    AN_F64(est.latency_bound_cycles, an_est_latency_bound_cycles, "analytic_latency_bound_cycles",
+           "cycles", "issue slots / (cores x u)"),
+    AN_F64(est.bandwidth_bound_cycles, an_est_bandwidth_bound_cycles,
+           "analytic_bandwidth_bound_cycles", "cycles", "DRAM bytes / dram.bytes_per_cycle"),
+};
+#undef AN
+#undef AN_FIELD
+#undef AN_U64
+#undef AN_F64
+#undef AN_ENV_U64
+#undef AN_ENV_F64
+const struct stats_descs run_output_analytic_stats_descs = {
+    "analytic", analytic_desc, STATS_COUNT(analytic_desc), 0, NULL, 0};
+
+/* ---- what only stats.json holds of a whole timed run ---- (st: the
+ * struct run_output_report; then its histograms) */
+static uint64_t json_latency_sum(const void *st, const struct stats_env *env) {
+  (void)env;
+  return machine_get_stats(((const struct run_output_report *)st)->machine)->load_latency.sum;
+}
+static uint64_t json_window(const void *st, const struct stats_env *env) {
+  (void)env;
+  return machine_timeline(((const struct run_output_report *)st)->machine)->window;
+}
+static const struct stats_desc json_desc[] = {
+    {.name = "load_latency_cycles_sum",
+     .unit = "cycles",
+     .desc = "loads' latencies summed: the exact total the cost.load_wait_cycles channel sums to "
+             "(stats.json only)",
+     .how = STATS_HOW_U64,
+     .u64 = json_latency_sum},
+    {.name = "timeline_window_cycles",
+     .unit = "cycles",
+     .desc = "a timeline.csv row's window at the end of the run (stats.json only)",
+     .how = STATS_HOW_U64,
+     .u64 = json_window},
+};
+const struct stats_descs run_output_json_stats_descs = {"run", json_desc, STATS_COUNT(json_desc),
+                                                        0,     NULL,      0};
+
 /* Every measured scalar, units in the names. */
 static void measured(const struct run_output_report *r, struct stats_table *t) {
   if (r->analytic) {
-    measured_analytic(r, t);
+    const struct stats_env env = {.cycles = r->analytic->est.cycles,
+                                  .ctx = r,
+                                  .class_names = trace_class_names,
+                                  .classes = TRACE_CLASS_COUNT};
+    stats_emit(t, &run_output_analytic_stats_descs, r->analytic, &env);
     return;
   }
   const struct machine_stats *s = machine_get_stats(r->machine);
@@ -232,9 +363,7 @@ static void measured(const struct run_output_report *r, struct stats_table *t) {
   if (r->sample) {
     /* Estimates with their intervals; the machine's own counters cover only
      * the detailed units, so they are not written. */
-    stats_u64(t, "ray_contexts", s->contexts);
-    stats_u64(t, "threads", s->threads);
-    sample_stats(r->sample, p, peak, t);
+    sample_stats(r->sample, p, peak, s->contexts, s->threads, t);
     return;
   }
   machine_stats_emit(r->machine, t, trace_class_names, TRACE_CLASS_COUNT, run_slot, r);
@@ -270,7 +399,14 @@ static bool write_timeline(const struct run_output_report *r, struct err *e) {
   return outfile_commit(&o, e);
 }
 
-/* DRAM bytes per cycle over the run by data class, read from timeline.csv. */
+/* timeline.csv's header of the machine's timeline column col. */
+static void tl_header(unsigned col, char *buf, size_t len) {
+  timeline_col_header(machine_tl_cols, machine_tl_col_count, col, trace_class_names, buf, len);
+}
+
+/* DRAM bytes per cycle over the run by data class, read from timeline.csv by
+ * the columns' header names (from the machine's column table), so a column
+ * added to the timeline cannot shift the plot. */
 static bool write_plot(const struct run_output_report *r, struct err *e) {
   char csv[4200], final[4200], cmd[8192];
   snprintf(csv, sizeof csv, "%s/timeline.csv", r->out_dir);
@@ -282,22 +418,33 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
     outfile_abort(&o);
     return err_set(e, final, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
   }
+  char rd[64], wr[64], cls[64];
+  tl_header(MACHINE_TL_DRAM_READ_BYTES, rd, sizeof rd);
+  tl_header(MACHINE_TL_DRAM_WRITE_BYTES, wr, sizeof wr);
+  /* The window's middle, in millions of cycles (timeline_write_csv's first two
+   * columns: the window's start and length). */
+  static const char x[] = "((column(\"cycle\")+column(\"cycles\")/2)/1e6)";
   int n = snprintf(
       cmd, sizeof cmd,
       "set terminal pngcairo size 1000,560 noenhanced\nset output '%s'\n"
-      "set datafile separator ','\nset key outside right top\n"
+      "set datafile separator ','\nset datafile columnheaders\nset key outside right top\n"
       "set title 'DRAM traffic per cycle: %s, %s policy, %ux%u (window %llu cycles)'\n"
       "set xlabel 'simulated time (million cycles)'\n"
       "set ylabel 'DRAM bytes per cycle'\nset grid\nset yrange [0:*]\n"
-      "plot '%s' using (($1+$2/2)/1e6):(($3+$4)/$2) with steps lw 2 lc rgb 'black' title 'all (read + write)'",
+      "plot '%s' using %s:((column(\"%s\")+column(\"%s\"))/column(\"cycles\")) with steps lw 2 "
+      "lc rgb 'black' title 'all (read + write)'",
       o.tmp, r->scene_name, r->policy, r->width, r->height,
-      (unsigned long long)machine_timeline(r->machine)->window, csv);
-  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++)
+      (unsigned long long)machine_timeline(r->machine)->window, csv, x, rd, wr);
+  for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) {
+    tl_header(MACHINE_TL_READ_CLASS0 + c, cls, sizeof cls);
     n += snprintf(cmd + n, sizeof cmd - (size_t)n,
-                  ", '' using (($1+$2/2)/1e6):($%u/$2) with steps title 'read: %s'", 5 + c,
-                  trace_class_names[c]);
+                  ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps title 'read: %s'",
+                  x, cls, trace_class_names[c]);
+  }
   snprintf(cmd + n, sizeof cmd - (size_t)n,
-           ", '' using (($1+$2/2)/1e6):($4/$2) with steps dt 2 title 'write-backs'\n");
+           ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps dt 2 title "
+           "'write-backs'\n",
+           x, wr);
   fputs(cmd, gp);
   if (pclose(gp) != 0) {
     outfile_abort(&o);
@@ -327,11 +474,11 @@ static bool write_json(const struct run_output_report *r, struct err *e) {
   stats_fini(&t);
   if (r->machine && !r->sample) { /* a whole timed run: its timeline and latency histograms */
     const struct machine_stats *s = machine_get_stats(r->machine);
-    /* The exact total the cost.load_wait_cycles channel sums to (the mean
-     * above is rounded). */
-    fprintf(f, ",\n  \"load_latency_cycles_sum\": %llu", (unsigned long long)s->load_latency.sum);
-    fprintf(f, ",\n  \"timeline_window_cycles\": %llu",
-            (unsigned long long)machine_timeline(r->machine)->window);
+    const struct stats_env env = {.cycles = s->cycles};
+    stats_emit(&t, &run_output_json_stats_descs, r, &env);
+    fputs(",\n", f);
+    stats_write_json_members(&t, f, "  ");
+    stats_fini(&t);
     fputs(",\n  \"load_latency_histogram_cycles\": ", f);
     hist_write_json(&s->load_latency, f);
     fputs(",\n  \"dram_read_latency_histogram_cycles\": ", f);
@@ -406,11 +553,19 @@ void run_output_summary(const struct run_output_report *r, FILE *f) {
 
 void run_output_stats_help(FILE *f, bool markdown) {
   /* The tables in the order machine_stats_emit fills the machine's slots. */
-  static const struct stats_descs *const order[] = {
-      &machine_stats_descs,           &run_output_stats_descs,   &run_output_misses_stats_descs,
-      &machine_l1_stats_descs,        &l2_stats_descs,           &dram_stats_descs,
-      &machine_dram_util_stats_descs, &dram_channel_stats_descs, &dram_banked_stats_descs,
-      &machine_engine_stats_descs};
+  static const struct stats_descs *const order[] = {&machine_stats_descs,
+                                                    &run_output_stats_descs,
+                                                    &run_output_misses_stats_descs,
+                                                    &machine_l1_stats_descs,
+                                                    &l2_stats_descs,
+                                                    &dram_stats_descs,
+                                                    &machine_dram_util_stats_descs,
+                                                    &dram_channel_stats_descs,
+                                                    &dram_banked_stats_descs,
+                                                    &machine_engine_stats_descs,
+                                                    &run_output_json_stats_descs,
+                                                    &run_output_analytic_stats_descs,
+                                                    &sample_stats_descs};
   for (unsigned i = 0; i < sizeof order / sizeof order[0]; i++)
     (markdown ? stats_write_markdown : stats_write_help)(order[i], f);
   timeline_write_help(machine_tl_cols, machine_tl_col_count, markdown, f);

@@ -58,9 +58,16 @@ bool run_output_write(const struct run_output_report *r, struct err *e);
 void run_output_summary(const struct run_output_report *r, FILE *f);
 
 /* Every number a whole timed run writes, table by table (each component's in
- * its order), then timeline.csv's columns: name, unit, component, description,
+ * its order), then what only stats.json holds, fidelity analytic's and a
+ * sampled run's numbers, then timeline.csv's columns: name, unit, component, description,
  * one a line
  * (`rtsim run --help-stats`), or as Markdown table rows (README "Numbers"). */
 void run_output_stats_help(FILE *f, bool markdown);
+/* The run's own tables: its numbers at the machine's slots (over a struct
+ * run_output_report), what only stats.json holds, and fidelity analytic's
+ * numbers (over a struct app_analytic; a sampled run's: app/sample.h). */
+struct stats_descs;
+extern const struct stats_descs run_output_stats_descs, run_output_misses_stats_descs,
+    run_output_json_stats_descs, run_output_analytic_stats_descs;
 
 #endif

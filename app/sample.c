@@ -284,41 +284,166 @@ double sample_cycles(const struct sampler *s, double *lo, double *hi) {
   return e.v;
 }
 
-static void put(struct stats_table *t, const char *name, struct est e) {
-  char n[96];
-  stats_f64(t, name, e.v);
-  snprintf(n, sizeof n, "%s_ci95_low", name);
-  stats_f64(t, n, e.lo);
-  snprintf(n, sizeof n, "%s_ci95_high", name);
-  stats_f64(t, n, e.hi);
+/* ---- the sampled run's numbers (README "Numbers", component sampled) ----
+ * st: the struct sampler; env->ctx: the struct sample_env below. Each
+ * estimate is three numbers: NAME, NAME_ci95_low and NAME_ci95_high. */
+
+struct sample_env {
+  const struct machine_params *p;
+  double peak; /* the DRAM's peak bytes a cycle (0: none) */
+  uint64_t contexts, threads;
+};
+
+/* The estimates written: sample_fig's and two made of them. */
+enum sample_out {
+  SO_CYCLES,
+  SO_SECONDS,
+  SO_RAYS_PER_S,
+  SO_UTIL,
+  SO_DRAM_BYTES,
+  SO_BYTES_PER_CYCLE,
+  SO_DRAM_UTIL,
+  SO_LOAD_LAT
+};
+
+static struct est est_of(const void *st, const struct stats_env *env, enum sample_out o) {
+  const struct sampler *s = st;
+  const struct sample_env *x = env->ctx;
+  struct est e;
+  switch (o) {
+  case SO_CYCLES: return estimate(s, SF_CYCLES);
+  case SO_SECONDS: {
+    const double hz = x->p->clock_ghz * 1e9;
+    e = estimate(s, SF_CYCLES);
+    struct est sec = {e.v / hz, e.lo / hz, e.hi / hz};
+    return sec;
+  }
+  case SO_RAYS_PER_S: return estimate(s, SF_RAYS_PER_S);
+  case SO_UTIL: return estimate(s, SF_UTIL);
+  case SO_DRAM_BYTES: return estimate(s, SF_DRAM_BYTES);
+  case SO_BYTES_PER_CYCLE: return estimate(s, SF_BYTES_PER_CYCLE);
+  case SO_DRAM_UTIL: {
+    e = estimate(s, SF_BYTES_PER_CYCLE);
+    struct est u = {e.v / x->peak, e.lo / x->peak, e.hi / x->peak};
+    return u;
+  }
+  default: return estimate(s, SF_LOAD_LAT);
+  }
 }
 
-void sample_stats(const struct sampler *s, const struct machine_params *p,
-                  double peak_bytes_per_cycle, struct stats_table *t) {
-  const double hz = p->clock_ghz * 1e9;
-  struct est c = estimate(s, SF_CYCLES);
-  put(t, "cycles", c);
-  struct est sec = {c.v / hz, c.lo / hz, c.hi / hz};
-  put(t, "seconds", sec);
-  stats_u64(t, "rays_traced", s->rays_total);
-  put(t, "rays_per_second", estimate(s, SF_RAYS_PER_S));
-  stats_u64(t, "issue_slots", s->slots_total);
-  put(t, "core_utilization", estimate(s, SF_UTIL));
-  put(t, "dram_bytes", estimate(s, SF_DRAM_BYTES));
-  struct est bpc = estimate(s, SF_BYTES_PER_CYCLE);
-  put(t, "dram_bytes_per_cycle", bpc);
-  if (peak_bytes_per_cycle > 0) {
-    struct est u = {bpc.v / peak_bytes_per_cycle, bpc.lo / peak_bytes_per_cycle,
-                    bpc.hi / peak_bytes_per_cycle};
-    put(t, "dram_utilization", u);
+#define SAMPLE_EST(o)                                                                              \
+  static double o##_v(const void *st, const struct stats_env *env) {                               \
+    return est_of(st, env, o).v;                                                                   \
+  }                                                                                                \
+  static double o##_lo(const void *st, const struct stats_env *env) {                              \
+    return est_of(st, env, o).lo;                                                                  \
+  }                                                                                                \
+  static double o##_hi(const void *st, const struct stats_env *env) {                              \
+    return est_of(st, env, o).hi;                                                                  \
   }
-  put(t, "load_latency_mean", estimate(s, SF_LOAD_LAT));
-  const double n = (double)s->total;
-  stats_u64(t, "sample_work_items", s->total);
-  stats_u64(t, "sample_units_measured", s->n);
-  stats_f64(t, "sample_detailed_fraction", (double)s->detailed / n);
-  stats_f64(t, "sample_measured_fraction", (double)s->measured / n);
-  stats_f64(t, "sample_warmed_fraction", (double)s->warmed / n);
-  stats_f64(t, "sample_detailed_slots_fraction",
-            (double)s->slots_detailed / (double)(s->slots_total ? s->slots_total : 1));
+SAMPLE_EST(SO_CYCLES)
+SAMPLE_EST(SO_SECONDS)
+SAMPLE_EST(SO_RAYS_PER_S)
+SAMPLE_EST(SO_UTIL)
+SAMPLE_EST(SO_DRAM_BYTES)
+SAMPLE_EST(SO_BYTES_PER_CYCLE)
+SAMPLE_EST(SO_DRAM_UTIL)
+SAMPLE_EST(SO_LOAD_LAT)
+#undef SAMPLE_EST
+
+static bool has_peak(const void *st, const struct stats_env *env) {
+  (void)st;
+  return ((const struct sample_env *)env->ctx)->peak > 0;
+}
+static uint64_t s_contexts(const void *st, const struct stats_env *env) {
+  (void)st;
+  return ((const struct sample_env *)env->ctx)->contexts;
+}
+static uint64_t s_threads(const void *st, const struct stats_env *env) {
+  (void)st;
+  return ((const struct sample_env *)env->ctx)->threads;
+}
+static double items_fraction(const void *st, uint64_t n) {
+  return (double)n / (double)((const struct sampler *)st)->total;
+}
+static double s_detailed(const void *st, const struct stats_env *env) {
+  (void)env;
+  return items_fraction(st, ((const struct sampler *)st)->detailed);
+}
+static double s_measured(const void *st, const struct stats_env *env) {
+  (void)env;
+  return items_fraction(st, ((const struct sampler *)st)->measured);
+}
+static double s_warmed(const void *st, const struct stats_env *env) {
+  (void)env;
+  return items_fraction(st, ((const struct sampler *)st)->warmed);
+}
+static double s_detailed_slots(const void *st, const struct stats_env *env) {
+  (void)env;
+  const struct sampler *s = st;
+  return (double)s->slots_detailed / (double)(s->slots_total ? s->slots_total : 1);
+}
+static uint64_t s_units(const void *st, const struct stats_env *env) {
+  (void)env;
+  return ((const struct sampler *)st)->n;
+}
+
+/* An estimate and its interval's two ends. */
+#define EST(o, nm, un, ds, pres)                                                                   \
+  {.name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .f64 = o##_v, .present = pres},       \
+      {.name = nm "_ci95_low",                                                                     \
+       .unit = un,                                                                                 \
+       .desc = "the low end of the 95% interval of " nm,                                           \
+       .how = STATS_HOW_F64,                                                                       \
+       .f64 = o##_lo,                                                                              \
+       .present = pres},                                                                           \
+  {                                                                                                \
+    .name = nm "_ci95_high", .unit = un, .desc = "the high end of the 95% interval of " nm,        \
+    .how = STATS_HOW_F64, .f64 = o##_hi, .present = pres                                           \
+  }
+#define ENV_U64(fn, nm, un, ds)                                                                    \
+  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .u64 = fn }
+#define ENV_F64(fn, nm, un, ds)                                                                    \
+  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .f64 = fn }
+static const struct stats_desc sample_desc[] = {
+    ENV_U64(s_contexts, "ray_contexts", "count", "ray contexts: cores x threads x rays"),
+    ENV_U64(s_threads, "threads", "count", "hardware threads: cores x threads_per_core"),
+    EST(SO_CYCLES, "cycles", "cycles", "the run's cycles, estimated", NULL),
+    EST(SO_SECONDS, "seconds", "seconds", "the run at clock_ghz, estimated", NULL),
+    STATS_FIELD(struct sampler, rays_total, "rays_traced", "count",
+                "rays traced, every kind (exact: every item is traced)"),
+    EST(SO_RAYS_PER_S, "rays_per_second", "per second", "rays traced / seconds, estimated", NULL),
+    STATS_FIELD(struct sampler, slots_total, "issue_slots", "cycles",
+                "issue slots the work takes (exact: every item is counted)"),
+    EST(SO_UTIL, "core_utilization", "fraction", "issue slots / cores x cycles, estimated", NULL),
+    EST(SO_DRAM_BYTES, "dram_bytes", "bytes", "bytes read from and written to the DRAM, estimated",
+        NULL),
+    EST(SO_BYTES_PER_CYCLE, "dram_bytes_per_cycle", "bytes a cycle",
+        "DRAM bytes / cycles, estimated", NULL),
+    EST(SO_DRAM_UTIL, "dram_utilization", "fraction",
+        "dram_bytes_per_cycle / the DRAM's peak, estimated (a DRAM with a peak)", has_peak),
+    EST(SO_LOAD_LAT, "load_latency_mean", "cycles", "a load's latency, mean, estimated", NULL),
+    STATS_FIELD(struct sampler, total, "sample_work_items", "count",
+                "work items (pixels or tiles) of the run"),
+    ENV_U64(s_units, "sample_units_measured", "count", "units simulated in detail"),
+    ENV_F64(s_detailed, "sample_detailed_fraction", "fraction",
+            "work items simulated in detail (warm-up included) / work items"),
+    ENV_F64(s_measured, "sample_measured_fraction", "fraction", "work items measured / work items"),
+    ENV_F64(s_warmed, "sample_warmed_fraction", "fraction",
+            "work items warmed without time / work items"),
+    ENV_F64(s_detailed_slots, "sample_detailed_slots_fraction", "fraction",
+            "issue slots simulated in detail / issue slots"),
+};
+#undef EST
+#undef ENV_U64
+#undef ENV_F64
+const struct stats_descs sample_stats_descs = {"sampled", sample_desc, STATS_COUNT(sample_desc),
+                                               0,         NULL,        0};
+
+void sample_stats(const struct sampler *s, const struct machine_params *p,
+                  double peak_bytes_per_cycle, uint64_t contexts, uint64_t threads,
+                  struct stats_table *t) {
+  const struct sample_env x = {p, peak_bytes_per_cycle, contexts, threads};
+  const struct stats_env env = {.ctx = &x};
+  stats_emit(t, &sample_stats_descs, s, &env);
 }

@@ -85,11 +85,15 @@ void sample_item_done(void *ctx, uint64_t k);
 /* After machine_run: the last unit's end is the end of the run. */
 void sample_finish(struct sampler *s, uint64_t rays_total);
 
-/* The estimates as stats members (name, name_ci95_low, name_ci95_high) and the
- * sampling's own figures. peak_bytes_per_cycle: the DRAM's peak (0: none, no
- * utilization). */
+/* The run's shape (contexts, threads), the estimates as stats members (name,
+ * name_ci95_low, name_ci95_high) and the sampling's own figures, as
+ * sample_stats_descs declares them. peak_bytes_per_cycle: the DRAM's peak (0:
+ * none, no utilization). */
 void sample_stats(const struct sampler *s, const struct machine_params *p,
-                  double peak_bytes_per_cycle, struct stats_table *t);
+                  double peak_bytes_per_cycle, uint64_t contexts, uint64_t threads,
+                  struct stats_table *t);
+struct stats_descs;
+extern const struct stats_descs sample_stats_descs;
 
 /* The estimate of the run's cycles and its 95% interval (after sample_finish). */
 double sample_cycles(const struct sampler *s, double *lo, double *hi);

@@ -117,7 +117,8 @@ static void a_wait(void *ctx, uint64_t cycles) {
 static const struct mem_ops analytic_ops = {a_load, a_store, a_compute, a_wait, NULL, NULL};
 
 struct analytic *analytic_create(const struct machine_params *p) {
-  CHECK(machine_params_problem(p) == NULL);
+  char why[MACHINE_PROBLEM_MAX];
+  CHECK(machine_params_problem(p, why, sizeof why) == NULL);
   struct analytic *a = xcalloc(1, sizeof *a);
   if (p->l1_size_bytes) {
     struct cache_params l1 = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE};

@@ -28,7 +28,9 @@ struct dram_params {
   struct dram_banked_params banked; /* banked (its clock_mhz is taken from clock_mhz) */
 };
 
-/* NULL if usable, else what is wrong, naming the dram.* key. */
+/* NULL if usable, else what is wrong, naming the dram.* key: the banked
+ * level's rules between keys (checked whatever the level). Each key's range
+ * is the key table's (machine_params_problem). */
 const char *dram_params_problem(const struct dram_params *p);
 
 /* Counted here for every level. */

@@ -178,7 +178,9 @@ struct dram_banked_params {
   bool tick_every_cycle; /* test only: wake every DRAM cycle while work is queued */
 };
 
-/* NULL if p is usable, else "dram.KEY: what is wrong" (a constant string). */
+/* NULL if p is usable, else "dram.KEY: what is wrong" (a constant string):
+ * powers of two and the rules between keys. Each key's range is the key
+ * table's (machine_cfg_range_problem), checked before a machine is built. */
 const char *dram_banked_params_problem(const struct dram_banked_params *p);
 
 /* Is s a usable mapping: six two-letter fields, each of ro ch ra bg ba co once? */
@@ -212,13 +214,14 @@ struct dram_banked_stats {
   uint64_t queue_area[2]; /* time integral of the entries queued, core cycles x entries */
   uint64_t queue_wait_sum_cycles[2]; /* sum over requests of their queue time (core cycles) */
   uint64_t queue_wait_max_cycles[2];
-  uint64_t queue_max[2];            /* most entries queued at once, all channels together */
-  uint64_t read_latency_sum_cycles; /* take to done, reads, core cycles */
-  uint64_t bus_busy_cycles;         /* data bus cycles carrying a burst, summed over channels */
-  uint64_t bank_open_cycles;        /* DRAM cycles with a row open, summed over banks */
-  uint64_t dram_cycles;             /* DRAM cycles simulated when finished */
+  uint64_t queue_max[2];     /* most entries queued at once, all channels together */
+  uint64_t bus_busy_cycles;  /* data bus cycles carrying a burst, summed over channels */
+  uint64_t bank_open_cycles; /* DRAM cycles with a row open, summed over banks */
 };
 const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d);
+/* The DRAM cycles the level had simulated when it finished (its clock, not
+ * one of its numbers: the figures use the run's length). */
+uint64_t dram_banked_finished_cycles(const struct dram_banked *d);
 /* The level's numbers, over its struct dram_banked_stats (sim/stats.h). */
 struct stats_descs;
 extern const struct stats_descs dram_banked_stats_descs;

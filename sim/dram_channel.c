@@ -16,9 +16,10 @@ struct dram_channel {
   struct engine *eng;
   struct dram_client client;
   double ticks_per_byte;
-  dram_tick *starts; /* ring: start ticks of the last queue_depth requests */
-  uint64_t k;        /* requests so far */
-  uint64_t space_at; /* cycle of the pending space event, or UINT64_MAX */
+  dram_tick *starts;    /* ring: start ticks of the last queue_depth requests */
+  uint64_t k;           /* requests so far */
+  dram_tick free_ticks; /* when the channel is next free: the last transfer's end */
+  uint64_t space_at;    /* cycle of the pending space event, or UINT64_MAX */
   /* Occupancy sweep: entry and start ticks of requests not yet started at
    * sweep_t (a ring of capacity sw_cap from sw_lo, sw_n long); sw_e: how many
    * of them have entered by sweep_t. */
@@ -85,16 +86,6 @@ static void sweep_add(struct dram_channel *d, dram_tick entry, dram_tick start) 
   d->sw_n++;
 }
 
-const char *dram_channel_params_problem(const struct dram_channel_params *p) {
-  if (!(p->bytes_per_cycle > 0) || !isfinite(p->bytes_per_cycle) || p->bytes_per_cycle > 1e6)
-    return "dram.bytes_per_cycle: must be above 0 and at most 10^6 bytes per cycle";
-  if (p->bytes_per_cycle < 1e-6) return "dram.bytes_per_cycle: must be at least 10^-6";
-  if (p->queue_depth < 1 || p->queue_depth > (1u << 20))
-    return "dram.queue_depth: must be 1 to 2^20";
-  if (p->latency_cycles > (1ull << 40)) return "dram.latency: must be at most 2^40 cycles";
-  return NULL;
-}
-
 static void ev_done(void *ctx, uint64_t tag) {
   struct dram_channel *d = ctx;
   d->client.done(d->client.ctx, tag);
@@ -127,7 +118,7 @@ static void ch_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   CHECK(place_free(d, arrive));
   sweep_to(d, arrive);
   uint32_t slot = (uint32_t)(d->k % d->p.queue_depth);
-  dram_tick start = arrive > d->st.last_end_ticks ? arrive : d->st.last_end_ticks;
+  dram_tick start = arrive > d->free_ticks ? arrive : d->free_ticks;
   /* At least one tick, so a transfer always takes time. */
   uint64_t dur = (uint64_t)llround((double)LINE_BYTES * d->ticks_per_byte);
   if (dur == 0) dur = 1;
@@ -135,7 +126,7 @@ static void ch_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   d->starts[slot] = start;
   d->k++;
   d->st.requests++;
-  d->st.last_end_ticks = end;
+  d->free_ticks = end;
   d->st.busy_ticks += dur;
   d->st.wait_ticks_sum += start - arrive;
   sweep_add(d, arrive, start);
@@ -181,23 +172,20 @@ static uint64_t ch_fifo_length_max(const void *st, const struct stats_env *env) 
 static const struct stats_desc channel_desc[] = {
     STATS_F64(struct dram_channel_stats, busy_ticks, ch_utilization, "dram_utilization", "fraction",
               "cycles the channel was transferring / cycles of the run"),
-    STATS_F64(struct dram_channel_stats, wait_ticks_sum, ch_fifo_wait_mean, "dram_fifo_wait_mean",
-              "cycles", "requests, taken to the start of their transfer: mean"),
+    {.name = "dram_fifo_wait_mean",
+     .unit = "cycles",
+     .desc = "requests, taken to the start of their transfer: mean",
+     .how = STATS_HOW_F64,
+     .off = offsetof(struct dram_channel_stats, wait_ticks_sum), /* and requests, after it */
+     .size = CH_AFTER(requests) - offsetof(struct dram_channel_stats, wait_ticks_sum),
+     .f64 = ch_fifo_wait_mean},
     STATS_F64(struct dram_channel_stats, fifo_area, ch_fifo_length_mean, "dram_fifo_length_mean",
               "requests", "requests in the FIFO: mean over the run"),
     STATS_U64(struct dram_channel_stats, fifo_max, ch_fifo_length_max, "dram_fifo_length_max",
               "requests", "requests in the FIFO: most at once"),
 };
 static const struct stats_skip channel_skip[] = {
-    STATS_SKIP(struct dram_channel_stats, requests,
-               "the wait mean's divisor: dram_reads + dram_writes"),
-    STATS_SKIP(struct dram_channel_stats, last_end_ticks, "the channel's own clock"),
-    {CH_AFTER(requests), offsetof(struct dram_channel_stats, busy_ticks) - CH_AFTER(requests),
-     "padding", NULL},
-    {CH_AFTER(fifo_max), offsetof(struct dram_channel_stats, last_end_ticks) - CH_AFTER(fifo_max),
-     "padding", NULL},
-    {CH_AFTER(last_end_ticks), sizeof(struct dram_channel_stats) - CH_AFTER(last_end_ticks),
-     "padding", NULL},
+    {CH_AFTER(fifo_max), sizeof(struct dram_channel_stats) - CH_AFTER(fifo_max), "padding", NULL},
 };
 const struct stats_descs dram_channel_stats_descs = {"dram channel",
                                                      channel_desc,
@@ -225,7 +213,8 @@ const struct dram_level_ops dram_channel_ops = {ch_can_take, ch_take, ch_finish,
 
 struct dram_channel *dram_channel_create(const struct dram_channel_params *p, struct engine *e,
                                          const struct dram_client *client) {
-  CHECK(dram_channel_params_problem(p) == NULL);
+  /* The FIFO divides by both (the key table keeps them positive). */
+  CHECK(p->bytes_per_cycle > 0 && p->queue_depth >= 1);
   struct dram_channel *d = xcalloc(1, sizeof *d);
   d->p = *p;
   d->eng = e;

@@ -28,23 +28,20 @@ struct dram_channel_params {
   uint32_t queue_depth;   /* requests that may wait for the channel, >= 1 */
 };
 
-/* NULL if usable, else what is wrong (naming the dram.* key). */
-const char *dram_channel_params_problem(const struct dram_channel_params *p);
-
 struct dram_channel_stats {
-  uint64_t requests;
   dram_tick busy_ticks;     /* transfer time */
   dram_tick wait_ticks_sum; /* from take to the start of the transfer (the FIFO wait), exact */
+  uint64_t requests;        /* the wait's mean's divisor (beside the sum it divides) */
   /* The FIFO's occupancy integral, by time (in cycles x requests), apart from
    * the waits, for Little's law; complete after finish. */
   double fifo_area;
   uint32_t fifo_max;
-  dram_tick last_end_ticks; /* when the channel is next free */
 };
 
 struct dram_channel;
 
-/* p must pass dram_channel_params_problem (CHECKed). Destroy through the ops. */
+/* p within the key table's ranges (machine_params_problem; bytes_per_cycle
+ * and queue_depth positive are CHECKed). Destroy through the ops. */
 struct dram_channel *dram_channel_create(const struct dram_channel_params *p, struct engine *e,
                                          const struct dram_client *client);
 extern const struct dram_level_ops dram_channel_ops; /* self: a struct dram_channel * */

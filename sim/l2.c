@@ -76,16 +76,15 @@ struct l2 {
   uint64_t stall_since; /* when that reason began */
   int last_refusal;     /* why l2_try last said no */
   struct ring miss_q, wb;
+  struct {
+    struct qmeter_clock stall_queue, miss_queue, write_buffer;
+  } qc; /* the meters' clocks, beside their numbers in st */
   struct l2_stats st;
 };
 
 const char *l2_params_problem(const struct l2_params *p) {
   struct cache_params c = {p->size_bytes, p->ways, L2_LG2_LINE};
   if (cache_params_problem(&c)) return "l2: size and ways do not make a cache of 64-byte lines";
-  if (p->banks < 1 || p->banks > 4096) return "l2.banks: must be 1 to 4096";
-  if (p->mshrs < 1 || p->mshrs > (1u << 20)) return "l2.mshrs: must be 1 to 2^20";
-  if (p->write_buffer < 1 || p->write_buffer > (1u << 20))
-    return "l2.write_buffer: must be 1 to 2^20";
   return NULL;
 }
 
@@ -237,7 +236,7 @@ static void stall_push(struct l2 *l2, const struct req *r, uint64_t t) {
   else l2->reqs[l2->stall_tail].next = i;
   l2->stall_tail = i;
   l2->st.stalls++;
-  qmeter_enter(&l2->st.stall_queue, t);
+  qmeter_enter(&l2->st.stall_queue, &l2->qc.stall_queue, t);
 }
 
 /* Retry stalled accesses, oldest first, until one must still wait. */
@@ -249,7 +248,7 @@ static void stall_retry(struct l2 *l2, uint64_t t) {
       if (l2->last_refusal != l2->stall_reason) stall_reason_set(l2, l2->last_refusal, t);
       return;
     }
-    qmeter_leave(&l2->st.stall_queue, t, r.ready_at);
+    qmeter_leave(&l2->st.stall_queue, &l2->qc.stall_queue, t, r.ready_at);
     l2->stall_head = r.next;
     if (l2->stall_head == NONE) l2->stall_tail = NONE;
     req_release(l2, i);
@@ -277,7 +276,7 @@ static bool try_read(struct l2 *l2, uint64_t t) {
   uint32_t slot = (uint32_t)ring_head(&l2->miss_q)[0];
   uint64_t addr = cache_line(l2->tags, slot) << L2_LG2_LINE;
   if (!dram_can_take(l2->dram, addr, false)) return false;
-  qmeter_leave(&l2->st.miss_queue, t, ring_head(&l2->miss_q)[1]);
+  qmeter_leave(&l2->st.miss_queue, &l2->qc.miss_queue, t, ring_head(&l2->miss_q)[1]);
   ring_pop(&l2->miss_q);
   dram_take(l2->dram, addr, false, tag_read(slot));
   return true;
@@ -291,7 +290,7 @@ static bool try_write(struct l2 *l2, uint64_t t) {
   if (!l2->wb.n) return false;
   uint64_t addr = ring_head(&l2->wb)[0] << L2_LG2_LINE;
   if (!dram_can_take(l2->dram, addr, true)) return false;
-  qmeter_leave(&l2->st.write_buffer, t, ring_head(&l2->wb)[1]);
+  qmeter_leave(&l2->st.write_buffer, &l2->qc.write_buffer, t, ring_head(&l2->wb)[1]);
   const uint32_t tag = (uint32_t)ring_head(&l2->wb)[2];
   ring_pop(&l2->wb);
   l2->wb_used--;
@@ -335,7 +334,7 @@ static bool take_back(struct l2 *l2, uint32_t slot, uint64_t t) {
   for (uint64_t i = 0; i < l2->wb.n; i++) {
     uint64_t *e = l2->wb.v[(l2->wb.lo + i) % l2->wb.cap];
     if (e[0] != line) continue;
-    qmeter_leave(&l2->st.write_buffer, t, e[1]);
+    qmeter_leave(&l2->st.write_buffer, &l2->qc.write_buffer, t, e[1]);
     e[0] = WB_TAKEN_BACK;
     l2->wb_used--;
     l2->st.writeback_bytes -= LINE_BYTES;
@@ -357,7 +356,7 @@ static void ev_to_dram(void *ctx, uint64_t slot) {
     return;
   }
   ring_push(&l2->miss_q, slot, t, 0);
-  qmeter_enter(&l2->st.miss_queue, t);
+  qmeter_enter(&l2->st.miss_queue, &l2->qc.miss_queue, t);
   pump(l2);
 }
 
@@ -366,7 +365,7 @@ static void ev_to_write_buffer(void *ctx, uint64_t r) {
   const uint64_t t = engine_now(l2->eng);
   ring_push(&l2->wb, l2->reqs[r].line, t, l2->reqs[r].tag);
   req_release(l2, (uint32_t)r);
-  qmeter_enter(&l2->st.write_buffer, t);
+  qmeter_enter(&l2->st.write_buffer, &l2->qc.write_buffer, t);
   pump(l2);
 }
 
@@ -484,9 +483,12 @@ bool l2_quiet(const struct l2 *l2) {
 }
 
 void l2_finish(struct l2 *l2, uint64_t end) {
-  qmeter_advance(&l2->st.stall_queue, end);
-  qmeter_advance(&l2->st.miss_queue, end);
-  qmeter_advance(&l2->st.write_buffer, end);
+  qmeter_advance(&l2->st.stall_queue, &l2->qc.stall_queue, end);
+  qmeter_advance(&l2->st.miss_queue, &l2->qc.miss_queue, end);
+  qmeter_advance(&l2->st.write_buffer, &l2->qc.write_buffer, end);
+  /* Conservation: a quiet L2 holds nothing, so whatever entered a queue left it. */
+  const struct qmeter *q[] = {&l2->st.stall_queue, &l2->st.miss_queue, &l2->st.write_buffer};
+  for (unsigned i = 0; i < 3; i++) CHECK_EQ(q[i]->entered, q[i]->left);
 }
 
 const struct l2_stats *l2_get_stats(const struct l2 *l2) { return &l2->st; }
@@ -524,14 +526,20 @@ L2_QUEUE_FNS(write_buffer)
       STATS_FIELD(struct l2_stats, q.max, pre "_length_max", "requests",                           \
                   what ": most inside at once")
 #define L2_QUEUE_SKIPS(q)                                                                          \
-  STATS_SKIP(struct l2_stats, q.entered, "equals requests at the end of a run (nothing queued)"),  \
-      STATS_SKIP(struct l2_stats, q.len, "0 at the end of a run"),                                 \
-      STATS_SKIP(struct l2_stats, q.since, "the meter's own clock")
+  STATS_SKIP(struct l2_stats, q.entered,                                                           \
+             "equals requests at the end of every run: a conservation CHECK (l2_finish)")
 
 _Static_assert(L2_STALL_COUNT == 4, "a descriptor for each stall reason");
 static const struct stats_desc l2_desc[] = {
     STATS_FIELD(struct l2_stats, accesses, "l2_accesses", "count",
                 "loads and stores that reached the L2"),
+    {.name = "l2_%s_accesses",
+     .unit = "count",
+     .desc = "of the accesses, those of each data class",
+     .how = STATS_HOW_FIELD,
+     .off = offsetof(struct l2_stats, accesses_by_class),
+     .size = STATS_FIELD_SIZE(struct l2_stats, accesses_by_class),
+     .per_class = true},
     STATS_FIELD(struct l2_stats, hits, "l2_hits", "count", "accesses that found their line"),
     STATS_FIELD(struct l2_stats, misses, "l2_misses", "count", "accesses that did not"),
     STATS_F64(struct l2_stats, misses, l2_miss_rate, "l2_miss_rate", "fraction",
@@ -574,8 +582,6 @@ static const struct stats_desc l2_desc[] = {
     L2_QUEUE(write_buffer, "l2_write_buffer", "write-backs from eviction to the DRAM taking them"),
 };
 static const struct stats_skip l2_skip[] = {
-    STATS_SKIP(struct l2_stats, accesses_by_class,
-               "not written yet (the timeline counts accesses)"),
     L2_QUEUE_SKIPS(stall_queue),
     L2_QUEUE_SKIPS(miss_queue),
     L2_QUEUE_SKIPS(write_buffer),

@@ -80,7 +80,9 @@ struct l2_client {
   void (*cost)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls, bool write);
 };
 
-/* NULL if usable, else what is wrong (naming the l2.* key). */
+/* NULL if usable, else what is wrong (naming the l2.* key): the geometry.
+ * banks, mshrs and write_buffer (at least 1) are held to their ranges by the
+ * key table (machine_params_problem), the one way to an L2. */
 const char *l2_params_problem(const struct l2_params *p);
 
 struct l2;

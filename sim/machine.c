@@ -19,6 +19,7 @@
 #include "sim/engine.h"
 #include "sim/err.h"
 #include "sim/l2.h"
+#include "sim/machine_cfg.h"
 #include "sim/stats.h"
 #include "sim/timeline.h"
 
@@ -146,16 +147,9 @@ double machine_dram_peak_bytes_per_cycle(const struct machine_params *p) {
   }
 }
 
-const char *machine_params_problem(const struct machine_params *p) {
-  if (!(p->clock_ghz > 0) || !isfinite(p->clock_ghz) || p->clock_ghz > 1000)
-    return "clock_ghz: must be above 0 and at most 1000";
-  if (p->fidelity >= MACHINE_FIDELITY_COUNT)
-    return "fidelity: expected analytic, fixed, channel or banked";
-  if (p->cores < 1 || p->cores > 4096) return "cores: must be 1 to 4096";
-  if (p->threads_per_core < 1 || p->threads_per_core > 256)
-    return "threads_per_core: must be 1 to 256";
-  if (p->rays_per_thread < 1 || p->rays_per_thread > 256)
-    return "rays_per_thread: must be 1 to 256";
+const char *machine_params_problem(const struct machine_params *p, char *buf, size_t cap) {
+  const char *why = machine_cfg_range_problem(p, buf, cap);
+  if (why) return why;
   if ((uint64_t)p->cores * p->threads_per_core * p->rays_per_thread > MACHINE_MAX_CONTEXTS)
     return "cores x threads_per_core x rays_per_thread: at most 2^20 ray contexts";
   if (p->l1_size_bytes) {
@@ -163,12 +157,9 @@ const char *machine_params_problem(const struct machine_params *p) {
     if (cache_params_problem(&c)) return "l1: size and ways do not make a cache of 64-byte lines";
   }
   struct l2_params l2 = l2_params_of(p);
-  const char *why = l2_params_problem(&l2);
-  if (why) return why;
+  if ((why = l2_params_problem(&l2))) return why;
   struct dram_params d = machine_dram_params(p);
-  if ((why = dram_params_problem(&d))) return why;
-  if (p->timeline_window_cycles < 1) return "timeline.window: must be at least 1";
-  return NULL;
+  return dram_params_problem(&d);
 }
 
 /* ---- threads ---- */
@@ -726,7 +717,8 @@ void machine_probe(const struct machine *m, struct machine_probe *out) {
 /* ---- machine ---- */
 
 static struct machine *create(const struct machine_params *p, uint64_t stack_bytes, bool paint) {
-  CHECK(machine_params_problem(p) == NULL);
+  char why[MACHINE_PROBLEM_MAX];
+  CHECK(machine_params_problem(p, why, sizeof why) == NULL);
   CHECK(p->fidelity != MACHINE_FIDELITY_ANALYTIC);
   struct machine *m = xcalloc(1, sizeof *m);
   m->p = *p;
@@ -885,6 +877,10 @@ static double m_core_utilization(const void *st, const struct stats_env *env) {
 static double m_thread_cycles(const void *st) {
   return (double)M_ST(st)->threads * (double)M_ST(st)->cycles;
 }
+static double m_busy_fraction(const void *st, const struct stats_env *env) {
+  (void)env;
+  return m_ratio((double)M_ST(st)->thread_busy_cycles, m_thread_cycles(st));
+}
 static double m_idle_fraction(const void *st, const struct stats_env *env) {
   (void)env;
   const struct machine_stats *s = st;
@@ -929,6 +925,8 @@ static const struct stats_desc machine_desc[] = {
                 "issue slots used (compute, loads, stores)"),
     STATS_F64(MS, issue_slots, m_core_utilization, "core_utilization", "fraction",
               "issue slots used / cores x cycles"),
+    STATS_F64(MS, thread_busy_cycles, m_busy_fraction, "thread_busy_fraction", "fraction",
+              "thread-cycles with a ray ready, running or being switched to"),
     STATS_F64(MS, thread_done_cycles, m_idle_fraction, "thread_idle_fraction", "fraction",
               "thread-cycles with no ray ready: waiting, parked or done"),
     STATS_F64(MS, thread_wait_cycles, m_wait_fraction, "thread_wait_fraction", "fraction",
@@ -940,12 +938,16 @@ static const struct stats_desc machine_desc[] = {
     STATS_FIELD(MS, ray_switches, "ray_switches", "count",
                 "a thread taking another ray than its last"),
     STATS_FIELD(MS, switch_cycles, "ray_switch_cycles", "cycles", "thread cycles paid for them"),
+    STATS_FIELD(MS, blocks, "ray_blocks", "count",
+                "runs of a ray between waits: issuing until it waits, parks or ends"),
     STATS_FIELD(MS, waits, "waits", "count", "mem_wait calls: a worker idle by its own choice"),
     STATS_FIELD(MS, wait_cycles, "wait_cycles", "cycles", "cycles they asked for"),
     STATS_FIELD(MS, parks, "parks", "count", "mem_park calls: a context leaving with no work"),
     STATS_FIELD(MS, wakes, "wakes", "count", "mem_wake calls"),
     STATS_FIELD(MS, loads, "loads", "count", "loads issued"),
     STATS_FIELD(MS, stores, "stores", "count", "stores issued"),
+    STATS_FIELD(MS, computes, "computes", "count",
+                "compute steps issued (their cycles are in issue_slots)"),
     STATS_FIELD(MS, blocking_loads, "blocking_loads", "count",
                 "loads that left the L1 and suspended their ray"),
     STATS_F64(MS, blocking_loads, m_slots_per_blocking_load, "issue_slots_per_blocking_load",
@@ -964,9 +966,6 @@ static const struct stats_desc machine_desc[] = {
                 "coroutine stacks alive at once (parked contexts hold none)"),
 };
 static const struct stats_skip machine_skip[] = {
-    STATS_SKIP(MS, thread_busy_cycles, "the rest of the thread-cycles: 1 - thread_idle_fraction"),
-    STATS_SKIP(MS, blocks, "the progress report's clock: not a figure of the machine"),
-    STATS_SKIP(MS, computes, "not written yet (issue_slots counts their slots)"),
     STATS_SKIP_BY(MS, l1_accesses, machine_l1_stats_descs),
     STATS_SKIP_BY(MS, l1_hits, machine_l1_stats_descs),
     STATS_SKIP_BY(MS, l2, l2_stats_descs),

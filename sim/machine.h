@@ -25,6 +25,7 @@
 #define RTSIM_SIM_MACHINE_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "sim/dram.h"
@@ -122,8 +123,11 @@ struct machine_stats {
 };
 
 /* NULL if p is usable, else a description naming the key (for config errors
- * without a position; the config reader checks each value where it is). */
-const char *machine_params_problem(const struct machine_params *p);
+ * without a position; the config reader checks each value where it is), in
+ * buf or a constant. Each key's range is its row in the key table
+ * (machine_cfg_range_problem); the components add the rules between keys. */
+#define MACHINE_PROBLEM_MAX 256
+const char *machine_params_problem(const struct machine_params *p, char *buf, size_t cap);
 
 /* The DRAM's parameters in p (for fidelity analytic, the channel's: the
  * figures its bounds read), and the core clock in whole kHz as the DRAM

@@ -554,7 +554,8 @@ bool machine_cfg_check(const struct machine_cfg *c, struct err *e) {
              FIDELITY_NAMES[p->fidelity]);
     return fail_at(c, KEYS[i].name, e, msg, v);
   }
-  const char *why = machine_params_problem(p);
+  char whybuf[MACHINE_PROBLEM_MAX];
+  const char *why = machine_params_problem(p, whybuf, sizeof whybuf);
   if (!why) return true;
   /* A problem that names its key ("dram.tRC: ...") points where it was set. */
   const char *colon = strchr(why, ':');
@@ -653,6 +654,45 @@ static void bound_text(double v, bool bytes, char *buf, size_t cap) {
   } else {
     stats_f64_text(v, 1, buf, cap);
   }
+}
+
+const char *machine_cfg_range_problem(const struct machine_params *p, char *buf, size_t cap) {
+  const size_t at = offsetof(struct machine_cfg, p);
+  for (unsigned i = 0; i < NKEYS; i++) {
+    const struct key *k = &KEYS[i];
+    /* The work's keys are the renderer's; a mapping's shape is the DRAM's rule. */
+    if (k->off < at || k->off >= at + sizeof *p || k->kind == K_MAPPING) continue;
+    const char *src = (const char *)p + (k->off - at);
+    double v;
+    uint32_t v32;
+    uint64_t v64;
+    switch (k->kind) {
+    case K_F64: memcpy(&v, src, sizeof v); break;
+    case K_U64:
+    case K_SIZE:
+      memcpy(&v64, src, sizeof v64);
+      v = (double)v64;
+      break;
+    default:
+      memcpy(&v32, src, sizeof v32);
+      v = k->kind == K_WAYS && v32 == 0 ? k->lo : (double)v32; /* 0: full */
+    }
+    if (v >= k->lo && v <= k->hi) continue; /* NaN is neither */
+    if (k->kind == K_ENUM) {
+      size_t n = (size_t)snprintf(buf, cap, "%s: expected one of: ", k->name);
+      for (unsigned j = 0; j <= (unsigned)k->hi && n < cap; j++)
+        n += (size_t)snprintf(buf + n, cap - n, "%s%s", j ? ", " : "", k->names[j]);
+      return buf;
+    }
+    char lo[32], hi[32];
+    bound_text(k->lo, k->kind == K_SIZE, lo, sizeof lo);
+    bound_text(k->hi, k->kind == K_SIZE, hi, sizeof hi);
+    const bool unit = k->unit[0] && k->kind != K_SIZE; /* a size's bounds carry theirs */
+    snprintf(buf, cap, "%s: must be %s to %s%s%s%s", k->name, lo, hi, unit ? " " : "",
+             unit ? k->unit : "", k->kind == K_WAYS ? " or full" : "");
+    return buf;
+  }
+  return NULL;
 }
 
 void machine_cfg_write_keys(FILE *f) {

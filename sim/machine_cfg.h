@@ -67,6 +67,11 @@ bool machine_cfg_set_at(struct machine_cfg *c, unsigned i, const char *value, co
  * divide them, ...), naming the key at fault where it was written. */
 bool machine_cfg_check(const struct machine_cfg *c, struct err *e);
 
+/* NULL if every key p holds is within its row's range (the check a config's
+ * value gets as it is read, for parameters built in code), else "key: must
+ * be LO to HI ..." in buf. Relations between keys are machine_params_problem's. */
+const char *machine_cfg_range_problem(const struct machine_params *p, char *buf, size_t cap);
+
 /* How many keys there are; key i's name (dotted; NULL past the last) and its
  * value as text ("4194304", "full", "0.5"). */
 unsigned machine_cfg_count(void);

@@ -89,6 +89,16 @@ static void col_name(const struct timeline_col *c, const char *cls, char *buf, s
   else snprintf(buf, len, "%s", c->name);
 }
 
+void timeline_col_header(const struct timeline_col *c, unsigned n, unsigned col,
+                         const char *const *class_names, char *buf, size_t len) {
+  for (unsigned j = 0; j < n; j++)
+    if (col >= c[j].col && col < c[j].col + c[j].span) {
+      col_name(&c[j], c[j].per_class ? class_names[col - c[j].col] : "", buf, len);
+      return;
+    }
+  CHECK(!"a timeline column without a descriptor");
+}
+
 void timeline_write_csv(const struct timeline *tl, const struct timeline_col *c, unsigned n,
                         const char *const *class_names, unsigned classes, uint64_t end, FILE *f) {
   char name[64];

@@ -53,6 +53,11 @@ struct timeline_col {
  * column's value. Per-class columns for `classes` classes named class_names. */
 void timeline_write_csv(const struct timeline *tl, const struct timeline_col *c, unsigned n,
                         const char *const *class_names, unsigned classes, uint64_t end, FILE *f);
+/* The header timeline_write_csv gives the timeline's column col (of c[0..n),
+ * per-class columns named from class_names), into buf: for readers that pick
+ * columns by name, so a column added cannot shift them. */
+void timeline_col_header(const struct timeline_col *c, unsigned n, unsigned col,
+                         const char *const *class_names, char *buf, size_t len);
 /* One line per column: name, unit, description (Markdown rows if markdown). */
 void timeline_write_help(const struct timeline_col *c, unsigned n, bool markdown, FILE *f);
 

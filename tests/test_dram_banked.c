@@ -270,7 +270,7 @@ static void test_refresh(void) {
           "refreshes %llu, expected %llu +- %llu", (unsigned long long)s->refreshes,
           (unsigned long long)(ranks * per_rank), (unsigned long long)ranks);
   EXPECT(s->refresh_cycles == s->refreshes * 420);
-  EXPECT(s->dram_cycles == 400000);
+  EXPECT(dram_banked_finished_cycles(d) == 400000);
   dram_banked_destroy(d);
   free(r);
   free(dn);
@@ -571,7 +571,7 @@ static void test_cq_write_drain(void) {
           (unsigned long long)done[1], (unsigned long long)done[2]);
   s = dram_banked_get_stats(d);
   EXPECT(s->writes == 2 && s->write_drains == 1 && s->row_conflicts == 1);
-  EXPECT(s->dram_cycles >= 500 + DRAM_BANKED_IDLE_DRAIN_CYCLES);
+  EXPECT(dram_banked_finished_cycles(d) >= 500 + DRAM_BANKED_IDLE_DRAIN_CYCLES);
   dram_banked_destroy(d);
 }
 
@@ -748,7 +748,8 @@ static void test_oracle_and_little(void) {
   free(d2);
 }
 
-/* 15: parameter checks name the key. */
+/* 15: parameter checks name the key (the rules a range cannot say; ranges
+ * are the key table's: test_machine_cfg). */
 static void test_problems(void) {
   struct dram_banked_params ok = ddr4();
   EXPECT(dram_banked_params_problem(&ok) == NULL);
@@ -761,10 +762,8 @@ static void test_problems(void) {
     EXPECTF(m && !strncmp(m, key ":", strlen(key ":")), "%s: got %s", #stmt, m ? m : "NULL");      \
   } while (0)
   BAD(p.channels = 3, "dram.channels");
-  BAD(p.channels = 128, "dram.channels");
   BAD(p.ranks = 0, "dram.ranks");
   BAD(p.bank_groups = 6, "dram.bank_groups");
-  BAD(p.banks_per_group = 128, "dram.banks_per_group");
   BAD(p.rows = 1000, "dram.rows");
   BAD(p.columns = 1000, "dram.columns");
   BAD(p.columns = 4, "dram.columns");
@@ -774,24 +773,15 @@ static void test_problems(void) {
   BAD(strcpy(p.mapping, "rochrababg"), "dram.mapping");
   BAD(strcpy(p.mapping, "rochrababgba"), "dram.mapping");
   BAD(strcpy(p.mapping, "rochrababgxx"), "dram.mapping");
-  BAD(p.page = (enum dram_banked_page)7, "dram.page_policy");
-  BAD(p.queue_structure = (enum dram_banked_queues)7, "dram.queue_structure");
-  BAD((p.queue_structure = DRAM_BANKED_PER_BANK, p.command_queue = 0), "dram.command_queue");
-  BAD((p.queue_structure = DRAM_BANKED_PER_RANK, p.command_queue = 4097), "dram.command_queue");
   BAD((p.queue_structure = DRAM_BANKED_PER_BANK, p.command_queue = 8, p.controller_cycles = 0),
       "dram.controller_cycles");
-  BAD(p.read_queue = 0, "dram.read_queue");
-  BAD(p.write_queue = 0, "dram.write_queue");
   BAD(p.write_high = 40, "dram.write_high");
   BAD(p.write_low = 24, "dram.write_low");
-  BAD(p.clock_mhz = 0, "dram.clock_mhz");
-  BAD(p.tCL = 0, "dram.tCL");
   BAD(p.tRC = 20, "dram.tRC");
   BAD(p.tCCD_L = 2, "dram.tCCD_L");
   BAD(p.tRRD_L = 1, "dram.tRRD_L");
   BAD(p.tWTR_L = 1, "dram.tWTR_L");
   BAD((p.tREFI = 400, p.tRFC = 420), "dram.tREFI");
-  BAD(p.tFAW = 1u << 21, "dram.tFAW");
   /* 6 + ch 6 + ra 4 + bg 4 + ba 6 + ro 24 + co 17 = 67 bits. */
   BAD((p.channels = 64, p.ranks = 16, p.bank_groups = 16, p.banks_per_group = 64, p.rows = 1u << 24,
        p.columns = 1u << 20),

@@ -37,6 +37,7 @@ static struct machine_params base(void) {
   machine_cfg_defaults(&c);
   p.dram_banked = c.p.dram_banked;
   p.timeline_window_cycles = 1000;
+  p.sample_fraction = 1; /* the key table's range holds for every key p carries */
   return p;
 }
 
@@ -354,7 +355,7 @@ static void test_queue_depth(void) {
     cycles[i] = st->cycles;
     const struct qmeter *q[] = {&st->l2.stall_queue, &st->l2.miss_queue, &st->l2.write_buffer};
     for (unsigned j = 0; j < 3; j++)
-      EXPECTF(q[j]->area == q[j]->wait_sum && q[j]->entered == q[j]->left && q[j]->len == 0,
+      EXPECTF(q[j]->area == q[j]->wait_sum && q[j]->entered == q[j]->left,
               "depth %u queue %u: area %llu, waits %llu", depth[i], j,
               (unsigned long long)q[j]->area, (unsigned long long)q[j]->wait_sum);
     EXPECTF(level_stat(m, "dram_fifo_length_max") <= depth[i], "depth %u: FIFO held %.0f", depth[i],

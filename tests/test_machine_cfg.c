@@ -65,8 +65,71 @@ static void test_readme_table(void) {
   free(readme);
 }
 
+/* Parameters built in code (tests, bench) meet each key's range in the key
+ * table itself, not in a copy of it: machine_params_problem names the key. */
+static void test_params_ranges(void) {
+  struct machine_cfg c;
+  machine_cfg_defaults(&c);
+  char buf[MACHINE_PROBLEM_MAX];
+  EXPECT(machine_params_problem(&c.p, buf, sizeof buf) == NULL);
+  static const struct {
+    const char *key, *want;
+  } cases[] = {
+      {"cores", "cores: must be 1 to 4096"},
+      {"clock_ghz", "clock_ghz: must be 0.001 to 1000 GHz"},
+      {"l2.banks", "l2.banks: must be 1 to 4096"},
+      {"l2.mshrs", "l2.mshrs: must be 1 to 2^20"},
+      {"l2.ways", "l2.ways: must be 1 to 2^28 or full"},
+      {"fidelity", "fidelity: expected one of: analytic, fixed, channel, banked"},
+      {"dram.channels", "dram.channels: must be 1 to 64"},
+      {"dram.banks_per_group", "dram.banks_per_group: must be 1 to 64"},
+      {"dram.page_policy", "dram.page_policy: expected one of: open, close"},
+      {"dram.queue_structure", "dram.queue_structure: expected one of: shared, per_bank, per_rank"},
+      {"dram.command_queue", "dram.command_queue: must be 1 to 4096 entries"},
+      {"dram.read_queue", "dram.read_queue: must be 1 to 4096 entries"},
+      {"dram.clock_mhz", "dram.clock_mhz: must be 1 to 16000 MHz"},
+      {"dram.tCL", "dram.tCL: must be 1 to 1000 DRAM cycles"},
+      {"dram.tFAW", "dram.tFAW: must be 1 to 10000 DRAM cycles"},
+      {"dram.bytes_per_cycle", "dram.bytes_per_cycle: must be 1e-06 to 10^6 bytes a cycle"},
+      {"dram.latency", "dram.latency: must be 0 to 10^9 cycles"},
+      {"timeline.window", "timeline.window: must be 1 to 10^12 cycles"},
+      {"sample.fraction", "sample.fraction: must be 1e-06 to 1"},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    struct machine_cfg b;
+    machine_cfg_defaults(&b);
+    /* Out of range on whichever side the key has room: above its top, or 0
+     * (or, for a double, NaN) below a bottom of 1. */
+    const char *k = cases[i].key;
+    if (!strcmp(k, "cores")) b.p.cores = 4097;
+    else if (!strcmp(k, "clock_ghz")) b.p.clock_ghz = 0.0 / 0.0;
+    else if (!strcmp(k, "l2.banks")) b.p.l2_banks = 0;
+    else if (!strcmp(k, "l2.mshrs")) b.p.l2_mshrs = (1u << 20) + 1;
+    else if (!strcmp(k, "l2.ways")) b.p.l2_ways = (1u << 28) + 1;
+    else if (!strcmp(k, "fidelity")) b.p.fidelity = MACHINE_FIDELITY_COUNT;
+    else if (!strcmp(k, "dram.channels")) b.p.dram_banked.channels = 128;
+    else if (!strcmp(k, "dram.banks_per_group")) b.p.dram_banked.banks_per_group = 128;
+    else if (!strcmp(k, "dram.page_policy")) b.p.dram_banked.page = (enum dram_banked_page)7;
+    else if (!strcmp(k, "dram.queue_structure"))
+      b.p.dram_banked.queue_structure = (enum dram_banked_queues)7;
+    else if (!strcmp(k, "dram.command_queue")) b.p.dram_banked.command_queue = 4097;
+    else if (!strcmp(k, "dram.read_queue")) b.p.dram_banked.read_queue = 0;
+    else if (!strcmp(k, "dram.clock_mhz")) b.p.dram_clock_mhz = 0;
+    else if (!strcmp(k, "dram.tCL")) b.p.dram_banked.tCL = 0;
+    else if (!strcmp(k, "dram.tFAW")) b.p.dram_banked.tFAW = 1u << 21;
+    else if (!strcmp(k, "dram.bytes_per_cycle")) b.p.dram_bytes_per_cycle = 0;
+    else if (!strcmp(k, "dram.latency")) b.p.dram_latency_cycles = 1ull << 40;
+    else if (!strcmp(k, "timeline.window")) b.p.timeline_window_cycles = 0;
+    else if (!strcmp(k, "sample.fraction")) b.p.sample_fraction = 1.5;
+    const char *why = machine_params_problem(&b.p, buf, sizeof buf);
+    EXPECTF(why && !strcmp(why, cases[i].want), "%s: got '%s', want '%s'", k, why ? why : "NULL",
+            cases[i].want);
+  }
+}
+
 int main(void) {
   test_readme_table();
+  test_params_ranges();
   static const struct {
     const char *file, *want;
   } bad[] = {
