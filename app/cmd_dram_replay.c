@@ -453,41 +453,40 @@ static double r_p99_dram(const void *st, const struct stats_env *env) {
   return (double)r_p99(st, env) * r_to_dram(env);
 }
 
-#define RU(fn, nm, un, ds)                                                                         \
-  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .u64 = fn }
-#define RF(fn, nm, un, ds)                                                                         \
-  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .f64 = fn }
 static const struct stats_desc replay_desc[] = {
-    RF(r_clock_ghz, "clock_ghz", "GHz", "the core clock (the config's)"),
-    RU(r_clock_mhz, "dram.clock_mhz", "MHz", "the DRAM's clock (the config's)"),
-    RU(r_requests, "requests", "count", "requests replayed"),
+    STATS_FN_F64(r_clock_ghz, "clock_ghz", "GHz", "the core clock (the config's)"),
+    STATS_FN_U64(r_clock_mhz, "dram.clock_mhz", "MHz", "the DRAM's clock (the config's)"),
+    STATS_FN_U64(r_requests, "requests", "count", "requests replayed"),
     STATS_FIELD(struct replay, reads, "reads", "count", "reads served"),
     STATS_FIELD(struct replay, writes, "writes", "count", "writes served"),
     STATS_FIELD(struct replay, first_arrival, "first_arrival_cycle", "cycles",
                 "the first request's arrival"),
     STATS_FIELD(struct replay, last_done, "last_done_cycle", "cycles", "the last request served"),
-    RU(r_cycles, "cycles", "cycles", "from the first arrival to the last served"),
-    RF(r_lat_mean, "read_latency_mean", "cycles", "a read's latency from its arrival, mean"),
-    RU(r_p50, "read_latency_p50", "cycles", "its median"),
-    RU(r_p95, "read_latency_p95", "cycles", "its 95th percentile"),
-    RU(r_p99, "read_latency_p99", "cycles", "its 99th percentile"),
-    RU(r_lat_max, "read_latency_max", "cycles", "its largest"),
-    RF(r_taken_mean, "read_latency_taken_mean", "cycles",
-       "a read's latency from the DRAM taking it, mean"),
-    RU(r_taken_max, "read_latency_taken_max", "cycles", "its largest"),
-    RF(r_write_mean, "write_latency_mean", "cycles", "a write's latency from its arrival, mean"),
-    RF(r_wait_mean, "refused_wait_mean", "cycles",
-       "cycles a request waited past its arrival for the DRAM to take it, mean"),
-    RF(r_bpc, "bytes_per_cycle", "bytes a cycle", "64-byte lines moved / cycles"),
-    RF(r_gbps, "gb_per_s", "GB/s", "bytes_per_cycle at clock_ghz"),
-    RF(r_mean_dram, "read_latency_mean_dram_cycles", "DRAM cycles",
-       "read_latency_mean in DRAM clock cycles"),
-    RF(r_p50_dram, "read_latency_p50_dram_cycles", "DRAM cycles", "read_latency_p50 likewise"),
-    RF(r_p95_dram, "read_latency_p95_dram_cycles", "DRAM cycles", "read_latency_p95 likewise"),
-    RF(r_p99_dram, "read_latency_p99_dram_cycles", "DRAM cycles", "read_latency_p99 likewise"),
+    STATS_FN_U64(r_cycles, "cycles", "cycles", "from the first arrival to the last served"),
+    STATS_FN_F64(r_lat_mean, "read_latency_mean", "cycles",
+                 "a read's latency from its arrival, mean"),
+    STATS_FN_U64(r_p50, "read_latency_p50", "cycles", "its median"),
+    STATS_FN_U64(r_p95, "read_latency_p95", "cycles", "its 95th percentile"),
+    STATS_FN_U64(r_p99, "read_latency_p99", "cycles", "its 99th percentile"),
+    STATS_FN_U64(r_lat_max, "read_latency_max", "cycles", "its largest"),
+    STATS_FN_F64(r_taken_mean, "read_latency_taken_mean", "cycles",
+                 "a read's latency from the DRAM taking it, mean"),
+    STATS_FN_U64(r_taken_max, "read_latency_taken_max", "cycles", "its largest"),
+    STATS_FN_F64(r_write_mean, "write_latency_mean", "cycles",
+                 "a write's latency from its arrival, mean"),
+    STATS_FN_F64(r_wait_mean, "refused_wait_mean", "cycles",
+                 "cycles a request waited past its arrival for the DRAM to take it, mean"),
+    STATS_FN_F64(r_bpc, "bytes_per_cycle", "bytes a cycle", "64-byte lines moved / cycles"),
+    STATS_FN_F64(r_gbps, "gb_per_s", "GB/s", "bytes_per_cycle at clock_ghz"),
+    STATS_FN_F64(r_mean_dram, "read_latency_mean_dram_cycles", "DRAM cycles",
+                 "read_latency_mean in DRAM clock cycles"),
+    STATS_FN_F64(r_p50_dram, "read_latency_p50_dram_cycles", "DRAM cycles",
+                 "read_latency_p50 likewise"),
+    STATS_FN_F64(r_p95_dram, "read_latency_p95_dram_cycles", "DRAM cycles",
+                 "read_latency_p95 likewise"),
+    STATS_FN_F64(r_p99_dram, "read_latency_p99_dram_cycles", "DRAM cycles",
+                 "read_latency_p99 likewise"),
 };
-#undef RU
-#undef RF
 static const struct stats_descs replay_stats_descs = {
     "dram-replay", replay_desc, STATS_COUNT(replay_desc), 0, NULL, 0};
 

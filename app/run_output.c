@@ -124,33 +124,14 @@ static double run_slots_per_geometry_miss(const void *st, const struct stats_env
 }
 
 static const struct stats_desc run_desc[] = {
-    {.name = "rays_traced",
-     .unit = "count",
-     .desc = "rays traced, every kind",
-     .how = STATS_HOW_U64,
-     .u64 = run_rays},
-    {.name = "rays_per_second",
-     .unit = "per second",
-     .desc = "rays traced / seconds",
-     .how = STATS_HOW_F64,
-     .f64 = run_rays_per_second},
-    {.name = "kd_node_visits",
-     .unit = "count",
-     .desc = "k-d tree nodes visited",
-     .how = STATS_HOW_U64,
-     .u64 = run_node_visits},
-    {.name = "triangle_tests",
-     .unit = "count",
-     .desc = "ray-triangle tests",
-     .how = STATS_HOW_U64,
-     .u64 = run_tri_tests},
+    STATS_FN_U64(run_rays, "rays_traced", "count", "rays traced, every kind"),
+    STATS_FN_F64(run_rays_per_second, "rays_per_second", "per second", "rays traced / seconds"),
+    STATS_FN_U64(run_node_visits, "kd_node_visits", "count", "k-d tree nodes visited"),
+    STATS_FN_U64(run_tri_tests, "triangle_tests", "count", "ray-triangle tests"),
 };
 static const struct stats_desc run_misses_desc[] = {
-    {.name = "issue_slots_per_geometry_miss",
-     .unit = "cycles",
-     .desc = "issue slots / lines of triangles or k-d nodes read from the DRAM",
-     .how = STATS_HOW_F64,
-     .f64 = run_slots_per_geometry_miss},
+    STATS_FN_F64(run_slots_per_geometry_miss, "issue_slots_per_geometry_miss", "cycles",
+                 "issue slots / lines of triangles or k-d nodes read from the DRAM"),
 };
 const struct stats_descs run_output_stats_descs = {"run", run_desc, STATS_COUNT(run_desc),
                                                    0,     NULL,     0};
@@ -249,19 +230,15 @@ AN_EST(bandwidth_bound_cycles)
   { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, AN(f), .u64 = fn }
 #define AN_F64(f, fn, nm, un, ds)                                                                  \
   { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, AN(f), .f64 = fn }
-#define AN_ENV_U64(fn, nm, un, ds)                                                                 \
-  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .u64 = fn }
-#define AN_ENV_F64(fn, nm, un, ds)                                                                 \
-  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .f64 = fn }
 static const struct stats_desc analytic_desc[] = {
     AN_FIELD(est.cycles, "cycles", "cycles", "the estimate: the larger of its two bounds"),
-    AN_ENV_F64(an_seconds, "seconds", "seconds", "the estimate at clock_ghz"),
-    AN_ENV_U64(an_rays, "rays_traced", "count", "rays traced, every kind"),
-    AN_ENV_F64(an_rays_per_second, "rays_per_second", "per second", "rays traced / seconds"),
-    AN_ENV_U64(an_node_visits, "kd_node_visits", "count", "k-d tree nodes visited"),
-    AN_ENV_U64(an_tri_tests, "triangle_tests", "count", "ray-triangle tests"),
-    AN_ENV_U64(an_contexts, "ray_contexts", "count", "ray contexts: cores x threads x rays"),
-    AN_ENV_U64(an_threads, "threads", "count", "hardware threads: cores x threads_per_core"),
+    STATS_FN_F64(an_seconds, "seconds", "seconds", "the estimate at clock_ghz"),
+    STATS_FN_U64(an_rays, "rays_traced", "count", "rays traced, every kind"),
+    STATS_FN_F64(an_rays_per_second, "rays_per_second", "per second", "rays traced / seconds"),
+    STATS_FN_U64(an_node_visits, "kd_node_visits", "count", "k-d tree nodes visited"),
+    STATS_FN_U64(an_tri_tests, "triangle_tests", "count", "ray-triangle tests"),
+    STATS_FN_U64(an_contexts, "ray_contexts", "count", "ray contexts: cores x threads x rays"),
+    STATS_FN_U64(an_threads, "threads", "count", "hardware threads: cores x threads_per_core"),
     AN_FIELD(counts.issue_slots, "issue_slots", "cycles",
              "issue slots the work takes (compute, loads, stores)"),
     AN_F64(counts.issue_slots, an_core_utilization, "core_utilization", "fraction",
@@ -316,8 +293,6 @@ static const struct stats_desc analytic_desc[] = {
 #undef AN_FIELD
 #undef AN_U64
 #undef AN_F64
-#undef AN_ENV_U64
-#undef AN_ENV_F64
 const struct stats_descs run_output_analytic_stats_descs = {
     "analytic", analytic_desc, STATS_COUNT(analytic_desc), 0, NULL, 0};
 

@@ -138,6 +138,11 @@ struct stats_descs {
     .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .off = offsetof(T, f),               \
     .size = STATS_FIELD_SIZE(T, f), .u64 = fn                                                      \
   }
+/* A figure fn computes from the whole struct and the run (no one field). */
+#define STATS_FN_U64(fn, nm, un, ds)                                                               \
+  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .u64 = fn }
+#define STATS_FN_F64(fn, nm, un, ds)                                                               \
+  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .f64 = fn }
 #define STATS_SLOT(id)                                                                             \
   { .name = "", .unit = "", .desc = "", .how = STATS_HOW_SLOT, .slot = id }
 #define STATS_SKIP(T, f, reason)                                                                   \
