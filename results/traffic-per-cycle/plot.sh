@@ -24,7 +24,9 @@ for scene in "$@"; do
     [ -f "$f" ] || continue
     found=1
     awk -F, -v s="$scene" -v c="$cores" -v l="$l2" -v p="$p" \
-      'FNR > 1 && $2 > 0 { printf "%s,%s,%s,%s,%.17g,%.6g\n", s, c, l, p, $1 + $2 / 2, ($3 + $4) / $2 }' \
+      'FNR == 1 { for (i = 1; i <= NF; i++) k[$i] = i; next }
+       $k["cycles"] > 0 { printf "%s,%s,%s,%s,%.17g,%.6g\n", s, c, l, p,
+         $k["cycle"] + $k["cycles"] / 2, ($k["dram_read_bytes"] + $k["dram_write_bytes"]) / $k["cycles"] }' \
       "$f" >> "$tmp/tidy.csv"
   done
   [ $found = 1 ] || { echo "plot.sh: no timeline for $scene in $dir" >&2; exit 2; }
