@@ -510,6 +510,11 @@ static void test_moved(void) {
           "'s|%s/|/gone/tree/|g' \"$f\"; done && grep -q /gone/tree/configs/tiny.yaml */command.sh",
           dir, RTSIM_SOURCE_DIR);
   EXPECTF(rc == 0, "rewriting the commands: %d %s", rc, out);
+  /* The configs moved with the tree only when the build lives inside it. */
+  if (strncmp(RTSIM_TMP, RTSIM_SOURCE_DIR "/", strlen(RTSIM_SOURCE_DIR) + 1) != 0) {
+    printf("test_moved: the build is outside the source tree; the moved-tree case is skipped\n");
+    return;
+  }
   rc = run("%s sweep %s -o %s", RTSIM_BINARY, GOOD, dir);
   EXPECTF(rc == 0 && strstr(out, "8 points, 8 complete, running 0"), "moved tree: %d %s", rc, out);
   rc = run(
