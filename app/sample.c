@@ -401,13 +401,9 @@ static uint64_t s_units(const void *st, const struct stats_env *env) {
     .name = nm "_ci95_high", .unit = un, .desc = "the high end of the 95% interval of " nm,        \
     .how = STATS_HOW_F64, .f64 = o##_hi, .present = pres                                           \
   }
-#define ENV_U64(fn, nm, un, ds)                                                                    \
-  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .u64 = fn }
-#define ENV_F64(fn, nm, un, ds)                                                                    \
-  { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .f64 = fn }
 static const struct stats_desc sample_desc[] = {
-    ENV_U64(s_contexts, "ray_contexts", "count", "ray contexts: cores x threads x rays"),
-    ENV_U64(s_threads, "threads", "count", "hardware threads: cores x threads_per_core"),
+    STATS_FN_U64(s_contexts, "ray_contexts", "count", "ray contexts: cores x threads x rays"),
+    STATS_FN_U64(s_threads, "threads", "count", "hardware threads: cores x threads_per_core"),
     EST(SO_CYCLES, "cycles", "cycles", "the run's cycles, estimated", NULL),
     EST(SO_SECONDS, "seconds", "seconds", "the run at clock_ghz, estimated", NULL),
     STATS_FIELD(struct sampler, rays_total, "rays_traced", "count",
@@ -425,18 +421,17 @@ static const struct stats_desc sample_desc[] = {
     EST(SO_LOAD_LAT, "load_latency_mean", "cycles", "a load's latency, mean, estimated", NULL),
     STATS_FIELD(struct sampler, total, "sample_work_items", "count",
                 "work items (pixels or tiles) of the run"),
-    ENV_U64(s_units, "sample_units_measured", "count", "units simulated in detail"),
-    ENV_F64(s_detailed, "sample_detailed_fraction", "fraction",
-            "work items simulated in detail (warm-up included) / work items"),
-    ENV_F64(s_measured, "sample_measured_fraction", "fraction", "work items measured / work items"),
-    ENV_F64(s_warmed, "sample_warmed_fraction", "fraction",
-            "work items warmed without time / work items"),
-    ENV_F64(s_detailed_slots, "sample_detailed_slots_fraction", "fraction",
-            "issue slots simulated in detail / issue slots"),
+    STATS_FN_U64(s_units, "sample_units_measured", "count", "units simulated in detail"),
+    STATS_FN_F64(s_detailed, "sample_detailed_fraction", "fraction",
+                 "work items simulated in detail (warm-up included) / work items"),
+    STATS_FN_F64(s_measured, "sample_measured_fraction", "fraction",
+                 "work items measured / work items"),
+    STATS_FN_F64(s_warmed, "sample_warmed_fraction", "fraction",
+                 "work items warmed without time / work items"),
+    STATS_FN_F64(s_detailed_slots, "sample_detailed_slots_fraction", "fraction",
+                 "issue slots simulated in detail / issue slots"),
 };
 #undef EST
-#undef ENV_U64
-#undef ENV_F64
 const struct stats_descs sample_stats_descs = {"sampled", sample_desc, STATS_COUNT(sample_desc),
                                                0,         NULL,        0};
 
