@@ -401,7 +401,26 @@ static void test_run_refuses_first(void) {
     }
 }
 
+/* dram-replay --help-stats: the replay's own numbers, one a line, and a value
+ * given to the flag is a usage error (exit 2, one line, nothing written). */
+static void test_replay_help_stats(void) {
+  char out[16384];
+  int rc = testing_run(RTSIM_BINARY " dram-replay --help-stats", out, sizeof out);
+  EXPECTF(rc == 0, "--help-stats: exit %d: %s", rc, out);
+  static const char *const names[] = {"requests", "read_latency_p99", "bytes_per_cycle",
+                                      "read_latency_p99_dram_cycles"};
+  for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+    char line[128];
+    snprintf(line, sizeof line, "\n%s ", names[i]);
+    EXPECTF(strstr(out, line) != NULL, "--help-stats lacks %s: %s", names[i], out);
+  }
+  rc = testing_run(RTSIM_BINARY " dram-replay --help-stats=3", out, sizeof out);
+  EXPECTF(rc == 2 && strstr(out, "option --help-stats takes no value") && count_lines(out) == 1,
+          "--help-stats=3: exit %d: %s", rc, out);
+}
+
 int main(void) {
+  test_replay_help_stats();
   test_huge_scenes();
   test_importer_child();
   static const struct {
