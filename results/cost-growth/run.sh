@@ -20,6 +20,9 @@ set -eu
 RTSIM=${RTSIM:-build/rtsim}
 OUT=${1:-results/cost-growth}
 REPEAT=${REPEAT:-3}
+case $REPEAT in
+'' | *[!0-9]* | 0*) echo "run.sh: REPEAT: got '$REPEAT', expected a whole number from 1" >&2; exit 2 ;;
+esac
 TIME=/usr/bin/time
 [ -x "$TIME" ] || { echo "run.sh: needs GNU time ($TIME; Debian package time)" >&2; exit 2; }
 mkdir -p "$OUT"
