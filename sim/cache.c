@@ -60,17 +60,22 @@ struct cache {
   uint64_t table_mask, table_used;
   unsigned table_shift;
   uint64_t vec_bytes; /* slots allocated in vectors */
-  bool flat_ok;       /* small and scanned: one block, made at the first install */
-  struct slot *flat;  /* then every slot, set s's at flat[s * ways] */
+  bool flat_ok;       /* small and scanned: flat, made at the first install */
+  struct slot *flat;  /* then every slot, set s's at flat[s * ways + k] (k: ways - 1 - way) */
+  uint64_t *ftag;     /* and beside it each slot's line + 1 (0: never held one) */
 };
 
-/* A scanned cache of at most this many lines (an L1: 8 KiB is 128) keeps
- * its sets and slots in one block of about 25 bytes a line, allocated when
- * the first line arrives (a core that never runs costs nothing). A find
- * then reads one host line or two, where the set pages and per-set vectors
- * take two dependent misses: on 1024 cores, whose L1s do not stay in the
- * host's caches, the find was 30% of the run. */
-#define FLAT_LINES 1024u
+/* A scanned cache of at most this many lines (an L1: 8 KiB is 128; the
+ * default L2, 4 MiB of 16 ways, 65,536) is flat: its slots in one block and
+ * their tags (line + 1) in another, allocated when the first line arrives (a
+ * core that never runs costs nothing; the pages of a large block only as
+ * they are written). A never-used slot is zeros: invalid, and the oldest
+ * stamp of its set, so no set needs a count or a list. A find reads the
+ * set's tags only: one host line for 8 ways, where the set pages and
+ * per-set vectors took two or three dependent misses (on 1024 cores, whose
+ * L1s do not stay in the host's caches, the find was 30% of the run; on the
+ * default machine the L2's find is the largest single cost). */
+#define FLAT_LINES (1u << 17)
 
 static const struct slot ZERO_SLOT;
 static const struct set ZERO_SET;
@@ -99,18 +104,16 @@ static inline const struct set *set_peek(const struct cache *c, uint64_t s) {
   return p ? &p[s % SET_PAGE] : &ZERO_SET;
 }
 
-/* The flat block (FLAT_LINES): the sets, then the slots; every set's
- * vector is its ways' slots, so it never grows. */
 static void flat_make(struct cache *c) {
-  unsigned char *b = xcalloc(1, c->sets * sizeof(struct set) + c->lines * sizeof(struct slot));
-  struct set *sets = (struct set *)b;
-  c->flat = (struct slot *)(b + c->sets * sizeof(struct set));
-  for (uint64_t s = 0; s < c->sets; s++) {
-    sets[s].vec = c->flat + s * c->ways;
-    sets[s].cap = (uint32_t)c->ways;
-  }
-  c->set_pages[0] = sets;
-  c->vec_bytes = c->lines * sizeof(struct slot);
+  c->flat = xcalloc(c->lines, sizeof *c->flat);
+  c->ftag = xcalloc(c->lines, sizeof *c->ftag);
+  c->vec_bytes = c->lines * (sizeof *c->flat + sizeof *c->ftag);
+}
+
+/* Slot i of a flat cache. */
+static inline struct slot *flat_slot(const struct cache *c, uint64_t i) {
+  const uint64_t s = set_of_slot(c, i);
+  return &c->flat[s * c->ways + c->ways - 1 - (i - s * c->ways)];
 }
 
 /* Sets in page i: SET_PAGE, fewer in a small cache's only page. */
@@ -121,15 +124,13 @@ static inline uint64_t page_sets(const struct cache *c, uint64_t i) {
 
 static inline struct set *set_get(struct cache *c, uint64_t s) {
   struct set **p = &c->set_pages[s / SET_PAGE];
-  if (!*p) {
-    if (c->flat_ok) flat_make(c);
-    else *p = xcalloc(page_sets(c, s / SET_PAGE), sizeof **p);
-  }
+  if (!*p) *p = xcalloc(page_sets(c, s / SET_PAGE), sizeof **p);
   return &(*p)[s % SET_PAGE];
 }
 
 /* Slot i to read: a never-used slot reads as zeros (no line, no flags). */
 static inline const struct slot *slot_peek(const struct cache *c, uint64_t i) {
+  if (c->flat_ok) return c->flat ? flat_slot(c, i) : &ZERO_SLOT;
   const uint64_t s = set_of_slot(c, i), w = way_of_slot(c, i);
   const struct set *st = set_peek(c, s);
   return w + st->used >= c->ways ? &st->vec[c->ways - 1 - w] : &ZERO_SLOT;
@@ -143,6 +144,10 @@ static inline struct slot *slot_at(const struct cache *c, struct set *st, uint64
 }
 
 static inline struct slot *slot_get(struct cache *c, uint64_t i) {
+  if (c->flat_ok) {
+    if (!c->flat) flat_make(c);
+    return flat_slot(c, i);
+  }
   return slot_at(c, set_get(c, set_of_slot(c, i)), i);
 }
 
@@ -231,19 +236,20 @@ struct cache *cache_create(const struct cache_params *p) {
   c->set_mask = (c->sets & (c->sets - 1)) == 0 ? c->sets - 1 : 0;
   if (c->sets == 1) c->set_mask = 0;
   c->scan = c->ways <= SCAN_WAYS;
-  c->set_page_count = (c->sets + SET_PAGE - 1) / SET_PAGE;
-  c->set_pages = xcalloc(c->set_page_count, sizeof *c->set_pages);
   c->flat_ok = c->scan && c->lines <= FLAT_LINES;
+  c->set_page_count = c->flat_ok ? 0 : (c->sets + SET_PAGE - 1) / SET_PAGE;
+  c->set_pages = xcalloc(c->set_page_count ? c->set_page_count : 1, sizeof *c->set_pages);
   if (!c->scan) table_resize(c, 4);
   return c;
 }
 
 void cache_destroy(struct cache *c) {
   if (!c) return;
+  free(c->flat);
+  free(c->ftag);
   for (uint64_t i = 0; i < c->set_page_count; i++) {
     if (!c->set_pages[i]) continue;
-    if (!c->flat)
-      for (uint64_t k = 0; k < page_sets(c, i); k++) free(c->set_pages[i][k].vec);
+    for (uint64_t k = 0; k < page_sets(c, i); k++) free(c->set_pages[i][k].vec);
     free(c->set_pages[i]);
   }
   free(c->set_pages);
@@ -268,15 +274,21 @@ static inline int64_t scan_used(const struct set *st, uint64_t line) {
   return -1;
 }
 
+/* A flat cache's scan: set s's tags only (one host line for 8 ways), no
+ * set or slot read; the index in the set's vector of line's slot, or -1. */
+static inline int64_t flat_scan(const struct cache *c, uint64_t s, uint64_t line) {
+  const uint64_t *t = c->ftag + s * c->ways, key = line + 1;
+  for (uint32_t k = 0; k < c->ways; k++)
+    if (t[k] == key) return k;
+  return -1;
+}
+
 uint32_t cache_find(const struct cache *c, uint64_t line) {
-  if (c->flat) {
-    /* Slots past the set's used ones are zeros, never valid. */
+  if (c->flat_ok) {
+    if (!c->flat) return CACHE_NONE;
     const uint64_t s = set_of_line(c, line);
-    const struct slot *v = c->flat + s * c->ways;
-    for (uint32_t k = 0; k < c->ways; k++)
-      if (v[k].line == line && (v[k].flags & F_VALID))
-        return (uint32_t)(s * c->ways + c->ways - 1 - k);
-    return CACHE_NONE;
+    const int64_t k = flat_scan(c, s, line);
+    return k < 0 ? CACHE_NONE : (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
   }
   if (c->scan) {
     const uint64_t s = set_of_line(c, line);
@@ -311,6 +323,10 @@ static void to_head(struct cache *c, struct set *st, uint32_t slot) {
 }
 
 void cache_touch(struct cache *c, uint32_t slot) {
+  if (c->flat_ok) {
+    slot_get(c, slot)->stamp = ++c->uses;
+    return;
+  }
   to_head(c, set_get(c, set_of_slot(c, slot)), slot);
 }
 
@@ -320,8 +336,15 @@ uint32_t cache_use(struct cache *c, uint64_t line) {
     if (slot != CACHE_NONE) cache_touch(c, slot);
     return slot;
   }
-  /* A scanned set (flat or paged): only its used slots can hold the line. */
   const uint64_t s = set_of_line(c, line);
+  if (c->flat_ok) {
+    if (!c->flat) return CACHE_NONE;
+    const int64_t k = flat_scan(c, s, line);
+    if (k < 0) return CACHE_NONE;
+    c->flat[s * c->ways + (uint64_t)k].stamp = ++c->uses;
+    return (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
+  }
+  /* A paged scanned set: only its used slots can hold the line. */
   struct set *page = c->set_pages[s / SET_PAGE];
   if (!page) return CACHE_NONE;
   struct set *st = &page[s % SET_PAGE];
@@ -331,23 +354,36 @@ uint32_t cache_use(struct cache *c, uint64_t line) {
   return (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
 }
 
+/* The oldest stamp not pending among n slots from v (stamps are distinct
+ * but for the never-used slots' zeros, the first of which is the set's
+ * lowest-ranked never-used one): its index in v, or -1. */
+static inline int64_t oldest_free(const struct slot *v, uint64_t n) {
+  int64_t best = -1;
+  uint64_t oldest = UINT64_MAX;
+  for (uint64_t k = 0; k < n; k++)
+    if (!(v[k].flags & F_PENDING) && v[k].stamp < oldest) {
+      oldest = v[k].stamp;
+      best = (int64_t)k;
+    }
+  return best;
+}
+
 uint32_t cache_victim(const struct cache *c, uint64_t line) {
   uint64_t s = set_of_line(c, line);
+  if (c->flat_ok) {
+    /* Never-used slots are zeros: the first of them is the paged path's
+     * choice too (a never-used slot first, the highest-ranked way). */
+    if (!c->flat) return (uint32_t)(s * c->ways + c->ways - 1);
+    const int64_t k = oldest_free(c->flat + s * c->ways, c->ways);
+    return k < 0 ? CACHE_NONE : (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
+  }
   const struct set *st = set_peek(c, s);
   /* A never-used slot first: the highest of them is the list's tail. */
   if (st->used < c->ways) return (uint32_t)(s * c->ways + (c->ways - st->used) - 1);
   if (c->scan) {
     /* The oldest stamp not pending (stamps are distinct: one answer). */
-    uint32_t best = CACHE_NONE;
-    uint64_t oldest = UINT64_MAX;
-    for (uint32_t k = 0; k < c->ways; k++) {
-      const struct slot *x = &st->vec[k];
-      if (!(x->flags & F_PENDING) && x->stamp < oldest) {
-        oldest = x->stamp;
-        best = (uint32_t)(s * c->ways + c->ways - 1 - k);
-      }
-    }
-    return best;
+    const int64_t k = oldest_free(st->vec, c->ways);
+    return k < 0 ? CACHE_NONE : (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
   }
   for (uint32_t i = st->tail; i != CACHE_NONE;) {
     const struct slot *x = &st->vec[c->ways - 1 - way_of_slot(c, i)];
@@ -383,6 +419,16 @@ void cache_set_byte(struct cache *c, uint32_t slot, uint8_t v) { slot_get(c, slo
 void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bool pending) {
   const uint64_t s = set_of_slot(c, slot);
   CHECK_EQ(s, set_of_line(c, line));
+  if (c->flat_ok) {
+    /* A never-used slot is zeros already; a used one keeps its word and byte. */
+    struct slot *x = slot_get(c, slot);
+    CHECK(!(x->flags & F_PENDING));
+    x->stamp = ++c->uses;
+    x->line = line;
+    x->flags = (uint8_t)(F_VALID | (dirty ? F_DIRTY : 0) | (pending ? F_PENDING : 0));
+    c->ftag[x - c->flat] = line + 1;
+    return;
+  }
   struct set *st = set_get(c, s);
   const uint64_t in_set = slot - s * c->ways;
   struct slot *x;

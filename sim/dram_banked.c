@@ -91,6 +91,7 @@ struct channel {
   /* per_bank / per_rank: */
   struct queue *cq;     /* command queues, by bank within the channel or by rank */
   uint32_t ncq, cq_n;   /* command queues; commands in them all */
+  uint64_t *cq_busy;    /* bit i of word i / 64: command queue i holds a command */
   uint32_t rr;          /* the command queue probed last (round robin) */
   uint32_t draining;    /* writes still to move in the current drain */
   int64_t last_busy;    /* the last cycle a request arrived or a request command issued */
@@ -592,8 +593,20 @@ static uint32_t cq_of(const struct dram_banked *d, const struct req *r) {
   return d->p.queue_structure == DRAM_BANKED_PER_RANK ? r->rank : r->bank;
 }
 
-static uint32_t cq_rank(const struct dram_banked *d, uint32_t qi) {
-  return d->p.queue_structure == DRAM_BANKED_PER_RANK ? qi : qi / d->banks_per_rank;
+static void cq_mark(struct channel *c, uint32_t qi, bool busy) {
+  const uint64_t bit = 1ull << (qi % 64);
+  if (busy) c->cq_busy[qi / 64] |= bit;
+  else c->cq_busy[qi / 64] &= ~bit;
+}
+
+/* The first command queue from `from` on holding a command, or ncq. */
+static uint32_t cq_next_busy(const struct channel *c, uint32_t from) {
+  for (uint32_t w = from / 64; w * 64 < c->ncq; w++) {
+    uint64_t bits = c->cq_busy[w];
+    if (w == from / 64) bits &= ~0ull << (from % 64);
+    if (bits) return w * 64 + (uint32_t)__builtin_ctzll(bits);
+  }
+  return c->ncq;
 }
 
 /* Entries of transaction queue q that may take part in cycle t (a prefix:
@@ -656,6 +669,7 @@ static bool schedule_cq(struct dram_banked *d, struct channel *c, int64_t t, boo
     m.ready = t + 1;
     cq->r[cq->n++] = m;
     c->cq_n++;
+    cq_mark(c, cq_of(d, &m), true);
     d->space_due = true;
     if (k == WR_Q) draining--;
   }
@@ -697,35 +711,40 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
   pk->type = CMD_NONE;
   pk->next = FAR;
   scan_refresh(d, c, now, pk);
-  for (uint32_t k = 1; k <= c->ncq; k++) {
-    const uint32_t qi = (c->rr + k) % c->ncq;
-    const struct queue *q = &c->cq[qi];
-    if (!q->n || c->ranks[cq_rank(d, qi)].pending) continue;
-    for (uint32_t j = 0; j < q->n; j++) {
-      const struct req *r = &q->r[j];
-      const struct bank *bk = &c->banks[r->bank];
-      int64_t t;
-      enum cmd_type type;
-      if (!bk->open) {
-        t = act_earliest(d, c, r, now);
-        type = CMD_ACT;
-      } else if (bk->row == r->row) {
-        if (r->write && write_behind_read(q, j)) continue;
-        t = col_earliest(d, c, r, r->write, now);
-        type = r->write ? CMD_WR : CMD_RD;
-      } else {
-        if (!pre_allowed(q, j, bk)) continue;
-        t = max64(max64(now, r->ready), bk->pre_ok);
-        type = CMD_PRE;
-      }
-      if (t < pk->next) pk->next = t;
-      if (t == now && pk->type == CMD_NONE) {
-        pk->type = type;
-        pk->rank = r->rank;
-        pk->bank = r->bank;
-        pk->cq = qi;
-        pk->qi = j;
-        pk->for_req = true;
+  /* The queues holding commands, round robin from the one after rr: those
+   * from there on, then those before it (rr last). */
+  const uint32_t start = (c->rr + 1) % c->ncq;
+  for (int pass = 0; pass < 2; pass++) {
+    const uint32_t hi = pass ? start : c->ncq;
+    for (uint32_t qi = cq_next_busy(c, pass ? 0 : start); qi < hi; qi = cq_next_busy(c, qi + 1)) {
+      const struct queue *q = &c->cq[qi];
+      if (c->ranks[q->r[0].rank].pending) continue; /* (a queue's commands share a rank) */
+      for (uint32_t j = 0; j < q->n; j++) {
+        const struct req *r = &q->r[j];
+        const struct bank *bk = &c->banks[r->bank];
+        int64_t t;
+        enum cmd_type type;
+        if (!bk->open) {
+          t = act_earliest(d, c, r, now);
+          type = CMD_ACT;
+        } else if (bk->row == r->row) {
+          if (r->write && write_behind_read(q, j)) continue;
+          t = col_earliest(d, c, r, r->write, now);
+          type = r->write ? CMD_WR : CMD_RD;
+        } else {
+          if (!pre_allowed(q, j, bk)) continue;
+          t = max64(max64(now, r->ready), bk->pre_ok);
+          type = CMD_PRE;
+        }
+        if (t < pk->next) pk->next = t;
+        if (t == now && pk->type == CMD_NONE) {
+          pk->type = type;
+          pk->rank = r->rank;
+          pk->bank = r->bank;
+          pk->cq = qi;
+          pk->qi = j;
+          pk->for_req = true;
+        }
       }
     }
   }
@@ -738,6 +757,7 @@ static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t q
   memmove(&q->r[j], &q->r[j + 1], (q->n - j - 1) * sizeof *q->r);
   q->n--;
   c->cq_n--;
+  if (!q->n) cq_mark(c, qi, false);
   d->queued--;
   /* DRAMsim3's row hit: the row has served a column command since its ACT. */
   count_kind(d, c->banks[r.bank].hits     ? KIND_HIT
@@ -1213,6 +1233,7 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
     if (d->cq_mode) {
       c->ncq = p->queue_structure == DRAM_BANKED_PER_RANK ? p->ranks : d->banks_per_channel;
       c->cq = xcalloc(c->ncq, sizeof *c->cq);
+      c->cq_busy = xcalloc((c->ncq + 63) / 64, sizeof *c->cq_busy);
       for (uint32_t j = 0; j < c->ncq; j++) {
         c->cq[j].cap = p->command_queue;
         c->cq[j].r = xcalloc(p->command_queue, sizeof(struct req));
@@ -1243,6 +1264,7 @@ void dram_banked_destroy(struct dram_banked *d) {
     free(c->ranks);
     for (uint32_t j = 0; j < c->ncq; j++) free(c->cq[j].r);
     free(c->cq);
+    free(c->cq_busy);
     free(c->fol);
   }
   free(d->ch);

@@ -461,7 +461,7 @@ static void ev_issue(void *ctx, uint64_t core) {
   const uint32_t T = m->p.threads_per_core;
   uint32_t pick = NONE;
   for (uint32_t i = 1; i <= T && pick == NONE; i++) {
-    uint32_t j = (k->rr + i) % T;
+    const uint32_t j = k->rr + i < T ? k->rr + i : k->rr + i - T; /* (k->rr + i) % T */
     uint64_t at;
     if (th_issuable_at(m, &m->th[core * T + j], &at) && at <= t) pick = j;
   }
