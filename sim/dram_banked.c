@@ -77,6 +77,22 @@ struct burst {
   bool write;
 };
 
+/* A scan's answer: the command to issue now (type CMD_NONE: none), the
+ * earliest cycle anything could, and the first candidate in scan order whose
+ * earliest time is the least of all candidates' (first_t; FAR: none). */
+struct pick {
+  enum cmd_type type;
+  uint32_t rank, bank; /* bank within the channel */
+  uint32_t qi;         /* request index in the served queue (per_bank: in command queue cq) */
+  uint32_t cq;
+  bool for_req; /* a request's command (else refresh work) */
+  int64_t next; /* earliest cycle >= now any candidate could issue (FAR: none) */
+  int64_t first_t;
+  enum cmd_type first_type;
+  uint32_t first_rank, first_bank, first_qi, first_cq;
+  bool first_for_req;
+};
+
 struct channel {
   struct queue q[2];
   bool writing;
@@ -98,6 +114,11 @@ struct channel {
   int64_t took_at;      /* the arrival cycle of the last request taken */
   struct follower *fol; /* reads waiting for another read's RD */
   uint32_t nfol, cap_fol;
+  /* per_bank / per_rank: the last command-queue scan, at cycle memo_at, while
+   * nothing it reads has changed since (memo_ok; see memo_pick). */
+  bool memo_ok;
+  int64_t memo_at;
+  struct pick memo;
 };
 
 struct dram_banked {
@@ -334,19 +355,19 @@ static int64_t col_earliest(const struct dram_banked *d, const struct channel *c
 
 /* ---- The scan: what issues at cycle `now`, and the earliest anything could ---- */
 
-struct pick {
-  enum cmd_type type;
-  uint32_t rank, bank; /* bank within the channel */
-  uint32_t qi;         /* request index in the served queue (per_bank: in command queue cq) */
-  uint32_t cq;
-  bool for_req; /* a request's command (else refresh work) */
-  int64_t next; /* earliest cycle >= now any candidate could issue (FAR: none) */
-};
-
 /* qi: the request's index in the served queue, or -1 for refresh work. */
 static void consider(struct pick *pk, int64_t t, int64_t now, enum cmd_type type, uint32_t rank,
                      uint32_t bank, int64_t qi) {
   if (t < pk->next) pk->next = t;
+  if (t < pk->first_t) {
+    pk->first_t = t;
+    pk->first_type = type;
+    pk->first_rank = rank;
+    pk->first_bank = bank;
+    pk->first_for_req = qi >= 0;
+    pk->first_qi = qi >= 0 ? (uint32_t)qi : 0;
+    pk->first_cq = 0;
+  }
   if (t == now && pk->type == CMD_NONE) {
     pk->type = type;
     pk->rank = rank;
@@ -360,6 +381,14 @@ static void consider(struct pick *pk, int64_t t, int64_t now, enum cmd_type type
  * open bank, lowest bank first, or REF once all are closed), then the oldest row hit of the
  * served queue, then the oldest PRE or ACT. The first that can issue at `now`
  * is picked; next is the least earliest time of all of them. */
+static int64_t ref_earliest(const struct dram_banked *d, const struct channel *c, uint32_t rank,
+                            int64_t now) {
+  const uint32_t bpr = d->banks_per_rank;
+  int64_t t = max64(now, c->ranks[rank].ref_end);
+  for (uint32_t i = 0; i < bpr; i++) t = max64(t, c->banks[rank * bpr + i].ref_ok);
+  return t;
+}
+
 static void scan_refresh(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
   const uint32_t bpr = d->banks_per_rank;
   for (uint32_t k = 0; k < d->p.ranks; k++) {
@@ -372,16 +401,14 @@ static void scan_refresh(struct dram_banked *d, struct channel *c, int64_t now, 
         if (bk->open) consider(pk, max64(now, bk->pre_ok), now, CMD_PRE, k, k * bpr + i, -1);
       }
     } else {
-      int64_t t = max64(now, rk->ref_end);
-      for (uint32_t i = 0; i < bpr; i++) t = max64(t, c->banks[k * bpr + i].ref_ok);
-      consider(pk, t, now, CMD_REF, k, 0, -1);
+      consider(pk, ref_earliest(d, c, k, now), now, CMD_REF, k, 0, -1);
     }
   }
 }
 
 static void scan(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
   pk->type = CMD_NONE;
-  pk->next = FAR;
+  pk->next = pk->first_t = FAR;
   scan_refresh(d, c, now, pk);
   const int qk = c->writing ? WR_Q : RD_Q;
   const struct queue *q = &c->q[qk];
@@ -536,6 +563,7 @@ static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t q
                             int64_t now);
 
 static void issue(struct dram_banked *d, struct channel *c, const struct pick *pk, int64_t now) {
+  c->memo_ok = false;
   const int qk = c->writing ? WR_Q : RD_Q;
   struct req *r = !pk->for_req ? NULL : d->cq_mode ? &c->cq[pk->cq].r[pk->qi] : &c->q[qk].r[pk->qi];
   switch (pk->type) {
@@ -661,6 +689,7 @@ static bool schedule_cq(struct dram_banked *d, struct channel *c, int64_t t, boo
   struct queue *q = &c->q[k];
   const bool changed = mi != UINT32_MAX || draining != c->draining;
   if (!apply) return changed;
+  if (changed) c->memo_ok = false;
   if (mi != UINT32_MAX) {
     struct req m = q->r[mi];
     struct queue *cq = &c->cq[cq_of(d, &m)];
@@ -709,7 +738,7 @@ static bool write_behind_read(const struct queue *q, uint32_t j) {
  * the earliest any candidate could. */
 static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
   pk->type = CMD_NONE;
-  pk->next = FAR;
+  pk->next = pk->first_t = FAR;
   scan_refresh(d, c, now, pk);
   /* The queues holding commands, round robin from the one after rr: those
    * from there on, then those before it (rr last). */
@@ -737,6 +766,15 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
           type = CMD_PRE;
         }
         if (t < pk->next) pk->next = t;
+        if (t < pk->first_t) {
+          pk->first_t = t;
+          pk->first_type = type;
+          pk->first_rank = r->rank;
+          pk->first_bank = r->bank;
+          pk->first_cq = qi;
+          pk->first_qi = j;
+          pk->first_for_req = true;
+        }
         if (t == now && pk->type == CMD_NONE) {
           pk->type = type;
           pk->rank = r->rank;
@@ -748,6 +786,42 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
       }
     }
   }
+  c->memo = *pk;
+  c->memo_at = now;
+  c->memo_ok = true;
+}
+
+/* The command to issue at `now` from the memo of the last scan, when nothing
+ * it read has changed since (false: scan). Every candidate's earliest time
+ * only grows with the cycle it is asked at, so at now >= memo_at those the
+ * memo found later than its least time are later still: none issues now if
+ * the least time is past now, and if it is now, only the memo's first such
+ * candidate can, when it still can (asked again). */
+static bool memo_pick(const struct dram_banked *d, const struct channel *c, int64_t now,
+                      struct pick *pk) {
+  const struct pick *m = &c->memo;
+  if (!c->memo_ok || c->memo_at > now || m->first_t < now) return false;
+  pk->type = CMD_NONE;
+  if (m->first_t > now) return true;
+  int64_t t;
+  if (m->first_for_req) {
+    const struct req *r = &c->cq[m->first_cq].r[m->first_qi];
+    const struct bank *bk = &c->banks[r->bank];
+    if (m->first_type == CMD_ACT) t = act_earliest(d, c, r, now);
+    else if (m->first_type == CMD_PRE) t = max64(max64(now, r->ready), bk->pre_ok);
+    else t = col_earliest(d, c, r, r->write, now);
+  } else {
+    t = m->first_type == CMD_REF ? ref_earliest(d, c, m->first_rank, now)
+                                 : max64(now, c->banks[m->first_bank].pre_ok);
+  }
+  if (t != now) return false;
+  pk->type = m->first_type;
+  pk->rank = m->first_rank;
+  pk->bank = m->first_bank;
+  pk->qi = m->first_qi;
+  pk->cq = m->first_cq;
+  pk->for_req = m->first_for_req;
+  return true;
 }
 
 static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t qi, uint32_t j,
@@ -804,7 +878,7 @@ static int64_t next_cq(struct dram_banked *d, struct channel *c, int64_t t) {
 /* Handle DRAM cycle `now` on channel c (per_bank / per_rank). */
 static void channel_cycle_cq(struct dram_banked *d, struct channel *c, int64_t now) {
   struct pick pk;
-  scan_cq(d, c, now, &pk);
+  if (!memo_pick(d, c, now, &pk)) scan_cq(d, c, now, &pk);
   if (pk.type != CMD_NONE) {
     issue(d, c, &pk, now);
     if (pk.for_req) {
@@ -825,6 +899,7 @@ static void channel_cycle(struct dram_banked *d, struct channel *c, int64_t now)
     while (rk->next_due <= now) {
       rk->pending++;
       rk->next_due += period;
+      c->memo_ok = false;
     }
   }
   if (d->cq_mode) {
