@@ -355,9 +355,11 @@ static int64_t col_earliest(const struct dram_banked *d, const struct channel *c
 
 /* ---- The scan: what issues at cycle `now`, and the earliest anything could ---- */
 
-/* qi: the request's index in the served queue, or -1 for refresh work. */
-static void consider(struct pick *pk, int64_t t, int64_t now, enum cmd_type type, uint32_t rank,
-                     uint32_t bank, int64_t qi) {
+/* A candidate that may issue from cycle t. qi: the request's index in the
+ * served queue (per_bank / per_rank: in command queue cq), or -1 for refresh
+ * work. */
+static void consider_in(struct pick *pk, int64_t t, int64_t now, enum cmd_type type, uint32_t rank,
+                        uint32_t bank, uint32_t cq, int64_t qi) {
   if (t < pk->next) pk->next = t;
   if (t < pk->first_t) {
     pk->first_t = t;
@@ -366,7 +368,7 @@ static void consider(struct pick *pk, int64_t t, int64_t now, enum cmd_type type
     pk->first_bank = bank;
     pk->first_for_req = qi >= 0;
     pk->first_qi = qi >= 0 ? (uint32_t)qi : 0;
-    pk->first_cq = 0;
+    pk->first_cq = cq;
   }
   if (t == now && pk->type == CMD_NONE) {
     pk->type = type;
@@ -374,7 +376,13 @@ static void consider(struct pick *pk, int64_t t, int64_t now, enum cmd_type type
     pk->bank = bank;
     pk->for_req = qi >= 0;
     pk->qi = qi >= 0 ? (uint32_t)qi : 0;
+    pk->cq = cq;
   }
+}
+
+static void consider(struct pick *pk, int64_t t, int64_t now, enum cmd_type type, uint32_t rank,
+                     uint32_t bank, int64_t qi) {
+  consider_in(pk, t, now, type, rank, bank, 0, qi);
 }
 
 /* Candidates in priority order: refresh work (ranks in order: a PRE for each
@@ -765,24 +773,7 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
           t = max64(max64(now, r->ready), bk->pre_ok);
           type = CMD_PRE;
         }
-        if (t < pk->next) pk->next = t;
-        if (t < pk->first_t) {
-          pk->first_t = t;
-          pk->first_type = type;
-          pk->first_rank = r->rank;
-          pk->first_bank = r->bank;
-          pk->first_cq = qi;
-          pk->first_qi = j;
-          pk->first_for_req = true;
-        }
-        if (t == now && pk->type == CMD_NONE) {
-          pk->type = type;
-          pk->rank = r->rank;
-          pk->bank = r->bank;
-          pk->cq = qi;
-          pk->qi = j;
-          pk->for_req = true;
-        }
+        consider_in(pk, t, now, type, r->rank, r->bank, qi, j);
       }
     }
   }
