@@ -121,10 +121,10 @@ struct analytic *analytic_create(const struct machine_params *p) {
   CHECK(machine_params_problem(p, why, sizeof why) == NULL);
   struct analytic *a = xcalloc(1, sizeof *a);
   if (p->l1_size_bytes) {
-    struct cache_params l1 = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE};
+    struct cache_params l1 = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE, false};
     a->l1 = cache_create(&l1);
   }
-  struct cache_params l2 = {p->l2_size_bytes, p->l2_ways, MACHINE_LG2_LINE};
+  struct cache_params l2 = {p->l2_size_bytes, p->l2_ways, MACHINE_LG2_LINE, true};
   a->l2 = cache_create(&l2);
   return a;
 }

@@ -65,8 +65,10 @@ struct cache {
   uint64_t *ftag;     /* and beside it each slot's line + 1 (0: never held one) */
 };
 
-/* A scanned cache of at most this many lines (an L1: 8 KiB is 128; the
- * default L2, 4 MiB of 16 ways, 65,536) is flat: its slots in one block and
+/* A scanned cache of at most this many lines (an L1: 8 KiB is 128), or a
+ * shared one of at most FLAT_LINES_SHARED (the default L2, 4 MiB of 16 ways,
+ * 65,536; per-core caches stay below 1024 lines so that many cores with large,
+ * sparsely used L1s cost what their lines do) is flat: its slots in one block and
  * their tags (line + 1) in another, allocated when the first line arrives (a
  * core that never runs costs nothing; the pages of a large block only as
  * they are written). A never-used slot is zeros: invalid, and the oldest
@@ -75,7 +77,8 @@ struct cache {
  * per-set vectors took two or three dependent misses (on 1024 cores, whose
  * L1s do not stay in the host's caches, the find was 30% of the run; on the
  * default machine the L2's find is the largest single cost). */
-#define FLAT_LINES (1u << 17)
+#define FLAT_LINES 1024u
+#define FLAT_LINES_SHARED (1u << 17)
 
 static const struct slot ZERO_SLOT;
 static const struct set ZERO_SET;
@@ -236,7 +239,7 @@ struct cache *cache_create(const struct cache_params *p) {
   c->set_mask = (c->sets & (c->sets - 1)) == 0 ? c->sets - 1 : 0;
   if (c->sets == 1) c->set_mask = 0;
   c->scan = c->ways <= SCAN_WAYS;
-  c->flat_ok = c->scan && c->lines <= FLAT_LINES;
+  c->flat_ok = c->scan && c->lines <= (p->shared ? FLAT_LINES_SHARED : FLAT_LINES);
   c->set_page_count = c->flat_ok ? 0 : (c->sets + SET_PAGE - 1) / SET_PAGE;
   c->set_pages = xcalloc(c->set_page_count ? c->set_page_count : 1, sizeof *c->set_pages);
   if (!c->scan) table_resize(c, 4);

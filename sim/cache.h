@@ -2,9 +2,10 @@
  * 2^lg2_line bytes. Tags and state only (values live on the host), allocated
  * as lines arrive: host memory follows the lines a run touches (about 50 bytes
  * each), not the configured size, so a 16 GiB cache costs what a small one
- * does on the same work (a cache of at most 2^17 lines and 16 ways is one
- * block of 32 bytes a line from its first line on, its pages taken by the
- * host as they are written: 4 MiB at most). A line may
+ * does on the same work (a cache of at most 1024 lines, or a shared one of
+ * at most 2^17, and at most 16 ways is one block of 32 bytes a line from its
+ * first line on, its pages taken by the host as they are written: 4 MiB at
+ * most). A line may
  * be pending (allocated, its fill not yet back): it is never chosen as a
  * victim. The caller decides what a hit, a miss or an eviction costs; this
  * module only keeps the contents. Used for the L1s and the L2. */
@@ -18,6 +19,10 @@ struct cache_params {
   uint64_t size_bytes; /* a multiple of the line; >= one line */
   uint32_t ways;       /* 0: fully associative; else divides the line count */
   unsigned lg2_line;
+  /* One shared cache (an L2): kept flat up to 2^17 lines (4 MiB of host
+   * memory) for a faster find. false (per-core caches): flat up to 1024
+   * lines only, so many cores with large, sparsely used caches stay cheap. */
+  bool shared;
 };
 
 /* What is wrong with a cache's shape, checked in this order (the one rule for

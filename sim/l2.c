@@ -83,7 +83,7 @@ struct l2 {
 };
 
 const char *l2_params_problem(const struct l2_params *p) {
-  struct cache_params c = {p->size_bytes, p->ways, L2_LG2_LINE};
+  struct cache_params c = {p->size_bytes, p->ways, L2_LG2_LINE, true};
   if (cache_params_problem(&c)) return "l2: size and ways do not make a cache of 64-byte lines";
   return NULL;
 }
@@ -457,7 +457,7 @@ struct l2 *l2_create(const struct l2_params *p, struct engine *e, struct timelin
   l2->tl = tl;
   l2->col = *cols;
   l2->client = *client;
-  struct cache_params cp = {p->size_bytes, p->ways, L2_LG2_LINE};
+  struct cache_params cp = {p->size_bytes, p->ways, L2_LG2_LINE, true};
   l2->tags = cache_create(&cp);
   l2->bank_free = xcalloc(p->banks, sizeof *l2->bank_free);
   l2->banks_pow2 = (p->banks & (p->banks - 1)) == 0;

@@ -153,7 +153,7 @@ const char *machine_params_problem(const struct machine_params *p, char *buf, si
   if ((uint64_t)p->cores * p->threads_per_core * p->rays_per_thread > MACHINE_MAX_CONTEXTS)
     return "cores x threads_per_core x rays_per_thread: at most 2^20 ray contexts";
   if (p->l1_size_bytes) {
-    struct cache_params c = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE};
+    struct cache_params c = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE, false};
     if (cache_params_problem(&c)) return "l1: size and ways do not make a cache of 64-byte lines";
   }
   struct l2_params l2 = l2_params_of(p);
@@ -746,7 +746,7 @@ static struct machine *create(const struct machine_params *p, uint64_t stack_byt
     m->warm[i].core = i;
     m->core[i].rr = p->threads_per_core - 1;
     if (p->l1_size_bytes) {
-      struct cache_params l1 = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE};
+      struct cache_params l1 = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE, false};
       m->core[i].l1 = cache_create(&l1);
     }
   }

@@ -48,7 +48,7 @@ static int ref_access(struct ref *r, uint64_t line) {
 }
 
 static void run_geometry(uint64_t size, uint32_t ways, uint64_t span, uint64_t n) {
-  struct cache_params p = {size, ways, 6};
+  struct cache_params p = {size, ways, 6, false};
   EXPECT(cache_params_problem(&p) == NULL);
   struct cache *c = cache_create(&p);
   struct ref r;
@@ -81,7 +81,7 @@ static void run_geometry(uint64_t size, uint32_t ways, uint64_t span, uint64_t n
 static void test_pending(void) {
   /* Two lines, fully associative: a pending line is never the victim, and
    * with every way pending there is none. */
-  struct cache_params p = {128, 0, 6};
+  struct cache_params p = {128, 0, 6, false};
   struct cache *c = cache_create(&p);
   cache_install(c, cache_victim(c, 10), 10, false, true);
   cache_install(c, cache_victim(c, 11), 11, true, false);
@@ -102,7 +102,7 @@ static void test_pending(void) {
 static void test_lazy(void) {
   const uint32_t ways[] = {16, 0};
   for (int k = 0; k < 2; k++) {
-    struct cache_params small = {4u << 20, ways[k], 6}, big = {1ull << 34, ways[k], 6};
+    struct cache_params small = {4u << 20, ways[k], 6, true}, big = {1ull << 34, ways[k], 6, true};
     struct cache *a = cache_create(&small), *b = cache_create(&big);
     const uint64_t b0 = cache_host_bytes(b);
     uint64_t x = 11, mism = 0, hits = 0, distinct = 0;
@@ -138,7 +138,7 @@ static void test_lazy(void) {
 }
 
 static void test_params(void) {
-  struct cache_params bad[] = {{32, 0, 6}, {100, 0, 6}, {64 * 12, 5, 6}};
+  struct cache_params bad[] = {{32, 0, 6, false}, {100, 0, 6, false}, {64 * 12, 5, 6, false}};
   for (unsigned i = 0; i < 3; i++) EXPECT(cache_params_problem(&bad[i]) != NULL);
 }
 
