@@ -113,10 +113,15 @@ static void flat_make(struct cache *c) {
   c->vec_bytes = c->lines * (sizeof *c->flat + sizeof *c->ftag);
 }
 
+/* The slot at index k of set s's vector (k: ways - 1 - way), CACHE_NONE for k < 0. */
+static inline uint32_t slot_no(const struct cache *c, uint64_t s, int64_t k) {
+  return k < 0 ? CACHE_NONE : (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
+}
+
 /* Slot i of a flat cache. */
 static inline struct slot *flat_slot(const struct cache *c, uint64_t i) {
   const uint64_t s = set_of_slot(c, i);
-  return &c->flat[s * c->ways + c->ways - 1 - (i - s * c->ways)];
+  return &c->flat[s * c->ways + c->ways - 1 - way_of_slot(c, i)];
 }
 
 /* Sets in page i: SET_PAGE, fewer in a small cache's only page. */
@@ -291,12 +296,12 @@ uint32_t cache_find(const struct cache *c, uint64_t line) {
     if (!c->flat) return CACHE_NONE;
     const uint64_t s = set_of_line(c, line);
     const int64_t k = flat_scan(c, s, line);
-    return k < 0 ? CACHE_NONE : (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
+    return slot_no(c, s, k);
   }
   if (c->scan) {
     const uint64_t s = set_of_line(c, line);
     const int64_t k = scan_used(set_peek(c, s), line);
-    return k < 0 ? CACHE_NONE : (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
+    return slot_no(c, s, k);
   }
   uint64_t i = hash_of(c, line);
   for (;;) {
@@ -345,7 +350,7 @@ uint32_t cache_use(struct cache *c, uint64_t line) {
     const int64_t k = flat_scan(c, s, line);
     if (k < 0) return CACHE_NONE;
     c->flat[s * c->ways + (uint64_t)k].stamp = ++c->uses;
-    return (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
+    return slot_no(c, s, k);
   }
   /* A paged scanned set: only its used slots can hold the line. */
   struct set *page = c->set_pages[s / SET_PAGE];
@@ -354,7 +359,7 @@ uint32_t cache_use(struct cache *c, uint64_t line) {
   const int64_t k = scan_used(st, line);
   if (k < 0) return CACHE_NONE;
   st->vec[k].stamp = ++c->uses;
-  return (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
+  return slot_no(c, s, k);
 }
 
 /* The oldest stamp not pending among n slots from v (stamps are distinct
@@ -378,7 +383,7 @@ uint32_t cache_victim(const struct cache *c, uint64_t line) {
      * choice too (a never-used slot first, the highest-ranked way). */
     if (!c->flat) return (uint32_t)(s * c->ways + c->ways - 1);
     const int64_t k = oldest_free(c->flat + s * c->ways, c->ways);
-    return k < 0 ? CACHE_NONE : (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
+    return slot_no(c, s, k);
   }
   const struct set *st = set_peek(c, s);
   /* A never-used slot first: the highest of them is the list's tail. */
@@ -386,7 +391,7 @@ uint32_t cache_victim(const struct cache *c, uint64_t line) {
   if (c->scan) {
     /* The oldest stamp not pending (stamps are distinct: one answer). */
     const int64_t k = oldest_free(st->vec, c->ways);
-    return k < 0 ? CACHE_NONE : (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
+    return slot_no(c, s, k);
   }
   for (uint32_t i = st->tail; i != CACHE_NONE;) {
     const struct slot *x = &st->vec[c->ways - 1 - way_of_slot(c, i)];

@@ -77,20 +77,23 @@ struct burst {
   bool write;
 };
 
-/* A scan's answer: the command to issue now (type CMD_NONE: none), the
- * earliest cycle anything could, and the first candidate in scan order whose
- * earliest time is the least of all candidates' (first_t; FAR: none). */
-struct pick {
+/* A command: its type, where it goes, and for which request. */
+struct cmd {
   enum cmd_type type;
   uint32_t rank, bank; /* bank within the channel */
   uint32_t qi;         /* request index in the served queue (per_bank: in command queue cq) */
   uint32_t cq;
   bool for_req; /* a request's command (else refresh work) */
+};
+
+/* A scan's answer: the command to issue now (type CMD_NONE: none), the
+ * earliest cycle anything could, and the first candidate in scan order whose
+ * earliest time is the least of all candidates' (first_t; FAR: none). */
+struct pick {
+  struct cmd cmd;
   int64_t next; /* earliest cycle >= now any candidate could issue (FAR: none) */
+  struct cmd first;
   int64_t first_t;
-  enum cmd_type first_type;
-  uint32_t first_rank, first_bank, first_qi, first_cq;
-  bool first_for_req;
 };
 
 struct channel {
@@ -114,11 +117,12 @@ struct channel {
   int64_t took_at;      /* the arrival cycle of the last request taken */
   struct follower *fol; /* reads waiting for another read's RD */
   uint32_t nfol, cap_fol;
-  /* per_bank / per_rank: the last command-queue scan, at cycle memo_at, while
-   * nothing it reads has changed since (memo_ok; see memo_pick). */
+  /* per_bank / per_rank: the last command-queue scan's first least candidate
+   * (memo, from cycle memo_t), the scan made at cycle memo_at, kept while
+   * nothing it read has changed since (memo_ok; see memo_pick). */
   bool memo_ok;
-  int64_t memo_at;
-  struct pick memo;
+  int64_t memo_at, memo_t;
+  struct cmd memo;
 };
 
 struct dram_banked {
@@ -360,24 +364,13 @@ static int64_t col_earliest(const struct dram_banked *d, const struct channel *c
  * work. */
 static void consider_in(struct pick *pk, int64_t t, int64_t now, enum cmd_type type, uint32_t rank,
                         uint32_t bank, uint32_t cq, int64_t qi) {
+  const struct cmd k = {type, rank, bank, qi >= 0 ? (uint32_t)qi : 0, cq, qi >= 0};
   if (t < pk->next) pk->next = t;
   if (t < pk->first_t) {
     pk->first_t = t;
-    pk->first_type = type;
-    pk->first_rank = rank;
-    pk->first_bank = bank;
-    pk->first_for_req = qi >= 0;
-    pk->first_qi = qi >= 0 ? (uint32_t)qi : 0;
-    pk->first_cq = cq;
+    pk->first = k;
   }
-  if (t == now && pk->type == CMD_NONE) {
-    pk->type = type;
-    pk->rank = rank;
-    pk->bank = bank;
-    pk->for_req = qi >= 0;
-    pk->qi = qi >= 0 ? (uint32_t)qi : 0;
-    pk->cq = cq;
-  }
+  if (t == now && pk->cmd.type == CMD_NONE) pk->cmd = k;
 }
 
 static void consider(struct pick *pk, int64_t t, int64_t now, enum cmd_type type, uint32_t rank,
@@ -415,7 +408,7 @@ static void scan_refresh(struct dram_banked *d, struct channel *c, int64_t now, 
 }
 
 static void scan(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
-  pk->type = CMD_NONE;
+  pk->cmd.type = CMD_NONE;
   pk->next = pk->first_t = FAR;
   scan_refresh(d, c, now, pk);
   const int qk = c->writing ? WR_Q : RD_Q;
@@ -570,20 +563,20 @@ static void issue_column(struct dram_banked *d, struct channel *c, int qk, uint3
 static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t qi, uint32_t j,
                             int64_t now);
 
-static void issue(struct dram_banked *d, struct channel *c, const struct pick *pk, int64_t now) {
+static void issue(struct dram_banked *d, struct channel *c, const struct cmd *k, int64_t now) {
   c->memo_ok = false;
   const int qk = c->writing ? WR_Q : RD_Q;
-  struct req *r = !pk->for_req ? NULL : d->cq_mode ? &c->cq[pk->cq].r[pk->qi] : &c->q[qk].r[pk->qi];
-  switch (pk->type) {
+  struct req *r = !k->for_req ? NULL : d->cq_mode ? &c->cq[k->cq].r[k->qi] : &c->q[qk].r[k->qi];
+  switch (k->type) {
   case CMD_PRE: {
-    struct bank *bk = &c->banks[pk->bank];
-    bank_close(d, c, bk, pk->rank, now);
+    struct bank *bk = &c->banks[k->bank];
+    bank_close(d, c, bk, k->rank, now);
     if (r) r->kind = KIND_CONFLICT;
     break;
   }
   case CMD_ACT: {
-    struct bank *bk = &c->banks[pk->bank];
-    struct rank *rk = &c->ranks[pk->rank];
+    struct bank *bk = &c->banks[k->bank];
+    struct rank *rk = &c->ranks[k->rank];
     struct group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
     if (bk->act_at >= 0) d->st.bank_open_cycles += (uint64_t)(bk->close_at - bk->act_at);
     bk->open = true;
@@ -604,15 +597,15 @@ static void issue(struct dram_banked *d, struct channel *c, const struct pick *p
   }
   case CMD_RD:
   case CMD_WR:
-    if (d->cq_mode) issue_column_cq(d, c, pk->cq, pk->qi, now);
-    else issue_column(d, c, qk, pk->qi, now);
+    if (d->cq_mode) issue_column_cq(d, c, k->cq, k->qi, now);
+    else issue_column(d, c, qk, k->qi, now);
     break;
   case CMD_REF: {
-    struct rank *rk = &c->ranks[pk->rank];
+    struct rank *rk = &c->ranks[k->rank];
     rk->pending--;
     rk->ref_end = now + d->p.tRFC;
     for (uint32_t i = 0; i < d->banks_per_rank; i++) {
-      struct bank *bk = &c->banks[pk->rank * d->banks_per_rank + i];
+      struct bank *bk = &c->banks[k->rank * d->banks_per_rank + i];
       bk->act_ok = max64(bk->act_ok, rk->ref_end);
     }
     d->st.refreshes++;
@@ -745,7 +738,7 @@ static bool write_behind_read(const struct queue *q, uint32_t j) {
  * last that issued; in each, the oldest command that can issue now. next:
  * the earliest any candidate could. */
 static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
-  pk->type = CMD_NONE;
+  pk->cmd.type = CMD_NONE;
   pk->next = pk->first_t = FAR;
   scan_refresh(d, c, now, pk);
   /* The queues holding commands, round robin from the one after rr: those
@@ -777,7 +770,8 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
       }
     }
   }
-  c->memo = *pk;
+  c->memo = pk->first;
+  c->memo_t = pk->first_t;
   c->memo_at = now;
   c->memo_ok = true;
 }
@@ -789,29 +783,24 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
  * the least time is past now, and if it is now, only the memo's first such
  * candidate can, when it still can (asked again). */
 static bool memo_pick(const struct dram_banked *d, const struct channel *c, int64_t now,
-                      struct pick *pk) {
-  const struct pick *m = &c->memo;
-  if (!c->memo_ok || c->memo_at > now || m->first_t < now) return false;
-  pk->type = CMD_NONE;
-  if (m->first_t > now) return true;
+                      struct cmd *k) {
+  const struct cmd *m = &c->memo;
+  if (!c->memo_ok || c->memo_at > now || c->memo_t < now) return false;
+  k->type = CMD_NONE;
+  if (c->memo_t > now) return true;
   int64_t t;
-  if (m->first_for_req) {
-    const struct req *r = &c->cq[m->first_cq].r[m->first_qi];
+  if (m->for_req) {
+    const struct req *r = &c->cq[m->cq].r[m->qi];
     const struct bank *bk = &c->banks[r->bank];
-    if (m->first_type == CMD_ACT) t = act_earliest(d, c, r, now);
-    else if (m->first_type == CMD_PRE) t = max64(max64(now, r->ready), bk->pre_ok);
+    if (m->type == CMD_ACT) t = act_earliest(d, c, r, now);
+    else if (m->type == CMD_PRE) t = max64(max64(now, r->ready), bk->pre_ok);
     else t = col_earliest(d, c, r, r->write, now);
   } else {
-    t = m->first_type == CMD_REF ? ref_earliest(d, c, m->first_rank, now)
-                                 : max64(now, c->banks[m->first_bank].pre_ok);
+    t = m->type == CMD_REF ? ref_earliest(d, c, m->rank, now)
+                           : max64(now, c->banks[m->bank].pre_ok);
   }
   if (t != now) return false;
-  pk->type = m->first_type;
-  pk->rank = m->first_rank;
-  pk->bank = m->first_bank;
-  pk->qi = m->first_qi;
-  pk->cq = m->first_cq;
-  pk->for_req = m->first_for_req;
+  *k = *m;
   return true;
 }
 
@@ -869,11 +858,11 @@ static int64_t next_cq(struct dram_banked *d, struct channel *c, int64_t t) {
 /* Handle DRAM cycle `now` on channel c (per_bank / per_rank). */
 static void channel_cycle_cq(struct dram_banked *d, struct channel *c, int64_t now) {
   struct pick pk;
-  if (!memo_pick(d, c, now, &pk)) scan_cq(d, c, now, &pk);
-  if (pk.type != CMD_NONE) {
-    issue(d, c, &pk, now);
-    if (pk.for_req) {
-      c->rr = pk.cq;
+  if (!memo_pick(d, c, now, &pk.cmd)) scan_cq(d, c, now, &pk);
+  if (pk.cmd.type != CMD_NONE) {
+    issue(d, c, &pk.cmd, now);
+    if (pk.cmd.for_req) {
+      c->rr = pk.cmd.cq;
       c->last_busy = now;
     }
   }
@@ -900,13 +889,13 @@ static void channel_cycle(struct dram_banked *d, struct channel *c, int64_t now)
   update_mode(d, c, now);
   struct pick pk;
   scan(d, c, now, &pk);
-  if (pk.type == CMD_NONE) {
+  if (pk.cmd.type == CMD_NONE) {
     CHECK_GT(pk.next, now);
     c->next = next_of(d, c, pk.next);
     if (c->next <= now) c->next = now + 1;
     return;
   }
-  issue(d, c, &pk, now);
+  issue(d, c, &pk.cmd, now);
   update_mode(d, c, now + 1);
   scan(d, c, now + 1, &pk);
   c->next = next_of(d, c, pk.next);
