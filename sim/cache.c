@@ -24,7 +24,7 @@ struct slot {
    * whole cache, keeps the list: its victim is the list's tail, no scan. */
   union {
     struct {
-      uint32_t prev, next; /* hashed: LRU list of the set's used slots; CACHE_NONE ends it */
+      uint32_t prev, next; /* hashed: the set's used slots, a circular LRU list */
     };
     uint64_t stamp; /* scanned: the cache's use count at the last use */
   };
@@ -37,10 +37,14 @@ struct slot {
  * index order whose tail is taken first, and a slot taken moves to the head:
  * so the never-used slots are always the lowest `ways - used` of the set, in
  * order, at the list's tail, and need no state of their own. The used ones
- * are kept in a vector that grows with them: way w at vec[ways - 1 - w]. */
+ * are kept in a vector that grows with them: way w at vec[ways - 1 - w]; its
+ * capacity is a function of `used` (vec_cap). A hashed set's list is circular
+ * (the head's prev is the tail), so a set is 16 bytes: in a very large cache
+ * nearly every touched set holds one line, and the set is a third of it. */
 struct set {
   struct slot *vec;
-  uint32_t head, tail, used, cap; /* head and tail: hashed caches only */
+  uint32_t used;
+  uint32_t head; /* hashed caches only: the most recently used slot */
 };
 
 /* Sets live in pages allocated when a set is first written, and a set's
@@ -142,6 +146,14 @@ static inline const struct slot *slot_peek(const struct cache *c, uint64_t i) {
   const uint64_t s = set_of_slot(c, i), w = way_of_slot(c, i);
   const struct set *st = set_peek(c, s);
   return w + st->used >= c->ways ? &st->vec[c->ways - 1 - w] : &ZERO_SLOT;
+}
+
+/* The slots a set's vector holds when `used` are used: 0, then powers of two
+ * up to the ways. */
+static inline uint64_t vec_cap(const struct cache *c, uint64_t used) {
+  if (used <= 1) return used;
+  const uint64_t p = 1ull << (64 - __builtin_clzll(used - 1));
+  return p < c->ways ? p : c->ways;
 }
 
 /* Slot i of set st, used. */
@@ -312,6 +324,18 @@ uint32_t cache_find(const struct cache *c, uint64_t line) {
   }
 }
 
+/* Slot x (not in the list) into a hashed set's circular list, not empty,
+ * as its head: between the tail and the old head. */
+static void list_push(struct cache *c, struct set *st, uint32_t slot, struct slot *x) {
+  struct slot *h = slot_at(c, st, st->head);
+  const uint32_t tail = h->prev;
+  x->prev = tail;
+  x->next = st->head;
+  slot_at(c, st, tail)->next = slot;
+  h->prev = slot;
+  st->head = slot;
+}
+
 /* Slot (used) to the head of its set's list. */
 static void to_head(struct cache *c, struct set *st, uint32_t slot) {
   if (c->scan) {
@@ -320,14 +344,15 @@ static void to_head(struct cache *c, struct set *st, uint32_t slot) {
   }
   if (st->head == slot) return;
   struct slot *x = slot_at(c, st, slot);
-  /* Unlink (x is not the head, so it has a prev). */
+  /* The tail becomes the head by turning the circle; another slot is
+   * unlinked (its neighbours exist: the list is circular) and pushed. */
+  if (slot_at(c, st, st->head)->prev == slot) {
+    st->head = slot;
+    return;
+  }
   slot_at(c, st, x->prev)->next = x->next;
-  if (x->next != CACHE_NONE) slot_at(c, st, x->next)->prev = x->prev;
-  else st->tail = x->prev;
-  x->prev = CACHE_NONE;
-  x->next = st->head;
-  slot_at(c, st, st->head)->prev = slot;
-  st->head = slot;
+  slot_at(c, st, x->next)->prev = x->prev;
+  list_push(c, st, slot, x);
 }
 
 void cache_touch(struct cache *c, uint32_t slot) {
@@ -393,12 +418,14 @@ uint32_t cache_victim(const struct cache *c, uint64_t line) {
     const int64_t k = oldest_free(st->vec, c->ways);
     return slot_no(c, s, k);
   }
-  for (uint32_t i = st->tail; i != CACHE_NONE;) {
+  /* From the tail (the head's prev) towards the head. */
+  const uint32_t head = st->head;
+  for (uint32_t i = st->vec[c->ways - 1 - way_of_slot(c, head)].prev;;) {
     const struct slot *x = &st->vec[c->ways - 1 - way_of_slot(c, i)];
     if (!(x->flags & F_PENDING)) return i;
+    if (i == head) return CACHE_NONE;
     i = x->prev;
   }
-  return CACHE_NONE;
 }
 
 bool cache_valid(const struct cache *c, uint32_t slot) {
@@ -444,22 +471,20 @@ void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bo
     /* A never-used slot: only the lowest-ranked one (cache_victim's) may be
      * taken; it joins the list at the head. */
     CHECK_EQ(in_set, c->ways - st->used - 1);
-    if (st->used == st->cap) {
-      uint64_t cap = st->cap ? 2ull * st->cap : 1;
-      if (cap > c->ways) cap = c->ways;
-      st->vec = xrealloc(st->vec, cap * sizeof *st->vec);
-      c->vec_bytes += (cap - st->cap) * sizeof *st->vec;
-      st->cap = (uint32_t)cap;
+    const uint64_t cap = vec_cap(c, st->used);
+    if (st->used == cap) {
+      const uint64_t grown = vec_cap(c, st->used + 1);
+      st->vec = xrealloc(st->vec, grown * sizeof *st->vec);
+      c->vec_bytes += (grown - cap) * sizeof *st->vec;
     }
     x = &st->vec[st->used];
     memset(x, 0, sizeof *x);
     if (c->scan) {
       x->stamp = ++c->uses;
+    } else if (st->used) {
+      list_push(c, st, slot, x);
     } else {
-      x->prev = CACHE_NONE;
-      x->next = st->used ? st->head : CACHE_NONE;
-      if (st->used) slot_at(c, st, st->head)->prev = slot;
-      else st->tail = slot;
+      x->prev = x->next = slot;
       st->head = slot;
     }
     st->used++;

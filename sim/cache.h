@@ -1,14 +1,14 @@
 /* One cache: set-associative or fully associative, LRU within a set, lines of
  * 2^lg2_line bytes. Tags and state only (values live on the host), allocated
- * as lines arrive: host memory follows the lines a run touches (about 50 bytes
- * each), not the configured size, so a 16 GiB cache costs what a small one
- * does on the same work (a cache of at most 1024 lines, or a shared one of
- * at most 2^17, and at most 16 ways is one block of 32 bytes a line from its
- * first line on, its pages taken by the host as they are written: 4 MiB at
- * most). A line may
- * be pending (allocated, its fill not yet back): it is never chosen as a
- * victim. The caller decides what a hit, a miss or an eviction costs; this
- * module only keeps the contents. Used for the L1s and the L2. */
+ * as lines arrive: host memory follows the lines a run touches (about 48
+ * bytes each, the allocator's share included), not the configured size, so a
+ * 16 GiB cache costs what a small one does on the same work (a cache of at
+ * most 1024 lines, or a shared one of at most 2^17, and at most 16 ways is
+ * one block of 32 bytes a line from its first line on, its pages taken by the
+ * host as they are written: 4 MiB at most). A line may be pending
+ * (allocated, its fill not yet back): it is never chosen as a victim. The
+ * caller decides what a hit, a miss or an eviction costs; this module only
+ * keeps the contents. Used for the L1s and the L2. */
 #ifndef RTSIM_SIM_CACHE_H
 #define RTSIM_SIM_CACHE_H
 
