@@ -11,6 +11,10 @@
 
 #include "sim/err.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #define F_VALID 1u
 #define F_DIRTY 2u
 #define F_PENDING 4u
@@ -298,6 +302,20 @@ static inline int64_t scan_used(const struct set *st, uint64_t line) {
  * set or slot read; the index in the set's vector of line's slot, or -1. */
 static inline int64_t flat_scan(const struct cache *c, uint64_t s, uint64_t line) {
   const uint64_t *t = c->ftag + s * c->ways, key = line + 1;
+#if defined(__SSE2__)
+  /* Two tags a compare, all of the set's, then one branch: a loop that
+   * stopped at the matching way mispredicted its exit on nearly every hit. */
+  if (!(c->ways & 1)) {
+    const __m128i kk = _mm_set1_epi64x((long long)key);
+    uint32_t mask = 0;
+    for (uint32_t k = 0; k < c->ways; k += 2) {
+      __m128i e = _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(t + k)), kk);
+      e = _mm_and_si128(e, _mm_shuffle_epi32(e, _MM_SHUFFLE(2, 3, 0, 1)));
+      mask |= (uint32_t)_mm_movemask_pd(_mm_castsi128_pd(e)) << k;
+    }
+    return mask ? __builtin_ctz(mask) : -1;
+  }
+#endif
   for (uint32_t k = 0; k < c->ways; k++)
     if (t[k] == key) return k;
   return -1;
