@@ -749,18 +749,32 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
     for (uint32_t qi = cq_next_busy(c, pass ? 0 : start); qi < hi; qi = cq_next_busy(c, qi + 1)) {
       const struct queue *q = &c->cq[qi];
       if (c->ranks[q->r[0].rank].pending) continue; /* (a queue's commands share a rank) */
+      /* An ACT, RD or WR's earliest time depends on its request only through
+       * the bank and `ready`, and never falls as `ready` grows: a later
+       * entry of the same command and bank as the last one considered here,
+       * ready no sooner, can neither come first nor lower `next` (ties keep
+       * the older), so it is not asked (in per_bank every entry shares the
+       * bank: of the ACTs of a closed bank only the oldest is asked). */
+      uint32_t seen_bank[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX}; /* ACT, RD, WR */
+      int64_t seen_ready[3] = {0, 0, 0};
       for (uint32_t j = 0; j < q->n; j++) {
         const struct req *r = &q->r[j];
         const struct bank *bk = &c->banks[r->bank];
         int64_t t;
         enum cmd_type type;
-        if (!bk->open) {
-          t = act_earliest(d, c, r, now);
-          type = CMD_ACT;
-        } else if (bk->row == r->row) {
-          if (r->write && write_behind_read(q, j)) continue;
-          t = col_earliest(d, c, r, r->write, now);
-          type = r->write ? CMD_WR : CMD_RD;
+        if (!bk->open || bk->row == r->row) {
+          const int w = !bk->open ? 0 : r->write ? 2 : 1;
+          if (seen_bank[w] == r->bank && r->ready >= seen_ready[w]) continue;
+          if (w == 2 && write_behind_read(q, j)) continue;
+          seen_bank[w] = r->bank;
+          seen_ready[w] = r->ready;
+          if (!w) {
+            t = act_earliest(d, c, r, now);
+            type = CMD_ACT;
+          } else {
+            t = col_earliest(d, c, r, r->write, now);
+            type = r->write ? CMD_WR : CMD_RD;
+          }
         } else {
           if (!pre_allowed(q, j, bk)) continue;
           t = max64(max64(now, r->ready), bk->pre_ok);
