@@ -69,22 +69,40 @@ struct cache {
   unsigned table_shift;
   uint64_t vec_bytes; /* slots allocated in vectors */
   bool flat_ok;       /* small and scanned: flat, made at the first install */
-  struct slot *flat;  /* then every slot, set s's at flat[s * ways + k] (k: ways - 1 - way) */
-  uint64_t *ftag;     /* and beside it each slot's line + 1 (0: never held one) */
+  /* Then each set's tags (line + 1; 0: never held one, so invalid) and
+   * after them its stamps (with FLAT_PENDING and FLAT_DIRTY), slot i's at
+   * index k of its set s (k: ways - 1 - way): a 4-way set is one host line,
+   * which a find, a use, a victim and an install all stay in. */
+  uint64_t *ftag;
+  void *ftag_mem;      /* ftag as allocated (ftag is host-line aligned in it) */
+  struct fmeta *fmeta; /* the owner's word and byte, made at the first set */
 };
+
+/* A flat slot's word and byte (cache_word, cache_byte): only an owner that
+ * keeps them (the L2) pays for them. */
+struct fmeta {
+  uint32_t word;
+  uint8_t byte;
+};
+#define FLAT_PENDING (1ull << 63)
+#define FLAT_DIRTY (1ull << 62)
+#define FLAT_STATE (FLAT_PENDING | FLAT_DIRTY)
 
 /* A scanned cache of at most this many lines (an L1: 8 KiB is 128), or a
  * shared one of at most FLAT_LINES_SHARED (the default L2, 4 MiB of 16 ways,
  * 65,536; per-core caches stay below 1024 lines so that many cores with large,
- * sparsely used L1s cost what their lines do) is flat: its slots in one block and
- * their tags (line + 1) in another, allocated when the first line arrives (a
- * core that never runs costs nothing; the pages of a large block only as
- * they are written). A never-used slot is zeros: invalid, and the oldest
- * stamp of its set, so no set needs a count or a list. A find reads the
- * set's tags only: one host line for 8 ways, where the set pages and
- * per-set vectors took two or three dependent misses (on 1024 cores, whose
- * L1s do not stay in the host's caches, the find was 30% of the run; on the
- * default machine the L2's find is the largest single cost). */
+ * sparsely used L1s cost what their lines do) is flat: one block of each
+ * set's tags (line + 1) followed by its stamps, 16 bytes a line, allocated
+ * when the first line arrives (a core that never runs costs nothing; the
+ * pages of a large block only as they are written), and the owner's word and
+ * byte in another block made when first set (the L2's; an L1 has none). A
+ * never-used slot is zeros: invalid, and the oldest stamp of its set, so no
+ * set needs a count or a list. A find reads the set's tags only, and a use,
+ * a victim choice and an install the stamps beside them: a 4-way L1's set is
+ * one host line. (The set pages and per-set vectors took two or three
+ * dependent misses a find; a block of 24-byte slots beside the tags took two
+ * more host lines for a victim: on 1024 cores, whose L1s do not stay in the
+ * host's caches, these were a third of the run.) */
 #define FLAT_LINES 1024u
 #define FLAT_LINES_SHARED (1u << 17)
 
@@ -116,9 +134,18 @@ static inline const struct set *set_peek(const struct cache *c, uint64_t s) {
 }
 
 static void flat_make(struct cache *c) {
-  c->flat = xcalloc(c->lines, sizeof *c->flat);
-  c->ftag = xcalloc(c->lines, sizeof *c->ftag);
-  c->vec_bytes = c->lines * (sizeof *c->flat + sizeof *c->ftag);
+  const uint64_t bytes = 2 * c->lines * sizeof *c->ftag;
+  c->ftag_mem = xcalloc(bytes + 64, 1);
+  c->ftag = (uint64_t *)(((uintptr_t)c->ftag_mem + 63) & ~(uintptr_t)63);
+  c->vec_bytes += bytes + 64;
+}
+
+/* Set s's tags, then its stamps. */
+static inline uint64_t *ftags(const struct cache *c, uint64_t s) {
+  return c->ftag + 2 * s * c->ways;
+}
+static inline uint64_t *fstamps(const struct cache *c, uint64_t s) {
+  return c->ftag + (2 * s + 1) * c->ways;
 }
 
 /* The slot at index k of set s's vector (k: ways - 1 - way), CACHE_NONE for k < 0. */
@@ -126,10 +153,36 @@ static inline uint32_t slot_no(const struct cache *c, uint64_t s, int64_t k) {
   return k < 0 ? CACHE_NONE : (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
 }
 
-/* Slot i of a flat cache. */
-static inline struct slot *flat_slot(const struct cache *c, uint64_t i) {
-  const uint64_t s = set_of_slot(c, i);
-  return &c->flat[s * c->ways + c->ways - 1 - way_of_slot(c, i)];
+/* Slot i's tag and stamp in a flat cache whose block is made. */
+static inline uint64_t *ftag_of(const struct cache *c, uint64_t i) {
+  return ftags(c, set_of_slot(c, i)) + c->ways - 1 - way_of_slot(c, i);
+}
+static inline uint64_t *fstamp_of(const struct cache *c, uint64_t i) {
+  return ftag_of(c, i) + c->ways;
+}
+/* Slot i's tag and stamp to write (the block made at the first write). */
+static inline uint64_t *fstamp_get(struct cache *c, uint64_t i) {
+  if (!c->ftag) flat_make(c);
+  return fstamp_of(c, i);
+}
+/* Slot i's stamp to read: 0 (oldest, not pending, clean) if never written. */
+static inline uint64_t fstamp_peek(const struct cache *c, uint64_t i) {
+  return c->ftag ? *fstamp_of(c, i) : 0;
+}
+/* Slot i's word and byte (made at the first set; index as in a set's tags). */
+static inline uint64_t flat_index(const struct cache *c, uint64_t i) {
+  return set_of_slot(c, i) * c->ways + c->ways - 1 - way_of_slot(c, i);
+}
+static inline struct fmeta *fmeta_get(struct cache *c, uint64_t i) {
+  if (!c->fmeta) {
+    c->fmeta = xcalloc(c->lines, sizeof *c->fmeta);
+    c->vec_bytes += c->lines * sizeof *c->fmeta;
+  }
+  return &c->fmeta[flat_index(c, i)];
+}
+static const struct fmeta ZERO_FMETA;
+static inline const struct fmeta *fmeta_peek(const struct cache *c, uint64_t i) {
+  return c->fmeta ? &c->fmeta[flat_index(c, i)] : &ZERO_FMETA;
 }
 
 /* Sets in page i: SET_PAGE, fewer in a small cache's only page. */
@@ -146,7 +199,6 @@ static inline struct set *set_get(struct cache *c, uint64_t s) {
 
 /* Slot i to read: a never-used slot reads as zeros (no line, no flags). */
 static inline const struct slot *slot_peek(const struct cache *c, uint64_t i) {
-  if (c->flat_ok) return c->flat ? flat_slot(c, i) : &ZERO_SLOT;
   const uint64_t s = set_of_slot(c, i), w = way_of_slot(c, i);
   const struct set *st = set_peek(c, s);
   return w + st->used >= c->ways ? &st->vec[c->ways - 1 - w] : &ZERO_SLOT;
@@ -168,10 +220,6 @@ static inline struct slot *slot_at(const struct cache *c, struct set *st, uint64
 }
 
 static inline struct slot *slot_get(struct cache *c, uint64_t i) {
-  if (c->flat_ok) {
-    if (!c->flat) flat_make(c);
-    return flat_slot(c, i);
-  }
   return slot_at(c, set_get(c, set_of_slot(c, i)), i);
 }
 
@@ -269,8 +317,8 @@ struct cache *cache_create(const struct cache_params *p) {
 
 void cache_destroy(struct cache *c) {
   if (!c) return;
-  free(c->flat);
-  free(c->ftag);
+  free(c->ftag_mem);
+  free(c->fmeta);
   for (uint64_t i = 0; i < c->set_page_count; i++) {
     if (!c->set_pages[i]) continue;
     for (uint64_t k = 0; k < page_sets(c, i); k++) free(c->set_pages[i][k].vec);
@@ -301,7 +349,7 @@ static inline int64_t scan_used(const struct set *st, uint64_t line) {
 /* A flat cache's scan: set s's tags only (one host line for 8 ways), no
  * set or slot read; the index in the set's vector of line's slot, or -1. */
 static inline int64_t flat_scan(const struct cache *c, uint64_t s, uint64_t line) {
-  const uint64_t *t = c->ftag + s * c->ways, key = line + 1;
+  const uint64_t *t = ftags(c, s), key = line + 1;
 #if defined(__SSE2__)
   /* Two tags a compare, all of the set's, then one branch: a loop that
    * stopped at the matching way mispredicted its exit on nearly every hit. */
@@ -323,7 +371,7 @@ static inline int64_t flat_scan(const struct cache *c, uint64_t s, uint64_t line
 
 uint32_t cache_find(const struct cache *c, uint64_t line) {
   if (c->flat_ok) {
-    if (!c->flat) return CACHE_NONE;
+    if (!c->ftag) return CACHE_NONE;
     const uint64_t s = set_of_line(c, line);
     const int64_t k = flat_scan(c, s, line);
     return slot_no(c, s, k);
@@ -375,7 +423,8 @@ static void to_head(struct cache *c, struct set *st, uint32_t slot) {
 
 void cache_touch(struct cache *c, uint32_t slot) {
   if (c->flat_ok) {
-    slot_get(c, slot)->stamp = ++c->uses;
+    uint64_t *st = fstamp_get(c, slot);
+    *st = (*st & FLAT_STATE) | ++c->uses;
     return;
   }
   to_head(c, set_get(c, set_of_slot(c, slot)), slot);
@@ -389,10 +438,11 @@ uint32_t cache_use(struct cache *c, uint64_t line) {
   }
   const uint64_t s = set_of_line(c, line);
   if (c->flat_ok) {
-    if (!c->flat) return CACHE_NONE;
+    if (!c->ftag) return CACHE_NONE;
     const int64_t k = flat_scan(c, s, line);
     if (k < 0) return CACHE_NONE;
-    c->flat[s * c->ways + (uint64_t)k].stamp = ++c->uses;
+    uint64_t *st = fstamps(c, s) + k;
+    *st = (*st & FLAT_STATE) | ++c->uses;
     return slot_no(c, s, k);
   }
   /* A paged scanned set: only its used slots can hold the line. */
@@ -424,9 +474,18 @@ uint32_t cache_victim(const struct cache *c, uint64_t line) {
   if (c->flat_ok) {
     /* Never-used slots are zeros: the first of them is the paged path's
      * choice too (a never-used slot first, the highest-ranked way). */
-    if (!c->flat) return (uint32_t)(s * c->ways + c->ways - 1);
-    const int64_t k = oldest_free(c->flat + s * c->ways, c->ways);
-    return slot_no(c, s, k);
+    if (!c->ftag) return (uint32_t)(s * c->ways + c->ways - 1);
+    /* The least stamp, dirtiness aside: a pending one's top bit puts it
+     * after every other, so the least is pending only when all are. */
+    const uint64_t *v = fstamps(c, s);
+    uint64_t least = v[0] & ~FLAT_DIRTY;
+    int64_t k = 0;
+    for (uint64_t j = 1; j < c->ways; j++)
+      if ((v[j] & ~FLAT_DIRTY) < least) {
+        least = v[j] & ~FLAT_DIRTY;
+        k = (int64_t)j;
+      }
+    return slot_no(c, s, least & FLAT_PENDING ? -1 : k);
   }
   const struct set *st = set_peek(c, s);
   /* A never-used slot first: the highest of them is the list's tail. */
@@ -446,40 +505,63 @@ uint32_t cache_victim(const struct cache *c, uint64_t line) {
   }
 }
 
+/* A flat slot is valid when it holds a tag (nothing invalidates a line). */
 bool cache_valid(const struct cache *c, uint32_t slot) {
+  if (c->flat_ok) return c->ftag && *ftag_of(c, slot);
   return slot_peek(c, slot)->flags & F_VALID;
 }
-uint64_t cache_line(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->line; }
+uint64_t cache_line(const struct cache *c, uint32_t slot) {
+  if (c->flat_ok) return c->ftag && *ftag_of(c, slot) ? *ftag_of(c, slot) - 1 : 0;
+  return slot_peek(c, slot)->line;
+}
 bool cache_dirty(const struct cache *c, uint32_t slot) {
+  if (c->flat_ok) return fstamp_peek(c, slot) & FLAT_DIRTY;
   return slot_peek(c, slot)->flags & F_DIRTY;
 }
 bool cache_pending(const struct cache *c, uint32_t slot) {
+  if (c->flat_ok) return fstamp_peek(c, slot) & FLAT_PENDING;
   return slot_peek(c, slot)->flags & F_PENDING;
 }
-void cache_set_dirty(struct cache *c, uint32_t slot) { slot_get(c, slot)->flags |= F_DIRTY; }
+void cache_set_dirty(struct cache *c, uint32_t slot) {
+  if (c->flat_ok) *fstamp_get(c, slot) |= FLAT_DIRTY;
+  else slot_get(c, slot)->flags |= F_DIRTY;
+}
 
 void cache_set_pending(struct cache *c, uint32_t slot, bool pending) {
+  if (c->flat_ok) {
+    uint64_t *st = fstamp_get(c, slot);
+    *st = pending ? *st | FLAT_PENDING : *st & ~FLAT_PENDING;
+    return;
+  }
   struct slot *x = slot_get(c, slot);
   if (pending) x->flags |= F_PENDING;
   else x->flags &= (uint8_t)~F_PENDING;
 }
 
-uint32_t cache_word(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->word; }
-void cache_set_word(struct cache *c, uint32_t slot, uint32_t v) { slot_get(c, slot)->word = v; }
-uint8_t cache_byte(const struct cache *c, uint32_t slot) { return slot_peek(c, slot)->byte; }
-void cache_set_byte(struct cache *c, uint32_t slot, uint8_t v) { slot_get(c, slot)->byte = v; }
+uint32_t cache_word(const struct cache *c, uint32_t slot) {
+  return c->flat_ok ? fmeta_peek(c, slot)->word : slot_peek(c, slot)->word;
+}
+void cache_set_word(struct cache *c, uint32_t slot, uint32_t v) {
+  if (c->flat_ok) fmeta_get(c, slot)->word = v;
+  else slot_get(c, slot)->word = v;
+}
+uint8_t cache_byte(const struct cache *c, uint32_t slot) {
+  return c->flat_ok ? fmeta_peek(c, slot)->byte : slot_peek(c, slot)->byte;
+}
+void cache_set_byte(struct cache *c, uint32_t slot, uint8_t v) {
+  if (c->flat_ok) fmeta_get(c, slot)->byte = v;
+  else slot_get(c, slot)->byte = v;
+}
 
 void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bool pending) {
   const uint64_t s = set_of_slot(c, slot);
   CHECK_EQ(s, set_of_line(c, line));
   if (c->flat_ok) {
-    /* A never-used slot is zeros already; a used one keeps its word and byte. */
-    struct slot *x = slot_get(c, slot);
-    CHECK(!(x->flags & F_PENDING));
-    x->stamp = ++c->uses;
-    x->line = line;
-    x->flags = (uint8_t)(F_VALID | (dirty ? F_DIRTY : 0) | (pending ? F_PENDING : 0));
-    c->ftag[x - c->flat] = line + 1;
+    /* A slot keeps its word and byte. */
+    uint64_t *st = fstamp_get(c, slot);
+    CHECK(!(*st & FLAT_PENDING));
+    *st = ++c->uses | (pending ? FLAT_PENDING : 0) | (dirty ? FLAT_DIRTY : 0);
+    *ftag_of(c, slot) = line + 1;
     return;
   }
   struct set *st = set_get(c, s);

@@ -4,8 +4,9 @@
  * bytes each, the allocator's share included), not the configured size, so a
  * 16 GiB cache costs what a small one does on the same work (a cache of at
  * most 1024 lines, or a shared one of at most 2^17, and at most 16 ways is
- * one block of 32 bytes a line from its first line on, its pages taken by the
- * host as they are written: 4 MiB at most). A line may be pending
+ * one block of 16 bytes a line from its first line on, its pages taken by the
+ * host as they are written, 2 MiB at most, plus 8 bytes a line once the owner
+ * keeps a word or a byte). A line may be pending
  * (allocated, its fill not yet back): it is never chosen as a victim. The
  * caller decides what a hit, a miss or an eviction costs; this module only
  * keeps the contents. Used for the L1s and the L2. */
