@@ -64,6 +64,10 @@ struct mthread {
   uint32_t core;
   uint32_t cur;  /* the ray the thread runs or switches to; NONE when idle */
   uint32_t last; /* the ray it ran last */
+  /* When cur may issue; UINT64_MAX while idle, so a core's earliest thread
+   * is a plain minimum. NOTE: cur is ready whenever kick or ev_issue asks (a
+   * ray that waits, parks or ends is replaced by th_next before either runs
+   * again), so the ray's own state, a host cache miss away, is not read. */
   uint64_t ready_at;
   uint32_t q_head, q_tail; /* rays ready to run, besides cur */
   uint32_t live;           /* rays not done */
@@ -187,16 +191,6 @@ static void th_set(struct machine *m, struct mthread *th, enum th_state s, uint6
 
 static void kick(struct machine *m, uint32_t core);
 
-/* NOTE: a thread's cur is ready whenever kick or ev_issue asks (a ray that
- * waits, parks or ends is replaced by th_next before either runs again), so
- * the ray's own state, a host cache miss away, need not be read. */
-static bool th_issuable_at(const struct machine *m, const struct mthread *th, uint64_t *at) {
-  (void)m;
-  if (th->cur == NONE) return false;
-  *at = th->ready_at;
-  return true;
-}
-
 /* Thread th takes ray c (ready) at cycle t: free if it ran c last. */
 static void th_take(struct machine *m, struct mthread *th, uint32_t c, uint64_t t) {
   th->cur = c;
@@ -219,6 +213,7 @@ static void th_next(struct machine *m, struct mthread *th, uint64_t t) {
     return;
   }
   th->cur = NONE;
+  th->ready_at = UINT64_MAX;
   th_set(m, th, !th->live ? TH_DONE : th->parked == th->live ? TH_PARKED : TH_WAIT, t);
 }
 
@@ -434,9 +429,9 @@ static void ev_issue(void *ctx, uint64_t core);
 static void kick(struct machine *m, uint32_t core) {
   struct mcore *k = &m->core[core];
   const uint32_t T = m->p.threads_per_core;
-  uint64_t best = UINT64_MAX, at;
+  uint64_t best = UINT64_MAX;
   for (uint32_t i = 0; i < T; i++)
-    if (th_issuable_at(m, &m->th[core * T + i], &at) && at < best) best = at;
+    if (m->th[core * T + i].ready_at < best) best = m->th[core * T + i].ready_at;
   if (best == UINT64_MAX) return;
   if (best < k->port_free) best = k->port_free;
   if (best < engine_now(m->eng)) best = engine_now(m->eng);
@@ -462,8 +457,7 @@ static void ev_issue(void *ctx, uint64_t core) {
   uint32_t pick = NONE;
   for (uint32_t i = 1; i <= T && pick == NONE; i++) {
     const uint32_t j = k->rr + i < T ? k->rr + i : k->rr + i - T; /* (k->rr + i) % T */
-    uint64_t at;
-    if (th_issuable_at(m, &m->th[core * T + j], &at) && at <= t) pick = j;
+    if (m->th[core * T + j].ready_at <= t) pick = j;
   }
   if (pick == NONE || t < k->port_free) {
     kick(m, (uint32_t)core);
