@@ -67,7 +67,7 @@ struct cache {
   uint32_t *table;   /* otherwise: slot index + 1; 0 empty */
   uint64_t table_mask, table_used;
   unsigned table_shift;
-  uint64_t vec_bytes; /* slots allocated in vectors */
+  uint64_t vec_bytes; /* slots allocated: in vectors, or a flat cache's blocks */
   bool flat_ok;       /* small and scanned: flat, made at the first install */
   /* Then each set's tags (line + 1; 0: never held one, so invalid) and
    * after them its stamps (with FLAT_PENDING and FLAT_DIRTY), slot i's at
@@ -153,9 +153,14 @@ static inline uint32_t slot_no(const struct cache *c, uint64_t s, int64_t k) {
   return k < 0 ? CACHE_NONE : (uint32_t)(s * c->ways + c->ways - 1 - (uint64_t)k);
 }
 
+/* Slot i's index within its set's vector or block (ways - 1 - way). */
+static inline uint64_t in_set(const struct cache *c, uint64_t i) {
+  return c->ways - 1 - way_of_slot(c, i);
+}
+
 /* Slot i's tag and stamp in a flat cache whose block is made. */
 static inline uint64_t *ftag_of(const struct cache *c, uint64_t i) {
-  return ftags(c, set_of_slot(c, i)) + c->ways - 1 - way_of_slot(c, i);
+  return ftags(c, set_of_slot(c, i)) + in_set(c, i);
 }
 static inline uint64_t *fstamp_of(const struct cache *c, uint64_t i) {
   return ftag_of(c, i) + c->ways;
@@ -171,7 +176,7 @@ static inline uint64_t fstamp_peek(const struct cache *c, uint64_t i) {
 }
 /* Slot i's word and byte (made at the first set; index as in a set's tags). */
 static inline uint64_t flat_index(const struct cache *c, uint64_t i) {
-  return set_of_slot(c, i) * c->ways + c->ways - 1 - way_of_slot(c, i);
+  return set_of_slot(c, i) * c->ways + in_set(c, i);
 }
 static inline struct fmeta *fmeta_get(struct cache *c, uint64_t i) {
   if (!c->fmeta) {
@@ -497,8 +502,8 @@ uint32_t cache_victim(const struct cache *c, uint64_t line) {
   }
   /* From the tail (the head's prev) towards the head. */
   const uint32_t head = st->head;
-  for (uint32_t i = st->vec[c->ways - 1 - way_of_slot(c, head)].prev;;) {
-    const struct slot *x = &st->vec[c->ways - 1 - way_of_slot(c, i)];
+  for (uint32_t i = st->vec[in_set(c, head)].prev;;) {
+    const struct slot *x = &st->vec[in_set(c, i)];
     if (!(x->flags & F_PENDING)) return i;
     if (i == head) return CACHE_NONE;
     i = x->prev;
@@ -511,7 +516,10 @@ bool cache_valid(const struct cache *c, uint32_t slot) {
   return slot_peek(c, slot)->flags & F_VALID;
 }
 uint64_t cache_line(const struct cache *c, uint32_t slot) {
-  if (c->flat_ok) return c->ftag && *ftag_of(c, slot) ? *ftag_of(c, slot) - 1 : 0;
+  if (c->flat_ok) {
+    const uint64_t t = c->ftag ? *ftag_of(c, slot) : 0;
+    return t ? t - 1 : 0;
+  }
   return slot_peek(c, slot)->line;
 }
 bool cache_dirty(const struct cache *c, uint32_t slot) {

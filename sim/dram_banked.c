@@ -357,6 +357,15 @@ static int64_t col_earliest(const struct dram_banked *d, const struct channel *c
   return bus_fit(d, c, t + lat, r->rank, write) - lat;
 }
 
+/* The earliest cycle >= now request r's command of the given type (ACT,
+ * PRE, RD or WR) could issue. */
+static int64_t req_earliest(const struct dram_banked *d, const struct channel *c,
+                            const struct req *r, enum cmd_type type, int64_t now) {
+  if (type == CMD_ACT) return act_earliest(d, c, r, now);
+  if (type == CMD_PRE) return max64(max64(now, r->ready), c->banks[r->bank].pre_ok);
+  return col_earliest(d, c, r, r->write, now);
+}
+
 /* ---- The scan: what issues at cycle `now`, and the earliest anything could ---- */
 
 /* A candidate that may issue from cycle t. qi: the request's index in the
@@ -760,7 +769,6 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
       for (uint32_t j = 0; j < q->n; j++) {
         const struct req *r = &q->r[j];
         const struct bank *bk = &c->banks[r->bank];
-        int64_t t;
         enum cmd_type type;
         if (!bk->open || bk->row == r->row) {
           const int w = !bk->open ? 0 : r->write ? 2 : 1;
@@ -768,19 +776,12 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
           if (w == 2 && write_behind_read(q, j)) continue;
           seen_bank[w] = r->bank;
           seen_ready[w] = r->ready;
-          if (!w) {
-            t = act_earliest(d, c, r, now);
-            type = CMD_ACT;
-          } else {
-            t = col_earliest(d, c, r, r->write, now);
-            type = r->write ? CMD_WR : CMD_RD;
-          }
+          type = !w ? CMD_ACT : r->write ? CMD_WR : CMD_RD;
         } else {
           if (!pre_allowed(q, j, bk)) continue;
-          t = max64(max64(now, r->ready), bk->pre_ok);
           type = CMD_PRE;
         }
-        consider_in(pk, t, now, type, r->rank, r->bank, qi, j);
+        consider_in(pk, req_earliest(d, c, r, type, now), now, type, r->rank, r->bank, qi, j);
       }
     }
   }
@@ -804,11 +805,7 @@ static bool memo_pick(const struct dram_banked *d, const struct channel *c, int6
   if (c->memo_t > now) return true;
   int64_t t;
   if (m->for_req) {
-    const struct req *r = &c->cq[m->cq].r[m->qi];
-    const struct bank *bk = &c->banks[r->bank];
-    if (m->type == CMD_ACT) t = act_earliest(d, c, r, now);
-    else if (m->type == CMD_PRE) t = max64(max64(now, r->ready), bk->pre_ok);
-    else t = col_earliest(d, c, r, r->write, now);
+    t = req_earliest(d, c, &c->cq[m->cq].r[m->qi], m->type, now);
   } else {
     t = m->type == CMD_REF ? ref_earliest(d, c, m->rank, now)
                            : max64(now, c->banks[m->bank].pre_ok);
