@@ -176,6 +176,7 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
   r.job = policy_job_create(k, &t->ar.setup, &pp, n, mp->cores);
   r.workers = xcalloc(n, sizeof *r.workers);
   t->m = r.m = machine_create(mp, 0);
+  machine_worker_state(t->m, r.workers, sizeof *r.workers); /* its tracer first */
   if (t->costs) machine_costs_enable(t->m, (uint64_t)width * height, TRACE_CLASS_COUNT);
   if (t->sampled) {
     char why[512];

@@ -48,6 +48,11 @@ void coro_resume(struct coro *c);
 /* From inside c: go back to whoever resumed it. */
 void coro_suspend(struct coro *c);
 bool coro_finished(const struct coro *c);
+/* Where a suspended c's stack is hot: its saved registers, with the frames it
+ * returns through just above (higher addresses). NULL before its first
+ * resume and once finished. For a caller that knows c will run soon and
+ * fetches these lines into the host cache ahead of coro_resume. */
+const void *coro_resume_point(const struct coro *c);
 
 /* Deepest stack use in bytes seen on a painted stack (0 if not painted). */
 size_t coro_stack_used(const struct coro *c);

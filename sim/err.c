@@ -92,6 +92,14 @@ void *xcalloc(unsigned long long n, unsigned long long size) {
   return p ? p : oom(n * size);
 }
 
+void *xcalloc_aligned(unsigned long long align, unsigned long long size) {
+  const unsigned long long n = (size + align - 1) / align * align;
+  void *p = aligned_alloc(align, n ? n : align);
+  if (!p) return oom(n);
+  memset(p, 0, n ? n : align);
+  return p;
+}
+
 void *xrealloc(void *p, unsigned long long size) {
   void *q = realloc(p, size ? size : 1);
   return q ? q : oom(size);

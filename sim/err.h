@@ -121,5 +121,7 @@ const char *err_not_regular(const char *path);
 void *xmalloc(unsigned long long size);
 void *xcalloc(unsigned long long n, unsigned long long size);
 void *xrealloc(void *p, unsigned long long size);
+/* Zeroed memory at a multiple of align (a power of two), freed by free. */
+void *xcalloc_aligned(unsigned long long align, unsigned long long size);
 
 #endif

@@ -29,24 +29,28 @@
 enum ctx_state { CTX_READY, CTX_WAIT, CTX_PARKED, CTX_DONE };
 enum th_state { TH_BUSY, TH_WAIT, TH_PARKED, TH_DONE };
 
+/* A ray context. Two host lines, line-aligned, what a load, a line back and
+ * an issue read in the first (the engine fetches both ahead of an event):
+ * on a large machine thousands of them are far from the host's near caches. */
 struct mctx {
-  struct machine *m;
+  _Alignas(64) struct machine *m;
   struct coro *co;
-  struct machine_worker_info info;
-  uint32_t thread; /* global thread index */
-  uint8_t state;
-  bool parking;       /* asked to park: its worker function is returning */
-  uint32_t pending;   /* lines of the current load not yet back */
+  const char *hot; /* its suspended stack's top (coro_resume_point); NULL: none */
+  uint64_t *acc;   /* per-item cost counters (below); NULL: costs not counted */
   uint64_t t;         /* the ray's own clock inside a block */
   uint64_t slots;     /* issue slots of the current block */
   uint64_t wait_from; /* cycle its waiting load left the core */
-  uint32_t next;      /* ready FIFO of its thread */
+  uint32_t pending;   /* lines of the current load not yet back */
+  uint32_t thread;    /* global thread index */
+  struct machine_worker_info info;
+  uint32_t next; /* ready FIFO of its thread */
+  uint8_t state;
+  bool parking; /* asked to park: its worker function is returning */
   /* Per-item costs (machine_costs_enable): the items it works for, what it
-   * has cost them since (COST_* counters, split when it is told anew), and
-   * the tags of its stores on their way to the L2, in issue order. */
+   * has cost them since (acc: COST_* counters, split when it is told anew),
+   * and the tags of its stores on their way to the L2, in issue order. */
   const uint32_t *items;
   uint32_t nitems, item1;
-  uint64_t *acc;
   struct tagrun *runs;
   uint32_t runs_cap, runs_lo, runs_n;
 };
@@ -64,11 +68,6 @@ struct mthread {
   uint32_t core;
   uint32_t cur;  /* the ray the thread runs or switches to; NONE when idle */
   uint32_t last; /* the ray it ran last */
-  /* When cur may issue; UINT64_MAX while idle, so a core's earliest thread
-   * is a plain minimum. NOTE: cur is ready whenever kick or ev_issue asks (a
-   * ray that waits, parks or ends is replaced by th_next before either runs
-   * again), so the ray's own state, a host cache miss away, is not read. */
-  uint64_t ready_at;
   uint32_t q_head, q_tail; /* rays ready to run, besides cur */
   uint32_t live;           /* rays not done */
   uint32_t parked;         /* of those, parked (mem_park) */
@@ -92,11 +91,21 @@ struct machine {
   struct l2 *l2;
   struct mctx *ctx;
   struct mthread *th;
+  /* When thread i's cur may issue: ready_at[i]; UINT64_MAX while idle, so a
+   * core's earliest thread is a plain minimum over its threads' adjacent
+   * entries (one host line with up to 8 threads a core; the threads' own
+   * records, a host cache miss each on a large machine, are not read).
+   * NOTE: cur is ready whenever kick or ev_issue asks (a ray that waits,
+   * parks or ends is replaced by th_next before either runs again), so the
+   * ray's own state is not read either. */
+  uint64_t *ready_at;
   struct mcore *core;
   uint32_t nctx, nth;
   uint64_t stacks_live, painted_max;
   machine_worker_fn fn;
   void *fn_arg;
+  const char *ws_base; /* machine_worker_state; NULL: none given */
+  uint64_t ws_stride;
   machine_progress_fn progress;
   void *progress_ctx;
   bool ran;
@@ -194,9 +203,10 @@ static void kick(struct machine *m, uint32_t core);
 /* Thread th takes ray c (ready) at cycle t: free if it ran c last. */
 static void th_take(struct machine *m, struct mthread *th, uint32_t c, uint64_t t) {
   th->cur = c;
-  th->ready_at = t;
+  uint64_t *ready = &m->ready_at[th - m->th];
+  *ready = t;
   if (th->last != NONE && th->last != c) {
-    th->ready_at += m->p.cost_ray_switch_cycles;
+    *ready += m->p.cost_ray_switch_cycles;
     m->st.ray_switches++;
     m->st.switch_cycles += m->p.cost_ray_switch_cycles;
   }
@@ -213,15 +223,24 @@ static void th_next(struct machine *m, struct mthread *th, uint64_t t) {
     return;
   }
   th->cur = NONE;
-  th->ready_at = UINT64_MAX;
+  m->ready_at[th - m->th] = UINT64_MAX;
   th_set(m, th, !th->live ? TH_DONE : th->parked == th->live ? TH_PARKED : TH_WAIT, t);
 }
 
 /* Ray c's data is back at cycle t. */
 static void ray_ready(struct machine *m, struct mctx *c, uint64_t t) {
   c->state = CTX_READY;
-  struct mthread *th = &m->th[c->thread];
+  /* It runs soon: fetch the top of its stack and its coroutine's record into
+   * the host cache now. With thousands of rays waiting, these are far from
+   * the host's near caches, and the switch back would wait for them. */
   uint32_t id = (uint32_t)(c - m->ctx);
+  if (c->hot) {
+    __builtin_prefetch(c->co);
+    for (unsigned i = 0; i < 6; i++) __builtin_prefetch(c->hot + 64 * i);
+    if (m->ws_base)
+      for (unsigned i = 0; i < 3; i++) __builtin_prefetch(m->ws_base + id * m->ws_stride + 64 * i);
+  }
+  struct mthread *th = &m->th[c->thread];
   if (th->cur == NONE) {
     /* NOTE: a block runs ahead of the engine (its ray's clock passes the
      * current event's cycle), so the thread may still be busy until its last
@@ -431,7 +450,7 @@ static void kick(struct machine *m, uint32_t core) {
   const uint32_t T = m->p.threads_per_core;
   uint64_t best = UINT64_MAX;
   for (uint32_t i = 0; i < T; i++)
-    if (m->th[core * T + i].ready_at < best) best = m->th[core * T + i].ready_at;
+    if (m->ready_at[core * T + i] < best) best = m->ready_at[core * T + i];
   if (best == UINT64_MAX) return;
   if (best < k->port_free) best = k->port_free;
   if (best < engine_now(m->eng)) best = engine_now(m->eng);
@@ -457,7 +476,7 @@ static void ev_issue(void *ctx, uint64_t core) {
   uint32_t pick = NONE;
   for (uint32_t i = 1; i <= T && pick == NONE; i++) {
     const uint32_t j = k->rr + i < T ? k->rr + i : k->rr + i - T; /* (k->rr + i) % T */
-    if (m->th[core * T + j].ready_at <= t) pick = j;
+    if (m->ready_at[core * T + j] <= t) pick = j;
   }
   if (pick == NONE || t < k->port_free) {
     kick(m, (uint32_t)core);
@@ -476,6 +495,7 @@ static void ev_issue(void *ctx, uint64_t core) {
   }
   m->running = c;
   coro_resume(c->co);
+  c->hot = coro_resume_point(c->co);
   m->running = NULL;
   m->st.blocks++;
   k->port_free = t + c->slots;
@@ -733,7 +753,8 @@ static struct machine *create(const struct machine_params *p, uint64_t stack_byt
   m->nctx = m->nth * p->rays_per_thread;
   m->core = xcalloc(p->cores, sizeof *m->core);
   m->th = xcalloc(m->nth, sizeof *m->th);
-  m->ctx = xcalloc(m->nctx, sizeof *m->ctx);
+  m->ready_at = xcalloc_aligned(64, (uint64_t)m->nth * sizeof *m->ready_at); /* all ready at 0 */
+  m->ctx = xcalloc_aligned(64, (uint64_t)m->nctx * sizeof *m->ctx);
   m->warm = xcalloc(p->cores, sizeof *m->warm);
   for (uint32_t i = 0; i < p->cores; i++) {
     m->warm[i].m = m;
@@ -796,6 +817,7 @@ void machine_destroy(struct machine *m) {
   free(m->core);
   free(m->warm);
   free(m->th);
+  free(m->ready_at);
   free(m->ctx);
   timeline_fini(&m->tl);
   l2_destroy(m->l2);
@@ -846,6 +868,11 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   /* The timeline covers the whole run. */
   timeline_cover(&m->tl, end);
   if (m->cost_acc) cost_finish(m);
+}
+
+void machine_worker_state(struct machine *m, const void *base, uint64_t stride) {
+  m->ws_base = base;
+  m->ws_stride = stride;
 }
 
 const struct machine_stats *machine_get_stats(const struct machine *m) { return &m->st; }

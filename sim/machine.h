@@ -164,6 +164,13 @@ void machine_destroy(struct machine *m); /* NULL ok */
 void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_progress_fn progress,
                  void *progress_ctx);
 
+/* A host-speed hint, before machine_run: context i's worker keeps the state
+ * it reads first when it runs again at base + i x stride (its tracer, say).
+ * When a context's load comes back the machine fetches the first host lines
+ * there into the host cache, ahead of running it: with thousands of contexts
+ * that state is far from the host's near caches. Nothing simulated changes. */
+void machine_worker_state(struct machine *m, const void *base, uint64_t stride);
+
 const struct machine_stats *machine_get_stats(const struct machine *m);
 
 /* The machine's numbers (sim/stats.h), over a struct machine_stats; the L1's
