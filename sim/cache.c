@@ -60,12 +60,12 @@ struct cache {
   /* What a find, a use, a victim and an install read, first and in one host
    * line (the struct is line-aligned): on 1024 cores the L1s' headers are
    * as far from the host's near caches as their sets. */
-  bool scan;          /* few ways: find a line by scanning its set */
-  bool flat_ok;       /* small and scanned: flat, made at the first install */
-  unsigned lg2_ways;  /* ways a power of two: its log2, else 64 (divide) */
+  bool scan;         /* few ways: find a line by scanning its set */
+  bool flat_ok;      /* small and scanned: flat, made at the first install */
+  unsigned lg2_ways; /* ways a power of two: its log2, else 64 (divide) */
   uint64_t ways;
-  uint64_t set_mask;  /* sets - 1 when a power of two, else 0 (use %) */
-  uint64_t uses;      /* scanned: the last stamp given */
+  uint64_t set_mask; /* sets - 1 when a power of two, else 0 (use %) */
+  uint64_t uses;     /* scanned: the last stamp given */
   /* Then each set's tags (line + 1; 0: never held one, so invalid) and
    * after them its stamps (with FLAT_PENDING and FLAT_DIRTY), slot i's at
    * index k of its set s (k: ways - 1 - way): a 4-way set is one host line,

@@ -35,8 +35,8 @@ enum th_state { TH_BUSY, TH_WAIT, TH_PARKED, TH_DONE };
 struct mctx {
   _Alignas(64) struct machine *m;
   struct coro *co;
-  const char *hot; /* its suspended stack's top (coro_resume_point); NULL: none */
-  uint64_t *acc;   /* per-item cost counters (below); NULL: costs not counted */
+  const char *hot;    /* its suspended stack's top (coro_resume_point); NULL: none */
+  uint64_t *acc;      /* per-item cost counters (below); NULL: costs not counted */
   uint64_t t;         /* the ray's own clock inside a block */
   uint64_t slots;     /* issue slots of the current block */
   uint64_t wait_from; /* cycle its waiting load left the core */
@@ -66,8 +66,8 @@ enum { COST_SLOTS, COST_WAIT, COST_WRITE, COST_READ0 };
 
 struct mthread {
   uint32_t core;
-  uint32_t cur;  /* the ray the thread runs or switches to; NONE when idle */
-  uint32_t last; /* the ray it ran last */
+  uint32_t cur;            /* the ray the thread runs or switches to; NONE when idle */
+  uint32_t last;           /* the ray it ran last */
   uint32_t q_head, q_tail; /* rays ready to run, besides cur */
   uint32_t live;           /* rays not done */
   uint32_t parked;         /* of those, parked (mem_park) */
