@@ -93,8 +93,9 @@ struct machine {
   struct mthread *th;
   /* When thread i's cur may issue: ready_at[i]; UINT64_MAX while idle, so a
    * core's earliest thread is a plain minimum over its threads' adjacent
-   * entries (one host line with up to 8 threads a core; the threads' own
-   * records, a host cache miss each on a large machine, are not read).
+   * entries (one host line for 8 threads a core, or a power of two fewer;
+   * the threads' own records, a host cache miss each on a large machine,
+   * are not read).
    * NOTE: cur is ready whenever kick or ev_issue asks (a ray that waits,
    * parks or ends is replaced by th_next before either runs again), so the
    * ray's own state is not read either. */
@@ -230,9 +231,10 @@ static void th_next(struct machine *m, struct mthread *th, uint64_t t) {
 /* Ray c's data is back at cycle t. */
 static void ray_ready(struct machine *m, struct mctx *c, uint64_t t) {
   c->state = CTX_READY;
-  /* It runs soon: fetch the top of its stack and its coroutine's record into
-   * the host cache now. With thousands of rays waiting, these are far from
-   * the host's near caches, and the switch back would wait for them. */
+  /* It runs soon: fetch the top of its stack, its coroutine's record and its
+   * worker's state (machine_worker_state) into the host cache now. With
+   * thousands of rays waiting, these are far from the host's near caches,
+   * and the switch back would wait for them. */
   uint32_t id = (uint32_t)(c - m->ctx);
   if (c->hot) {
     __builtin_prefetch(c->co);
