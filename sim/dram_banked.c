@@ -288,6 +288,9 @@ static int64_t bus_fit(const struct dram_banked *d, const struct channel *c, int
                        uint32_t rank, bool write) {
   const int64_t b = d->burst_cycles;
   int64_t s = s0;
+  /* Past the last burst's end and its turnaround gap (at most a cycle; the
+   * bursts are in order of start): nothing to fit around. */
+  if (!c->nb || s >= c->bursts[c->nb - 1].start + b + 1) return s;
   for (uint32_t i = 0; i < c->nb; i++) {
     int64_t gap = c->bursts[i].rank != rank && !(d->cq_mode && write && c->bursts[i].write);
     int64_t a = c->bursts[i].start;
