@@ -70,7 +70,7 @@ struct cache {
    * after them its stamps (with FLAT_PENDING and FLAT_DIRTY), slot i's at
    * index k of its set s (k: ways - 1 - way): a 4-way set is one host line,
    * which a find, a use, a victim and an install all stay in. */
-  uint64_t *ftag;
+  uint64_t *ftag;      /* host-line aligned */
   struct fmeta *fmeta; /* the owner's word and byte, made at the first set */
   uint64_t sets;
   /* The rest. */
@@ -81,7 +81,6 @@ struct cache {
   uint64_t table_mask, table_used;
   unsigned table_shift;
   uint64_t vec_bytes; /* slots allocated: in vectors, or a flat cache's blocks */
-  void *ftag_mem;     /* ftag as allocated (ftag is host-line aligned in it) */
 };
 
 /* A flat slot's word and byte (cache_word, cache_byte): only an owner that
@@ -141,9 +140,8 @@ static inline const struct set *set_peek(const struct cache *c, uint64_t s) {
 
 static void flat_make(struct cache *c) {
   const uint64_t bytes = 2 * c->lines * sizeof *c->ftag;
-  c->ftag_mem = xcalloc(bytes + 64, 1);
-  c->ftag = (uint64_t *)(((uintptr_t)c->ftag_mem + 63) & ~(uintptr_t)63);
-  c->vec_bytes += bytes + 64;
+  c->ftag = xcalloc_aligned(64, bytes);
+  c->vec_bytes += bytes;
 }
 
 /* Set s's tags, then its stamps. */
@@ -328,7 +326,7 @@ struct cache *cache_create(const struct cache_params *p) {
 
 void cache_destroy(struct cache *c) {
   if (!c) return;
-  free(c->ftag_mem);
+  free(c->ftag);
   free(c->fmeta);
   for (uint64_t i = 0; i < c->set_page_count; i++) {
     if (!c->set_pages[i]) continue;

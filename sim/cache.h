@@ -21,8 +21,9 @@ struct cache_params {
   uint32_t ways;       /* 0: fully associative; else divides the line count */
   unsigned lg2_line;
   /* One shared cache (an L2): kept flat up to 2^17 lines (2 MiB of host
-   * memory, 3 MiB with the owner's words and bytes) for a faster find. false (per-core caches):
-   * flat up to 1024 lines only, so many cores with large, sparsely used caches stay cheap. */
+   * memory, 3 MiB with the owner's words and bytes) for a faster find.
+   * false (per-core caches): flat up to 1024 lines only, so many cores with
+   * large, sparsely used caches stay cheap. */
   bool shared;
 };
 

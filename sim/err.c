@@ -93,11 +93,11 @@ void *xcalloc(unsigned long long n, unsigned long long size) {
 }
 
 void *xcalloc_aligned(unsigned long long align, unsigned long long size) {
-  const unsigned long long n = (size + align - 1) / align * align;
-  void *p = aligned_alloc(align, n ? n : align);
+  /* aligned_alloc wants a multiple of align; at least one. */
+  const unsigned long long n = size ? (size + align - 1) / align * align : align;
+  void *p = aligned_alloc(align, n);
   if (!p) return oom(n);
-  memset(p, 0, n ? n : align);
-  return p;
+  return memset(p, 0, n);
 }
 
 void *xrealloc(void *p, unsigned long long size) {

@@ -35,7 +35,9 @@ enum th_state { TH_BUSY, TH_WAIT, TH_PARKED, TH_DONE };
 struct mctx {
   _Alignas(64) struct machine *m;
   struct coro *co;
-  const char *hot;    /* its suspended stack's top (coro_resume_point); NULL: none */
+  /* Its suspended stack's top (coro_resume_point, taken when it suspends:
+   * a wake then need not read the coroutine's record first); NULL: none. */
+  const char *hot;
   uint64_t *acc;      /* per-item cost counters (below); NULL: costs not counted */
   uint64_t t;         /* the ray's own clock inside a block */
   uint64_t slots;     /* issue slots of the current block */
