@@ -355,6 +355,20 @@ static inline int64_t scan_used(const struct set *st, uint64_t line) {
   return -1;
 }
 
+#if defined(__SSE2__)
+/* Bit k set when tag k of the n (even) at t is key: two tags a compare. */
+static inline uint32_t flat_match(const uint64_t *t, uint64_t key, uint64_t n) {
+  const __m128i kk = _mm_set1_epi64x((long long)key);
+  uint32_t mask = 0;
+  for (uint32_t k = 0; k < n; k += 2) {
+    __m128i e = _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(t + k)), kk);
+    e = _mm_and_si128(e, _mm_shuffle_epi32(e, _MM_SHUFFLE(2, 3, 0, 1)));
+    mask |= (uint32_t)_mm_movemask_pd(_mm_castsi128_pd(e)) << k;
+  }
+  return mask;
+}
+#endif
+
 /* A flat cache's scan: set s's tags only (one host line for 8 ways), no
  * set or slot read; the index in the set's vector of line's slot, or -1. */
 static inline int64_t flat_scan(const struct cache *c, uint64_t s, uint64_t line) {
@@ -363,13 +377,11 @@ static inline int64_t flat_scan(const struct cache *c, uint64_t s, uint64_t line
   /* Two tags a compare, all of the set's, then one branch: a loop that
    * stopped at the matching way mispredicted its exit on nearly every hit. */
   if (!(c->ways & 1)) {
-    const __m128i kk = _mm_set1_epi64x((long long)key);
-    uint32_t mask = 0;
-    for (uint32_t k = 0; k < c->ways; k += 2) {
-      __m128i e = _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(t + k)), kk);
-      e = _mm_and_si128(e, _mm_shuffle_epi32(e, _MM_SHUFFLE(2, 3, 0, 1)));
-      mask |= (uint32_t)_mm_movemask_pd(_mm_castsi128_pd(e)) << k;
-    }
+    /* The configured L1s' 4 ways and the L2's 16 unrolled (a loop over a
+     * count read at run time cost as many instructions as the compares). */
+    const uint32_t mask = c->ways == 4    ? flat_match(t, key, 4)
+                          : c->ways == 16 ? flat_match(t, key, 16)
+                                          : flat_match(t, key, c->ways);
     return mask ? __builtin_ctz(mask) : -1;
   }
 #endif
@@ -478,23 +490,32 @@ static inline int64_t oldest_free(const struct slot *v, uint64_t n) {
   return best;
 }
 
+/* The index of the least of n stamps, dirtiness aside, or -1 when it is
+ * pending: a pending one's top bit puts it after every other, so the least
+ * is pending only when all are. Called with the configured caches' way
+ * counts as constants (unrolled). */
+static inline int64_t flat_oldest(const uint64_t *v, uint64_t n) {
+  uint64_t least = v[0] & ~FLAT_DIRTY;
+  int64_t k = 0;
+  for (uint64_t j = 1; j < n; j++)
+    if ((v[j] & ~FLAT_DIRTY) < least) {
+      least = v[j] & ~FLAT_DIRTY;
+      k = (int64_t)j;
+    }
+  return least & FLAT_PENDING ? -1 : k;
+}
+
 uint32_t cache_victim(const struct cache *c, uint64_t line) {
   uint64_t s = set_of_line(c, line);
   if (c->flat_ok) {
     /* Never-used slots are zeros: the first of them is the paged path's
      * choice too (a never-used slot first, the highest-ranked way). */
     if (!c->ftag) return (uint32_t)(s * c->ways + c->ways - 1);
-    /* The least stamp, dirtiness aside: a pending one's top bit puts it
-     * after every other, so the least is pending only when all are. */
     const uint64_t *v = fstamps(c, s);
-    uint64_t least = v[0] & ~FLAT_DIRTY;
-    int64_t k = 0;
-    for (uint64_t j = 1; j < c->ways; j++)
-      if ((v[j] & ~FLAT_DIRTY) < least) {
-        least = v[j] & ~FLAT_DIRTY;
-        k = (int64_t)j;
-      }
-    return slot_no(c, s, least & FLAT_PENDING ? -1 : k);
+    const int64_t k = c->ways == 4    ? flat_oldest(v, 4)
+                      : c->ways == 16 ? flat_oldest(v, 16)
+                                      : flat_oldest(v, c->ways);
+    return slot_no(c, s, k);
   }
   const struct set *st = set_peek(c, s);
   /* A never-used slot first: the highest of them is the list's tail. */
