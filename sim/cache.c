@@ -505,17 +505,20 @@ static inline int64_t flat_oldest(const uint64_t *v, uint64_t n) {
   return least & FLAT_PENDING ? -1 : k;
 }
 
+/* flat_oldest of a set's stamps v. */
+static inline int64_t flat_victim(const struct cache *c, const uint64_t *v) {
+  return c->ways == 4    ? flat_oldest(v, 4)
+         : c->ways == 16 ? flat_oldest(v, 16)
+                         : flat_oldest(v, c->ways);
+}
+
 uint32_t cache_victim(const struct cache *c, uint64_t line) {
   uint64_t s = set_of_line(c, line);
   if (c->flat_ok) {
     /* Never-used slots are zeros: the first of them is the paged path's
      * choice too (a never-used slot first, the highest-ranked way). */
     if (!c->ftag) return (uint32_t)(s * c->ways + c->ways - 1);
-    const uint64_t *v = fstamps(c, s);
-    const int64_t k = c->ways == 4    ? flat_oldest(v, 4)
-                      : c->ways == 16 ? flat_oldest(v, 16)
-                                      : flat_oldest(v, c->ways);
-    return slot_no(c, s, k);
+    return slot_no(c, s, flat_victim(c, fstamps(c, s)));
   }
   const struct set *st = set_peek(c, s);
   /* A never-used slot first: the highest of them is the list's tail. */
@@ -584,6 +587,30 @@ uint8_t cache_byte(const struct cache *c, uint32_t slot) {
 void cache_set_byte(struct cache *c, uint32_t slot, uint8_t v) {
   if (c->flat_ok) fmeta_get(c, slot)->byte = v;
   else slot_get(c, slot)->byte = v;
+}
+
+bool cache_fill(struct cache *c, uint64_t line, bool dirty) {
+  if (c->flat_ok) {
+    /* cache_use, cache_victim and cache_install in one look at the set. */
+    if (!c->ftag) flat_make(c);
+    const uint64_t s = set_of_line(c, line);
+    uint64_t *st = fstamps(c, s);
+    int64_t k = flat_scan(c, s, line);
+    if (k >= 0) {
+      st[k] = (st[k] & FLAT_STATE) | ++c->uses;
+      return true;
+    }
+    k = flat_victim(c, st);
+    if (k >= 0) {
+      st[k] = ++c->uses | (dirty ? FLAT_DIRTY : 0);
+      ftags(c, s)[k] = line + 1;
+    }
+    return false;
+  }
+  if (cache_use(c, line) != CACHE_NONE) return true;
+  const uint32_t v = cache_victim(c, line);
+  if (v != CACHE_NONE) cache_install(c, v, line, dirty, false);
+  return false;
 }
 
 void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bool pending) {

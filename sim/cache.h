@@ -71,6 +71,9 @@ bool cache_pending(const struct cache *c, uint32_t slot);
  * first if dirty) as the most recently used, with the given state. */
 void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bool pending);
 void cache_set_dirty(struct cache *c, uint32_t slot);
+/* cache_use; on a miss, cache_install of line (not pending, dirty as given)
+ * into cache_victim's slot, when the set has one. True on a hit. */
+bool cache_fill(struct cache *c, uint64_t line, bool dirty);
 void cache_set_pending(struct cache *c, uint32_t slot, bool pending);
 /* A word and a byte the owner keeps with each slot (the L2: the head of a
  * pending line's waiter list, the class of the access that missed); 0 until

@@ -415,10 +415,7 @@ static void cost_finish(struct machine *m) {
 /* A line of ray c's load is back at cycle t (fills c's L1). */
 static void line_done(struct machine *m, struct mctx *c, uint64_t line, uint64_t t) {
   struct cache *l1 = m->core[c->info.core].l1;
-  if (l1) {
-    if (cache_use(l1, line) == CACHE_NONE)
-      cache_install(l1, cache_victim(l1, line), line, false, false);
-  }
+  if (l1) cache_fill(l1, line, false); /* a victim: an L1 has no pending line */
   m->loads_back++;
   CHECK_GT(c->pending, 0);
   if (--c->pending == 0) {
@@ -665,13 +662,8 @@ static void warm_access(struct mwarm *w, uint64_t addr, uint32_t size, bool stor
   for (uint64_t line = addr >> MACHINE_LG2_LINE, end = (addr + size - 1) >> MACHINE_LG2_LINE;
        line <= end; line++) {
     if (l1) {
-      uint32_t s = cache_use(l1, line);
-      if (s != CACHE_NONE) {
-        if (!store) continue;
-      } else if (!store) {
-        s = cache_victim(l1, line);
-        if (s != CACHE_NONE) cache_install(l1, s, line, false, false);
-      }
+      if (store) cache_use(l1, line);
+      else if (cache_fill(l1, line, false)) continue;
     }
     l2_warm(m->l2, line, store);
   }
