@@ -56,12 +56,13 @@ static inline double *row_at(struct timeline *tl, uint64_t t) {
   return t >= tl->lo && t < tl->hi ? tl->hot : row(tl, t / tl->window);
 }
 
-void timeline_point(struct timeline *tl, unsigned col, uint64_t t, double amount) {
+void timeline_point_any(struct timeline *tl, unsigned col, uint64_t t, double amount) {
   CHECK_LT(col, tl->cols);
   row_at(tl, t)[col] += amount;
 }
 
-void timeline_span(struct timeline *tl, unsigned col, uint64_t a, uint64_t b, double per_cycle) {
+void timeline_span_any(struct timeline *tl, unsigned col, uint64_t a, uint64_t b,
+                       double per_cycle) {
   CHECK_LT(col, tl->cols);
   if (b <= a) return;
   /* The row of the span's last window first: any coarsening happens now. */
