@@ -442,10 +442,20 @@ static void to_head(struct cache *c, struct set *st, uint32_t slot) {
   list_push(c, st, slot, x);
 }
 
+/* A flat slot's stamp st made the newest of its set (its state kept), and
+ * a line put in a flat slot (its tag tg, its stamp st) as the newest. */
+static inline void flat_touch(struct cache *c, uint64_t *st) {
+  *st = (*st & FLAT_STATE) | ++c->uses;
+}
+static inline void flat_put(struct cache *c, uint64_t *tg, uint64_t *st, uint64_t line, bool dirty,
+                            bool pending) {
+  *st = ++c->uses | (pending ? FLAT_PENDING : 0) | (dirty ? FLAT_DIRTY : 0);
+  *tg = line + 1;
+}
+
 void cache_touch(struct cache *c, uint32_t slot) {
   if (c->flat_ok) {
-    uint64_t *st = fstamp_get(c, slot);
-    *st = (*st & FLAT_STATE) | ++c->uses;
+    flat_touch(c, fstamp_get(c, slot));
     return;
   }
   to_head(c, set_get(c, set_of_slot(c, slot)), slot);
@@ -462,8 +472,7 @@ uint32_t cache_use(struct cache *c, uint64_t line) {
     if (!c->ftag) return CACHE_NONE;
     const int64_t k = flat_scan(c, s, line);
     if (k < 0) return CACHE_NONE;
-    uint64_t *st = fstamps(c, s) + k;
-    *st = (*st & FLAT_STATE) | ++c->uses;
+    flat_touch(c, fstamps(c, s) + k);
     return slot_no(c, s, k);
   }
   /* A paged scanned set: only its used slots can hold the line. */
@@ -597,14 +606,11 @@ bool cache_fill(struct cache *c, uint64_t line, bool dirty) {
     uint64_t *st = fstamps(c, s);
     int64_t k = flat_scan(c, s, line);
     if (k >= 0) {
-      st[k] = (st[k] & FLAT_STATE) | ++c->uses;
+      flat_touch(c, st + k);
       return true;
     }
     k = flat_victim(c, st);
-    if (k >= 0) {
-      st[k] = ++c->uses | (dirty ? FLAT_DIRTY : 0);
-      ftags(c, s)[k] = line + 1;
-    }
+    if (k >= 0) flat_put(c, ftags(c, s) + k, st + k, line, dirty, false);
     return false;
   }
   if (cache_use(c, line) != CACHE_NONE) return true;
@@ -620,8 +626,7 @@ void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bo
     /* A slot keeps its word and byte. */
     uint64_t *st = fstamp_get(c, slot);
     CHECK(!(*st & FLAT_PENDING));
-    *st = ++c->uses | (pending ? FLAT_PENDING : 0) | (dirty ? FLAT_DIRTY : 0);
-    *ftag_of(c, slot) = line + 1;
+    flat_put(c, ftag_of(c, slot), st, line, dirty, pending);
     return;
   }
   struct set *st = set_get(c, s);
