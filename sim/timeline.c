@@ -53,7 +53,7 @@ static double *row(struct timeline *tl, uint64_t w) {
 
 /* The row of cycle t. */
 static inline double *row_at(struct timeline *tl, uint64_t t) {
-  return t >= tl->lo && t < tl->hi ? tl->hot : row(tl, t / tl->window);
+  return timeline_in_hot(tl, t) ? tl->hot : row(tl, t / tl->window);
 }
 
 void timeline_point_any(struct timeline *tl, unsigned col, uint64_t t, double amount) {
@@ -66,7 +66,7 @@ void timeline_span_any(struct timeline *tl, unsigned col, uint64_t a, uint64_t b
   CHECK_LT(col, tl->cols);
   if (b <= a) return;
   /* The row of the span's last window first: any coarsening happens now. */
-  if (!(b - 1 >= tl->lo && b - 1 < tl->hi)) row(tl, (b - 1) / tl->window);
+  if (!timeline_in_hot(tl, b - 1)) row(tl, (b - 1) / tl->window);
   for (uint64_t x = a; x < b;) {
     double *r = row_at(tl, x);
     uint64_t end = tl->hi; /* row_at leaves x's window hot */

@@ -31,10 +31,15 @@ void timeline_point_any(struct timeline *tl, unsigned col, uint64_t t, double am
 /* Add per_cycle for every cycle of [a, b), split between windows in proportion. */
 void timeline_span_any(struct timeline *tl, unsigned col, uint64_t a, uint64_t b, double per_cycle);
 
+/* Cycle t lies in the row last reached (tl->hot). */
+static inline bool timeline_in_hot(const struct timeline *tl, uint64_t t) {
+  return t >= tl->lo && t < tl->hi;
+}
+
 /* The same, inline when it falls in the row last reached (most adds: one per
  * access and issue of a timed run); the same sums either way. */
 static inline void timeline_point(struct timeline *tl, unsigned col, uint64_t t, double amount) {
-  if (t >= tl->lo && t < tl->hi && col < tl->cols) tl->hot[col] += amount;
+  if (timeline_in_hot(tl, t) && col < tl->cols) tl->hot[col] += amount;
   else timeline_point_any(tl, col, t, amount);
 }
 static inline void timeline_span(struct timeline *tl, unsigned col, uint64_t a, uint64_t b,
