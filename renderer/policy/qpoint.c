@@ -15,22 +15,16 @@
 void qpoint_subtree_tris(const struct kd_tree *kd, uint32_t *out) {
   const uint32_t n = kd->node_count;
   if (n == 0) return;
-  /* Parents and depths (a byte: trees are at most KD_DEPTH_LIMIT deep), for
-   * the meeting points below; a word a node less than subtree ends would
-   * take, on trees of millions of nodes. */
+  /* Parents, for the meeting points below. */
   uint32_t *parent = xmalloc((uint64_t)n * sizeof *parent);
-  uint8_t *depth = xmalloc(n);
   parent[0] = QPOINT_NONE;
-  depth[0] = 0;
   for (uint32_t i = 0; i < n; i++) {
     struct kd_node nd = kd->nodes[i];
     if (kd_is_leaf(nd)) continue;
     CHECK_LT(i + 1, n);
     CHECK_GT(kd_above(nd), i + 1);
     CHECK_LT(kd_above(nd), n);
-    CHECK_LT(depth[i], 255);
     parent[i + 1] = parent[kd_above(nd)] = i;
-    depth[i + 1] = depth[kd_above(nd)] = (uint8_t)(depth[i] + 1);
   }
 
   uint32_t tri_count = 0;
@@ -43,11 +37,14 @@ void qpoint_subtree_tris(const struct kd_tree *kd, uint32_t *out) {
   /* +1 at each leaf, -1 at the meeting point of a triangle's consecutive
    * leaves (leaves are visited in increasing node order, so last[p] and i
    * are consecutive): after the subtree sums, a subtree counts each of its
-   * triangles once. The lowest common ancestor of two leaves: the deeper one
-   * climbs to the other's depth, then both climb until they meet; a
-   * triangle's consecutive leaves are near each other, so the climb is short.
-   * A repeated reference (a == b) cancels itself. Sums are kept in out modulo 2^32: a partial sum
-   * may go below zero, every final one is a count. */
+   * triangles once. The lowest common ancestor of leaves a < i is the first
+   * node at or above i whose index is at most a: a subtree is the run of
+   * node indices from its root, so an ancestor of i numbered at most a holds
+   * a (a lies between it and i), and one numbered above a does not. So only
+   * i climbs, and no depths are needed; a triangle's consecutive leaves are
+   * near each other, so the climb is short. A repeated reference (a == i)
+   * cancels itself. Sums are kept in out modulo 2^32: a partial sum may go
+   * below zero, every final one is a count. */
   memset(out, 0, (uint64_t)n * sizeof *out);
   for (uint32_t i = 0; i < n; i++) {
     struct kd_node nd = kd->nodes[i];
@@ -58,18 +55,12 @@ void qpoint_subtree_tris(const struct kd_tree *kd, uint32_t *out) {
       uint32_t a = last[p];
       last[p] = i;
       if (a == QPOINT_NONE) continue;
-      uint32_t x = a, y = i;
-      while (depth[x] > depth[y]) x = parent[x];
-      while (depth[y] > depth[x]) y = parent[y];
-      while (x != y) {
-        x = parent[x];
-        y = parent[y];
-      }
+      uint32_t x = i;
+      while (x > a) x = parent[x];
       out[x]--;
     }
   }
   free(last);
-  free(depth);
   for (uint32_t i = n; i-- > 1;) out[parent[i]] += out[i];
   free(parent);
   for (uint32_t i = 0; i < n; i++) CHECK_LE(out[i], tri_count);
