@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "app/bench_embree.h"
+#include "app/bench_policies.h"
 #include "app/opts.h"
 #include "renderer/camera.h"
 #include "renderer/policy/policy.h"
@@ -74,6 +75,22 @@ static const char HELP[] =
     "                         at sample.fraction F (README: Sampling) against its\n"
     "                         full run: adds cycles_ci95_low, cycles_ci95_high,\n"
     "                         speedup_vs_full (host time) and cycles_error_vs_full\n"
+    "  --policies LIST        with --timed: instead, time whole 'rtsim run' processes\n"
+    "                         (this program, as a user runs it: scene load, k-d\n"
+    "                         build, run and output files) of each policy in LIST\n"
+    "                         (two or more, e.g. dynamic,recursive), the policies\n"
+    "                         taking turns for --repeat rounds, outputs in a\n"
+    "                         temporary folder; per scene and policy prints scene,\n"
+    "                         width, height, rays, machine, set, policy, rounds,\n"
+    "                         host_s_best and host_s_median (user + system seconds\n"
+    "                         of the process), run_s_best and run_s_median (the\n"
+    "                         run's own wall_s in stats.json, without the load),\n"
+    "                         events, peak_rss_mb, and against the last policy of\n"
+    "                         LIST (base): host_vs_base_median and _max (over the\n"
+    "                         rounds' ratios), run_vs_base_median, events_vs_base,\n"
+    "                         peak_rss_vs_base\n"
+    "  --set KEY=VALUE        with --policies: a machine key for every run\n"
+    "                         (repeatable)\n"
     "  -h, --help             this text\n";
 
 static double render_once(const struct app_world *w, uint32_t mask, uint32_t W, uint32_t H,
@@ -233,12 +250,15 @@ static bool parse_fraction(const char *text, void *dst) {
   return true;
 }
 
-int cmd_bench(int argc, char **argv) {
+/* cmd_bench with its --set list (sized for argc entries, owned by the caller). */
+static int bench_main(int argc, char **argv, struct app_sets *sets) {
   uint64_t width = 0, height = 0, repeat = 3, analyser = 0;
   double sample = 1;
   uint32_t mask = RAY_MASK(RAY_PRIMARY);
   bool functional = false, engine = false, embree = false;
   const char *timed = NULL;
+  struct bench_policy_list policies = {0};
+  bool have_policies = false;
   const struct opts_spec spec[] = {
       OPTS_U64("width", 0, &width, 1, 16384),
       OPTS_U64("height", 0, &height, 1, 16384),
@@ -250,6 +270,13 @@ int cmd_bench(int argc, char **argv) {
       OPTS_STR("timed", 0, &timed),
       OPTS_PARSE("sample", 0, &sample, parse_fraction, "a fraction above 0 and at most 1"),
       OPTS_FLAG("embree", 0, &embree),
+      {.name = "policies",
+       .kind = OPTS_KIND_PARSE,
+       .dst = &policies,
+       .parse = bench_parse_policies,
+       .expect = BENCH_POLICIES_EXPECT,
+       .given = &have_policies},
+      OPTS_PARSE("set", 0, sets, app_sets_add, "KEY=VALUE"),
       OPTS_END};
   struct opts_args args;
   int rc = opts_parse("bench", HELP, spec, argc, argv, &args);
@@ -271,6 +298,14 @@ int cmd_bench(int argc, char **argv) {
     return 0;
   }
   if (args.n == 0) return app_usage_error("bench", "missing SCENE.yaml");
+  if (have_policies && !timed)
+    return app_usage_error("bench", "--policies: give the machine with --timed MACHINE.yaml");
+  if (sets->n && !have_policies)
+    return app_usage_error("bench", "--set: only with --timed MACHINE.yaml --policies LIST");
+  if (have_policies && (sample < 1 || functional || embree))
+    return app_usage_error("bench", "--policies: not with --sample, --functional or --embree");
+  if (have_policies)
+    return bench_policies(timed, sets, &policies, mask, width, height, repeat, argc, argv, optind);
   if (timed) return bench_timed(timed, mask, width, height, repeat, sample, argc, argv);
   if (embree && !bench_embree_available())
     return app_usage_error("bench", "--embree: this rtsim was built without Embree (install "
@@ -361,4 +396,12 @@ int cmd_bench(int argc, char **argv) {
     app_world_fini(&w);
   }
   return 0;
+}
+
+int cmd_bench(int argc, char **argv) {
+  struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v),
+                          0}; /* at most one an argument */
+  int rc = bench_main(argc, argv, &sets);
+  free(sets.v);
+  return rc;
 }

@@ -532,6 +532,19 @@ int main(void) {
        "/configs/tiny.yaml --sample 0.01 --width 8 --height 8 " SCN "good_room_tiny.yaml",
        "--sample 0.01 on"},
       {"bench --rays primary,glossy " SCN "good_room_tiny.yaml", "--rays: got 'primary,glossy'"},
+      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --policies dynamic " SCN
+       "good_room_tiny.yaml",
+       "--policies: got 'dynamic', expected two or more of"},
+      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --policies dynamic,dynamic " SCN
+       "good_room_tiny.yaml",
+       "--policies: got 'dynamic,dynamic'"},
+      {"bench --policies dynamic,recursive " SCN "good_room_tiny.yaml",
+       "--policies: give the machine with --timed MACHINE.yaml"},
+      {"bench --set cores=2 " SCN "good_room_tiny.yaml",
+       "--set: only with --timed MACHINE.yaml --policies LIST"},
+      {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --policies dynamic,recursive --set "
+       "cores=0 " SCN "good_room_tiny.yaml",
+       "--set cores=0: error: cores: out of range (got 0, expected 1 to 4096)"},
 #ifndef RTSIM_HAVE_EMBREE
       {"bench --embree " SCN "good_room_tiny.yaml",
        "--embree: this rtsim was built without Embree"},

@@ -1,0 +1,327 @@
+/* rtsim bench --policies: whole `rtsim run` processes timed against each
+ * other (bench_policies.h). */
+#define _GNU_SOURCE /* wait4 */
+#include "app/bench_policies.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "app/app.h"
+#include "app/csv.h"
+#include "renderer/shade.h"
+#include "sim/err.h"
+#include "sim/machine_cfg.h"
+
+bool bench_parse_policies(const char *text, void *dst) {
+  struct bench_policy_list *l = dst;
+  char name[32];
+  l->n = 0;
+  for (const char *p = text;;) {
+    size_t len = strcspn(p, ",");
+    if (len == 0 || len >= sizeof name || l->n == BENCH_POLICIES_MAX) return false;
+    memcpy(name, p, len);
+    name[len] = '\0';
+    enum policy_kind k;
+    if (!policy_parse(name, &k)) return false;
+    for (unsigned i = 0; i < l->n; i++)
+      if (l->k[i] == k) return false;
+    l->k[l->n++] = k;
+    if (p[len] == '\0') break;
+    p += len + 1;
+  }
+  return l->n >= 2;
+}
+
+/* One run's figures. */
+struct bench_run {
+  double host_s, run_s, peak_mb;
+  uint64_t events;
+  char scene[128];
+  uint64_t width, height;
+};
+
+/* The temporary folder: the run's output folder and its stderr inside. */
+struct bench_tmp {
+  char dir[4096], out[4200], err[4200];
+};
+
+/* Remove the files of out (rtsim run writes plain files only) and out itself. */
+static void clear_out(const struct bench_tmp *t) {
+  DIR *d = opendir(t->out);
+  if (!d) return;
+  struct dirent *de;
+  char path[8400];
+  while ((de = readdir(d))) {
+    if (!strcmp(de->d_name, ".") || !strcmp(de->d_name, "..")) continue;
+    snprintf(path, sizeof path, "%s/%s", t->out, de->d_name);
+    unlink(path);
+  }
+  closedir(d);
+  rmdir(t->out);
+}
+
+static void tmp_fini(const struct bench_tmp *t) {
+  clear_out(t);
+  unlink(t->err);
+  rmdir(t->dir);
+}
+
+/* Print the failed run's stderr (kept in t->err) under a line saying which. */
+static void show_failure(const struct bench_tmp *t, const char *scene, const char *policy,
+                         int status) {
+  fprintf(stderr, "rtsim bench: rtsim run of %s with --policy %s ", scene, policy);
+  if (WIFEXITED(status)) fprintf(stderr, "exited with code %d:\n", WEXITSTATUS(status));
+  else
+    fprintf(stderr, "was killed by signal %d (%s):\n", WTERMSIG(status),
+            strsignal(WTERMSIG(status)));
+  FILE *f = fopen(t->err, "r");
+  if (!f) return;
+  char buf[4096];
+  size_t n;
+  while ((n = fread(buf, 1, sizeof buf, f)) > 0) fwrite(buf, 1, n, stderr);
+  fclose(f);
+}
+
+/* stats.json of the run just made, whole (NULL if it cannot be read). */
+static char *read_stats(const struct bench_tmp *t) {
+  char path[8400];
+  snprintf(path, sizeof path, "%s/stats.json", t->out);
+  FILE *f = fopen(path, "r");
+  if (!f) return NULL;
+  size_t cap = 1 << 16, n = 0;
+  char *s = xmalloc(cap);
+  for (size_t k; (k = fread(s + n, 1, cap - n - 1, f)) > 0;) {
+    n += k;
+    if (n + 1 == cap) s = xrealloc(s, cap *= 2);
+  }
+  fclose(f);
+  s[n] = '\0';
+  return s;
+}
+
+static bool member_f64(const char *json, const char *key, double *v) {
+  char text[64];
+  return csv_json_member(json, key, text, sizeof text) && csv_number(text, v);
+}
+
+/* Run `bin args` with stdout to /dev/null and stderr to t->err; its exit
+ * status and user + system seconds. False if it could not be started. */
+static bool run_child(const char *bin, char **args, const struct bench_tmp *t, int *status,
+                      double *host_s) {
+  fflush(stdout);
+  fflush(stderr);
+  pid_t pid = fork();
+  if (pid < 0) return false;
+  if (pid == 0) {
+    int fd = open(t->err, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    int null = open("/dev/null", O_WRONLY);
+    if (fd >= 0) dup2(fd, 2);
+    if (null >= 0) dup2(null, 1);
+    execv(bin, args);
+    fprintf(stderr, "rtsim bench: cannot run %s: %s\n", bin, strerror(errno));
+    _exit(127);
+  }
+  struct rusage ru;
+  while (wait4(pid, status, 0, &ru) < 0)
+    if (errno != EINTR) return false;
+  *host_s = (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
+            (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
+  return true;
+}
+
+static int cmp_f64(const void *a, const void *b) {
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* The median of v[0..n) (v is sorted in place). */
+static double median(double *v, uint64_t n) {
+  qsort(v, n, sizeof *v, cmp_f64);
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* text as one CSV field. */
+static void put_field(const char *text) {
+  if (!strpbrk(text, ",\"\n")) {
+    fputs(text, stdout);
+    return;
+  }
+  putchar('"');
+  for (const char *p = text; *p; p++) {
+    if (*p == '"') putchar('"');
+    putchar(*p);
+  }
+  putchar('"');
+}
+
+/* The rows of one scene: r[round * n + j] is policy j's run in that round. */
+static void print_rows(const char *machine, const char *set_text, const char *rays,
+                       const struct bench_policy_list *l, const struct bench_run *r,
+                       uint64_t rounds) {
+  const unsigned n = l->n, base = n - 1;
+  double *a = xmalloc(rounds * sizeof *a), *b = xmalloc(rounds * sizeof *b);
+  for (unsigned j = 0; j < n; j++) {
+    const struct bench_run *first = &r[j];
+    double host_best = first->host_s, run_best = first->run_s;
+    for (uint64_t k = 0; k < rounds; k++) {
+      const struct bench_run *x = &r[k * n + j];
+      if (x->host_s < host_best) host_best = x->host_s;
+      if (x->run_s < run_best) run_best = x->run_s;
+      a[k] = x->host_s;
+      b[k] = x->run_s;
+    }
+    const double host_med = median(a, rounds), run_med = median(b, rounds);
+    double host_ratio_max = 0;
+    for (uint64_t k = 0; k < rounds; k++) {
+      const struct bench_run *x = &r[k * n + j], *y = &r[k * n + base];
+      a[k] = y->host_s > 0 ? x->host_s / y->host_s : 0;
+      b[k] = y->run_s > 0 ? x->run_s / y->run_s : 0;
+      if (a[k] > host_ratio_max) host_ratio_max = a[k];
+    }
+    const double host_ratio = median(a, rounds), run_ratio = median(b, rounds);
+    const struct bench_run *y = &r[base];
+    put_field(first->scene);
+    printf(",%llu,%llu,", (unsigned long long)first->width, (unsigned long long)first->height);
+    put_field(rays);
+    putchar(',');
+    put_field(machine);
+    putchar(',');
+    put_field(set_text);
+    printf(",%s,%llu,%.3f,%.3f,%.4f,%.4f,%llu,%.1f,%.3f,%.3f,%.3f,%.3f,%.3f,%s\n",
+           policy_name(l->k[j]), (unsigned long long)rounds, host_best, host_med, run_best, run_med,
+           (unsigned long long)first->events, first->peak_mb, host_ratio, host_ratio_max, run_ratio,
+           y->events ? (double)first->events / (double)y->events : 0.0,
+           y->peak_mb > 0 ? first->peak_mb / y->peak_mb : 0.0, policy_name(l->k[base]));
+  }
+  fflush(stdout);
+  free(a);
+  free(b);
+}
+
+int bench_policies(const char *machine, const struct app_sets *sets,
+                   const struct bench_policy_list *l, uint32_t mask, uint64_t width,
+                   uint64_t height, uint64_t rounds, int argc, char **argv, int first_scene) {
+  /* The config is refused here, before any run, as rtsim run would. */
+  struct machine_cfg mc;
+  struct err e = {0};
+  if (!app_machine_load(&mc, machine, sets, &e)) return app_report(&e);
+  char bin[4096];
+  ssize_t bl = readlink("/proc/self/exe", bin, sizeof bin - 1);
+  if (bl <= 0) {
+    fprintf(stderr, "rtsim bench: error: cannot find this program's path (/proc/self/exe)\n");
+    return 1;
+  }
+  bin[bl] = '\0';
+  struct bench_tmp t;
+  const char *tmpdir = getenv("TMPDIR");
+  snprintf(t.dir, sizeof t.dir, "%s/rtsim-bench-XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
+  if (!mkdtemp(t.dir)) {
+    fprintf(stderr, "rtsim bench: error: cannot make a temporary folder %s: %s\n", t.dir,
+            strerror(errno));
+    return 1;
+  }
+  snprintf(t.out, sizeof t.out, "%s/run", t.dir);
+  snprintf(t.err, sizeof t.err, "%s/stderr.txt", t.dir);
+
+  char rays[64], wtext[24], htext[24];
+  shade_rays_name(mask, rays, sizeof rays);
+  snprintf(wtext, sizeof wtext, "%llu", (unsigned long long)width);
+  snprintf(htext, sizeof htext, "%llu", (unsigned long long)height);
+  size_t set_len = 1;
+  for (unsigned i = 0; i < sets->n; i++) set_len += strlen(sets->v[i]) + 1;
+  char *set_text = xcalloc(set_len, 1);
+  for (unsigned i = 0; i < sets->n; i++) {
+    if (i) strcat(set_text, ";");
+    strcat(set_text, sets->v[i]);
+  }
+  /* bin run MACHINE SCENE --policy P --rays R [--width W --height H]
+   * [--set KV]... -o OUT, NULL */
+  const char **args = xcalloc(16 + 2 * (size_t)sets->n, sizeof *args);
+  int rc = 0;
+  const bool progress = isatty(2);
+  struct bench_run *r = xcalloc(rounds * l->n, sizeof *r);
+  for (int i = first_scene; i < argc && rc == 0; i++) {
+    for (uint64_t k = 0; k < rounds && rc == 0; k++) {
+      for (unsigned j = 0; j < l->n && rc == 0; j++) {
+        unsigned a = 0;
+        args[a++] = bin;
+        args[a++] = "run";
+        args[a++] = machine;
+        args[a++] = argv[i];
+        args[a++] = "--policy";
+        args[a++] = policy_name(l->k[j]);
+        args[a++] = "--rays";
+        args[a++] = rays;
+        if (width) {
+          args[a++] = "--width";
+          args[a++] = wtext;
+        }
+        if (height) {
+          args[a++] = "--height";
+          args[a++] = htext;
+        }
+        for (unsigned s = 0; s < sets->n; s++) {
+          args[a++] = "--set";
+          args[a++] = sets->v[s];
+        }
+        args[a++] = "-o";
+        args[a++] = t.out;
+        args[a] = NULL;
+        int status = 0;
+        struct bench_run *x = &r[k * l->n + j];
+        if (!run_child(bin, (char **)args, &t, &status, &x->host_s)) {
+          fprintf(stderr, "rtsim bench: error: cannot run %s: %s\n", bin, strerror(errno));
+          rc = 1;
+          break;
+        }
+        if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+          show_failure(&t, argv[i], policy_name(l->k[j]), status);
+          rc = WIFEXITED(status) ? WEXITSTATUS(status) : 1;
+          break;
+        }
+        char *json = read_stats(&t);
+        double ev = 0, w = 0, h = 0;
+        if (!json || !member_f64(json, "wall_s", &x->run_s) || !member_f64(json, "events", &ev) ||
+            !member_f64(json, "peak_rss_mb", &x->peak_mb) || !member_f64(json, "width", &w) ||
+            !member_f64(json, "height", &h) ||
+            !csv_json_member(json, "scene", x->scene, sizeof x->scene)) {
+          fprintf(stderr, "rtsim bench: error: rtsim run of %s wrote no readable %s/stats.json\n",
+                  argv[i], t.out);
+          free(json);
+          rc = 1;
+          break;
+        }
+        free(json);
+        x->events = (uint64_t)ev;
+        x->width = (uint64_t)w;
+        x->height = (uint64_t)h;
+        clear_out(&t);
+        if (progress)
+          fprintf(stderr, "\rbench: %s, round %llu of %llu   ", argv[i], (unsigned long long)k + 1,
+                  (unsigned long long)rounds);
+      }
+    }
+    if (rc == 0) {
+      if (progress) fputc('\n', stderr);
+      if (i == first_scene) /* the header once a scene has its rows: none when the first fails */
+        printf("scene,width,height,rays,machine,set,policy,rounds,host_s_best,host_s_median,"
+               "run_s_best,run_s_median,events,peak_rss_mb,host_vs_base_median,host_vs_base_max,"
+               "run_vs_base_median,events_vs_base,peak_rss_vs_base,base\n");
+      print_rows(machine, set_text, rays, l, r, rounds);
+    }
+  }
+  free(r);
+  free(args);
+  free(set_text);
+  tmp_fini(&t);
+  return rc;
+}

@@ -1,0 +1,128 @@
+/* rtsim bench --timed MACHINE.yaml --policies LIST against rtsim run itself:
+ * the events and image size it reports for each policy are those of the same
+ * run made directly (an independent process writing its own stats.json), its
+ * ratios are its own columns divided as it says, it leaves no temporary
+ * folder behind, and a run that fails stops it with that run's message and
+ * exit code. Host seconds are a benchmark's figures, not checked here beyond
+ * being positive. */
+#include <dirent.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testing.h"
+
+#define SCN RTSIM_TEST_DATA "/scenes/good_room_tiny.yaml"
+#define CFG RTSIM_SOURCE_DIR "/configs/tiny.yaml"
+
+/* The n-th comma-separated field of line (quoted fields kept whole). */
+static void field(const char *line, unsigned n, char *out, unsigned cap) {
+  unsigned i = 0, k = 0;
+  bool q = false;
+  for (const char *p = line; *p && *p != '\n'; p++) {
+    if (*p == '"') q = !q;
+    else if (*p == ',' && !q) i++;
+    else if (i == n && k + 1 < cap) out[k++] = *p;
+  }
+  out[k] = '\0';
+}
+
+static double field_f(const char *line, unsigned n) {
+  char t[64];
+  field(line, n, t, sizeof t);
+  return atof(t);
+}
+
+/* Events of a direct rtsim run of policy p into dir. */
+static double direct_events(const char *p, const char *dir) {
+  char out[8192], path[600];
+  int rc = testing_runf(out, sizeof out,
+                        RTSIM_BINARY " run " CFG " " SCN " --policy %s --rays primary,shadow "
+                                     "--width 8 --height 8 --set cores=4 -o %s",
+                        p, dir);
+  EXPECTF(rc == 0, "direct run of %s: exit %d: %s", p, rc, out);
+  snprintf(path, sizeof path, "%s/stats.json", dir);
+  FILE *f = fopen(path, "r");
+  EXPECTF(f != NULL, "no %s", path);
+  if (!f) return -1;
+  char line[512];
+  double ev = -1;
+  while (fgets(line, sizeof line, f))
+    if (strncmp(line, "  \"events\": ", 12) == 0) ev = atof(line + 12);
+  fclose(f);
+  return ev;
+}
+
+/* Folders named rtsim-bench-* in dir. */
+static int bench_dirs(const char *dir) {
+  DIR *d = opendir(dir);
+  if (!d) return 0;
+  int n = 0;
+  for (struct dirent *de; (de = readdir(d));) n += strncmp(de->d_name, "rtsim-bench-", 12) == 0;
+  closedir(d);
+  return n;
+}
+
+int main(void) {
+  char out[16384];
+  int rc = testing_runf(out, sizeof out,
+                        "TMPDIR=%s " RTSIM_BINARY " bench --timed " CFG
+                        " --policies dynamic,packet,recursive --rays primary,shadow --width 8 "
+                        "--height 8 --set cores=4 --repeat 2 " SCN " 2>/dev/null",
+                        RTSIM_TMP);
+  EXPECTF(rc == 0, "bench --policies: exit %d: %s", rc, out);
+  EXPECTF(bench_dirs(RTSIM_TMP) == 0, "bench left its temporary folder in %s", RTSIM_TMP);
+  /* The header and one row per policy, in LIST's order, base last. */
+  const char *row[3];
+  const char *p = strchr(out, '\n');
+  EXPECTF(p && strncmp(out, "scene,width,height,rays,machine,set,policy,rounds,", 50) == 0,
+          "header: %s", out);
+  for (int i = 0; i < 3; i++) {
+    row[i] = p ? p + 1 : "";
+    p = p ? strchr(p + 1, '\n') : NULL;
+  }
+  static const char *const pol[3] = {"dynamic", "packet", "recursive"};
+  double ev[3];
+  char dir[512];
+  for (int i = 0; i < 3; i++) {
+    char t[64];
+    field(row[i], 6, t, sizeof t);
+    EXPECTF(strcmp(t, pol[i]) == 0, "row %d is policy '%s', want %s", i, t, pol[i]);
+    field(row[i], 3, t, sizeof t);
+    EXPECTF(strcmp(t, "primary,shadow") == 0, "row %d rays '%s'", i, t);
+    field(row[i], 5, t, sizeof t);
+    EXPECTF(strcmp(t, "cores=4") == 0, "row %d set '%s'", i, t);
+    field(row[i], 19, t, sizeof t);
+    EXPECTF(strcmp(t, "recursive") == 0, "row %d base '%s'", i, t);
+    EXPECTF(field_f(row[i], 1) == 8 && field_f(row[i], 2) == 8 && field_f(row[i], 7) == 2,
+            "row %d: width, height, rounds: %s", i, row[i]);
+    ev[i] = field_f(row[i], 12);
+    snprintf(dir, sizeof dir, "%s/bench-direct-%s", RTSIM_TMP, pol[i]);
+    double want = direct_events(pol[i], dir);
+    EXPECTF(ev[i] == want, "%s: bench says %.0f events, a direct run %.0f", pol[i], ev[i], want);
+    EXPECTF(field_f(row[i], 8) > 0 && field_f(row[i], 9) >= field_f(row[i], 8) &&
+                field_f(row[i], 10) > 0 && field_f(row[i], 11) >= field_f(row[i], 10) &&
+                field_f(row[i], 13) > 0,
+            "row %d: host and run seconds, best <= median, memory: %s", i, row[i]);
+  }
+  /* Against the base: its own events over the base's (3 decimals). */
+  for (int i = 0; i < 3; i++) {
+    double r = field_f(row[i], 17), want = ev[i] / ev[2];
+    EXPECTF(r > want - 0.0006 && r < want + 0.0006, "%s: events_vs_base %.3f, want %.4f", pol[i], r,
+            want);
+  }
+  EXPECTF(field_f(row[2], 14) == 1 && field_f(row[2], 16) == 1, "the base against itself: %s",
+          row[2]);
+
+  /* A run that fails: its message, its exit code, no header, no folder. */
+  rc = testing_runf(out, sizeof out,
+                    "TMPDIR=%s " RTSIM_BINARY " bench --timed " CFG
+                    " --policies dynamic,recursive --repeat 1 %s/no_such_scene.yaml",
+                    RTSIM_TMP, RTSIM_TEST_DATA);
+  EXPECTF(rc == 2 && strstr(out, "rtsim run of ") && strstr(out, "no_such_scene.yaml: error:") &&
+              !strstr(out, "scene,width"),
+          "failing run: exit %d: %s", rc, out);
+  EXPECTF(bench_dirs(RTSIM_TMP) == 0, "a failed bench left its temporary folder");
+  return testing_done("test_bench");
+}
