@@ -270,12 +270,8 @@ static int bench_main(int argc, char **argv, struct app_sets *sets) {
       OPTS_STR("timed", 0, &timed),
       OPTS_PARSE("sample", 0, &sample, parse_fraction, "a fraction above 0 and at most 1"),
       OPTS_FLAG("embree", 0, &embree),
-      {.name = "policies",
-       .kind = OPTS_KIND_PARSE,
-       .dst = &policies,
-       .parse = bench_parse_policies,
-       .expect = BENCH_POLICIES_EXPECT,
-       .given = &have_policies},
+      OPTS_PARSE_GIVEN("policies", 0, &policies, bench_parse_policies, BENCH_POLICIES_EXPECT,
+                       &have_policies),
       OPTS_PARSE("set", 0, sets, app_sets_add, "KEY=VALUE"),
       OPTS_END};
   struct opts_args args;

@@ -362,16 +362,9 @@ int cmd_trace(int argc, char **argv) {
   char policy_expect[160];
   app_policy_expect(policy_expect, sizeof policy_expect, "");
   const struct opts_spec spec[] = {
-      OPTS_STR("din", 0, &din_path),
-      TRAFFIC_OPTS(&width, &height, &mask, &pp, &threads),
-      {.name = "policy",
-       .kind = OPTS_KIND_PARSE,
-       .dst = &pk,
-       .parse = app_parse_policy,
-       .expect = policy_expect,
-       .given = &have_policy},
-      OPTS_PARSE("cache", 0, &cache, parse_cache, "a power of two from 1024 to 4194304"),
-      OPTS_END};
+      OPTS_STR("din", 0, &din_path), TRAFFIC_OPTS(&width, &height, &mask, &pp, &threads),
+      OPTS_PARSE_GIVEN("policy", 0, &pk, app_parse_policy, policy_expect, &have_policy),
+      OPTS_PARSE("cache", 0, &cache, parse_cache, "a power of two from 1024 to 4194304"), OPTS_END};
   struct opts_args args;
   int rc = opts_parse("trace", TRACE_HELP, spec, argc, argv, &args);
   if (rc != OPTS_GO) return rc;

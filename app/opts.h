@@ -47,6 +47,12 @@ struct opts_spec {
     .name = (n_), .letter = (l_), .kind = OPTS_KIND_PARSE, .dst = (d_), .parse = (fn_),            \
     .expect = (expect_)                                                                            \
   }
+/* OPTS_PARSE that also sets *given_ (a bool) when the option appears. */
+#define OPTS_PARSE_GIVEN(n_, l_, d_, fn_, expect_, given_)                                         \
+  {                                                                                                \
+    .name = (n_), .letter = (l_), .kind = OPTS_KIND_PARSE, .dst = (d_), .parse = (fn_),            \
+    .expect = (expect_), .given = (given_)                                                         \
+  }
 #define OPTS_END                                                                                   \
   { .name = NULL }
 /* A pointer of the named type (a mismatch is a compile error under -Werror). */
