@@ -1,6 +1,7 @@
 /* Scene storage: growable arrays of triangles and materials. */
 #include "renderer/scene.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -84,6 +85,18 @@ void scene_reserve(struct scene *s, uint32_t n) {
   s->tris = xrealloc(s->tris, (unsigned long long)n * sizeof *s->tris);
 }
 
+/* The geometric normal in double precision, for a triangle whose float cross
+ * product overflows (finite vertices, but edges of 1e19 or more: a mesh scaled
+ * or moved far out). Float's product is kept for every other triangle, so
+ * their normals, and every image, stay as they were. */
+static vec3 wide_normal(vec3 a, vec3 b, vec3 c) {
+  const double ux = (double)b.x - a.x, uy = (double)b.y - a.y, uz = (double)b.z - a.z;
+  const double vx = (double)c.x - a.x, vy = (double)c.y - a.y, vz = (double)c.z - a.z;
+  const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+  const double l = sqrt(nx * nx + ny * ny + nz * nz);
+  return l > 0 ? v3((float)(nx / l), (float)(ny / l), (float)(nz / l)) : v3(0, 0, 1);
+}
+
 uint32_t scene_add_tri(struct scene *s, vec3 a, vec3 b, vec3 c, const vec3 *normals,
                        uint32_t material) {
   if (s->tri_count == s->tri_cap) {
@@ -100,7 +113,8 @@ uint32_t scene_add_tri(struct scene *s, vec3 a, vec3 b, vec3 c, const vec3 *norm
   } else {
     vec3 n = v3_cross(v3_sub(b, a), v3_sub(c, a));
     float l = v3_len(n);
-    n = l > 0.0f ? v3_scale(n, 1.0f / l) : v3(0, 0, 1);
+    if (!isfinite(l)) n = wide_normal(a, b, c);
+    else n = l > 0.0f ? v3_scale(n, 1.0f / l) : v3(0, 0, 1);
     t->n[0] = t->n[1] = t->n[2] = n;
   }
   t->material = material;

@@ -59,6 +59,31 @@ int main(void) {
     scene_fini(&s);
   }
 
+  /* The same triangle scaled by 2.18e20 (a fuzzer's find): its vertices are
+   * finite, but float's cross product of its edges overflows; its normal is
+   * still the unit +Z, not NaN. Moved far out instead, the same. */
+  static const char *const far[] = {"scale: 218446744073709551615", "scale: 1e19",
+                                    "translate: [-1e30, 1e30, 0]\n    scale: 1e30"};
+  for (size_t i = 0; i < sizeof far / sizeof far[0]; i++) {
+    const char *big = RTSIM_TMP "/scene_far_mesh.yaml";
+    FILE *g = fopen(big, "w");
+    EXPECT(g != NULL);
+    if (!g) break;
+    fprintf(g,
+            "camera: {from: [0, -2, 1], at: [0, 0, 0]}\ngeometry:\n  - mesh: %s/scenes/tri.obj\n"
+            "    %s\n",
+            RTSIM_TEST_DATA, far[i]);
+    fclose(g);
+    if (!load(&s, big)) continue;
+    EXPECTF(s.tri_count == 1, "%s: %u triangles", far[i], s.tri_count);
+    for (int k = 0; k < 3; k++) {
+      vec3 n = s.tris[0].n[k];
+      EXPECTF(n.x == 0 && n.y == 0 && n.z == 1, "%s: normal %d is (%g, %g, %g), want +Z", far[i], k,
+              (double)n.x, (double)n.y, (double)n.z);
+    }
+    scene_fini(&s);
+  }
+
   /* Materials in the file override the generator's defaults by name. */
   snprintf(path, sizeof path, "%s/scenes/sphereflake.yaml", RTSIM_SOURCE_DIR);
   if (load(&s, path)) {
