@@ -66,14 +66,11 @@ int main(void) {
                                     "translate: [-1e30, 1e30, 0]\n    scale: 1e30"};
   for (size_t i = 0; i < sizeof far / sizeof far[0]; i++) {
     const char *big = RTSIM_TMP "/scene_far_mesh.yaml";
-    FILE *g = fopen(big, "w");
-    EXPECT(g != NULL);
-    if (!g) break;
-    fprintf(g,
-            "camera: {from: [0, -2, 1], at: [0, 0, 0]}\ngeometry:\n  - mesh: %s/scenes/tri.obj\n"
-            "    %s\n",
-            RTSIM_TEST_DATA, far[i]);
-    fclose(g);
+    if (!testing_writef(big,
+                        "camera: {from: [0, -2, 1], at: [0, 0, 0]}\ngeometry:\n  - mesh: "
+                        "%s/scenes/tri.obj\n    %s\n",
+                        RTSIM_TEST_DATA, far[i]))
+      break;
     if (!load(&s, big)) continue;
     EXPECTF(s.tri_count == 1, "%s: %u triangles", far[i], s.tri_count);
     for (int k = 0; k < 3; k++) {

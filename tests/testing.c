@@ -34,6 +34,19 @@ int testing_runf(char *buf, unsigned buf_size, const char *fmt, ...) {
   return testing_run(cmd, buf, buf_size);
 }
 
+bool testing_writef(const char *path, const char *fmt, ...) {
+  FILE *f = fopen(path, "w");
+  EXPECTF(f != NULL, "cannot write %s", path);
+  if (!f) return false;
+  va_list ap;
+  va_start(ap, fmt);
+  vfprintf(f, fmt, ap);
+  va_end(ap);
+  bool ok = fclose(f) == 0;
+  EXPECTF(ok, "cannot write %s", path);
+  return ok;
+}
+
 int testing_run(const char *cmd, char *buf, unsigned buf_size) {
   char full[8192];
   snprintf(full, sizeof full, "%s 2>&1", cmd);

@@ -76,6 +76,9 @@ int testing_run(const char *cmd, char *buf, unsigned buf_size);
 int testing_runf(char *buf, unsigned buf_size, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
+/* Write path with printf's text (a check fails, and false, if it cannot). */
+bool testing_writef(const char *path, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
 /* The whole of dir/name (caller frees; *len its length if len), or NULL. */
 char *testing_slurp(const char *dir, const char *name, size_t *len);
 /* A number member of dir/stats.json ("cycles"); NAN when absent. */
