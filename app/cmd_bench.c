@@ -88,7 +88,7 @@ static const char HELP[] =
     "                         events, peak_rss_mb, and against the last policy of\n"
     "                         LIST (base): host_vs_base_median and _max (over the\n"
     "                         rounds' ratios), run_vs_base_median, events_vs_base,\n"
-    "                         peak_rss_vs_base\n"
+    "                         peak_rss_vs_base, and base (its name)\n"
     "  --set KEY=VALUE        with --policies: a machine key for every run\n"
     "                         (repeatable)\n"
     "  -h, --help             this text\n";
