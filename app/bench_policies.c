@@ -20,6 +20,7 @@
 #include "renderer/shade.h"
 #include "sim/err.h"
 #include "sim/machine_cfg.h"
+#include "sim/stats.h"
 
 bool bench_parse_policies(const char *text, void *dst) {
   struct bench_policy_list *l = dst;
@@ -95,17 +96,9 @@ static void show_failure(const struct bench_tmp *t, const char *scene, const cha
 static char *read_stats(const struct bench_tmp *t) {
   char path[8400];
   snprintf(path, sizeof path, "%s/stats.json", t->out);
-  FILE *f = fopen(path, "r");
-  if (!f) return NULL;
-  size_t cap = 1 << 16, n = 0;
-  char *s = xmalloc(cap);
-  for (size_t k; (k = fread(s + n, 1, cap - n - 1, f)) > 0;) {
-    n += k;
-    if (n + 1 == cap) s = xrealloc(s, cap *= 2);
-  }
-  fclose(f);
-  s[n] = '\0';
-  return s;
+  size_t len;
+  const char *why;
+  return csv_slurp(path, &len, &why);
 }
 
 static bool member_f64(const char *json, const char *key, double *v) {
@@ -149,20 +142,6 @@ static double median(double *v, uint64_t n) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-/* text as one CSV field. */
-static void put_field(const char *text) {
-  if (!strpbrk(text, ",\"\n")) {
-    fputs(text, stdout);
-    return;
-  }
-  putchar('"');
-  for (const char *p = text; *p; p++) {
-    if (*p == '"') putchar('"');
-    putchar(*p);
-  }
-  putchar('"');
-}
-
 /* The rows of one scene: r[round * n + j] is policy j's run in that round. */
 static void print_rows(const char *machine, const char *set_text, const char *rays,
                        const struct bench_policy_list *l, const struct bench_run *r,
@@ -189,13 +168,13 @@ static void print_rows(const char *machine, const char *set_text, const char *ra
     }
     const double host_ratio = median(a, rounds), run_ratio = median(b, rounds);
     const struct bench_run *y = &r[base];
-    put_field(first->scene);
+    stats_write_csv_str(stdout, first->scene);
     printf(",%llu,%llu,", (unsigned long long)first->width, (unsigned long long)first->height);
-    put_field(rays);
+    stats_write_csv_str(stdout, rays);
     putchar(',');
-    put_field(machine);
+    stats_write_csv_str(stdout, machine);
     putchar(',');
-    put_field(set_text);
+    stats_write_csv_str(stdout, set_text);
     printf(",%s,%llu,%.3f,%.3f,%.4f,%.4f,%llu,%.1f,%.3f,%.3f,%.3f,%.3f,%.3f,%s\n",
            policy_name(l->k[j]), (unsigned long long)rounds, host_best, host_med, run_best, run_med,
            (unsigned long long)first->events, first->peak_mb, host_ratio, host_ratio_max, run_ratio,

@@ -77,16 +77,9 @@ static bool read_provenance(struct point *p, const char *dir, struct err *e) {
   char path[8192];
   snprintf(path, sizeof path, "%s/%s/stats.json", dir, p->name);
   const char *why;
-  FILE *f = err_fopen_regular(path, &why);
-  if (!f) return err_set(e, path, 0, 0, "cannot read the file: %s", why);
-  char *text = NULL;
-  size_t len = 0, got;
-  char buf[65536];
-  FILE *m = open_memstream(&text, &len);
-  CHECK(m);
-  while ((got = fread(buf, 1, sizeof buf, f)) > 0) fwrite(buf, 1, got, m);
-  fclose(f);
-  CHECK(fclose(m) == 0);
+  size_t len;
+  char *text = csv_slurp(path, &len, &why);
+  if (!text) return err_set(e, path, 0, 0, "cannot read the file: %s", why);
   for (int k = 0; k < PROV_COUNT; k++)
     if (!csv_json_member(text, PROV_NAMES[k], p->prov[k], sizeof p->prov[k])) p->prov[k][0] = '\0';
   free(text);

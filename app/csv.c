@@ -10,9 +10,7 @@
 #include "sim/err.h"
 #include "sim/scalar.h"
 
-/* Read a whole regular file into a NUL-terminated buffer (caller frees), its
- * length in *len; NULL on failure, with the reason in *why. */
-static char *slurp(const char *path, size_t *len, const char **why) {
+char *csv_slurp(const char *path, size_t *len, const char **why) {
   FILE *f = err_fopen_regular(path, why);
   if (!f) return NULL;
   size_t cap = 1 << 14, n = 0;
@@ -59,7 +57,7 @@ bool csv_read(struct csv_table *t, const char *path, struct err *e) {
   snprintf(t->file, sizeof t->file, "%s", path);
   size_t size = 0;
   const char *why;
-  char *text = slurp(path, &size, &why);
+  char *text = csv_slurp(path, &size, &why);
   if (!text) return err_set(e, path, 0, 0, "cannot read: %s", why);
   /* A NUL byte would end the text there, and the rows after it with it. */
   const char *nul = memchr(text, '\0', size);

@@ -6,6 +6,7 @@
 #define RTSIM_APP_CSV_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 struct err;
 
@@ -17,6 +18,11 @@ struct csv_table {
   int *lines, *cols; /* position of each cell (nrows x ncols) */
   unsigned nrows;
 };
+
+/* Read a whole regular file into a NUL-terminated buffer (caller frees), its
+ * length in *len; NULL on failure, with the reason in *why. What csv_read
+ * and the readers of stats.json start from. */
+char *csv_slurp(const char *path, size_t *len, const char **why);
 
 /* Read the CSV file at path. A missing or empty file, a NUL byte, an
  * unterminated quote, a duplicate or empty column name, or a row whose field
