@@ -96,6 +96,19 @@ struct pick {
   int64_t first_t;
 };
 
+/* A command queue's summary: of its candidates as of cycle `at`, the least
+ * earliest time t (FAR: none) and the first candidate with it. */
+struct qsum {
+  int64_t at, t;
+  struct cmd k;
+  int64_t act_t, rd_t, wr_t; /* the least of its ACT, RD and WR candidates (FAR: none) */
+  /* per_bank: the one ACT or PRE candidate (o_t FAR: none), and the entries
+   * of the RD and WR candidates (see col_refresh). */
+  int64_t o_t;
+  struct cmd o;
+  uint32_t rd_j, wr_j;
+};
+
 struct channel {
   struct queue q[2];
   bool writing;
@@ -117,9 +130,17 @@ struct channel {
   int64_t took_at;      /* the arrival cycle of the last request taken */
   struct follower *fol; /* reads waiting for another read's RD */
   uint32_t nfol, cap_fol;
-  /* per_bank / per_rank: the last command-queue scan's first least candidate
-   * (memo, from cycle memo_t), the scan made at cycle memo_at, kept while
-   * nothing it read has changed since (memo_ok; see memo_pick). */
+  /* per_bank / per_rank: each command queue's least candidate (cq_sum),
+   * and bitmaps by command queue: its summary is fresh; it has an ACT
+   * candidate; it has a column candidate (what a command elsewhere can
+   * invalidate: see cq_sum). */
+  struct qsum *sum;
+  uint64_t *fresh, *has_act, *has_col;
+  uint64_t *col_stale; /* per_bank: only its column candidates' times may have moved */
+  uint64_t *blocked;   /* bitmap: the command queue's rank has a refresh due */
+  /* The last scan's first least candidate (memo, at cycle memo_t), made at
+   * cycle memo_at, kept while no command issued and no entry or refresh came
+   * since (memo_ok; see channel_cycle_cq). */
   bool memo_ok;
   int64_t memo_at, memo_t;
   struct cmd memo;
@@ -246,6 +267,8 @@ static uint64_t core_deciding(const struct dram_banked *d, int64_t w) {
     if (w <= 0) return 0;
     w--;
   }
+  if (w < ((int64_t)1 << 31) && d->clk.num < (1ull << 32))
+    return (uint64_t)w * d->clk.num / d->clk.den + 1;
   return (uint64_t)(((unsigned __int128)(uint64_t)w * d->clk.num) / d->clk.den) + 1;
 }
 
@@ -494,12 +517,114 @@ static int64_t next_of(const struct dram_banked *d, const struct channel *c, int
   return s < next ? s : next;
 }
 
+/* ---- per_bank / per_rank: what a change makes stale (see cq_sum) ---- */
+
+/* Clear, in bitmap `fresh`, the bits of [lo, hi) set in `mask` (NULL: all). */
+static void stale_range(uint64_t *fresh, const uint64_t *mask, uint32_t lo, uint32_t hi) {
+  for (uint32_t i = lo; i < hi;) {
+    const uint32_t w = i / 64, b = i % 64, n = hi - i < 64 - b ? hi - i : 64 - b;
+    const uint64_t bits = (n == 64 ? ~0ull : ((1ull << n) - 1)) << b;
+    fresh[w] &= ~(bits & (mask ? mask[w] : ~0ull));
+    i += n;
+  }
+}
+
+/* The command queues holding rank k's requests: [*lo, *hi). */
+static void rank_queues(const struct dram_banked *d, uint32_t k, uint32_t *lo, uint32_t *hi) {
+  const bool per_rank = d->p.queue_structure == DRAM_BANKED_PER_RANK;
+  *lo = per_rank ? k : k * d->banks_per_rank;
+  *hi = per_rank ? k + 1 : (k + 1) * d->banks_per_rank;
+}
+
+/* Bank `bank`'s state or its command queue's entries changed. */
+static void stale_bank(const struct dram_banked *d, struct channel *c, uint32_t bank) {
+  if (!d->cq_mode) return;
+  const uint32_t qi =
+      d->p.queue_structure == DRAM_BANKED_PER_RANK ? bank / d->banks_per_rank : bank;
+  c->fresh[qi / 64] &= ~(1ull << (qi % 64));
+}
+
+/* A refresh changed all of rank k's state. */
+static void stale_rank(const struct dram_banked *d, struct channel *c, uint32_t k) {
+  if (!d->cq_mode) return;
+  uint32_t lo, hi;
+  rank_queues(d, k, &lo, &hi);
+  stale_range(c->fresh, NULL, lo, hi);
+}
+
+/* Clear the fresh bit of each queue of [lo, hi) set in `mask` whose summary
+ * has an ACT candidate before h_act, a RD before h_rd or a WR before h_wr. */
+static void stale_before(struct channel *c, const uint64_t *mask, uint32_t lo, uint32_t hi,
+                         int64_t h_act, int64_t h_rd, int64_t h_wr) {
+  for (uint32_t w = lo / 64; w * 64 < hi; w++) {
+    uint64_t bits = mask[w] & c->fresh[w];
+    if (w == lo / 64) bits &= ~0ull << (lo % 64);
+    if (hi - w * 64 < 64) bits &= (1ull << (hi - w * 64)) - 1;
+    while (bits) {
+      const uint32_t b = (uint32_t)__builtin_ctzll(bits);
+      const struct qsum *s = &c->sum[w * 64 + b];
+      bits &= bits - 1;
+      if (s->act_t < h_act || s->rd_t < h_rd || s->wr_t < h_wr) {
+        /* per_bank: a column command moves only the column candidates. */
+        if (h_act == FAR && c->col_stale) c->col_stale[w] |= 1ull << b;
+        else c->fresh[w] &= ~(1ull << b);
+      }
+    }
+  }
+}
+
+/* An ACT in rank k at `now` moved its ACT spacing (tRRD, tFAW): nothing
+ * before now + tRRD_L or the new oldest of the last four ACTs + tFAW changes
+ * (tRRD_L >= tRRD_S), so only its queues with an ACT candidate earlier than
+ * that can be stale. */
+static void stale_acts(const struct dram_banked *d, struct channel *c, uint32_t k, int64_t now) {
+  if (!d->cq_mode) return;
+  const struct rank *rk = &c->ranks[k];
+  const int64_t h = max64(now + d->p.tRRD_L, rk->faw[rk->faw_i] + d->p.tFAW);
+  uint32_t lo, hi;
+  rank_queues(d, k, &lo, &hi);
+  stale_before(c, c->has_act, lo, hi, h, FAR, FAR);
+}
+
+/* A column command at `now` moved the column spacing (tCCD, tWTR, tRTW) and
+ * put a burst on the data bus. Each constraint it adds ends by the bounds
+ * below (one idle cycle between bursts, whichever ranks; tCCD_L >= tCCD_S,
+ * tWTR_L >= tWTR_S), and a column candidate no earlier than its bound keeps
+ * its time: the new burst ends, gap included, before that candidate's data
+ * would start. So only queues with a column candidate earlier can be stale. */
+static void stale_columns(const struct dram_banked *d, struct channel *c, bool write, int64_t now) {
+  if (!d->cq_mode) return;
+  const struct dram_banked_params *p = &d->p;
+  const int64_t b = d->burst_cycles;
+  int64_t h_rd, h_wr;
+  if (write) {
+    h_rd = now + max64(p->tCWL + b + p->tWTR_L, (int64_t)p->tCWL + b + 1 - p->tCL);
+    h_wr = now + max64(p->tCCD_L, b + 1);
+  } else {
+    h_rd = now + max64(p->tCCD_L, b + 1);
+    h_wr = now + max64(p->tRTW, (int64_t)p->tCL + b + 1 - p->tCWL);
+  }
+  stale_before(c, c->has_col, 0, c->ncq, FAR, h_rd, h_wr);
+}
+
+/* Rank k's command queues take no command while it has a refresh due. */
+static void block_rank(const struct dram_banked *d, struct channel *c, uint32_t k, bool due) {
+  if (!d->cq_mode) return;
+  uint32_t lo, hi;
+  rank_queues(d, k, &lo, &hi);
+  for (uint32_t i = lo; i < hi; i++) {
+    const uint64_t bit = 1ull << (i % 64);
+    c->blocked[i / 64] = due ? c->blocked[i / 64] | bit : c->blocked[i / 64] & ~bit;
+  }
+}
+
 static void bank_close(struct dram_banked *d, struct channel *c, struct bank *bk, uint32_t rank,
                        int64_t at) {
   bk->open = false;
   bk->close_at = at;
   bk->act_ok = max64(bk->act_ok, at + d->p.tRP);
   bk->ref_ok = at + d->p.tRP;
+  stale_bank(d, c, (uint32_t)(bk - c->banks));
   c->ranks[rank].open--;
   d->st.precharges++;
 }
@@ -515,6 +640,8 @@ static int64_t column_state(struct dram_banked *d, struct channel *c, const stru
   const int64_t b = d->burst_cycles;
   int64_t end, pre;
   bk->hits++;
+  stale_bank(d, c, r.bank);
+  stale_columns(d, c, write, now);
   if (write) {
     rk->wr = g->wr = now;
     bus_add(d, c, now, now + d->p.tCWL, r.rank, true);
@@ -603,6 +730,8 @@ static void issue(struct dram_banked *d, struct channel *c, const struct cmd *k,
     rk->faw[rk->faw_i] = now;
     rk->faw_i = (rk->faw_i + 1) & 3;
     rk->open++;
+    stale_bank(d, c, k->bank);
+    stale_acts(d, c, k->rank, now);
     d->st.activates++;
     if (r->kind == KIND_HIT) r->kind = KIND_MISS;
     break;
@@ -614,12 +743,13 @@ static void issue(struct dram_banked *d, struct channel *c, const struct cmd *k,
     break;
   case CMD_REF: {
     struct rank *rk = &c->ranks[k->rank];
-    rk->pending--;
+    if (!--rk->pending) block_rank(d, c, k->rank, false);
     rk->ref_end = now + d->p.tRFC;
     for (uint32_t i = 0; i < d->banks_per_rank; i++) {
       struct bank *bk = &c->banks[k->rank * d->banks_per_rank + i];
       bk->act_ok = max64(bk->act_ok, rk->ref_end);
     }
+    stale_rank(d, c, k->rank);
     d->st.refreshes++;
     d->st.refresh_cycles += d->p.tRFC;
     break;
@@ -640,21 +770,11 @@ static void cq_mark(struct channel *c, uint32_t qi, bool busy) {
   else c->cq_busy[qi / 64] &= ~bit;
 }
 
-/* The first command queue from `from` on holding a command, or ncq. */
-static uint32_t cq_next_busy(const struct channel *c, uint32_t from) {
-  for (uint32_t w = from / 64; w * 64 < c->ncq; w++) {
-    uint64_t bits = c->cq_busy[w];
-    if (w == from / 64) bits &= ~0ull << (from % 64);
-    if (bits) return w * 64 + (uint32_t)__builtin_ctzll(bits);
-  }
-  return c->ncq;
-}
-
 /* Entries of transaction queue q that may take part in cycle t (a prefix:
  * ready grows with arrival). */
 static uint32_t visible(const struct queue *q, int64_t t) {
-  uint32_t n = 0;
-  while (n < q->n && q->r[n].ready - 1 <= t) n++;
+  uint32_t n = q->n;
+  while (n > 0 && q->r[n - 1].ready - 1 > t) n--;
   return n;
 }
 
@@ -710,6 +830,7 @@ static bool schedule_cq(struct dram_banked *d, struct channel *c, int64_t t, boo
     q->n--;
     m.ready = t + 1;
     cq->r[cq->n++] = m;
+    stale_bank(d, c, m.bank);
     c->cq_n++;
     cq_mark(c, cq_of(d, &m), true);
     d->space_due = true;
@@ -746,6 +867,121 @@ static bool write_behind_read(const struct queue *q, uint32_t j) {
   return false;
 }
 
+/* Command queue qi's candidates as of cycle now: the least earliest time and
+ * the first candidate with it, into s; has_act and has_col say which kinds
+ * of command it holds. */
+static void cq_candidates(const struct dram_banked *d, const struct channel *c, uint32_t qi,
+                          int64_t now, struct qsum *s, bool *has_act, bool *has_col) {
+  const struct queue *q = &c->cq[qi];
+  struct pick pk = {.cmd.type = CMD_NONE, .next = FAR, .first_t = FAR};
+  *has_act = *has_col = false;
+  s->act_t = s->rd_t = s->wr_t = s->o_t = FAR;
+  /* An ACT, RD or WR's earliest time depends on its request only through
+   * the bank and `ready`, and never falls as `ready` grows: a later entry of
+   * the same command and bank as the last one considered here, ready no
+   * sooner, can neither come first nor lower the least (ties keep the
+   * older), so it is not asked (in per_bank every entry shares the bank: of
+   * the ACTs of a closed bank only the oldest is asked). */
+  uint32_t seen_bank[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX}; /* ACT, RD, WR */
+  int64_t seen_ready[3] = {0, 0, 0};
+  for (uint32_t j = 0; j < q->n; j++) {
+    const struct req *r = &q->r[j];
+    const struct bank *bk = &c->banks[r->bank];
+    enum cmd_type type;
+    if (!bk->open || bk->row == r->row) {
+      const int w = !bk->open ? 0 : r->write ? 2 : 1;
+      if (seen_bank[w] == r->bank && r->ready >= seen_ready[w]) continue;
+      if (w == 2 && write_behind_read(q, j)) continue;
+      seen_bank[w] = r->bank;
+      seen_ready[w] = r->ready;
+      type = !w ? CMD_ACT : r->write ? CMD_WR : CMD_RD;
+      if (!w) *has_act = true;
+      else *has_col = true;
+    } else {
+      if (!pre_allowed(q, j, bk)) continue;
+      type = CMD_PRE;
+    }
+    const int64_t t = req_earliest(d, c, r, type, now);
+    if (type == CMD_RD || type == CMD_WR) {
+      int64_t *least = type == CMD_RD ? &s->rd_t : &s->wr_t;
+      if (t < *least) {
+        *least = t;
+        *(type == CMD_RD ? &s->rd_j : &s->wr_j) = j;
+      }
+    } else {
+      if (type == CMD_ACT && t < s->act_t) s->act_t = t;
+      if (t < s->o_t) {
+        s->o_t = t;
+        s->o = (struct cmd){type, r->rank, r->bank, j, qi, true};
+      }
+    }
+    consider_in(&pk, t, now, type, r->rank, r->bank, qi, j);
+  }
+  s->at = now;
+  s->t = pk.first_t;
+  s->k = pk.first;
+}
+
+/* Command queue qi's summary as of cycle now, computed again only when
+ * stale. NOTE: why a summary stays true. A candidate's earliest time asked at
+ * n is h(max(n, T)), T from its request and the timing state, h the identity
+ * (ACT, PRE) or the data bus's first fit (RD, WR), which is monotone and
+ * maps every cycle between t0 and h(t0) to h(t0). So while the state it read
+ * is unchanged, each candidate's time asked at any n in [at, t] is the time
+ * asked at `at`, and the summary holds there. What it read: the queue's
+ * entries and their bank (stale_bank), the rank's ACT spacing for ACT
+ * candidates (stale_rank), the rank, group and channel column spacing and
+ * the bus for RD and WR candidates (stale_columns), a refresh (stale_rank,
+ * all). */
+/* per_bank: a summary whose column candidates alone may have moved, asked
+ * again at now (within [at, t]). A per_bank queue holds one bank, so it has
+ * at most one ACT or PRE candidate (its oldest entry: an ACT for a closed
+ * bank, a PRE for a conflict, pre_allowed), one RD and one WR (each the
+ * oldest of its kind asked, as `ready` grows along the queue): the first
+ * least of those three is the queue's. */
+static void col_refresh(const struct dram_banked *d, const struct channel *c, uint32_t qi,
+                        int64_t now, struct qsum *s) {
+  const struct queue *q = &c->cq[qi];
+  int64_t t = s->o_t;
+  struct cmd k = s->o;
+  uint32_t kj = t < FAR ? s->o.qi : UINT32_MAX;
+  for (int i = 0; i < 2; i++) {
+    int64_t *ct = i ? &s->wr_t : &s->rd_t;
+    if (*ct == FAR) continue;
+    const uint32_t j = i ? s->wr_j : s->rd_j;
+    const struct req *r = &q->r[j];
+    *ct = col_earliest(d, c, r, r->write, now);
+    if (*ct < t || (*ct == t && j < kj)) {
+      t = *ct;
+      kj = j;
+      k = (struct cmd){r->write ? CMD_WR : CMD_RD, r->rank, r->bank, j, qi, true};
+    }
+  }
+  s->at = now;
+  s->t = t;
+  s->k = k;
+}
+
+static const struct qsum *cq_sum(const struct dram_banked *d, struct channel *c, uint32_t qi,
+                                 int64_t now) {
+  struct qsum *s = &c->sum[qi];
+  const uint32_t w = qi / 64;
+  const uint64_t bit = 1ull << (qi % 64);
+  if ((c->fresh[w] & bit) && now >= s->at && now <= s->t) {
+    if (!c->col_stale || !(c->col_stale[w] & bit)) return s;
+    c->col_stale[w] &= ~bit;
+    col_refresh(d, c, qi, now, s);
+    return s;
+  }
+  bool act, col;
+  cq_candidates(d, c, qi, now, s, &act, &col);
+  if (c->col_stale) c->col_stale[w] &= ~bit;
+  c->fresh[w] |= bit;
+  c->has_act[w] = act ? c->has_act[w] | bit : c->has_act[w] & ~bit;
+  c->has_col[w] = col ? c->has_col[w] | bit : c->has_col[w] & ~bit;
+  return s;
+}
+
 /* Refresh work, then the command queues round robin from the one after the
  * last that issued; in each, the oldest command that can issue now. next:
  * the earliest any candidate could. */
@@ -753,69 +989,55 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
   pk->cmd.type = CMD_NONE;
   pk->next = pk->first_t = FAR;
   scan_refresh(d, c, now, pk);
-  /* The queues holding commands, round robin from the one after rr: those
-   * from there on, then those before it (rr last). */
-  const uint32_t start = (c->rr + 1) % c->ncq;
-  for (int pass = 0; pass < 2; pass++) {
-    const uint32_t hi = pass ? start : c->ncq;
-    for (uint32_t qi = cq_next_busy(c, pass ? 0 : start); qi < hi; qi = cq_next_busy(c, qi + 1)) {
-      const struct queue *q = &c->cq[qi];
-      if (c->ranks[q->r[0].rank].pending) continue; /* (a queue's commands share a rank) */
-      /* An ACT, RD or WR's earliest time depends on its request only through
-       * the bank and `ready`, and never falls as `ready` grows: a later
-       * entry of the same command and bank as the last one considered here,
-       * ready no sooner, can neither come first nor lower `next` (ties keep
-       * the older), so it is not asked (in per_bank every entry shares the
-       * bank: of the ACTs of a closed bank only the oldest is asked). */
-      uint32_t seen_bank[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX}; /* ACT, RD, WR */
-      int64_t seen_ready[3] = {0, 0, 0};
-      for (uint32_t j = 0; j < q->n; j++) {
-        const struct req *r = &q->r[j];
-        const struct bank *bk = &c->banks[r->bank];
-        enum cmd_type type;
-        if (!bk->open || bk->row == r->row) {
-          const int w = !bk->open ? 0 : r->write ? 2 : 1;
-          if (seen_bank[w] == r->bank && r->ready >= seen_ready[w]) continue;
-          if (w == 2 && write_behind_read(q, j)) continue;
-          seen_bank[w] = r->bank;
-          seen_ready[w] = r->ready;
-          type = !w ? CMD_ACT : r->write ? CMD_WR : CMD_RD;
-        } else {
-          if (!pre_allowed(q, j, bk)) continue;
-          type = CMD_PRE;
-        }
-        consider_in(pk, req_earliest(d, c, r, type, now), now, type, r->rank, r->bank, qi, j);
+  /* The queues holding commands (but those of a rank with a refresh due: a
+   * queue's commands share a rank), round robin from the one after rr: those
+   * from there on, then those before it (rr last). A queue's candidates in
+   * scan order are its own in entry order, so its summary (the first least)
+   * stands for them all; and since every candidate is asked at now, one can
+   * issue now only if it is a least: the first least of the whole scan. */
+  const uint32_t start = (c->rr + 1) % c->ncq, nw = (c->ncq + 63) / 64;
+  uint32_t best = UINT32_MAX;
+  int64_t best_t = FAR;
+  /* Words from start's on, the first of them from start's bit; then from the
+   * first word up to start's, that one below start's bit. */
+  for (uint32_t step = 0; step <= nw; step++) {
+    const uint32_t w = (start / 64 + step) % nw;
+    uint64_t bits = c->cq_busy[w] & ~c->blocked[w];
+    const uint64_t from_start = ~0ull << (start % 64);
+    if (step == 0) bits &= from_start;
+    else if (step == nw) bits &= ~from_start;
+    const uint64_t stale = ~c->fresh[w] | (c->col_stale ? c->col_stale[w] : 0);
+    while (bits) {
+      const uint32_t b = (uint32_t)__builtin_ctzll(bits);
+      const uint32_t qi = w * 64 + b;
+      bits &= bits - 1;
+      const struct qsum *s = &c->sum[qi];
+      if ((stale >> b & 1) || s->t < now) s = cq_sum(d, c, qi, now);
+      if (d->p.check_summaries) {
+        struct qsum full;
+        bool act, col;
+        CHECK_GE(now, s->at);
+        cq_candidates(d, c, qi, now, &full, &act, &col);
+        CHECK_EQ(full.t, s->t);
+        CHECK(full.t == FAR || (full.k.type == s->k.type && full.k.bank == s->k.bank &&
+                                full.k.qi == s->k.qi && full.k.for_req == s->k.for_req));
+      }
+      if (s->t < best_t) {
+        best_t = s->t;
+        best = qi;
       }
     }
   }
+  if (best_t < pk->next) pk->next = best_t;
+  if (best_t < pk->first_t) {
+    pk->first_t = best_t;
+    pk->first = c->sum[best].k;
+  }
+  if (pk->first_t == now) pk->cmd = pk->first;
   c->memo = pk->first;
   c->memo_t = pk->first_t;
   c->memo_at = now;
   c->memo_ok = true;
-}
-
-/* The command to issue at `now` from the memo of the last scan, when nothing
- * it read has changed since (false: scan). Every candidate's earliest time
- * only grows with the cycle it is asked at, so at now >= memo_at those the
- * memo found later than its least time are later still: none issues now if
- * the least time is past now, and if it is now, only the memo's first such
- * candidate can, when it still can (asked again). */
-static bool memo_pick(const struct dram_banked *d, const struct channel *c, int64_t now,
-                      struct cmd *k) {
-  const struct cmd *m = &c->memo;
-  if (!c->memo_ok || c->memo_at > now || c->memo_t < now) return false;
-  k->type = CMD_NONE;
-  if (c->memo_t > now) return true;
-  int64_t t;
-  if (m->for_req) {
-    t = req_earliest(d, c, &c->cq[m->cq].r[m->qi], m->type, now);
-  } else {
-    t = m->type == CMD_REF ? ref_earliest(d, c, m->rank, now)
-                           : max64(now, c->banks[m->bank].pre_ok);
-  }
-  if (t != now) return false;
-  *k = *m;
-  return true;
 }
 
 static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t qi, uint32_t j,
@@ -824,6 +1046,7 @@ static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t q
   struct req r = q->r[j];
   memmove(&q->r[j], &q->r[j + 1], (q->n - j - 1) * sizeof *q->r);
   q->n--;
+  stale_bank(d, c, r.bank);
   c->cq_n--;
   if (!q->n) cq_mark(c, qi, false);
   d->queued--;
@@ -872,7 +1095,15 @@ static int64_t next_cq(struct dram_banked *d, struct channel *c, int64_t t) {
 /* Handle DRAM cycle `now` on channel c (per_bank / per_rank). */
 static void channel_cycle_cq(struct dram_banked *d, struct channel *c, int64_t now) {
   struct pick pk;
-  if (!memo_pick(d, c, now, &pk.cmd)) scan_cq(d, c, now, &pk);
+  /* The last scan's answer stands while nothing changed since: every
+   * queue's summary holds from memo_at to its own least time, so none can
+   * issue before memo_t, and at memo_t the memo's queue comes first. */
+  if (c->memo_ok && now >= c->memo_at && now <= c->memo_t) {
+    pk.cmd.type = CMD_NONE;
+    if (now == c->memo_t) pk.cmd = c->memo;
+  } else {
+    scan_cq(d, c, now, &pk);
+  }
   if (pk.cmd.type != CMD_NONE) {
     issue(d, c, &pk.cmd, now);
     if (pk.cmd.for_req) {
@@ -891,7 +1122,7 @@ static void channel_cycle(struct dram_banked *d, struct channel *c, int64_t now)
   for (uint32_t k = 0; k < d->p.ranks; k++) {
     struct rank *rk = &c->ranks[k];
     while (rk->next_due <= now) {
-      rk->pending++;
+      if (!rk->pending++) block_rank(d, c, k, true);
       rk->next_due += period;
       c->memo_ok = false;
     }
@@ -1303,6 +1534,13 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
       c->ncq = p->queue_structure == DRAM_BANKED_PER_RANK ? p->ranks : d->banks_per_channel;
       c->cq = xcalloc(c->ncq, sizeof *c->cq);
       c->cq_busy = xcalloc((c->ncq + 63) / 64, sizeof *c->cq_busy);
+      c->sum = xcalloc(c->ncq, sizeof *c->sum);
+      c->fresh = xcalloc((c->ncq + 63) / 64, sizeof *c->fresh);
+      c->has_act = xcalloc((c->ncq + 63) / 64, sizeof *c->has_act);
+      c->has_col = xcalloc((c->ncq + 63) / 64, sizeof *c->has_col);
+      c->blocked = xcalloc((c->ncq + 63) / 64, sizeof *c->blocked);
+      if (p->queue_structure == DRAM_BANKED_PER_BANK)
+        c->col_stale = xcalloc((c->ncq + 63) / 64, sizeof *c->col_stale);
       for (uint32_t j = 0; j < c->ncq; j++) {
         c->cq[j].cap = p->command_queue;
         c->cq[j].r = xcalloc(p->command_queue, sizeof(struct req));
@@ -1334,6 +1572,12 @@ void dram_banked_destroy(struct dram_banked *d) {
     for (uint32_t j = 0; j < c->ncq; j++) free(c->cq[j].r);
     free(c->cq);
     free(c->cq_busy);
+    free(c->sum);
+    free(c->fresh);
+    free(c->has_act);
+    free(c->has_col);
+    free(c->blocked);
+    free(c->col_stale);
     free(c->fol);
   }
   free(d->ch);

@@ -176,6 +176,8 @@ struct dram_banked_params {
   uint32_t tCL, tCWL, tRCD, tRP, tRAS, tRC, tCCD_S, tCCD_L, tRRD_S, tRRD_L, tFAW, tWR, tWTR_S,
       tWTR_L, tRTW, tRTP, tREFI, tRFC;
   bool tick_every_cycle; /* test only: wake every DRAM cycle while work is queued */
+  bool check_summaries;  /* test only: check each command queue's kept summary against its
+                            candidates asked again (per_bank / per_rank) */
 };
 
 /* NULL if p is usable, else "dram.KEY: what is wrong" (a constant string):

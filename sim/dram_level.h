@@ -76,11 +76,14 @@ static inline struct dram_clock dram_clock_make(uint64_t core_khz, uint64_t dram
  * it). NOTE: 128-bit products (a GCC and Clang extension), so no time a run
  * can reach overflows. */
 static inline uint64_t dram_clock_to_core(struct dram_clock c, uint64_t d) {
+  /* (The same value in 64 bits while the product fits: the common case.) */
+  if (d < (1ull << 31) && c.num < (1ull << 32)) return (d * c.num + c.den - 1) / c.den;
   return (uint64_t)(((unsigned __int128)d * c.num + c.den - 1) / c.den);
 }
 
 /* The first DRAM cycle that begins at or after core cycle t. */
 static inline uint64_t dram_clock_from_core(struct dram_clock c, uint64_t t) {
+  if (t < (1ull << 31) && c.den < (1ull << 32)) return (t * c.den + c.num - 1) / c.num;
   return (uint64_t)(((unsigned __int128)t * c.den + c.num - 1) / c.num);
 }
 

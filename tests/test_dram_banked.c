@@ -704,6 +704,7 @@ static void test_oracle_and_little(void) {
       uint64_t fin = r[N - 1].at + 200000;
       uint64_t khz = cfgs[ci].core_mhz * MHZ;
       p.tick_every_cycle = false;
+      p.check_summaries = true;
       struct dram_banked *a = run(&p, khz, r, N, d1, fin);
       p.tick_every_cycle = true;
       struct dram_banked *b = run(&p, khz, r, N, d2, fin);
