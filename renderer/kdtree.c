@@ -594,8 +594,8 @@ static void kd_build_all(struct kd_builder *b, const struct scene *s) {
     for (int a = 0; a < 3; a++) {
       float x = v3_get(tr->v[0], a), y = v3_get(tr->v[1], a), z = v3_get(tr->v[2], a);
       CHECK(isfinite(x) && isfinite(y) && isfinite(z));
-      b->tb[i].lo[a] = fminf(x, fminf(y, z));
-      b->tb[i].hi[a] = fmaxf(x, fmaxf(y, z));
+      b->tb[i].lo[a] = min_nonnan(x, min_nonnan(y, z));
+      b->tb[i].hi[a] = max_nonnan(x, max_nonnan(y, z));
     }
   }
 

@@ -42,7 +42,10 @@ static inline vec3 v3_pow2_scaled(vec3 a) {
  * nor overflows); the zero vector stays zero. */
 static inline vec3 v3_unit(vec3 a) { return v3_norm(v3_pow2_scaled(a)); }
 /* max and min of two non-NaN floats: one compare, where fmaxf and fminf are
- * library calls (their NaN rule keeps the compiler from using maxss). */
+ * library calls (their NaN rule keeps the compiler from using maxss). A tie
+ * gives b: max_nonnan(+0, -0) is -0 from any compiler, where fmaxf leaves the
+ * sign to the library or the compiler (on x86-64 glibc's gives b, clang's
+ * inline code a). */
 static inline float max_nonnan(float a, float b) { return a > b ? a : b; }
 static inline float min_nonnan(float a, float b) { return a < b ? a : b; }
 
@@ -58,11 +61,12 @@ static inline float float_next_up(float x) {
 }
 
 static inline float v3_get(vec3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? a.y : a.z; }
+/* Componentwise min and max of vectors without NaN (ties as min_nonnan's). */
 static inline vec3 v3_min(vec3 a, vec3 b) {
-  return v3(fminf(a.x, b.x), fminf(a.y, b.y), fminf(a.z, b.z));
+  return v3(min_nonnan(a.x, b.x), min_nonnan(a.y, b.y), min_nonnan(a.z, b.z));
 }
 static inline vec3 v3_max(vec3 a, vec3 b) {
-  return v3(fmaxf(a.x, b.x), fmaxf(a.y, b.y), fmaxf(a.z, b.z));
+  return v3(max_nonnan(a.x, b.x), max_nonnan(a.y, b.y), max_nonnan(a.z, b.z));
 }
 
 #endif

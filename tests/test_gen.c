@@ -1,15 +1,19 @@
 /* Procedural generators: triangle counts against their formulas, sphereflake
  * geometry against SPD's hand-computed child positions, the watertightness
  * precondition (every edge of a closed mesh used twice, in opposite directions,
- * with bit-identical vertices), target sizes of grove and room, determinism. */
+ * with bit-identical vertices), target sizes of grove and room, determinism,
+ * the order of grove's random draws, the committed scenes' hashes. */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "renderer/rng.h"
 #include "renderer/scene.h"
 #include "renderer/scene/gen.h"
 #include "renderer/scene/gen_util.h"
+#include "renderer/scene/scene_file.h"
+#include "sim/err.h"
 #include "testing.h"
 
 /* A directed edge as raw vertex bits: equal only if bit-identical. */
@@ -305,6 +309,81 @@ static void test_count_formulas(void) {
   EXPECT(gen_room_tri_count(1e6) == gen_room_tri_count(1e5));
 }
 
+/* grove's uniform draw: lo + (hi - lo) u, u from rng_f32. */
+static double grove_draw(struct rng *r, double lo, double hi) {
+  return lo + (hi - lo) * (double)rng_f32(r);
+}
+
+/* The order of grove's draws, worked by hand for the one tree of seed 1: the
+ * placement stream (seed, 0) gives the foot's x, then y, in [-3, 3]; the
+ * tree's stream (seed, 1) the trunk's length, its radius r0, then the lean's
+ * y, then its x. The trunk (the 3 * 8 triangles after the ground's 512) ends
+ * in a cone whose apex is foot + (length + 0.62 r0) unit(lean x, lean y, 1).
+ * With the two leans drawn the other way round (as clang did while they were
+ * one call's arguments), the apex moves by 0.07. */
+static void test_grove_draw_order(void) {
+  struct rng place = rng_make(1, 0), tree = rng_make(1, 1);
+  double x = grove_draw(&place, -3.0, 3.0);
+  double y = grove_draw(&place, -3.0, 3.0);
+  double len = grove_draw(&tree, 2.2, 3.2);
+  double r0 = grove_draw(&tree, 0.14, 0.22);
+  double lean_y = grove_draw(&tree, -0.08, 0.08);
+  double lean_x = grove_draw(&tree, -0.08, 0.08);
+  EXPECTF(fabs(lean_x - lean_y) > 0.01, "leans %g %g: the case tells no order", lean_x, lean_y);
+  gen_d3 w = gen_d3_norm(gen_d3_make(lean_x, lean_y, 1.0));
+  gen_d3 apex = gen_d3_add(gen_d3_make(x, y, -0.2), gen_d3_scale(w, len + 0.62 * r0));
+
+  struct scene s;
+  scene_init(&s);
+  gen_grove(&s, 0.001, 1);
+  double nearest = INFINITY;
+  for (uint32_t t = 512; t < 512 + 3 * 8 && t < s.tri_count; t++)
+    for (int k = 0; k < 3; k++) {
+      const vec3 v = s.tris[t].v[k];
+      nearest = fmin(nearest, gen_d3_len(gen_d3_sub(gen_d3_make(v.x, v.y, v.z), apex)));
+    }
+  EXPECTF(nearest < 1e-5, "trunk apex (%g %g %g) is %g from every trunk vertex", apex.x, apex.y,
+          apex.z, nearest);
+  scene_fini(&s);
+}
+
+/* The committed scenes' hashes: the big three's as the committed results
+ * record them (results/, column scene_hash), the small ones' as gcc and clang
+ * both make them. A generator that draws its random numbers in another order,
+ * or computes a coordinate another way, makes other triangles and moves every
+ * result of its scenes: one draw a statement, as C leaves the order of a
+ * call's arguments and of an initializer's expressions open. On purpose, a
+ * new hash goes here with the results made again. They hold on x86-64 with
+ * glibc's libm (README: Same bits from any compiler); elsewhere untested. */
+static void test_scene_hashes(void) {
+#if defined(__x86_64__) && defined(__GLIBC__)
+  static const struct {
+    const char *file;
+    uint64_t hash;
+  } cases[] = {
+      {"scenes/grove.yaml", 0xe9b902b54a20257dull},
+      {"scenes/room.yaml", 0xac49e6e3f8eec8cdull},
+      {"scenes/sphereflake.yaml", 0x31de3b7d1efdd032ull},
+      {"scenes/small/grove.yaml", 0x27bbefb6e72eabceull},
+      {"scenes/small/room.yaml", 0x5e66fbfee3ee7081ull},
+      {"scenes/small/sphereflake.yaml", 0xfb5f9a2eb8e1bdbeull},
+  };
+  for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", RTSIM_SOURCE_DIR, cases[i].file);
+    struct scene s;
+    struct err e;
+    memset(&e, 0, sizeof e);
+    bool ok = scene_file_load(&s, path, &e);
+    EXPECTF(ok, "%s: %s:%d:%d %s", path, e.file, e.line, e.col, e.msg);
+    if (!ok) continue;
+    EXPECTF(scene_hash(&s) == cases[i].hash, "%s: scene_hash %016llx, expected %016llx",
+            cases[i].file, (unsigned long long)scene_hash(&s), (unsigned long long)cases[i].hash);
+    scene_fini(&s);
+  }
+#endif
+}
+
 int main(void) {
   test_count_formulas();
   test_sphereflake_counts();
@@ -320,5 +399,7 @@ int main(void) {
   /* A different seed moves trees but keeps the grove's size. */
   EXPECT(gen_count(gen_grove, 1.0, 1) == gen_count(gen_grove, 1.0, 12345));
   EXPECT(gen_count(gen_grove, 0.001, 3) > 0);
+  test_grove_draw_order();
+  test_scene_hashes();
   return testing_done("test_gen");
 }

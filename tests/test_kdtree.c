@@ -21,6 +21,22 @@
 
 static float rnd(struct rng *g, float lo, float hi) { return lo + (hi - lo) * rng_f32(g); }
 static uint32_t rnd_u(struct rng *g, uint32_t n) { return n ? rng_u32(g) % n : 0; }
+/* NOTE: a vector's draws one a statement, z first (the cases were tuned with
+ * gcc, which took v3's three arguments last first; clang takes them first
+ * first, and C leaves it open). */
+static vec3 rnd_v3(struct rng *g, float lo, float hi) {
+  float z = rnd(g, lo, hi);
+  float y = rnd(g, lo, hi);
+  float x = rnd(g, lo, hi);
+  return v3(x, y, z);
+}
+/* A point lo + ext * (u, u, u), u in [0, 1), z drawn first as in rnd_v3. */
+static vec3 rnd_in(struct rng *g, vec3 lo, vec3 ext) {
+  float uz = rng_f32(g);
+  float uy = rng_f32(g);
+  float ux = rng_f32(g);
+  return v3(lo.x + ext.x * ux, lo.y + ext.y * uy, lo.z + ext.z * uz);
+}
 
 static uint32_t fbits(float f) {
   uint32_t u;
@@ -41,11 +57,10 @@ static void v3_put(vec3 *v, int a, float f) {
 static void soup_random(struct scene *s, uint64_t seed, int n) {
   struct rng g = rng_make(seed, 1);
   for (int i = 0; i < n; i++) {
-    vec3 c = v3(rnd(&g, -1, 1), rnd(&g, -1, 1), rnd(&g, -1, 1));
+    vec3 c = rnd_v3(&g, -1, 1);
     float sz = i % 10 == 0 ? 1.0f : rnd(&g, 0.02f, 0.25f);
     vec3 v[3];
-    for (int k = 0; k < 3; k++)
-      v[k] = v3_add(c, v3(rnd(&g, -sz, sz), rnd(&g, -sz, sz), rnd(&g, -sz, sz)));
+    for (int k = 0; k < 3; k++) v[k] = v3_add(c, rnd_v3(&g, -sz, sz));
     if (i % 37 == 0) v[2] = v[1];                               /* repeated vertex */
     if (i % 41 == 0) v[2] = v3_sub(v3_scale(v[1], 2.0f), v[0]); /* collinear-ish */
     scene_add_tri(s, v[0], v[1], v[2], NULL, 0);
@@ -74,7 +89,8 @@ static void soup_grid(struct scene *s, uint64_t seed, int n, bool odd) {
       scene_add_tri(s, a, b, c, NULL, 0);
       continue;
     }
-    int base[3] = {(int)rnd_u(&g, 13) + 2, (int)rnd_u(&g, 13) + 2, (int)rnd_u(&g, 13) + 2};
+    int base[3];
+    for (int a = 0; a < 3; a++) base[a] = (int)rnd_u(&g, 13) + 2;
     int flat_axis = i % 4 == 0 ? (int)rnd_u(&g, 3) : -1;
     vec3 v[3];
     for (int k = 0; k < 3; k++)
@@ -362,15 +378,12 @@ static struct ray make_test_ray(struct rng *g, const struct scene *s, const stru
   int split_axis = -1;
   vec3 o;
   switch (ok) {
-  case 0: /* inside the bounds */
-    o = v3(lo.x + ext.x * rng_f32(g), lo.y + ext.y * rng_f32(g), lo.z + ext.z * rng_f32(g));
-    break;
+  case 0: /* inside the bounds */ o = rnd_in(g, lo, ext); break;
   case 1: /* anywhere in 3x the bounds */
-    o = v3_add(mid, v3(ext.x * rnd(g, -1.5f, 1.5f), ext.y * rnd(g, -1.5f, 1.5f),
-                       ext.z * rnd(g, -1.5f, 1.5f)));
+    o = v3_add(mid, v3_mul(ext, rnd_v3(g, -1.5f, 1.5f)));
     break;
   case 2: /* exactly on a split plane */
-    o = v3(lo.x + ext.x * rng_f32(g), lo.y + ext.y * rng_f32(g), lo.z + ext.z * rng_f32(g));
+    o = rnd_in(g, lo, ext);
     if (nsplit) {
       uint32_t k = rnd_u(g, nsplit);
       split_axis = saxes[k];
@@ -389,22 +402,23 @@ static struct ray make_test_ray(struct rng *g, const struct scene *s, const stru
     break;
   }
   default: /* outside, on a box face plane */
-    o = v3_add(mid, v3(ext.x * rnd(g, -1, 1), ext.y * rnd(g, -1, 1), ext.z * rnd(g, -1, 1)));
-    v3_put(&o, (int)rnd_u(g, 3),
-           (rng_u32(g) & 1) ? v3_at(lo, (int)(i % 3)) : v3_at(hi, (int)(i % 3)));
+    o = v3_add(mid, v3_mul(ext, rnd_v3(g, -1, 1)));
+    bool low = rng_u32(g) & 1; /* drawn before the axis (rnd_v3) */
+    v3_put(&o, (int)rnd_u(g, 3), low ? v3_at(lo, (int)(i % 3)) : v3_at(hi, (int)(i % 3)));
     break;
   }
   vec3 d;
   int dk = (i / 5) % 6;
   switch (dk) {
-  case 0: d = v3(rnd(g, -1, 1), rnd(g, -1, 1), rnd(g, -1, 1)); break;
+  case 0: d = rnd_v3(g, -1, 1); break;
   case 1: { /* axis-aligned */
     d = v3(0, 0, 0);
-    v3_put(&d, (int)rnd_u(g, 3), (rng_u32(g) & 1) ? 1.0f : -1.0f);
+    bool up = rng_u32(g) & 1; /* drawn before the axis (rnd_v3) */
+    v3_put(&d, (int)rnd_u(g, 3), up ? 1.0f : -1.0f);
     break;
   }
   case 2: /* one zero component; in the split plane when o is on one */
-    d = v3(rnd(g, -1, 1), rnd(g, -1, 1), rnd(g, -1, 1));
+    d = rnd_v3(g, -1, 1);
     v3_put(&d, split_axis >= 0 ? split_axis : (int)rnd_u(g, 3), 0.0f);
     break;
   case 3: { /* at a random point of a random triangle */
@@ -426,9 +440,11 @@ static struct ray make_test_ray(struct rng *g, const struct scene *s, const stru
     d = v3_sub(q, o);
     break;
   }
-  default: /* unnormalised, wide range of lengths */
-    d = v3_scale(v3(rnd(g, -1, 1), rnd(g, -1, 1), rnd(g, -1, 1)), powf(10.0f, rnd(g, -3, 3)));
+  default: { /* unnormalised, wide range of lengths; the length drawn first (rnd_v3) */
+    float len = powf(10.0f, rnd(g, -3, 3));
+    d = v3_scale(rnd_v3(g, -1, 1), len);
     break;
+  }
   }
   if (d.x == 0 && d.y == 0 && d.z == 0) d = v3(0.3f, -0.2f, 1.0f);
   r.o = o;

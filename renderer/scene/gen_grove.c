@@ -67,7 +67,11 @@ static void grove_branch(struct grove_ctx *c, gen_d3 base, gen_d3 dir, double le
      * outward so crowns read as crowns from a distance. */
     for (int i = 0; i < GROVE_LEAVES_PER_TIP; i++) {
       double t = grove_unif(&c->rng, 0.3, 1.15);
-      gen_d3 off = gen_d3_scale(grove_rand_dir(&c->rng), grove_unif(&c->rng, 0.05, 0.3) * len);
+      /* NOTE: one draw a statement (here the offset's length, then its
+       * direction): C leaves the order of a call's arguments open, and gcc and
+       * clang take them in opposite orders (tests/test_gen.c holds this one). */
+      double off_len = grove_unif(&c->rng, 0.05, 0.3) * len;
+      gen_d3 off = gen_d3_scale(grove_rand_dir(&c->rng), off_len);
       gen_d3 p = gen_d3_add(gen_frame_point(&f, 0, 0, t * len), off);
       gen_d3 a = gen_d3_norm(gen_d3_add(dir, gen_d3_scale(grove_rand_dir(&c->rng), 0.9)));
       if (gen_d3_len(a) < 0.5) a = dir;
@@ -171,7 +175,10 @@ void gen_grove(struct scene *s, double detail, uint64_t seed) {
     c.rng = rng_make(seed, 1 + (uint64_t)i);
     double trunk_len = grove_unif(&c.rng, 2.2, 3.2);
     double trunk_r = grove_unif(&c.rng, 0.14, 0.22);
-    gen_d3 lean = gen_d3_make(grove_unif(&c.rng, -0.08, 0.08), grove_unif(&c.rng, -0.08, 0.08), 1);
+    /* One draw a statement, y before x (NOTE in grove_branch). */
+    double lean_y = grove_unif(&c.rng, -0.08, 0.08);
+    double lean_x = grove_unif(&c.rng, -0.08, 0.08);
+    gen_d3 lean = gen_d3_make(lean_x, lean_y, 1);
     /* Start below the ground so the open tube end is never seen. */
     grove_branch(&c, gen_d3_make(xy[2 * i], xy[2 * i + 1], -0.2), gen_d3_norm(lean), trunk_len,
                  trunk_r, 0);
