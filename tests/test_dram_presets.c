@@ -33,8 +33,8 @@ static void cell(const char *b, const char *e, char *out, size_t cap) {
 /* Parse one "| a | b | c | d | e |" line into r; false if it has not five cells. */
 static bool parse_row(const char *line, const char *end, struct row *r) {
   char *dst[5] = {r->key, r->value, r->source, r->source_value, r->note};
-  const size_t cap[5] = {sizeof r->key, sizeof r->value, sizeof r->source,
-                         sizeof r->source_value, sizeof r->note};
+  const size_t cap[5] = {sizeof r->key, sizeof r->value, sizeof r->source, sizeof r->source_value,
+                         sizeof r->note};
   if (*line != '|') return false;
   const char *b = line + 1;
   for (int i = 0; i < 5; i++) {
@@ -135,7 +135,8 @@ int main(void) {
                     "|---|---|---|---|---|\n| `dram.tCL` | `17` | ini `CL` | `16` | |\n";
   struct row r[2];
   EXPECT(table_of(bad, "x.yaml", r, 2) == 1);
-  EXPECT(!strcmp(r[0].key, "dram.tCL") && !strcmp(r[0].value, "17") && !strcmp(r[0].source, "ini `CL`"));
+  EXPECT(!strcmp(r[0].key, "dram.tCL") && !strcmp(r[0].value, "17") &&
+         !strcmp(r[0].source, "ini `CL`"));
   EXPECT(!strcmp(r[0].source_value, "16") && r[0].note[0] == '\0');
   free(readme);
   return testing_done("test_dram_presets");
