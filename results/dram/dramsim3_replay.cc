@@ -28,7 +28,7 @@
 #include <sys/stat.h>
 
 #include "memory_system.h"
-#include <nlohmann/json.hpp>
+#include "json.hpp"  // DRAMsim3's bundled nlohmann::json (ext/headers)
 
 struct Req {
     uint64_t addr;

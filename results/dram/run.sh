@@ -3,13 +3,37 @@
 #  1. levels.csv: fixed, channel and banked on the default machine, every scene
 #     and policy (configs/sweeps/dram-levels.yaml).
 #  2. dramsim3.csv: the banked DDR4-2400 level against DRAMsim3 on the same
-#     request streams (each run's --dram-trace, replayed open loop by both).
+#     request streams (each run's --dram-trace cut to DRAMsim3's trace format,
+#     address, op and arrival in DRAM cycles, replayed open loop by both as
+#     DRAMsim3's trace reader does: each request offered from its DRAM cycle on,
+#     at most one a cycle, in trace order; rtsim at clock_ghz 1.2, so its core
+#     and DRAM cycles are one).
 #     DRAMsim3's side needs a DRAMsim3 build with results/dram/dramsim3_replay.cc
 #     (README here): DRAMSIM3=its binary DRAMSIM3_INI=its DDR4_8Gb_x8_2400.ini.
 #     Without them only rtsim's columns are filled.
 # From the repository top, after sh .ci/setup:
 #   [DRAMSIM3=... DRAMSIM3_INI=...] sh results/dram/run.sh
 set -eu
+# Check the DDR4 preset's table of sources (configs/dram/README.md, its rows
+# whose source is an ini key) against the DRAMsim3 ini this run replays with.
+if [ -n "${DRAMSIM3_INI:-}" ]; then
+  awk -F'|' '
+    FNR == NR {
+      if ($0 ~ /^[ \t]*[A-Za-z_0-9]+[ \t]*=/) {
+        k = $0; sub(/[ \t]*=.*/, "", k); gsub(/[ \t]/, "", k)
+        v = $0; sub(/^[^=]*=[ \t]*/, "", v); sub(/[ \t;].*$/, "", v); ini[k] = v
+      }
+      next
+    }
+    /^<!-- preset: / { on = ($0 ~ /preset: ddr4-2400\.yaml /); next }
+    on && /^\|/ && $4 ~ /ini `/ {
+      k = $4; sub(/.*ini `/, "", k); sub(/`.*/, "", k)
+      v = $5; gsub(/[ `]/, "", v); n++
+      if (!(k in ini) || ini[k] != v) { printf "configs/dram/README.md: ini %s is %s in the table, %s in %s\n", k, v, (k in ini) ? ini[k] : "absent", ARGV[1]; bad++ }
+    }
+    END { if (bad || !n) { if (!n) print "configs/dram/README.md: no ini rows for ddr4-2400.yaml"; exit 1 } }
+  ' "$DRAMSIM3_INI" configs/dram/README.md
+fi
 out=build/dram
 # A fresh directory: a sweep resumes, and points from an older build would stay.
 rm -rf "$out"
@@ -19,6 +43,15 @@ build/rtsim merge "$out/levels" -o results/dram/levels.csv
 
 csvget() { awk -F, -v k="$2" 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == k) c = i } NR == 2 { print $c }' "$1"; }
 kvget() { awk -F= -v k="$2" '$1 == k { print $2 }' "$1"; }
+# Read latencies of a replay from its three-column trace ($1) and per-request
+# file ($2, '#' header then one line a request in trace order): mean, p50, p95,
+# p99 of done - arrival, exact (the ceil(p/100 n)-th smallest, as the DRAMsim3
+# driver ranks them; rtsim's CSV gives quantiles as histogram bucket bounds).
+readlat() {
+  tail -n +2 "$2" | paste -d' ' "$1" - | awk '$2 == "READ" { print $7 - $5 }' | sort -n |
+    awk 'function at(p,  r, c) { r = p / 100.0 * NR; c = int(r); if (c < r) c++; if (c < 1) c = 1; return v[c] }
+         { v[NR] = $1; s += $1 } END { printf "%.3f %d %d %d\n", s / NR, at(50), at(95), at(99) }'
+}
 
 table=results/dram/dramsim3.csv
 echo "scene,policy,requests,writes,rtsim_read_latency_mean,dramsim3_read_latency_mean,rtsim_read_latency_p50,dramsim3_read_latency_p50,rtsim_read_latency_p95,dramsim3_read_latency_p95,rtsim_read_latency_p99,dramsim3_read_latency_p99,rtsim_gb_per_s,dramsim3_gb_per_s,rtsim_row_hit_rate,dramsim3_row_hit_rate" > "$table.tmp"
@@ -27,10 +60,13 @@ for scene in sphereflake grove room; do
     t="$out/$scene-$policy"
     build/rtsim run configs/default.yaml "scenes/$scene.yaml" --width 96 --height 96 \
       --rays primary,shadow,diffuse --policy "$policy" --dram-trace "$t.trace" -o "$t" > /dev/null
-    build/rtsim dram-replay configs/default.yaml "$t.trace" > "$t.rtsim.csv"
+    # Both replay the same three-column trace (DRAMsim3's format).
+    awk '!/^#/ && NF { print $1, $2, $3 }' "$t.trace" > "$t.dramsim3.trace"
+    build/rtsim dram-replay configs/default.yaml "$t.dramsim3.trace" --set clock_ghz=1.2 \
+      --per-request "$t.rtsim.per" > "$t.rtsim.csv"
+    set -- $(readlat "$t.dramsim3.trace" "$t.rtsim.per")
     d3_mean= d3_p50= d3_p95= d3_p99= d3_gbs= d3_hit=
     if [ -n "${DRAMSIM3:-}" ]; then
-      awk '!/^#/ && NF { print $1, $2, $3 }' "$t.trace" > "$t.dramsim3.trace"
       # DRAMsim3's controller can deadlock (a write drain that a queued read of
       # the same line blocks, with that read never moved): bound its run at
       # twice the stream's span and leave its columns empty if it stalls.
@@ -46,36 +82,41 @@ for scene in sphereflake grove room; do
       fi
     fi
     r="$t.rtsim.csv"
-    printf '%s,%s,%s,%s,%.2f,%s,%.0f,%s,%.1f,%s,%.1f,%s,%.3f,%s,%.4f,%s\n' "$scene" "$policy" \
-      "$(csvget "$r" requests)" "$(csvget "$r" writes)" \
-      "$(csvget "$r" read_latency_mean_dram_cycles)" "$d3_mean" \
-      "$(csvget "$r" read_latency_p50_dram_cycles)" "$d3_p50" \
-      "$(csvget "$r" read_latency_p95_dram_cycles)" "$d3_p95" \
-      "$(csvget "$r" read_latency_p99_dram_cycles)" "$d3_p99" \
+    printf '%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%.3f,%s,%.4f,%s\n' "$scene" "$policy" \
+      "$(csvget "$r" requests)" "$(csvget "$r" writes)" "$1" "$d3_mean" "$2" "$d3_p50" \
+      "$3" "$d3_p95" "$4" "$d3_p99" \
       "$(csvget "$r" gb_per_s)" "$d3_gbs" "$(csvget "$r" dram_row_hit_rate)" "$d3_hit" >> "$table.tmp"
   done
 done
 mv "$table.tmp" "$table"
 
-# 3. saturated.csv: the first 400,000 requests of two streams offered one a DRAM
-#    cycle (at clock_ghz 1.2 the core and DRAM cycles are one), faster than one
-#    channel serves: the bandwidth each controller sustains.
+# 3. saturated.csv: the first 400,000 requests of three streams (one of them
+#    write-heavy: room's dynamic, 45% writes) offered one a DRAM cycle (at
+#    clock_ghz 1.2 the core and DRAM cycles are one), faster than one channel
+#    serves: the bandwidth each controller sustains, and the read latencies
+#    (DRAM cycles, from the request's arrival; from its taking, the mean).
 sat=results/dram/saturated.csv
-echo "stream,rtsim_bytes_per_cycle,dramsim3_bytes_per_cycle,rtsim_row_hit_rate,dramsim3_row_hit_rate" > "$sat.tmp"
-for s in grove-recursive sphereflake-dynamic; do
+echo "stream,requests,writes,rtsim_bytes_per_cycle,dramsim3_bytes_per_cycle,rtsim_row_hit_rate,dramsim3_row_hit_rate,rtsim_read_latency_mean,dramsim3_read_latency_mean,rtsim_read_latency_p95,dramsim3_read_latency_p95,rtsim_read_latency_p99,dramsim3_read_latency_p99,rtsim_read_latency_taken_mean,dramsim3_read_latency_taken_mean" > "$sat.tmp"
+for s in grove-recursive sphereflake-dynamic room-dynamic; do
   awk '!/^#/ && NF { n++; if (n <= 400000) print $1, $2, n }' "$out/$s.trace" > "$out/$s.saturated.trace"
-  build/rtsim dram-replay configs/default.yaml "$out/$s.saturated.trace" --set clock_ghz=1.2 > "$out/$s.saturated.csv"
-  d3_bpc= d3_hit=
+  build/rtsim dram-replay configs/default.yaml "$out/$s.saturated.trace" --set clock_ghz=1.2 \
+    --per-request "$out/$s.saturated.per" > "$out/$s.saturated.csv"
+  set -- $(readlat "$out/$s.saturated.trace" "$out/$s.saturated.per")
+  d3_bpc= d3_hit= d3_mean= d3_p95= d3_p99= d3_taken=
   if [ -n "${DRAMSIM3:-}" ]; then
+    d3="$out/$s.saturated.dramsim3.txt"
     "$DRAMSIM3" "$DRAMSIM3_INI" "$out/$s.saturated.trace" --out-dir "$out/$s.saturated.dramsim3" \
-      --cycles-limit 20000000 > "$out/$s.saturated.dramsim3.txt" || true
-    if [ "$(kvget "$out/$s.saturated.dramsim3.txt" finished)" = 1 ]; then
-      d3_bpc=$(kvget "$out/$s.saturated.dramsim3.txt" bandwidth_bytes_per_cycle)
-      d3_hit=$(kvget "$out/$s.saturated.dramsim3.txt" row_hit_rate)
+      --cycles-limit 20000000 > "$d3" || true
+    if [ "$(kvget "$d3" finished)" = 1 ]; then
+      d3_bpc=$(kvget "$d3" bandwidth_bytes_per_cycle) d3_hit=$(kvget "$d3" row_hit_rate)
+      d3_mean=$(kvget "$d3" read_latency_mean) d3_p95=$(kvget "$d3" read_latency_p95)
+      d3_p99=$(kvget "$d3" read_latency_p99) d3_taken=$(kvget "$d3" read_latency_from_accept_mean)
     fi
   fi
   r="$out/$s.saturated.csv"
-  printf '%s,%.3f,%s,%.4f,%s\n' "$s" "$(csvget "$r" bytes_per_cycle)" "$d3_bpc" \
-    "$(csvget "$r" dram_row_hit_rate)" "$d3_hit" >> "$sat.tmp"
+  printf '%s,%s,%s,%.3f,%s,%.4f,%s,%s,%s,%s,%s,%s,%s,%.2f,%s\n' "$s" \
+    "$(csvget "$r" requests)" "$(csvget "$r" writes)" \
+    "$(csvget "$r" bytes_per_cycle)" "$d3_bpc" "$(csvget "$r" dram_row_hit_rate)" "$d3_hit" \
+    "$1" "$d3_mean" "$3" "$d3_p95" "$4" "$d3_p99" "$(csvget "$r" read_latency_taken_mean)" "$d3_taken" >> "$sat.tmp"
 done
 mv "$sat.tmp" "$sat"
