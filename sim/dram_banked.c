@@ -57,6 +57,7 @@ struct req {
    * moved at the end of m, its command may issue from m + 1. */
   int64_t ready;
   uint32_t rank, group, bank; /* bank: index within the channel */
+  uint32_t cq;                /* per_bank / per_rank: its command queue */
   uint8_t kind;
   bool write;
 };
@@ -138,6 +139,7 @@ struct channel {
   uint64_t *fresh, *has_act, *has_col;
   uint64_t *col_stale; /* per_bank: only its column candidates' times may have moved */
   uint64_t *blocked;   /* bitmap: the command queue's rank has a refresh due */
+  uint64_t *full;      /* bitmap: the command queue is full */
   /* The last scan's first least candidate (memo, at cycle memo_t), made at
    * cycle memo_at, kept while no command issued and no entry or refresh came
    * since (memo_ok; see channel_cycle_cq). */
@@ -802,8 +804,9 @@ static bool schedule_cq(struct dram_banked *d, struct channel *c, int64_t t, boo
   int k = draining ? WR_Q : RD_Q;
   uint32_t mi = UINT32_MAX; /* the transaction to move */
   for (uint32_t i = 0; i < (k == WR_Q ? nw : nr); i++) {
-    const struct queue *cq = &c->cq[cq_of(d, &c->q[k].r[i])];
-    if (cq->n >= cq->cap) continue;
+    const uint32_t qi = c->q[k].r[i].cq;
+    if (c->full[qi / 64] >> (qi % 64) & 1) continue;
+    const struct queue *cq = &c->cq[qi];
     if (k == WR_Q && line_waits(c, cq, false, c->q[k].r[i].line)) {
       /* A read of the line still waits: writing first would lose its data;
        * the drain ends (and may start again next cycle). With every command
@@ -830,6 +833,7 @@ static bool schedule_cq(struct dram_banked *d, struct channel *c, int64_t t, boo
     q->n--;
     m.ready = t + 1;
     cq->r[cq->n++] = m;
+    if (cq->n == cq->cap) c->full[m.cq / 64] |= 1ull << (m.cq % 64);
     stale_bank(d, c, m.bank);
     c->cq_n++;
     cq_mark(c, cq_of(d, &m), true);
@@ -1046,6 +1050,7 @@ static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t q
   struct req r = q->r[j];
   memmove(&q->r[j], &q->r[j + 1], (q->n - j - 1) * sizeof *q->r);
   q->n--;
+  c->full[qi / 64] &= ~(1ull << (qi % 64));
   stale_bank(d, c, r.bank);
   c->cq_n--;
   if (!q->n) cq_mark(c, qi, false);
@@ -1244,6 +1249,8 @@ static void serve_at(struct dram_banked *d, int64_t at, uint64_t tag) {
   engine_at(d->e, dram_clock_to_core(d->clk, (uint64_t)at), on_done, d, tag);
 }
 
+static uint32_t cq_of(const struct dram_banked *d, const struct req *r);
+
 /* Queue a request in its channel's queue qk (the request's fields but tag,
  * line and ready from co); the level's counters follow. */
 static struct req *enqueue(struct dram_banked *d, struct channel *c, int qk,
@@ -1264,6 +1271,7 @@ static struct req *enqueue(struct dram_banked *d, struct channel *c, int qk,
   r->bank = co->rank * d->banks_per_rank + co->bank_group * d->p.banks_per_group + co->bank;
   r->kind = KIND_HIT;
   r->write = qk == WR_Q;
+  if (d->cq_mode) r->cq = cq_of(d, r);
   d->queued++;
   area_to(d, qk, r->take_core);
   d->q_len[qk]++;
@@ -1539,6 +1547,7 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
       c->has_act = xcalloc((c->ncq + 63) / 64, sizeof *c->has_act);
       c->has_col = xcalloc((c->ncq + 63) / 64, sizeof *c->has_col);
       c->blocked = xcalloc((c->ncq + 63) / 64, sizeof *c->blocked);
+      c->full = xcalloc((c->ncq + 63) / 64, sizeof *c->full);
       if (p->queue_structure == DRAM_BANKED_PER_BANK)
         c->col_stale = xcalloc((c->ncq + 63) / 64, sizeof *c->col_stale);
       for (uint32_t j = 0; j < c->ncq; j++) {
@@ -1577,6 +1586,7 @@ void dram_banked_destroy(struct dram_banked *d) {
     free(c->has_act);
     free(c->has_col);
     free(c->blocked);
+    free(c->full);
     free(c->col_stale);
     free(c->fol);
   }
