@@ -42,6 +42,27 @@ bool bench_parse_policies(const char *text, void *dst) {
   return l->n >= 2;
 }
 
+bool bench_parse_levels(const char *text, void *dst) {
+  static const char *const known[] = {"native", "analytic", "fixed", "channel", "banked"};
+  struct bench_level_list *l = dst;
+  l->n = 0;
+  for (const char *p = text;;) {
+    size_t len = strcspn(p, ",");
+    if (len == 0 || len >= sizeof l->name[0] || l->n == BENCH_POLICIES_MAX) return false;
+    bool ok = false;
+    for (unsigned i = 0; i < sizeof known / sizeof known[0]; i++)
+      ok |= strlen(known[i]) == len && !strncmp(known[i], p, len);
+    if (!ok) return false;
+    for (unsigned i = 0; i < l->n; i++)
+      if (strlen(l->name[i]) == len && !strncmp(l->name[i], p, len)) return false;
+    memcpy(l->name[l->n], p, len);
+    l->name[l->n++][len] = '\0';
+    if (p[len] == '\0') break;
+    p += len + 1;
+  }
+  return l->n >= 2;
+}
+
 /* One run's figures. */
 struct bench_run {
   double host_s, run_s, peak_mb;
@@ -77,9 +98,9 @@ static void tmp_fini(const struct bench_tmp *t) {
 }
 
 /* Print the failed run's stderr (kept in t->err) under a line saying which. */
-static void show_failure(const struct bench_tmp *t, const char *scene, const char *policy,
+static void show_failure(const struct bench_tmp *t, const char *scene, const char *what,
                          int status) {
-  fprintf(stderr, "rtsim bench: rtsim run of %s with --policy %s ", scene, policy);
+  fprintf(stderr, "rtsim bench: the run of %s (%s) ", scene, what);
   if (WIFEXITED(status)) fprintf(stderr, "exited with code %d:\n", WEXITSTATUS(status));
   else
     fprintf(stderr, "was killed by signal %d (%s):\n", WTERMSIG(status),
@@ -109,7 +130,7 @@ static bool member_f64(const char *json, const char *key, double *v) {
 /* Run `bin args` with stdout to /dev/null and stderr to t->err; its exit
  * status and user + system seconds. False if it could not be started. */
 static bool run_child(const char *bin, char **args, const struct bench_tmp *t, int *status,
-                      double *host_s) {
+                      double *host_s, double *peak_mb) {
   fflush(stdout);
   fflush(stderr);
   pid_t pid = fork();
@@ -128,6 +149,7 @@ static bool run_child(const char *bin, char **args, const struct bench_tmp *t, i
     if (errno != EINTR) return false;
   *host_s = (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
             (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
+  *peak_mb = (double)ru.ru_maxrss / 1024.0; /* (kilobytes on Linux) */
   return true;
 }
 
@@ -144,9 +166,9 @@ static double median(double *v, uint64_t n) {
 
 /* The rows of one scene: r[round * n + j] is policy j's run in that round. */
 static void print_rows(const char *machine, const char *set_text, const char *rays,
-                       const struct bench_policy_list *l, const struct bench_run *r,
+                       const char *const *label, unsigned n, const struct bench_run *r,
                        uint64_t rounds) {
-  const unsigned n = l->n, base = n - 1;
+  const unsigned base = n - 1;
   double *a = xmalloc(rounds * sizeof *a), *b = xmalloc(rounds * sizeof *b);
   for (unsigned j = 0; j < n; j++) {
     const struct bench_run *first = &r[j];
@@ -175,11 +197,11 @@ static void print_rows(const char *machine, const char *set_text, const char *ra
     stats_write_csv_str(stdout, machine);
     putchar(',');
     stats_write_csv_str(stdout, set_text);
-    printf(",%s,%llu,%.3f,%.3f,%.4f,%.4f,%llu,%.1f,%.3f,%.3f,%.3f,%.3f,%.3f,%s\n",
-           policy_name(l->k[j]), (unsigned long long)rounds, host_best, host_med, run_best, run_med,
+    printf(",%s,%llu,%.3f,%.3f,%.4f,%.4f,%llu,%.1f,%.3f,%.3f,%.3f,%.3f,%.3f,%s\n", label[j],
+           (unsigned long long)rounds, host_best, host_med, run_best, run_med,
            (unsigned long long)first->events, first->peak_mb, host_ratio, host_ratio_max, run_ratio,
            y->events ? (double)first->events / (double)y->events : 0.0,
-           y->peak_mb > 0 ? first->peak_mb / y->peak_mb : 0.0, policy_name(l->k[base]));
+           y->peak_mb > 0 ? first->peak_mb / y->peak_mb : 0.0, label[base]);
   }
   fflush(stdout);
   free(a);
@@ -187,8 +209,17 @@ static void print_rows(const char *machine, const char *set_text, const char *ra
 }
 
 int bench_policies(const char *machine, const struct app_sets *sets,
-                   const struct bench_policy_list *l, uint32_t mask, uint64_t width,
-                   uint64_t height, uint64_t rounds, int argc, char **argv, int first_scene) {
+                   const struct bench_policy_list *l, const struct bench_level_list *lv,
+                   enum policy_kind policy, uint32_t mask, uint64_t width, uint64_t height,
+                   uint64_t rounds, int argc, char **argv, int first_scene) {
+  /* The variants: a label each, and what it adds to the command line. */
+  const unsigned n = l ? l->n : lv->n;
+  const char *label[BENCH_POLICIES_MAX];
+  char fid[BENCH_POLICIES_MAX][32];
+  for (unsigned j = 0; j < n; j++) {
+    label[j] = l ? policy_name(l->k[j]) : lv->name[j];
+    if (!l) snprintf(fid[j], sizeof fid[j], "fidelity=%s", lv->name[j]);
+  }
   /* The config is refused here, before any run, as rtsim run would. */
   struct machine_cfg mc;
   struct err e = {0};
@@ -215,29 +246,40 @@ int bench_policies(const char *machine, const struct app_sets *sets,
   shade_rays_name(mask, rays, sizeof rays);
   snprintf(wtext, sizeof wtext, "%llu", (unsigned long long)width);
   snprintf(htext, sizeof htext, "%llu", (unsigned long long)height);
-  size_t set_len = 1;
+  size_t set_len = 32;
   for (unsigned i = 0; i < sets->n; i++) set_len += strlen(sets->v[i]) + 1;
   char *set_text = xcalloc(set_len, 1);
+  if (!l) snprintf(set_text, set_len, "policy=%s", policy_name(policy));
   for (unsigned i = 0; i < sets->n; i++) {
-    if (i) strcat(set_text, ";");
+    if (*set_text) strcat(set_text, ";");
     strcat(set_text, sets->v[i]);
   }
+  char image[4300];
+  snprintf(image, sizeof image, "%s/image.exr", t.out);
   /* bin run MACHINE SCENE --policy P --rays R [--width W --height H]
    * [--set KV]... -o OUT, NULL */
-  const char **args = xcalloc(16 + 2 * (size_t)sets->n, sizeof *args);
+  const char **args = xcalloc(18 + 2 * (size_t)sets->n, sizeof *args);
   int rc = 0;
   const bool progress = isatty(2);
-  struct bench_run *r = xcalloc(rounds * l->n, sizeof *r);
+  struct bench_run *r = xcalloc(rounds * n, sizeof *r);
   for (int i = first_scene; i < argc && rc == 0; i++) {
     for (uint64_t k = 0; k < rounds && rc == 0; k++) {
-      for (unsigned j = 0; j < l->n && rc == 0; j++) {
+      for (unsigned j = 0; j < n && rc == 0; j++) {
+        /* native: rtsim render of the same image (no machine, no stats). */
+        const bool native = !l && !strcmp(lv->name[j], "native");
         unsigned a = 0;
         args[a++] = bin;
-        args[a++] = "run";
-        args[a++] = machine;
+        args[a++] = native ? "render" : "run";
+        if (!native) args[a++] = machine;
         args[a++] = argv[i];
-        args[a++] = "--policy";
-        args[a++] = policy_name(l->k[j]);
+        if (!native) {
+          args[a++] = "--policy";
+          args[a++] = l ? policy_name(l->k[j]) : policy_name(policy);
+        }
+        if (!l && !native) {
+          args[a++] = "--set";
+          args[a++] = fid[j];
+        }
         args[a++] = "--rays";
         args[a++] = rays;
         if (width) {
@@ -248,24 +290,40 @@ int bench_policies(const char *machine, const struct app_sets *sets,
           args[a++] = "--height";
           args[a++] = htext;
         }
-        for (unsigned s = 0; s < sets->n; s++) {
+        for (unsigned s = 0; s < sets->n && !native; s++) {
           args[a++] = "--set";
           args[a++] = sets->v[s];
         }
         args[a++] = "-o";
-        args[a++] = t.out;
+        args[a++] = native ? image : t.out;
         args[a] = NULL;
+        if (native && mkdir(t.out, 0755) != 0 && errno != EEXIST) {
+          fprintf(stderr, "rtsim bench: error: cannot make %s: %s\n", t.out, strerror(errno));
+          rc = 1;
+          break;
+        }
         int status = 0;
-        struct bench_run *x = &r[k * l->n + j];
-        if (!run_child(bin, (char **)args, &t, &status, &x->host_s)) {
+        double peak_mb = 0;
+        struct bench_run *x = &r[k * n + j];
+        if (!run_child(bin, (char **)args, &t, &status, &x->host_s, &peak_mb)) {
           fprintf(stderr, "rtsim bench: error: cannot run %s: %s\n", bin, strerror(errno));
           rc = 1;
           break;
         }
         if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-          show_failure(&t, argv[i], policy_name(l->k[j]), status);
+          show_failure(&t, argv[i], label[j], status);
           rc = WIFEXITED(status) ? WEXITSTATUS(status) : 1;
           break;
+        }
+        if (native) {
+          /* The render's own figures: its host time, no events. */
+          x->run_s = x->host_s;
+          x->peak_mb = peak_mb;
+          snprintf(x->scene, sizeof x->scene, "%s", "");
+          x->width = width;
+          x->height = height;
+          clear_out(&t);
+          continue;
         }
         char *json = read_stats(&t);
         double ev = 0, w = 0, h = 0;
@@ -292,10 +350,22 @@ int bench_policies(const char *machine, const struct app_sets *sets,
     if (rc == 0) {
       if (progress) fputc('\n', stderr);
       if (i == first_scene) /* the header once a scene has its rows: none when the first fails */
-        printf("scene,width,height,rays,machine,set,policy,rounds,host_s_best,host_s_median,"
+        printf("scene,width,height,rays,machine,set,%s,rounds,host_s_best,host_s_median,"
                "run_s_best,run_s_median,events,peak_rss_mb,host_vs_base_median,host_vs_base_max,"
-               "run_vs_base_median,events_vs_base,peak_rss_vs_base,base\n");
-      print_rows(machine, set_text, rays, l, r, rounds);
+               "run_vs_base_median,events_vs_base,peak_rss_vs_base,base\n",
+               l ? "policy" : "level");
+      /* A native row takes the scene and image size of the timed rows. */
+      for (uint64_t k = 0; k < rounds * n; k++)
+        if (!r[k].scene[0]) {
+          for (uint64_t m = 0; m < rounds * n; m++)
+            if (r[m].scene[0]) {
+              memcpy(r[k].scene, r[m].scene, sizeof r[k].scene);
+              r[k].width = r[m].width;
+              r[k].height = r[m].height;
+              break;
+            }
+        }
+      print_rows(machine, set_text, rays, label, n, r, rounds);
     }
   }
   free(r);

@@ -24,15 +24,28 @@ bool bench_parse_policies(const char *text, void *dst);
 #define BENCH_POLICIES_EXPECT                                                                      \
   "two or more of recursive, packet, dynamic, treelet, separated by commas"
 
+/* An OPTS_PARSE destination for --levels: rungs of the fidelity ladder
+ * (analytic, fixed, channel, banked) or native (rtsim render of the same
+ * image: the renderer alone), at least two, each once. */
+struct bench_level_list {
+  char name[BENCH_POLICIES_MAX][12];
+  unsigned n;
+};
+bool bench_parse_levels(const char *text, void *dst);
+#define BENCH_LEVELS_EXPECT                                                                        \
+  "two or more of native, analytic, fixed, channel, banked, separated by commas"
+
 struct app_sets;
 
-/* For each scene: `rounds` rounds, each running every policy of l in turn;
- * prints the CSV rows (one per scene and policy) on stdout. sets: --set
- * assignments for every run; width, height 0: the scene's. Returns the exit
- * code: 0, APP_EXIT_USAGE for a config refused before any run, or a failed
- * run's own (its stderr shown). */
+/* For each scene: `rounds` rounds, each running every policy of l in turn
+ * (l NULL: every level of lv, with policy `policy`); prints the CSV rows (one
+ * per scene and policy or level) on stdout. sets: --set assignments for
+ * every run; width, height 0: the scene's. Returns the exit code: 0,
+ * APP_EXIT_USAGE for a config refused before any run, or a failed run's own
+ * (its stderr shown). */
 int bench_policies(const char *machine, const struct app_sets *sets,
-                   const struct bench_policy_list *l, uint32_t mask, uint64_t width,
-                   uint64_t height, uint64_t rounds, int argc, char **argv, int first_scene);
+                   const struct bench_policy_list *l, const struct bench_level_list *lv,
+                   enum policy_kind policy, uint32_t mask, uint64_t width, uint64_t height,
+                   uint64_t rounds, int argc, char **argv, int first_scene);
 
 #endif

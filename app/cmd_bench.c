@@ -89,7 +89,15 @@ static const char HELP[] =
     "                         LIST (base): host_vs_base_median and _max (over the\n"
     "                         rounds' ratios), run_vs_base_median, events_vs_base,\n"
     "                         peak_rss_vs_base, and base (its name)\n"
-    "  --set KEY=VALUE        with --policies: a machine key for every run\n"
+    "  --levels LIST          with --timed: as --policies, but one policy (--policy,\n"
+    "                         default recursive) at each level of LIST: native\n"
+    "                         (rtsim render of the same image, the renderer alone)\n"
+    "                         or a rung of the fidelity ladder (analytic, fixed,\n"
+    "                         channel, banked: --set fidelity=L); the column\n"
+    "                         'level' replaces 'policy', and 'set' names the\n"
+    "                         policy; e.g. --levels native,banked,channel\n"
+    "  --policy P             with --levels: the policy of every run\n"
+    "  --set KEY=VALUE        with --policies or --levels: a machine key for every run\n"
     "                         (repeatable)\n"
     "  -h, --help             this text\n";
 
@@ -258,7 +266,9 @@ static int bench_main(int argc, char **argv, struct app_sets *sets) {
   bool functional = false, engine = false, embree = false;
   const char *timed = NULL;
   struct bench_policy_list policies = {0};
-  bool have_policies = false;
+  struct bench_level_list levels = {0};
+  enum policy_kind policy = POLICY_RECURSIVE;
+  bool have_policies = false, have_levels = false;
   const struct opts_spec spec[] = {
       OPTS_U64("width", 0, &width, 1, 16384),
       OPTS_U64("height", 0, &height, 1, 16384),
@@ -272,6 +282,9 @@ static int bench_main(int argc, char **argv, struct app_sets *sets) {
       OPTS_FLAG("embree", 0, &embree),
       OPTS_PARSE_GIVEN("policies", 0, &policies, bench_parse_policies, BENCH_POLICIES_EXPECT,
                        &have_policies),
+      OPTS_PARSE_GIVEN("levels", 0, &levels, bench_parse_levels, BENCH_LEVELS_EXPECT, &have_levels),
+      OPTS_PARSE("policy", 0, &policy, app_parse_policy,
+                 "one of: recursive, packet, dynamic, treelet"),
       OPTS_PARSE("set", 0, sets, app_sets_add, "KEY=VALUE"),
       OPTS_END};
   struct opts_args args;
@@ -296,12 +309,19 @@ static int bench_main(int argc, char **argv, struct app_sets *sets) {
   if (args.n == 0) return app_usage_error("bench", "missing SCENE.yaml");
   if (have_policies && !timed)
     return app_usage_error("bench", "--policies: give the machine with --timed MACHINE.yaml");
-  if (sets->n && !have_policies)
-    return app_usage_error("bench", "--set: only with --timed MACHINE.yaml --policies LIST");
-  if (have_policies && (sample < 1 || functional || embree))
-    return app_usage_error("bench", "--policies: not with --sample, --functional or --embree");
-  if (have_policies)
-    return bench_policies(timed, sets, &policies, mask, width, height, repeat, argc, argv, optind);
+  if (have_levels && !timed)
+    return app_usage_error("bench", "--levels: give the machine with --timed MACHINE.yaml");
+  if (have_levels && have_policies)
+    return app_usage_error("bench", "--levels: not with --policies (give one --policy)");
+  if (sets->n && !have_policies && !have_levels)
+    return app_usage_error("bench", "--set: only with --timed MACHINE.yaml --policies or --levels");
+  if ((have_policies || have_levels) && (sample < 1 || functional || embree))
+    return app_usage_error("bench",
+                           have_levels ? "--levels: not with --sample, --functional or --embree"
+                                       : "--policies: not with --sample, --functional or --embree");
+  if (have_policies || have_levels)
+    return bench_policies(timed, sets, have_policies ? &policies : NULL, &levels, policy, mask,
+                          width, height, repeat, argc, argv, optind);
   if (timed) return bench_timed(timed, mask, width, height, repeat, sample, argc, argv);
   if (embree && !bench_embree_available())
     return app_usage_error("bench", "--embree: this rtsim was built without Embree (install "

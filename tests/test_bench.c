@@ -34,13 +34,13 @@ static double field_f(const char *line, unsigned n) {
   return atof(t);
 }
 
-/* Events of a direct rtsim run of policy p into dir. */
-static double direct_events(const char *p, const char *dir) {
+/* Events of a direct rtsim run of policy p into dir (extra: more options). */
+static double direct_events(const char *p, const char *dir, const char *extra) {
   char out[8192], path[600];
   int rc = testing_runf(out, sizeof out,
                         RTSIM_BINARY " run " CFG " " SCN " --policy %s --rays primary,shadow "
-                                     "--width 8 --height 8 --set cores=4 -o %s",
-                        p, dir);
+                                     "--width 8 --height 8 --set cores=4 %s -o %s",
+                        p, extra, dir);
   EXPECTF(rc == 0, "direct run of %s: exit %d: %s", p, rc, out);
   snprintf(path, sizeof path, "%s/stats.json", dir);
   FILE *f = fopen(path, "r");
@@ -99,7 +99,7 @@ int main(void) {
             "row %d: width, height, rounds: %s", i, row[i]);
     ev[i] = field_f(row[i], 12);
     snprintf(dir, sizeof dir, "%s/bench-direct-%s", RTSIM_TMP, pol[i]);
-    double want = direct_events(pol[i], dir);
+    double want = direct_events(pol[i], dir, "");
     EXPECTF(ev[i] == want, "%s: bench says %.0f events, a direct run %.0f", pol[i], ev[i], want);
     EXPECTF(field_f(row[i], 8) > 0 && field_f(row[i], 9) >= field_f(row[i], 8) &&
                 field_f(row[i], 10) > 0 && field_f(row[i], 11) >= field_f(row[i], 10) &&
@@ -115,12 +115,49 @@ int main(void) {
   EXPECTF(field_f(row[2], 14) == 1 && field_f(row[2], 16) == 1, "the base against itself: %s",
           row[2]);
 
+  /* --levels: one row per level in LIST's order; native (a render: no
+   * events) and each rung as a direct run at that fidelity. */
+  rc = testing_runf(out, sizeof out,
+                    "TMPDIR=%s " RTSIM_BINARY " bench --timed " CFG
+                    " --levels native,fixed,channel --policy packet --rays primary,shadow "
+                    "--width 8 --height 8 --set cores=4 --repeat 1 " SCN " 2>/dev/null",
+                    RTSIM_TMP);
+  EXPECTF(rc == 0, "bench --levels: exit %d: %s", rc, out);
+  EXPECTF(bench_dirs(RTSIM_TMP) == 0, "bench --levels left its temporary folder");
+  p = strchr(out, '\n');
+  EXPECTF(p && strncmp(out, "scene,width,height,rays,machine,set,level,rounds,", 49) == 0,
+          "--levels header: %s", out);
+  static const char *const lvl[3] = {"native", "fixed", "channel"};
+  for (int i = 0; i < 3; i++) {
+    row[i] = p ? p + 1 : "";
+    p = p ? strchr(p + 1, '\n') : NULL;
+    char t[64];
+    field(row[i], 6, t, sizeof t);
+    EXPECTF(strcmp(t, lvl[i]) == 0, "--levels row %d is '%s', want %s", i, t, lvl[i]);
+    field(row[i], 5, t, sizeof t);
+    EXPECTF(strcmp(t, "policy=packet;cores=4") == 0, "--levels row %d set '%s'", i, t);
+    EXPECTF(field_f(row[i], 1) == 8 && field_f(row[i], 2) == 8 && field_f(row[i], 8) > 0,
+            "--levels row %d: width, height, host seconds: %s", i, row[i]);
+  }
+  EXPECTF(field_f(row[0], 12) == 0, "native has no events: %s", row[0]);
+  for (int i = 1; i < 3; i++) {
+    char extra[64];
+    snprintf(extra, sizeof extra, "--set fidelity=%s", lvl[i]);
+    snprintf(dir, sizeof dir, "%s/bench-direct-level-%s", RTSIM_TMP, lvl[i]);
+    double want = direct_events("packet", dir, extra);
+    EXPECTF(field_f(row[i], 12) == want, "%s: bench says %.0f events, a direct run %.0f", lvl[i],
+            field_f(row[i], 12), want);
+  }
+  rc = testing_runf(out, sizeof out,
+                    RTSIM_BINARY " bench --timed " CFG " --levels banked,exact " SCN " 2>&1");
+  EXPECTF(rc == 2 && strstr(out, "--levels"), "bad --levels: exit %d: %s", rc, out);
+
   /* A run that fails: its message, its exit code, no header, no folder. */
   rc = testing_runf(out, sizeof out,
                     "TMPDIR=%s " RTSIM_BINARY " bench --timed " CFG
                     " --policies dynamic,recursive --repeat 1 %s/no_such_scene.yaml",
                     RTSIM_TMP, RTSIM_TEST_DATA);
-  EXPECTF(rc == 2 && strstr(out, "rtsim run of ") && strstr(out, "no_such_scene.yaml: error:") &&
+  EXPECTF(rc == 2 && strstr(out, "the run of ") && strstr(out, "no_such_scene.yaml: error:") &&
               !strstr(out, "scene,width"),
           "failing run: exit %d: %s", rc, out);
   EXPECTF(bench_dirs(RTSIM_TMP) == 0, "a failed bench left its temporary folder");

@@ -541,7 +541,7 @@ int main(void) {
       {"bench --policies dynamic,recursive " SCN "good_room_tiny.yaml",
        "--policies: give the machine with --timed MACHINE.yaml"},
       {"bench --set cores=2 " SCN "good_room_tiny.yaml",
-       "--set: only with --timed MACHINE.yaml --policies LIST"},
+       "--set: only with --timed MACHINE.yaml --policies or --levels"},
       {"bench --timed " RTSIM_SOURCE_DIR "/configs/tiny.yaml --policies dynamic,recursive --set "
        "cores=0 " SCN "good_room_tiny.yaml",
        "--set cores=0: error: cores: out of range (got 0, expected 1 to 4096)"},
