@@ -21,6 +21,7 @@
 
 #include "app/csv.h"
 #include "app/opts.h"
+#include "app/outguard.h"
 #include "sim/err.h"
 #include "sim/outfile.h"
 #include "sim/stats.h"
@@ -213,7 +214,9 @@ int cmd_merge(int argc, char **argv) {
   warn_mixed(pts, n, "scene_hash", 0, "scene", "a scene changed between points");
 
   struct outfile o;
+  outguard_beside(out); /* a signal while it is written removes its temporary */
   if (!outfile_open(&o, out, "the table", &e)) {
+    outguard_clear();
     rc = app_report(&e);
     goto done;
   }
@@ -234,7 +237,9 @@ int cmd_merge(int argc, char **argv) {
     }
     fputc('\n', f);
   }
-  if (!outfile_commit(&o, &e)) {
+  bool committed = outfile_commit(&o, &e);
+  outguard_clear();
+  if (!committed) {
     rc = app_report(&e);
     goto done;
   }

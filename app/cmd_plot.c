@@ -14,7 +14,9 @@
 #include <string.h>
 
 #include "app/csv.h"
+#include "app/gnuplot.h"
 #include "app/opts.h"
+#include "app/outguard.h"
 #include "app/plot_axis.h"
 #include "sim/err.h"
 #include "sim/outfile.h"
@@ -1078,23 +1080,27 @@ int cmd_plot(int argc, char **argv) {
   free(blab);
   free(yaxes);
 
-  /* The script's head: the terminal and the output, then the body. */
+  /* The script's head: the terminal and the output, then the body. A signal
+   * from here on stops gnuplot and removes the temporaries. */
+  outguard_beside(out);
+  if (script) outguard_beside(script);
   if (!outfile_open_named(&plot, out, "the plot", &e)) {
     rc = 1;
     goto fail;
   }
-  FILE *gpipe = popen("gnuplot >/dev/null", "w");
-  if (!gpipe) {
+  struct gnuplot gnu;
+  if (!gnuplot_open(&gnu, false)) {
     err_set(&e, out, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
     rc = 1;
     goto fail;
   }
+  FILE *gpipe = gnu.in;
   fprintf(gpipe, "set terminal %s size %u,%u noenhanced font ',11'\nset output ",
           svg ? "svg" : "pngcairo", W, H);
   gp_str(gpipe, plot.tmp);
   fputc('\n', gpipe);
   fwrite(body, 1, bodylen, gpipe);
-  if (pclose(gpipe) != 0) {
+  if (!gnuplot_close(&gnu)) {
     err_set(&e, out, 0, 0, "gnuplot could not draw the plot (is gnuplot-nox installed?)");
     rc = 1;
     goto fail;
@@ -1126,6 +1132,7 @@ int cmd_plot(int argc, char **argv) {
 fail:
   outfile_abort(&plot);
   outfile_abort(&gpfile);
+  outguard_clear();
   if (e.set) app_report(&e);
   free(body);
   free(drawn);

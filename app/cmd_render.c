@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "app/opts.h"
+#include "app/outguard.h"
 #include "app/preview.h"
 #include "renderer/framebuffer.h"
 #include "renderer/image.h"
@@ -14,6 +15,7 @@
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/err.h"
+#include "sim/outfile.h"
 
 static const char HELP[] =
     "usage: rtsim render SCENE.yaml -o IMAGE.exr [options]\n"
@@ -23,7 +25,9 @@ static const char HELP[] =
     "Prints a summary on stdout; progress on stderr when it is a terminal.\n"
     "\n"
     "options:\n"
-    "  -o, --output FILE   image to write (required); written whole or not at all\n"
+    "  -o, --output FILE   image to write (required); it and the preview are written\n"
+    "                      whole, both or neither (a failure or SIGINT leaves the\n"
+    "                      earlier files as they were)\n"
     "  --width W           image width in pixels (default: the scene's)\n"
     "  --height H          image height in pixels (default: the scene's)\n"
     "  --rays LIST         ray types, comma-separated from primary,shadow,specular,diffuse\n"
@@ -108,8 +112,18 @@ int cmd_render(int argc, char **argv) {
                               im.channel_count * sizeof(float));
   struct err e;
   memset(&e, 0, sizeof e);
-  bool ok =
-      image_write_exr(&im, out, half, &e) && (!preview || preview_write_png(&im, preview, &e));
+  /* The image and its preview both or neither: each drawn into a temporary,
+   * renamed once both are whole; a signal meanwhile removes them. */
+  struct outfile exr = {0}, png = {0};
+  outguard_beside(out);
+  if (preview) outguard_beside(preview);
+  bool ok = outfile_open_named(&exr, out, "EXR", &e) && image_write_exr_to(&im, &exr, half, &e) &&
+            (!preview || (outfile_open_named(&png, preview, "the preview", &e) &&
+                          preview_write_png(&im, &png, &e) && outfile_commit(&png, &e))) &&
+            outfile_commit(&exr, &e);
+  outfile_abort(&exr);
+  outfile_abort(&png);
+  outguard_clear();
   image_fini(&im);
   const uint64_t seed_used = ar.sc.seed;
   app_render_fini(&ar);

@@ -12,6 +12,7 @@
 
 #include "app/opts.h"
 #include "app/outdir.h"
+#include "app/outguard.h"
 #include "app/run_output.h"
 #include "renderer/policy/policy.h"
 #include "renderer/shade.h"
@@ -32,10 +33,10 @@ static const char HELP[] =
     "channel or banked (the DRAM's detail; default banked), or analytic: no\n"
     "timed machine, one worker's counts and a closed-form estimate of the cycles\n"
     "(seconds; no timeline.csv or traffic.png, and only the numbers it knows).\n"
-    "Writes into OUTDIR (created if needed), each file whole or not at all,\n"
-    "stats.json last; a complete OUTDIR is rewritten through a fresh sibling\n"
-    "swapped in at the end, so it is the old run or the new one, never a mix, and\n"
-    "SIGINT or SIGTERM leaves no temporary behind (README: Output directories):\n"
+    "Writes into a fresh sibling of OUTDIR put in its place at the end, so OUTDIR\n"
+    "is absent or the earlier run until then, whole, never a mix; a run that\n"
+    "fails or is stopped (SIGINT, SIGTERM) leaves it as it was and nothing else\n"
+    "behind (README: Output directories):\n"
     "  image.exr     the picture, bit-identical in RGB to rtsim render's\n"
     "  stats.json    resolved config, scene, seed, wall time, every measured number\n"
     "  stats.csv     the same numbers as one tidy row (no wall time: bit-identical\n"
@@ -104,7 +105,7 @@ int cmd_run(int argc, char **argv) {
   double cost_max = 0;
   bool help_keys = false;
   bool help_stats = false, help_stats_md = false;
-  struct outfile trace = {0};
+  struct outfile trace = {0}, heat = {0};
   struct outdir od = {0};
   struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v),
                           0}; /* at most one an argument */
@@ -199,20 +200,34 @@ int cmd_run(int argc, char **argv) {
     app_world_fini(&w);
     goto done;
   }
-  /* A complete OUTDIR is rewritten through a fresh sibling swapped in at the
-   * end; a signal from here on removes what the run leaves half done. */
+  /* The outputs go to a fresh sibling of OUTDIR put in its place at the end;
+   * a signal from here on removes it (app/outdir.h). */
   if (!outdir_begin(&od, out, run_output_files, &e)) {
     app_report(&e);
     app_world_fini(&w);
     goto done;
   }
-  if (trace_path) {
-    if (!outfile_open(&trace, trace_path, "the DRAM trace", &e)) {
+  /* The trace and the heat map: in the sibling when asked for in OUTDIR,
+   * else beside their names, committed only when every output is written. */
+  const char *const extra[2] = {trace_path, cost_preview};
+  for (int k = 0; k < 2; k++) {
+    if (!extra[k]) continue;
+    char place[OUTDIR_PATH_MAX + 300];
+    if (!outdir_place(&od, extra[k], place, sizeof place)) {
+      app_usage_error("run", "%s %s: that is one of the run's own outputs in OUTDIR",
+                      k ? "--cost-preview" : "--dram-trace", extra[k]);
+      app_world_fini(&w);
+      goto done;
+    }
+    if (strcmp(place, extra[k]) == 0) outguard_beside(place);
+    bool opened = k ? outfile_open_named(&heat, place, "the heat map", &e)
+                    : outfile_open(&trace, place, "the DRAM trace", &e);
+    if (!opened) {
+      outdir_name_in_err(&od, &e);
       app_report(&e);
       app_world_fini(&w);
       goto done;
     }
-    outdir_watch(trace.tmp);
   }
   struct app_timed t = {0};
   struct app_analytic a;
@@ -241,14 +256,17 @@ int cmd_run(int argc, char **argv) {
       .tstats = analytic ? &a.ts : &t.ts,
       .fb = analytic ? &a.ar.fb : &t.ar.fb,
       .costs = !analytic && t.costs ? machine_get_costs(t.m) : NULL,
-      .cost_preview = cost_preview,
+      .cost_preview = cost_preview ? &heat : NULL,
       .cost_channel = cost_channel,
       .cost_max = cost_max,
       .wall_s = analytic ? a.wall_s : t.wall_s,
   };
-  /* The trace first: stats.json, written last, marks the directory complete. */
-  bool ok = !trace_path || outfile_commit(&trace, &e);
-  rc = ok && run_output_write(&rep, &e) && outdir_commit(&od, &e) ? 0 : app_report(&e);
+  /* The files outside OUTDIR before OUTDIR itself: a complete OUTDIR means
+   * every output is in place. */
+  bool ok = run_output_write(&rep, &e) && (!trace_path || outfile_commit(&trace, &e)) &&
+            (!cost_preview || outfile_commit(&heat, &e)) && outdir_commit(&od, &e);
+  if (!ok) outdir_name_in_err(&od, &e);
+  rc = ok ? 0 : app_report(&e);
   rep.out_dir = out;
   if (rc == 0) run_output_summary(&rep, stdout);
   if (analytic) app_analytic_fini(&a);
@@ -256,7 +274,9 @@ int cmd_run(int argc, char **argv) {
   app_world_fini(&w);
 done:
   outfile_abort(&trace);
+  outfile_abort(&heat);
   outdir_abort(&od);
+  outguard_clear();
   free(sets.v);
   return rc;
 }

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "app/opts.h"
+#include "app/outguard.h"
 #include "renderer/framebuffer.h"
 #include "renderer/policy/policy.h"
 #include "renderer/policy/qpoint.h"
@@ -230,7 +231,9 @@ int cmd_traffic(int argc, char **argv) {
 
   struct err e = {0};
   struct outfile o;
+  outguard_beside(out); /* a signal while it is written removes its temporary */
   if (!outfile_open(&o, out, "the table", &e)) {
+    outguard_clear();
     free(rows);
     app_world_fini(&w);
     return app_report(&e);
@@ -278,7 +281,9 @@ int cmd_traffic(int argc, char **argv) {
             (unsigned long long)pv_bytes, (unsigned long long)pp.dyn_batch_rays,
             (unsigned long long)dyn_ray_buffer, w.scene.kd_clip ? "clipped" : "whole");
   }
-  if (!outfile_commit(&o, &e)) {
+  bool committed = outfile_commit(&o, &e);
+  outguard_clear();
+  if (!committed) {
     free(rows);
     app_world_fini(&w);
     return app_report(&e);

@@ -1,6 +1,5 @@
-/* rtsim run's output directory (outdir.h): in place when incomplete, a fresh
- * sibling swapped in when complete; a signal handler that removes what an
- * interrupted run leaves half done. */
+/* rtsim run's output directory (outdir.h): outputs go to a fresh sibling put
+ * in DIR's place at the end; app/outguard.h removes it on a signal. */
 #define _GNU_SOURCE /* renameat2 and RENAME_EXCHANGE (glibc 2.28 and later) */
 #include "app/outdir.h"
 
@@ -14,83 +13,11 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "app/outguard.h"
 #include "sim/err.h"
 #include "sim/outfile.h"
 
-/* Outputs a run may name, and the temporaries of each the handler removes:
- * sim/outfile.h's ".<name>.<pid>.<n>.tmp", n counting up past names that
- * exist; only a stale temporary of an earlier process with our pid can push
- * n past 0, so a few suffice. */
-enum { OUTDIR_OUTPUTS_MAX = 8, OUTDIR_TRIES = 4, OUTDIR_NAME = OUTDIR_PATH_MAX + 300 };
-
-static const int SIGNALS[3] = {SIGINT, SIGTERM, SIGHUP};
-
-/* What the signal handler removes, formatted beforehand: a handler may call
- * only async-signal-safe functions (unlink, rmdir, raise), so nothing is
- * formatted or allocated there. */
-static struct {
-  volatile sig_atomic_t armed;
-  char tmp[OUTDIR_OUTPUTS_MAX * OUTDIR_TRIES][OUTDIR_NAME];
-  unsigned ntmp;
-  char out[OUTDIR_OUTPUTS_MAX][OUTDIR_NAME]; /* outputs in the fresh sibling */
-  unsigned nout;
-  char dir[OUTDIR_PATH_MAX]; /* the fresh sibling, "" when writing in place */
-  char watched[OUTDIR_NAME]; /* another temporary, "" if none */
-  struct sigaction old[3];
-  bool installed[3];
-} g;
-
-static void on_signal(int sig) {
-  if (g.armed) {
-    for (unsigned i = 0; i < g.ntmp; i++) unlink(g.tmp[i]);
-    if (g.watched[0]) unlink(g.watched);
-    for (unsigned i = 0; i < g.nout; i++) unlink(g.out[i]);
-    if (g.dir[0]) rmdir(g.dir);
-  }
-  /* SA_RESETHAND restored the default action: end by the same signal, so
-   * the parent (a shell, rtsim sweep) sees how the run ended. The signal is
-   * blocked inside its handler, so it lands on return. */
-  raise(sig);
-}
-
-static void arm(const struct outdir *d, const char *const *outputs) {
-  memset(g.tmp, 0, sizeof g.tmp);
-  g.ntmp = g.nout = 0;
-  g.dir[0] = g.watched[0] = '\0';
-  const long pid = (long)getpid();
-  for (unsigned k = 0; outputs[k]; k++) {
-    CHECK_LT(k, (unsigned)OUTDIR_OUTPUTS_MAX);
-    for (unsigned n = 0; n < OUTDIR_TRIES; n++)
-      snprintf(g.tmp[g.ntmp++], OUTDIR_NAME, "%s/.%s.%ld.%u.tmp", d->write, outputs[k], pid, n);
-    if (d->fresh) snprintf(g.out[g.nout++], OUTDIR_NAME, "%s/%s", d->write, outputs[k]);
-  }
-  if (d->fresh) snprintf(g.dir, sizeof g.dir, "%s", d->write);
-  g.armed = 1;
-  for (int i = 0; i < 3; i++) {
-    struct sigaction sa;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sa.sa_flags = SA_RESETHAND;
-    sigemptyset(&sa.sa_mask);
-    g.installed[i] = false;
-    /* A signal the caller ignores (nohup) stays ignored. */
-    if (sigaction(SIGNALS[i], NULL, &g.old[i]) == 0 && g.old[i].sa_handler != SIG_IGN)
-      g.installed[i] = sigaction(SIGNALS[i], &sa, NULL) == 0;
-  }
-}
-
-static void disarm(void) {
-  if (!g.armed) return;
-  g.armed = 0;
-  for (int i = 0; i < 3; i++)
-    if (g.installed[i]) sigaction(SIGNALS[i], &g.old[i], NULL);
-}
-
-void outdir_watch(const char *tmp) {
-  /* Copied, so the caller may free its string (outfile_commit does). */
-  g.watched[0] = '\0';
-  if (tmp && strlen(tmp) < sizeof g.watched) memcpy(g.watched, tmp, strlen(tmp) + 1);
-}
+enum { OUTDIR_NAME = OUTDIR_PATH_MAX + 300 };
 
 static bool is_output(const char *name, const char *const *outputs) {
   for (unsigned k = 0; outputs[k]; k++)
@@ -144,97 +71,162 @@ static void remove_stale_siblings(const char *parent, const char *base) {
   closedir(dp);
 }
 
+/* path made absolute with its links resolved, whether it exists or not (then
+ * its parent must): false with errno set when it cannot be. */
+static bool resolve(const char *path, char *out, size_t cap) {
+  char copy[OUTDIR_PATH_MAX];
+  size_t n = strlen(path);
+  if (n == 0 || n >= sizeof copy) {
+    errno = n ? ENAMETOOLONG : ENOENT;
+    return false;
+  }
+  memcpy(copy, path, n + 1);
+  while (n > 1 && copy[n - 1] == '/') copy[--n] = '\0'; /* "DIR/" is DIR */
+  char *real = realpath(copy, NULL);
+  if (real) {
+    bool fits = strlen(real) < cap;
+    if (fits) snprintf(out, cap, "%s", real);
+    free(real);
+    if (!fits) errno = ENAMETOOLONG;
+    return fits;
+  }
+  if (errno != ENOENT) return false;
+  /* Absent: its parent resolved, and its own name. */
+  char *slash = strrchr(copy, '/');
+  const char *base = slash ? slash + 1 : copy;
+  if (!strcmp(base, ".") || !strcmp(base, "..")) return false;
+  if (slash == copy) real = realpath("/", NULL);
+  else if (slash) {
+    *slash = '\0';
+    real = realpath(copy, NULL);
+  } else real = realpath(".", NULL);
+  if (!real) return false;
+  int len = snprintf(out, cap, "%s/%s", strcmp(real, "/") ? real : "", base);
+  free(real);
+  if (len < 0 || (size_t)len >= cap) {
+    errno = ENAMETOOLONG;
+    return false;
+  }
+  return true;
+}
+
 bool outdir_begin(struct outdir *d, const char *path, const char *const *outputs, struct err *e) {
   memset(d, 0, sizeof *d);
   if (strlen(path) >= sizeof d->path)
     return err_set(e, path, 0, 0, "cannot create the directory: the path is too long");
   snprintf(d->path, sizeof d->path, "%s", path);
   d->outputs = outputs;
-  char stats[OUTDIR_NAME];
-  snprintf(stats, sizeof stats, "%s/stats.json", path);
+  if (!resolve(path, d->target, sizeof d->target))
+    return err_set(e, path, 0, 0, "cannot create the directory: %s", strerror(errno));
   struct stat sb;
-  char *real = stat(stats, &sb) == 0 ? realpath(path, NULL) : NULL;
-  char *slash = real ? strrchr(real, '/') : NULL;
-  if (slash && slash[1] && strlen(real) + 32 < sizeof d->target) {
-    /* Complete: a fresh sibling, swapped in by outdir_commit. */
-    snprintf(d->target, sizeof d->target, "%s", real);
-    *slash = '\0';
-    const char *parent = real[0] ? real : "/";
-    remove_stale_siblings(parent, slash + 1);
-    snprintf(d->write, sizeof d->write, "%s/.%s.run-%ld", real[0] ? real : "", slash + 1,
-             (long)getpid());
-    free(real);
-    d->fresh = true;
-    /* Armed first: a signal right after mkdir must find the sibling to remove. */
-    arm(d, outputs);
-    if (mkdir(d->write, 0777) != 0 &&
-        (errno != EEXIST || !clear_dir(d->write) || mkdir(d->write, 0777) != 0)) {
-      int code = errno;
-      d->fresh = false;
-      disarm();
-      return err_set(e, d->write, 0, 0, "cannot create the directory for the new outputs: %s",
-                     strerror(code));
-    }
-    return true;
-  } else {
-    free(real); /* incomplete, new, or the root: in place */
-    if (mkdir(path, 0777) != 0 && errno != EEXIST)
-      return err_set(e, path, 0, 0, "cannot create the directory: %s", strerror(errno));
-    /* A killed run's temporaries would stay forever. */
-    outfile_remove_stale(path);
-    snprintf(d->write, sizeof d->write, "%s", path);
+  if (stat(d->target, &sb) == 0 && !S_ISDIR(sb.st_mode))
+    return err_set(e, path, 0, 0, "cannot create the directory: it exists and is not one");
+  /* An output's name that an earlier DIR holds as a directory would stay
+   * behind the swap: refused before anything runs. */
+  for (unsigned k = 0; stat(d->target, &sb) == 0 && outputs[k]; k++) {
+    char p[OUTDIR_NAME];
+    snprintf(p, sizeof p, "%s/%s", path, outputs[k]);
+    if (lstat(p, &sb) == 0 && S_ISDIR(sb.st_mode))
+      return err_set(e, p, 0, 0, "cannot write the file over it: %s", strerror(EISDIR));
   }
-  arm(d, outputs);
+  char *slash = strrchr(d->target, '/');
+  if (!slash || !slash[1] || strlen(d->target) + 32 >= sizeof d->write)
+    return err_set(e, path, 0, 0, "cannot write the outputs into the root directory");
+  *slash = '\0';
+  const char *parent = d->target[0] ? d->target : "/";
+  remove_stale_siblings(parent, slash + 1);
+  snprintf(d->write, sizeof d->write, "%s/.%s.run-%ld", d->target, slash + 1, (long)getpid());
+  *slash = '/';
+  /* Guarded first: a signal right after mkdir must find the sibling. */
+  outguard_tree(d->write);
+  if (mkdir(d->write, 0777) != 0 &&
+      (errno != EEXIST || !clear_dir(d->write) || mkdir(d->write, 0777) != 0)) {
+    int code = errno;
+    outguard_untree(d->write);
+    return err_set(e, path, 0, 0, "cannot create the directory: %s", strerror(code));
+  }
+  /* Killed runs' temporaries in an earlier DIR would otherwise stay there
+   * until a run succeeds. */
+  if (stat(d->target, &sb) == 0) outfile_remove_stale(d->target);
+  d->fresh = true;
   return true;
 }
 
-/* Undo a carry-over that failed half way: entries moved into the sibling go
- * back (links are just removed), then the sibling goes. */
-static void restore(const struct outdir *d, const char *const *outputs) {
-  DIR *dp = opendir(d->write);
-  if (dp) {
-    struct dirent *de;
-    while ((de = readdir(dp))) {
-      const char *n = de->d_name;
-      if (!strcmp(n, ".") || !strcmp(n, "..") || is_output(n, outputs) || is_temporary(n)) continue;
-      char from[OUTDIR_NAME], to[OUTDIR_NAME];
-      snprintf(from, sizeof from, "%s/%s", d->write, n);
-      snprintf(to, sizeof to, "%s/%s", d->target, n);
-      struct stat sb;
-      if (lstat(to, &sb) != 0) rename(from, to);
-    }
-    closedir(dp);
+bool outdir_place(const struct outdir *d, const char *path, char *buf, size_t cap) {
+  const char *slash = strrchr(path, '/');
+  const char *base = slash ? slash + 1 : path;
+  char dir[OUTDIR_PATH_MAX], real[OUTDIR_PATH_MAX];
+  snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) : 1, slash ? path : ".");
+  if (slash == path) snprintf(dir, sizeof dir, "/");
+  if (base[0] && strcmp(base, ".") && strcmp(base, "..") && resolve(dir, real, sizeof real) &&
+      !strcmp(real, d->target)) {
+    if (is_output(base, d->outputs)) return false;
+    snprintf(buf, cap, "%s/%s", d->write, base);
+  } else snprintf(buf, cap, "%s", path);
+  return true;
+}
+
+/* What a carry-over moved (not linked) into the sibling, to move back if the
+ * swap fails. */
+struct moved {
+  char **name;
+  unsigned n;
+};
+
+/* Undo a carry-over that failed half way or whose swap failed: what was
+ * moved goes back (links are just removed with the sibling), then the
+ * sibling goes. */
+static void restore(const struct outdir *d, struct moved *m) {
+  for (unsigned i = 0; i < m->n; i++) {
+    char from[OUTDIR_NAME], to[OUTDIR_NAME];
+    snprintf(from, sizeof from, "%s/%s", d->write, m->name[i]);
+    snprintf(to, sizeof to, "%s/%s", d->target, m->name[i]);
+    struct stat sb;
+    if (lstat(to, &sb) != 0) rename(from, to);
   }
   clear_dir(d->write);
 }
 
-/* Give the sibling what the old directory holds besides the run's outputs:
- * regular files as hard links (the old directory stays whole until the
+static void moved_free(struct moved *m) {
+  for (unsigned i = 0; i < m->n; i++) free(m->name[i]);
+  free(m->name);
+  m->name = NULL;
+  m->n = 0;
+}
+
+/* Give the sibling what DIR holds besides the run's outputs and what the run
+ * wrote there itself: regular files as hard links (DIR stays whole until the
  * swap), anything else (a subdirectory, a link) moved. */
-static bool carry_over(const struct outdir *d, const char *const *outputs, struct err *e) {
+static bool carry_over(const struct outdir *d, struct moved *m, struct err *e) {
   DIR *dp = opendir(d->target);
   if (!dp) return err_set(e, d->path, 0, 0, "cannot read the directory: %s", strerror(errno));
   bool ok = true;
   struct dirent *de;
   while (ok && (de = readdir(dp))) {
     const char *n = de->d_name;
-    if (!strcmp(n, ".") || !strcmp(n, "..") || is_output(n, outputs) || is_temporary(n)) continue;
+    if (!strcmp(n, ".") || !strcmp(n, "..") || is_output(n, d->outputs) || is_temporary(n))
+      continue;
     char from[OUTDIR_NAME], to[OUTDIR_NAME];
     snprintf(from, sizeof from, "%s/%s", d->target, n);
     snprintf(to, sizeof to, "%s/%s", d->write, n);
     struct stat sb;
-    if (lstat(from, &sb) != 0) continue; /* gone meanwhile */
+    if (lstat(from, &sb) != 0 || lstat(to, &sb) == 0) continue; /* gone, or the run's own */
     if (S_ISREG(sb.st_mode) && link(from, to) == 0) continue;
     if (rename(from, to) != 0)
       ok = err_set(e, from, 0, 0, "cannot carry it over into the new outputs' directory: %s",
                    strerror(errno));
+    else {
+      m->name = xrealloc(m->name, (m->n + 1ull) * sizeof *m->name);
+      m->name[m->n] = xmalloc(strlen(n) + 1);
+      memcpy(m->name[m->n++], n, strlen(n) + 1);
+    }
   }
   closedir(dp);
   return ok;
 }
 
-/* Put the sibling in the old directory's place; on success d->write names
- * what holds the old contents now. */
+/* Put the sibling in DIR's place; on success d->write names what holds the
+ * old contents now (nothing when DIR was absent). */
 static bool swap(struct outdir *d, struct err *e) {
   if (renameat2(AT_FDCWD, d->write, AT_FDCWD, d->target, RENAME_EXCHANGE) == 0) return true;
   if (errno != EINVAL && errno != ENOSYS)
@@ -256,40 +248,55 @@ static bool swap(struct outdir *d, struct err *e) {
 }
 
 bool outdir_commit(struct outdir *d, struct err *e) {
-  if (!d->fresh) {
-    disarm();
-    return true;
-  }
+  CHECK(d->fresh);
   /* No signal between the carry-over and the removal of the old contents: a
    * signal that comes meanwhile lands after, on a finished directory. */
-  sigset_t set, old;
-  sigemptyset(&set);
-  for (int i = 0; i < 3; i++) sigaddset(&set, SIGNALS[i]);
-  sigprocmask(SIG_BLOCK, &set, &old);
-  bool ok = carry_over(d, d->outputs, e) && swap(d, e);
-  if (!ok) restore(d, d->outputs);
-  else if (!clear_dir(d->write))
+  outguard_hold();
+  char sibling[OUTDIR_PATH_MAX];
+  snprintf(sibling, sizeof sibling, "%s", d->write);
+  struct moved m = {NULL, 0};
+  bool ok = false, placed = false, failed = false;
+  struct stat sb;
+  if (stat(d->target, &sb) != 0 && errno == ENOENT) {
+    /* DIR absent: the sibling takes its name. A directory made meanwhile
+     * under that name is swapped with instead. */
+    int rc = renameat2(AT_FDCWD, d->write, AT_FDCWD, d->target, RENAME_NOREPLACE);
+    if (rc != 0 && (errno == EINVAL || errno == ENOSYS)) rc = rename(d->write, d->target);
+    if (rc == 0) ok = placed = true;
+    else if (errno != EEXIST && errno != ENOTEMPTY)
+      failed =
+          !err_set(e, d->path, 0, 0, "cannot move the new outputs into place: %s", strerror(errno));
+  }
+  if (!placed && !failed) ok = carry_over(d, &m, e) && swap(d, e);
+  if (!ok) restore(d, &m);
+  else if (!placed && !clear_dir(d->write))
     fprintf(stderr,
             "rtsim run: warning: the previous outputs are left in %s (it holds a "
             "directory made meanwhile)\n",
             d->write);
+  moved_free(&m);
+  outguard_untree(sibling);
   d->fresh = false;
-  disarm();
-  sigprocmask(SIG_SETMASK, &old, NULL);
+  outguard_release();
   return ok;
 }
 
 void outdir_abort(struct outdir *d) {
-  if (d->fresh) {
-    sigset_t set, old;
-    sigemptyset(&set);
-    for (int i = 0; i < 3; i++) sigaddset(&set, SIGNALS[i]);
-    sigprocmask(SIG_BLOCK, &set, &old);
-    restore(d, d->outputs);
-    d->fresh = false;
-    disarm();
-    sigprocmask(SIG_SETMASK, &old, NULL);
-    return;
-  }
-  disarm();
+  if (!d->fresh) return;
+  outguard_hold();
+  clear_dir(d->write);
+  outguard_untree(d->write);
+  d->fresh = false;
+  outguard_release();
+}
+
+void outdir_name_in_err(const struct outdir *d, struct err *e) {
+  char w[ERR_FILE_MAX];
+  err_escape(w, sizeof w, d->write);
+  size_t n = strlen(w);
+  if (!e->set || strncmp(e->file, w, n) || e->file[n] != '/') return;
+  char named[ERR_FILE_MAX + OUTDIR_PATH_MAX], given[ERR_FILE_MAX];
+  err_escape(given, sizeof given, d->path);
+  snprintf(named, sizeof named, "%s%s", given, e->file + n);
+  snprintf(e->file, sizeof e->file, "%s", named);
 }

@@ -1,26 +1,22 @@
-/* rtsim run's output directory, complete or incomplete as a whole, never a mix
- * of two runs (each file in it is whole already: sim/outfile.h). A directory
- * is complete when it holds stats.json, which a run writes last.
+/* rtsim run's output directory, whole or absent: a run writes its outputs
+ * into a fresh sibling ".NAME.run-PID" and puts it in DIR's place at the end
+ * with one rename (each file in it is whole already: sim/outfile.h). DIR
+ * absent, the sibling is renamed to DIR; DIR present (an earlier run, a
+ * sweep's point with its command.sh and point.csv), the sibling first gets
+ * the entries of DIR that are not the run's own outputs, then the two swap
+ * with one atomic rename (renameat2 RENAME_EXCHANGE) and the old contents,
+ * now under the sibling's name, are removed. A run that fails or is stopped
+ * before that leaves DIR as it was (absent, or the earlier run whole) and no
+ * sibling. Where the file system cannot exchange two names, the swap is two
+ * renames (old aside, new in): DIR is briefly absent, never mixed.
  *
- * Into an incomplete (or new) directory a run writes in place: interrupted,
- * it stays incomplete. A complete directory is never written in place: the
- * run writes a fresh sibling ".NAME.run-PID" and swaps it in at the end with
- * one atomic rename (renameat2 RENAME_EXCHANGE), after carrying over the
- * entries that are not the run's own outputs (a sweep's command.sh and
- * point.csv, a DRAM trace written into the directory); the old directory,
- * now under the sibling's name, is then removed. Interrupted before the swap,
- * the old directory is untouched. Where the file system cannot exchange two
- * names, the swap is two renames (old aside, new in): DIR is briefly absent,
- * never mixed.
- *
- * SIGINT, SIGTERM and SIGHUP while a run writes: the handler removes the run's
- * temporaries (and the fresh sibling with what it holds), then ends the
- * process by the same signal. NOTE: that needs process-wide state (a signal
- * handler reaches nothing else): one output directory per process. */
+ * SIGINT, SIGTERM and SIGHUP while a run writes: app/outguard.h removes the
+ * sibling with what it holds. */
 #ifndef RTSIM_APP_OUTDIR_H
 #define RTSIM_APP_OUTDIR_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 struct err;
 
@@ -28,31 +24,36 @@ struct err;
 
 struct outdir {
   char path[OUTDIR_PATH_MAX];   /* the directory as given */
-  char write[OUTDIR_PATH_MAX];  /* where the outputs go: path, or the fresh sibling */
-  char target[OUTDIR_PATH_MAX]; /* path made absolute, when fresh */
-  bool fresh;                   /* write is the fresh sibling of a complete path */
+  char write[OUTDIR_PATH_MAX];  /* the fresh sibling the outputs go to */
+  char target[OUTDIR_PATH_MAX]; /* path made absolute */
+  bool fresh;                   /* write exists and is ours */
   const char *const *outputs;   /* outdir_begin's */
 };
 
-/* Make the directory ready to write (create it, or a fresh sibling of a
- * complete one; remove temporaries and siblings of runs that were killed
- * outright) and arm the signal handler. outputs: the names the run writes
- * (NULL-terminated; static storage): their temporaries are what a signal
- * removes, and they are never carried over. False with e set when a
- * directory cannot be made; nothing is armed then. */
+/* Make the fresh sibling of path (removing siblings of runs into path that
+ * were killed outright) and guard it against signals. outputs: the names the
+ * run writes (NULL-terminated; static storage), never carried over from an
+ * earlier DIR. False with e set when path cannot be a directory (its parent
+ * does not exist, it is a file) or the sibling cannot be made. */
 bool outdir_begin(struct outdir *d, const char *path, const char *const *outputs, struct err *e);
 
-/* Also remove this temporary (another outfile's, e.g. the DRAM trace's) on a
- * signal; NULL forgets it. The string must stay valid until then. */
-void outdir_watch(const char *tmp);
+/* Where the run writes an output of its own given as path (a DRAM trace, a
+ * heat map): inside the sibling when path's directory is DIR, so it comes and
+ * goes with the run's other outputs; else path itself. False when path is in
+ * DIR under one of the run's output names. */
+bool outdir_place(const struct outdir *d, const char *path, char *buf, size_t cap);
 
-/* The outputs are written: swap a fresh sibling in (signals held off while
- * it happens) and disarm. False with e set when the swap fails (the old
- * directory then stays as it was, and the sibling is removed). */
+/* The outputs are written: put the sibling in DIR's place (signals held off
+ * meanwhile). False with e set when that fails: DIR then stays as it was and
+ * the sibling is removed. */
 bool outdir_commit(struct outdir *d, struct err *e);
 
-/* Give up (a failed write): remove a fresh sibling and disarm. The old
- * directory is untouched. Safe after commit or on a zeroed d. */
+/* Give up (a failed write): remove the sibling; DIR is untouched. Safe after
+ * commit or on a zeroed d. */
 void outdir_abort(struct outdir *d);
+
+/* Name a file of the sibling in e by its place in DIR (as given), so a
+ * message says DIR/stats.csv, not the sibling's. */
+void outdir_name_in_err(const struct outdir *d, struct err *e);
 
 #endif

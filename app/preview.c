@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "app/gnuplot.h"
 #include "renderer/image.h"
 #include "sim/err.h"
 #include "sim/outfile.h"
@@ -18,13 +19,14 @@ static unsigned char to_srgb8(float v) {
   return (unsigned char)lrintf(s * 255.0f);
 }
 
-bool preview_write_png(const struct image *im, const char *png, struct err *e) {
+bool preview_write_png(const struct image *im, struct outfile *out, struct err *e) {
+  const char *png = out->path;
   int r = image_channel(im, "R"), g = image_channel(im, "G"), b = image_channel(im, "B");
   CHECK_GE(r, 0);
   CHECK_GE(g, 0);
   CHECK_GE(b, 0);
   /* The raw pixels gnuplot reads: a scratch temporary, never committed. */
-  struct outfile raw, out = {0};
+  struct outfile raw;
   if (!outfile_open(&raw, png, "the preview", e)) return false;
   uint64_t n = (uint64_t)im->width * im->height;
   unsigned char *px = xmalloc(3 * n);
@@ -36,8 +38,8 @@ bool preview_write_png(const struct image *im, const char *png, struct err *e) {
   bool ok = fwrite(px, 3, n, raw.f) == n && fflush(raw.f) == 0;
   free(px);
   if (!ok) err_set(e, png, 0, 0, "cannot write the preview's temporary file");
-  ok = ok && outfile_open_named(&out, png, "the preview", e);
-  FILE *gp = ok ? popen("gnuplot >/dev/null 2>&1", "w") : NULL;
+  struct gnuplot gnu;
+  FILE *gp = ok && gnuplot_open(&gnu, true) ? gnu.in : NULL;
   if (ok && !gp) ok = err_set(e, png, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
   if (ok) {
     /* Row 0 of the image is the top; gnuplot's y grows upward, hence flipy. */
@@ -47,19 +49,18 @@ bool preview_write_png(const struct image *im, const char *png, struct err *e) {
             "unset border\nunset tics\nunset key\nset xrange [-0.5:%u-0.5]\n"
             "set yrange [-0.5:%u-0.5]\n"
             "plot '%s' binary array=(%u,%u) flipy format='%%uchar%%uchar%%uchar' with rgbimage\n",
-            im->width, im->height, out.tmp, im->width, im->height, raw.tmp, im->width, im->height);
-    if (pclose(gp) != 0)
+            im->width, im->height, out->tmp, im->width, im->height, raw.tmp, im->width, im->height);
+    if (!gnuplot_close(&gnu))
       ok = err_set(e, png, 0, 0, "gnuplot could not write the preview (is gnuplot-nox installed?)");
   }
-  ok = ok && outfile_commit(&out, e);
-  outfile_abort(&out);
   outfile_abort(&raw);
   return ok;
 }
 
 bool preview_write_heat_png(const struct image *im, const char *channel, const char *title,
-                            const char *subtitle, const char *units, double top, const char *png,
-                            struct err *e) {
+                            const char *subtitle, const char *units, double top,
+                            struct outfile *out, struct err *e) {
+  const char *png = out->path;
   const int ch = image_channel(im, channel);
   CHECK_GE(ch, 0);
   const uint64_t n = (uint64_t)im->width * im->height;
@@ -78,12 +79,12 @@ bool preview_write_heat_png(const struct image *im, const char *channel, const c
     if (*q == '"' || *q == '\\') *q = '\'';
   for (char *q = t2; *q; q++)
     if (*q == '"' || *q == '\\') *q = '\'';
-  struct outfile raw, out = {0};
+  struct outfile raw;
   if (!outfile_open(&raw, png, "the heat map", e)) return false;
   bool ok = fwrite(im->planes[ch], sizeof(float), n, raw.f) == n && fflush(raw.f) == 0;
   if (!ok) err_set(e, png, 0, 0, "cannot write the heat map's temporary file");
-  ok = ok && outfile_open_named(&out, png, "the heat map", e);
-  FILE *gp = ok ? popen("gnuplot >/dev/null 2>&1", "w") : NULL;
+  struct gnuplot gnu;
+  FILE *gp = ok && gnuplot_open(&gnu, true) ? gnu.in : NULL;
   if (ok && !gp) ok = err_set(e, png, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
   if (ok) {
     /* Small images are drawn enlarged (whole pixels), beside the colour bar. */
@@ -101,14 +102,12 @@ bool preview_write_heat_png(const struct image *im, const char *channel, const c
         "4 '#fde725')\n"
         "plot '%s' binary array=(%u,%u) flipy format='%%float' using ($1 > %.17g ? %.17g : $1) "
         "with image\n",
-        im->width * scale + 260, im->height * scale + 90, out.tmp, t1, t2, max, clip, im->width,
+        im->width * scale + 260, im->height * scale + 90, out->tmp, t1, t2, max, clip, im->width,
         im->height, top, units, top >= 1e4 ? "%.1s%c" : "%g", raw.tmp, im->width, im->height, top,
         top);
-    if (pclose(gp) != 0)
+    if (!gnuplot_close(&gnu))
       ok = err_set(e, png, 0, 0, "gnuplot could not draw the heat map (is gnuplot-nox installed?)");
   }
-  ok = ok && outfile_commit(&out, e);
-  outfile_abort(&out);
   outfile_abort(&raw);
   return ok;
 }

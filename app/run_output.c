@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "app/app.h"
+#include "app/gnuplot.h"
 #include "app/preview.h"
 #include "app/sample.h"
 #include "renderer/framebuffer.h"
@@ -388,8 +389,8 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
   snprintf(final, sizeof final, "%s/traffic.png", r->out_dir);
   struct outfile o;
   if (!outfile_open_named(&o, final, "the plot", e)) return false;
-  FILE *gp = popen("gnuplot >/dev/null 2>&1", "w");
-  if (!gp) {
+  struct gnuplot gnu;
+  if (!gnuplot_open(&gnu, true)) {
     outfile_abort(&o);
     return err_set(e, final, 0, 0, "cannot run gnuplot (install gnuplot-nox)");
   }
@@ -420,8 +421,8 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
            ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps dt 2 title "
            "'write-backs'\n",
            x, wr);
-  fputs(cmd, gp);
-  if (pclose(gp) != 0) {
+  fputs(cmd, gnu.in);
+  if (!gnuplot_close(&gnu)) {
     outfile_abort(&o);
     return err_set(e, final, 0, 0, "gnuplot could not draw the plot (is gnuplot-nox installed?)");
   }
@@ -494,17 +495,12 @@ bool run_output_write(const struct run_output_report *r, struct err *e) {
                                 r->cost_preview, e);
   }
   image_fini(&im);
-  /* stats.json last: it marks the directory complete. */
+  /* stats.json last: it marks the directory complete. At fidelity analytic
+   * there is no time line to write or plot, and a sampled run's is the
+   * detailed units' time only (an earlier run's is not carried over into the
+   * new directory: app/outdir.h). */
   ok = ok && write_csv(r, e);
-  /* At fidelity analytic there is no time line to write or plot, and a
-   * sampled run's is the detailed units' time only; a whole timed run's left
-   * in the same directory would pass for this run's. */
-  const bool timeline = r->machine && !r->sample;
-  if (ok && timeline) ok = write_timeline(r, e) && write_plot(r, e);
-  for (int i = 0; ok && !timeline && i < 2; i++) {
-    snprintf(path, sizeof path, "%s/%s", r->out_dir, i ? "traffic.png" : "timeline.csv");
-    unlink(path);
-  }
+  if (ok && r->machine && !r->sample) ok = write_timeline(r, e) && write_plot(r, e);
   return ok && write_json(r, e);
 }
 

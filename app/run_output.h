@@ -1,6 +1,7 @@
 /* What rtsim run writes: image.exr, stats.csv, timeline.csv, traffic.png and,
  * last, stats.json (its presence marks the directory complete). Each file is
- * written under a temporary name and renamed when whole. At fidelity analytic
+ * written under a temporary name and renamed when whole, into a directory
+ * swapped in whole at the end (app/outdir.h). At fidelity analytic
  * there is no timeline.csv or traffic.png, and the stats hold only the
  * numbers the estimate knows, under the timed rungs' names. */
 #ifndef RTSIM_APP_RUN_OUTPUT_H
@@ -20,6 +21,7 @@ struct framebuffer;
 struct app_analytic;
 struct machine_costs;
 struct image;
+struct outfile;
 
 struct run_output_report {
   const char *out_dir, *machine_path, *scene_path, *scene_name, *policy;
@@ -35,7 +37,8 @@ struct run_output_report {
   const struct trace_stats *tstats;
   const struct framebuffer *fb;
   const struct machine_costs *costs; /* per-pixel costs (NULL: not counted) */
-  const char *cost_preview;          /* a heat map PNG of cost_channel (NULL: none) */
+  struct outfile *cost_preview;      /* a heat map PNG of cost_channel, drawn into it and not
+                                        committed (NULL: none) */
   const char *cost_channel;
   double cost_max; /* the colour scale's top (0: the largest value) */
   double wall_s;
@@ -52,7 +55,9 @@ void run_output_image(const struct run_output_report *r, struct image *im);
 /* The names run_output_write writes or removes in out_dir, NULL-terminated
  * (app/outdir.h: what a signal removes, what a rerun does not carry over). */
 extern const char *const run_output_files[];
-/* Write every output; on failure fills e (file = the one that failed). */
+/* Write every output into r->out_dir, and the heat map into r->cost_preview
+ * (left for the caller to commit); on failure fills e (file = the one that
+ * failed). */
 bool run_output_write(const struct run_output_report *r, struct err *e);
 /* A few "key: value" lines for a person. */
 void run_output_summary(const struct run_output_report *r, FILE *f);

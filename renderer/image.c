@@ -88,7 +88,8 @@ static bool image_bind_channels(const struct image *im, exr_coding_channel_info_
   return true;
 }
 
-bool image_write_exr(const struct image *im, const char *path, bool half, struct err *e) {
+bool image_write_exr_to(const struct image *im, struct outfile *out, bool half, struct err *e) {
+  const char *path = out->path;
   struct image_exr_msg msg = {{0}};
   exr_context_initializer_t init = image_exr_init(&msg);
   exr_context_t ctx = NULL;
@@ -99,8 +100,6 @@ bool image_write_exr(const struct image *im, const char *path, bool half, struct
   int part = 0;
   int32_t lines = 0;
 
-  struct outfile out = {0};
-
   if (im->width == 0 || im->height == 0 || im->channel_count == 0 || im->width > INT32_MAX ||
       im->height > INT32_MAX) {
     err_set(e, path, 0, 0, "cannot write EXR: empty image (%ux%u, %u channels)", im->width,
@@ -108,9 +107,8 @@ bool image_write_exr(const struct image *im, const char *path, bool half, struct
     goto done;
   }
 
-  if (!outfile_open_named(&out, path, "EXR", e)) goto done;
   stage = "cannot create file";
-  rv = exr_start_write(&ctx, out.tmp, EXR_WRITE_FILE_DIRECTLY, &init);
+  rv = exr_start_write(&ctx, out->tmp, EXR_WRITE_FILE_DIRECTLY, &init);
   if (rv != EXR_ERR_SUCCESS) goto fail;
 
   stage = "cannot define header";
@@ -152,7 +150,7 @@ bool image_write_exr(const struct image *im, const char *path, bool half, struct
   stage = "cannot finish file";
   rv = exr_finish(&ctx);
   if (rv != EXR_ERR_SUCCESS) goto fail;
-  ok = outfile_commit(&out, e);
+  ok = true;
   goto done;
 
 fail:
@@ -160,6 +158,13 @@ fail:
 done:
   if (enc_live) exr_encoding_destroy(ctx, &enc);
   if (ctx) exr_finish(&ctx);
+  return ok;
+}
+
+bool image_write_exr(const struct image *im, const char *path, bool half, struct err *e) {
+  struct outfile out = {0};
+  bool ok = outfile_open_named(&out, path, "EXR", e) && image_write_exr_to(im, &out, half, e) &&
+            outfile_commit(&out, e);
   outfile_abort(&out);
   return ok;
 }

@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 struct err;
+struct outfile;
 
 #define IMAGE_MAX_CHANNELS 16
 #define IMAGE_NAME_MAX 32
@@ -31,6 +32,9 @@ int image_channel(const struct image *im, const char *name);
  * file appears under `path` only when complete (temporary name + rename). On
  * failure fills e (file = path) and returns false. */
 bool image_write_exr(const struct image *im, const char *path, bool half, struct err *e);
+/* The same into out's temporary (out from outfile_open_named), which the
+ * caller commits with the command's other outputs; e names out->path. */
+bool image_write_exr_to(const struct image *im, struct outfile *out, bool half, struct err *e);
 
 /* Read any scanline EXR of HALF or FLOAT channels into floats (im is
  * initialised here; image_fini frees it). On failure fills e, returns false. */

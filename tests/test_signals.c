@@ -192,24 +192,63 @@ static void test_run_rerun(void) {
   }
   fprintf(stderr, "test_signals: rerun interrupted: %d old, %d new\n", old_seen, new_seen);
 
-  /* In place (the directory is incomplete): SIGTERM once the image is
-   * written leaves no temporary and no stats.json. */
-  run("rm -rf %s && mkdir %s", dir, dir);
-  const char *argv[] = {RTSIM_BINARY, "run", TINY, ROOM_TINY, "-o", dir, RUN_ARGS, NULL};
-  pid_t pid = start(argv);
-  char image[4200];
-  snprintf(image, sizeof image, "%s/image.exr", dir);
-  int status = 0;
-  bool ended = false;
-  const double end = now() + 60;
-  while (!exists(image) && now() < end && !(ended = waitpid(pid, &status, WNOHANG) == pid)) nap();
-  if (!ended) kill(pid, SIGTERM);
-  EXPECT(ended || wait_for(pid, 60, &status));
-  EXPECTF(WIFSIGNALED(status) ? WTERMSIG(status) == SIGTERM : WEXITSTATUS(status) == 0,
-          "in place: status %#x", status);
-  EXPECTF(count_named(dir, ".", ".tmp") == 0, "in place: temporaries left");
-  EXPECTF(!WIFSIGNALED(status) || !exists(RTSIM_TMP "/sig_run/stats.json"),
-          "in place: an interrupted run looks complete");
+  /* A new DIR, and an incomplete one (an earlier run's image.exr without
+   * stats.json): SIGTERM once the sibling holds the new image leaves DIR as
+   * it was and no sibling. */
+  for (int incomplete = 0; incomplete < 2; incomplete++) {
+    run("rm -rf %s", dir);
+    if (incomplete) run("mkdir %s && echo old > %s/image.exr", dir, dir);
+    const char *argv[] = {RTSIM_BINARY, "run", TINY, ROOM_TINY, "-o", dir, RUN_ARGS, NULL};
+    pid_t pid = start(argv);
+    char image[4200];
+    snprintf(image, sizeof image, "%s/.sig_run.run-%ld/image.exr", RTSIM_TMP, (long)pid);
+    int status = 0;
+    bool ended = false;
+    const double end = now() + 60;
+    while (!exists(image) && now() < end && !(ended = waitpid(pid, &status, WNOHANG) == pid)) nap();
+    if (!ended) kill(pid, SIGTERM);
+    EXPECT(ended || wait_for(pid, 60, &status));
+    EXPECTF(WIFSIGNALED(status) ? WTERMSIG(status) == SIGTERM : WEXITSTATUS(status) == 0,
+            "status %#x", status);
+    EXPECTF(count_named(RTSIM_TMP, ".sig_run.", "") == 0, "a sibling is left");
+    if (!WIFSIGNALED(status)) continue;
+    char *old = testing_slurp(dir, "image.exr", NULL);
+    EXPECTF(incomplete ? old && !strcmp(old, "old\n") : !exists(dir),
+            "incomplete %d: the directory changed", incomplete);
+    free(old);
+    EXPECT(!exists(RTSIM_TMP "/sig_run/stats.json"));
+  }
+}
+
+/* rtsim render stopped (SIGTERM) while gnuplot draws its preview: gnuplot is
+ * stopped first, then neither the image nor the preview nor a temporary of
+ * either is left. The preview's temporary appears just before gnuplot starts;
+ * a run that ends first is tried again (three times at most). */
+static void test_render(void) {
+  const char *exr = RTSIM_TMP "/sig_render.exr", *png = RTSIM_TMP "/sig_render.png";
+  int stopped = 0;
+  for (int attempt = 0; attempt < 3 && !stopped; attempt++) {
+    run("rm -f %s %s", exr, png);
+    const char *argv[] = {RTSIM_BINARY, "render",  ROOM_TINY, "-o",       exr,  "--preview",
+                          png,          "--width", "64",      "--height", "48", NULL};
+    pid_t pid = start(argv);
+    int status = 0;
+    bool ended = false;
+    const double end = now() + 60;
+    while (count_named(RTSIM_TMP, ".sig_render.png.", ".tmp") == 0 && now() < end &&
+           !(ended = waitpid(pid, &status, WNOHANG) == pid))
+      nap();
+    if (!ended) kill(pid, SIGTERM);
+    EXPECT(ended || wait_for(pid, 60, &status));
+    stopped += WIFSIGNALED(status);
+    EXPECTF(WIFSIGNALED(status) ? WTERMSIG(status) == SIGTERM : WEXITSTATUS(status) == 0,
+            "render: status %#x", status);
+    if (!WIFSIGNALED(status)) continue;
+    /* rtsim reaped gnuplot before it ended: nothing can appear after. */
+    EXPECT(!exists(exr) && !exists(png));
+    EXPECTF(count_named(RTSIM_TMP, ".sig_render.", ".tmp") == 0, "render: temporaries left");
+  }
+  fprintf(stderr, "test_signals: render stopped while drawing %d time(s)\n", stopped);
 }
 
 /* A sweep of a short point (width 8) and a long one (width 96 of the small
@@ -323,6 +362,7 @@ int main(void) {
   /* Orphans of the sweeps killed here become this program's children. */
   EXPECT(prctl(PR_SET_CHILD_SUBREAPER, 1) == 0);
   test_run_rerun();
+  test_render();
   test_sweep_sigterm();
   test_sweep_sigkill();
   /* Reap anything left (nothing is expected). */

@@ -326,8 +326,8 @@ static void test_resume(void) {
           "resumed table differs from the reference (%d: %s)", rc, out);
 }
 
-/* A point that fails at run time (its image.exr is a directory, so the image
- * cannot be renamed into place): the others finish, its stderr is kept, the
+/* A point that fails (its image.exr is a directory, which the run would not
+ * write over): the others finish, its stderr is kept, the
  * summary names it, exit 1; once mended, only it runs. */
 static void test_failing_point(void) {
   const char *dir = RTSIM_TMP "/sw_fail";
@@ -343,7 +343,7 @@ static void test_failing_point(void) {
   char err_path[4096];
   snprintf(err_path, sizeof err_path, "%s/%s/error.txt", dir, bad);
   char *err = read_all(err_path);
-  EXPECTF(err && strstr(err, "cannot write EXR") && strstr(err, "exited with code 2"),
+  EXPECTF(err && strstr(err, "cannot write the file over it") && strstr(err, "exited with code 2"),
           "error.txt: %s", err ? err : "(missing)");
   free(err);
   /* Whoever runs the point, its own job line keeps its stderr (#19 item 1). */
@@ -351,7 +351,7 @@ static void test_failing_point(void) {
   rc = run("cd / && %s sweep %s -o %s --emit-jobs 2>/dev/null | sh", RTSIM_BINARY, GOOD, dir);
   EXPECTF(rc == 1, "the failing point's job line: exit %d, want 1: %s", rc, out);
   err = read_all(err_path);
-  EXPECTF(err && strstr(err, "cannot write EXR") && strstr(err, "exited with code 2"),
+  EXPECTF(err && strstr(err, "cannot write the file over it") && strstr(err, "exited with code 2"),
           "error.txt from the job line: %s", err ? err : "(missing)");
   free(err);
   /* Merge takes the complete points and names the other. */
@@ -465,7 +465,8 @@ static void test_status(void) {
   char want[1024];
   snprintf(want, sizeof want, "\nfailed    %s: ", GOOD_NAMES[1]);
   char *at = strstr(out, want);
-  EXPECTF(at && strstr(at, "cannot write EXR") < strchr(at + 1, '\n'), "failed line: %s", out);
+  EXPECTF(at && strstr(at, "cannot write the file over it") < strchr(at + 1, '\n'),
+          "failed line: %s", out);
   snprintf(want, sizeof want, "\nrunning   %s: on node7, pid %ld, for ", GOOD_NAMES[4],
            (long)getpid());
   EXPECTF(strstr(out, want), "running line (want %s): %s", want, out);
