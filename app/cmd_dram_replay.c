@@ -581,7 +581,7 @@ int cmd_dram_replay(int argc, char **argv) {
   p->cap = 64;
   p->ring = xcalloc(p->cap, sizeof *p->ring);
   p->eng = engine_create();
-  const struct dram_client client = {p, on_done, on_space};
+  const struct dram_client client = {p, on_done, on_space, NULL};
   p->dram = dram_create(&dp, core_khz, p->eng, &client);
   p->feed_at = p->next.arrival;
   engine_at(p->eng, p->next.arrival, ev_feed, p, p->next.arrival);

@@ -18,7 +18,8 @@ const char *const dram_model_names[DRAM_MODEL_COUNT] = {"fixed", "channel", "ban
 
 struct flight {
   uint64_t addr, tag, at, done_at;
-  bool write, done;
+  double xfer_start, xfer_end; /* the level's transfer, when has_xfer */
+  bool write, done, has_xfer;
 };
 
 struct dram {
@@ -32,6 +33,9 @@ struct dram {
   struct flight *ring; /* capacity a power of two, indexed by sequence */
   uint64_t cap, head, next;
   uint64_t inflight; /* taken, not yet served */
+  /* The request being reported served (inside client.done): its transfer. */
+  bool served_has_xfer;
+  double served_start, served_end;
   FILE *trace;
   struct dram_stats st;
 };
@@ -69,8 +73,21 @@ static void level_done(void *ctx, uint64_t seq) {
   hist_add(f->write ? &d->st.write_latency : &d->st.read_latency, f->done_at - f->at);
   d->inflight--;
   uint64_t tag = f->tag;
+  d->served_has_xfer = f->has_xfer;
+  d->served_start = f->xfer_start;
+  d->served_end = f->xfer_end;
   if (seq == d->head) trace_flush(d);
   d->client.done(d->client.ctx, tag);
+  d->served_has_xfer = false;
+}
+
+static void level_transfer(void *ctx, uint64_t seq, double start, double end) {
+  struct dram *d = ctx;
+  CHECK(seq >= d->head && seq < d->next);
+  struct flight *f = &d->ring[seq & (d->cap - 1)];
+  f->has_xfer = true;
+  f->xfer_start = start;
+  f->xfer_end = end;
 }
 
 static void level_space(void *ctx) {
@@ -89,7 +106,7 @@ struct dram *dram_create(const struct dram_params *p, uint64_t core_khz, struct 
   d->core_khz = core_khz;
   d->cap = 64;
   d->ring = xcalloc(d->cap, sizeof *d->ring);
-  struct dram_client mine = {d, level_done, level_space};
+  struct dram_client mine = {d, level_done, level_space, level_transfer};
   switch (p->model) {
   case DRAM_MODEL_FIXED:
     d->ops = &dram_fixed_ops;
@@ -141,6 +158,7 @@ void dram_take(struct dram *d, uint64_t addr, bool write, uint64_t tag) {
   f->at = engine_now(d->eng);
   f->write = write;
   f->done = false;
+  f->has_xfer = false;
   d->inflight++;
   if (write) {
     d->st.writes++;
@@ -159,6 +177,12 @@ void dram_finish(struct dram *d) {
 }
 
 const struct dram_stats *dram_get_stats(const struct dram *d) { return &d->st; }
+
+bool dram_served_transfer(const struct dram *d, double *start, double *end) {
+  *start = d->served_start;
+  *end = d->served_end;
+  return d->served_has_xfer;
+}
 
 void dram_report(const struct dram *d, struct stats_table *t, uint64_t cycles) {
   d->ops->report(d->level, t, cycles);

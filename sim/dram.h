@@ -56,6 +56,12 @@ void dram_take(struct dram *d, uint64_t addr, bool write, uint64_t tag);
 /* After the run (nothing in flight, CHECKed). */
 void dram_finish(struct dram *d);
 
+/* From inside client->done: the core cycles [*start, *end), with fractions,
+ * the served request's data held the channel, when the level says so (the
+ * channel level); false otherwise (fixed: there is no channel; banked: its
+ * bursts are its own). */
+bool dram_served_transfer(const struct dram *d, double *start, double *end);
+
 const struct dram_stats *dram_get_stats(const struct dram *d);
 /* The numbers every level shares, over a struct dram_stats (sim/stats.h): its
  * slots are where the caller puts a utilization figure of its own (the

@@ -130,6 +130,10 @@ static void ch_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   d->st.busy_ticks += dur;
   d->st.wait_ticks_sum += start - arrive;
   sweep_add(d, arrive, start);
+  if (d->client.transfer) {
+    const double per_cycle = (double)(1ull << DRAM_TICK_BITS);
+    d->client.transfer(d->client.ctx, tag, (double)start / per_cycle, (double)end / per_cycle);
+  }
   uint64_t done = dram_ticks_to_cycles_ceil(end) + (write ? 0 : d->p.latency_cycles);
   engine_at(d->eng, done, ev_done, d, tag);
   /* Full now: tell the client when the next place frees (the request

@@ -29,6 +29,10 @@ struct dram_client {
    * May be called when nothing was refused; must not be called from inside
    * take. */
   void (*space)(void *ctx);
+  /* Optional (NULL: not wanted). Called from inside take by a level that
+   * models a data channel: request `tag`'s data will hold it over the core
+   * cycles [start, end), with fractions. A level without one never calls it. */
+  void (*transfer)(void *ctx, uint64_t tag, double start, double end);
 };
 
 struct dram_level_ops {

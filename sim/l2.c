@@ -378,13 +378,22 @@ static void ev_held_merge(void *ctx, uint64_t r) {
 
 /* ---- from the DRAM ---- */
 
+/* A line the DRAM moved, into timeline column col: over the cycles its data
+ * held the channel when the DRAM says (so no window shows more than the
+ * channel can move in it), else whole at cycle t, when it was served. */
+static void count_line(struct l2 *l2, unsigned col, uint64_t t) {
+  double a, b;
+  if (dram_served_transfer(l2->dram, &a, &b)) timeline_spread(l2->tl, col, a, b, LINE_BYTES);
+  else timeline_point(l2->tl, col, t, LINE_BYTES);
+}
+
 static void fill(struct l2 *l2, uint32_t s, uint64_t t, bool from_dram) {
   cache_set_pending(l2->tags, s, false);
   l2->mshr_used--;
   unsigned cls = cache_byte(l2->tags, s);
   if (from_dram) {
-    timeline_point(l2->tl, l2->col.read_bytes, t, LINE_BYTES);
-    timeline_point(l2->tl, l2->col.read_class0 + cls, t, LINE_BYTES);
+    count_line(l2, l2->col.read_bytes, t);
+    count_line(l2, l2->col.read_class0 + cls, t);
   }
   uint32_t w = cache_word(l2->tags, s);
   cache_set_word(l2->tags, s, NONE);
@@ -423,7 +432,7 @@ static void dram_done(void *ctx, uint64_t tag) {
   struct l2 *l2 = ctx;
   const uint64_t t = engine_now(l2->eng);
   if (tag == TAG_WRITE) {
-    timeline_point(l2->tl, l2->col.write_bytes, t, LINE_BYTES);
+    count_line(l2, l2->col.write_bytes, t);
     return;
   }
   fill(l2, (uint32_t)(tag >> 1), t, true);
@@ -432,7 +441,7 @@ static void dram_done(void *ctx, uint64_t tag) {
 static void dram_space(void *ctx) { pump(ctx); }
 
 struct dram_client l2_dram_client(struct l2 *l2) {
-  struct dram_client c = {l2, dram_done, dram_space};
+  struct dram_client c = {l2, dram_done, dram_space, NULL};
   return c;
 }
 

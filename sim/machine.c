@@ -1077,10 +1077,11 @@ void machine_stats_emit(const struct machine *m, struct stats_table *t,
 /* The timeline's columns (enum machine_tl_col), as timeline.csv writes them. */
 const struct timeline_col machine_tl_cols[] = {
     {"dram_read_bytes", "bytes",
-     "bytes the DRAM delivered in the window (a transfer split in proportion)",
+     "bytes the DRAM delivered in the window (at fidelity channel each transfer spread over its "
+     "cycles on the channel; else whole lines at the cycle served)",
      MACHINE_TL_DRAM_READ_BYTES, 1, 2, false, false},
-    {"dram_write_bytes", "bytes", "bytes the DRAM wrote in the window", MACHINE_TL_DRAM_WRITE_BYTES,
-     1, 2, false, false},
+    {"dram_write_bytes", "bytes", "bytes the DRAM wrote in the window (the same way)",
+     MACHINE_TL_DRAM_WRITE_BYTES, 1, 2, false, false},
     {"read_%s_bytes", "bytes", "of the bytes read, those of each data class",
      MACHINE_TL_READ_CLASS0, MEM_CLASS_MAX, 2, true, false},
     {"l2_accesses", "count", "accesses that reached the L2", MACHINE_TL_L2_ACCESSES, 1, 0, false,

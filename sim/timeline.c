@@ -2,6 +2,7 @@
  * and pairs of rows merge, so the counts stay exact sums whatever the length. */
 #include "sim/timeline.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -73,6 +74,31 @@ void timeline_span_any(struct timeline *tl, unsigned col, uint64_t a, uint64_t b
     if (end > b) end = b;
     r[col] += per_cycle * (double)(end - x);
     x = end;
+  }
+}
+
+void timeline_spread(struct timeline *tl, unsigned col, double a, double b, double amount) {
+  CHECK_LT(col, tl->cols);
+  CHECK(a >= 0 && b >= a);
+  const uint64_t first = (uint64_t)a;
+  /* The cycle that holds the end (b itself belongs to the next one). */
+  uint64_t last = b > a ? (uint64_t)ceil(b) - 1 : first;
+  if (last < first) last = first;
+  /* The row of the last window first: any coarsening happens now. */
+  if (!timeline_in_hot(tl, last)) row(tl, last / tl->window);
+  double from = a, left = amount;
+  for (uint64_t x = first;;) {
+    double *r = row_at(tl, x);
+    const uint64_t hi = tl->hi; /* row_at leaves x's window hot */
+    if (!(b > a) || (double)hi >= b) {
+      r[col] += left; /* the rest, so the pieces sum to amount */
+      return;
+    }
+    const double part = amount * (((double)hi - from) / (b - a));
+    r[col] += part;
+    left -= part;
+    from = (double)hi;
+    x = hi;
   }
 }
 

@@ -31,6 +31,11 @@ void timeline_point_any(struct timeline *tl, unsigned col, uint64_t t, double am
 /* Add per_cycle for every cycle of [a, b), split between windows in proportion. */
 void timeline_span_any(struct timeline *tl, unsigned col, uint64_t a, uint64_t b, double per_cycle);
 
+/* Add amount over the cycles [a, b) (a >= 0, with fractions), split between
+ * windows in proportion to the time each holds; b == a adds it whole at
+ * cycle a. The pieces sum to amount. */
+void timeline_spread(struct timeline *tl, unsigned col, double a, double b, double amount);
+
 /* Cycle t lies in the row last reached (tl->hot). */
 static inline bool timeline_in_hot(const struct timeline *tl, uint64_t t) {
   return t >= tl->lo && t < tl->hi;

@@ -126,7 +126,7 @@ static void test_fixed(void) {
   for (unsigned i = 0; i < 4; i++) {
     make_requests(r, NREQ, 11 + i, 3);
     struct client c = {.eng = engine_create(), .r = r, .n = NREQ, .ops = &dram_fixed_ops};
-    struct dram_client dc = {&c, on_done, on_space};
+    struct dram_client dc = {&c, on_done, on_space, NULL};
     c.level = dram_fixed_create(lats[i], c.eng, &dc);
     drive(&c);
     unsigned bad = 0;
@@ -150,7 +150,7 @@ static void channel_case(double bytes_per_cycle, uint64_t latency, unsigned dept
   const double T = 64.0 / bytes_per_cycle;
   channel_reference(r, NREQ, T, latency, depth, taken, done);
   struct client c = {.eng = engine_create(), .r = r, .n = NREQ, .ops = &dram_channel_ops};
-  struct dram_client dc = {&c, on_done, on_space};
+  struct dram_client dc = {&c, on_done, on_space, NULL};
   struct dram_channel_params p = {latency, bytes_per_cycle, depth};
   c.level = dram_channel_create(&p, c.eng, &dc);
   drive(&c);
@@ -215,7 +215,7 @@ static void wrapper_case(enum dram_model model) {
   p.banked = testing_ddr4_params();
   EXPECT(dram_params_problem(&p) == NULL);
   struct client c = {.eng = engine_create(), .r = r, .n = NREQ};
-  struct dram_client dc = {&c, on_done, on_space};
+  struct dram_client dc = {&c, on_done, on_space, NULL};
   c.dram = dram_create(&p, 1400000, c.eng, &dc); /* 1.4 GHz core */
   char *buf = NULL;
   size_t len = 0;

@@ -87,7 +87,7 @@ static struct dram_banked *run(const struct dram_banked_params *p, uint64_t core
   h.n = n;
   h.done = done;
   h.waiting = xcalloc(n + 1, sizeof *h.waiting);
-  struct dram_client cl = {&h, h_done, h_space};
+  struct dram_client cl = {&h, h_done, h_space, NULL};
   h.d = dram_banked_create(p, core_khz, h.e, &cl);
   for (uint64_t i = 0; i < n; i++) {
     done[i] = UINT64_MAX;

@@ -376,7 +376,63 @@ static void test_refusals(void) {
           "exit %d: %s", rc, out);
 }
 
+/* The timeline's DRAM bytes at the channel rung (README "Outputs"): each line
+ * is spread over the cycles its transfer holds the channel, so no row of
+ * timeline.csv holds more than cycles x dram.bytes_per_cycle (up to the two
+ * decimals it is written with), the columns sum to the run's totals, and a
+ * run held back by the channel fills its busiest windows. The settings of
+ * the issue that found whole lines in a window past what the channel moves
+ * in it: a treelet run at 0.25 bytes a cycle (256 cycles a line) against
+ * windows of 200 cycles. */
+static void test_timeline_bound(void) {
+  static char out[1 << 16];
+  const char *dir = RTSIM_TMP "/ladder_bound";
+  if (run("default", "room", "treelet", "channel",
+          "--set dram.bytes_per_cycle=0.25 --set timeline.window=200", 16, 12, dir, out,
+          sizeof out))
+    return;
+  char *t = testing_slurp(dir, "timeline.csv", NULL);
+  EXPECT(t != NULL);
+  if (!t) return;
+  int col_cycles = -1, col_read = -1, col_write = -1, k = 0;
+  char *save, *line = strtok_r(t, "\n", &save);
+  for (char *c = line; c; k++) {
+    char *comma = strchr(c, ',');
+    size_t n = comma ? (size_t)(comma - c) : strlen(c);
+    if (n == 6 && !strncmp(c, "cycles", n)) col_cycles = k;
+    if (n == 15 && !strncmp(c, "dram_read_bytes", n)) col_read = k;
+    if (n == 16 && !strncmp(c, "dram_write_bytes", n)) col_write = k;
+    c = comma ? comma + 1 : NULL;
+  }
+  EXPECT(col_cycles >= 0 && col_read >= 0 && col_write >= 0);
+  double read = 0, write = 0, fullest = 0;
+  unsigned rows = 0, over = 0;
+  while ((line = strtok_r(NULL, "\n", &save))) {
+    double v[64] = {0};
+    k = 0;
+    for (char *c = line; c && k < 64; k++) {
+      v[k] = strtod(c, NULL);
+      c = strchr(c, ',');
+      if (c) c++;
+    }
+    const double cap = 0.25 * v[col_cycles], moved = v[col_read] + v[col_write];
+    over += moved > cap + 0.01;
+    if (moved / cap > fullest) fullest = moved / cap;
+    read += v[col_read];
+    write += v[col_write];
+    rows++;
+  }
+  free(t);
+  const double rb = testing_json_num(dir, "dram_read_bytes"),
+               wb = testing_json_num(dir, "dram_write_bytes");
+  EXPECTF(rows > 100 && over == 0, "%u of %u windows hold more than the channel moves", over, rows);
+  EXPECTF(fullest > 0.99, "the busiest window holds %.3f of what the channel moves", fullest);
+  EXPECTF(fabs(read - rb) <= 0.005 * rows && fabs(write - wb) <= 0.005 * rows,
+          "timeline %.2f / %.2f bytes, totals %.0f / %.0f", read, write, rb, wb);
+}
+
 int main(void) {
+  test_timeline_bound();
   test_refusals();
   test_images_and_keys();
   test_exact();
