@@ -1429,7 +1429,8 @@ static const struct stats_desc banked_desc[] = {
                 "requests that found another row open"),
     {.name = "dram_row_hit_rate",
      .unit = "fraction",
-     .desc = "row hits / requests (reads and writes)",
+     .desc = "row hits / column commands (RD and WR issued), as DRAMsim3 counts: reads "
+             "served from the write queue or by another read's RD issue none",
      .how = STATS_HOW_F64,
      .off = offsetof(struct dram_banked_stats, reads), /* reads and writes, side by side */
      .size =

@@ -597,6 +597,64 @@ static void test_cq_in_order(void) {
   dram_banked_destroy(d);
 }
 
+/* dram_row_hit_rate is row hits over column commands (RD and WR issued), as
+ * DRAMsim3 reports it, and its description says so: a read served with
+ * another's RD and a read answered from the write buffer issue none. By
+ * hand, the two cases above: per_bank order (A finds its bank closed, C
+ * hits, B conflicts, D is served with A): 1 hit of 3 commands, not of 4
+ * requests; the write drain (W0 opens row 1, W1, W2 and R3 hit it, R4 is
+ * answered from the buffer): 3 hits of 4 commands, not of 5 requests. */
+static double row_hit_rate(const struct dram_banked *d) {
+  struct stats_table t = {0};
+  dram_banked_ops.report(d, &t, 1000);
+  double v = -1;
+  for (unsigned i = 0; i < t.n; i++)
+    if (!strcmp(t.e[i].name, "dram_row_hit_rate")) v = t.e[i].f;
+  stats_fini(&t);
+  return v;
+}
+
+static void test_row_hit_rate(void) {
+  struct dram_banked_params p = ddr4_per_bank();
+  struct rq a[] = {{0, addr_of(&p, 0, 0, 0, 0, 1, 0), false},
+                   {1, addr_of(&p, 0, 0, 0, 0, 2, 0), false},
+                   {2, addr_of(&p, 0, 0, 0, 0, 1, 1), false},
+                   {3, addr_of(&p, 0, 0, 0, 0, 1, 0), false}};
+  uint64_t done[5];
+  struct dram_banked *d = run(&p, 1200 * MHZ, a, 4, done, 0);
+  const struct dram_banked_stats *s = dram_banked_get_stats(d);
+  EXPECT(s->row_hits + s->row_misses + s->row_conflicts == s->reads + s->writes);
+  EXPECTF(s->row_hits == 1 && s->reads == 3 && row_hit_rate(d) == 1.0 / 3,
+          "merged read: rate %.6f, %llu hits of %llu commands", row_hit_rate(d),
+          (unsigned long long)s->row_hits, (unsigned long long)(s->reads + s->writes));
+  dram_banked_destroy(d);
+
+  p.write_queue = 4;
+  p.write_high = 4;
+  p.write_low = 2;
+  struct rq r[5];
+  for (int i = 0; i < 3; i++)
+    r[i] = (struct rq){(uint64_t)i, addr_of(&p, 0, 0, 0, 0, 1, (uint64_t)i), true};
+  r[3] = (struct rq){3, addr_of(&p, 0, 0, 0, 0, 1, 5), false};
+  r[4] = (struct rq){4, addr_of(&p, 0, 0, 0, 0, 1, 1), false};
+  d = run(&p, 1200 * MHZ, r, 5, done, 0);
+  s = dram_banked_get_stats(d);
+  EXPECT(s->row_hits + s->row_misses + s->row_conflicts == s->reads + s->writes);
+  EXPECTF(s->write_forwards == 1 && s->reads + s->writes == 4 && s->row_hits == 3 &&
+              row_hit_rate(d) == 3.0 / 4,
+          "forwarded read: rate %.6f, %llu hits of %llu commands", row_hit_rate(d),
+          (unsigned long long)s->row_hits, (unsigned long long)(s->reads + s->writes));
+  dram_banked_destroy(d);
+
+  /* The description says what is computed. */
+  const char *desc = NULL;
+  for (unsigned i = 0; i < dram_banked_stats_descs.n; i++)
+    if (!strcmp(dram_banked_stats_descs.d[i].name, "dram_row_hit_rate"))
+      desc = dram_banked_stats_descs.d[i].desc;
+  EXPECTF(desc && strstr(desc, "column commands") && !strstr(desc, "requests ("),
+          "dram_row_hit_rate: %s", desc ? desc : "(none)");
+}
+
 /* 12: decode, hand-computed bit positions. 2 channels, 2 ranks, 4 groups, 4
  * banks, 1024 rows, 1024 columns / BL 8 = 128 bursts: widths ch 1, ra 1, bg
  * 2, ba 2, ro 10, co 7, above 6 offset bits. */
@@ -808,6 +866,7 @@ int main(void) {
   test_cq_round_robin();
   test_cq_write_drain();
   test_cq_in_order();
+  test_row_hit_rate();
   test_decode();
   test_oracle_and_little();
   test_problems();
