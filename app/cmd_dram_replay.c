@@ -44,7 +44,9 @@ static const char HELP[] =
     "The operation is READ, WRITE, R or W (case matters) in every format. The\n"
     "address is hexadecimal after 0x, or decimal, and is aligned down to its\n"
     "64-byte line (every request is one line). Arrivals must not decrease. A line\n"
-    "is at most 4096 bytes.\n"
+    "is at most 4096 bytes. On a banked DRAM with refresh, a trace may span at\n"
+    "most 2^20 refreshes (channels x the last arrival / (tREFI / ranks)): the\n"
+    "replay steps through each.\n"
     "\n"
     "Prints one tidy CSV row with its header on stdout: requests, reads, writes,\n"
     "the span from the first arrival to the last request served, read latencies\n"
@@ -65,6 +67,9 @@ static const char HELP[] =
 
 #define REPLAY_LINE_MAX 4096          /* bytes a line, its newline not counted */
 #define REPLAY_CYCLE_MAX (1ull << 40) /* latest arrival, in core cycles */
+/* Refreshes a trace may span, over the banked level's channels: the level
+ * steps through each one (an idle stretch too), some 40 ns apiece. */
+#define REPLAY_REFRESHES_MAX (1ull << 20)
 #define REPLAY_LINE_BYTES 64u
 #define REPLAY_FIELDS_MAX 6 /* fields kept of a line (one past the most allowed) */
 #define REPLAY_ECHO_MAX 40  /* bytes of a bad field quoted in a message */
@@ -90,8 +95,10 @@ struct reader {
   unsigned fields;           /* the trace's fields a line; 0 until its first request */
   unsigned long format_line; /* the line that set it */
   struct dram_clock clock;
-  uint64_t requests; /* read so far */
-  uint64_t last_at;  /* the last request's arrival as written (its field's unit) */
+  uint64_t dram_cycle_max; /* latest arrival in DRAM cycles (REPLAY_REFRESHES_MAX) */
+  uint64_t refresh_every;  /* the banked level's refresh interval, DRAM cycles (0: none) */
+  uint64_t requests;       /* read so far */
+  uint64_t last_at;        /* the last request's arrival as written (its field's unit) */
   struct err *e;
 };
 
@@ -261,6 +268,20 @@ static int reader_next(struct reader *r, struct request *q) {
                      "arrival DRAM cycle: too late (got %llu, core cycle %llu; expected at most "
                      "core cycle %llu)",
                      (unsigned long long)v, (unsigned long long)q->arrival, REPLAY_CYCLE_MAX),
+             -1;
+    /* A banked DRAM with refresh steps through every refresh until then. */
+    const uint64_t dram_at = n == 5 ? dram_clock_from_core(r->clock, v) : v;
+    if (dram_at > r->dram_cycle_max)
+      return err_set(r->e, r->path, line, n == 2 ? f[0].col : f[n == 3 ? 2 : 3].col,
+                     "%s: too late for the replay (got DRAM cycle %llu, expected at most %llu: "
+                     "the DRAM refreshes every tREFI / ranks = %llu DRAM cycles on each channel "
+                     "and the replay steps through every refresh, at most %llu in all; "
+                     "--set dram.tREFI=0 turns refresh off)",
+                     n == 2   ? "request"
+                     : n == 3 ? "arrival DRAM cycle"
+                              : "arrival cycle",
+                     (unsigned long long)dram_at, (unsigned long long)r->dram_cycle_max,
+                     (unsigned long long)r->refresh_every, REPLAY_REFRESHES_MAX),
              -1;
     r->last_at = v;
     r->requests++;
@@ -559,6 +580,11 @@ int cmd_dram_replay(int argc, char **argv) {
   p->rd.path = trace_path;
   p->rd.e = &e;
   p->rd.clock = dram_clock_make(core_khz, (uint64_t)dp.clock_mhz * 1000);
+  p->rd.dram_cycle_max = UINT64_MAX;
+  if (dp.model == DRAM_MODEL_BANKED && dp.banked.tREFI > 0) {
+    p->rd.refresh_every = dp.banked.tREFI / dp.banked.ranks;
+    p->rd.dram_cycle_max = REPLAY_REFRESHES_MAX / dp.banked.channels * p->rd.refresh_every;
+  }
   int got = reader_next(&p->rd, &p->next);
   if (got == 0)
     err_set(&e, trace_path, 0, 0,

@@ -455,6 +455,10 @@ static void test_bad(void) {
                              "expected a whole number from 0 to 1099511627776)"},
       {DT "bad_long_line.trace", "bad_long_line.trace:2:4097: error: line too long (got more "
                                  "than 4096 bytes, expected at most 4096)"},
+      {DT "bad_refresh_span.trace --set fidelity=banked",
+       "bad_refresh_span.trace:5:11: error: arrival DRAM cycle: too late for the replay (got DRAM "
+       "cycle 4907335681, expected at most 4907335680: the DRAM refreshes every tREFI / ranks = "
+       "4680 DRAM cycles"},
       {DT "empty.trace", "empty.trace: error: no request in the trace"},
       {DT "no_such.trace", "no_such.trace: error: cannot open: No such file or directory"},
       {DT "fixed.trace --set fidelity=dimm",
@@ -481,6 +485,19 @@ static void test_bad(void) {
     char *out = slurp(TMP "bad.csv");
     EXPECTF(out && !out[0], "%s: output on stdout: %s", cases[i].args, out ? out : "(none)");
     free(out);
+  }
+
+  /* A banked replay steps through every refresh: the trace that reaches the
+   * last DRAM cycle allowed replays (2^20 refreshes, a fraction of a second),
+   * and without refresh, or at the channel rung, so does a later one. */
+  static const char *const fine[] = {"refresh_span.trace --set fidelity=banked",
+                                     "bad_refresh_span.trace --set fidelity=banked "
+                                     "--set dram.tREFI=0",
+                                     "bad_refresh_span.trace"};
+  for (size_t i = 0; i < sizeof fine / sizeof fine[0]; i++) {
+    snprintf(args, sizeof args, SRC "configs/tiny.yaml " DT "%s", fine[i]);
+    int rc = replay(args, TMP "span.csv", msg, sizeof msg);
+    EXPECTF(rc == 0, "%s: exit %d: %s", fine[i], rc, msg);
   }
 
   /* The command line. */
