@@ -120,7 +120,7 @@ bool outdir_begin(struct outdir *d, const char *path, const char *const *outputs
     return err_set(e, path, 0, 0, "cannot create the directory: %s", strerror(errno));
   struct stat sb;
   if (stat(d->target, &sb) == 0 && !S_ISDIR(sb.st_mode))
-    return err_set(e, path, 0, 0, "cannot create the directory: it exists and is not one");
+    return err_set(e, path, 0, 0, "cannot create the directory: a file of that name exists");
   /* An output's name that an earlier DIR holds as a directory would stay
    * behind the swap: refused before anything runs. */
   for (unsigned k = 0; stat(d->target, &sb) == 0 && outputs[k]; k++) {
