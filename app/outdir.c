@@ -295,8 +295,11 @@ void outdir_name_in_err(const struct outdir *d, struct err *e) {
   err_escape(w, sizeof w, d->write);
   size_t n = strlen(w);
   if (!e->set || strncmp(e->file, w, n) || e->file[n] != '/') return;
-  char named[ERR_FILE_MAX + OUTDIR_PATH_MAX], given[ERR_FILE_MAX];
-  err_escape(given, sizeof given, d->path);
-  snprintf(named, sizeof named, "%s%s", given, e->file + n);
-  snprintf(e->file, sizeof e->file, "%s", named);
+  char rest[ERR_FILE_MAX];
+  memcpy(rest, e->file + n, strlen(e->file + n) + 1);
+  err_escape(e->file, sizeof e->file, d->path);
+  size_t g = strlen(e->file), r = strlen(rest);
+  if (g + r >= sizeof e->file) r = sizeof e->file - 1 - g; /* cut short, as err_set would */
+  memcpy(e->file + g, rest, r);
+  e->file[g + r] = '\0';
 }

@@ -156,6 +156,26 @@ static void test_run_existing(void) {
   EXPECT(count_named(RTSIM_TMP, ".od_old.", "") == 0);
 }
 
+/* OUTDIR that cannot be a directory: a file of that name (left as it was),
+ * or a parent that does not exist. One message, exit 2, nothing made. */
+static void test_run_refused(void) {
+  const char *file = RTSIM_TMP "/od_file";
+  run("rm -rf %s && echo keep > %s", file, file);
+  int rc = run("%s -o %s", RUN, file);
+  EXPECTF(rc == 2 && one_message("od_file", "cannot create the directory: a file of that name "
+                                            "exists"),
+          "a file: %d %s", rc, out);
+  char *keep = testing_slurp(RTSIM_TMP, "od_file", NULL);
+  EXPECT(keep && !strcmp(keep, "keep\n"));
+  free(keep);
+  rc = run("%s -o %s/od_no_such/dir", RUN, RTSIM_TMP);
+  EXPECTF(rc == 2 && one_message("od_no_such/dir",
+                                 "cannot create the directory: No such file or directory"),
+          "no parent: %d %s", rc, out);
+  EXPECT(!exists(RTSIM_TMP "/od_no_such"));
+  EXPECT(count_named(RTSIM_TMP, ".od_file.", "") == 0);
+}
+
 /* rtsim render: a preview that cannot be written leaves no image either, and
  * an earlier image stays; an image past the limit (64x64: some 20 KB) leaves
  * neither. */
@@ -218,6 +238,7 @@ static void test_sweep_point(void) {
 int main(void) {
   test_run_new();
   test_run_existing();
+  test_run_refused();
   test_render();
   test_traffic();
   test_sweep_point();
