@@ -135,7 +135,10 @@ bool outdir_begin(struct outdir *d, const char *path, const char *const *outputs
   *slash = '\0';
   const char *parent = d->target[0] ? d->target : "/";
   remove_stale_siblings(parent, slash + 1);
-  snprintf(d->write, sizeof d->write, "%s/.%s.run-%ld", d->target, slash + 1, (long)getpid());
+  /* (fits: checked above; the length is used so that gcc sees it is) */
+  const int wn =
+      snprintf(d->write, sizeof d->write, "%s/.%s.run-%ld", d->target, slash + 1, (long)getpid());
+  CHECK(wn > 0 && (size_t)wn < sizeof d->write);
   *slash = '/';
   /* Guarded first: a signal right after mkdir must find the sibling. */
   outguard_tree(d->write);
