@@ -1422,11 +1422,11 @@ BK_QUEUE_FNS(1, writes)
 
 static const struct stats_desc banked_desc[] = {
     STATS_FIELD(struct dram_banked_stats, row_hits, "dram_row_hits", "count",
-                "requests that found their row open"),
+                "column commands that found their row open"),
     STATS_FIELD(struct dram_banked_stats, row_misses, "dram_row_misses", "count",
-                "requests that found their bank closed"),
+                "column commands whose row had to be opened"),
     STATS_FIELD(struct dram_banked_stats, row_conflicts, "dram_row_conflicts", "count",
-                "requests that found another row open"),
+                "column commands whose bank had another row open"),
     {.name = "dram_row_hit_rate",
      .unit = "fraction",
      .desc = "row hits / column commands (RD and WR issued), as DRAMsim3 counts: reads "
