@@ -4,7 +4,7 @@
  * Two controller structures share the timing state and the refresh: shared
  * (FR-FCFS over a read and a write queue) and per_bank / per_rank
  * (transaction queues feeding command queues, the functions named _cq).
- * Times inside are signed DRAM cycles; NEVER sits far enough below zero that
+ * Times inside are signed DRAM cycles; DRAM_BANKED_NEVER sits far enough below zero that
  * adding any timing to it still constrains nothing. */
 #include "sim/dram_banked.h"
 
@@ -15,14 +15,21 @@
 #include "sim/err.h"
 #include "sim/stats.h"
 
-#define NEVER (-((int64_t)1 << 40))
-#define FAR INT64_MAX
+#define DRAM_BANKED_NEVER (-((int64_t)1 << 40))
+#define DRAM_BANKED_FAR INT64_MAX
 
-enum { RD_Q = 0, WR_Q = 1 };
-enum { KIND_HIT = 0, KIND_MISS = 1, KIND_CONFLICT = 2 };
-enum cmd_type { CMD_NONE, CMD_ACT, CMD_PRE, CMD_RD, CMD_WR, CMD_REF };
+enum { DRAM_BANKED_RD_Q = 0, DRAM_BANKED_WR_Q = 1 };
+enum { DRAM_BANKED_KIND_HIT = 0, DRAM_BANKED_KIND_MISS = 1, DRAM_BANKED_KIND_CONFLICT = 2 };
+enum dram_banked_cmd_type {
+  DRAM_BANKED_CMD_NONE,
+  DRAM_BANKED_CMD_ACT,
+  DRAM_BANKED_CMD_PRE,
+  DRAM_BANKED_CMD_RD,
+  DRAM_BANKED_CMD_WR,
+  DRAM_BANKED_CMD_REF
+};
 
-struct bank {
+struct dram_banked_bank {
   int64_t act_ok;           /* earliest ACT: PRE + tRP, ACT + tRC, REF + tRFC */
   int64_t col_ok;           /* ACT + tRCD */
   int64_t pre_ok;           /* ACT + tRAS, RD + tRTP, WR + tCWL + BL/2 + tWR */
@@ -36,21 +43,21 @@ struct bank {
   bool conflict_seen, hit_held;
 };
 
-struct group {
+struct dram_banked_group {
   int64_t act, rd, wr; /* last ACT, RD, WR in the bank group */
 };
 
-struct rank {
+struct dram_banked_rank {
   int64_t act, rd, wr; /* last ACT, RD, WR in the rank */
   int64_t faw[4];      /* the last four ACTs, a ring from faw_i (oldest) */
   unsigned faw_i;
   int64_t ref_end;  /* REF + tRFC */
-  int64_t next_due; /* the next refresh falls due (FAR: refresh off) */
+  int64_t next_due; /* the next refresh falls due (DRAM_BANKED_FAR: refresh off) */
   uint32_t pending; /* refreshes due and not yet issued */
   uint32_t open;    /* banks with a row open */
 };
 
-struct req {
+struct dram_banked_req {
   uint64_t tag, take_core, seq, row, line, column;
   /* The first DRAM cycle its commands may issue (controller_cycles after
    * taken). per_bank: a transaction may move at the end of cycle ready - 1;
@@ -63,79 +70,80 @@ struct req {
 };
 
 /* A read served by another queued read of its line (per_bank). */
-struct follower {
+struct dram_banked_follower {
   uint64_t line, tag;
 };
 
-struct queue {
-  struct req *r; /* in age order */
+struct dram_banked_queue {
+  struct dram_banked_req *r; /* in age order */
   uint32_t n, cap;
 };
 
-struct burst {
+struct dram_banked_burst {
   int64_t start;
   uint32_t rank;
   bool write;
 };
 
 /* A command: its type, where it goes, and for which request. */
-struct cmd {
-  enum cmd_type type;
+struct dram_banked_cmd {
+  enum dram_banked_cmd_type type;
   uint32_t rank, bank; /* bank within the channel */
   uint32_t qi;         /* request index in the served queue (per_bank: in command queue cq) */
   uint32_t cq;
   bool for_req; /* a request's command (else refresh work) */
 };
 
-/* A scan's answer: the command to issue now (type CMD_NONE: none), the
+/* A scan's answer: the command to issue now (type DRAM_BANKED_CMD_NONE: none), the
  * earliest cycle anything could, and the first candidate in scan order whose
- * earliest time is the least of all candidates' (first_t; FAR: none). */
-struct pick {
-  struct cmd cmd;
-  int64_t next; /* earliest cycle >= now any candidate could issue (FAR: none) */
-  struct cmd first;
+ * earliest time is the least of all candidates' (first_t; DRAM_BANKED_FAR: none). */
+struct dram_banked_pick {
+  struct dram_banked_cmd cmd;
+  int64_t next; /* earliest cycle >= now any candidate could issue (DRAM_BANKED_FAR: none) */
+  struct dram_banked_cmd first;
   int64_t first_t;
 };
 
 /* A command queue's summary: of its candidates as of cycle `at`, the least
- * earliest time t (FAR: none) and the first candidate with it. */
-struct qsum {
+ * earliest time t (DRAM_BANKED_FAR: none) and the first candidate with it. */
+struct dram_banked_qsum {
   int64_t at, t;
-  struct cmd k;
-  int64_t act_t, rd_t, wr_t; /* the least of its ACT, RD and WR candidates (FAR: none) */
-  /* per_bank: the one ACT or PRE candidate (o_t FAR: none), and the entries
+  struct dram_banked_cmd k;
+  int64_t act_t, rd_t,
+      wr_t; /* the least of its ACT, RD and WR candidates (DRAM_BANKED_FAR: none) */
+  /* per_bank: the one ACT or PRE candidate (o_t DRAM_BANKED_FAR: none), and the entries
    * of the RD and WR candidates (see col_refresh). */
   int64_t o_t;
-  struct cmd o;
+  struct dram_banked_cmd o;
   uint32_t rd_j, wr_j;
 };
 
-struct channel {
-  struct queue q[2];
+struct dram_banked_channel {
+  struct dram_banked_queue q[2];
   bool writing;
-  int64_t rd;           /* last RD on the channel (tRTW) */
-  struct burst *bursts; /* data bursts that may still matter, by start */
+  int64_t rd;                       /* last RD on the channel (tRTW) */
+  struct dram_banked_burst *bursts; /* data bursts that may still matter, by start */
   uint32_t nb, cap_b;
-  struct bank *banks;   /* ranks x groups x banks_per_group */
-  struct group *groups; /* ranks x groups */
-  struct rank *ranks;
+  struct dram_banked_bank *banks;   /* ranks x groups x banks_per_group */
+  struct dram_banked_group *groups; /* ranks x groups */
+  struct dram_banked_rank *ranks;
   int64_t next; /* earliest cycle a command may issue or a refresh fall due */
   uint64_t scan_no;
   /* per_bank / per_rank: */
-  struct queue *cq;     /* command queues, by bank within the channel or by rank */
-  uint32_t ncq, cq_n;   /* command queues; commands in them all */
-  uint64_t *cq_busy;    /* bit i of word i / 64: command queue i holds a command */
-  uint32_t rr;          /* the command queue probed last (round robin) */
-  uint32_t draining;    /* writes still to move in the current drain */
-  int64_t last_busy;    /* the last cycle a request arrived or a request command issued */
-  int64_t took_at;      /* the arrival cycle of the last request taken */
-  struct follower *fol; /* reads waiting for another read's RD */
+  struct dram_banked_queue *cq; /* command queues, by bank within the channel or by rank */
+  uint32_t ncq, cq_n;           /* command queues; commands in them all */
+  uint64_t *cq_busy;            /* bit i of word i / 64: command queue i holds a command */
+  uint32_t rr;                  /* the command queue probed last (round robin) */
+  uint32_t draining;            /* writes still to move in the current drain */
+  int64_t last_busy;            /* the last cycle a request arrived or a request command issued */
+  int64_t took_at;              /* the arrival cycle of the last request taken */
+  struct dram_banked_follower *fol; /* reads waiting for another read's RD */
   uint32_t nfol, cap_fol;
   /* per_bank / per_rank: each command queue's least candidate (cq_sum),
    * and bitmaps by command queue: its summary is fresh; it has an ACT
    * candidate; it has a column candidate (what a command elsewhere can
    * invalidate: see cq_sum). */
-  struct qsum *sum;
+  struct dram_banked_qsum *sum;
   uint64_t *fresh, *has_act, *has_col;
   uint64_t *col_stale; /* per_bank: only its column candidates' times may have moved */
   uint64_t *blocked;   /* bitmap: the command queue's rank has a refresh due */
@@ -145,7 +153,7 @@ struct channel {
    * since (memo_ok; see channel_cycle_cq). */
   bool memo_ok;
   int64_t memo_at, memo_t;
-  struct cmd memo;
+  struct dram_banked_cmd memo;
 };
 
 struct dram_banked {
@@ -153,7 +161,7 @@ struct dram_banked {
   struct dram_clock clk;
   struct engine *e;
   struct dram_client client;
-  struct channel *ch;
+  struct dram_banked_channel *ch;
   uint32_t banks_per_rank, banks_per_channel;
   int64_t burst_cycles; /* BL / 2 */
   int64_t refresh_step; /* tREFI / ranks */
@@ -309,7 +317,7 @@ static void area_to(struct dram_banked *d, int k, uint64_t t) {
 /* The earliest start >= s0 of a burst of `rank` that overlaps no burst on the
  * channel (one idle cycle between ranks). Bursts are disjoint and sorted by
  * start, so moving past one can only meet later ones. */
-static int64_t bus_fit(const struct dram_banked *d, const struct channel *c, int64_t s0,
+static int64_t bus_fit(const struct dram_banked *d, const struct dram_banked_channel *c, int64_t s0,
                        uint32_t rank, bool write) {
   const int64_t b = d->burst_cycles;
   int64_t s = s0;
@@ -326,8 +334,8 @@ static int64_t bus_fit(const struct dram_banked *d, const struct channel *c, int
 
 /* Record a burst at `start`; forget those that end before any future burst
  * could begin (a command at `now` or later puts data at now + min latency). */
-static void bus_add(struct dram_banked *d, struct channel *c, int64_t now, int64_t start,
-                    uint32_t rank, bool write) {
+static void bus_add(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
+                    int64_t start, uint32_t rank, bool write) {
   const int64_t b = d->burst_cycles;
   int64_t horizon = now + (d->p.tCL < d->p.tCWL ? d->p.tCL : d->p.tCWL);
   uint32_t k = 0;
@@ -349,11 +357,11 @@ static void bus_add(struct dram_banked *d, struct channel *c, int64_t now, int64
 
 /* ---- Earliest times of each command ---- */
 
-static int64_t act_earliest(const struct dram_banked *d, const struct channel *c,
-                            const struct req *r, int64_t now) {
-  const struct bank *bk = &c->banks[r->bank];
-  const struct rank *rk = &c->ranks[r->rank];
-  const struct group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
+static int64_t act_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
+                            const struct dram_banked_req *r, int64_t now) {
+  const struct dram_banked_bank *bk = &c->banks[r->bank];
+  const struct dram_banked_rank *rk = &c->ranks[r->rank];
+  const struct dram_banked_group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
   int64_t t = max64(max64(now, r->ready), bk->act_ok);
   t = max64(t, rk->ref_end);
   t = max64(t, rk->act + d->p.tRRD_S);
@@ -362,11 +370,11 @@ static int64_t act_earliest(const struct dram_banked *d, const struct channel *c
   return t;
 }
 
-static int64_t col_earliest(const struct dram_banked *d, const struct channel *c,
-                            const struct req *r, bool write, int64_t now) {
-  const struct bank *bk = &c->banks[r->bank];
-  const struct rank *rk = &c->ranks[r->rank];
-  const struct group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
+static int64_t col_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
+                            const struct dram_banked_req *r, bool write, int64_t now) {
+  const struct dram_banked_bank *bk = &c->banks[r->bank];
+  const struct dram_banked_rank *rk = &c->ranks[r->rank];
+  const struct dram_banked_group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
   const int64_t b = d->burst_cycles;
   int64_t t = max64(max64(now, r->ready), bk->col_ok);
   int64_t lat;
@@ -387,10 +395,11 @@ static int64_t col_earliest(const struct dram_banked *d, const struct channel *c
 
 /* The earliest cycle >= now request r's command of the given type (ACT,
  * PRE, RD or WR) could issue. */
-static int64_t req_earliest(const struct dram_banked *d, const struct channel *c,
-                            const struct req *r, enum cmd_type type, int64_t now) {
-  if (type == CMD_ACT) return act_earliest(d, c, r, now);
-  if (type == CMD_PRE) return max64(max64(now, r->ready), c->banks[r->bank].pre_ok);
+static int64_t req_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
+                            const struct dram_banked_req *r, enum dram_banked_cmd_type type,
+                            int64_t now) {
+  if (type == DRAM_BANKED_CMD_ACT) return act_earliest(d, c, r, now);
+  if (type == DRAM_BANKED_CMD_PRE) return max64(max64(now, r->ready), c->banks[r->bank].pre_ok);
   return col_earliest(d, c, r, r->write, now);
 }
 
@@ -399,19 +408,20 @@ static int64_t req_earliest(const struct dram_banked *d, const struct channel *c
 /* A candidate that may issue from cycle t. qi: the request's index in the
  * served queue (per_bank / per_rank: in command queue cq), or -1 for refresh
  * work. */
-static void consider_in(struct pick *pk, int64_t t, int64_t now, enum cmd_type type, uint32_t rank,
-                        uint32_t bank, uint32_t cq, int64_t qi) {
-  const struct cmd k = {type, rank, bank, qi >= 0 ? (uint32_t)qi : 0, cq, qi >= 0};
+static void consider_in(struct dram_banked_pick *pk, int64_t t, int64_t now,
+                        enum dram_banked_cmd_type type, uint32_t rank, uint32_t bank, uint32_t cq,
+                        int64_t qi) {
+  const struct dram_banked_cmd k = {type, rank, bank, qi >= 0 ? (uint32_t)qi : 0, cq, qi >= 0};
   if (t < pk->next) pk->next = t;
   if (t < pk->first_t) {
     pk->first_t = t;
     pk->first = k;
   }
-  if (t == now && pk->cmd.type == CMD_NONE) pk->cmd = k;
+  if (t == now && pk->cmd.type == DRAM_BANKED_CMD_NONE) pk->cmd = k;
 }
 
-static void consider(struct pick *pk, int64_t t, int64_t now, enum cmd_type type, uint32_t rank,
-                     uint32_t bank, int64_t qi) {
+static void consider(struct dram_banked_pick *pk, int64_t t, int64_t now,
+                     enum dram_banked_cmd_type type, uint32_t rank, uint32_t bank, int64_t qi) {
   consider_in(pk, t, now, type, rank, bank, 0, qi);
 }
 
@@ -419,44 +429,47 @@ static void consider(struct pick *pk, int64_t t, int64_t now, enum cmd_type type
  * open bank, lowest bank first, or REF once all are closed), then the oldest row hit of the
  * served queue, then the oldest PRE or ACT. The first that can issue at `now`
  * is picked; next is the least earliest time of all of them. */
-static int64_t ref_earliest(const struct dram_banked *d, const struct channel *c, uint32_t rank,
-                            int64_t now) {
+static int64_t ref_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
+                            uint32_t rank, int64_t now) {
   const uint32_t bpr = d->banks_per_rank;
   int64_t t = max64(now, c->ranks[rank].ref_end);
   for (uint32_t i = 0; i < bpr; i++) t = max64(t, c->banks[rank * bpr + i].ref_ok);
   return t;
 }
 
-static void scan_refresh(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
+static void scan_refresh(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
+                         struct dram_banked_pick *pk) {
   const uint32_t bpr = d->banks_per_rank;
   for (uint32_t k = 0; k < d->p.ranks; k++) {
-    struct rank *rk = &c->ranks[k];
+    struct dram_banked_rank *rk = &c->ranks[k];
     if (rk->next_due < pk->next) pk->next = max64(rk->next_due, now);
     if (!rk->pending) continue;
     if (rk->open) {
       for (uint32_t i = 0; i < bpr; i++) {
-        const struct bank *bk = &c->banks[k * bpr + i];
-        if (bk->open) consider(pk, max64(now, bk->pre_ok), now, CMD_PRE, k, k * bpr + i, -1);
+        const struct dram_banked_bank *bk = &c->banks[k * bpr + i];
+        if (bk->open)
+          consider(pk, max64(now, bk->pre_ok), now, DRAM_BANKED_CMD_PRE, k, k * bpr + i, -1);
       }
     } else {
-      consider(pk, ref_earliest(d, c, k, now), now, CMD_REF, k, 0, -1);
+      consider(pk, ref_earliest(d, c, k, now), now, DRAM_BANKED_CMD_REF, k, 0, -1);
     }
   }
 }
 
-static void scan(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
-  pk->cmd.type = CMD_NONE;
-  pk->next = pk->first_t = FAR;
+static void scan(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
+                 struct dram_banked_pick *pk) {
+  pk->cmd.type = DRAM_BANKED_CMD_NONE;
+  pk->next = pk->first_t = DRAM_BANKED_FAR;
   scan_refresh(d, c, now, pk);
-  const int qk = c->writing ? WR_Q : RD_Q;
-  const struct queue *q = &c->q[qk];
+  const int qk = c->writing ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
+  const struct dram_banked_queue *q = &c->q[qk];
   uint64_t no = ++c->scan_no;
   /* Pass 1: row hits, oldest first; note per bank whether a hit that may
    * still issue holds back a conflict's PRE. */
   for (uint32_t i = 0; i < q->n; i++) {
-    const struct req *r = &q->r[i];
+    const struct dram_banked_req *r = &q->r[i];
     if (c->ranks[r->rank].pending) continue;
-    struct bank *bk = &c->banks[r->bank];
+    struct dram_banked_bank *bk = &c->banks[r->bank];
     if (bk->stamp != no) {
       bk->stamp = no;
       bk->conflict_seen = false;
@@ -469,27 +482,29 @@ static void scan(struct dram_banked *d, struct channel *c, int64_t now, struct p
     }
     if (bk->conflict_seen && bk->hits >= DRAM_BANKED_ROW_HIT_CAP) continue;
     bk->hit_held = true;
-    consider(pk, col_earliest(d, c, r, qk == WR_Q, now), now, qk == WR_Q ? CMD_WR : CMD_RD, r->rank,
-             r->bank, i);
+    consider(pk, col_earliest(d, c, r, qk == DRAM_BANKED_WR_Q, now), now,
+             qk == DRAM_BANKED_WR_Q ? DRAM_BANKED_CMD_WR : DRAM_BANKED_CMD_RD, r->rank, r->bank, i);
   }
   /* Pass 2: PRE for a conflict no hit holds back, ACT for a closed bank. */
   for (uint32_t i = 0; i < q->n; i++) {
-    const struct req *r = &q->r[i];
+    const struct dram_banked_req *r = &q->r[i];
     if (c->ranks[r->rank].pending) continue;
-    const struct bank *bk = &c->banks[r->bank];
-    if (!bk->open) consider(pk, act_earliest(d, c, r, now), now, CMD_ACT, r->rank, r->bank, i);
+    const struct dram_banked_bank *bk = &c->banks[r->bank];
+    if (!bk->open)
+      consider(pk, act_earliest(d, c, r, now), now, DRAM_BANKED_CMD_ACT, r->rank, r->bank, i);
     else if (bk->row != r->row && !bk->hit_held)
-      consider(pk, max64(max64(now, r->ready), bk->pre_ok), now, CMD_PRE, r->rank, r->bank, i);
+      consider(pk, max64(max64(now, r->ready), bk->pre_ok), now, DRAM_BANKED_CMD_PRE, r->rank,
+               r->bank, i);
   }
 }
 
 /* ---- Issuing ---- */
 
 /* The cycle from which channel c's oldest read has waited too long
- * (DRAM_BANKED_READ_AGE_CAP x tRC), or FAR with no read queued. */
-static int64_t starve_at(const struct dram_banked *d, const struct channel *c) {
-  if (!c->q[RD_Q].n) return FAR;
-  return c->q[RD_Q].r[0].ready + (int64_t)DRAM_BANKED_READ_AGE_CAP * (int64_t)d->p.tRC;
+ * (DRAM_BANKED_READ_AGE_CAP x tRC), or DRAM_BANKED_FAR with no read queued. */
+static int64_t starve_at(const struct dram_banked *d, const struct dram_banked_channel *c) {
+  if (!c->q[DRAM_BANKED_RD_Q].n) return DRAM_BANKED_FAR;
+  return c->q[DRAM_BANKED_RD_Q].r[0].ready + (int64_t)DRAM_BANKED_READ_AGE_CAP * (int64_t)d->p.tRC;
 }
 
 /* Turn the channel to writes or back to reads at DRAM cycle now. NOTE: a
@@ -499,8 +514,8 @@ static int64_t starve_at(const struct dram_banked *d, const struct channel *c) {
  * conflicting read's precharge, activate and read fit between drains, and
  * such a read starved for 30,000 cycles. The moment a read starts starving is
  * a wake of its own (next_of), so skipping ahead still equals ticking. */
-static void update_mode(struct dram_banked *d, struct channel *c, int64_t now) {
-  uint32_t nr = c->q[RD_Q].n, nw = c->q[WR_Q].n;
+static void update_mode(struct dram_banked *d, struct dram_banked_channel *c, int64_t now) {
+  uint32_t nr = c->q[DRAM_BANKED_RD_Q].n, nw = c->q[DRAM_BANKED_WR_Q].n;
   bool starving = now >= starve_at(d, c);
   if (!c->writing) {
     if ((nw >= d->p.write_high && !starving) || (nr == 0 && nw > 0)) {
@@ -514,8 +529,9 @@ static void update_mode(struct dram_banked *d, struct channel *c, int64_t now) {
 
 /* The channel's next wake: its next command, or a read starting to starve
  * while the channel serves writes. */
-static int64_t next_of(const struct dram_banked *d, const struct channel *c, int64_t next) {
-  int64_t s = c->writing ? starve_at(d, c) : FAR;
+static int64_t next_of(const struct dram_banked *d, const struct dram_banked_channel *c,
+                       int64_t next) {
+  int64_t s = c->writing ? starve_at(d, c) : DRAM_BANKED_FAR;
   return s < next ? s : next;
 }
 
@@ -539,7 +555,7 @@ static void rank_queues(const struct dram_banked *d, uint32_t k, uint32_t *lo, u
 }
 
 /* Bank `bank`'s state or its command queue's entries changed. */
-static void stale_bank(const struct dram_banked *d, struct channel *c, uint32_t bank) {
+static void stale_bank(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t bank) {
   if (!d->cq_mode) return;
   const uint32_t qi =
       d->p.queue_structure == DRAM_BANKED_PER_RANK ? bank / d->banks_per_rank : bank;
@@ -547,7 +563,7 @@ static void stale_bank(const struct dram_banked *d, struct channel *c, uint32_t 
 }
 
 /* A refresh changed all of rank k's state. */
-static void stale_rank(const struct dram_banked *d, struct channel *c, uint32_t k) {
+static void stale_rank(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t k) {
   if (!d->cq_mode) return;
   uint32_t lo, hi;
   rank_queues(d, k, &lo, &hi);
@@ -556,19 +572,19 @@ static void stale_rank(const struct dram_banked *d, struct channel *c, uint32_t 
 
 /* Clear the fresh bit of each queue of [lo, hi) set in `mask` whose summary
  * has an ACT candidate before h_act, a RD before h_rd or a WR before h_wr. */
-static void stale_before(struct channel *c, const uint64_t *mask, uint32_t lo, uint32_t hi,
-                         int64_t h_act, int64_t h_rd, int64_t h_wr) {
+static void stale_before(struct dram_banked_channel *c, const uint64_t *mask, uint32_t lo,
+                         uint32_t hi, int64_t h_act, int64_t h_rd, int64_t h_wr) {
   for (uint32_t w = lo / 64; w * 64 < hi; w++) {
     uint64_t bits = mask[w] & c->fresh[w];
     if (w == lo / 64) bits &= ~0ull << (lo % 64);
     if (hi - w * 64 < 64) bits &= (1ull << (hi - w * 64)) - 1;
     while (bits) {
       const uint32_t b = (uint32_t)__builtin_ctzll(bits);
-      const struct qsum *s = &c->sum[w * 64 + b];
+      const struct dram_banked_qsum *s = &c->sum[w * 64 + b];
       bits &= bits - 1;
       if (s->act_t < h_act || s->rd_t < h_rd || s->wr_t < h_wr) {
         /* per_bank: a column command moves only the column candidates. */
-        if (h_act == FAR && c->col_stale) c->col_stale[w] |= 1ull << b;
+        if (h_act == DRAM_BANKED_FAR && c->col_stale) c->col_stale[w] |= 1ull << b;
         else c->fresh[w] &= ~(1ull << b);
       }
     }
@@ -579,13 +595,14 @@ static void stale_before(struct channel *c, const uint64_t *mask, uint32_t lo, u
  * before now + tRRD_L or the new oldest of the last four ACTs + tFAW changes
  * (tRRD_L >= tRRD_S), so only its queues with an ACT candidate earlier than
  * that can be stale. */
-static void stale_acts(const struct dram_banked *d, struct channel *c, uint32_t k, int64_t now) {
+static void stale_acts(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t k,
+                       int64_t now) {
   if (!d->cq_mode) return;
-  const struct rank *rk = &c->ranks[k];
+  const struct dram_banked_rank *rk = &c->ranks[k];
   const int64_t h = max64(now + d->p.tRRD_L, rk->faw[rk->faw_i] + d->p.tFAW);
   uint32_t lo, hi;
   rank_queues(d, k, &lo, &hi);
-  stale_before(c, c->has_act, lo, hi, h, FAR, FAR);
+  stale_before(c, c->has_act, lo, hi, h, DRAM_BANKED_FAR, DRAM_BANKED_FAR);
 }
 
 /* A column command at `now` moved the column spacing (tCCD, tWTR, tRTW) and
@@ -594,7 +611,8 @@ static void stale_acts(const struct dram_banked *d, struct channel *c, uint32_t 
  * tWTR_L >= tWTR_S), and a column candidate no earlier than its bound keeps
  * its time: the new burst ends, gap included, before that candidate's data
  * would start. So only queues with a column candidate earlier can be stale. */
-static void stale_columns(const struct dram_banked *d, struct channel *c, bool write, int64_t now) {
+static void stale_columns(const struct dram_banked *d, struct dram_banked_channel *c, bool write,
+                          int64_t now) {
   if (!d->cq_mode) return;
   const struct dram_banked_params *p = &d->p;
   const int64_t b = d->burst_cycles;
@@ -606,11 +624,12 @@ static void stale_columns(const struct dram_banked *d, struct channel *c, bool w
     h_rd = now + max64(p->tCCD_L, b + 1);
     h_wr = now + max64(p->tRTW, (int64_t)p->tCL + b + 1 - p->tCWL);
   }
-  stale_before(c, c->has_col, 0, c->ncq, FAR, h_rd, h_wr);
+  stale_before(c, c->has_col, 0, c->ncq, DRAM_BANKED_FAR, h_rd, h_wr);
 }
 
 /* Rank k's command queues take no command while it has a refresh due. */
-static void block_rank(const struct dram_banked *d, struct channel *c, uint32_t k, bool due) {
+static void block_rank(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t k,
+                       bool due) {
   if (!d->cq_mode) return;
   uint32_t lo, hi;
   rank_queues(d, k, &lo, &hi);
@@ -620,8 +639,8 @@ static void block_rank(const struct dram_banked *d, struct channel *c, uint32_t 
   }
 }
 
-static void bank_close(struct dram_banked *d, struct channel *c, struct bank *bk, uint32_t rank,
-                       int64_t at) {
+static void bank_close(struct dram_banked *d, struct dram_banked_channel *c,
+                       struct dram_banked_bank *bk, uint32_t rank, int64_t at) {
   bk->open = false;
   bk->close_at = at;
   bk->act_ok = max64(bk->act_ok, at + d->p.tRP);
@@ -633,12 +652,12 @@ static void bank_close(struct dram_banked *d, struct channel *c, struct bank *bk
 
 /* The bank, rank, group and bus state of r's column command at now; returns
  * the cycle its data transfer ends. */
-static int64_t column_state(struct dram_banked *d, struct channel *c, const struct req *rq,
-                            bool write, int64_t now) {
-  const struct req r = *rq;
-  struct bank *bk = &c->banks[r.bank];
-  struct rank *rk = &c->ranks[r.rank];
-  struct group *g = &c->groups[r.rank * d->p.bank_groups + r.group];
+static int64_t column_state(struct dram_banked *d, struct dram_banked_channel *c,
+                            const struct dram_banked_req *rq, bool write, int64_t now) {
+  const struct dram_banked_req r = *rq;
+  struct dram_banked_bank *bk = &c->banks[r.bank];
+  struct dram_banked_rank *rk = &c->ranks[r.rank];
+  struct dram_banked_group *g = &c->groups[r.rank * d->p.bank_groups + r.group];
   const int64_t b = d->burst_cycles;
   int64_t end, pre;
   bk->hits++;
@@ -663,8 +682,8 @@ static int64_t column_state(struct dram_banked *d, struct channel *c, const stru
 }
 
 static void count_kind(struct dram_banked *d, uint8_t kind) {
-  if (kind == KIND_HIT) d->st.row_hits++;
-  else if (kind == KIND_MISS) d->st.row_misses++;
+  if (kind == DRAM_BANKED_KIND_HIT) d->st.row_hits++;
+  else if (kind == DRAM_BANKED_KIND_MISS) d->st.row_misses++;
   else d->st.row_conflicts++;
 }
 
@@ -674,7 +693,8 @@ static uint64_t core_deciding(const struct dram_banked *d, int64_t w);
  * the core cycle DRAM cycle now begins (per_bank: the first core cycle whose
  * arrivals come after cycle now, which is when now may be handled, so that
  * the occupancy integral runs forward). */
-static void queue_leave(struct dram_banked *d, int qk, const struct req *r, int64_t now) {
+static void queue_leave(struct dram_banked *d, int qk, const struct dram_banked_req *r,
+                        int64_t now) {
   uint64_t left = d->cq_mode ? core_deciding(d, now) : dram_clock_to_core(d->clk, (uint64_t)now);
   area_to(d, qk, left);
   d->q_len[qk]--;
@@ -683,14 +703,14 @@ static void queue_leave(struct dram_banked *d, int qk, const struct req *r, int6
   if (wait > d->st.queue_wait_max_cycles[qk]) d->st.queue_wait_max_cycles[qk] = wait;
 }
 
-static void issue_column(struct dram_banked *d, struct channel *c, int qk, uint32_t qi,
+static void issue_column(struct dram_banked *d, struct dram_banked_channel *c, int qk, uint32_t qi,
                          int64_t now) {
-  struct queue *q = &c->q[qk];
-  struct req r = q->r[qi];
+  struct dram_banked_queue *q = &c->q[qk];
+  struct dram_banked_req r = q->r[qi];
   memmove(&q->r[qi], &q->r[qi + 1], (q->n - qi - 1) * sizeof *q->r);
   q->n--;
   d->queued--;
-  int64_t end = column_state(d, c, &r, qk == WR_Q, now);
+  int64_t end = column_state(d, c, &r, qk == DRAM_BANKED_WR_Q, now);
   count_kind(d, r.kind);
   /* The place frees at the column command: queue time ends there. */
   queue_leave(d, qk, &r, now);
@@ -701,30 +721,33 @@ static void issue_column(struct dram_banked *d, struct channel *c, int qk, uint3
   engine_at(d->e, done, on_done, d, r.tag);
 }
 
-static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t qi, uint32_t j,
-                            int64_t now);
+static void issue_column_cq(struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi,
+                            uint32_t j, int64_t now);
 
-static void issue(struct dram_banked *d, struct channel *c, const struct cmd *k, int64_t now) {
+static void issue(struct dram_banked *d, struct dram_banked_channel *c,
+                  const struct dram_banked_cmd *k, int64_t now) {
   c->memo_ok = false;
-  const int qk = c->writing ? WR_Q : RD_Q;
-  struct req *r = !k->for_req ? NULL : d->cq_mode ? &c->cq[k->cq].r[k->qi] : &c->q[qk].r[k->qi];
+  const int qk = c->writing ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
+  struct dram_banked_req *r = !k->for_req  ? NULL
+                              : d->cq_mode ? &c->cq[k->cq].r[k->qi]
+                                           : &c->q[qk].r[k->qi];
   switch (k->type) {
-  case CMD_PRE: {
-    struct bank *bk = &c->banks[k->bank];
+  case DRAM_BANKED_CMD_PRE: {
+    struct dram_banked_bank *bk = &c->banks[k->bank];
     bank_close(d, c, bk, k->rank, now);
-    if (r) r->kind = KIND_CONFLICT;
+    if (r) r->kind = DRAM_BANKED_KIND_CONFLICT;
     break;
   }
-  case CMD_ACT: {
-    struct bank *bk = &c->banks[k->bank];
-    struct rank *rk = &c->ranks[k->rank];
-    struct group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
+  case DRAM_BANKED_CMD_ACT: {
+    struct dram_banked_bank *bk = &c->banks[k->bank];
+    struct dram_banked_rank *rk = &c->ranks[k->rank];
+    struct dram_banked_group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
     if (bk->act_at >= 0) d->st.bank_open_cycles += (uint64_t)(bk->close_at - bk->act_at);
     bk->open = true;
     bk->row = r->row;
     bk->hits = 0;
     bk->act_at = now;
-    bk->close_at = FAR;
+    bk->close_at = DRAM_BANKED_FAR;
     bk->col_ok = now + d->p.tRCD;
     bk->pre_ok = now + d->p.tRAS;
     bk->act_ok = now + d->p.tRC;
@@ -735,20 +758,20 @@ static void issue(struct dram_banked *d, struct channel *c, const struct cmd *k,
     stale_bank(d, c, k->bank);
     stale_acts(d, c, k->rank, now);
     d->st.activates++;
-    if (r->kind == KIND_HIT) r->kind = KIND_MISS;
+    if (r->kind == DRAM_BANKED_KIND_HIT) r->kind = DRAM_BANKED_KIND_MISS;
     break;
   }
-  case CMD_RD:
-  case CMD_WR:
+  case DRAM_BANKED_CMD_RD:
+  case DRAM_BANKED_CMD_WR:
     if (d->cq_mode) issue_column_cq(d, c, k->cq, k->qi, now);
     else issue_column(d, c, qk, k->qi, now);
     break;
-  case CMD_REF: {
-    struct rank *rk = &c->ranks[k->rank];
+  case DRAM_BANKED_CMD_REF: {
+    struct dram_banked_rank *rk = &c->ranks[k->rank];
     if (!--rk->pending) block_rank(d, c, k->rank, false);
     rk->ref_end = now + d->p.tRFC;
     for (uint32_t i = 0; i < d->banks_per_rank; i++) {
-      struct bank *bk = &c->banks[k->rank * d->banks_per_rank + i];
+      struct dram_banked_bank *bk = &c->banks[k->rank * d->banks_per_rank + i];
       bk->act_ok = max64(bk->act_ok, rk->ref_end);
     }
     stale_rank(d, c, k->rank);
@@ -756,17 +779,17 @@ static void issue(struct dram_banked *d, struct channel *c, const struct cmd *k,
     d->st.refresh_cycles += d->p.tRFC;
     break;
   }
-  case CMD_NONE: break;
+  case DRAM_BANKED_CMD_NONE: break;
   }
 }
 
 /* ---- per_bank / per_rank: transaction queues feeding command queues ---- */
 
-static uint32_t cq_of(const struct dram_banked *d, const struct req *r) {
+static uint32_t cq_of(const struct dram_banked *d, const struct dram_banked_req *r) {
   return d->p.queue_structure == DRAM_BANKED_PER_RANK ? r->rank : r->bank;
 }
 
-static void cq_mark(struct channel *c, uint32_t qi, bool busy) {
+static void cq_mark(struct dram_banked_channel *c, uint32_t qi, bool busy) {
   const uint64_t bit = 1ull << (qi % 64);
   if (busy) c->cq_busy[qi / 64] |= bit;
   else c->cq_busy[qi / 64] &= ~bit;
@@ -774,7 +797,7 @@ static void cq_mark(struct channel *c, uint32_t qi, bool busy) {
 
 /* Entries of transaction queue q that may take part in cycle t (a prefix:
  * ready grows with arrival). */
-static uint32_t visible(const struct queue *q, int64_t t) {
+static uint32_t visible(const struct dram_banked_queue *q, int64_t t) {
   uint32_t n = q->n;
   while (n > 0 && q->r[n - 1].ready - 1 > t) n--;
   return n;
@@ -782,8 +805,9 @@ static uint32_t visible(const struct queue *q, int64_t t) {
 
 /* Does a request of line `line` wait, as a write (write) or a read, in the
  * transaction queue or in command queue cq (the one its line maps to)? */
-static bool line_waits(const struct channel *c, const struct queue *cq, bool write, uint64_t line) {
-  const struct queue *q = &c->q[write ? WR_Q : RD_Q];
+static bool line_waits(const struct dram_banked_channel *c, const struct dram_banked_queue *cq,
+                       bool write, uint64_t line) {
+  const struct dram_banked_queue *q = &c->q[write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q];
   for (uint32_t i = 0; i < q->n; i++)
     if (q->r[i].line == line) return true;
   for (uint32_t i = 0; i < cq->n; i++)
@@ -794,20 +818,21 @@ static bool line_waits(const struct channel *c, const struct queue *cq, bool wri
 /* The end of cycle t: maybe start a write drain, then move at most one
  * transaction to its command queue. apply false: change nothing, only say
  * whether anything would change. */
-static bool schedule_cq(struct dram_banked *d, struct channel *c, int64_t t, bool apply) {
-  const uint32_t nw = visible(&c->q[WR_Q], t), nr = visible(&c->q[RD_Q], t);
+static bool schedule_cq(struct dram_banked *d, struct dram_banked_channel *c, int64_t t,
+                        bool apply) {
+  const uint32_t nw = visible(&c->q[DRAM_BANKED_WR_Q], t), nr = visible(&c->q[DRAM_BANKED_RD_Q], t);
   uint32_t draining = c->draining;
   if (!draining && nw > 0 &&
       (nw >= d->p.write_high || (nw > d->p.write_low && c->cq_n == 0) ||
        (nr == 0 && c->cq_n == 0 && t >= c->last_busy + DRAM_BANKED_IDLE_DRAIN_CYCLES)))
     draining = nw;
-  int k = draining ? WR_Q : RD_Q;
+  int k = draining ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
   uint32_t mi = UINT32_MAX; /* the transaction to move */
-  for (uint32_t i = 0; i < (k == WR_Q ? nw : nr); i++) {
+  for (uint32_t i = 0; i < (k == DRAM_BANKED_WR_Q ? nw : nr); i++) {
     const uint32_t qi = c->q[k].r[i].cq;
     if (c->full[qi / 64] >> (qi % 64) & 1) continue;
-    const struct queue *cq = &c->cq[qi];
-    if (k == WR_Q && line_waits(c, cq, false, c->q[k].r[i].line)) {
+    const struct dram_banked_queue *cq = &c->cq[qi];
+    if (k == DRAM_BANKED_WR_Q && line_waits(c, cq, false, c->q[k].r[i].line)) {
       /* A read of the line still waits: writing first would lose its data;
        * the drain ends (and may start again next cycle). With every command
        * queue empty and that read still in the read queue nothing would
@@ -815,20 +840,20 @@ static bool schedule_cq(struct dram_banked *d, struct channel *c, int64_t t, boo
        * DRAMsim3 deadlocks there). */
       draining = 0;
       if (c->cq_n) break; /* (else the read is in the read queue) */
-      k = RD_Q;
+      k = DRAM_BANKED_RD_Q;
       i = UINT32_MAX; /* the loop's increment makes it 0 */
       continue;
     }
     mi = i;
     break;
   }
-  struct queue *q = &c->q[k];
+  struct dram_banked_queue *q = &c->q[k];
   const bool changed = mi != UINT32_MAX || draining != c->draining;
   if (!apply) return changed;
   if (changed) c->memo_ok = false;
   if (mi != UINT32_MAX) {
-    struct req m = q->r[mi];
-    struct queue *cq = &c->cq[cq_of(d, &m)];
+    struct dram_banked_req m = q->r[mi];
+    struct dram_banked_queue *cq = &c->cq[cq_of(d, &m)];
     memmove(&q->r[mi], &q->r[mi + 1], (q->n - mi - 1) * sizeof *q->r);
     q->n--;
     m.ready = t + 1;
@@ -838,9 +863,9 @@ static bool schedule_cq(struct dram_banked *d, struct channel *c, int64_t t, boo
     c->cq_n++;
     cq_mark(c, cq_of(d, &m), true);
     d->space_due = true;
-    if (k == WR_Q) draining--;
+    if (k == DRAM_BANKED_WR_Q) draining--;
   }
-  if (!c->draining && k == WR_Q && (mi != UINT32_MAX || draining)) d->st.write_drains++;
+  if (!c->draining && k == DRAM_BANKED_WR_Q && (mi != UINT32_MAX || draining)) d->st.write_drains++;
   c->draining = draining;
   return changed;
 }
@@ -848,8 +873,9 @@ static bool schedule_cq(struct dram_banked *d, struct channel *c, int64_t t, boo
 /* May the PRE at entry j of command queue q (for a conflict in bank bk) issue?
  * Not before an older request of its queue for the same bank, nor while one
  * of its queue still hits the open row, unless the row has served the cap. */
-static bool pre_allowed(const struct queue *q, uint32_t j, const struct bank *bk) {
-  const struct req *r = &q->r[j];
+static bool pre_allowed(const struct dram_banked_queue *q, uint32_t j,
+                        const struct dram_banked_bank *bk) {
+  const struct dram_banked_req *r = &q->r[j];
   for (uint32_t i = 0; i < j; i++)
     if (q->r[i].bank == r->bank) return false;
   if (bk->hits >= DRAM_BANKED_ROW_HIT_CAP) return true;
@@ -862,10 +888,10 @@ static bool pre_allowed(const struct queue *q, uint32_t j, const struct bank *bk
  * the DRAM? NOTE: its place (bank, row, column), not its address: addresses
  * above the DRAM's capacity alias, and DRAMsim3 compares places here though
  * it forwards and merges by address. */
-static bool write_behind_read(const struct queue *q, uint32_t j) {
-  const struct req *w = &q->r[j];
+static bool write_behind_read(const struct dram_banked_queue *q, uint32_t j) {
+  const struct dram_banked_req *w = &q->r[j];
   for (uint32_t i = 0; i < j; i++) {
-    const struct req *r = &q->r[i];
+    const struct dram_banked_req *r = &q->r[i];
     if (!r->write && r->bank == w->bank && r->row == w->row && r->column == w->column) return true;
   }
   return false;
@@ -874,12 +900,14 @@ static bool write_behind_read(const struct queue *q, uint32_t j) {
 /* Command queue qi's candidates as of cycle now: the least earliest time and
  * the first candidate with it, into s; has_act and has_col say which kinds
  * of command it holds. */
-static void cq_candidates(const struct dram_banked *d, const struct channel *c, uint32_t qi,
-                          int64_t now, struct qsum *s, bool *has_act, bool *has_col) {
-  const struct queue *q = &c->cq[qi];
-  struct pick pk = {.cmd.type = CMD_NONE, .next = FAR, .first_t = FAR};
+static void cq_candidates(const struct dram_banked *d, const struct dram_banked_channel *c,
+                          uint32_t qi, int64_t now, struct dram_banked_qsum *s, bool *has_act,
+                          bool *has_col) {
+  const struct dram_banked_queue *q = &c->cq[qi];
+  struct dram_banked_pick pk = {
+      .cmd.type = DRAM_BANKED_CMD_NONE, .next = DRAM_BANKED_FAR, .first_t = DRAM_BANKED_FAR};
   *has_act = *has_col = false;
-  s->act_t = s->rd_t = s->wr_t = s->o_t = FAR;
+  s->act_t = s->rd_t = s->wr_t = s->o_t = DRAM_BANKED_FAR;
   /* An ACT, RD or WR's earliest time depends on its request only through
    * the bank and `ready`, and never falls as `ready` grows: a later entry of
    * the same command and bank as the last one considered here, ready no
@@ -889,34 +917,34 @@ static void cq_candidates(const struct dram_banked *d, const struct channel *c, 
   uint32_t seen_bank[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX}; /* ACT, RD, WR */
   int64_t seen_ready[3] = {0, 0, 0};
   for (uint32_t j = 0; j < q->n; j++) {
-    const struct req *r = &q->r[j];
-    const struct bank *bk = &c->banks[r->bank];
-    enum cmd_type type;
+    const struct dram_banked_req *r = &q->r[j];
+    const struct dram_banked_bank *bk = &c->banks[r->bank];
+    enum dram_banked_cmd_type type;
     if (!bk->open || bk->row == r->row) {
       const int w = !bk->open ? 0 : r->write ? 2 : 1;
       if (seen_bank[w] == r->bank && r->ready >= seen_ready[w]) continue;
       if (w == 2 && write_behind_read(q, j)) continue;
       seen_bank[w] = r->bank;
       seen_ready[w] = r->ready;
-      type = !w ? CMD_ACT : r->write ? CMD_WR : CMD_RD;
+      type = !w ? DRAM_BANKED_CMD_ACT : r->write ? DRAM_BANKED_CMD_WR : DRAM_BANKED_CMD_RD;
       if (!w) *has_act = true;
       else *has_col = true;
     } else {
       if (!pre_allowed(q, j, bk)) continue;
-      type = CMD_PRE;
+      type = DRAM_BANKED_CMD_PRE;
     }
     const int64_t t = req_earliest(d, c, r, type, now);
-    if (type == CMD_RD || type == CMD_WR) {
-      int64_t *least = type == CMD_RD ? &s->rd_t : &s->wr_t;
+    if (type == DRAM_BANKED_CMD_RD || type == DRAM_BANKED_CMD_WR) {
+      int64_t *least = type == DRAM_BANKED_CMD_RD ? &s->rd_t : &s->wr_t;
       if (t < *least) {
         *least = t;
-        *(type == CMD_RD ? &s->rd_j : &s->wr_j) = j;
+        *(type == DRAM_BANKED_CMD_RD ? &s->rd_j : &s->wr_j) = j;
       }
     } else {
-      if (type == CMD_ACT && t < s->act_t) s->act_t = t;
+      if (type == DRAM_BANKED_CMD_ACT && t < s->act_t) s->act_t = t;
       if (t < s->o_t) {
         s->o_t = t;
-        s->o = (struct cmd){type, r->rank, r->bank, j, qi, true};
+        s->o = (struct dram_banked_cmd){type, r->rank, r->bank, j, qi, true};
       }
     }
     consider_in(&pk, t, now, type, r->rank, r->bank, qi, j);
@@ -943,22 +971,23 @@ static void cq_candidates(const struct dram_banked *d, const struct channel *c, 
  * bank, a PRE for a conflict, pre_allowed), one RD and one WR (each the
  * oldest of its kind asked, as `ready` grows along the queue): the first
  * least of those three is the queue's. */
-static void col_refresh(const struct dram_banked *d, const struct channel *c, uint32_t qi,
-                        int64_t now, struct qsum *s) {
-  const struct queue *q = &c->cq[qi];
+static void col_refresh(const struct dram_banked *d, const struct dram_banked_channel *c,
+                        uint32_t qi, int64_t now, struct dram_banked_qsum *s) {
+  const struct dram_banked_queue *q = &c->cq[qi];
   int64_t t = s->o_t;
-  struct cmd k = s->o;
-  uint32_t kj = t < FAR ? s->o.qi : UINT32_MAX;
+  struct dram_banked_cmd k = s->o;
+  uint32_t kj = t < DRAM_BANKED_FAR ? s->o.qi : UINT32_MAX;
   for (int i = 0; i < 2; i++) {
     int64_t *ct = i ? &s->wr_t : &s->rd_t;
-    if (*ct == FAR) continue;
+    if (*ct == DRAM_BANKED_FAR) continue;
     const uint32_t j = i ? s->wr_j : s->rd_j;
-    const struct req *r = &q->r[j];
+    const struct dram_banked_req *r = &q->r[j];
     *ct = col_earliest(d, c, r, r->write, now);
     if (*ct < t || (*ct == t && j < kj)) {
       t = *ct;
       kj = j;
-      k = (struct cmd){r->write ? CMD_WR : CMD_RD, r->rank, r->bank, j, qi, true};
+      k = (struct dram_banked_cmd){
+          r->write ? DRAM_BANKED_CMD_WR : DRAM_BANKED_CMD_RD, r->rank, r->bank, j, qi, true};
     }
   }
   s->at = now;
@@ -966,9 +995,9 @@ static void col_refresh(const struct dram_banked *d, const struct channel *c, ui
   s->k = k;
 }
 
-static const struct qsum *cq_sum(const struct dram_banked *d, struct channel *c, uint32_t qi,
-                                 int64_t now) {
-  struct qsum *s = &c->sum[qi];
+static const struct dram_banked_qsum *
+cq_sum(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi, int64_t now) {
+  struct dram_banked_qsum *s = &c->sum[qi];
   const uint32_t w = qi / 64;
   const uint64_t bit = 1ull << (qi % 64);
   if ((c->fresh[w] & bit) && now >= s->at && now <= s->t) {
@@ -989,9 +1018,10 @@ static const struct qsum *cq_sum(const struct dram_banked *d, struct channel *c,
 /* Refresh work, then the command queues round robin from the one after the
  * last that issued; in each, the oldest command that can issue now. next:
  * the earliest any candidate could. */
-static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struct pick *pk) {
-  pk->cmd.type = CMD_NONE;
-  pk->next = pk->first_t = FAR;
+static void scan_cq(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
+                    struct dram_banked_pick *pk) {
+  pk->cmd.type = DRAM_BANKED_CMD_NONE;
+  pk->next = pk->first_t = DRAM_BANKED_FAR;
   scan_refresh(d, c, now, pk);
   /* The queues holding commands (but those of a rank with a refresh due: a
    * queue's commands share a rank), round robin from the one after rr: those
@@ -1001,7 +1031,7 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
    * issue now only if it is a least: the first least of the whole scan. */
   const uint32_t start = (c->rr + 1) % c->ncq, nw = (c->ncq + 63) / 64;
   uint32_t best = UINT32_MAX;
-  int64_t best_t = FAR;
+  int64_t best_t = DRAM_BANKED_FAR;
   /* Words from start's on, the first of them from start's bit; then from the
    * first word up to start's, that one below start's bit. */
   for (uint32_t step = 0; step <= nw; step++) {
@@ -1015,16 +1045,17 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
       const uint32_t b = (uint32_t)__builtin_ctzll(bits);
       const uint32_t qi = w * 64 + b;
       bits &= bits - 1;
-      const struct qsum *s = &c->sum[qi];
+      const struct dram_banked_qsum *s = &c->sum[qi];
       if ((stale >> b & 1) || s->t < now) s = cq_sum(d, c, qi, now);
       if (d->p.check_summaries) {
-        struct qsum full;
+        struct dram_banked_qsum full;
         bool act, col;
         CHECK_GE(now, s->at);
         cq_candidates(d, c, qi, now, &full, &act, &col);
         CHECK_EQ(full.t, s->t);
-        CHECK(full.t == FAR || (full.k.type == s->k.type && full.k.bank == s->k.bank &&
-                                full.k.qi == s->k.qi && full.k.for_req == s->k.for_req));
+        CHECK(full.t == DRAM_BANKED_FAR ||
+              (full.k.type == s->k.type && full.k.bank == s->k.bank && full.k.qi == s->k.qi &&
+               full.k.for_req == s->k.for_req));
       }
       if (s->t < best_t) {
         best_t = s->t;
@@ -1044,10 +1075,10 @@ static void scan_cq(struct dram_banked *d, struct channel *c, int64_t now, struc
   c->memo_ok = true;
 }
 
-static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t qi, uint32_t j,
-                            int64_t now) {
-  struct queue *q = &c->cq[qi];
-  struct req r = q->r[j];
+static void issue_column_cq(struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi,
+                            uint32_t j, int64_t now) {
+  struct dram_banked_queue *q = &c->cq[qi];
+  struct dram_banked_req r = q->r[j];
   memmove(&q->r[j], &q->r[j + 1], (q->n - j - 1) * sizeof *q->r);
   q->n--;
   c->full[qi / 64] &= ~(1ull << (qi % 64));
@@ -1056,11 +1087,11 @@ static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t q
   if (!q->n) cq_mark(c, qi, false);
   d->queued--;
   /* DRAMsim3's row hit: the row has served a column command since its ACT. */
-  count_kind(d, c->banks[r.bank].hits     ? KIND_HIT
-                : r.kind == KIND_CONFLICT ? KIND_CONFLICT
-                                          : KIND_MISS);
+  count_kind(d, c->banks[r.bank].hits                 ? DRAM_BANKED_KIND_HIT
+                : r.kind == DRAM_BANKED_KIND_CONFLICT ? DRAM_BANKED_KIND_CONFLICT
+                                                      : DRAM_BANKED_KIND_MISS);
   int64_t end = column_state(d, c, &r, r.write, now);
-  queue_leave(d, r.write ? WR_Q : RD_Q, &r, now);
+  queue_leave(d, r.write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q, &r, now);
   if (r.write) return; /* posted: served when it arrived */
   uint64_t done = dram_clock_to_core(d->clk, (uint64_t)end);
   CHECK_GE(done, engine_now(d->e));
@@ -1080,17 +1111,18 @@ static void issue_column_cq(struct dram_banked *d, struct channel *c, uint32_t q
 }
 
 /* The earliest cycle >= t at which channel c's state may change. */
-static int64_t next_cq(struct dram_banked *d, struct channel *c, int64_t t) {
-  struct pick pk;
+static int64_t next_cq(struct dram_banked *d, struct dram_banked_channel *c, int64_t t) {
+  struct dram_banked_pick pk;
   scan_cq(d, c, t, &pk);
   int64_t nx = pk.next;
   if (schedule_cq(d, c, t, false)) return t;
   for (int k = 0; k < 2; k++) {
-    const struct queue *q = &c->q[k];
+    const struct dram_banked_queue *q = &c->q[k];
     uint32_t v = visible(q, t);
     if (v < q->n && q->r[v].ready - 1 < nx) nx = q->r[v].ready - 1;
   }
-  if (!c->draining && c->q[WR_Q].n && !c->cq_n && !visible(&c->q[RD_Q], t)) {
+  if (!c->draining && c->q[DRAM_BANKED_WR_Q].n && !c->cq_n &&
+      !visible(&c->q[DRAM_BANKED_RD_Q], t)) {
     int64_t idle = c->last_busy + DRAM_BANKED_IDLE_DRAIN_CYCLES;
     if (idle < nx) nx = idle;
   }
@@ -1098,18 +1130,18 @@ static int64_t next_cq(struct dram_banked *d, struct channel *c, int64_t t) {
 }
 
 /* Handle DRAM cycle `now` on channel c (per_bank / per_rank). */
-static void channel_cycle_cq(struct dram_banked *d, struct channel *c, int64_t now) {
-  struct pick pk;
+static void channel_cycle_cq(struct dram_banked *d, struct dram_banked_channel *c, int64_t now) {
+  struct dram_banked_pick pk;
   /* The last scan's answer stands while nothing changed since: every
    * queue's summary holds from memo_at to its own least time, so none can
    * issue before memo_t, and at memo_t the memo's queue comes first. */
   if (c->memo_ok && now >= c->memo_at && now <= c->memo_t) {
-    pk.cmd.type = CMD_NONE;
+    pk.cmd.type = DRAM_BANKED_CMD_NONE;
     if (now == c->memo_t) pk.cmd = c->memo;
   } else {
     scan_cq(d, c, now, &pk);
   }
-  if (pk.cmd.type != CMD_NONE) {
+  if (pk.cmd.type != DRAM_BANKED_CMD_NONE) {
     issue(d, c, &pk.cmd, now);
     if (pk.cmd.for_req) {
       c->rr = pk.cmd.cq;
@@ -1122,10 +1154,10 @@ static void channel_cycle_cq(struct dram_banked *d, struct channel *c, int64_t n
 
 /* Handle DRAM cycle `now` on channel c: refreshes falling due, the drain mode,
  * at most one command; then c->next. */
-static void channel_cycle(struct dram_banked *d, struct channel *c, int64_t now) {
+static void channel_cycle(struct dram_banked *d, struct dram_banked_channel *c, int64_t now) {
   const int64_t period = d->refresh_step * (int64_t)d->p.ranks;
   for (uint32_t k = 0; k < d->p.ranks; k++) {
-    struct rank *rk = &c->ranks[k];
+    struct dram_banked_rank *rk = &c->ranks[k];
     while (rk->next_due <= now) {
       if (!rk->pending++) block_rank(d, c, k, true);
       rk->next_due += period;
@@ -1137,9 +1169,9 @@ static void channel_cycle(struct dram_banked *d, struct channel *c, int64_t now)
     return;
   }
   update_mode(d, c, now);
-  struct pick pk;
+  struct dram_banked_pick pk;
   scan(d, c, now, &pk);
-  if (pk.cmd.type == CMD_NONE) {
+  if (pk.cmd.type == DRAM_BANKED_CMD_NONE) {
     CHECK_GT(pk.next, now);
     c->next = next_of(d, c, pk.next);
     if (c->next <= now) c->next = now + 1;
@@ -1152,19 +1184,19 @@ static void channel_cycle(struct dram_banked *d, struct channel *c, int64_t now)
   if (c->next <= now) c->next = now + 1;
 }
 
-static bool channel_busy(const struct dram_banked *d, const struct channel *c) {
-  if (c->q[RD_Q].n || c->q[WR_Q].n || c->cq_n) return true;
+static bool channel_busy(const struct dram_banked *d, const struct dram_banked_channel *c) {
+  if (c->q[DRAM_BANKED_RD_Q].n || c->q[DRAM_BANKED_WR_Q].n || c->cq_n) return true;
   for (uint32_t k = 0; k < d->p.ranks; k++)
     if (c->ranks[k].pending) return true;
   return false;
 }
 
-/* The next DRAM cycle to handle (FAR: none). The oracle mode handles every
+/* The next DRAM cycle to handle (DRAM_BANKED_FAR: none). The oracle mode handles every
  * cycle while any channel has work, and otherwise jumps to the next refresh. */
 static int64_t next_cycle(const struct dram_banked *d) {
-  int64_t w = FAR;
+  int64_t w = DRAM_BANKED_FAR;
   for (uint32_t i = 0; i < d->p.channels; i++) {
-    const struct channel *c = &d->ch[i];
+    const struct dram_banked_channel *c = &d->ch[i];
     if (d->p.tick_every_cycle) {
       if (channel_busy(d, c)) return d->cursor;
       for (uint32_t k = 0; k < d->p.ranks; k++)
@@ -1184,7 +1216,7 @@ static void schedule_wake(struct dram_banked *d) {
   /* Idle (nothing queued): no wake; refreshes are caught up at the next call. */
   if (!d->queued) return;
   int64_t w = next_cycle(d);
-  CHECK_LT(w, FAR);
+  CHECK_LT(w, DRAM_BANKED_FAR);
   uint64_t t = core_deciding(d, w);
   if (t >= d->wake_at) return;
   d->wake_at = t;
@@ -1200,7 +1232,7 @@ static void advance(struct dram_banked *d) {
     int64_t w = next_cycle(d);
     if (w >= limit) break;
     for (uint32_t i = 0; i < d->p.channels; i++) {
-      struct channel *c = &d->ch[i];
+      struct dram_banked_channel *c = &d->ch[i];
       if (d->p.tick_every_cycle || c->next <= w) channel_cycle(d, c, w);
     }
     d->cursor = w + 1;
@@ -1229,8 +1261,8 @@ static bool banked_can_take(const void *self, uint64_t addr, bool write) {
   advance(d);
   struct dram_banked_coord co;
   dram_banked_decode(d, addr, &co);
-  struct channel *c = &d->ch[co.channel];
-  const struct queue *q = &c->q[write ? WR_Q : RD_Q];
+  struct dram_banked_channel *c = &d->ch[co.channel];
+  const struct dram_banked_queue *q = &c->q[write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q];
   if (d->cq_mode && c->took_at == d->cursor - 1) {
     /* One request a channel a DRAM cycle: ask again in the next. */
     uint64_t t = core_deciding(d, d->cursor);
@@ -1249,16 +1281,16 @@ static void serve_at(struct dram_banked *d, int64_t at, uint64_t tag) {
   engine_at(d->e, dram_clock_to_core(d->clk, (uint64_t)at), on_done, d, tag);
 }
 
-static uint32_t cq_of(const struct dram_banked *d, const struct req *r);
+static uint32_t cq_of(const struct dram_banked *d, const struct dram_banked_req *r);
 
 /* Queue a request in its channel's queue qk (the request's fields but tag,
  * line and ready from co); the level's counters follow. */
-static struct req *enqueue(struct dram_banked *d, struct channel *c, int qk,
-                           const struct dram_banked_coord *co, uint64_t addr, uint64_t tag,
-                           int64_t ready) {
-  struct queue *q = &c->q[qk];
+static struct dram_banked_req *enqueue(struct dram_banked *d, struct dram_banked_channel *c, int qk,
+                                       const struct dram_banked_coord *co, uint64_t addr,
+                                       uint64_t tag, int64_t ready) {
+  struct dram_banked_queue *q = &c->q[qk];
   CHECK_LT(q->n, q->cap);
-  struct req *r = &q->r[q->n++];
+  struct dram_banked_req *r = &q->r[q->n++];
   r->tag = tag;
   r->take_core = engine_now(d->e);
   r->line = addr >> 6;
@@ -1269,8 +1301,8 @@ static struct req *enqueue(struct dram_banked *d, struct channel *c, int qk,
   r->rank = co->rank;
   r->group = co->bank_group;
   r->bank = co->rank * d->banks_per_rank + co->bank_group * d->p.banks_per_group + co->bank;
-  r->kind = KIND_HIT;
-  r->write = qk == WR_Q;
+  r->kind = DRAM_BANKED_KIND_HIT;
+  r->write = qk == DRAM_BANKED_WR_Q;
   if (d->cq_mode) r->cq = cq_of(d, r);
   d->queued++;
   area_to(d, qk, r->take_core);
@@ -1280,16 +1312,16 @@ static struct req *enqueue(struct dram_banked *d, struct channel *c, int qk,
 }
 
 /* per_bank / per_rank: the request arrives after DRAM cycle cursor - 1. */
-static void take_cq(struct dram_banked *d, struct channel *c, const struct dram_banked_coord *co,
-                    uint64_t addr, bool write, uint64_t tag) {
+static void take_cq(struct dram_banked *d, struct dram_banked_channel *c,
+                    const struct dram_banked_coord *co, uint64_t addr, bool write, uint64_t tag) {
   const int64_t arr = d->cursor - 1, ready = arr + (int64_t)d->p.controller_cycles;
   const uint64_t line = addr >> 6;
   CHECK_LT(c->took_at, arr);
   c->took_at = arr;
-  struct req probe;
+  struct dram_banked_req probe;
   probe.rank = co->rank;
   probe.bank = co->rank * d->banks_per_rank + co->bank_group * d->p.banks_per_group + co->bank;
-  const struct queue *cq = &c->cq[cq_of(d, &probe)];
+  const struct dram_banked_queue *cq = &c->cq[cq_of(d, &probe)];
   if (line_waits(c, cq, true, line)) {
     /* Its line's write has not issued: a read is answered from it, a write
      * replaces it. */
@@ -1309,7 +1341,7 @@ static void take_cq(struct dram_banked *d, struct channel *c, const struct dram_
     d->st.read_merges++;
     return;
   }
-  enqueue(d, c, write ? WR_Q : RD_Q, co, addr, tag, ready);
+  enqueue(d, c, write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q, co, addr, tag, ready);
   if (write) serve_at(d, ready, tag); /* posted */
   if (arr > c->last_busy) c->last_busy = arr;
   /* It may move at the end of cycle ready - 1 (never before the cursor). */
@@ -1324,16 +1356,16 @@ static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   advance(d);
   struct dram_banked_coord co;
   dram_banked_decode(d, addr, &co);
-  struct channel *c = &d->ch[co.channel];
+  struct dram_banked_channel *c = &d->ch[co.channel];
   if (d->cq_mode) {
     take_cq(d, c, &co, addr, write, tag);
     return;
   }
-  const int qk = write ? WR_Q : RD_Q;
+  const int qk = write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
   /* A line waiting in the write queue answers a read of it, and takes a later
    * write of it in its place (a controller's write queue is searched by
    * address, as DRAMsim3's is): served the next DRAM cycle, no command. */
-  const struct queue *wq = &c->q[WR_Q];
+  const struct dram_banked_queue *wq = &c->q[DRAM_BANKED_WR_Q];
   for (uint32_t i = 0; i < wq->n; i++)
     if (wq->r[i].line == addr >> 6) {
       if (write) d->st.write_merges++;
@@ -1345,7 +1377,7 @@ static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   enqueue(d, c, qk, &co, addr, tag, d->cursor + (int64_t)d->p.controller_cycles);
   /* Cycles before the cursor are decided; the new request joins at it. */
   update_mode(d, c, d->cursor);
-  struct pick pk;
+  struct dram_banked_pick pk;
   scan(d, c, d->cursor, &pk);
   int64_t nx = next_of(d, c, pk.next);
   if (nx < d->cursor) nx = d->cursor;
@@ -1359,11 +1391,11 @@ static void banked_finish(void *self) {
   CHECK_EQ(d->queued, 0);
   CHECK_EQ(d->inflight, 0);
   uint64_t now = engine_now(d->e);
-  area_to(d, RD_Q, now);
-  area_to(d, WR_Q, now);
+  area_to(d, DRAM_BANKED_RD_Q, now);
+  area_to(d, DRAM_BANKED_WR_Q, now);
   for (uint32_t i = 0; i < d->p.channels; i++)
     for (uint32_t j = 0; j < d->banks_per_channel; j++) {
-      struct bank *bk = &d->ch[i].banks[j];
+      struct dram_banked_bank *bk = &d->ch[i].banks[j];
       if (bk->act_at < 0) continue;
       int64_t end = bk->close_at < d->cursor ? bk->close_at : d->cursor;
       if (end > bk->act_at) d->st.bank_open_cycles += (uint64_t)(end - bk->act_at);
@@ -1520,24 +1552,24 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
    * plus a burst either side. */
   uint32_t spread = p->tCL > p->tCWL ? p->tCL - p->tCWL : p->tCWL - p->tCL;
   for (uint32_t i = 0; i < p->channels; i++) {
-    struct channel *c = &d->ch[i];
-    c->q[RD_Q].cap = p->read_queue;
-    c->q[RD_Q].r = xcalloc(p->read_queue, sizeof(struct req));
-    c->q[WR_Q].cap = p->write_queue;
-    c->q[WR_Q].r = xcalloc(p->write_queue, sizeof(struct req));
-    c->rd = NEVER;
+    struct dram_banked_channel *c = &d->ch[i];
+    c->q[DRAM_BANKED_RD_Q].cap = p->read_queue;
+    c->q[DRAM_BANKED_RD_Q].r = xcalloc(p->read_queue, sizeof(struct dram_banked_req));
+    c->q[DRAM_BANKED_WR_Q].cap = p->write_queue;
+    c->q[DRAM_BANKED_WR_Q].r = xcalloc(p->write_queue, sizeof(struct dram_banked_req));
+    c->rd = DRAM_BANKED_NEVER;
     c->cap_b = spread / (uint32_t)d->burst_cycles + 6;
     c->bursts = xcalloc(c->cap_b, sizeof *c->bursts);
     c->banks = xcalloc(d->banks_per_channel, sizeof *c->banks);
     for (uint32_t j = 0; j < d->banks_per_channel; j++) {
-      struct bank *bk = &c->banks[j];
-      bk->act_ok = bk->col_ok = bk->pre_ok = bk->ref_ok = NEVER;
+      struct dram_banked_bank *bk = &c->banks[j];
+      bk->act_ok = bk->col_ok = bk->pre_ok = bk->ref_ok = DRAM_BANKED_NEVER;
       bk->act_at = -1;
-      bk->close_at = FAR;
+      bk->close_at = DRAM_BANKED_FAR;
     }
     c->groups = xcalloc(p->ranks * p->bank_groups, sizeof *c->groups);
     for (uint32_t j = 0; j < p->ranks * p->bank_groups; j++)
-      c->groups[j].act = c->groups[j].rd = c->groups[j].wr = NEVER;
+      c->groups[j].act = c->groups[j].rd = c->groups[j].wr = DRAM_BANKED_NEVER;
     c->ranks = xcalloc(p->ranks, sizeof *c->ranks);
     if (d->cq_mode) {
       c->ncq = p->queue_structure == DRAM_BANKED_PER_RANK ? p->ranks : d->banks_per_channel;
@@ -1553,16 +1585,16 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
         c->col_stale = xcalloc((c->ncq + 63) / 64, sizeof *c->col_stale);
       for (uint32_t j = 0; j < c->ncq; j++) {
         c->cq[j].cap = p->command_queue;
-        c->cq[j].r = xcalloc(p->command_queue, sizeof(struct req));
+        c->cq[j].r = xcalloc(p->command_queue, sizeof(struct dram_banked_req));
       }
-      c->last_busy = c->took_at = NEVER;
+      c->last_busy = c->took_at = DRAM_BANKED_NEVER;
     }
-    c->next = FAR;
+    c->next = DRAM_BANKED_FAR;
     for (uint32_t k = 0; k < p->ranks; k++) {
-      struct rank *rk = &c->ranks[k];
-      rk->act = rk->rd = rk->wr = rk->ref_end = NEVER;
-      for (int j = 0; j < 4; j++) rk->faw[j] = NEVER;
-      rk->next_due = p->tREFI ? (int64_t)(k + 1) * d->refresh_step : FAR;
+      struct dram_banked_rank *rk = &c->ranks[k];
+      rk->act = rk->rd = rk->wr = rk->ref_end = DRAM_BANKED_NEVER;
+      for (int j = 0; j < 4; j++) rk->faw[j] = DRAM_BANKED_NEVER;
+      rk->next_due = p->tREFI ? (int64_t)(k + 1) * d->refresh_step : DRAM_BANKED_FAR;
       if (rk->next_due < c->next) c->next = rk->next_due;
     }
   }
@@ -1572,9 +1604,9 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
 void dram_banked_destroy(struct dram_banked *d) {
   if (!d) return;
   for (uint32_t i = 0; i < d->p.channels; i++) {
-    struct channel *c = &d->ch[i];
-    free(c->q[RD_Q].r);
-    free(c->q[WR_Q].r);
+    struct dram_banked_channel *c = &d->ch[i];
+    free(c->q[DRAM_BANKED_RD_Q].r);
+    free(c->q[DRAM_BANKED_WR_Q].r);
     free(c->bursts);
     free(c->banks);
     free(c->groups);
