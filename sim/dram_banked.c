@@ -3,267 +3,18 @@
  * the earliest cycle anything could, so the level sleeps exactly until then.
  * Two controller structures share the timing state and the refresh: shared
  * (FR-FCFS over a read and a write queue) and per_bank / per_rank
- * (transaction queues feeding command queues, the functions named _cq).
- * Times inside are signed DRAM cycles; DRAM_BANKED_NEVER sits far enough below zero that
- * adding any timing to it still constrains nothing. */
+ * (transaction queues feeding command queues). What its parts share:
+ * sim/dram_banked_state.h. */
 #include "sim/dram_banked.h"
 
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "sim/dram_banked_state.h"
 #include "sim/engine.h"
 #include "sim/err.h"
 #include "sim/stats.h"
-
-#define DRAM_BANKED_NEVER (-((int64_t)1 << 40))
-#define DRAM_BANKED_FAR INT64_MAX
-
-enum { DRAM_BANKED_RD_Q = 0, DRAM_BANKED_WR_Q = 1 };
-enum { DRAM_BANKED_KIND_HIT = 0, DRAM_BANKED_KIND_MISS = 1, DRAM_BANKED_KIND_CONFLICT = 2 };
-enum dram_banked_cmd_type {
-  DRAM_BANKED_CMD_NONE,
-  DRAM_BANKED_CMD_ACT,
-  DRAM_BANKED_CMD_PRE,
-  DRAM_BANKED_CMD_RD,
-  DRAM_BANKED_CMD_WR,
-  DRAM_BANKED_CMD_REF
-};
-
-struct dram_banked_bank {
-  int64_t act_ok;           /* earliest ACT: PRE + tRP, ACT + tRC, REF + tRFC */
-  int64_t col_ok;           /* ACT + tRCD */
-  int64_t pre_ok;           /* ACT + tRAS, RD + tRTP, WR + tCWL + BL/2 + tWR */
-  int64_t ref_ok;           /* its last precharge + tRP */
-  int64_t act_at, close_at; /* the current or last open interval (act_at < 0: none) */
-  uint64_t row;
-  uint32_t hits; /* column commands since ACT */
-  bool open;
-  /* Scan scratch, valid when stamp == the channel's scan number. */
-  uint64_t stamp;
-  bool conflict_seen, hit_held;
-};
-
-struct dram_banked_group {
-  int64_t act, rd, wr; /* last ACT, RD, WR in the bank group */
-};
-
-struct dram_banked_rank {
-  int64_t act, rd, wr; /* last ACT, RD, WR in the rank */
-  int64_t faw[4];      /* the last four ACTs, a ring from faw_i (oldest) */
-  unsigned faw_i;
-  int64_t ref_end;  /* REF + tRFC */
-  int64_t next_due; /* the next refresh falls due (DRAM_BANKED_FAR: refresh off) */
-  uint32_t pending; /* refreshes due and not yet issued */
-  uint32_t open;    /* banks with a row open */
-};
-
-struct dram_banked_req {
-  uint64_t tag, take_core, seq, row, line, column;
-  /* The first DRAM cycle its commands may issue (controller_cycles after
-   * taken). per_bank: a transaction may move at the end of cycle ready - 1;
-   * moved at the end of m, its command may issue from m + 1. */
-  int64_t ready;
-  uint32_t rank, group, bank; /* bank: index within the channel */
-  uint32_t cq;                /* per_bank / per_rank: its command queue */
-  uint8_t kind;
-  bool write;
-};
-
-/* A read served by another queued read of its line (per_bank). */
-struct dram_banked_follower {
-  uint64_t line, tag;
-};
-
-struct dram_banked_queue {
-  struct dram_banked_req *r; /* in age order */
-  uint32_t n, cap;
-};
-
-struct dram_banked_burst {
-  int64_t start;
-  uint32_t rank;
-  bool write;
-};
-
-/* A command: its type, where it goes, and for which request. */
-struct dram_banked_cmd {
-  enum dram_banked_cmd_type type;
-  uint32_t rank, bank; /* bank within the channel */
-  uint32_t qi;         /* request index in the served queue (per_bank: in command queue cq) */
-  uint32_t cq;
-  bool for_req; /* a request's command (else refresh work) */
-};
-
-/* A scan's answer: the command to issue now (type DRAM_BANKED_CMD_NONE: none), the
- * earliest cycle anything could, and the first candidate in scan order whose
- * earliest time is the least of all candidates' (first_t; DRAM_BANKED_FAR: none). */
-struct dram_banked_pick {
-  struct dram_banked_cmd cmd;
-  int64_t next; /* earliest cycle >= now any candidate could issue (DRAM_BANKED_FAR: none) */
-  struct dram_banked_cmd first;
-  int64_t first_t;
-};
-
-/* A command queue's summary: of its candidates as of cycle `at`, the least
- * earliest time t (DRAM_BANKED_FAR: none) and the first candidate with it. */
-struct dram_banked_qsum {
-  int64_t at, t;
-  struct dram_banked_cmd k;
-  int64_t act_t, rd_t,
-      wr_t; /* the least of its ACT, RD and WR candidates (DRAM_BANKED_FAR: none) */
-  /* per_bank: the one ACT or PRE candidate (o_t DRAM_BANKED_FAR: none), and the entries
-   * of the RD and WR candidates (see col_refresh). */
-  int64_t o_t;
-  struct dram_banked_cmd o;
-  uint32_t rd_j, wr_j;
-};
-
-struct dram_banked_channel {
-  struct dram_banked_queue q[2];
-  bool writing;
-  int64_t rd;                       /* last RD on the channel (tRTW) */
-  struct dram_banked_burst *bursts; /* data bursts that may still matter, by start */
-  uint32_t nb, cap_b;
-  struct dram_banked_bank *banks;   /* ranks x groups x banks_per_group */
-  struct dram_banked_group *groups; /* ranks x groups */
-  struct dram_banked_rank *ranks;
-  int64_t next; /* earliest cycle a command may issue or a refresh fall due */
-  uint64_t scan_no;
-  /* per_bank / per_rank: */
-  struct dram_banked_queue *cq; /* command queues, by bank within the channel or by rank */
-  uint32_t ncq, cq_n;           /* command queues; commands in them all */
-  uint64_t *cq_busy;            /* bit i of word i / 64: command queue i holds a command */
-  uint32_t rr;                  /* the command queue probed last (round robin) */
-  uint32_t draining;            /* writes still to move in the current drain */
-  int64_t last_busy;            /* the last cycle a request arrived or a request command issued */
-  int64_t took_at;              /* the arrival cycle of the last request taken */
-  struct dram_banked_follower *fol; /* reads waiting for another read's RD */
-  uint32_t nfol, cap_fol;
-  /* per_bank / per_rank: each command queue's least candidate (cq_sum),
-   * and bitmaps by command queue: its summary is fresh; it has an ACT
-   * candidate; it has a column candidate (what a command elsewhere can
-   * invalidate: see cq_sum). */
-  struct dram_banked_qsum *sum;
-  uint64_t *fresh, *has_act, *has_col;
-  uint64_t *col_stale; /* per_bank: only its column candidates' times may have moved */
-  uint64_t *blocked;   /* bitmap: the command queue's rank has a refresh due */
-  uint64_t *full;      /* bitmap: the command queue is full */
-  /* The last scan's first least candidate (memo, at cycle memo_t), made at
-   * cycle memo_at, kept while no command issued and no entry or refresh came
-   * since (memo_ok; see channel_cycle_cq). */
-  bool memo_ok;
-  int64_t memo_at, memo_t;
-  struct dram_banked_cmd memo;
-};
-
-struct dram_banked {
-  struct dram_banked_params p;
-  struct dram_clock clk;
-  struct engine *e;
-  struct dram_client client;
-  struct dram_banked_channel *ch;
-  uint32_t banks_per_rank, banks_per_channel;
-  int64_t burst_cycles; /* BL / 2 */
-  int64_t refresh_step; /* tREFI / ranks */
-  bool cq_mode;         /* queue_structure per_bank or per_rank */
-  /* Mapping: shift and mask of each field above the line offset. */
-  unsigned sh_ch, sh_ra, sh_bg, sh_ba, sh_ro, sh_co;
-  uint64_t mk_ch, mk_ra, mk_bg, mk_ba, mk_ro, mk_co;
-  int64_t cursor;   /* the first DRAM cycle not yet handled */
-  uint64_t wake_at; /* earliest wake pending (UINT64_MAX: none) */
-  uint64_t
-      space_at; /* per_bank: the latest space callback scheduled for a refused second request */
-  uint64_t seq, inflight, queued;
-  /* Occupancy integrals by time, per queue kind. */
-  uint64_t q_len[2], q_last[2];
-  bool space_due;
-  uint64_t finished_dram_cycles; /* the cursor when finished */
-  struct dram_banked_stats st;
-};
-
-static int64_t max64(int64_t a, int64_t b) { return a > b ? a : b; }
-
-static bool pow2(uint64_t x) { return x && !(x & (x - 1)); }
-
-static unsigned lg2(uint64_t x) {
-  unsigned n = 0;
-  while (x > 1) {
-    x >>= 1;
-    n++;
-  }
-  return n;
-}
-
-static const char *const FIELDS[6] = {"ro", "ch", "ra", "bg", "ba", "co"};
-
-/* Index in FIELDS of the two letters at s, or -1. */
-static int field_of(const char *s) {
-  for (int i = 0; i < 6; i++)
-    if (s[0] == FIELDS[i][0] && s[1] == FIELDS[i][1]) return i;
-  return -1;
-}
-
-bool dram_banked_mapping_ok(const char *s) {
-  if (!s || strlen(s) != 12) return false;
-  unsigned seen = 0;
-  for (int i = 0; i < 6; i++) {
-    int f = field_of(s + 2 * i);
-    if (f < 0 || (seen & (1u << f))) return false;
-    seen |= 1u << f;
-  }
-  return true;
-}
-
-const char *dram_banked_params_problem(const struct dram_banked_params *p) {
-  /* Each key's range is its row in the key table (machine_params_problem);
-   * here, what a range cannot say: powers of two, and rules between keys.
-   * The messages still state the ranges, as they did when they were checked
-   * here, so a bad value reads the same from a config or from code. */
-  if (!pow2(p->channels)) return "dram.channels: must be a power of two from 1 to 64";
-  if (!pow2(p->ranks)) return "dram.ranks: must be a power of two from 1 to 16";
-  if (!pow2(p->bank_groups)) return "dram.bank_groups: must be a power of two from 1 to 16";
-  if (!pow2(p->banks_per_group)) return "dram.banks_per_group: must be a power of two from 1 to 64";
-  if (!pow2(p->rows)) return "dram.rows: must be a power of two up to 2^24";
-  if (p->burst_length < 2 || !pow2(p->burst_length))
-    return "dram.burst_length: must be a power of two from 2 to 64";
-  if (!pow2(p->columns) || p->columns < p->burst_length)
-    return "dram.columns: must be a power of two from burst_length to 2^20";
-  /* 32: the widest bus a burst of two beats leaves for a 64-byte line. */
-  if (!pow2(p->bus_bytes) || p->bus_bytes > 32)
-    return "dram.bus_bytes: must be a power of two up to 32";
-  if (p->bus_bytes * p->burst_length != 64)
-    return "dram.bus_bytes: bus_bytes x burst_length must be 64 (one line per burst)";
-  if (!dram_banked_mapping_ok(p->mapping))
-    return "dram.mapping: expected six two-letter fields, each of ro ch ra bg ba co once";
-  /* The fields must fit above the 6 offset bits of a 64-bit address. */
-  unsigned bits = lg2(p->channels) + lg2(p->ranks) + lg2(p->bank_groups) + lg2(p->banks_per_group) +
-                  lg2(p->rows) + lg2(p->columns / p->burst_length);
-  if (bits > 58) return "dram.rows: the address fields need more than 64 bits";
-  if (p->write_high > p->write_queue) return "dram.write_high: must be 1 to write_queue";
-  if (p->write_low >= p->write_high) return "dram.write_low: must be below write_high";
-  if (p->queue_structure != DRAM_BANKED_SHARED && p->controller_cycles < 1)
-    return "dram.controller_cycles: must be at least 1 with queue_structure per_bank or per_rank "
-           "(a request reaches its command queue at the end of a cycle)";
-  if (p->tRC < p->tRAS) return "dram.tRC: must be at least tRAS";
-  if (p->tCCD_L < p->tCCD_S) return "dram.tCCD_L: must be at least tCCD_S";
-  if (p->tRRD_L < p->tRRD_S) return "dram.tRRD_L: must be at least tRRD_S";
-  if (p->tWTR_L < p->tWTR_S) return "dram.tWTR_L: must be at least tWTR_S";
-  if (p->tREFI && p->tREFI / p->ranks <= p->tRFC)
-    return "dram.tREFI: tREFI / ranks must exceed tRFC (or tREFI 0: no refresh)";
-  return NULL;
-}
-
-/* NOTE: the level's arithmetic holds for timings up to 2^20 DRAM cycles and
- * clocks up to 2^24 kHz; the key table's ranges lie well inside. CHECKed at
- * creation, so a table widened past them fails loudly, not in a wrong cycle. */
-static bool within_model(const struct dram_banked_params *p) {
-  const uint32_t t[] = {p->tCL,    p->tCWL,   p->tRCD,   p->tRP,    p->tRAS,  p->tRC,
-                        p->tCCD_S, p->tCCD_L, p->tRRD_S, p->tRRD_L, p->tFAW,  p->tWR,
-                        p->tWTR_S, p->tWTR_L, p->tRTW,   p->tRTP,   p->tREFI, p->tRFC};
-  for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++)
-    if (t[i] > (1u << 20)) return false;
-  return p->clock_mhz >= 1 && p->clock_mhz <= (1u << 24) / 1000;
-}
 
 /* ---- Time and events ---- */
 
@@ -303,7 +54,7 @@ static void on_wake(void *ctx, uint64_t at) {
   advance(d);
 }
 
-/* ---- Queue bookkeeping ---- */
+/* ---- A request's life ---- */
 
 /* The occupancy integral of queue kind k up to core cycle t. */
 static void area_to(struct dram_banked *d, int k, uint64_t t) {
@@ -312,389 +63,51 @@ static void area_to(struct dram_banked *d, int k, uint64_t t) {
   d->q_last[k] = t;
 }
 
-/* ---- Data bus ---- */
-
-/* The earliest start >= s0 of a burst of `rank` that overlaps no burst on the
- * channel (one idle cycle between ranks). Bursts are disjoint and sorted by
- * start, so moving past one can only meet later ones. */
-static int64_t bus_fit(const struct dram_banked *d, const struct dram_banked_channel *c, int64_t s0,
-                       uint32_t rank, bool write) {
-  const int64_t b = d->burst_cycles;
-  int64_t s = s0;
-  /* Past the last burst's end and its turnaround gap (at most a cycle; the
-   * bursts are in order of start): nothing to fit around. */
-  if (!c->nb || s >= c->bursts[c->nb - 1].start + b + 1) return s;
-  for (uint32_t i = 0; i < c->nb; i++) {
-    int64_t gap = c->bursts[i].rank != rank && !(d->cq_mode && write && c->bursts[i].write);
-    int64_t a = c->bursts[i].start;
-    if (s < a + b + gap && s + b + gap > a) s = a + b + gap;
-  }
-  return s;
+void dram_banked_serve(struct dram_banked *d, uint64_t t, uint64_t tag) {
+  d->inflight++;
+  engine_at(d->e, t, on_done, d, tag);
 }
 
-/* Record a burst at `start`; forget those that end before any future burst
- * could begin (a command at `now` or later puts data at now + min latency). */
-static void bus_add(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
-                    int64_t start, uint32_t rank, bool write) {
-  const int64_t b = d->burst_cycles;
-  int64_t horizon = now + (d->p.tCL < d->p.tCWL ? d->p.tCL : d->p.tCWL);
-  uint32_t k = 0;
-  for (uint32_t i = 0; i < c->nb; i++)
-    if (c->bursts[i].start + b + 1 > horizon) c->bursts[k++] = c->bursts[i];
-  c->nb = k;
-  CHECK_LT(c->nb, c->cap_b);
-  uint32_t i = c->nb;
-  while (i > 0 && c->bursts[i - 1].start > start) {
-    c->bursts[i] = c->bursts[i - 1];
-    i--;
-  }
-  c->bursts[i].start = start;
-  c->bursts[i].rank = rank;
-  c->bursts[i].write = write;
-  c->nb++;
-  d->st.bus_busy_cycles += (uint64_t)b;
+/* Queue a request in its channel's queue qk (the request's fields but tag,
+ * line and ready from co); the level's counters follow. */
+struct dram_banked_req *dram_banked_enqueue(struct dram_banked *d, struct dram_banked_channel *c,
+                                            int qk, const struct dram_banked_coord *co,
+                                            uint64_t addr, uint64_t tag, int64_t ready) {
+  struct dram_banked_queue *q = &c->q[qk];
+  CHECK_LT(q->n, q->cap);
+  struct dram_banked_req *r = &q->r[q->n++];
+  r->tag = tag;
+  r->take_core = engine_now(d->e);
+  r->line = addr >> 6;
+  r->ready = ready;
+  r->seq = d->seq++;
+  r->row = co->row;
+  r->column = co->column;
+  r->rank = co->rank;
+  r->group = co->bank_group;
+  r->bank = co->rank * d->banks_per_rank + co->bank_group * d->p.banks_per_group + co->bank;
+  r->kind = DRAM_BANKED_KIND_HIT;
+  r->write = qk == DRAM_BANKED_WR_Q;
+  if (d->cq_mode) r->cq = dram_banked_cq_of(d, r);
+  d->queued++;
+  area_to(d, qk, r->take_core);
+  d->q_len[qk]++;
+  if (d->q_len[qk] > d->st.queue_max[qk]) d->st.queue_max[qk] = d->q_len[qk];
+  return r;
 }
 
-/* ---- Earliest times of each command ---- */
-
-static int64_t act_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
-                            const struct dram_banked_req *r, int64_t now) {
-  const struct dram_banked_bank *bk = &c->banks[r->bank];
-  const struct dram_banked_rank *rk = &c->ranks[r->rank];
-  const struct dram_banked_group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
-  int64_t t = max64(max64(now, r->ready), bk->act_ok);
-  t = max64(t, rk->ref_end);
-  t = max64(t, rk->act + d->p.tRRD_S);
-  t = max64(t, g->act + d->p.tRRD_L);
-  t = max64(t, rk->faw[rk->faw_i] + d->p.tFAW);
-  return t;
-}
-
-static int64_t col_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
-                            const struct dram_banked_req *r, bool write, int64_t now) {
-  const struct dram_banked_bank *bk = &c->banks[r->bank];
-  const struct dram_banked_rank *rk = &c->ranks[r->rank];
-  const struct dram_banked_group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
-  const int64_t b = d->burst_cycles;
-  int64_t t = max64(max64(now, r->ready), bk->col_ok);
-  int64_t lat;
-  if (write) {
-    t = max64(t, rk->wr + d->p.tCCD_S);
-    t = max64(t, g->wr + d->p.tCCD_L);
-    t = max64(t, c->rd + d->p.tRTW);
-    lat = d->p.tCWL;
-  } else {
-    t = max64(t, rk->rd + d->p.tCCD_S);
-    t = max64(t, g->rd + d->p.tCCD_L);
-    t = max64(t, rk->wr + d->p.tCWL + b + d->p.tWTR_S);
-    t = max64(t, g->wr + d->p.tCWL + b + d->p.tWTR_L);
-    lat = d->p.tCL;
-  }
-  return bus_fit(d, c, t + lat, r->rank, write) - lat;
-}
-
-/* The earliest cycle >= now request r's command of the given type (ACT,
- * PRE, RD or WR) could issue. */
-static int64_t req_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
-                            const struct dram_banked_req *r, enum dram_banked_cmd_type type,
-                            int64_t now) {
-  if (type == DRAM_BANKED_CMD_ACT) return act_earliest(d, c, r, now);
-  if (type == DRAM_BANKED_CMD_PRE) return max64(max64(now, r->ready), c->banks[r->bank].pre_ok);
-  return col_earliest(d, c, r, r->write, now);
-}
-
-/* ---- The scan: what issues at cycle `now`, and the earliest anything could ---- */
-
-/* A candidate that may issue from cycle t. qi: the request's index in the
- * served queue (per_bank / per_rank: in command queue cq), or -1 for refresh
- * work. */
-static void consider_in(struct dram_banked_pick *pk, int64_t t, int64_t now,
-                        enum dram_banked_cmd_type type, uint32_t rank, uint32_t bank, uint32_t cq,
-                        int64_t qi) {
-  const struct dram_banked_cmd k = {type, rank, bank, qi >= 0 ? (uint32_t)qi : 0, cq, qi >= 0};
-  if (t < pk->next) pk->next = t;
-  if (t < pk->first_t) {
-    pk->first_t = t;
-    pk->first = k;
-  }
-  if (t == now && pk->cmd.type == DRAM_BANKED_CMD_NONE) pk->cmd = k;
-}
-
-static void consider(struct dram_banked_pick *pk, int64_t t, int64_t now,
-                     enum dram_banked_cmd_type type, uint32_t rank, uint32_t bank, int64_t qi) {
-  consider_in(pk, t, now, type, rank, bank, 0, qi);
-}
-
-/* Candidates in priority order: refresh work (ranks in order: a PRE for each
- * open bank, lowest bank first, or REF once all are closed), then the oldest row hit of the
- * served queue, then the oldest PRE or ACT. The first that can issue at `now`
- * is picked; next is the least earliest time of all of them. */
-static int64_t ref_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
-                            uint32_t rank, int64_t now) {
-  const uint32_t bpr = d->banks_per_rank;
-  int64_t t = max64(now, c->ranks[rank].ref_end);
-  for (uint32_t i = 0; i < bpr; i++) t = max64(t, c->banks[rank * bpr + i].ref_ok);
-  return t;
-}
-
-static void scan_refresh(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
-                         struct dram_banked_pick *pk) {
-  const uint32_t bpr = d->banks_per_rank;
-  for (uint32_t k = 0; k < d->p.ranks; k++) {
-    struct dram_banked_rank *rk = &c->ranks[k];
-    if (rk->next_due < pk->next) pk->next = max64(rk->next_due, now);
-    if (!rk->pending) continue;
-    if (rk->open) {
-      for (uint32_t i = 0; i < bpr; i++) {
-        const struct dram_banked_bank *bk = &c->banks[k * bpr + i];
-        if (bk->open)
-          consider(pk, max64(now, bk->pre_ok), now, DRAM_BANKED_CMD_PRE, k, k * bpr + i, -1);
-      }
-    } else {
-      consider(pk, ref_earliest(d, c, k, now), now, DRAM_BANKED_CMD_REF, k, 0, -1);
-    }
-  }
-}
-
-static void scan(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
-                 struct dram_banked_pick *pk) {
-  pk->cmd.type = DRAM_BANKED_CMD_NONE;
-  pk->next = pk->first_t = DRAM_BANKED_FAR;
-  scan_refresh(d, c, now, pk);
-  const int qk = c->writing ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
-  const struct dram_banked_queue *q = &c->q[qk];
-  uint64_t no = ++c->scan_no;
-  /* Pass 1: row hits, oldest first; note per bank whether a hit that may
-   * still issue holds back a conflict's PRE. */
-  for (uint32_t i = 0; i < q->n; i++) {
-    const struct dram_banked_req *r = &q->r[i];
-    if (c->ranks[r->rank].pending) continue;
-    struct dram_banked_bank *bk = &c->banks[r->bank];
-    if (bk->stamp != no) {
-      bk->stamp = no;
-      bk->conflict_seen = false;
-      bk->hit_held = false;
-    }
-    if (!bk->open) continue;
-    if (bk->row != r->row) {
-      bk->conflict_seen = true;
-      continue;
-    }
-    if (bk->conflict_seen && bk->hits >= DRAM_BANKED_ROW_HIT_CAP) continue;
-    bk->hit_held = true;
-    consider(pk, col_earliest(d, c, r, qk == DRAM_BANKED_WR_Q, now), now,
-             qk == DRAM_BANKED_WR_Q ? DRAM_BANKED_CMD_WR : DRAM_BANKED_CMD_RD, r->rank, r->bank, i);
-  }
-  /* Pass 2: PRE for a conflict no hit holds back, ACT for a closed bank. */
-  for (uint32_t i = 0; i < q->n; i++) {
-    const struct dram_banked_req *r = &q->r[i];
-    if (c->ranks[r->rank].pending) continue;
-    const struct dram_banked_bank *bk = &c->banks[r->bank];
-    if (!bk->open)
-      consider(pk, act_earliest(d, c, r, now), now, DRAM_BANKED_CMD_ACT, r->rank, r->bank, i);
-    else if (bk->row != r->row && !bk->hit_held)
-      consider(pk, max64(max64(now, r->ready), bk->pre_ok), now, DRAM_BANKED_CMD_PRE, r->rank,
-               r->bank, i);
-  }
-}
-
-/* ---- Issuing ---- */
-
-/* The cycle from which channel c's oldest read has waited too long
- * (DRAM_BANKED_READ_AGE_CAP x tRC), or DRAM_BANKED_FAR with no read queued. */
-static int64_t starve_at(const struct dram_banked *d, const struct dram_banked_channel *c) {
-  if (!c->q[DRAM_BANKED_RD_Q].n) return DRAM_BANKED_FAR;
-  return c->q[DRAM_BANKED_RD_Q].r[0].ready + (int64_t)DRAM_BANKED_READ_AGE_CAP * (int64_t)d->p.tRC;
-}
-
-/* Turn the channel to writes or back to reads at DRAM cycle now. NOTE: a
- * read that has waited too long (starve_at) turns the channel back to reads
- * and keeps it there until it is served: under a heavy write stream the
- * write queue never falls to write_low, or refills to write_high before a
- * conflicting read's precharge, activate and read fit between drains, and
- * such a read starved for 30,000 cycles. The moment a read starts starving is
- * a wake of its own (next_of), so skipping ahead still equals ticking. */
-static void update_mode(struct dram_banked *d, struct dram_banked_channel *c, int64_t now) {
-  uint32_t nr = c->q[DRAM_BANKED_RD_Q].n, nw = c->q[DRAM_BANKED_WR_Q].n;
-  bool starving = now >= starve_at(d, c);
-  if (!c->writing) {
-    if ((nw >= d->p.write_high && !starving) || (nr == 0 && nw > 0)) {
-      c->writing = true;
-      d->st.write_drains++;
-    }
-  } else if (nw == 0 || (nw <= d->p.write_low && nr > 0) || starving) {
-    c->writing = false;
-  }
-}
-
-/* The channel's next wake: its next command, or a read starting to starve
- * while the channel serves writes. */
-static int64_t next_of(const struct dram_banked *d, const struct dram_banked_channel *c,
-                       int64_t next) {
-  int64_t s = c->writing ? starve_at(d, c) : DRAM_BANKED_FAR;
-  return s < next ? s : next;
-}
-
-/* ---- per_bank / per_rank: what a change makes stale (see cq_sum) ---- */
-
-/* Clear, in bitmap `fresh`, the bits of [lo, hi) set in `mask` (NULL: all). */
-static void stale_range(uint64_t *fresh, const uint64_t *mask, uint32_t lo, uint32_t hi) {
-  for (uint32_t i = lo; i < hi;) {
-    const uint32_t w = i / 64, b = i % 64, n = hi - i < 64 - b ? hi - i : 64 - b;
-    const uint64_t bits = (n == 64 ? ~0ull : ((1ull << n) - 1)) << b;
-    fresh[w] &= ~(bits & (mask ? mask[w] : ~0ull));
-    i += n;
-  }
-}
-
-/* The command queues holding rank k's requests: [*lo, *hi). */
-static void rank_queues(const struct dram_banked *d, uint32_t k, uint32_t *lo, uint32_t *hi) {
-  const bool per_rank = d->p.queue_structure == DRAM_BANKED_PER_RANK;
-  *lo = per_rank ? k : k * d->banks_per_rank;
-  *hi = per_rank ? k + 1 : (k + 1) * d->banks_per_rank;
-}
-
-/* Bank `bank`'s state or its command queue's entries changed. */
-static void stale_bank(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t bank) {
-  if (!d->cq_mode) return;
-  const uint32_t qi =
-      d->p.queue_structure == DRAM_BANKED_PER_RANK ? bank / d->banks_per_rank : bank;
-  c->fresh[qi / 64] &= ~(1ull << (qi % 64));
-}
-
-/* A refresh changed all of rank k's state. */
-static void stale_rank(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t k) {
-  if (!d->cq_mode) return;
-  uint32_t lo, hi;
-  rank_queues(d, k, &lo, &hi);
-  stale_range(c->fresh, NULL, lo, hi);
-}
-
-/* Clear the fresh bit of each queue of [lo, hi) set in `mask` whose summary
- * has an ACT candidate before h_act, a RD before h_rd or a WR before h_wr. */
-static void stale_before(struct dram_banked_channel *c, const uint64_t *mask, uint32_t lo,
-                         uint32_t hi, int64_t h_act, int64_t h_rd, int64_t h_wr) {
-  for (uint32_t w = lo / 64; w * 64 < hi; w++) {
-    uint64_t bits = mask[w] & c->fresh[w];
-    if (w == lo / 64) bits &= ~0ull << (lo % 64);
-    if (hi - w * 64 < 64) bits &= (1ull << (hi - w * 64)) - 1;
-    while (bits) {
-      const uint32_t b = (uint32_t)__builtin_ctzll(bits);
-      const struct dram_banked_qsum *s = &c->sum[w * 64 + b];
-      bits &= bits - 1;
-      if (s->act_t < h_act || s->rd_t < h_rd || s->wr_t < h_wr) {
-        /* per_bank: a column command moves only the column candidates. */
-        if (h_act == DRAM_BANKED_FAR && c->col_stale) c->col_stale[w] |= 1ull << b;
-        else c->fresh[w] &= ~(1ull << b);
-      }
-    }
-  }
-}
-
-/* An ACT in rank k at `now` moved its ACT spacing (tRRD, tFAW): nothing
- * before now + tRRD_L or the new oldest of the last four ACTs + tFAW changes
- * (tRRD_L >= tRRD_S), so only its queues with an ACT candidate earlier than
- * that can be stale. */
-static void stale_acts(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t k,
-                       int64_t now) {
-  if (!d->cq_mode) return;
-  const struct dram_banked_rank *rk = &c->ranks[k];
-  const int64_t h = max64(now + d->p.tRRD_L, rk->faw[rk->faw_i] + d->p.tFAW);
-  uint32_t lo, hi;
-  rank_queues(d, k, &lo, &hi);
-  stale_before(c, c->has_act, lo, hi, h, DRAM_BANKED_FAR, DRAM_BANKED_FAR);
-}
-
-/* A column command at `now` moved the column spacing (tCCD, tWTR, tRTW) and
- * put a burst on the data bus. Each constraint it adds ends by the bounds
- * below (one idle cycle between bursts, whichever ranks; tCCD_L >= tCCD_S,
- * tWTR_L >= tWTR_S), and a column candidate no earlier than its bound keeps
- * its time: the new burst ends, gap included, before that candidate's data
- * would start. So only queues with a column candidate earlier can be stale. */
-static void stale_columns(const struct dram_banked *d, struct dram_banked_channel *c, bool write,
-                          int64_t now) {
-  if (!d->cq_mode) return;
-  const struct dram_banked_params *p = &d->p;
-  const int64_t b = d->burst_cycles;
-  int64_t h_rd, h_wr;
-  if (write) {
-    h_rd = now + max64(p->tCWL + b + p->tWTR_L, (int64_t)p->tCWL + b + 1 - p->tCL);
-    h_wr = now + max64(p->tCCD_L, b + 1);
-  } else {
-    h_rd = now + max64(p->tCCD_L, b + 1);
-    h_wr = now + max64(p->tRTW, (int64_t)p->tCL + b + 1 - p->tCWL);
-  }
-  stale_before(c, c->has_col, 0, c->ncq, DRAM_BANKED_FAR, h_rd, h_wr);
-}
-
-/* Rank k's command queues take no command while it has a refresh due. */
-static void block_rank(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t k,
-                       bool due) {
-  if (!d->cq_mode) return;
-  uint32_t lo, hi;
-  rank_queues(d, k, &lo, &hi);
-  for (uint32_t i = lo; i < hi; i++) {
-    const uint64_t bit = 1ull << (i % 64);
-    c->blocked[i / 64] = due ? c->blocked[i / 64] | bit : c->blocked[i / 64] & ~bit;
-  }
-}
-
-static void bank_close(struct dram_banked *d, struct dram_banked_channel *c,
-                       struct dram_banked_bank *bk, uint32_t rank, int64_t at) {
-  bk->open = false;
-  bk->close_at = at;
-  bk->act_ok = max64(bk->act_ok, at + d->p.tRP);
-  bk->ref_ok = at + d->p.tRP;
-  stale_bank(d, c, (uint32_t)(bk - c->banks));
-  c->ranks[rank].open--;
-  d->st.precharges++;
-}
-
-/* The bank, rank, group and bus state of r's column command at now; returns
- * the cycle its data transfer ends. */
-static int64_t column_state(struct dram_banked *d, struct dram_banked_channel *c,
-                            const struct dram_banked_req *rq, bool write, int64_t now) {
-  const struct dram_banked_req r = *rq;
-  struct dram_banked_bank *bk = &c->banks[r.bank];
-  struct dram_banked_rank *rk = &c->ranks[r.rank];
-  struct dram_banked_group *g = &c->groups[r.rank * d->p.bank_groups + r.group];
-  const int64_t b = d->burst_cycles;
-  int64_t end, pre;
-  bk->hits++;
-  stale_bank(d, c, r.bank);
-  stale_columns(d, c, write, now);
-  if (write) {
-    rk->wr = g->wr = now;
-    bus_add(d, c, now, now + d->p.tCWL, r.rank, true);
-    end = now + d->p.tCWL + b;
-    pre = end + d->p.tWR;
-    d->st.writes++;
-  } else {
-    rk->rd = g->rd = c->rd = now;
-    bus_add(d, c, now, now + d->p.tCL, r.rank, false);
-    end = now + d->p.tCL + b;
-    pre = now + d->p.tRTP;
-    d->st.reads++;
-  }
-  bk->pre_ok = max64(bk->pre_ok, pre);
-  if (d->p.page == DRAM_BANKED_CLOSE_PAGE) bank_close(d, c, bk, r.rank, bk->pre_ok);
-  return end;
-}
-
-static void count_kind(struct dram_banked *d, uint8_t kind) {
+void dram_banked_count_kind(struct dram_banked *d, uint8_t kind) {
   if (kind == DRAM_BANKED_KIND_HIT) d->st.row_hits++;
   else if (kind == DRAM_BANKED_KIND_MISS) d->st.row_misses++;
   else d->st.row_conflicts++;
 }
 
-static uint64_t core_deciding(const struct dram_banked *d, int64_t w);
-
 /* Queue time of r, of queue kind qk, ends at its column command at now: in
  * the core cycle DRAM cycle now begins (per_bank: the first core cycle whose
  * arrivals come after cycle now, which is when now may be handled, so that
  * the occupancy integral runs forward). */
-static void queue_leave(struct dram_banked *d, int qk, const struct dram_banked_req *r,
-                        int64_t now) {
+void dram_banked_queue_leave(struct dram_banked *d, int qk, const struct dram_banked_req *r,
+                             int64_t now) {
   uint64_t left = d->cq_mode ? core_deciding(d, now) : dram_clock_to_core(d->clk, (uint64_t)now);
   area_to(d, qk, left);
   d->q_len[qk]--;
@@ -703,29 +116,10 @@ static void queue_leave(struct dram_banked *d, int qk, const struct dram_banked_
   if (wait > d->st.queue_wait_max_cycles[qk]) d->st.queue_wait_max_cycles[qk] = wait;
 }
 
-static void issue_column(struct dram_banked *d, struct dram_banked_channel *c, int qk, uint32_t qi,
-                         int64_t now) {
-  struct dram_banked_queue *q = &c->q[qk];
-  struct dram_banked_req r = q->r[qi];
-  memmove(&q->r[qi], &q->r[qi + 1], (q->n - qi - 1) * sizeof *q->r);
-  q->n--;
-  d->queued--;
-  int64_t end = column_state(d, c, &r, qk == DRAM_BANKED_WR_Q, now);
-  count_kind(d, r.kind);
-  /* The place frees at the column command: queue time ends there. */
-  queue_leave(d, qk, &r, now);
-  d->space_due = true;
-  uint64_t done = dram_clock_to_core(d->clk, (uint64_t)end);
-  CHECK_GE(done, engine_now(d->e));
-  d->inflight++;
-  engine_at(d->e, done, on_done, d, r.tag);
-}
+/* ---- Cycles ---- */
 
-static void issue_column_cq(struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi,
-                            uint32_t j, int64_t now);
-
-static void issue(struct dram_banked *d, struct dram_banked_channel *c,
-                  const struct dram_banked_cmd *k, int64_t now) {
+void dram_banked_issue(struct dram_banked *d, struct dram_banked_channel *c,
+                       const struct dram_banked_cmd *k, int64_t now) {
   c->memo_ok = false;
   const int qk = c->writing ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
   struct dram_banked_req *r = !k->for_req  ? NULL
@@ -734,454 +128,30 @@ static void issue(struct dram_banked *d, struct dram_banked_channel *c,
   switch (k->type) {
   case DRAM_BANKED_CMD_PRE: {
     struct dram_banked_bank *bk = &c->banks[k->bank];
-    bank_close(d, c, bk, k->rank, now);
+    dram_banked_bank_close(d, c, bk, k->rank, now);
     if (r) r->kind = DRAM_BANKED_KIND_CONFLICT;
     break;
   }
-  case DRAM_BANKED_CMD_ACT: {
-    struct dram_banked_bank *bk = &c->banks[k->bank];
-    struct dram_banked_rank *rk = &c->ranks[k->rank];
-    struct dram_banked_group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
-    if (bk->act_at >= 0) d->st.bank_open_cycles += (uint64_t)(bk->close_at - bk->act_at);
-    bk->open = true;
-    bk->row = r->row;
-    bk->hits = 0;
-    bk->act_at = now;
-    bk->close_at = DRAM_BANKED_FAR;
-    bk->col_ok = now + d->p.tRCD;
-    bk->pre_ok = now + d->p.tRAS;
-    bk->act_ok = now + d->p.tRC;
-    rk->act = g->act = now;
-    rk->faw[rk->faw_i] = now;
-    rk->faw_i = (rk->faw_i + 1) & 3;
-    rk->open++;
-    stale_bank(d, c, k->bank);
-    stale_acts(d, c, k->rank, now);
-    d->st.activates++;
+  case DRAM_BANKED_CMD_ACT:
+    dram_banked_activate(d, c, k, r, now);
     if (r->kind == DRAM_BANKED_KIND_HIT) r->kind = DRAM_BANKED_KIND_MISS;
     break;
-  }
   case DRAM_BANKED_CMD_RD:
   case DRAM_BANKED_CMD_WR:
-    if (d->cq_mode) issue_column_cq(d, c, k->cq, k->qi, now);
-    else issue_column(d, c, qk, k->qi, now);
+    if (d->cq_mode) dram_banked_ctrl_issue_column(d, c, k->cq, k->qi, now);
+    else dram_banked_frfcfs_issue_column(d, c, qk, k->qi, now);
     break;
-  case DRAM_BANKED_CMD_REF: {
-    struct dram_banked_rank *rk = &c->ranks[k->rank];
-    if (!--rk->pending) block_rank(d, c, k->rank, false);
-    rk->ref_end = now + d->p.tRFC;
-    for (uint32_t i = 0; i < d->banks_per_rank; i++) {
-      struct dram_banked_bank *bk = &c->banks[k->rank * d->banks_per_rank + i];
-      bk->act_ok = max64(bk->act_ok, rk->ref_end);
-    }
-    stale_rank(d, c, k->rank);
-    d->st.refreshes++;
-    d->st.refresh_cycles += d->p.tRFC;
-    break;
-  }
+  case DRAM_BANKED_CMD_REF: dram_banked_refresh_issue(d, c, k->rank, now); break;
   case DRAM_BANKED_CMD_NONE: break;
   }
 }
 
-/* ---- per_bank / per_rank: transaction queues feeding command queues ---- */
-
-static uint32_t cq_of(const struct dram_banked *d, const struct dram_banked_req *r) {
-  return d->p.queue_structure == DRAM_BANKED_PER_RANK ? r->rank : r->bank;
-}
-
-static void cq_mark(struct dram_banked_channel *c, uint32_t qi, bool busy) {
-  const uint64_t bit = 1ull << (qi % 64);
-  if (busy) c->cq_busy[qi / 64] |= bit;
-  else c->cq_busy[qi / 64] &= ~bit;
-}
-
-/* Entries of transaction queue q that may take part in cycle t (a prefix:
- * ready grows with arrival). */
-static uint32_t visible(const struct dram_banked_queue *q, int64_t t) {
-  uint32_t n = q->n;
-  while (n > 0 && q->r[n - 1].ready - 1 > t) n--;
-  return n;
-}
-
-/* Does a request of line `line` wait, as a write (write) or a read, in the
- * transaction queue or in command queue cq (the one its line maps to)? */
-static bool line_waits(const struct dram_banked_channel *c, const struct dram_banked_queue *cq,
-                       bool write, uint64_t line) {
-  const struct dram_banked_queue *q = &c->q[write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q];
-  for (uint32_t i = 0; i < q->n; i++)
-    if (q->r[i].line == line) return true;
-  for (uint32_t i = 0; i < cq->n; i++)
-    if (cq->r[i].write == write && cq->r[i].line == line) return true;
-  return false;
-}
-
-/* The end of cycle t: maybe start a write drain, then move at most one
- * transaction to its command queue. apply false: change nothing, only say
- * whether anything would change. */
-static bool schedule_cq(struct dram_banked *d, struct dram_banked_channel *c, int64_t t,
-                        bool apply) {
-  const uint32_t nw = visible(&c->q[DRAM_BANKED_WR_Q], t), nr = visible(&c->q[DRAM_BANKED_RD_Q], t);
-  uint32_t draining = c->draining;
-  if (!draining && nw > 0 &&
-      (nw >= d->p.write_high || (nw > d->p.write_low && c->cq_n == 0) ||
-       (nr == 0 && c->cq_n == 0 && t >= c->last_busy + DRAM_BANKED_IDLE_DRAIN_CYCLES)))
-    draining = nw;
-  int k = draining ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
-  uint32_t mi = UINT32_MAX; /* the transaction to move */
-  for (uint32_t i = 0; i < (k == DRAM_BANKED_WR_Q ? nw : nr); i++) {
-    const uint32_t qi = c->q[k].r[i].cq;
-    if (c->full[qi / 64] >> (qi % 64) & 1) continue;
-    const struct dram_banked_queue *cq = &c->cq[qi];
-    if (k == DRAM_BANKED_WR_Q && line_waits(c, cq, false, c->q[k].r[i].line)) {
-      /* A read of the line still waits: writing first would lose its data;
-       * the drain ends (and may start again next cycle). With every command
-       * queue empty and that read still in the read queue nothing would
-       * ever change: the read queue is served this cycle instead ([ours];
-       * DRAMsim3 deadlocks there). */
-      draining = 0;
-      if (c->cq_n) break; /* (else the read is in the read queue) */
-      k = DRAM_BANKED_RD_Q;
-      i = UINT32_MAX; /* the loop's increment makes it 0 */
-      continue;
-    }
-    mi = i;
-    break;
-  }
-  struct dram_banked_queue *q = &c->q[k];
-  const bool changed = mi != UINT32_MAX || draining != c->draining;
-  if (!apply) return changed;
-  if (changed) c->memo_ok = false;
-  if (mi != UINT32_MAX) {
-    struct dram_banked_req m = q->r[mi];
-    struct dram_banked_queue *cq = &c->cq[cq_of(d, &m)];
-    memmove(&q->r[mi], &q->r[mi + 1], (q->n - mi - 1) * sizeof *q->r);
-    q->n--;
-    m.ready = t + 1;
-    cq->r[cq->n++] = m;
-    if (cq->n == cq->cap) c->full[m.cq / 64] |= 1ull << (m.cq % 64);
-    stale_bank(d, c, m.bank);
-    c->cq_n++;
-    cq_mark(c, cq_of(d, &m), true);
-    d->space_due = true;
-    if (k == DRAM_BANKED_WR_Q) draining--;
-  }
-  if (!c->draining && k == DRAM_BANKED_WR_Q && (mi != UINT32_MAX || draining)) d->st.write_drains++;
-  c->draining = draining;
-  return changed;
-}
-
-/* May the PRE at entry j of command queue q (for a conflict in bank bk) issue?
- * Not before an older request of its queue for the same bank, nor while one
- * of its queue still hits the open row, unless the row has served the cap. */
-static bool pre_allowed(const struct dram_banked_queue *q, uint32_t j,
-                        const struct dram_banked_bank *bk) {
-  const struct dram_banked_req *r = &q->r[j];
-  for (uint32_t i = 0; i < j; i++)
-    if (q->r[i].bank == r->bank) return false;
-  if (bk->hits >= DRAM_BANKED_ROW_HIT_CAP) return true;
-  for (uint32_t i = j + 1; i < q->n; i++)
-    if (q->r[i].bank == r->bank && q->r[i].row == bk->row) return false;
-  return true;
-}
-
-/* Does the write at entry j of q wait behind an older read of its place in
- * the DRAM? NOTE: its place (bank, row, column), not its address: addresses
- * above the DRAM's capacity alias, and DRAMsim3 compares places here though
- * it forwards and merges by address. */
-static bool write_behind_read(const struct dram_banked_queue *q, uint32_t j) {
-  const struct dram_banked_req *w = &q->r[j];
-  for (uint32_t i = 0; i < j; i++) {
-    const struct dram_banked_req *r = &q->r[i];
-    if (!r->write && r->bank == w->bank && r->row == w->row && r->column == w->column) return true;
-  }
-  return false;
-}
-
-/* Command queue qi's candidates as of cycle now: the least earliest time and
- * the first candidate with it, into s; has_act and has_col say which kinds
- * of command it holds. */
-static void cq_candidates(const struct dram_banked *d, const struct dram_banked_channel *c,
-                          uint32_t qi, int64_t now, struct dram_banked_qsum *s, bool *has_act,
-                          bool *has_col) {
-  const struct dram_banked_queue *q = &c->cq[qi];
-  struct dram_banked_pick pk = {
-      .cmd.type = DRAM_BANKED_CMD_NONE, .next = DRAM_BANKED_FAR, .first_t = DRAM_BANKED_FAR};
-  *has_act = *has_col = false;
-  s->act_t = s->rd_t = s->wr_t = s->o_t = DRAM_BANKED_FAR;
-  /* An ACT, RD or WR's earliest time depends on its request only through
-   * the bank and `ready`, and never falls as `ready` grows: a later entry of
-   * the same command and bank as the last one considered here, ready no
-   * sooner, can neither come first nor lower the least (ties keep the
-   * older), so it is not asked (in per_bank every entry shares the bank: of
-   * the ACTs of a closed bank only the oldest is asked). */
-  uint32_t seen_bank[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX}; /* ACT, RD, WR */
-  int64_t seen_ready[3] = {0, 0, 0};
-  for (uint32_t j = 0; j < q->n; j++) {
-    const struct dram_banked_req *r = &q->r[j];
-    const struct dram_banked_bank *bk = &c->banks[r->bank];
-    enum dram_banked_cmd_type type;
-    if (!bk->open || bk->row == r->row) {
-      const int w = !bk->open ? 0 : r->write ? 2 : 1;
-      if (seen_bank[w] == r->bank && r->ready >= seen_ready[w]) continue;
-      if (w == 2 && write_behind_read(q, j)) continue;
-      seen_bank[w] = r->bank;
-      seen_ready[w] = r->ready;
-      type = !w ? DRAM_BANKED_CMD_ACT : r->write ? DRAM_BANKED_CMD_WR : DRAM_BANKED_CMD_RD;
-      if (!w) *has_act = true;
-      else *has_col = true;
-    } else {
-      if (!pre_allowed(q, j, bk)) continue;
-      type = DRAM_BANKED_CMD_PRE;
-    }
-    const int64_t t = req_earliest(d, c, r, type, now);
-    if (type == DRAM_BANKED_CMD_RD || type == DRAM_BANKED_CMD_WR) {
-      int64_t *least = type == DRAM_BANKED_CMD_RD ? &s->rd_t : &s->wr_t;
-      if (t < *least) {
-        *least = t;
-        *(type == DRAM_BANKED_CMD_RD ? &s->rd_j : &s->wr_j) = j;
-      }
-    } else {
-      if (type == DRAM_BANKED_CMD_ACT && t < s->act_t) s->act_t = t;
-      if (t < s->o_t) {
-        s->o_t = t;
-        s->o = (struct dram_banked_cmd){type, r->rank, r->bank, j, qi, true};
-      }
-    }
-    consider_in(&pk, t, now, type, r->rank, r->bank, qi, j);
-  }
-  s->at = now;
-  s->t = pk.first_t;
-  s->k = pk.first;
-}
-
-/* Command queue qi's summary as of cycle now, computed again only when
- * stale. NOTE: why a summary stays true. A candidate's earliest time asked at
- * n is h(max(n, T)), T from its request and the timing state, h the identity
- * (ACT, PRE) or the data bus's first fit (RD, WR), which is monotone and
- * maps every cycle between t0 and h(t0) to h(t0). So while the state it read
- * is unchanged, each candidate's time asked at any n in [at, t] is the time
- * asked at `at`, and the summary holds there. What it read: the queue's
- * entries and their bank (stale_bank), the rank's ACT spacing for ACT
- * candidates (stale_rank), the rank, group and channel column spacing and
- * the bus for RD and WR candidates (stale_columns), a refresh (stale_rank,
- * all). */
-/* per_bank: a summary whose column candidates alone may have moved, asked
- * again at now (within [at, t]). A per_bank queue holds one bank, so it has
- * at most one ACT or PRE candidate (its oldest entry: an ACT for a closed
- * bank, a PRE for a conflict, pre_allowed), one RD and one WR (each the
- * oldest of its kind asked, as `ready` grows along the queue): the first
- * least of those three is the queue's. */
-static void col_refresh(const struct dram_banked *d, const struct dram_banked_channel *c,
-                        uint32_t qi, int64_t now, struct dram_banked_qsum *s) {
-  const struct dram_banked_queue *q = &c->cq[qi];
-  int64_t t = s->o_t;
-  struct dram_banked_cmd k = s->o;
-  uint32_t kj = t < DRAM_BANKED_FAR ? s->o.qi : UINT32_MAX;
-  for (int i = 0; i < 2; i++) {
-    int64_t *ct = i ? &s->wr_t : &s->rd_t;
-    if (*ct == DRAM_BANKED_FAR) continue;
-    const uint32_t j = i ? s->wr_j : s->rd_j;
-    const struct dram_banked_req *r = &q->r[j];
-    *ct = col_earliest(d, c, r, r->write, now);
-    if (*ct < t || (*ct == t && j < kj)) {
-      t = *ct;
-      kj = j;
-      k = (struct dram_banked_cmd){
-          r->write ? DRAM_BANKED_CMD_WR : DRAM_BANKED_CMD_RD, r->rank, r->bank, j, qi, true};
-    }
-  }
-  s->at = now;
-  s->t = t;
-  s->k = k;
-}
-
-static const struct dram_banked_qsum *
-cq_sum(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi, int64_t now) {
-  struct dram_banked_qsum *s = &c->sum[qi];
-  const uint32_t w = qi / 64;
-  const uint64_t bit = 1ull << (qi % 64);
-  if ((c->fresh[w] & bit) && now >= s->at && now <= s->t) {
-    if (!c->col_stale || !(c->col_stale[w] & bit)) return s;
-    c->col_stale[w] &= ~bit;
-    col_refresh(d, c, qi, now, s);
-    return s;
-  }
-  bool act, col;
-  cq_candidates(d, c, qi, now, s, &act, &col);
-  if (c->col_stale) c->col_stale[w] &= ~bit;
-  c->fresh[w] |= bit;
-  c->has_act[w] = act ? c->has_act[w] | bit : c->has_act[w] & ~bit;
-  c->has_col[w] = col ? c->has_col[w] | bit : c->has_col[w] & ~bit;
-  return s;
-}
-
-/* Refresh work, then the command queues round robin from the one after the
- * last that issued; in each, the oldest command that can issue now. next:
- * the earliest any candidate could. */
-static void scan_cq(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
-                    struct dram_banked_pick *pk) {
-  pk->cmd.type = DRAM_BANKED_CMD_NONE;
-  pk->next = pk->first_t = DRAM_BANKED_FAR;
-  scan_refresh(d, c, now, pk);
-  /* The queues holding commands (but those of a rank with a refresh due: a
-   * queue's commands share a rank), round robin from the one after rr: those
-   * from there on, then those before it (rr last). A queue's candidates in
-   * scan order are its own in entry order, so its summary (the first least)
-   * stands for them all; and since every candidate is asked at now, one can
-   * issue now only if it is a least: the first least of the whole scan. */
-  const uint32_t start = (c->rr + 1) % c->ncq, nw = (c->ncq + 63) / 64;
-  uint32_t best = UINT32_MAX;
-  int64_t best_t = DRAM_BANKED_FAR;
-  /* Words from start's on, the first of them from start's bit; then from the
-   * first word up to start's, that one below start's bit. */
-  for (uint32_t step = 0; step <= nw; step++) {
-    const uint32_t w = (start / 64 + step) % nw;
-    uint64_t bits = c->cq_busy[w] & ~c->blocked[w];
-    const uint64_t from_start = ~0ull << (start % 64);
-    if (step == 0) bits &= from_start;
-    else if (step == nw) bits &= ~from_start;
-    const uint64_t stale = ~c->fresh[w] | (c->col_stale ? c->col_stale[w] : 0);
-    while (bits) {
-      const uint32_t b = (uint32_t)__builtin_ctzll(bits);
-      const uint32_t qi = w * 64 + b;
-      bits &= bits - 1;
-      const struct dram_banked_qsum *s = &c->sum[qi];
-      if ((stale >> b & 1) || s->t < now) s = cq_sum(d, c, qi, now);
-      if (d->p.check_summaries) {
-        struct dram_banked_qsum full;
-        bool act, col;
-        CHECK_GE(now, s->at);
-        cq_candidates(d, c, qi, now, &full, &act, &col);
-        CHECK_EQ(full.t, s->t);
-        CHECK(full.t == DRAM_BANKED_FAR ||
-              (full.k.type == s->k.type && full.k.bank == s->k.bank && full.k.qi == s->k.qi &&
-               full.k.for_req == s->k.for_req));
-      }
-      if (s->t < best_t) {
-        best_t = s->t;
-        best = qi;
-      }
-    }
-  }
-  if (best_t < pk->next) pk->next = best_t;
-  if (best_t < pk->first_t) {
-    pk->first_t = best_t;
-    pk->first = c->sum[best].k;
-  }
-  if (pk->first_t == now) pk->cmd = pk->first;
-  c->memo = pk->first;
-  c->memo_t = pk->first_t;
-  c->memo_at = now;
-  c->memo_ok = true;
-}
-
-static void issue_column_cq(struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi,
-                            uint32_t j, int64_t now) {
-  struct dram_banked_queue *q = &c->cq[qi];
-  struct dram_banked_req r = q->r[j];
-  memmove(&q->r[j], &q->r[j + 1], (q->n - j - 1) * sizeof *q->r);
-  q->n--;
-  c->full[qi / 64] &= ~(1ull << (qi % 64));
-  stale_bank(d, c, r.bank);
-  c->cq_n--;
-  if (!q->n) cq_mark(c, qi, false);
-  d->queued--;
-  /* DRAMsim3's row hit: the row has served a column command since its ACT. */
-  count_kind(d, c->banks[r.bank].hits                 ? DRAM_BANKED_KIND_HIT
-                : r.kind == DRAM_BANKED_KIND_CONFLICT ? DRAM_BANKED_KIND_CONFLICT
-                                                      : DRAM_BANKED_KIND_MISS);
-  int64_t end = column_state(d, c, &r, r.write, now);
-  queue_leave(d, r.write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q, &r, now);
-  if (r.write) return; /* posted: served when it arrived */
-  uint64_t done = dram_clock_to_core(d->clk, (uint64_t)end);
-  CHECK_GE(done, engine_now(d->e));
-  d->inflight++;
-  engine_at(d->e, done, on_done, d, r.tag);
-  /* Reads of the same line that arrived while it waited. */
-  uint32_t k = 0;
-  for (uint32_t i = 0; i < c->nfol; i++) {
-    if (c->fol[i].line != r.line) {
-      c->fol[k++] = c->fol[i];
-      continue;
-    }
-    d->inflight++;
-    engine_at(d->e, done, on_done, d, c->fol[i].tag);
-  }
-  c->nfol = k;
-}
-
-/* The earliest cycle >= t at which channel c's state may change. */
-static int64_t next_cq(struct dram_banked *d, struct dram_banked_channel *c, int64_t t) {
-  struct dram_banked_pick pk;
-  scan_cq(d, c, t, &pk);
-  int64_t nx = pk.next;
-  if (schedule_cq(d, c, t, false)) return t;
-  for (int k = 0; k < 2; k++) {
-    const struct dram_banked_queue *q = &c->q[k];
-    uint32_t v = visible(q, t);
-    if (v < q->n && q->r[v].ready - 1 < nx) nx = q->r[v].ready - 1;
-  }
-  if (!c->draining && c->q[DRAM_BANKED_WR_Q].n && !c->cq_n &&
-      !visible(&c->q[DRAM_BANKED_RD_Q], t)) {
-    int64_t idle = c->last_busy + DRAM_BANKED_IDLE_DRAIN_CYCLES;
-    if (idle < nx) nx = idle;
-  }
-  return nx < t ? t : nx;
-}
-
-/* Handle DRAM cycle `now` on channel c (per_bank / per_rank). */
-static void channel_cycle_cq(struct dram_banked *d, struct dram_banked_channel *c, int64_t now) {
-  struct dram_banked_pick pk;
-  /* The last scan's answer stands while nothing changed since: every
-   * queue's summary holds from memo_at to its own least time, so none can
-   * issue before memo_t, and at memo_t the memo's queue comes first. */
-  if (c->memo_ok && now >= c->memo_at && now <= c->memo_t) {
-    pk.cmd.type = DRAM_BANKED_CMD_NONE;
-    if (now == c->memo_t) pk.cmd = c->memo;
-  } else {
-    scan_cq(d, c, now, &pk);
-  }
-  if (pk.cmd.type != DRAM_BANKED_CMD_NONE) {
-    issue(d, c, &pk.cmd, now);
-    if (pk.cmd.for_req) {
-      c->rr = pk.cmd.cq;
-      c->last_busy = now;
-    }
-  }
-  schedule_cq(d, c, now, true);
-  c->next = next_cq(d, c, now + 1);
-}
-
-/* Handle DRAM cycle `now` on channel c: refreshes falling due, the drain mode,
- * at most one command; then c->next. */
+/* Handle DRAM cycle `now` on channel c: refreshes falling due, then the
+ * controller structure's cycle (at most one command); then c->next. */
 static void channel_cycle(struct dram_banked *d, struct dram_banked_channel *c, int64_t now) {
-  const int64_t period = d->refresh_step * (int64_t)d->p.ranks;
-  for (uint32_t k = 0; k < d->p.ranks; k++) {
-    struct dram_banked_rank *rk = &c->ranks[k];
-    while (rk->next_due <= now) {
-      if (!rk->pending++) block_rank(d, c, k, true);
-      rk->next_due += period;
-      c->memo_ok = false;
-    }
-  }
-  if (d->cq_mode) {
-    channel_cycle_cq(d, c, now);
-    return;
-  }
-  update_mode(d, c, now);
-  struct dram_banked_pick pk;
-  scan(d, c, now, &pk);
-  if (pk.cmd.type == DRAM_BANKED_CMD_NONE) {
-    CHECK_GT(pk.next, now);
-    c->next = next_of(d, c, pk.next);
-    if (c->next <= now) c->next = now + 1;
-    return;
-  }
-  issue(d, c, &pk.cmd, now);
-  update_mode(d, c, now + 1);
-  scan(d, c, now + 1, &pk);
-  c->next = next_of(d, c, pk.next);
-  if (c->next <= now) c->next = now + 1;
+  dram_banked_refresh_fall_due(d, c, now);
+  if (d->cq_mode) dram_banked_ctrl_cycle(d, c, now);
+  else dram_banked_frfcfs_cycle(d, c, now);
 }
 
 static bool channel_busy(const struct dram_banked *d, const struct dram_banked_channel *c) {
@@ -1208,7 +178,7 @@ static int64_t next_cycle(const struct dram_banked *d) {
   return w < d->cursor ? d->cursor : w;
 }
 
-static void schedule_wake(struct dram_banked *d) {
+void dram_banked_schedule_wake(struct dram_banked *d) {
   if (d->space_due) {
     d->space_due = false;
     engine_at(d->e, engine_now(d->e), on_space, d, 0);
@@ -1238,20 +208,10 @@ static void advance(struct dram_banked *d) {
     d->cursor = w + 1;
   }
   if (d->cursor < limit) d->cursor = limit;
-  schedule_wake(d);
+  dram_banked_schedule_wake(d);
 }
 
 /* ---- The level ---- */
-
-void dram_banked_decode(const struct dram_banked *d, uint64_t addr, struct dram_banked_coord *out) {
-  uint64_t a = addr >> 6;
-  out->channel = (uint32_t)((a >> d->sh_ch) & d->mk_ch);
-  out->rank = (uint32_t)((a >> d->sh_ra) & d->mk_ra);
-  out->bank_group = (uint32_t)((a >> d->sh_bg) & d->mk_bg);
-  out->bank = (uint32_t)((a >> d->sh_ba) & d->mk_ba);
-  out->row = (a >> d->sh_ro) & d->mk_ro;
-  out->column = ((a >> d->sh_co) & d->mk_co) * d->p.burst_length;
-}
 
 static bool banked_can_take(const void *self, uint64_t addr, bool write) {
   /* NOTE: const only in the interface's sense: answering needs the state as of
@@ -1275,81 +235,6 @@ static bool banked_can_take(const void *self, uint64_t addr, bool write) {
   return q->n < q->cap;
 }
 
-/* Serve tag at DRAM cycle at, with no command. */
-static void serve_at(struct dram_banked *d, int64_t at, uint64_t tag) {
-  d->inflight++;
-  engine_at(d->e, dram_clock_to_core(d->clk, (uint64_t)at), on_done, d, tag);
-}
-
-static uint32_t cq_of(const struct dram_banked *d, const struct dram_banked_req *r);
-
-/* Queue a request in its channel's queue qk (the request's fields but tag,
- * line and ready from co); the level's counters follow. */
-static struct dram_banked_req *enqueue(struct dram_banked *d, struct dram_banked_channel *c, int qk,
-                                       const struct dram_banked_coord *co, uint64_t addr,
-                                       uint64_t tag, int64_t ready) {
-  struct dram_banked_queue *q = &c->q[qk];
-  CHECK_LT(q->n, q->cap);
-  struct dram_banked_req *r = &q->r[q->n++];
-  r->tag = tag;
-  r->take_core = engine_now(d->e);
-  r->line = addr >> 6;
-  r->ready = ready;
-  r->seq = d->seq++;
-  r->row = co->row;
-  r->column = co->column;
-  r->rank = co->rank;
-  r->group = co->bank_group;
-  r->bank = co->rank * d->banks_per_rank + co->bank_group * d->p.banks_per_group + co->bank;
-  r->kind = DRAM_BANKED_KIND_HIT;
-  r->write = qk == DRAM_BANKED_WR_Q;
-  if (d->cq_mode) r->cq = cq_of(d, r);
-  d->queued++;
-  area_to(d, qk, r->take_core);
-  d->q_len[qk]++;
-  if (d->q_len[qk] > d->st.queue_max[qk]) d->st.queue_max[qk] = d->q_len[qk];
-  return r;
-}
-
-/* per_bank / per_rank: the request arrives after DRAM cycle cursor - 1. */
-static void take_cq(struct dram_banked *d, struct dram_banked_channel *c,
-                    const struct dram_banked_coord *co, uint64_t addr, bool write, uint64_t tag) {
-  const int64_t arr = d->cursor - 1, ready = arr + (int64_t)d->p.controller_cycles;
-  const uint64_t line = addr >> 6;
-  CHECK_LT(c->took_at, arr);
-  c->took_at = arr;
-  struct dram_banked_req probe;
-  probe.rank = co->rank;
-  probe.bank = co->rank * d->banks_per_rank + co->bank_group * d->p.banks_per_group + co->bank;
-  const struct dram_banked_queue *cq = &c->cq[cq_of(d, &probe)];
-  if (line_waits(c, cq, true, line)) {
-    /* Its line's write has not issued: a read is answered from it, a write
-     * replaces it. */
-    if (write) d->st.write_merges++;
-    else d->st.write_forwards++;
-    serve_at(d, ready, tag);
-    return;
-  }
-  if (!write && line_waits(c, cq, false, line)) {
-    if (c->nfol == c->cap_fol) {
-      c->cap_fol = c->cap_fol ? 2 * c->cap_fol : 8;
-      c->fol = xrealloc(c->fol, c->cap_fol * sizeof *c->fol);
-    }
-    c->fol[c->nfol].line = line;
-    c->fol[c->nfol].tag = tag;
-    c->nfol++;
-    d->st.read_merges++;
-    return;
-  }
-  enqueue(d, c, write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q, co, addr, tag, ready);
-  if (write) serve_at(d, ready, tag); /* posted */
-  if (arr > c->last_busy) c->last_busy = arr;
-  /* It may move at the end of cycle ready - 1 (never before the cursor). */
-  int64_t nx = max64(d->cursor, ready - 1);
-  if (nx < c->next) c->next = nx;
-  schedule_wake(d);
-}
-
 static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   struct dram_banked *d = self;
   CHECK_EQ(addr & 63, 0);
@@ -1357,32 +242,8 @@ static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   struct dram_banked_coord co;
   dram_banked_decode(d, addr, &co);
   struct dram_banked_channel *c = &d->ch[co.channel];
-  if (d->cq_mode) {
-    take_cq(d, c, &co, addr, write, tag);
-    return;
-  }
-  const int qk = write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
-  /* A line waiting in the write queue answers a read of it, and takes a later
-   * write of it in its place (a controller's write queue is searched by
-   * address, as DRAMsim3's is): served the next DRAM cycle, no command. */
-  const struct dram_banked_queue *wq = &c->q[DRAM_BANKED_WR_Q];
-  for (uint32_t i = 0; i < wq->n; i++)
-    if (wq->r[i].line == addr >> 6) {
-      if (write) d->st.write_merges++;
-      else d->st.write_forwards++;
-      d->inflight++;
-      engine_at(d->e, dram_clock_to_core(d->clk, (uint64_t)d->cursor + 1), on_done, d, tag);
-      return;
-    }
-  enqueue(d, c, qk, &co, addr, tag, d->cursor + (int64_t)d->p.controller_cycles);
-  /* Cycles before the cursor are decided; the new request joins at it. */
-  update_mode(d, c, d->cursor);
-  struct dram_banked_pick pk;
-  scan(d, c, d->cursor, &pk);
-  int64_t nx = next_of(d, c, pk.next);
-  if (nx < d->cursor) nx = d->cursor;
-  if (nx < c->next) c->next = nx;
-  schedule_wake(d);
+  if (d->cq_mode) dram_banked_ctrl_take(d, c, &co, addr, write, tag);
+  else dram_banked_frfcfs_take(d, c, &co, addr, write, tag);
 }
 
 static void banked_finish(void *self) {
@@ -1404,6 +265,250 @@ static void banked_finish(void *self) {
   d->finished_dram_cycles = (uint64_t)d->cursor;
 }
 
+static void banked_destroy(void *self) { dram_banked_destroy(self); }
+
+const struct dram_level_ops dram_banked_ops = {banked_can_take, banked_take, banked_finish,
+                                               dram_banked_report, banked_destroy};
+
+struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint64_t core_khz,
+                                       struct engine *e, const struct dram_client *client) {
+  CHECK(dram_banked_params_problem(p) == NULL);
+  CHECK(dram_banked_params_within_model(p));
+  CHECK(client && client->done);
+  struct dram_banked *d = xcalloc(1, sizeof *d);
+  d->p = *p;
+  d->clk = dram_clock_make(core_khz, (uint64_t)p->clock_mhz * 1000);
+  d->e = e;
+  d->client = *client;
+  d->banks_per_rank = p->bank_groups * p->banks_per_group;
+  d->banks_per_channel = p->ranks * d->banks_per_rank;
+  d->burst_cycles = p->burst_length / 2;
+  d->refresh_step = p->tREFI / p->ranks;
+  d->cq_mode = p->queue_structure != DRAM_BANKED_SHARED;
+  d->wake_at = UINT64_MAX;
+  dram_banked_map_init(&d->map, p);
+  d->ch = xcalloc(p->channels, sizeof *d->ch);
+  for (uint32_t i = 0; i < p->channels; i++) {
+    struct dram_banked_channel *c = &d->ch[i];
+    c->q[DRAM_BANKED_RD_Q].cap = p->read_queue;
+    c->q[DRAM_BANKED_RD_Q].r = xcalloc(p->read_queue, sizeof(struct dram_banked_req));
+    c->q[DRAM_BANKED_WR_Q].cap = p->write_queue;
+    c->q[DRAM_BANKED_WR_Q].r = xcalloc(p->write_queue, sizeof(struct dram_banked_req));
+    c->rd = DRAM_BANKED_NEVER;
+    dram_banked_bus_init(d, c);
+    c->banks = xcalloc(d->banks_per_channel, sizeof *c->banks);
+    for (uint32_t j = 0; j < d->banks_per_channel; j++) {
+      struct dram_banked_bank *bk = &c->banks[j];
+      bk->act_ok = bk->col_ok = bk->pre_ok = bk->ref_ok = DRAM_BANKED_NEVER;
+      bk->act_at = -1;
+      bk->close_at = DRAM_BANKED_FAR;
+    }
+    c->groups = xcalloc(p->ranks * p->bank_groups, sizeof *c->groups);
+    for (uint32_t j = 0; j < p->ranks * p->bank_groups; j++)
+      c->groups[j].act = c->groups[j].rd = c->groups[j].wr = DRAM_BANKED_NEVER;
+    c->ranks = xcalloc(p->ranks, sizeof *c->ranks);
+    if (d->cq_mode) {
+      c->ncq = p->queue_structure == DRAM_BANKED_PER_RANK ? p->ranks : d->banks_per_channel;
+      c->cq = xcalloc(c->ncq, sizeof *c->cq);
+      c->cq_busy = xcalloc((c->ncq + 63) / 64, sizeof *c->cq_busy);
+      c->sum = xcalloc(c->ncq, sizeof *c->sum);
+      c->fresh = xcalloc((c->ncq + 63) / 64, sizeof *c->fresh);
+      c->has_act = xcalloc((c->ncq + 63) / 64, sizeof *c->has_act);
+      c->has_col = xcalloc((c->ncq + 63) / 64, sizeof *c->has_col);
+      c->blocked = xcalloc((c->ncq + 63) / 64, sizeof *c->blocked);
+      c->full = xcalloc((c->ncq + 63) / 64, sizeof *c->full);
+      if (p->queue_structure == DRAM_BANKED_PER_BANK)
+        c->col_stale = xcalloc((c->ncq + 63) / 64, sizeof *c->col_stale);
+      for (uint32_t j = 0; j < c->ncq; j++) {
+        c->cq[j].cap = p->command_queue;
+        c->cq[j].r = xcalloc(p->command_queue, sizeof(struct dram_banked_req));
+      }
+      c->last_busy = c->took_at = DRAM_BANKED_NEVER;
+    }
+    c->next = DRAM_BANKED_FAR;
+    for (uint32_t k = 0; k < p->ranks; k++) {
+      struct dram_banked_rank *rk = &c->ranks[k];
+      rk->act = rk->rd = rk->wr = rk->ref_end = DRAM_BANKED_NEVER;
+      for (int j = 0; j < 4; j++) rk->faw[j] = DRAM_BANKED_NEVER;
+      rk->next_due = dram_banked_refresh_due(d, k, 0);
+      if (rk->next_due < c->next) c->next = rk->next_due;
+    }
+  }
+  return d;
+}
+
+void dram_banked_destroy(struct dram_banked *d) {
+  if (!d) return;
+  for (uint32_t i = 0; i < d->p.channels; i++) {
+    struct dram_banked_channel *c = &d->ch[i];
+    free(c->q[DRAM_BANKED_RD_Q].r);
+    free(c->q[DRAM_BANKED_WR_Q].r);
+    free(c->bursts);
+    free(c->banks);
+    free(c->groups);
+    free(c->ranks);
+    for (uint32_t j = 0; j < c->ncq; j++) free(c->cq[j].r);
+    free(c->cq);
+    free(c->cq_busy);
+    free(c->sum);
+    free(c->fresh);
+    free(c->has_act);
+    free(c->has_col);
+    free(c->blocked);
+    free(c->full);
+    free(c->col_stale);
+    free(c->fol);
+  }
+  free(d->ch);
+  free(d);
+}
+
+/* The banked level's address mapping (DRAMsim3's): above the 6 line-offset
+ * bits, six fields from most to least significant in the order the mapping
+ * string names them ("ro" "ch" "ra" "bg" "ba" "co"), each log2 of its count
+ * wide; co is log2(columns / burst_length), one line per burst. Holds: every
+ * field's shift and mask come from the string and the sizes alone, so two
+ * levels of the same parameters decode alike. */
+static unsigned lg2(uint64_t x) {
+  unsigned n = 0;
+  while (x > 1) {
+    x >>= 1;
+    n++;
+  }
+  return n;
+}
+
+static const char *const FIELDS[6] = {"ro", "ch", "ra", "bg", "ba", "co"};
+
+/* Index in FIELDS of the two letters at s, or -1. */
+static int field_of(const char *s) {
+  for (int i = 0; i < 6; i++)
+    if (s[0] == FIELDS[i][0] && s[1] == FIELDS[i][1]) return i;
+  return -1;
+}
+
+bool dram_banked_mapping_ok(const char *s) {
+  if (!s || strlen(s) != 12) return false;
+  unsigned seen = 0;
+  for (int i = 0; i < 6; i++) {
+    int f = field_of(s + 2 * i);
+    if (f < 0 || (seen & (1u << f))) return false;
+    seen |= 1u << f;
+  }
+  return true;
+}
+
+/* Each field's width, in FIELDS' order. */
+static void widths(const struct dram_banked_params *p, unsigned width[6]) {
+  width[0] = lg2(p->rows);
+  width[1] = lg2(p->channels);
+  width[2] = lg2(p->ranks);
+  width[3] = lg2(p->bank_groups);
+  width[4] = lg2(p->banks_per_group);
+  width[5] = lg2(p->columns / p->burst_length);
+}
+
+unsigned dram_banked_map_bits(const struct dram_banked_params *p) {
+  unsigned width[6];
+  widths(p, width);
+  return width[0] + width[1] + width[2] + width[3] + width[4] + width[5];
+}
+
+void dram_banked_map_init(struct dram_banked_map *m, const struct dram_banked_params *p) {
+  /* Field widths, then positions from the least significant (the last). */
+  unsigned width[6];
+  widths(p, width);
+  unsigned pos[6] = {0}, at = 0;
+  for (int i = 5; i >= 0; i--) {
+    int f = field_of(p->mapping + 2 * i);
+    pos[f] = at;
+    at += width[f];
+  }
+  m->sh_ro = pos[0], m->mk_ro = (1ull << width[0]) - 1;
+  m->sh_ch = pos[1], m->mk_ch = (1ull << width[1]) - 1;
+  m->sh_ra = pos[2], m->mk_ra = (1ull << width[2]) - 1;
+  m->sh_bg = pos[3], m->mk_bg = (1ull << width[3]) - 1;
+  m->sh_ba = pos[4], m->mk_ba = (1ull << width[4]) - 1;
+  m->sh_co = pos[5], m->mk_co = (1ull << width[5]) - 1;
+  m->burst_length = p->burst_length;
+}
+
+void dram_banked_map_decode(const struct dram_banked_map *m, uint64_t addr,
+                            struct dram_banked_coord *out) {
+  uint64_t a = addr >> 6;
+  out->channel = (uint32_t)((a >> m->sh_ch) & m->mk_ch);
+  out->rank = (uint32_t)((a >> m->sh_ra) & m->mk_ra);
+  out->bank_group = (uint32_t)((a >> m->sh_bg) & m->mk_bg);
+  out->bank = (uint32_t)((a >> m->sh_ba) & m->mk_ba);
+  out->row = (a >> m->sh_ro) & m->mk_ro;
+  out->column = ((a >> m->sh_co) & m->mk_co) * m->burst_length;
+}
+
+void dram_banked_decode(const struct dram_banked *d, uint64_t addr, struct dram_banked_coord *out) {
+  dram_banked_map_decode(&d->map, addr, out);
+}
+
+/* The banked level's parameter rules: what a key's range in the key table
+ * (machine_cfg) cannot say, powers of two and the relations between keys, and
+ * the bounds the level's arithmetic holds within. Holds: a params struct that
+ * passes dram_banked_params_problem builds a level (dram_banked_create CHECKs
+ * both), and each message names the key to change. */
+static bool pow2(uint64_t x) { return x && !(x & (x - 1)); }
+
+const char *dram_banked_params_problem(const struct dram_banked_params *p) {
+  /* Each key's range is its row in the key table (machine_params_problem);
+   * here, what a range cannot say: powers of two, and rules between keys.
+   * The messages still state the ranges, as they did when they were checked
+   * here, so a bad value reads the same from a config or from code. */
+  if (!pow2(p->channels)) return "dram.channels: must be a power of two from 1 to 64";
+  if (!pow2(p->ranks)) return "dram.ranks: must be a power of two from 1 to 16";
+  if (!pow2(p->bank_groups)) return "dram.bank_groups: must be a power of two from 1 to 16";
+  if (!pow2(p->banks_per_group)) return "dram.banks_per_group: must be a power of two from 1 to 64";
+  if (!pow2(p->rows)) return "dram.rows: must be a power of two up to 2^24";
+  if (p->burst_length < 2 || !pow2(p->burst_length))
+    return "dram.burst_length: must be a power of two from 2 to 64";
+  if (!pow2(p->columns) || p->columns < p->burst_length)
+    return "dram.columns: must be a power of two from burst_length to 2^20";
+  /* 32: the widest bus a burst of two beats leaves for a 64-byte line. */
+  if (!pow2(p->bus_bytes) || p->bus_bytes > 32)
+    return "dram.bus_bytes: must be a power of two up to 32";
+  if (p->bus_bytes * p->burst_length != 64)
+    return "dram.bus_bytes: bus_bytes x burst_length must be 64 (one line per burst)";
+  if (!dram_banked_mapping_ok(p->mapping))
+    return "dram.mapping: expected six two-letter fields, each of ro ch ra bg ba co once";
+  /* The fields must fit above the 6 offset bits of a 64-bit address. */
+  if (dram_banked_map_bits(p) > 58) return "dram.rows: the address fields need more than 64 bits";
+  if (p->write_high > p->write_queue) return "dram.write_high: must be 1 to write_queue";
+  if (p->write_low >= p->write_high) return "dram.write_low: must be below write_high";
+  if (p->queue_structure != DRAM_BANKED_SHARED && p->controller_cycles < 1)
+    return "dram.controller_cycles: must be at least 1 with queue_structure per_bank or per_rank "
+           "(a request reaches its command queue at the end of a cycle)";
+  if (p->tRC < p->tRAS) return "dram.tRC: must be at least tRAS";
+  if (p->tCCD_L < p->tCCD_S) return "dram.tCCD_L: must be at least tCCD_S";
+  if (p->tRRD_L < p->tRRD_S) return "dram.tRRD_L: must be at least tRRD_S";
+  if (p->tWTR_L < p->tWTR_S) return "dram.tWTR_L: must be at least tWTR_S";
+  if (p->tREFI && p->tREFI / p->ranks <= p->tRFC)
+    return "dram.tREFI: tREFI / ranks must exceed tRFC (or tREFI 0: no refresh)";
+  return NULL;
+}
+
+/* NOTE: the level's arithmetic holds for timings up to 2^20 DRAM cycles and
+ * clocks up to 2^24 kHz; the key table's ranges lie well inside. CHECKed at
+ * creation, so a table widened past them fails loudly, not in a wrong cycle. */
+bool dram_banked_params_within_model(const struct dram_banked_params *p) {
+  const uint32_t t[] = {p->tCL,    p->tCWL,   p->tRCD,   p->tRP,    p->tRAS,  p->tRC,
+                        p->tCCD_S, p->tCCD_L, p->tRRD_S, p->tRRD_L, p->tFAW,  p->tWR,
+                        p->tWTR_S, p->tWTR_L, p->tRTW,   p->tRTP,   p->tREFI, p->tRFC};
+  for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++)
+    if (t[i] > (1u << 20)) return false;
+  return p->clock_mhz >= 1 && p->clock_mhz <= (1u << 24) / 1000;
+}
+
+/* The banked level's numbers: the table of its figures (names, units,
+ * descriptions; README "Numbers"), each computed from its struct
+ * dram_banked_stats and the run's length. Holds: every figure is a counter or
+ * a ratio of counters the level keeps, so the table reads the same whatever
+ * the level's controller structure. */
 static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 
 /* The banked level's numbers (README "Numbers"); env->ctx is the level. */
@@ -1496,16 +601,11 @@ const struct stats_descs dram_banked_stats_descs = {"dram banked",
                                                     NULL,
                                                     0};
 
-static void banked_report(const void *self, struct stats_table *t, uint64_t cycles) {
+void dram_banked_report(const void *self, struct stats_table *t, uint64_t cycles) {
   const struct dram_banked *d = self;
   const struct stats_env env = {.cycles = cycles, .ctx = d};
   stats_emit(t, &dram_banked_stats_descs, &d->st, &env);
 }
-
-static void banked_destroy(void *self) { dram_banked_destroy(self); }
-
-const struct dram_level_ops dram_banked_ops = {banked_can_take, banked_take, banked_finish,
-                                               banked_report, banked_destroy};
 
 const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d) {
   return &d->st;
@@ -1515,114 +615,922 @@ uint64_t dram_banked_finished_cycles(const struct dram_banked *d) {
   return d->finished_dram_cycles;
 }
 
-struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint64_t core_khz,
-                                       struct engine *e, const struct dram_client *client) {
-  CHECK(dram_banked_params_problem(p) == NULL);
-  CHECK(within_model(p));
-  CHECK(client && client->done);
-  struct dram_banked *d = xcalloc(1, sizeof *d);
-  d->p = *p;
-  d->clk = dram_clock_make(core_khz, (uint64_t)p->clock_mhz * 1000);
-  d->e = e;
-  d->client = *client;
-  d->banks_per_rank = p->bank_groups * p->banks_per_group;
-  d->banks_per_channel = p->ranks * d->banks_per_rank;
-  d->burst_cycles = p->burst_length / 2;
-  d->refresh_step = p->tREFI / p->ranks;
-  d->cq_mode = p->queue_structure != DRAM_BANKED_SHARED;
-  d->wake_at = UINT64_MAX;
-  /* Field widths, then positions from the least significant (the last). */
-  unsigned width[6] = {
-      lg2(p->rows),        lg2(p->channels),        lg2(p->ranks),
-      lg2(p->bank_groups), lg2(p->banks_per_group), lg2(p->columns / p->burst_length)};
-  unsigned pos[6] = {0}, at = 0;
-  for (int i = 5; i >= 0; i--) {
-    int f = field_of(p->mapping + 2 * i);
-    pos[f] = at;
-    at += width[f];
-  }
-  d->sh_ro = pos[0], d->mk_ro = (1ull << width[0]) - 1;
-  d->sh_ch = pos[1], d->mk_ch = (1ull << width[1]) - 1;
-  d->sh_ra = pos[2], d->mk_ra = (1ull << width[2]) - 1;
-  d->sh_bg = pos[3], d->mk_bg = (1ull << width[3]) - 1;
-  d->sh_ba = pos[4], d->mk_ba = (1ull << width[4]) - 1;
-  d->sh_co = pos[5], d->mk_co = (1ull << width[5]) - 1;
-  d->ch = xcalloc(p->channels, sizeof *d->ch);
+/* The banked level's data bus, one per channel: the bursts that may still
+ * matter, and where the next burst fits. Holds: the bursts kept are disjoint
+ * and sorted by start; bursts of two ranks are at least one idle cycle apart,
+ * but with queue_structure per_bank / per_rank a write may follow another
+ * rank's write with none (DRAMsim3's write-to-write across ranks is BL/2). */
+void dram_banked_bus_init(const struct dram_banked *d, struct dram_banked_channel *c) {
   /* Bursts that can still matter lie within the spread of the two latencies
    * plus a burst either side. */
+  const struct dram_banked_params *p = &d->p;
   uint32_t spread = p->tCL > p->tCWL ? p->tCL - p->tCWL : p->tCWL - p->tCL;
-  for (uint32_t i = 0; i < p->channels; i++) {
-    struct dram_banked_channel *c = &d->ch[i];
-    c->q[DRAM_BANKED_RD_Q].cap = p->read_queue;
-    c->q[DRAM_BANKED_RD_Q].r = xcalloc(p->read_queue, sizeof(struct dram_banked_req));
-    c->q[DRAM_BANKED_WR_Q].cap = p->write_queue;
-    c->q[DRAM_BANKED_WR_Q].r = xcalloc(p->write_queue, sizeof(struct dram_banked_req));
-    c->rd = DRAM_BANKED_NEVER;
-    c->cap_b = spread / (uint32_t)d->burst_cycles + 6;
-    c->bursts = xcalloc(c->cap_b, sizeof *c->bursts);
-    c->banks = xcalloc(d->banks_per_channel, sizeof *c->banks);
-    for (uint32_t j = 0; j < d->banks_per_channel; j++) {
-      struct dram_banked_bank *bk = &c->banks[j];
-      bk->act_ok = bk->col_ok = bk->pre_ok = bk->ref_ok = DRAM_BANKED_NEVER;
-      bk->act_at = -1;
-      bk->close_at = DRAM_BANKED_FAR;
-    }
-    c->groups = xcalloc(p->ranks * p->bank_groups, sizeof *c->groups);
-    for (uint32_t j = 0; j < p->ranks * p->bank_groups; j++)
-      c->groups[j].act = c->groups[j].rd = c->groups[j].wr = DRAM_BANKED_NEVER;
-    c->ranks = xcalloc(p->ranks, sizeof *c->ranks);
-    if (d->cq_mode) {
-      c->ncq = p->queue_structure == DRAM_BANKED_PER_RANK ? p->ranks : d->banks_per_channel;
-      c->cq = xcalloc(c->ncq, sizeof *c->cq);
-      c->cq_busy = xcalloc((c->ncq + 63) / 64, sizeof *c->cq_busy);
-      c->sum = xcalloc(c->ncq, sizeof *c->sum);
-      c->fresh = xcalloc((c->ncq + 63) / 64, sizeof *c->fresh);
-      c->has_act = xcalloc((c->ncq + 63) / 64, sizeof *c->has_act);
-      c->has_col = xcalloc((c->ncq + 63) / 64, sizeof *c->has_col);
-      c->blocked = xcalloc((c->ncq + 63) / 64, sizeof *c->blocked);
-      c->full = xcalloc((c->ncq + 63) / 64, sizeof *c->full);
-      if (p->queue_structure == DRAM_BANKED_PER_BANK)
-        c->col_stale = xcalloc((c->ncq + 63) / 64, sizeof *c->col_stale);
-      for (uint32_t j = 0; j < c->ncq; j++) {
-        c->cq[j].cap = p->command_queue;
-        c->cq[j].r = xcalloc(p->command_queue, sizeof(struct dram_banked_req));
-      }
-      c->last_busy = c->took_at = DRAM_BANKED_NEVER;
-    }
-    c->next = DRAM_BANKED_FAR;
-    for (uint32_t k = 0; k < p->ranks; k++) {
-      struct dram_banked_rank *rk = &c->ranks[k];
-      rk->act = rk->rd = rk->wr = rk->ref_end = DRAM_BANKED_NEVER;
-      for (int j = 0; j < 4; j++) rk->faw[j] = DRAM_BANKED_NEVER;
-      rk->next_due = p->tREFI ? (int64_t)(k + 1) * d->refresh_step : DRAM_BANKED_FAR;
-      if (rk->next_due < c->next) c->next = rk->next_due;
-    }
-  }
-  return d;
+  c->cap_b = spread / (uint32_t)d->burst_cycles + 6;
+  c->bursts = xcalloc(c->cap_b, sizeof *c->bursts);
 }
 
-void dram_banked_destroy(struct dram_banked *d) {
-  if (!d) return;
-  for (uint32_t i = 0; i < d->p.channels; i++) {
-    struct dram_banked_channel *c = &d->ch[i];
-    free(c->q[DRAM_BANKED_RD_Q].r);
-    free(c->q[DRAM_BANKED_WR_Q].r);
-    free(c->bursts);
-    free(c->banks);
-    free(c->groups);
-    free(c->ranks);
-    for (uint32_t j = 0; j < c->ncq; j++) free(c->cq[j].r);
-    free(c->cq);
-    free(c->cq_busy);
-    free(c->sum);
-    free(c->fresh);
-    free(c->has_act);
-    free(c->has_col);
-    free(c->blocked);
-    free(c->full);
-    free(c->col_stale);
-    free(c->fol);
+/* Bursts are disjoint and sorted by start, so moving past one can only meet
+ * later ones. */
+int64_t dram_banked_bus_fit(const struct dram_banked *d, const struct dram_banked_channel *c,
+                            int64_t s0, uint32_t rank, bool write) {
+  const int64_t b = d->burst_cycles;
+  int64_t s = s0;
+  /* Past the last burst's end and its turnaround gap (at most a cycle; the
+   * bursts are in order of start): nothing to fit around. */
+  if (!c->nb || s >= c->bursts[c->nb - 1].start + b + 1) return s;
+  for (uint32_t i = 0; i < c->nb; i++) {
+    int64_t gap = c->bursts[i].rank != rank && !(d->cq_mode && write && c->bursts[i].write);
+    int64_t a = c->bursts[i].start;
+    if (s < a + b + gap && s + b + gap > a) s = a + b + gap;
   }
-  free(d->ch);
-  free(d);
+  return s;
+}
+
+/* Forget the bursts that end before any future burst could begin (a command
+ * at `now` or later puts data at now + min latency). */
+void dram_banked_bus_add(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
+                         int64_t start, uint32_t rank, bool write) {
+  const int64_t b = d->burst_cycles;
+  int64_t horizon = now + (d->p.tCL < d->p.tCWL ? d->p.tCL : d->p.tCWL);
+  uint32_t k = 0;
+  for (uint32_t i = 0; i < c->nb; i++)
+    if (c->bursts[i].start + b + 1 > horizon) c->bursts[k++] = c->bursts[i];
+  c->nb = k;
+  CHECK_LT(c->nb, c->cap_b);
+  uint32_t i = c->nb;
+  while (i > 0 && c->bursts[i - 1].start > start) {
+    c->bursts[i] = c->bursts[i - 1];
+    i--;
+  }
+  c->bursts[i].start = start;
+  c->bursts[i].rank = rank;
+  c->bursts[i].write = write;
+  c->nb++;
+  d->st.bus_busy_cycles += (uint64_t)b;
+}
+
+/* The banked level's bank, group and rank state: the earliest cycle each
+ * command of a request could issue, and the state each command leaves. Holds:
+ * each bank, group and rank field records the last command that bounds a
+ * later one (struct dram_banked_bank says which), so a command's earliest time
+ * is a max over those fields plus its timings, then the data bus's first fit
+ * for a column command. The constraints, as modelled: sim/dram_banked.h. */
+int64_t dram_banked_act_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
+                                 const struct dram_banked_req *r, int64_t now) {
+  const struct dram_banked_bank *bk = &c->banks[r->bank];
+  const struct dram_banked_rank *rk = &c->ranks[r->rank];
+  const struct dram_banked_group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
+  int64_t t = max64(max64(now, r->ready), bk->act_ok);
+  t = max64(t, rk->ref_end);
+  t = max64(t, rk->act + d->p.tRRD_S);
+  t = max64(t, g->act + d->p.tRRD_L);
+  t = max64(t, rk->faw[rk->faw_i] + d->p.tFAW);
+  return t;
+}
+
+int64_t dram_banked_col_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
+                                 const struct dram_banked_req *r, bool write, int64_t now) {
+  const struct dram_banked_bank *bk = &c->banks[r->bank];
+  const struct dram_banked_rank *rk = &c->ranks[r->rank];
+  const struct dram_banked_group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
+  const int64_t b = d->burst_cycles;
+  int64_t t = max64(max64(now, r->ready), bk->col_ok);
+  int64_t lat;
+  if (write) {
+    t = max64(t, rk->wr + d->p.tCCD_S);
+    t = max64(t, g->wr + d->p.tCCD_L);
+    t = max64(t, c->rd + d->p.tRTW);
+    lat = d->p.tCWL;
+  } else {
+    t = max64(t, rk->rd + d->p.tCCD_S);
+    t = max64(t, g->rd + d->p.tCCD_L);
+    t = max64(t, rk->wr + d->p.tCWL + b + d->p.tWTR_S);
+    t = max64(t, g->wr + d->p.tCWL + b + d->p.tWTR_L);
+    lat = d->p.tCL;
+  }
+  return dram_banked_bus_fit(d, c, t + lat, r->rank, write) - lat;
+}
+
+int64_t dram_banked_req_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
+                                 const struct dram_banked_req *r, enum dram_banked_cmd_type type,
+                                 int64_t now) {
+  if (type == DRAM_BANKED_CMD_ACT) return dram_banked_act_earliest(d, c, r, now);
+  if (type == DRAM_BANKED_CMD_PRE) return max64(max64(now, r->ready), c->banks[r->bank].pre_ok);
+  return dram_banked_col_earliest(d, c, r, r->write, now);
+}
+
+void dram_banked_activate(struct dram_banked *d, struct dram_banked_channel *c,
+                          const struct dram_banked_cmd *k, const struct dram_banked_req *r,
+                          int64_t now) {
+  struct dram_banked_bank *bk = &c->banks[k->bank];
+  struct dram_banked_rank *rk = &c->ranks[k->rank];
+  struct dram_banked_group *g = &c->groups[r->rank * d->p.bank_groups + r->group];
+  if (bk->act_at >= 0) d->st.bank_open_cycles += (uint64_t)(bk->close_at - bk->act_at);
+  bk->open = true;
+  bk->row = r->row;
+  bk->hits = 0;
+  bk->act_at = now;
+  bk->close_at = DRAM_BANKED_FAR;
+  bk->col_ok = now + d->p.tRCD;
+  bk->pre_ok = now + d->p.tRAS;
+  bk->act_ok = now + d->p.tRC;
+  rk->act = g->act = now;
+  rk->faw[rk->faw_i] = now;
+  rk->faw_i = (rk->faw_i + 1) & 3;
+  rk->open++;
+  dram_banked_stale_bank(d, c, k->bank);
+  dram_banked_stale_acts(d, c, k->rank, now);
+  d->st.activates++;
+}
+
+void dram_banked_bank_close(struct dram_banked *d, struct dram_banked_channel *c,
+                            struct dram_banked_bank *bk, uint32_t rank, int64_t at) {
+  bk->open = false;
+  bk->close_at = at;
+  bk->act_ok = max64(bk->act_ok, at + d->p.tRP);
+  bk->ref_ok = at + d->p.tRP;
+  dram_banked_stale_bank(d, c, (uint32_t)(bk - c->banks));
+  c->ranks[rank].open--;
+  d->st.precharges++;
+}
+
+int64_t dram_banked_column_state(struct dram_banked *d, struct dram_banked_channel *c,
+                                 const struct dram_banked_req *rq, bool write, int64_t now) {
+  const struct dram_banked_req r = *rq;
+  struct dram_banked_bank *bk = &c->banks[r.bank];
+  struct dram_banked_rank *rk = &c->ranks[r.rank];
+  struct dram_banked_group *g = &c->groups[r.rank * d->p.bank_groups + r.group];
+  const int64_t b = d->burst_cycles;
+  int64_t end, pre;
+  bk->hits++;
+  dram_banked_stale_bank(d, c, r.bank);
+  dram_banked_stale_columns(d, c, write, now);
+  if (write) {
+    rk->wr = g->wr = now;
+    dram_banked_bus_add(d, c, now, now + d->p.tCWL, r.rank, true);
+    end = now + d->p.tCWL + b;
+    pre = end + d->p.tWR;
+    d->st.writes++;
+  } else {
+    rk->rd = g->rd = c->rd = now;
+    dram_banked_bus_add(d, c, now, now + d->p.tCL, r.rank, false);
+    end = now + d->p.tCL + b;
+    pre = now + d->p.tRTP;
+    d->st.reads++;
+  }
+  bk->pre_ok = max64(bk->pre_ok, pre);
+  if (d->p.page == DRAM_BANKED_CLOSE_PAGE) dram_banked_bank_close(d, c, bk, r.rank, bk->pre_ok);
+  return end;
+}
+
+/* The banked level's refresh (DRAMsim3's RANK_LEVEL_STAGGERED): when each
+ * rank's refreshes fall due, and the work one brings. Holds: rank r's k-th
+ * refresh (k >= 0) falls due at (k * ranks + r + 1) * floor(tREFI / ranks);
+ * once due, the rank takes no request command; its open banks are precharged,
+ * REF issues once all have been precharged for tRP, and the rank takes no ACT
+ * for tRFC after it. tREFI 0: no refresh. */
+int64_t dram_banked_refresh_due(const struct dram_banked *d, uint32_t rank, uint64_t k) {
+  if (!d->p.tREFI) return DRAM_BANKED_FAR;
+  return ((int64_t)k * (int64_t)d->p.ranks + rank + 1) * d->refresh_step;
+}
+
+void dram_banked_refresh_fall_due(struct dram_banked *d, struct dram_banked_channel *c,
+                                  int64_t now) {
+  const int64_t period = d->refresh_step * (int64_t)d->p.ranks;
+  for (uint32_t k = 0; k < d->p.ranks; k++) {
+    struct dram_banked_rank *rk = &c->ranks[k];
+    while (rk->next_due <= now) {
+      if (!rk->pending++) dram_banked_block_rank(d, c, k, true);
+      rk->next_due += period;
+      c->memo_ok = false;
+    }
+  }
+}
+
+/* The earliest cycle >= now rank `rank`'s REF could issue (its banks all
+ * closed). */
+static int64_t ref_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
+                            uint32_t rank, int64_t now) {
+  const uint32_t bpr = d->banks_per_rank;
+  int64_t t = max64(now, c->ranks[rank].ref_end);
+  for (uint32_t i = 0; i < bpr; i++) t = max64(t, c->banks[rank * bpr + i].ref_ok);
+  return t;
+}
+
+/* Refresh work comes first in a scan: ranks in order, a PRE for each open
+ * bank (lowest bank first), or REF once all are closed. The next refresh to
+ * fall due bounds the scan's next. */
+void dram_banked_scan_refresh(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
+                              struct dram_banked_pick *pk) {
+  const uint32_t bpr = d->banks_per_rank;
+  for (uint32_t k = 0; k < d->p.ranks; k++) {
+    struct dram_banked_rank *rk = &c->ranks[k];
+    if (rk->next_due < pk->next) pk->next = max64(rk->next_due, now);
+    if (!rk->pending) continue;
+    if (rk->open) {
+      for (uint32_t i = 0; i < bpr; i++) {
+        const struct dram_banked_bank *bk = &c->banks[k * bpr + i];
+        if (bk->open)
+          dram_banked_consider(pk, max64(now, bk->pre_ok), now, DRAM_BANKED_CMD_PRE, k, k * bpr + i,
+                               -1);
+      }
+    } else {
+      dram_banked_consider(pk, ref_earliest(d, c, k, now), now, DRAM_BANKED_CMD_REF, k, 0, -1);
+    }
+  }
+}
+
+void dram_banked_refresh_issue(struct dram_banked *d, struct dram_banked_channel *c, uint32_t rank,
+                               int64_t now) {
+  struct dram_banked_rank *rk = &c->ranks[rank];
+  if (!--rk->pending) dram_banked_block_rank(d, c, rank, false);
+  rk->ref_end = now + d->p.tRFC;
+  for (uint32_t i = 0; i < d->banks_per_rank; i++) {
+    struct dram_banked_bank *bk = &c->banks[rank * d->banks_per_rank + i];
+    bk->act_ok = max64(bk->act_ok, rk->ref_end);
+  }
+  dram_banked_stale_rank(d, c, rank);
+  d->st.refreshes++;
+  d->st.refresh_cycles += d->p.tRFC;
+}
+
+/* The banked level's command queues (queue_structure per_bank / per_rank):
+ * which commands a queue offers (its candidates), the summary each queue keeps
+ * of them, and the round-robin scan over the summaries. Holds: a fresh summary
+ * equals its candidates asked again at any cycle from its `at` to its least
+ * time (check_summaries CHECKs it), because every change that could move a
+ * candidate's time clears the queue's fresh bit (the dram_banked_stale_
+ * calls; see cq_sum for why that suffices). */
+/* Clear, in bitmap `fresh`, the bits of [lo, hi) set in `mask` (NULL: all). */
+static void stale_range(uint64_t *fresh, const uint64_t *mask, uint32_t lo, uint32_t hi) {
+  for (uint32_t i = lo; i < hi;) {
+    const uint32_t w = i / 64, b = i % 64, n = hi - i < 64 - b ? hi - i : 64 - b;
+    const uint64_t bits = (n == 64 ? ~0ull : ((1ull << n) - 1)) << b;
+    fresh[w] &= ~(bits & (mask ? mask[w] : ~0ull));
+    i += n;
+  }
+}
+
+/* The command queues holding rank k's requests: [*lo, *hi). */
+static void rank_queues(const struct dram_banked *d, uint32_t k, uint32_t *lo, uint32_t *hi) {
+  const bool per_rank = d->p.queue_structure == DRAM_BANKED_PER_RANK;
+  *lo = per_rank ? k : k * d->banks_per_rank;
+  *hi = per_rank ? k + 1 : (k + 1) * d->banks_per_rank;
+}
+
+/* Bank `bank`'s state or its command queue's entries changed. */
+void dram_banked_stale_bank(const struct dram_banked *d, struct dram_banked_channel *c,
+                            uint32_t bank) {
+  if (!d->cq_mode) return;
+  const uint32_t qi =
+      d->p.queue_structure == DRAM_BANKED_PER_RANK ? bank / d->banks_per_rank : bank;
+  c->fresh[qi / 64] &= ~(1ull << (qi % 64));
+}
+
+/* A refresh changed all of rank k's state. */
+void dram_banked_stale_rank(const struct dram_banked *d, struct dram_banked_channel *c,
+                            uint32_t k) {
+  if (!d->cq_mode) return;
+  uint32_t lo, hi;
+  rank_queues(d, k, &lo, &hi);
+  stale_range(c->fresh, NULL, lo, hi);
+}
+
+/* Clear the fresh bit of each queue of [lo, hi) set in `mask` whose summary
+ * has an ACT candidate before h_act, a RD before h_rd or a WR before h_wr. */
+static void stale_before(struct dram_banked_channel *c, const uint64_t *mask, uint32_t lo,
+                         uint32_t hi, int64_t h_act, int64_t h_rd, int64_t h_wr) {
+  for (uint32_t w = lo / 64; w * 64 < hi; w++) {
+    uint64_t bits = mask[w] & c->fresh[w];
+    if (w == lo / 64) bits &= ~0ull << (lo % 64);
+    if (hi - w * 64 < 64) bits &= (1ull << (hi - w * 64)) - 1;
+    while (bits) {
+      const uint32_t b = (uint32_t)__builtin_ctzll(bits);
+      const struct dram_banked_qsum *s = &c->sum[w * 64 + b];
+      bits &= bits - 1;
+      if (s->act_t < h_act || s->rd_t < h_rd || s->wr_t < h_wr) {
+        /* per_bank: a column command moves only the column candidates. */
+        if (h_act == DRAM_BANKED_FAR && c->col_stale) c->col_stale[w] |= 1ull << b;
+        else c->fresh[w] &= ~(1ull << b);
+      }
+    }
+  }
+}
+
+/* An ACT in rank k at `now` moved its ACT spacing (tRRD, tFAW): nothing
+ * before now + tRRD_L or the new oldest of the last four ACTs + tFAW changes
+ * (tRRD_L >= tRRD_S), so only its queues with an ACT candidate earlier than
+ * that can be stale. */
+void dram_banked_stale_acts(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t k,
+                            int64_t now) {
+  if (!d->cq_mode) return;
+  const struct dram_banked_rank *rk = &c->ranks[k];
+  const int64_t h = max64(now + d->p.tRRD_L, rk->faw[rk->faw_i] + d->p.tFAW);
+  uint32_t lo, hi;
+  rank_queues(d, k, &lo, &hi);
+  stale_before(c, c->has_act, lo, hi, h, DRAM_BANKED_FAR, DRAM_BANKED_FAR);
+}
+
+/* A column command at `now` moved the column spacing (tCCD, tWTR, tRTW) and
+ * put a burst on the data bus. Each constraint it adds ends by the bounds
+ * below (one idle cycle between bursts, whichever ranks; tCCD_L >= tCCD_S,
+ * tWTR_L >= tWTR_S), and a column candidate no earlier than its bound keeps
+ * its time: the new burst ends, gap included, before that candidate's data
+ * would start. So only queues with a column candidate earlier can be stale. */
+void dram_banked_stale_columns(const struct dram_banked *d, struct dram_banked_channel *c,
+                               bool write, int64_t now) {
+  if (!d->cq_mode) return;
+  const struct dram_banked_params *p = &d->p;
+  const int64_t b = d->burst_cycles;
+  int64_t h_rd, h_wr;
+  if (write) {
+    h_rd = now + max64(p->tCWL + b + p->tWTR_L, (int64_t)p->tCWL + b + 1 - p->tCL);
+    h_wr = now + max64(p->tCCD_L, b + 1);
+  } else {
+    h_rd = now + max64(p->tCCD_L, b + 1);
+    h_wr = now + max64(p->tRTW, (int64_t)p->tCL + b + 1 - p->tCWL);
+  }
+  stale_before(c, c->has_col, 0, c->ncq, DRAM_BANKED_FAR, h_rd, h_wr);
+}
+
+/* Rank k's command queues take no command while it has a refresh due. */
+void dram_banked_block_rank(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t k,
+                            bool due) {
+  if (!d->cq_mode) return;
+  uint32_t lo, hi;
+  rank_queues(d, k, &lo, &hi);
+  for (uint32_t i = lo; i < hi; i++) {
+    const uint64_t bit = 1ull << (i % 64);
+    c->blocked[i / 64] = due ? c->blocked[i / 64] | bit : c->blocked[i / 64] & ~bit;
+  }
+}
+
+/* May the PRE at entry j of command queue q (for a conflict in bank bk) issue?
+ * Not before an older request of its queue for the same bank, nor while one
+ * of its queue still hits the open row, unless the row has served the cap. */
+static bool pre_allowed(const struct dram_banked_queue *q, uint32_t j,
+                        const struct dram_banked_bank *bk) {
+  const struct dram_banked_req *r = &q->r[j];
+  for (uint32_t i = 0; i < j; i++)
+    if (q->r[i].bank == r->bank) return false;
+  if (bk->hits >= DRAM_BANKED_ROW_HIT_CAP) return true;
+  for (uint32_t i = j + 1; i < q->n; i++)
+    if (q->r[i].bank == r->bank && q->r[i].row == bk->row) return false;
+  return true;
+}
+
+/* Does the write at entry j of q wait behind an older read of its place in
+ * the DRAM? NOTE: its place (bank, row, column), not its address: addresses
+ * above the DRAM's capacity alias, and DRAMsim3 compares places here though
+ * it forwards and merges by address. */
+static bool write_behind_read(const struct dram_banked_queue *q, uint32_t j) {
+  const struct dram_banked_req *w = &q->r[j];
+  for (uint32_t i = 0; i < j; i++) {
+    const struct dram_banked_req *r = &q->r[i];
+    if (!r->write && r->bank == w->bank && r->row == w->row && r->column == w->column) return true;
+  }
+  return false;
+}
+
+/* Command queue qi's candidates as of cycle now: the least earliest time and
+ * the first candidate with it, into s; has_act and has_col say which kinds
+ * of command it holds. */
+static void cq_candidates(const struct dram_banked *d, const struct dram_banked_channel *c,
+                          uint32_t qi, int64_t now, struct dram_banked_qsum *s, bool *has_act,
+                          bool *has_col) {
+  const struct dram_banked_queue *q = &c->cq[qi];
+  struct dram_banked_pick pk = {
+      .cmd.type = DRAM_BANKED_CMD_NONE, .next = DRAM_BANKED_FAR, .first_t = DRAM_BANKED_FAR};
+  *has_act = *has_col = false;
+  s->act_t = s->rd_t = s->wr_t = s->o_t = DRAM_BANKED_FAR;
+  /* An ACT, RD or WR's earliest time depends on its request only through
+   * the bank and `ready`, and never falls as `ready` grows: a later entry of
+   * the same command and bank as the last one considered here, ready no
+   * sooner, can neither come first nor lower the least (ties keep the
+   * older), so it is not asked (in per_bank every entry shares the bank: of
+   * the ACTs of a closed bank only the oldest is asked). */
+  uint32_t seen_bank[3] = {UINT32_MAX, UINT32_MAX, UINT32_MAX}; /* ACT, RD, WR */
+  int64_t seen_ready[3] = {0, 0, 0};
+  for (uint32_t j = 0; j < q->n; j++) {
+    const struct dram_banked_req *r = &q->r[j];
+    const struct dram_banked_bank *bk = &c->banks[r->bank];
+    enum dram_banked_cmd_type type;
+    if (!bk->open || bk->row == r->row) {
+      const int w = !bk->open ? 0 : r->write ? 2 : 1;
+      if (seen_bank[w] == r->bank && r->ready >= seen_ready[w]) continue;
+      if (w == 2 && write_behind_read(q, j)) continue;
+      seen_bank[w] = r->bank;
+      seen_ready[w] = r->ready;
+      type = !w ? DRAM_BANKED_CMD_ACT : r->write ? DRAM_BANKED_CMD_WR : DRAM_BANKED_CMD_RD;
+      if (!w) *has_act = true;
+      else *has_col = true;
+    } else {
+      if (!pre_allowed(q, j, bk)) continue;
+      type = DRAM_BANKED_CMD_PRE;
+    }
+    const int64_t t = dram_banked_req_earliest(d, c, r, type, now);
+    if (type == DRAM_BANKED_CMD_RD || type == DRAM_BANKED_CMD_WR) {
+      int64_t *least = type == DRAM_BANKED_CMD_RD ? &s->rd_t : &s->wr_t;
+      if (t < *least) {
+        *least = t;
+        *(type == DRAM_BANKED_CMD_RD ? &s->rd_j : &s->wr_j) = j;
+      }
+    } else {
+      if (type == DRAM_BANKED_CMD_ACT && t < s->act_t) s->act_t = t;
+      if (t < s->o_t) {
+        s->o_t = t;
+        s->o = (struct dram_banked_cmd){type, r->rank, r->bank, j, qi, true};
+      }
+    }
+    dram_banked_consider_in(&pk, t, now, type, r->rank, r->bank, qi, j);
+  }
+  s->at = now;
+  s->t = pk.first_t;
+  s->k = pk.first;
+}
+
+/* Command queue qi's summary as of cycle now, computed again only when
+ * stale. NOTE: why a summary stays true. A candidate's earliest time asked at
+ * n is h(max(n, T)), T from its request and the timing state, h the identity
+ * (ACT, PRE) or the data bus's first fit (RD, WR), which is monotone and
+ * maps every cycle between t0 and h(t0) to h(t0). So while the state it read
+ * is unchanged, each candidate's time asked at any n in [at, t] is the time
+ * asked at `at`, and the summary holds there. What it read, and the call that
+ * marks it stale when that changes: the queue's entries and their bank
+ * (dram_banked_stale_bank), the rank's ACT spacing for ACT candidates
+ * (dram_banked_stale_acts), the rank, group and channel column spacing and the
+ * bus for RD and WR candidates (dram_banked_stale_columns), a refresh
+ * (dram_banked_stale_rank, all). */
+/* per_bank: a summary whose column candidates alone may have moved, asked
+ * again at now (within [at, t]). A per_bank queue holds one bank, so it has
+ * at most one ACT or PRE candidate (its oldest entry: an ACT for a closed
+ * bank, a PRE for a conflict, pre_allowed), one RD and one WR (each the
+ * oldest of its kind asked, as `ready` grows along the queue): the first
+ * least of those three is the queue's. */
+static void col_refresh(const struct dram_banked *d, const struct dram_banked_channel *c,
+                        uint32_t qi, int64_t now, struct dram_banked_qsum *s) {
+  const struct dram_banked_queue *q = &c->cq[qi];
+  int64_t t = s->o_t;
+  struct dram_banked_cmd k = s->o;
+  uint32_t kj = t < DRAM_BANKED_FAR ? s->o.qi : UINT32_MAX;
+  for (int i = 0; i < 2; i++) {
+    int64_t *ct = i ? &s->wr_t : &s->rd_t;
+    if (*ct == DRAM_BANKED_FAR) continue;
+    const uint32_t j = i ? s->wr_j : s->rd_j;
+    const struct dram_banked_req *r = &q->r[j];
+    *ct = dram_banked_col_earliest(d, c, r, r->write, now);
+    if (*ct < t || (*ct == t && j < kj)) {
+      t = *ct;
+      kj = j;
+      k = (struct dram_banked_cmd){
+          r->write ? DRAM_BANKED_CMD_WR : DRAM_BANKED_CMD_RD, r->rank, r->bank, j, qi, true};
+    }
+  }
+  s->at = now;
+  s->t = t;
+  s->k = k;
+}
+
+static const struct dram_banked_qsum *
+cq_sum(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi, int64_t now) {
+  struct dram_banked_qsum *s = &c->sum[qi];
+  const uint32_t w = qi / 64;
+  const uint64_t bit = 1ull << (qi % 64);
+  if ((c->fresh[w] & bit) && now >= s->at && now <= s->t) {
+    if (!c->col_stale || !(c->col_stale[w] & bit)) return s;
+    c->col_stale[w] &= ~bit;
+    col_refresh(d, c, qi, now, s);
+    return s;
+  }
+  bool act, col;
+  cq_candidates(d, c, qi, now, s, &act, &col);
+  if (c->col_stale) c->col_stale[w] &= ~bit;
+  c->fresh[w] |= bit;
+  c->has_act[w] = act ? c->has_act[w] | bit : c->has_act[w] & ~bit;
+  c->has_col[w] = col ? c->has_col[w] | bit : c->has_col[w] & ~bit;
+  return s;
+}
+
+/* Refresh work, then the command queues round robin from the one after the
+ * last that issued; in each, the oldest command that can issue now. next:
+ * the earliest any candidate could. */
+void dram_banked_cmdq_scan(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
+                           struct dram_banked_pick *pk) {
+  pk->cmd.type = DRAM_BANKED_CMD_NONE;
+  pk->next = pk->first_t = DRAM_BANKED_FAR;
+  dram_banked_scan_refresh(d, c, now, pk);
+  /* The queues holding commands (but those of a rank with a refresh due: a
+   * queue's commands share a rank), round robin from the one after rr: those
+   * from there on, then those before it (rr last). A queue's candidates in
+   * scan order are its own in entry order, so its summary (the first least)
+   * stands for them all; and since every candidate is asked at now, one can
+   * issue now only if it is a least: the first least of the whole scan. */
+  const uint32_t start = (c->rr + 1) % c->ncq, nw = (c->ncq + 63) / 64;
+  uint32_t best = UINT32_MAX;
+  int64_t best_t = DRAM_BANKED_FAR;
+  /* Words from start's on, the first of them from start's bit; then from the
+   * first word up to start's, that one below start's bit. */
+  for (uint32_t step = 0; step <= nw; step++) {
+    const uint32_t w = (start / 64 + step) % nw;
+    uint64_t bits = c->cq_busy[w] & ~c->blocked[w];
+    const uint64_t from_start = ~0ull << (start % 64);
+    if (step == 0) bits &= from_start;
+    else if (step == nw) bits &= ~from_start;
+    const uint64_t stale = ~c->fresh[w] | (c->col_stale ? c->col_stale[w] : 0);
+    while (bits) {
+      const uint32_t b = (uint32_t)__builtin_ctzll(bits);
+      const uint32_t qi = w * 64 + b;
+      bits &= bits - 1;
+      const struct dram_banked_qsum *s = &c->sum[qi];
+      if ((stale >> b & 1) || s->t < now) s = cq_sum(d, c, qi, now);
+      if (d->p.check_summaries) {
+        struct dram_banked_qsum full;
+        bool act, col;
+        CHECK_GE(now, s->at);
+        cq_candidates(d, c, qi, now, &full, &act, &col);
+        CHECK_EQ(full.t, s->t);
+        CHECK(full.t == DRAM_BANKED_FAR ||
+              (full.k.type == s->k.type && full.k.bank == s->k.bank && full.k.qi == s->k.qi &&
+               full.k.for_req == s->k.for_req));
+      }
+      if (s->t < best_t) {
+        best_t = s->t;
+        best = qi;
+      }
+    }
+  }
+  if (best_t < pk->next) pk->next = best_t;
+  if (best_t < pk->first_t) {
+    pk->first_t = best_t;
+    pk->first = c->sum[best].k;
+  }
+  if (pk->first_t == now) pk->cmd = pk->first;
+  c->memo = pk->first;
+  c->memo_t = pk->first_t;
+  c->memo_at = now;
+  c->memo_ok = true;
+}
+
+/* The banked level's controller with queue_structure per_bank / per_rank
+ * (DRAMsim3's): per channel a read queue and a write buffer of transactions
+ * feeding command queues, one per bank or per rank (sim/dram_banked.h,
+ * "Structure per_bank / per_rank"). Holds: at the end of each DRAM cycle at
+ * most one transaction moves to its command queue, and at most one command
+ * issues per cycle, the first candidate of the round-robin scan
+ * (dram_banked_cmdq_scan); writes are posted, served controller_cycles after
+ * they arrive. */
+uint32_t dram_banked_cq_of(const struct dram_banked *d, const struct dram_banked_req *r) {
+  return d->p.queue_structure == DRAM_BANKED_PER_RANK ? r->rank : r->bank;
+}
+
+static void cq_mark(struct dram_banked_channel *c, uint32_t qi, bool busy) {
+  const uint64_t bit = 1ull << (qi % 64);
+  if (busy) c->cq_busy[qi / 64] |= bit;
+  else c->cq_busy[qi / 64] &= ~bit;
+}
+
+/* Entries of transaction queue q that may take part in cycle t (a prefix:
+ * ready grows with arrival). */
+static uint32_t visible(const struct dram_banked_queue *q, int64_t t) {
+  uint32_t n = q->n;
+  while (n > 0 && q->r[n - 1].ready - 1 > t) n--;
+  return n;
+}
+
+/* Does a request of line `line` wait, as a write (write) or a read, in the
+ * transaction queue or in command queue cq (the one its line maps to)? */
+static bool line_waits(const struct dram_banked_channel *c, const struct dram_banked_queue *cq,
+                       bool write, uint64_t line) {
+  const struct dram_banked_queue *q = &c->q[write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q];
+  for (uint32_t i = 0; i < q->n; i++)
+    if (q->r[i].line == line) return true;
+  for (uint32_t i = 0; i < cq->n; i++)
+    if (cq->r[i].write == write && cq->r[i].line == line) return true;
+  return false;
+}
+
+/* The end of cycle t: maybe start a write drain, then move at most one
+ * transaction to its command queue. apply false: change nothing, only say
+ * whether anything would change. */
+static bool schedule_cq(struct dram_banked *d, struct dram_banked_channel *c, int64_t t,
+                        bool apply) {
+  const uint32_t nw = visible(&c->q[DRAM_BANKED_WR_Q], t), nr = visible(&c->q[DRAM_BANKED_RD_Q], t);
+  uint32_t draining = c->draining;
+  if (!draining && nw > 0 &&
+      (nw >= d->p.write_high || (nw > d->p.write_low && c->cq_n == 0) ||
+       (nr == 0 && c->cq_n == 0 && t >= c->last_busy + DRAM_BANKED_IDLE_DRAIN_CYCLES)))
+    draining = nw;
+  int k = draining ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
+  uint32_t mi = UINT32_MAX; /* the transaction to move */
+  for (uint32_t i = 0; i < (k == DRAM_BANKED_WR_Q ? nw : nr); i++) {
+    const uint32_t qi = c->q[k].r[i].cq;
+    if (c->full[qi / 64] >> (qi % 64) & 1) continue;
+    const struct dram_banked_queue *cq = &c->cq[qi];
+    if (k == DRAM_BANKED_WR_Q && line_waits(c, cq, false, c->q[k].r[i].line)) {
+      /* A read of the line still waits: writing first would lose its data;
+       * the drain ends (and may start again next cycle). With every command
+       * queue empty and that read still in the read queue nothing would
+       * ever change: the read queue is served this cycle instead ([ours];
+       * DRAMsim3 deadlocks there). */
+      draining = 0;
+      if (c->cq_n) break; /* (else the read is in the read queue) */
+      k = DRAM_BANKED_RD_Q;
+      i = UINT32_MAX; /* the loop's increment makes it 0 */
+      continue;
+    }
+    mi = i;
+    break;
+  }
+  struct dram_banked_queue *q = &c->q[k];
+  const bool changed = mi != UINT32_MAX || draining != c->draining;
+  if (!apply) return changed;
+  if (changed) c->memo_ok = false;
+  if (mi != UINT32_MAX) {
+    struct dram_banked_req m = q->r[mi];
+    struct dram_banked_queue *cq = &c->cq[dram_banked_cq_of(d, &m)];
+    memmove(&q->r[mi], &q->r[mi + 1], (q->n - mi - 1) * sizeof *q->r);
+    q->n--;
+    m.ready = t + 1;
+    cq->r[cq->n++] = m;
+    if (cq->n == cq->cap) c->full[m.cq / 64] |= 1ull << (m.cq % 64);
+    dram_banked_stale_bank(d, c, m.bank);
+    c->cq_n++;
+    cq_mark(c, dram_banked_cq_of(d, &m), true);
+    d->space_due = true;
+    if (k == DRAM_BANKED_WR_Q) draining--;
+  }
+  if (!c->draining && k == DRAM_BANKED_WR_Q && (mi != UINT32_MAX || draining)) d->st.write_drains++;
+  c->draining = draining;
+  return changed;
+}
+
+void dram_banked_ctrl_issue_column(struct dram_banked *d, struct dram_banked_channel *c,
+                                   uint32_t qi, uint32_t j, int64_t now) {
+  struct dram_banked_queue *q = &c->cq[qi];
+  struct dram_banked_req r = q->r[j];
+  memmove(&q->r[j], &q->r[j + 1], (q->n - j - 1) * sizeof *q->r);
+  q->n--;
+  c->full[qi / 64] &= ~(1ull << (qi % 64));
+  dram_banked_stale_bank(d, c, r.bank);
+  c->cq_n--;
+  if (!q->n) cq_mark(c, qi, false);
+  d->queued--;
+  /* DRAMsim3's row hit: the row has served a column command since its ACT. */
+  dram_banked_count_kind(d, c->banks[r.bank].hits                 ? DRAM_BANKED_KIND_HIT
+                            : r.kind == DRAM_BANKED_KIND_CONFLICT ? DRAM_BANKED_KIND_CONFLICT
+                                                                  : DRAM_BANKED_KIND_MISS);
+  int64_t end = dram_banked_column_state(d, c, &r, r.write, now);
+  dram_banked_queue_leave(d, r.write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q, &r, now);
+  if (r.write) return; /* posted: served when it arrived */
+  uint64_t done = dram_clock_to_core(d->clk, (uint64_t)end);
+  CHECK_GE(done, engine_now(d->e));
+  dram_banked_serve(d, done, r.tag);
+  /* Reads of the same line that arrived while it waited. */
+  uint32_t k = 0;
+  for (uint32_t i = 0; i < c->nfol; i++) {
+    if (c->fol[i].line != r.line) {
+      c->fol[k++] = c->fol[i];
+      continue;
+    }
+    dram_banked_serve(d, done, c->fol[i].tag);
+  }
+  c->nfol = k;
+}
+
+/* The earliest cycle >= t at which channel c's state may change. */
+static int64_t next_cq(struct dram_banked *d, struct dram_banked_channel *c, int64_t t) {
+  struct dram_banked_pick pk;
+  dram_banked_cmdq_scan(d, c, t, &pk);
+  int64_t nx = pk.next;
+  if (schedule_cq(d, c, t, false)) return t;
+  for (int k = 0; k < 2; k++) {
+    const struct dram_banked_queue *q = &c->q[k];
+    uint32_t v = visible(q, t);
+    if (v < q->n && q->r[v].ready - 1 < nx) nx = q->r[v].ready - 1;
+  }
+  if (!c->draining && c->q[DRAM_BANKED_WR_Q].n && !c->cq_n &&
+      !visible(&c->q[DRAM_BANKED_RD_Q], t)) {
+    int64_t idle = c->last_busy + DRAM_BANKED_IDLE_DRAIN_CYCLES;
+    if (idle < nx) nx = idle;
+  }
+  return nx < t ? t : nx;
+}
+
+/* Handle DRAM cycle `now` on channel c (refreshes fallen due): at most one
+ * command, then at most one transaction moved; then c->next. */
+void dram_banked_ctrl_cycle(struct dram_banked *d, struct dram_banked_channel *c, int64_t now) {
+  struct dram_banked_pick pk;
+  /* The last scan's answer stands while nothing changed since: every
+   * queue's summary holds from memo_at to its own least time, so none can
+   * issue before memo_t, and at memo_t the memo's queue comes first. */
+  if (c->memo_ok && now >= c->memo_at && now <= c->memo_t) {
+    pk.cmd.type = DRAM_BANKED_CMD_NONE;
+    if (now == c->memo_t) pk.cmd = c->memo;
+  } else {
+    dram_banked_cmdq_scan(d, c, now, &pk);
+  }
+  if (pk.cmd.type != DRAM_BANKED_CMD_NONE) {
+    dram_banked_issue(d, c, &pk.cmd, now);
+    if (pk.cmd.for_req) {
+      c->rr = pk.cmd.cq;
+      c->last_busy = now;
+    }
+  }
+  schedule_cq(d, c, now, true);
+  c->next = next_cq(d, c, now + 1);
+}
+
+/* Serve tag at DRAM cycle at, with no command. */
+static void serve_at(struct dram_banked *d, int64_t at, uint64_t tag) {
+  dram_banked_serve(d, dram_clock_to_core(d->clk, (uint64_t)at), tag);
+}
+
+/* The request arrives after DRAM cycle cursor - 1. */
+void dram_banked_ctrl_take(struct dram_banked *d, struct dram_banked_channel *c,
+                           const struct dram_banked_coord *co, uint64_t addr, bool write,
+                           uint64_t tag) {
+  const int64_t arr = d->cursor - 1, ready = arr + (int64_t)d->p.controller_cycles;
+  const uint64_t line = addr >> 6;
+  CHECK_LT(c->took_at, arr);
+  c->took_at = arr;
+  struct dram_banked_req probe;
+  probe.rank = co->rank;
+  probe.bank = co->rank * d->banks_per_rank + co->bank_group * d->p.banks_per_group + co->bank;
+  const struct dram_banked_queue *cq = &c->cq[dram_banked_cq_of(d, &probe)];
+  if (line_waits(c, cq, true, line)) {
+    /* Its line's write has not issued: a read is answered from it, a write
+     * replaces it. */
+    if (write) d->st.write_merges++;
+    else d->st.write_forwards++;
+    serve_at(d, ready, tag);
+    return;
+  }
+  if (!write && line_waits(c, cq, false, line)) {
+    if (c->nfol == c->cap_fol) {
+      c->cap_fol = c->cap_fol ? 2 * c->cap_fol : 8;
+      c->fol = xrealloc(c->fol, c->cap_fol * sizeof *c->fol);
+    }
+    c->fol[c->nfol].line = line;
+    c->fol[c->nfol].tag = tag;
+    c->nfol++;
+    d->st.read_merges++;
+    return;
+  }
+  dram_banked_enqueue(d, c, write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q, co, addr, tag, ready);
+  if (write) serve_at(d, ready, tag); /* posted */
+  if (arr > c->last_busy) c->last_busy = arr;
+  /* It may move at the end of cycle ready - 1 (never before the cursor). */
+  int64_t nx = max64(d->cursor, ready - 1);
+  if (nx < c->next) c->next = nx;
+  dram_banked_schedule_wake(d);
+}
+
+/* The banked level's controller with queue_structure shared: one FR-FCFS
+ * scheduler per channel over a read queue and a write queue, turning between
+ * them at the write watermarks (sim/dram_banked.h, "Structure shared"). Holds:
+ * one scan of the served queue per handled cycle gives both the command to
+ * issue and the earliest cycle any could, so the channel sleeps exactly until
+ * then; a request keeps its queue place until its column command. */
+/* Candidates in priority order: refresh work (dram_banked_scan_refresh), then
+ * the oldest row hit of the served queue, then the oldest PRE or ACT. The
+ * first that can issue at `now` is picked; next is the least earliest time of
+ * all of them. */
+static void scan(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
+                 struct dram_banked_pick *pk) {
+  pk->cmd.type = DRAM_BANKED_CMD_NONE;
+  pk->next = pk->first_t = DRAM_BANKED_FAR;
+  dram_banked_scan_refresh(d, c, now, pk);
+  const int qk = c->writing ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
+  const struct dram_banked_queue *q = &c->q[qk];
+  uint64_t no = ++c->scan_no;
+  /* Pass 1: row hits, oldest first; note per bank whether a hit that may
+   * still issue holds back a conflict's PRE. */
+  for (uint32_t i = 0; i < q->n; i++) {
+    const struct dram_banked_req *r = &q->r[i];
+    if (c->ranks[r->rank].pending) continue;
+    struct dram_banked_bank *bk = &c->banks[r->bank];
+    if (bk->stamp != no) {
+      bk->stamp = no;
+      bk->conflict_seen = false;
+      bk->hit_held = false;
+    }
+    if (!bk->open) continue;
+    if (bk->row != r->row) {
+      bk->conflict_seen = true;
+      continue;
+    }
+    if (bk->conflict_seen && bk->hits >= DRAM_BANKED_ROW_HIT_CAP) continue;
+    bk->hit_held = true;
+    dram_banked_consider(pk, dram_banked_col_earliest(d, c, r, qk == DRAM_BANKED_WR_Q, now), now,
+                         qk == DRAM_BANKED_WR_Q ? DRAM_BANKED_CMD_WR : DRAM_BANKED_CMD_RD, r->rank,
+                         r->bank, i);
+  }
+  /* Pass 2: PRE for a conflict no hit holds back, ACT for a closed bank. */
+  for (uint32_t i = 0; i < q->n; i++) {
+    const struct dram_banked_req *r = &q->r[i];
+    if (c->ranks[r->rank].pending) continue;
+    const struct dram_banked_bank *bk = &c->banks[r->bank];
+    if (!bk->open)
+      dram_banked_consider(pk, dram_banked_act_earliest(d, c, r, now), now, DRAM_BANKED_CMD_ACT,
+                           r->rank, r->bank, i);
+    else if (bk->row != r->row && !bk->hit_held)
+      dram_banked_consider(pk, max64(max64(now, r->ready), bk->pre_ok), now, DRAM_BANKED_CMD_PRE,
+                           r->rank, r->bank, i);
+  }
+}
+
+/* The cycle from which channel c's oldest read has waited too long
+ * (DRAM_BANKED_READ_AGE_CAP x tRC), or DRAM_BANKED_FAR with no read queued. */
+static int64_t starve_at(const struct dram_banked *d, const struct dram_banked_channel *c) {
+  if (!c->q[DRAM_BANKED_RD_Q].n) return DRAM_BANKED_FAR;
+  return c->q[DRAM_BANKED_RD_Q].r[0].ready + (int64_t)DRAM_BANKED_READ_AGE_CAP * (int64_t)d->p.tRC;
+}
+
+/* Turn the channel to writes or back to reads at DRAM cycle now. NOTE: a
+ * read that has waited too long (starve_at) turns the channel back to reads
+ * and keeps it there until it is served: under a heavy write stream the
+ * write queue never falls to write_low, or refills to write_high before a
+ * conflicting read's precharge, activate and read fit between drains, and
+ * such a read starved for 30,000 cycles. The moment a read starts starving is
+ * a wake of its own (next_of), so skipping ahead still equals ticking. */
+static void update_mode(struct dram_banked *d, struct dram_banked_channel *c, int64_t now) {
+  uint32_t nr = c->q[DRAM_BANKED_RD_Q].n, nw = c->q[DRAM_BANKED_WR_Q].n;
+  bool starving = now >= starve_at(d, c);
+  if (!c->writing) {
+    if ((nw >= d->p.write_high && !starving) || (nr == 0 && nw > 0)) {
+      c->writing = true;
+      d->st.write_drains++;
+    }
+  } else if (nw == 0 || (nw <= d->p.write_low && nr > 0) || starving) {
+    c->writing = false;
+  }
+}
+
+/* The channel's next wake: its next command, or a read starting to starve
+ * while the channel serves writes. */
+static int64_t next_of(const struct dram_banked *d, const struct dram_banked_channel *c,
+                       int64_t next) {
+  int64_t s = c->writing ? starve_at(d, c) : DRAM_BANKED_FAR;
+  return s < next ? s : next;
+}
+
+void dram_banked_frfcfs_issue_column(struct dram_banked *d, struct dram_banked_channel *c, int qk,
+                                     uint32_t qi, int64_t now) {
+  struct dram_banked_queue *q = &c->q[qk];
+  struct dram_banked_req r = q->r[qi];
+  memmove(&q->r[qi], &q->r[qi + 1], (q->n - qi - 1) * sizeof *q->r);
+  q->n--;
+  d->queued--;
+  int64_t end = dram_banked_column_state(d, c, &r, qk == DRAM_BANKED_WR_Q, now);
+  dram_banked_count_kind(d, r.kind);
+  /* The place frees at the column command: queue time ends there. */
+  dram_banked_queue_leave(d, qk, &r, now);
+  d->space_due = true;
+  uint64_t done = dram_clock_to_core(d->clk, (uint64_t)end);
+  CHECK_GE(done, engine_now(d->e));
+  dram_banked_serve(d, done, r.tag);
+}
+
+/* The drain mode, at most one command; then c->next. */
+void dram_banked_frfcfs_cycle(struct dram_banked *d, struct dram_banked_channel *c, int64_t now) {
+  update_mode(d, c, now);
+  struct dram_banked_pick pk;
+  scan(d, c, now, &pk);
+  if (pk.cmd.type == DRAM_BANKED_CMD_NONE) {
+    CHECK_GT(pk.next, now);
+    c->next = next_of(d, c, pk.next);
+    if (c->next <= now) c->next = now + 1;
+    return;
+  }
+  dram_banked_issue(d, c, &pk.cmd, now);
+  update_mode(d, c, now + 1);
+  scan(d, c, now + 1, &pk);
+  c->next = next_of(d, c, pk.next);
+  if (c->next <= now) c->next = now + 1;
+}
+
+void dram_banked_frfcfs_take(struct dram_banked *d, struct dram_banked_channel *c,
+                             const struct dram_banked_coord *co, uint64_t addr, bool write,
+                             uint64_t tag) {
+  const int qk = write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
+  /* A line waiting in the write queue answers a read of it, and takes a later
+   * write of it in its place (a controller's write queue is searched by
+   * address, as DRAMsim3's is): served the next DRAM cycle, no command. */
+  const struct dram_banked_queue *wq = &c->q[DRAM_BANKED_WR_Q];
+  for (uint32_t i = 0; i < wq->n; i++)
+    if (wq->r[i].line == addr >> 6) {
+      if (write) d->st.write_merges++;
+      else d->st.write_forwards++;
+      dram_banked_serve(d, dram_clock_to_core(d->clk, (uint64_t)d->cursor + 1), tag);
+      return;
+    }
+  dram_banked_enqueue(d, c, qk, co, addr, tag, d->cursor + (int64_t)d->p.controller_cycles);
+  /* Cycles before the cursor are decided; the new request joins at it. */
+  update_mode(d, c, d->cursor);
+  struct dram_banked_pick pk;
+  scan(d, c, d->cursor, &pk);
+  int64_t nx = next_of(d, c, pk.next);
+  if (nx < d->cursor) nx = d->cursor;
+  if (nx < c->next) c->next = nx;
+  dram_banked_schedule_wake(d);
 }
