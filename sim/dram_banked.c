@@ -7,14 +7,12 @@
  * sim/dram_banked_state.h. */
 #include "sim/dram_banked.h"
 
-#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "sim/dram_banked_state.h"
 #include "sim/engine.h"
 #include "sim/err.h"
-#include "sim/stats.h"
 
 /* ---- Time and events ---- */
 
@@ -361,117 +359,6 @@ void dram_banked_destroy(struct dram_banked *d) {
   }
   free(d->ch);
   free(d);
-}
-
-/* The banked level's numbers: the table of its figures (names, units,
- * descriptions; README "Numbers"), each computed from its struct
- * dram_banked_stats and the run's length. Holds: every figure is a counter or
- * a ratio of counters the level keeps, so the table reads the same whatever
- * the level's controller structure. */
-static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
-
-/* The banked level's numbers (README "Numbers"); env->ctx is the level. */
-static double bk_dram_cycles(const struct stats_env *env) {
-  const struct dram_banked *d = env->ctx;
-  return (double)env->cycles * (double)d->clk.den / (double)d->clk.num;
-}
-static double bk_row_hit_rate(const void *st, const struct stats_env *env) {
-  (void)env;
-  const struct dram_banked_stats *s = st;
-  return ratio((double)s->row_hits, (double)(s->reads + s->writes));
-}
-static double bk_bus_utilization(const void *st, const struct stats_env *env) {
-  const struct dram_banked *d = env->ctx;
-  const struct dram_banked_stats *s = st;
-  return ratio((double)s->bus_busy_cycles, bk_dram_cycles(env) * d->p.channels);
-}
-static double bk_bank_active_fraction(const void *st, const struct stats_env *env) {
-  const struct dram_banked *d = env->ctx;
-  const struct dram_banked_stats *s = st;
-  return ratio((double)s->bank_open_cycles,
-               bk_dram_cycles(env) * d->banks_per_channel * d->p.channels);
-}
-#define BK_QUEUE_FNS(k, n)                                                                         \
-  static double bk_queue_length_mean_##k(const void *st, const struct stats_env *env) {            \
-    return ratio((double)((const struct dram_banked_stats *)st)->queue_area[k],                    \
-                 (double)env->cycles);                                                             \
-  }                                                                                                \
-  static double bk_queue_wait_mean_##k(const void *st, const struct stats_env *env) {              \
-    (void)env;                                                                                     \
-    const struct dram_banked_stats *s = st;                                                        \
-    return ratio((double)s->queue_wait_sum_cycles[k], (double)s->n);                               \
-  }
-BK_QUEUE_FNS(0, reads)
-BK_QUEUE_FNS(1, writes)
-#define BK_QUEUE(k, q, what)                                                                       \
-  STATS_F64(struct dram_banked_stats, queue_area[k], bk_queue_length_mean_##k,                     \
-            "dram_" q "_queue_length_mean", "requests",                                            \
-            what " queued, all channels: mean over the run"),                                      \
-      STATS_FIELD(struct dram_banked_stats, queue_max[k], "dram_" q "_queue_length_max",           \
-                  "requests", what " queued, all channels: most at once"),                         \
-      STATS_F64(struct dram_banked_stats, queue_wait_sum_cycles[k], bk_queue_wait_mean_##k,        \
-                "dram_" q "_queue_wait_mean_cycles", "cycles",                                     \
-                what ", taken to column command: mean"),                                           \
-      STATS_FIELD(struct dram_banked_stats, queue_wait_max_cycles[k],                              \
-                  "dram_" q "_queue_wait_max_cycles", "cycles",                                    \
-                  what ", taken to column command: most")
-
-static const struct stats_desc banked_desc[] = {
-    STATS_FIELD(struct dram_banked_stats, row_hits, "dram_row_hits", "count",
-                "column commands that found their row open"),
-    STATS_FIELD(struct dram_banked_stats, row_misses, "dram_row_misses", "count",
-                "column commands whose row had to be opened"),
-    STATS_FIELD(struct dram_banked_stats, row_conflicts, "dram_row_conflicts", "count",
-                "column commands whose bank had another row open"),
-    {.name = "dram_row_hit_rate",
-     .unit = "fraction",
-     .desc = "row hits / column commands (RD and WR issued), as DRAMsim3 counts: reads "
-             "served from the write queue or by another read's RD issue none",
-     .how = STATS_HOW_F64,
-     .off = offsetof(struct dram_banked_stats, reads), /* reads and writes, side by side */
-     .size =
-         offsetof(struct dram_banked_stats, row_hits) - offsetof(struct dram_banked_stats, reads),
-     .f64 = bk_row_hit_rate},
-    STATS_FIELD(struct dram_banked_stats, activates, "dram_activates", "count", "row activations"),
-    STATS_FIELD(struct dram_banked_stats, precharges, "dram_precharges", "count",
-                "precharges, auto-precharges included"),
-    STATS_FIELD(struct dram_banked_stats, refreshes, "dram_refreshes", "count", "refresh commands"),
-    STATS_FIELD(struct dram_banked_stats, refresh_cycles, "dram_refresh_cycles", "DRAM cycles",
-                "rank-cycles in refresh (DRAM clock)"),
-    STATS_FIELD(struct dram_banked_stats, write_drains, "dram_write_drains", "count",
-                "turns from reads to writes"),
-    STATS_FIELD(struct dram_banked_stats, write_forwards, "dram_write_forwards", "count",
-                "reads answered from the write queue (no command)"),
-    STATS_FIELD(struct dram_banked_stats, write_merges, "dram_write_merges", "count",
-                "writes that found their line in the write queue"),
-    STATS_FIELD(struct dram_banked_stats, read_merges, "dram_read_merges", "count",
-                "reads served by another queued read's column command"),
-    STATS_F64(struct dram_banked_stats, bus_busy_cycles, bk_bus_utilization, "dram_bus_utilization",
-              "fraction", "data bus busy, averaged over channels"),
-    STATS_F64(struct dram_banked_stats, bank_open_cycles, bk_bank_active_fraction,
-              "dram_bank_active_fraction", "fraction", "bank-cycles with a row open"),
-    BK_QUEUE(0, "read", "reads"),
-    BK_QUEUE(1, "write", "writes"),
-};
-const struct stats_descs dram_banked_stats_descs = {"dram banked",
-                                                    banked_desc,
-                                                    STATS_COUNT(banked_desc),
-                                                    sizeof(struct dram_banked_stats),
-                                                    NULL,
-                                                    0};
-
-void dram_banked_report(const void *self, struct stats_table *t, uint64_t cycles) {
-  const struct dram_banked *d = self;
-  const struct stats_env env = {.cycles = cycles, .ctx = d};
-  stats_emit(t, &dram_banked_stats_descs, &d->st, &env);
-}
-
-const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d) {
-  return &d->st;
-}
-
-uint64_t dram_banked_finished_cycles(const struct dram_banked *d) {
-  return d->finished_dram_cycles;
 }
 
 /* The banked level's data bus, one per channel: the bursts that may still
