@@ -1,7 +1,8 @@
 /* The banked DRAM level against hand-computed command timelines (DDR4-2400
  * figures, 1:1 clocks unless said), bandwidth bounds, the per-cycle oracle on
- * random traffic, Little's law, address decoding and parameter checks; both
- * controller structures (shared FR-FCFS, per-bank command queues). */
+ * random traffic and Little's law; both controller structures (shared
+ * FR-FCFS, per-bank command queues). Its pieces alone: address decoding
+ * (test_dram_banked_map.c), parameter rules (test_dram_banked_params.c). */
 #include <stdlib.h>
 #include <string.h>
 
@@ -655,40 +656,6 @@ static void test_row_hit_rate(void) {
           "dram_row_hit_rate: %s", desc ? desc : "(none)");
 }
 
-/* 12: decode, hand-computed bit positions. 2 channels, 2 ranks, 4 groups, 4
- * banks, 1024 rows, 1024 columns / BL 8 = 128 bursts: widths ch 1, ra 1, bg
- * 2, ba 2, ro 10, co 7, above 6 offset bits. */
-static void test_decode(void) {
-  struct dram_banked_params p = ddr4();
-  p.channels = 2;
-  p.ranks = 2;
-  p.rows = 1024;
-  uint64_t done[1];
-  struct rq none[1] = {{0, 0, false}};
-  /* "rochrababgco": co 6..12, bg 13..14, ba 15..16, ra 17, ch 18, ro 19..28.
-   * ro 0x2A5 (<< 19 = 0x15280000), ch 1 (0x40000), ra 0, ba 3 (0x18000),
-   * bg 2 (0x4000), co 0x55 (<< 6 = 0x1540): 0x152DD540. */
-  struct dram_banked *d = run(&p, 1200 * MHZ, none, 1, done, 0);
-  struct dram_banked_coord c;
-  dram_banked_decode(d, 0x152DD540ull, &c);
-  EXPECT(c.channel == 1 && c.rank == 0 && c.bank_group == 2 && c.bank == 3 && c.row == 0x2A5 &&
-         c.column == 0x55 * 8);
-  dram_banked_decode(d, 0x20000ull, &c); /* bit 17: rank 1 only */
-  EXPECT(c.channel == 0 && c.rank == 1 && c.bank_group == 0 && c.bank == 0 && c.row == 0 &&
-         c.column == 0);
-  dram_banked_destroy(d);
-  /* "chrobabgraco" (DRAMsim3's default): co 6..12, ra 13, bg 14..15, ba
-   * 16..17, ro 18..27, ch 28. ch 1 (0x10000000), ro 0x155 (<< 18 =
-   * 0x5540000), ba 2 (0x20000), bg 1 (0x4000), ra 1 (0x2000), co 0x7F
-   * (0x1FC0): 0x15567FC0. */
-  strcpy(p.mapping, "chrobabgraco");
-  d = run(&p, 1200 * MHZ, none, 1, done, 0);
-  dram_banked_decode(d, 0x15567FC0ull, &c);
-  EXPECT(c.channel == 1 && c.rank == 1 && c.bank_group == 1 && c.bank == 2 && c.row == 0x155 &&
-         c.column == 0x7F * 8);
-  dram_banked_destroy(d);
-}
-
 /* Random traffic: bursts of arrivals, 30% writes, a small footprint of rows
  * so hits, misses and conflicts all occur. */
 static void random_traffic(const struct dram_banked_params *p, uint64_t seed, struct rq *r,
@@ -807,50 +774,6 @@ static void test_oracle_and_little(void) {
   free(d2);
 }
 
-/* 15: parameter checks name the key (the rules a range cannot say; ranges
- * are the key table's: test_machine_cfg). */
-static void test_problems(void) {
-  struct dram_banked_params ok = ddr4();
-  EXPECT(dram_banked_params_problem(&ok) == NULL);
-  struct dram_banked_params p;
-#define BAD(stmt, key)                                                                             \
-  do {                                                                                             \
-    p = ok;                                                                                        \
-    stmt;                                                                                          \
-    const char *m = dram_banked_params_problem(&p);                                                \
-    EXPECTF(m && !strncmp(m, key ":", strlen(key ":")), "%s: got %s", #stmt, m ? m : "NULL");      \
-  } while (0)
-  BAD(p.channels = 3, "dram.channels");
-  BAD(p.ranks = 0, "dram.ranks");
-  BAD(p.bank_groups = 6, "dram.bank_groups");
-  BAD(p.rows = 1000, "dram.rows");
-  BAD(p.columns = 1000, "dram.columns");
-  BAD(p.columns = 4, "dram.columns");
-  BAD(p.bus_bytes = 16, "dram.bus_bytes");
-  BAD((p.bus_bytes = 4, p.burst_length = 8), "dram.bus_bytes");
-  BAD(p.burst_length = 6, "dram.burst_length");
-  BAD(strcpy(p.mapping, "rochrababg"), "dram.mapping");
-  BAD(strcpy(p.mapping, "rochrababgba"), "dram.mapping");
-  BAD(strcpy(p.mapping, "rochrababgxx"), "dram.mapping");
-  BAD((p.queue_structure = DRAM_BANKED_PER_BANK, p.command_queue = 8, p.controller_cycles = 0),
-      "dram.controller_cycles");
-  BAD(p.write_high = 40, "dram.write_high");
-  BAD(p.write_low = 24, "dram.write_low");
-  BAD(p.tRC = 20, "dram.tRC");
-  BAD(p.tCCD_L = 2, "dram.tCCD_L");
-  BAD(p.tRRD_L = 1, "dram.tRRD_L");
-  BAD(p.tWTR_L = 1, "dram.tWTR_L");
-  BAD((p.tREFI = 400, p.tRFC = 420), "dram.tREFI");
-  /* 6 + ch 6 + ra 4 + bg 4 + ba 6 + ro 24 + co 17 = 67 bits. */
-  BAD((p.channels = 64, p.ranks = 16, p.bank_groups = 16, p.banks_per_group = 64, p.rows = 1u << 24,
-       p.columns = 1u << 20),
-      "dram.rows");
-#undef BAD
-  EXPECT(dram_banked_mapping_ok("rochrababgco") && dram_banked_mapping_ok("chrobabgraco"));
-  EXPECT(!dram_banked_mapping_ok("rochrababgc") && !dram_banked_mapping_ok("rorochrababg") &&
-         !dram_banked_mapping_ok(NULL));
-}
-
 int main(void) {
   test_latencies();
   test_wtr();
@@ -867,8 +790,6 @@ int main(void) {
   test_cq_write_drain();
   test_cq_in_order();
   test_row_hit_rate();
-  test_decode();
   test_oracle_and_little();
-  test_problems();
   return testing_done("dram_banked");
 }
