@@ -2,7 +2,9 @@
  * figures, 1:1 clocks unless said), bandwidth bounds, the per-cycle oracle on
  * random traffic and Little's law; both controller structures (shared
  * FR-FCFS, per-bank command queues). Its pieces alone: address decoding
- * (test_dram_banked_map.c), parameter rules (test_dram_banked_params.c). */
+ * (test_dram_banked_map.c), parameter rules (test_dram_banked_params.c),
+ * refresh due times (test_dram_banked_refresh.c), the data bus
+ * (test_dram_banked_bus.c). */
 #include <stdlib.h>
 #include <string.h>
 
