@@ -4,7 +4,8 @@
  * sim/ never includes a renderer/ header; renderer/ and its rooms include from
  * sim/ only the memory interface (mem.h) and the base headers. The same door
  * is held at link time by the renderer_door program (CMakeLists.txt). Each
- * x.c with an x.h includes it first. */
+ * x.c with an x.h includes it first. A module's private header is included
+ * only by the module's own files and their tests. */
 #include <dirent.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -89,6 +90,24 @@ static void own_header_first(const char *path, const char *name, FILE *f, const 
     }
 }
 
+/* A private header, arg[0], is included only by files whose path (from the
+ * source top) starts with one of arg[1..]. */
+static void private_to(const char *path, const char *name, FILE *f, const void *arg) {
+  (void)name;
+  const char *const *rule = arg;
+  for (int i = 1; rule[i]; i++)
+    if (!strncmp(path, rule[i], strlen(rule[i]))) return;
+  char want[256], line[1024];
+  snprintf(want, sizeof want, "#include \"%s\"", rule[0]);
+  int lineno = 0;
+  while (fgets(line, sizeof line, f)) {
+    lineno++;
+    if (strncmp(line, "#include", 8) != 0) continue;
+    EXPECTF(strncmp(line, want, strlen(want)) != 0, "%s:%d: includes %s, private to %s*", path,
+            lineno, rule[0], rule[1]);
+  }
+}
+
 /* The base pieces: a file of sim/ named for one of them. */
 static const char *const BASE[] = {"err", "cfg", "scalar", "outfile", "stats", "hist", NULL};
 
@@ -124,5 +143,11 @@ int main(void) {
   EXPECT(each_source("renderer/scene", no_crossing, renderer_rule) > 0);
   static const char *const dirs[] = {"sim", "renderer", "app", NULL};
   for (int i = 0; dirs[i]; i++) EXPECT(each_source(dirs[i], own_header_first, NULL) > 0);
+  /* The banked DRAM level's inside: its files' and their tests' alone. */
+  static const char *const banked_private[] = {"sim/dram_banked_state.h", "sim/dram_banked",
+                                               "tests/test_dram_banked", NULL};
+  static const char *const all_dirs[] = {"sim", "renderer", "app", "tests", NULL};
+  for (int i = 0; all_dirs[i]; i++)
+    EXPECT(each_source(all_dirs[i], private_to, banked_private) > 0);
   return testing_done("test_layers");
 }
