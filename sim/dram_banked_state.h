@@ -270,7 +270,11 @@ void dram_banked_frfcfs_issue_column(struct dram_banked *d, struct dram_banked_c
 
 /* ---- dram_banked_ctrl.c: per_bank / per_rank ---- */
 
+/* Handle DRAM cycle now on channel c (refreshes fallen due): at most one
+ * command, at most one transaction moved; set c->next. */
 void dram_banked_ctrl_cycle(struct dram_banked *d, struct dram_banked_channel *c, int64_t now);
+/* Take a request of line addr (coordinates co) into channel c; it arrives
+ * after DRAM cycle cursor - 1. */
 void dram_banked_ctrl_take(struct dram_banked *d, struct dram_banked_channel *c,
                            const struct dram_banked_coord *co, uint64_t addr, bool write,
                            uint64_t tag);
@@ -357,6 +361,8 @@ void dram_banked_refresh_issue(struct dram_banked *d, struct dram_banked_channel
 
 /* m for p's mapping and sizes (p passed dram_banked_params_problem). */
 void dram_banked_map_init(struct dram_banked_map *m, const struct dram_banked_params *p);
+/* addr's coordinates under m (the line offset ignored; bits above the fields
+ * alias). */
 void dram_banked_map_decode(const struct dram_banked_map *m, uint64_t addr,
                             struct dram_banked_coord *out);
 /* Address bits the six fields of p take above the line offset. */
