@@ -14,6 +14,7 @@
 #include "app/outdir.h"
 #include "app/outguard.h"
 #include "app/run_output.h"
+#include "app/rung_error.h"
 #include "renderer/policy/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
@@ -236,6 +237,19 @@ int cmd_run(int argc, char **argv) {
   else
     app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, &mc.work,
                   isatty(2), trace.f, true);
+  /* A whole run at a cheaper rung says how wrong that rung was measured to be
+   * in runs like it (README "Fidelity ladder"). */
+  struct rung_error rung = {0};
+  const bool cheaper = mc.p.fidelity != MACHINE_FIDELITY_BANKED && !t.sampled;
+  if (cheaper && analytic) {
+    rung_error_match(&rung, &mc.p, policy_name(policy),
+                     a.est.bandwidth_bound_cycles > a.est.latency_bound_cycles, a.est.cycles,
+                     a.counts.issue_slots, a.counts.fetch_bytes + a.counts.writeback_bytes);
+  } else if (cheaper) {
+    const struct machine_stats *s = machine_get_stats(t.m);
+    rung_error_match(&rung, &mc.p, policy_name(policy), -1, s->cycles, s->issue_slots,
+                     s->dram.read_bytes + s->dram.write_bytes);
+  }
   struct run_output_report rep = {
       .out_dir = od.write,
       .machine_path = machine_path,
@@ -251,6 +265,7 @@ int cmd_run(int argc, char **argv) {
       .cfg = &mc,
       .machine = t.m,
       .sample = t.sampled ? &t.sample : NULL,
+      .rung = cheaper ? &rung : NULL,
       .analytic = analytic ? &a : NULL,
       .rstats = analytic ? &a.st : &t.st,
       .tstats = analytic ? &a.ts : &t.ts,
@@ -267,6 +282,11 @@ int cmd_run(int argc, char **argv) {
             (!cost_preview || outfile_commit(&heat, &e)) && outdir_commit(&od, &e);
   if (!ok) outdir_name_in_err(&od, &e);
   rc = ok ? 0 : app_report(&e);
+  if (rc == 0 && cheaper && rung.warn) {
+    char line[1024];
+    rung_error_warning(&rung, line, sizeof line);
+    fprintf(stderr, "rtsim run: warning: %s\n", line);
+  }
   rep.out_dir = out;
   if (rc == 0) run_output_summary(&rep, stdout);
   if (analytic) app_analytic_fini(&a);

@@ -11,6 +11,7 @@
 #include "app/app.h"
 #include "app/gnuplot.h"
 #include "app/preview.h"
+#include "app/rung_error.h"
 #include "app/sample.h"
 #include "renderer/framebuffer.h"
 #include "renderer/image.h"
@@ -331,6 +332,7 @@ static void measured(const struct run_output_report *r, struct stats_table *t) {
                                   .class_names = trace_class_names,
                                   .classes = TRACE_CLASS_COUNT};
     stats_emit(t, &run_output_analytic_stats_descs, r->analytic, &env);
+    if (r->rung) stats_emit(t, &rung_error_stats_descs, r->rung, &env);
     return;
   }
   const struct machine_stats *s = machine_get_stats(r->machine);
@@ -343,6 +345,7 @@ static void measured(const struct run_output_report *r, struct stats_table *t) {
     return;
   }
   machine_stats_emit(r->machine, t, trace_class_names, TRACE_CLASS_COUNT, run_slot, r);
+  if (r->rung) stats_emit(t, &rung_error_stats_descs, r->rung, &(struct stats_env){0});
 }
 
 /* Start OUTDIR/name through a temporary (commit with outfile_commit). */
@@ -508,10 +511,10 @@ void run_output_summary(const struct run_output_report *r, FILE *f) {
   struct stats_table t = {0};
   measured(r, &t);
   static const char *const show[] = {
-      "cycles",       "cycles_ci95_low",      "cycles_ci95_high",       "sample_detailed_fraction",
-      "rays_traced",  "rays_per_second",      "core_utilization",       "thread_idle_fraction",
-      "l2_miss_rate", "dram_bytes_per_cycle", "dram_read_latency_mean", "load_latency_mean",
-      "events"};
+      "cycles",       "cycles_ci95_low",       "cycles_ci95_high",       "sample_detailed_fraction",
+      "rays_traced",  "rays_per_second",       "core_utilization",       "thread_idle_fraction",
+      "l2_miss_rate", "dram_bytes_per_cycle",  "dram_read_latency_mean", "load_latency_mean",
+      "events",       "rung_cycles_error_min", "rung_cycles_error_max",  "rung_error_warning"};
   for (unsigned i = 0; i < sizeof show / sizeof show[0]; i++)
     for (unsigned j = 0; j < t.n; j++)
       if (!strcmp(t.e[j].name, show[i])) {
@@ -536,7 +539,8 @@ void run_output_stats_help(FILE *f, bool markdown) {
                                                     &machine_engine_stats_descs,
                                                     &run_output_json_stats_descs,
                                                     &run_output_analytic_stats_descs,
-                                                    &sample_stats_descs};
+                                                    &sample_stats_descs,
+                                                    &rung_error_stats_descs};
   for (unsigned i = 0; i < sizeof order / sizeof order[0]; i++)
     (markdown ? stats_write_markdown : stats_write_help)(order[i], f);
   timeline_write_help(machine_tl_cols, machine_tl_col_count, markdown, f);

@@ -22,6 +22,7 @@ struct app_analytic;
 struct machine_costs;
 struct image;
 struct outfile;
+struct rung_error;
 
 struct run_output_report {
   const char *out_dir, *machine_path, *scene_path, *scene_name, *policy;
@@ -33,6 +34,7 @@ struct run_output_report {
   const struct machine *machine;       /* a timed rung's; NULL at fidelity analytic */
   const struct app_analytic *analytic; /* fidelity analytic's counts and estimate, else NULL */
   const struct sampler *sample;        /* a sampled run's estimates (NULL: a full run) */
+  const struct rung_error *rung; /* a whole run at a cheaper rung: its measured error (else NULL) */
   const struct render_stats *rstats;
   const struct trace_stats *tstats;
   const struct framebuffer *fb;
@@ -64,8 +66,8 @@ void run_output_summary(const struct run_output_report *r, FILE *f);
 
 /* Every number a whole timed run writes, table by table (each component's in
  * its order), then what only stats.json holds, fidelity analytic's and a
- * sampled run's numbers, then timeline.csv's columns: name, unit, component, description,
- * one a line
+ * sampled run's numbers, a cheaper rung's measured error (app/rung_error.h),
+ * then timeline.csv's columns: name, unit, component, description, one a line
  * (`rtsim run --help-stats`), or as Markdown table rows (README "Numbers"). */
 void run_output_stats_help(FILE *f, bool markdown);
 /* The run's own tables: its numbers at the machine's slots (over a struct

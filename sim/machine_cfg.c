@@ -620,6 +620,11 @@ void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *in
   }
 }
 
+const char *machine_cfg_fidelity_name(uint32_t f) {
+  CHECK_LT(f, MACHINE_FIDELITY_COUNT);
+  return FIDELITY_NAMES[f];
+}
+
 void machine_cfg_to_stats(const struct machine_cfg *c, struct stats_table *t) {
   for (unsigned i = 0; i < NKEYS; i++) {
     char v[64];

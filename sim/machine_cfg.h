@@ -87,5 +87,7 @@ void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *in
 void machine_cfg_write_keys(FILE *f);
 /* Every key as a column of t (numbers as numbers, "full" as text). */
 void machine_cfg_to_stats(const struct machine_cfg *c, struct stats_table *t);
+/* A rung's name as the fidelity key takes it ("analytic", ...; f < MACHINE_FIDELITY_COUNT). */
+const char *machine_cfg_fidelity_name(uint32_t f);
 
 #endif
