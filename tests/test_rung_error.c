@@ -102,7 +102,14 @@ static void test_table_is_csv(void) {
   }
   EXPECTF(n == rung_error_table_rows, "the CSV has %u rows, the table %u", n,
           rung_error_table_rows);
+  EXPECTF(n > 0, "%s measures no regime", RUNG_ERROR_TABLE_PATH);
   free(csv);
+  /* Issue 36's run: analytic on grove, recursive, 32 cores and a 1 MiB L2,
+   * at its bandwidth bound, was 37% low in cycles and said nothing. */
+  struct rung_error r;
+  rung_error_match_in(&r, rung_error_table, rung_error_table_rows, "analytic", "recursive", 1,
+                      0.948, 0.555);
+  EXPECT(r.row && r.inside && r.warn && r.row->cycles_min < -0.3);
 }
 
 /* rtsim run on tiny.yaml at rung (and more), into dir; the exit code, its
@@ -152,6 +159,7 @@ static void test_run(void) {
     struct rung_error r;
     rung_error_match_in(&r, rung_error_table, rung_error_table_rows, rungs[i], "recursive", bound,
                         util, core);
+    EXPECTF(r.row, "%s recursive: no regime measured", rungs[i]);
     EXPECTF(testing_json_num(dir, "rung_error_warning") == r.warn, "%s: rung_error_warning",
             rungs[i]);
     EXPECTF((strstr(out, "rtsim run: warning: fidelity ") != NULL) == r.warn,
