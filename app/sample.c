@@ -30,19 +30,34 @@ const char *sample_problem(const struct machine_params *p, enum policy_kind k, u
   if (policy_queues(k))
     return "sample.fraction: sampling needs a policy that takes its work item by item "
            "(recursive or packet); the dynamic and treelet policies trace every primary ray "
-           "as one batch";
+           "as one batch, and sampling them in time (fast-forwarding the whole machine "
+           "between windows) was measured 2-18% off in cycles at 128x128 with intervals "
+           "that missed (README \"Sampling\"): run them whole";
   /* A unit warms the pipeline with two items a ray context, then measures
    * at least one a context: the measured window then holds the unit's own
    * items, started at spread times. */
   uint32_t n = sample_units(p, total, contexts);
-  if (n < 4 || p->sample_fraction * (double)total / n < 3.0 * contexts) {
+  if (n < SAMPLE_MIN_UNITS || p->sample_fraction * (double)total / n < 3.0 * contexts) {
+    /* The fraction that gives SAMPLE_MIN_UNITS units of 3 x contexts items. */
+    const double need = SAMPLE_MIN_UNITS * 3.0 * contexts / (double)total;
+    char hint[160];
+    if (p->sample_units && p->sample_units < SAMPLE_MIN_UNITS)
+      snprintf(hint, sizeof hint, "sample.units 0 or at least %u", SAMPLE_MIN_UNITS);
+    else if (need <= 1)
+      snprintf(hint, sizeof hint,
+               "sample.fraction %.3g or more, a larger image, or fewer ray contexts", need);
+    else
+      snprintf(hint, sizeof hint,
+               "this image is too small to sample on %u ray contexts: a larger image, fewer "
+               "contexts, or the whole run",
+               contexts);
     snprintf(buf, cap,
              "sample.fraction: too few detailed items: %.0f of %llu work items in %u unit%s, and "
              "a unit needs 3 x %u (the ray contexts: two pipelines to warm, one to measure) and "
-             "there must be at least 4 units; a larger fraction or image, fewer units or "
-             "contexts",
+             "there must be at least %u units (fewer leave a 95%% interval that means nothing); "
+             "%s",
              p->sample_fraction * (double)total, (unsigned long long)total, n, n == 1 ? "" : "s",
-             contexts);
+             contexts, SAMPLE_MIN_UNITS, hint);
     return buf;
   }
   return NULL;
@@ -53,7 +68,7 @@ void sample_init(struct sampler *s, const struct machine_params *p, uint64_t tot
   memset(s, 0, sizeof *s);
   s->total = total;
   s->n = sample_units(p, total, contexts);
-  CHECK_GE(s->n, 4);
+  CHECK_GE(s->n, SAMPLE_MIN_UNITS);
   s->cores = p->cores;
   s->hz = p->clock_ghz * 1e9;
   s->u = xcalloc(s->n, sizeof *s->u);
@@ -277,8 +292,27 @@ static struct est estimate(const struct sampler *s, enum sample_fig f) {
   return e;
 }
 
+/* e with each of its three numbers moved into [lo, hi]. */
+static struct est clamp_est(struct est e, double lo, double hi) {
+  const double x[3] = {e.v, e.lo, e.hi};
+  double c[3];
+  for (int i = 0; i < 3; i++) c[i] = x[i] < lo ? lo : x[i] > hi ? hi : x[i];
+  struct est r = {c[0], c[1], c[2]};
+  return r;
+}
+
+/* The fewest cycles the run can have taken: its issue slots over the cores
+ * (a core issues one slot a cycle), and the cycles the units took (they are
+ * part of the run: each unit's measured cycles, which do not overlap). */
+static double min_cycles(const struct sampler *s) {
+  double units = 0;
+  for (uint32_t h = 0; h < s->n; h++) units += delta(&s->u[h], SQ_CYCLES);
+  const double issue = (double)s->slots_total / s->cores;
+  return issue > units ? issue : units;
+}
+
 double sample_cycles(const struct sampler *s, double *lo, double *hi) {
-  struct est e = estimate(s, SF_CYCLES);
+  struct est e = clamp_est(estimate(s, SF_CYCLES), min_cycles(s), INFINITY);
   *lo = e.lo;
   *hi = e.hi;
   return e.v;
@@ -306,28 +340,41 @@ enum sample_out {
   SO_LOAD_LAT
 };
 
+/* Output o's estimate and interval, each number within the range its figure
+ * can take (a linearized interval is symmetric and knows no range; from a
+ * wide spread it reached below zero): cycles and seconds at least
+ * min_cycles, utilizations in [0, 1] and at most what min_cycles allows,
+ * DRAM bytes at least the units' own, the rest at least 0. */
 static struct est est_of(const void *st, const struct stats_env *env, enum sample_out o) {
   const struct sampler *s = st;
   const struct sample_env *x = env->ctx;
+  const double hz = x->p->clock_ghz * 1e9, c0 = min_cycles(s);
   struct est e;
   switch (o) {
-  case SO_CYCLES: return estimate(s, SF_CYCLES);
+  case SO_CYCLES: return clamp_est(estimate(s, SF_CYCLES), c0, INFINITY);
   case SO_SECONDS: {
-    const double hz = x->p->clock_ghz * 1e9;
-    e = estimate(s, SF_CYCLES);
+    e = clamp_est(estimate(s, SF_CYCLES), c0, INFINITY);
     struct est sec = {e.v / hz, e.lo / hz, e.hi / hz};
     return sec;
   }
-  case SO_RAYS_PER_S: return estimate(s, SF_RAYS_PER_S);
-  case SO_UTIL: return estimate(s, SF_UTIL);
-  case SO_DRAM_BYTES: return estimate(s, SF_DRAM_BYTES);
-  case SO_BYTES_PER_CYCLE: return estimate(s, SF_BYTES_PER_CYCLE);
+  case SO_RAYS_PER_S:
+    return clamp_est(estimate(s, SF_RAYS_PER_S), 0, (double)s->rays_total / (c0 / hz));
+  case SO_UTIL: {
+    const double top = (double)s->slots_total / (c0 * s->cores);
+    return clamp_est(estimate(s, SF_UTIL), 0, top < 1 ? top : 1);
+  }
+  case SO_DRAM_BYTES: {
+    double own = 0;
+    for (uint32_t h = 0; h < s->n; h++) own += delta(&s->u[h], SQ_DRAM_BYTES);
+    return clamp_est(estimate(s, SF_DRAM_BYTES), own, INFINITY);
+  }
+  case SO_BYTES_PER_CYCLE: return clamp_est(estimate(s, SF_BYTES_PER_CYCLE), 0, INFINITY);
   case SO_DRAM_UTIL: {
     e = estimate(s, SF_BYTES_PER_CYCLE);
     struct est u = {e.v / x->peak, e.lo / x->peak, e.hi / x->peak};
-    return u;
+    return clamp_est(u, 0, 1);
   }
-  default: return estimate(s, SF_LOAD_LAT);
+  default: return clamp_est(estimate(s, SF_LOAD_LAT), 0, INFINITY);
   }
 }
 

@@ -63,6 +63,12 @@ struct sampler {
   uint64_t rays_total, slots_total, slots_detailed;
 };
 
+/* The fewest units a run may sample: 6 middle units, Student's t at 5 degrees
+ * of freedom (2.57, 1.3 x the normal's 1.96). With fewer, the variance comes
+ * from one to three differences and t from 3.2 up to 12.7: an interval wide
+ * enough to reach below zero, not a measurement. */
+#define SAMPLE_MIN_UNITS 8u
+
 /* The units a job of `total` items gets on a machine of `contexts` ray
  * contexts (sample.units, or when 0 as many as fit, at most 40). */
 uint32_t sample_units(const struct machine_params *p, uint64_t total, uint32_t contexts);

@@ -103,18 +103,51 @@ static void test_seeds(void) {
   free(c);
 }
 
-/* Packet: the items are tiles (256 at 128x128), enough for 5 units of 24. */
+/* Packet: the items are tiles (1024 at 256x256); half of them make 21 units
+ * (measured: cycles +3.0%, its interval [-3.4%, +9.5%]). */
 static void test_packet(void) {
   char out[8192], full[512], samp[512];
   snprintf(full, sizeof full, "%s/smp_pk_full", RTSIM_TMP);
   snprintf(samp, sizeof samp, "%s/smp_pk_s", RTSIM_TMP);
-  EXPECT(run("sphereflake", "packet", 128, 128, "", full, out, sizeof out) == 0);
+  EXPECT(run("sphereflake", "packet", 256, 256, "", full, out, sizeof out) == 0);
   int rc =
-      run("sphereflake", "packet", 128, 128, "--set sample.fraction=0.5", samp, out, sizeof out);
+      run("sphereflake", "packet", 256, 256, "--set sample.fraction=0.5", samp, out, sizeof out);
   EXPECTF(rc == 0, "sampled packet run: exit %d: %s", rc, out);
   if (rc) return;
   EXPECT(testing_json_num(full, "issue_slots") == testing_json_num(samp, "issue_slots"));
   expect_near(full, samp, "cycles", 0.05);
+  const double c = testing_json_num(full, "cycles");
+  EXPECTF(testing_json_num(samp, "cycles_ci95_low") <= c &&
+              c <= testing_json_num(samp, "cycles_ci95_high"),
+          "packet: the full run's cycles %g outside the sampled interval", c);
+}
+
+/* An issue-bound run (every core busy every cycle): the raw estimate of the
+ * cycles falls below the issue slots over the cores and its interval's top
+ * of the core utilization above 1 (measured: the unclamped estimate 0.3%
+ * under the bound); both are clamped to what the run can be. */
+static void test_clamped(void) {
+  char out[8192], dir[512];
+  snprintf(dir, sizeof dir, "%s/smp_clamp", RTSIM_TMP);
+  char cmd[4096];
+  snprintf(cmd, sizeof cmd,
+           "%s run %s/configs/tiny.yaml %s/scenes/small/room.yaml --width 64 --height 64 --rays "
+           "primary --set costs.node=2000 --set sample.fraction=0.5 -o %s",
+           RTSIM_BINARY, RTSIM_SOURCE_DIR, RTSIM_SOURCE_DIR, dir);
+  int rc = testing_run(cmd, out, sizeof out);
+  EXPECTF(rc == 0, "issue-bound sampled run: exit %d: %s", rc, out);
+  if (rc) return;
+  const double bound = testing_json_num(dir, "issue_slots") / 2; /* tiny.yaml: 2 cores */
+  EXPECTF(testing_json_num(dir, "cycles_ci95_low") >= bound &&
+              testing_json_num(dir, "cycles") >= bound,
+          "cycles %g [%g, ...] below the issue bound %g", testing_json_num(dir, "cycles"),
+          testing_json_num(dir, "cycles_ci95_low"), bound);
+  EXPECTF(testing_json_num(dir, "core_utilization_ci95_high") <= 1 &&
+              testing_json_num(dir, "core_utilization") <= 1,
+          "core utilization %g [.., %g] above 1", testing_json_num(dir, "core_utilization"),
+          testing_json_num(dir, "core_utilization_ci95_high"));
+  EXPECTF(testing_json_num(dir, "cycles_ci95_high") > testing_json_num(dir, "cycles_ci95_low"),
+          "a clamped interval is still an interval");
 }
 
 static void test_refusals(void) {
@@ -123,7 +156,7 @@ static void test_refusals(void) {
   } bad[] = {
       {"dynamic", "--set sample.fraction=0.5", "sampling needs a policy that takes its work item"},
       {"recursive", "--set sample.fraction=0.01", "too few detailed items"},
-      {"recursive", "--set sample.fraction=0.5 --set sample.units=3", "at least 4 units"},
+      {"recursive", "--set sample.fraction=0.5 --set sample.units=3", "at least 8 units"},
       {"recursive", "--set sample.fraction=0.5 --set fidelity=analytic", "a timed fidelity"},
       {"recursive", "--set sample.fraction=0.5 --dram-trace " RTSIM_TMP "/smp.trace",
        "--dram-trace records a whole run"},
@@ -160,6 +193,7 @@ int main(void) {
   test_against_full();
   test_seeds();
   test_packet();
+  test_clamped();
   test_refusals();
   return testing_done("test_sampling");
 }
