@@ -113,6 +113,15 @@ struct timed_ctx {
   double t0;
 };
 
+/* The rays every worker has traced so far (sampling's probes). */
+static uint64_t rays_now(void *ctx) {
+  const struct timed_ctx *r = ctx;
+  const uint32_t n = machine_get_stats(r->m)->contexts;
+  uint64_t sum = 0;
+  for (uint32_t i = 0; i < n; i++) sum += render_stats_total(&r->workers[i].st);
+  return sum;
+}
+
 static void run_worker(void *arg, const struct machine_worker_info *info, struct mem_port port) {
   struct timed_ctx *r = arg;
   struct policy_worker *w = &r->workers[info->id];
@@ -183,6 +192,8 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
     CHECK(sample_problem(mp, k, policy_job_total(r.job), n, why, sizeof why) == NULL);
     sample_init(&t->sample, mp, policy_job_total(r.job), n);
     t->sample.m = t->m;
+    t->sample.rays_now = rays_now;
+    t->sample.rays_ctx = &r;
   }
   if (dram_trace) dram_trace_to(machine_dram(t->m), dram_trace);
   r.t0 = app_now();

@@ -71,6 +71,7 @@ void sample_init(struct sampler *s, const struct machine_params *p, uint64_t tot
   CHECK_GE(s->n, SAMPLE_MIN_UNITS);
   s->cores = p->cores;
   s->hz = p->clock_ghz * 1e9;
+  s->whole = p->sample_whole_image != 0;
   s->u = xcalloc(s->n, sizeof *s->u);
   s->drained = xcalloc(s->n, sizeof *s->drained);
   uint64_t prev_end = 0;
@@ -119,6 +120,7 @@ static void probe(struct sampler *s, uint64_t *at) {
   at[SQ_DRAM_BYTES] = p.dram_bytes;
   at[SQ_LAT_SUM] = p.load_latency_sum;
   at[SQ_LAT_N] = p.loads_timed;
+  at[SQ_RAYS] = s->rays_now ? s->rays_now(s->rays_ctx) : 0;
 }
 
 enum policy_item sample_item(void *ctx, uint64_t k, uint32_t core, struct mem_port *port) {
@@ -138,12 +140,17 @@ enum policy_item sample_item(void *ctx, uint64_t k, uint32_t core, struct mem_po
       u->have0 = true;
     }
     s->in_flight++;
+    s->traced++;
     return POLICY_ITEM_DETAIL;
   }
+  /* An item before the warming window: skipped (a sampled image), or only
+   * counted; neither touches a cache, so neither waits for the drain. */
+  if (k < u->warm_from && !s->whole) return POLICY_ITEM_SKIP;
   /* Between units the pipeline drains before the fast-forward: the unit's
    * last items must not run on caches warmed for the next one. */
   if (s->in_flight > 0 && !s->drained[s->cur]) return POLICY_ITEM_HOLD;
   s->drained[s->cur] = true;
+  s->traced++;
   *port = k >= u->warm_from ? machine_warm_port(s->m, core) : machine_count_port(s->m);
   return POLICY_ITEM_PORT;
 }
@@ -164,6 +171,7 @@ void sample_finish(struct sampler *s, uint64_t rays_total) {
   u->at1[SQ_DRAM_BYTES] = st->l2.fetch_bytes + st->l2.writeback_bytes;
   u->at1[SQ_LAT_SUM] = st->load_latency.sum;
   u->at1[SQ_LAT_N] = st->load_latency.count;
+  u->at1[SQ_RAYS] = rays_total;
   u->have1 = true;
   s->rays_total = rays_total;
   s->slots_detailed = st->issue_slots;
@@ -195,10 +203,12 @@ static double items(const struct sample_unit *u) { return (double)(u->end - u->m
 struct parts {
   double edge[SQ_COUNT]; /* first + last units' deltas */
   double S[SQ_COUNT];    /* sum over middle units of W_h x q_h / M_h */
-  double slots_mid;      /* issue slots the middle stands for */
+  double slots_mid;      /* issue slots the middle stands for (the whole image) */
 };
 
 enum sample_fig {
+  SF_SLOTS,
+  SF_RAYS,
   SF_CYCLES,
   SF_DRAM_BYTES,
   SF_BYTES_PER_CYCLE,
@@ -208,24 +218,32 @@ enum sample_fig {
   SF_COUNT
 };
 
-/* A middle quantity's total: its ratio to issue slots over the middle units,
- * times the issue slots the middle stands for. */
-static double mid(const struct parts *p, enum sample_q q) {
+/* A middle quantity's total. With the whole image traced: its ratio to issue
+ * slots over the middle units, times the issue slots the middle stands for
+ * (known); with a sampled image, the middle units' values per item times the
+ * items they stand for (S: parts_of weighs each stratum so that the weights
+ * sum to the items outside the first and last units). */
+static double mid(const struct sampler *s, const struct parts *p, enum sample_q q) {
+  if (!s->whole) return p->S[q];
   return p->S[SQ_SLOTS] > 0 ? p->S[q] / p->S[SQ_SLOTS] * p->slots_mid : 0;
 }
 
 static double figure(const struct sampler *s, const struct parts *p, enum sample_fig f) {
-  double cycles = p->edge[SQ_CYCLES] + mid(p, SQ_CYCLES);
-  double bytes = p->edge[SQ_DRAM_BYTES] + mid(p, SQ_DRAM_BYTES);
+  double cycles = p->edge[SQ_CYCLES] + mid(s, p, SQ_CYCLES);
+  double bytes = p->edge[SQ_DRAM_BYTES] + mid(s, p, SQ_DRAM_BYTES);
+  const double slots = s->whole ? (double)s->slots_total : p->edge[SQ_SLOTS] + p->S[SQ_SLOTS];
+  const double rays = s->whole ? (double)s->rays_total : p->edge[SQ_RAYS] + p->S[SQ_RAYS];
   switch (f) {
+  case SF_SLOTS: return slots;
+  case SF_RAYS: return rays;
   case SF_CYCLES: return cycles;
   case SF_DRAM_BYTES: return bytes;
   case SF_BYTES_PER_CYCLE: return cycles > 0 ? bytes / cycles : 0;
-  case SF_UTIL: return cycles > 0 ? (double)s->slots_total / (cycles * s->cores) : 0;
-  case SF_RAYS_PER_S: return cycles > 0 ? (double)s->rays_total / (cycles / s->hz) : 0;
+  case SF_UTIL: return cycles > 0 ? slots / (cycles * s->cores) : 0;
+  case SF_RAYS_PER_S: return cycles > 0 ? rays / (cycles / s->hz) : 0;
   default: {
-    double n = p->edge[SQ_LAT_N] + mid(p, SQ_LAT_N);
-    return n > 0 ? (p->edge[SQ_LAT_SUM] + mid(p, SQ_LAT_SUM)) / n : 0;
+    double n = p->edge[SQ_LAT_N] + mid(s, p, SQ_LAT_N);
+    return n > 0 ? (p->edge[SQ_LAT_SUM] + mid(s, p, SQ_LAT_SUM)) / n : 0;
   }
   }
 }
@@ -237,10 +255,15 @@ static double weight(const struct sampler *s, uint32_t h) {
 static void parts_of(const struct sampler *s, struct parts *p) {
   memset(p, 0, sizeof *p);
   const struct sample_unit *f = &s->u[0], *l = &s->u[s->n - 1];
+  /* With a sampled image the middle units stand for every item outside the
+   * first and last units' measured ones: their strata's weights scaled up. */
+  double w = 0;
+  for (uint32_t h = 1; h + 1 < s->n; h++) w += weight(s, h);
+  const double scale = s->whole ? 1 : ((double)s->total - items(f) - items(l)) / w;
   for (unsigned q = 0; q < SQ_COUNT; q++) {
     p->edge[q] = delta(f, q) + delta(l, q);
     for (uint32_t h = 1; h + 1 < s->n; h++)
-      p->S[q] += weight(s, h) * delta(&s->u[h], q) / items(&s->u[h]);
+      p->S[q] += scale * weight(s, h) * delta(&s->u[h], q) / items(&s->u[h]);
   }
   p->slots_mid = (double)s->slots_total - p->edge[SQ_SLOTS];
 }
@@ -271,13 +294,18 @@ static struct est estimate(const struct sampler *s, enum sample_fig f) {
     grad[q] = (figure(s, &d, f) - v) / eps;
   }
   const uint32_t r = s->n - 2; /* middle units */
-  double prev = 0, ss = 0, w2 = 0;
+  double prev = 0, ss = 0, w2 = 0, wsum = 0;
+  for (uint32_t h = 1; h + 1 < s->n; h++) wsum += weight(s, h);
+  const double scale = s->whole
+                           ? 1
+                           : ((double)s->total - items(&s->u[0]) - items(&s->u[s->n - 1])) / wsum,
+               scale2 = scale * scale;
   for (uint32_t h = 1; h + 1 < s->n; h++) {
     double l = 0;
     for (unsigned q = 0; q < SQ_COUNT; q++) l += grad[q] * delta(&s->u[h], q) / items(&s->u[h]);
     if (h > 1) ss += (l - prev) * (l - prev);
     prev = l;
-    w2 += weight(s, h) * weight(s, h);
+    w2 += weight(s, h) * weight(s, h) * scale2;
   }
   double var = r > 1 ? ss / (2.0 * (r - 1)) * w2 : 0;
   double half = sample_t975(r > 1 ? r - 1 : 1) * sqrt(var);
@@ -287,7 +315,8 @@ static struct est estimate(const struct sampler *s, enum sample_fig f) {
    * figures made of cycles carry a systematic +-SAMPLE_SYSTEMATIC, added in
    * quadrature; without it an issue-bound run's interval is narrower than
    * that bias. */
-  if (f != SF_DRAM_BYTES && f != SF_LOAD_LAT) half = hypot(half, SAMPLE_SYSTEMATIC * v);
+  if (f == SF_CYCLES || f == SF_BYTES_PER_CYCLE || f == SF_UTIL || f == SF_RAYS_PER_S)
+    half = hypot(half, SAMPLE_SYSTEMATIC * v);
   struct est e = {v, v - half, v + half};
   return e;
 }
@@ -330,6 +359,8 @@ struct sample_env {
 
 /* The estimates written: sample_fig's and two made of them. */
 enum sample_out {
+  SO_SLOTS,
+  SO_RAYS,
   SO_CYCLES,
   SO_SECONDS,
   SO_RAYS_PER_S,
@@ -357,10 +388,14 @@ static struct est est_of(const void *st, const struct stats_env *env, enum sampl
     struct est sec = {e.v / hz, e.lo / hz, e.hi / hz};
     return sec;
   }
+  /* What was traced is at least what the image holds. */
+  case SO_SLOTS: return clamp_est(estimate(s, SF_SLOTS), (double)s->slots_total, INFINITY);
+  case SO_RAYS: return clamp_est(estimate(s, SF_RAYS), (double)s->rays_total, INFINITY);
   case SO_RAYS_PER_S:
-    return clamp_est(estimate(s, SF_RAYS_PER_S), 0, (double)s->rays_total / (c0 / hz));
+    return clamp_est(estimate(s, SF_RAYS_PER_S), 0,
+                     s->whole ? (double)s->rays_total / (c0 / hz) : INFINITY);
   case SO_UTIL: {
-    const double top = (double)s->slots_total / (c0 * s->cores);
+    const double top = s->whole ? (double)s->slots_total / (c0 * s->cores) : 1;
     return clamp_est(estimate(s, SF_UTIL), 0, top < 1 ? top : 1);
   }
   case SO_DRAM_BYTES: {
@@ -388,6 +423,8 @@ static struct est est_of(const void *st, const struct stats_env *env, enum sampl
   static double o##_hi(const void *st, const struct stats_env *env) {                              \
     return est_of(st, env, o).hi;                                                                  \
   }
+SAMPLE_EST(SO_SLOTS)
+SAMPLE_EST(SO_RAYS)
 SAMPLE_EST(SO_CYCLES)
 SAMPLE_EST(SO_SECONDS)
 SAMPLE_EST(SO_RAYS_PER_S)
@@ -421,6 +458,10 @@ static double s_measured(const void *st, const struct stats_env *env) {
   (void)env;
   return items_fraction(st, ((const struct sampler *)st)->measured);
 }
+static double s_traced(const void *st, const struct stats_env *env) {
+  (void)env;
+  return items_fraction(st, ((const struct sampler *)st)->traced);
+}
 static double s_warmed(const void *st, const struct stats_env *env) {
   (void)env;
   return items_fraction(st, ((const struct sampler *)st)->warmed);
@@ -453,11 +494,15 @@ static const struct stats_desc sample_desc[] = {
     STATS_FN_U64(s_threads, "threads", "count", "hardware threads: cores x threads_per_core"),
     EST(SO_CYCLES, "cycles", "cycles", "the run's cycles, estimated", NULL),
     EST(SO_SECONDS, "seconds", "seconds", "the run at clock_ghz, estimated", NULL),
-    STATS_FIELD(struct sampler, rays_total, "rays_traced", "count",
-                "rays traced, every kind (exact: every item is traced)"),
+    EST(SO_RAYS, "rays_traced", "count",
+        "rays of the whole image, every kind (with sample.image whole, traced and exact: the "
+        "interval is the value)",
+        NULL),
     EST(SO_RAYS_PER_S, "rays_per_second", "per second", "rays traced / seconds, estimated", NULL),
-    STATS_FIELD(struct sampler, slots_total, "issue_slots", "cycles",
-                "issue slots the work takes (exact: every item is counted)"),
+    EST(SO_SLOTS, "issue_slots", "cycles",
+        "issue slots the whole image takes (with sample.image whole, counted and exact: the "
+        "interval is the value)",
+        NULL),
     EST(SO_UTIL, "core_utilization", "fraction", "issue slots / cores x cycles, estimated", NULL),
     EST(SO_DRAM_BYTES, "dram_bytes", "bytes", "bytes read from and written to the DRAM, estimated",
         NULL),
@@ -475,8 +520,10 @@ static const struct stats_desc sample_desc[] = {
                  "work items measured / work items"),
     STATS_FN_F64(s_warmed, "sample_warmed_fraction", "fraction",
                  "work items warmed without time / work items"),
+    STATS_FN_F64(s_traced, "sample_traced_fraction", "fraction",
+                 "work items traced (detailed, warmed or counted) / work items"),
     STATS_FN_F64(s_detailed_slots, "sample_detailed_slots_fraction", "fraction",
-                 "issue slots simulated in detail / issue slots"),
+                 "issue slots simulated in detail / issue slots traced"),
 };
 #undef EST
 const struct stats_descs sample_stats_descs = {"sampled", sample_desc, STATS_COUNT(sample_desc),

@@ -10,16 +10,20 @@
  * is left in flight: the unit's last items run on caches as they were, not
  * warmed for the next unit). Then, before the next unit, sample.warming times
  * its detailed items go through the warming port (caches updated, no time);
- * every other item through a port that only counts issue slots. So every
- * item is traced: the image, the rays and the issue slots are exact, and the
- * time is what is estimated. A unit's measurement is the difference of two
+ * with sample.image whole, every other item through a port that only counts
+ * issue slots (every item traced: the image, the rays and the issue slots
+ * exact, the time estimated); by default (sample.image sampled) every other
+ * item is skipped, not traced at all (its pixels black), and the rays and
+ * issue slots are estimated too. A unit's measurement is the difference of two
  * machine probes: at the claim of its first measured item and at the claim of
  * the first item after it (the end of the run for the last unit).
  *
  * Estimates: the first and last units' own values plus, for the rest of the
- * run, the middle units' cycles (DRAM bytes, load latencies) per issue slot
- * times the issue slots the rest takes (a ratio estimator on an exactly known
- * total). The 95% intervals: linearization, the middle units' variance from
+ * run, with the whole image, the middle units' cycles (DRAM bytes, load
+ * latencies) per issue slot times the issue slots the rest takes (a ratio
+ * estimator on an exactly known total); with a sampled image, the middle
+ * units' values per item times the items the rest holds (an expansion
+ * estimator, stratified). The 95% intervals: linearization, the middle units' variance from
  * successive differences (a systematic sample), Student's t with
  * middle units - 1 degrees of freedom; figures made of cycles add a
  * systematic 0.5% in quadrature (a bias common to all windows, which their
@@ -38,7 +42,7 @@ struct stats_table;
 struct err;
 
 /* What a unit measured, per quantity (differences of two probes). */
-enum sample_q { SQ_CYCLES, SQ_SLOTS, SQ_DRAM_BYTES, SQ_LAT_SUM, SQ_LAT_N, SQ_COUNT };
+enum sample_q { SQ_CYCLES, SQ_SLOTS, SQ_DRAM_BYTES, SQ_LAT_SUM, SQ_LAT_N, SQ_RAYS, SQ_COUNT };
 
 struct sample_unit {
   uint64_t stratum_lo, stratum_hi; /* the stratum's items [lo, hi) */
@@ -59,7 +63,12 @@ struct sampler {
   bool *drained;                       /* [h]: the gap before unit h has seen the pipeline empty */
   uint32_t cores;
   double hz;
-  /* After the run (sample_finish): exact totals. */
+  bool whole;      /* sample.image whole: every item traced (else skipped) */
+  uint64_t traced; /* items traced (detailed, warmed, counted) */
+  /* The rays traced so far (set by the caller before the run). */
+  uint64_t (*rays_now)(void *ctx);
+  void *rays_ctx;
+  /* After the run (sample_finish): the totals of what was traced. */
   uint64_t rays_total, slots_total, slots_detailed;
 };
 

@@ -85,6 +85,7 @@ struct machine_params {
   double sample_fraction;
   uint32_t sample_units;
   double sample_warming;
+  uint32_t sample_whole_image; /* 1: every item traced (sample.image: whole) */
   uint64_t sample_seed;
 };
 

@@ -43,6 +43,7 @@ static const char *const FIDELITY_NAMES[MACHINE_FIDELITY_COUNT] = {"analytic", "
 static const char *const QUEUE_NAMES[] = {"shared", "per_bank",
                                           "per_rank"};            /* enum dram_banked_queues */
 static const char *const SHARING_NAMES[] = {"partition", "chip"}; /* renderer/policy/policy.h */
+static const char *const IMAGE_NAMES[] = {"sampled", "whole"};    /* sample.image */
 
 /* Every machine key, one row each: name, kind, range, default, unit, rungs,
  * where it goes, (names of an enum's values,) what it is. The order is that of
@@ -171,6 +172,10 @@ static const struct key KEYS[] = {
      "strata of the work list, one detailed unit each (0: as many as fit, at most 40)"},
     {"sample.warming", K_F64, 0, 1e6, "4", "", R_ALL, P(sample_warming),
      "items warmed without time before a unit, a multiple of its detailed items"},
+    {"sample.image", K_ENUM, 0, 1, "whole", "", R_ALL, E(sample_whole_image, IMAGE_NAMES),
+     "whole: every item is traced (rays and issue slots exact); sampled: only the units and "
+     "the items warmed before them (the rest of the image black, rays and issue slots "
+     "estimated)"},
     {"sample.seed", K_U64, 0, 1e15, "1", "", R_ALL, P(sample_seed),
      "where each middle unit falls in its stratum"},
 };

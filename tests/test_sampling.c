@@ -150,6 +150,40 @@ static void test_clamped(void) {
           "a clamped interval is still an interval");
 }
 
+/* sample.image sampled: only the units and their warming windows are traced;
+ * the rays and issue slots become estimates whose intervals hold the full
+ * run's counts, and the image is not the full run's (pixels left black). */
+static void test_sampled_image(void) {
+  char out[8192], full[512], samp[512];
+  snprintf(full, sizeof full, "%s/smp_img_full", RTSIM_TMP);
+  snprintf(samp, sizeof samp, "%s/smp_img_s", RTSIM_TMP);
+  EXPECT(run("room", "recursive", 64, 64, "", full, out, sizeof out) == 0);
+  int rc = run("room", "recursive", 64, 64,
+               "--set sample.fraction=0.2 --set sample.warming=1 --set sample.image=sampled", samp,
+               out, sizeof out);
+  EXPECTF(rc == 0, "sampled image: exit %d: %s", rc, out);
+  if (rc) return;
+  const double traced = testing_json_num(samp, "sample_traced_fraction");
+  EXPECTF(traced > 0.2 && traced < 0.6, "traced fraction %g for 0.2 detailed, 0.2 warmed", traced);
+  const char *counts[] = {"issue_slots", "rays_traced", "cycles"};
+  for (size_t i = 0; i < 3; i++) {
+    char lo[96], hi[96];
+    snprintf(lo, sizeof lo, "%s_ci95_low", counts[i]);
+    snprintf(hi, sizeof hi, "%s_ci95_high", counts[i]);
+    const double f = testing_json_num(full, counts[i]);
+    printf("sampled image: %s full %.6g, estimate %.6g [%.6g, %.6g]\n", counts[i], f,
+           testing_json_num(samp, counts[i]), testing_json_num(samp, lo),
+           testing_json_num(samp, hi));
+    EXPECTF(testing_json_num(samp, lo) <= f && f <= testing_json_num(samp, hi) &&
+                testing_json_num(samp, lo) < testing_json_num(samp, hi),
+            "sampled image: %s's interval misses the full run's %g", counts[i], f);
+  }
+  char a[600], b[600];
+  snprintf(a, sizeof a, "%s/image.exr", full);
+  snprintf(b, sizeof b, "%s/image.exr", samp);
+  EXPECTF(!testing_same_rgb(a, b), "sampled image: the image is the full run's");
+}
+
 static void test_refusals(void) {
   static const struct {
     const char *policy, *more, *want;
@@ -194,6 +228,7 @@ int main(void) {
   test_seeds();
   test_packet();
   test_clamped();
+  test_sampled_image();
   test_refusals();
   return testing_done("test_sampling");
 }

@@ -77,17 +77,18 @@ void policy_job_done(struct policy_job *job, uint64_t n) {
     s->progress(s->progress_ctx, job->done, job->total);
 }
 
-bool policy_item_begin(struct policy_job *job, struct policy_worker *w, uint64_t k,
-                       struct mem_port *own) {
+enum policy_item policy_item_begin(struct policy_job *job, struct policy_worker *w, uint64_t k,
+                                   struct mem_port *own) {
   const struct policy_setup *s = &job->setup;
   *own = w->tr.mem;
-  if (!s->item) return true;
+  if (!s->item) return POLICY_ITEM_DETAIL;
   for (uint64_t wait = 64;; wait = wait < 4096 ? 2 * wait : wait) {
     struct mem_port other = {0};
-    switch (s->item(s->item_ctx, k, w->core, &other)) {
-    case POLICY_ITEM_DETAIL: return true;
-    case POLICY_ITEM_PORT: w->tr.mem = other; return false;
-    default: mem_wait(own, wait); break;
+    const enum policy_item how = s->item(s->item_ctx, k, w->core, &other);
+    switch (how) {
+    case POLICY_ITEM_HOLD: mem_wait(own, wait); break;
+    case POLICY_ITEM_PORT: w->tr.mem = other; return how;
+    default: return how;
     }
   }
 }

@@ -49,7 +49,7 @@ enum policy_kind {
 enum policy_dyn_sharing { POLICY_DYN_PARTITION = 0, POLICY_DYN_CHIP = 1 };
 
 /* What to do with a claimed work item (policy_setup.item). */
-enum policy_item { POLICY_ITEM_DETAIL, POLICY_ITEM_PORT, POLICY_ITEM_HOLD };
+enum policy_item { POLICY_ITEM_DETAIL, POLICY_ITEM_PORT, POLICY_ITEM_HOLD, POLICY_ITEM_SKIP };
 
 struct policy_params {
   uint32_t packet_dim;  /* packet: packets are packet_dim x packet_dim pixels (8) */
@@ -143,8 +143,9 @@ struct policy_setup {
    * worker's port; POLICY_ITEM_PORT through *port instead (a backend that
    * takes no time and never suspends: it warms caches or only counts);
    * POLICY_ITEM_HOLD: the worker waits (mem_wait, 64 cycles, doubling up to
-   * 4096) and asks again about the same item. Every item is traced and drawn
-   * in the end. Items are claimed in order, one a claim. item_done (may be
+   * 4096) and asks again about the same item; POLICY_ITEM_SKIP: the item is
+   * not traced at all (no access, no ray, its pixels left black). Items are
+   * claimed in order, one a claim. item_done (may be
    * NULL) hears when a POLICY_ITEM_DETAIL item is finished. Recursive and packet only: the
    * dynamic policy claims a whole batch at once (policy_job_create CHECKs). */
   enum policy_item (*item)(void *ctx, uint64_t k, uint32_t core, struct mem_port *port);

@@ -54,9 +54,11 @@ uint64_t policy_job_claim(struct policy_job *job, uint64_t n, uint64_t *first);
 
 /* Sampling (policy_setup.item): before item k's first access (it may wait
  * first); w's port may be swapped for the item, *own keeps w's own for
- * policy_item_end. True when the item goes through w's own port. */
-bool policy_item_begin(struct policy_job *job, struct policy_worker *w, uint64_t k,
-                       struct mem_port *own);
+ * policy_item_end. POLICY_ITEM_DETAIL: the item goes through w's own port;
+ * POLICY_ITEM_PORT: through another; POLICY_ITEM_SKIP: the caller skips it
+ * (policy_item_end is not called, policy_job_done is). */
+enum policy_item policy_item_begin(struct policy_job *job, struct policy_worker *w, uint64_t k,
+                                   struct mem_port *own);
 void policy_item_end(struct policy_job *job, struct policy_worker *w, uint64_t k,
                      const struct mem_port *own, bool detail);
 

@@ -117,7 +117,12 @@ static bool pkt_step(struct policy_job *job, struct policy_worker *wk) {
   uint64_t k;
   if (policy_job_claim(job, 1, &k) == 0) return false;
   struct mem_port own;
-  const bool detail = policy_item_begin(job, wk, k, &own);
+  const enum policy_item how = policy_item_begin(job, wk, k, &own);
+  if (how == POLICY_ITEM_SKIP) {
+    policy_job_done(job, 1);
+    return true;
+  }
+  const bool detail = how == POLICY_ITEM_DETAIL;
   if (!wk->scratch) {
     struct pkt_scratch *n = xmalloc(sizeof *n);
     n->pk = trace_packet_create();

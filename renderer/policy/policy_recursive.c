@@ -45,7 +45,12 @@ static bool rec_step(struct policy_job *job, struct policy_worker *wk) {
   uint64_t k;
   if (policy_job_claim(job, 1, &k) == 0) return false;
   struct mem_port own;
-  const bool detail = policy_item_begin(job, wk, k, &own);
+  const enum policy_item how = policy_item_begin(job, wk, k, &own);
+  if (how == POLICY_ITEM_SKIP) {
+    policy_job_done(job, 1);
+    return true;
+  }
+  const bool detail = how == POLICY_ITEM_DETAIL;
   if (!wk->scratch) wk->scratch = xmalloc(sizeof(struct rec_scratch));
   struct rec_scratch *x = wk->scratch;
   struct ray *stack = x->stack;
