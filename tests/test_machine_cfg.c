@@ -94,6 +94,7 @@ static void test_params_ranges(void) {
       {"dram.latency", "dram.latency: must be 0 to 10^9 cycles"},
       {"timeline.window", "timeline.window: must be 1 to 10^12 cycles"},
       {"sample.fraction", "sample.fraction: must be 1e-06 to 1"},
+      {"sample.image", "sample.image: expected one of: sampled, whole"},
   };
   for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
     struct machine_cfg b;
@@ -121,6 +122,7 @@ static void test_params_ranges(void) {
     else if (!strcmp(k, "dram.latency")) b.p.dram_latency_cycles = 1ull << 40;
     else if (!strcmp(k, "timeline.window")) b.p.timeline_window_cycles = 0;
     else if (!strcmp(k, "sample.fraction")) b.p.sample_fraction = 1.5;
+    else if (!strcmp(k, "sample.image")) b.p.sample_whole_image = 2;
     const char *why = machine_params_problem(&b.p, buf, sizeof buf);
     EXPECTF(why && !strcmp(why, cases[i].want), "%s: got '%s', want '%s'", k, why ? why : "NULL",
             cases[i].want);

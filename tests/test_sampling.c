@@ -195,6 +195,8 @@ static void test_refusals(void) {
       {"recursive", "--set sample.fraction=0.5 --dram-trace " RTSIM_TMP "/smp.trace",
        "--dram-trace records a whole run"},
       {"recursive", "--set sample.fraction=0", "sample.fraction"},
+      {"recursive", "--set sample.fraction=0.5 --set sample.image=half",
+       "--set sample.image=half: error: sample.image: unknown value (got 'half', expected one of: sampled, whole)"},
       {"recursive", "--set sample.fraction=1.5", "sample.fraction"},
   };
   char out[8192];
