@@ -176,6 +176,16 @@ void sample_finish(struct sampler *s, uint64_t rays_total) {
   s->rays_total = rays_total;
   s->slots_detailed = st->issue_slots;
   s->slots_total = st->issue_slots + machine_warm_slots(s->m) + machine_count_slots(s->m);
+  /* With a sampled image the middle units stand for every item outside the
+   * first and last units' measured ones: their strata scaled up to that. */
+  s->mid_scale = 1;
+  if (!s->whole) {
+    double w = 0;
+    for (uint32_t h = 1; h + 1 < s->n; h++) w += (double)(s->u[h].stratum_hi - s->u[h].stratum_lo);
+    s->mid_scale = ((double)s->total - (double)(s->u[0].end - s->u[0].measure) -
+                    (double)(u->end - u->measure)) /
+                   w;
+  }
   for (uint32_t h = 0; h < s->n; h++) CHECK(s->u[h].have0 && s->u[h].have1);
 }
 
@@ -248,22 +258,18 @@ static double figure(const struct sampler *s, const struct parts *p, enum sample
   }
 }
 
+/* The items middle unit h stands for: its stratum's, scaled by mid_scale. */
 static double weight(const struct sampler *s, uint32_t h) {
-  return (double)(s->u[h].stratum_hi - s->u[h].stratum_lo);
+  return (double)(s->u[h].stratum_hi - s->u[h].stratum_lo) * s->mid_scale;
 }
 
 static void parts_of(const struct sampler *s, struct parts *p) {
   memset(p, 0, sizeof *p);
   const struct sample_unit *f = &s->u[0], *l = &s->u[s->n - 1];
-  /* With a sampled image the middle units stand for every item outside the
-   * first and last units' measured ones: their strata's weights scaled up. */
-  double w = 0;
-  for (uint32_t h = 1; h + 1 < s->n; h++) w += weight(s, h);
-  const double scale = s->whole ? 1 : ((double)s->total - items(f) - items(l)) / w;
   for (unsigned q = 0; q < SQ_COUNT; q++) {
     p->edge[q] = delta(f, q) + delta(l, q);
     for (uint32_t h = 1; h + 1 < s->n; h++)
-      p->S[q] += scale * weight(s, h) * delta(&s->u[h], q) / items(&s->u[h]);
+      p->S[q] += weight(s, h) * delta(&s->u[h], q) / items(&s->u[h]);
   }
   p->slots_mid = (double)s->slots_total - p->edge[SQ_SLOTS];
 }
@@ -294,18 +300,13 @@ static struct est estimate(const struct sampler *s, enum sample_fig f) {
     grad[q] = (figure(s, &d, f) - v) / eps;
   }
   const uint32_t r = s->n - 2; /* middle units */
-  double prev = 0, ss = 0, w2 = 0, wsum = 0;
-  for (uint32_t h = 1; h + 1 < s->n; h++) wsum += weight(s, h);
-  const double scale = s->whole
-                           ? 1
-                           : ((double)s->total - items(&s->u[0]) - items(&s->u[s->n - 1])) / wsum,
-               scale2 = scale * scale;
+  double prev = 0, ss = 0, w2 = 0;
   for (uint32_t h = 1; h + 1 < s->n; h++) {
     double l = 0;
     for (unsigned q = 0; q < SQ_COUNT; q++) l += grad[q] * delta(&s->u[h], q) / items(&s->u[h]);
     if (h > 1) ss += (l - prev) * (l - prev);
     prev = l;
-    w2 += weight(s, h) * weight(s, h) * scale2;
+    w2 += weight(s, h) * weight(s, h);
   }
   double var = r > 1 ? ss / (2.0 * (r - 1)) * w2 : 0;
   double half = sample_t975(r > 1 ? r - 1 : 1) * sqrt(var);

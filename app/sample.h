@@ -70,6 +70,7 @@ struct sampler {
   void *rays_ctx;
   /* After the run (sample_finish): the totals of what was traced. */
   uint64_t rays_total, slots_total, slots_detailed;
+  double mid_scale; /* a middle stratum's items x this: the items its unit stands for */
 };
 
 /* The fewest units a run may sample: 6 middle units, Student's t at 5 degrees
