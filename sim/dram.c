@@ -12,6 +12,7 @@
 
 #include "sim/dram_fixed.h"
 #include "sim/engine.h"
+#include "sim/ring.h"
 #include "sim/stats.h"
 
 const char *const dram_model_names[DRAM_MODEL_COUNT] = {"fixed", "channel", "banked"};
@@ -30,8 +31,7 @@ struct dram {
   void *level;
   struct dram_clock clock;
   uint64_t core_khz;
-  struct flight *ring; /* capacity a power of two, indexed by sequence */
-  uint64_t cap, head, next;
+  struct ring fl;    /* requests taken, by sequence; head: the oldest not yet traced */
   uint64_t inflight; /* taken, not yet served */
   /* The request being reported served (inside client.done): its transfer. */
   bool served_has_xfer;
@@ -51,22 +51,22 @@ const char *dram_params_problem(const struct dram_params *p) {
 }
 
 static void trace_flush(struct dram *d) {
-  while (d->head < d->next) {
-    struct flight *f = &d->ring[d->head & (d->cap - 1)];
+  while (ring_len(&d->fl)) {
+    struct flight *f = RING_HEAD(&d->fl, struct flight);
     if (!f->done) break;
     if (d->trace)
       fprintf(d->trace, "0x%llx %s %llu %llu %llu\n", (unsigned long long)f->addr,
               f->write ? "WRITE" : "READ",
               (unsigned long long)dram_clock_from_core(d->clock, f->at), (unsigned long long)f->at,
               (unsigned long long)f->done_at);
-    d->head++;
+    ring_pop(&d->fl);
   }
 }
 
 static void level_done(void *ctx, uint64_t seq) {
   struct dram *d = ctx;
-  CHECK(seq >= d->head && seq < d->next);
-  struct flight *f = &d->ring[seq & (d->cap - 1)];
+  CHECK(seq >= d->fl.head && seq < d->fl.tail);
+  struct flight *f = RING_AT(&d->fl, struct flight, seq);
   CHECK(!f->done);
   f->done = true;
   f->done_at = engine_now(d->eng);
@@ -76,15 +76,15 @@ static void level_done(void *ctx, uint64_t seq) {
   d->served_has_xfer = f->has_xfer;
   d->served_start = f->xfer_start;
   d->served_end = f->xfer_end;
-  if (seq == d->head) trace_flush(d);
+  if (seq == d->fl.head) trace_flush(d);
   d->client.done(d->client.ctx, tag);
   d->served_has_xfer = false;
 }
 
 static void level_transfer(void *ctx, uint64_t seq, double start, double end) {
   struct dram *d = ctx;
-  CHECK(seq >= d->head && seq < d->next);
-  struct flight *f = &d->ring[seq & (d->cap - 1)];
+  CHECK(seq >= d->fl.head && seq < d->fl.tail);
+  struct flight *f = RING_AT(&d->fl, struct flight, seq);
   f->has_xfer = true;
   f->xfer_start = start;
   f->xfer_end = end;
@@ -104,8 +104,6 @@ struct dram *dram_create(const struct dram_params *p, uint64_t core_khz, struct 
   d->client = *client;
   d->clock = dram_clock_make(core_khz, (uint64_t)p->clock_mhz * 1000);
   d->core_khz = core_khz;
-  d->cap = 64;
-  d->ring = xcalloc(d->cap, sizeof *d->ring);
   struct dram_client mine = {d, level_done, level_space, level_transfer};
   switch (p->model) {
   case DRAM_MODEL_FIXED:
@@ -133,7 +131,7 @@ struct dram *dram_create(const struct dram_params *p, uint64_t core_khz, struct 
 void dram_destroy(struct dram *d) {
   if (!d) return;
   d->ops->destroy(d->level);
-  free(d->ring);
+  ring_free(&d->fl);
   free(d);
 }
 
@@ -142,17 +140,8 @@ bool dram_can_take(const struct dram *d, uint64_t addr, bool write) {
 }
 
 void dram_take(struct dram *d, uint64_t addr, bool write, uint64_t tag) {
-  if (d->next - d->head == d->cap) {
-    /* Grow the ring, keeping each request at its sequence modulo the new size. */
-    uint64_t cap = 2 * d->cap;
-    struct flight *n = xcalloc(cap, sizeof *n);
-    for (uint64_t s = d->head; s < d->next; s++) n[s & (cap - 1)] = d->ring[s & (d->cap - 1)];
-    free(d->ring);
-    d->ring = n;
-    d->cap = cap;
-  }
-  uint64_t seq = d->next++;
-  struct flight *f = &d->ring[seq & (d->cap - 1)];
+  const uint64_t seq = d->fl.tail;
+  struct flight *f = RING_PUSH(&d->fl, struct flight);
   f->addr = addr;
   f->tag = tag;
   f->at = engine_now(d->eng);
@@ -172,7 +161,7 @@ void dram_take(struct dram *d, uint64_t addr, bool write, uint64_t tag) {
 
 void dram_finish(struct dram *d) {
   CHECK_EQ(d->inflight, 0);
-  CHECK_EQ(d->head, d->next);
+  CHECK_EQ(ring_len(&d->fl), 0);
   d->ops->finish(d->level);
 }
 

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 
 #include "sim/engine.h"
+#include "sim/ring.h"
 #include "sim/stats.h"
 
 struct dram_channel {
@@ -20,14 +21,18 @@ struct dram_channel {
   uint64_t k;           /* requests so far */
   dram_tick free_ticks; /* when the channel is next free: the last transfer's end */
   uint64_t space_at;    /* cycle of the pending space event, or UINT64_MAX */
-  /* Occupancy sweep: entry and start ticks of requests not yet started at
-   * sweep_t (a ring of capacity sw_cap from sw_lo, sw_n long); sw_e: how many
-   * of them have entered by sweep_t. */
-  dram_tick (*sw)[2];
-  uint64_t sw_cap, sw_lo, sw_n, sw_e;
+  /* Occupancy sweep: entry and start ticks (struct span) of requests not yet
+   * started at sweep_t; sw_e: how many of them have entered by sweep_t. */
+  struct ring sw;
+  uint64_t sw_e;
   dram_tick sweep_t;
   double occ;
   struct dram_channel_stats st;
+};
+
+/* A request's entry into the FIFO and the start of its transfer, in ticks. */
+struct span {
+  dram_tick entry, start;
 };
 
 #define LINE_BYTES 64u
@@ -37,11 +42,11 @@ struct dram_channel {
  * non-decreasing, so two pointers merge them in time order. */
 static void sweep_to(struct dram_channel *d, dram_tick x) {
   const double tick = 1.0 / (double)(1ull << DRAM_TICK_BITS);
-  while (d->sw_n) {
-    dram_tick *head = d->sw[d->sw_lo % d->sw_cap];
+  while (ring_len(&d->sw)) {
+    const uint64_t n = ring_len(&d->sw);
     dram_tick next_entry =
-        d->sw_e < d->sw_n ? d->sw[(d->sw_lo + d->sw_e) % d->sw_cap][0] : TICK_FOREVER;
-    dram_tick next_start = head[1];
+        d->sw_e < n ? RING_AT(&d->sw, struct span, d->sw.head + d->sw_e)->entry : TICK_FOREVER;
+    dram_tick next_start = RING_HEAD(&d->sw, struct span)->start;
     dram_tick ev = next_entry < next_start ? next_entry : next_start;
     if (ev > x) break;
     d->st.fifo_area += d->occ * (double)(ev - d->sweep_t) * tick;
@@ -55,8 +60,7 @@ static void sweep_to(struct dram_channel *d, dram_tick x) {
     } else {
       /* The head starts: it entered no later than it started. */
       CHECK_GT(d->sw_e, 0);
-      d->sw_lo++;
-      d->sw_n--;
+      ring_pop(&d->sw);
       d->sw_e--;
       d->occ -= 1.0;
     }
@@ -68,22 +72,7 @@ static void sweep_to(struct dram_channel *d, dram_tick x) {
 }
 
 static void sweep_add(struct dram_channel *d, dram_tick entry, dram_tick start) {
-  if (d->sw_n == d->sw_cap) {
-    uint64_t cap = d->sw_cap ? 2 * d->sw_cap : 64;
-    dram_tick(*n)[2] = xmalloc(cap * sizeof *n);
-    for (uint64_t i = 0; i < d->sw_n; i++) {
-      n[i][0] = d->sw[(d->sw_lo + i) % d->sw_cap][0];
-      n[i][1] = d->sw[(d->sw_lo + i) % d->sw_cap][1];
-    }
-    free(d->sw);
-    d->sw = n;
-    d->sw_cap = cap;
-    d->sw_lo = 0;
-  }
-  dram_tick *r = d->sw[(d->sw_lo + d->sw_n) % d->sw_cap];
-  r[0] = entry;
-  r[1] = start;
-  d->sw_n++;
+  *RING_PUSH(&d->sw, struct span) = (struct span){entry, start};
 }
 
 static void ev_done(void *ctx, uint64_t tag) {
@@ -207,7 +196,7 @@ static void ch_report(const void *self, struct stats_table *t, uint64_t cycles) 
 static void ch_destroy(void *self) {
   struct dram_channel *d = self;
   if (!d) return;
-  free(d->sw);
+  ring_free(&d->sw);
   free(d->starts);
   free(d);
 }

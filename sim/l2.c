@@ -11,6 +11,7 @@
 
 #include "sim/cache.h"
 #include "sim/dram.h"
+#include "sim/ring.h"
 #include "sim/stats.h"
 #include "sim/timeline.h"
 
@@ -27,35 +28,11 @@ struct req {
   uint32_t next;
 };
 
-/* A FIFO ring of (value, entered, tag) triples, growing by doubling. */
-struct ring {
-  uint64_t (*v)[3];
-  uint64_t cap, lo, n;
+/* An entry of the miss queue (value: the slot) or the write buffer (value:
+ * the line, WB_TAKEN_BACK once taken back; tag: the line's cost tag). */
+struct qentry {
+  uint64_t value, at, tag;
 };
-
-static void ring_push(struct ring *r, uint64_t value, uint64_t at, uint64_t tag) {
-  if (r->n == r->cap) {
-    uint64_t cap = r->cap ? 2 * r->cap : 64;
-    uint64_t(*v)[3] = xmalloc(cap * sizeof *v);
-    for (uint64_t i = 0; i < r->n; i++)
-      for (int k = 0; k < 3; k++) v[i][k] = r->v[(r->lo + i) % r->cap][k];
-    free(r->v);
-    r->v = v;
-    r->cap = cap;
-    r->lo = 0;
-  }
-  r->v[(r->lo + r->n) % r->cap][0] = value;
-  r->v[(r->lo + r->n) % r->cap][1] = at;
-  r->v[(r->lo + r->n) % r->cap][2] = tag;
-  r->n++;
-}
-
-static const uint64_t *ring_head(const struct ring *r) { return r->v[r->lo % r->cap]; }
-
-static void ring_pop(struct ring *r) {
-  r->lo = (r->lo + 1) % r->cap;
-  r->n--;
-}
 
 struct l2 {
   struct l2_params p;
@@ -119,7 +96,7 @@ static void pump(struct l2 *l2);
 
 /* Try one access at cycle t; false (and last_refusal) if it must wait. */
 static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
-  if (l2->miss_q.n) {
+  if (ring_len(&l2->miss_q)) {
     l2->last_refusal = L2_STALL_DRAM;
     return false;
   }
@@ -272,11 +249,12 @@ void l2_access(struct l2 *l2, uint64_t line, enum l2_op op, unsigned cls, void *
 /* ---- towards the DRAM ---- */
 
 static bool try_read(struct l2 *l2, uint64_t t) {
-  if (!l2->miss_q.n) return false;
-  uint32_t slot = (uint32_t)ring_head(&l2->miss_q)[0];
+  if (!ring_len(&l2->miss_q)) return false;
+  const struct qentry *h = RING_HEAD(&l2->miss_q, struct qentry);
+  uint32_t slot = (uint32_t)h->value;
   uint64_t addr = cache_line(l2->tags, slot) << L2_LG2_LINE;
   if (!dram_can_take(l2->dram, addr, false)) return false;
-  qmeter_leave(&l2->st.miss_queue, &l2->qc.miss_queue, t, ring_head(&l2->miss_q)[1]);
+  qmeter_leave(&l2->st.miss_queue, &l2->qc.miss_queue, t, h->at);
   ring_pop(&l2->miss_q);
   dram_take(l2->dram, addr, false, tag_read(slot));
   return true;
@@ -286,12 +264,14 @@ static bool try_read(struct l2 *l2, uint64_t t) {
 #define WB_TAKEN_BACK UINT64_MAX
 
 static bool try_write(struct l2 *l2, uint64_t t) {
-  while (l2->wb.n && ring_head(&l2->wb)[0] == WB_TAKEN_BACK) ring_pop(&l2->wb);
-  if (!l2->wb.n) return false;
-  uint64_t addr = ring_head(&l2->wb)[0] << L2_LG2_LINE;
+  while (ring_len(&l2->wb) && RING_HEAD(&l2->wb, struct qentry)->value == WB_TAKEN_BACK)
+    ring_pop(&l2->wb);
+  if (!ring_len(&l2->wb)) return false;
+  const struct qentry *h = RING_HEAD(&l2->wb, struct qentry);
+  uint64_t addr = h->value << L2_LG2_LINE;
   if (!dram_can_take(l2->dram, addr, true)) return false;
-  qmeter_leave(&l2->st.write_buffer, &l2->qc.write_buffer, t, ring_head(&l2->wb)[1]);
-  const uint32_t tag = (uint32_t)ring_head(&l2->wb)[2];
+  qmeter_leave(&l2->st.write_buffer, &l2->qc.write_buffer, t, h->at);
+  const uint32_t tag = (uint32_t)h->tag;
   ring_pop(&l2->wb);
   l2->wb_used--;
   dram_take(l2->dram, addr, true, TAG_WRITE);
@@ -314,7 +294,7 @@ static void pump(struct l2 *l2) {
       moved = true;
       continue;
     }
-    if (!writes_first && !l2->miss_q.n && try_write(l2, t)) {
+    if (!writes_first && !ring_len(&l2->miss_q) && try_write(l2, t)) {
       moved = true;
       continue;
     }
@@ -331,11 +311,11 @@ static void fill(struct l2 *l2, uint32_t s, uint64_t t, bool from_dram);
  * of a line and then its older data written over it.) */
 static bool take_back(struct l2 *l2, uint32_t slot, uint64_t t) {
   const uint64_t line = cache_line(l2->tags, slot);
-  for (uint64_t i = 0; i < l2->wb.n; i++) {
-    uint64_t *e = l2->wb.v[(l2->wb.lo + i) % l2->wb.cap];
-    if (e[0] != line) continue;
-    qmeter_leave(&l2->st.write_buffer, &l2->qc.write_buffer, t, e[1]);
-    e[0] = WB_TAKEN_BACK;
+  for (uint64_t s = l2->wb.head; s < l2->wb.tail; s++) {
+    struct qentry *e = RING_AT(&l2->wb, struct qentry, s);
+    if (e->value != line) continue;
+    qmeter_leave(&l2->st.write_buffer, &l2->qc.write_buffer, t, e->at);
+    e->value = WB_TAKEN_BACK;
     l2->wb_used--;
     l2->st.writeback_bytes -= LINE_BYTES;
     l2->st.fetch_bytes -= LINE_BYTES;
@@ -355,7 +335,7 @@ static void ev_to_dram(void *ctx, uint64_t slot) {
     pump(l2); /* (a place in the write buffer is free) */
     return;
   }
-  ring_push(&l2->miss_q, slot, t, 0);
+  *RING_PUSH(&l2->miss_q, struct qentry) = (struct qentry){slot, t, 0};
   qmeter_enter(&l2->st.miss_queue, &l2->qc.miss_queue, t);
   pump(l2);
 }
@@ -363,7 +343,7 @@ static void ev_to_dram(void *ctx, uint64_t slot) {
 static void ev_to_write_buffer(void *ctx, uint64_t r) {
   struct l2 *l2 = ctx;
   const uint64_t t = engine_now(l2->eng);
-  ring_push(&l2->wb, l2->reqs[r].line, t, l2->reqs[r].tag);
+  *RING_PUSH(&l2->wb, struct qentry) = (struct qentry){l2->reqs[r].line, t, l2->reqs[r].tag};
   req_release(l2, (uint32_t)r);
   qmeter_enter(&l2->st.write_buffer, &l2->qc.write_buffer, t);
   pump(l2);
@@ -478,8 +458,8 @@ struct l2 *l2_create(const struct l2_params *p, struct engine *e, struct timelin
 
 void l2_destroy(struct l2 *l2) {
   if (!l2) return;
-  free(l2->miss_q.v);
-  free(l2->wb.v);
+  ring_free(&l2->miss_q);
+  ring_free(&l2->wb);
   free(l2->reqs);
   free(l2->bank_free);
   cache_destroy(l2->tags);
@@ -487,8 +467,8 @@ void l2_destroy(struct l2 *l2) {
 }
 
 bool l2_quiet(const struct l2 *l2) {
-  return l2->mshr_used == 0 && l2->stall_head == NONE && l2->miss_q.n == 0 && l2->wb.n == 0 &&
-         l2->wb_used == 0;
+  return l2->mshr_used == 0 && l2->stall_head == NONE && ring_len(&l2->miss_q) == 0 &&
+         ring_len(&l2->wb) == 0 && l2->wb_used == 0;
 }
 
 void l2_finish(struct l2 *l2, uint64_t end) {

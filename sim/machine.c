@@ -20,6 +20,7 @@
 #include "sim/err.h"
 #include "sim/l2.h"
 #include "sim/machine_cfg.h"
+#include "sim/ring.h"
 #include "sim/stats.h"
 #include "sim/timeline.h"
 
@@ -53,8 +54,7 @@ struct mctx {
    * and the tags of its stores on their way to the L2, in issue order. */
   const uint32_t *items;
   uint32_t nitems, item1;
-  struct tagrun *runs;
-  uint32_t runs_cap, runs_lo, runs_n;
+  struct ring runs; /* struct tagrun */
 };
 
 /* Stores in a row with one tag. */
@@ -309,33 +309,21 @@ static uint32_t cost_tag(const struct mctx *c) {
 
 /* A store's tag joins c's FIFO (its L2 access comes later: ev_l2_access). */
 static void cost_store_push(struct mctx *c, uint32_t tag) {
-  if (c->runs_n && c->runs[(c->runs_lo + c->runs_n - 1) % c->runs_cap].tag == tag) {
-    c->runs[(c->runs_lo + c->runs_n - 1) % c->runs_cap].n++;
+  if (ring_len(&c->runs) && RING_BACK(&c->runs, struct tagrun)->tag == tag) {
+    RING_BACK(&c->runs, struct tagrun)->n++;
     return;
   }
-  if (c->runs_n == c->runs_cap) {
-    uint32_t cap = c->runs_cap ? 2 * c->runs_cap : 4;
-    struct tagrun *r = xmalloc((uint64_t)cap * sizeof *r);
-    for (uint32_t i = 0; i < c->runs_n; i++) r[i] = c->runs[(c->runs_lo + i) % c->runs_cap];
-    free(c->runs);
-    c->runs = r;
-    c->runs_cap = cap;
-    c->runs_lo = 0;
-  }
-  c->runs[(c->runs_lo + c->runs_n++) % c->runs_cap] = (struct tagrun){tag, 1};
+  *RING_PUSH(&c->runs, struct tagrun) = (struct tagrun){tag, 1};
 }
 
 /* NOTE: a context's L2 accesses leave in issue order (its clock never goes
  * back, and events of one cycle keep their order), so a FIFO finds each
  * store's tag. */
 static uint32_t cost_store_pop(struct mctx *c) {
-  CHECK_GT(c->runs_n, 0);
-  struct tagrun *h = &c->runs[c->runs_lo];
+  CHECK_GT(ring_len(&c->runs), 0);
+  struct tagrun *h = RING_HEAD(&c->runs, struct tagrun);
   const uint32_t tag = h->tag;
-  if (--h->n == 0) {
-    c->runs_lo = (c->runs_lo + 1) % c->runs_cap;
-    c->runs_n--;
-  }
+  if (--h->n == 0) ring_pop(&c->runs);
   return tag;
 }
 
@@ -393,7 +381,7 @@ const struct machine_costs *machine_get_costs(const struct machine *m) {
 static void cost_finish(struct machine *m) {
   for (uint32_t i = 0; i < m->nctx; i++) {
     CHECK_EQ(m->ctx[i].nitems, 0);
-    CHECK_EQ(m->ctx[i].runs_n, 0);
+    CHECK_EQ(ring_len(&m->ctx[i].runs), 0);
   }
   const struct machine_costs *k = &m->costs;
   uint64_t slots = 0, wait = 0, wr = 0, rd[MEM_CLASS_MAX] = {0};
@@ -803,7 +791,7 @@ void machine_destroy(struct machine *m) {
   if (!m) return;
   for (uint32_t i = 0; i < m->nctx; i++) CHECK(m->ctx[i].co == NULL || !m->ran);
   for (uint32_t i = 0; i < m->nctx; i++) coro_destroy(m->ctx[i].co);
-  for (uint32_t i = 0; i < m->nctx; i++) free(m->ctx[i].runs);
+  for (uint32_t i = 0; i < m->nctx; i++) ring_free(&m->ctx[i].runs);
   free(m->cost_acc);
   free(m->costs.issue_slots);
   free(m->costs.load_wait_cycles);
