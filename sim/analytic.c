@@ -20,8 +20,6 @@ struct analytic {
   struct analytic_counts n;
 };
 
-#define LINE_BYTES (1u << MACHINE_LG2_LINE)
-
 enum l2_kind { L2K_LOAD, L2K_STORE, L2K_STORE_LINE };
 
 /* One line at the L2: true if it was fetched from DRAM. */
@@ -37,7 +35,7 @@ static bool l2_line(struct analytic *a, uint64_t line, enum l2_kind op, unsigned
   }
   uint32_t v = cache_victim(a->l2, line);
   CHECK_NE(v, CACHE_NONE); /* nothing is ever pending here */
-  if (cache_valid(a->l2, v) && cache_dirty(a->l2, v)) n->writeback_bytes += LINE_BYTES;
+  if (cache_valid(a->l2, v) && cache_dirty(a->l2, v)) n->writeback_bytes += SIM_LINE_BYTES;
   cache_install(a->l2, v, line, op != L2K_LOAD, false);
   if (op == L2K_STORE_LINE) {
     /* Nothing of the old line survives: allocate without a fetch. */
@@ -45,8 +43,8 @@ static bool l2_line(struct analytic *a, uint64_t line, enum l2_kind op, unsigned
     return false;
   }
   n->l2_misses++;
-  n->fetch_bytes += LINE_BYTES;
-  n->fetch_bytes_by_class[cls] += LINE_BYTES;
+  n->fetch_bytes += SIM_LINE_BYTES;
+  n->fetch_bytes_by_class[cls] += SIM_LINE_BYTES;
   return true;
 }
 
@@ -57,7 +55,7 @@ static void a_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct analytic_counts *n = &a->n;
   n->issue_slots++;
   n->loads++;
-  uint64_t line = addr >> MACHINE_LG2_LINE, end = (addr + size - 1) >> MACHINE_LG2_LINE;
+  uint64_t line = addr >> SIM_LINE_LG2, end = (addr + size - 1) >> SIM_LINE_LG2;
   bool blocks = false, missed = false;
   for (; line <= end; line++) {
     if (a->l1) {
@@ -87,8 +85,8 @@ static void a_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   CHECK_LT(cls, MEM_CLASS_MAX);
   a->n.issue_slots++;
   a->n.stores++;
-  const uint64_t last = addr + size - 1, lmask = LINE_BYTES - 1;
-  uint64_t line = addr >> MACHINE_LG2_LINE, end = last >> MACHINE_LG2_LINE;
+  const uint64_t last = addr + size - 1, lmask = SIM_LINE_BYTES - 1;
+  uint64_t line = addr >> SIM_LINE_LG2, end = last >> SIM_LINE_LG2;
   const uint64_t first_whole = (addr & lmask) ? line + 1 : line;
   const bool last_whole = (last & lmask) == lmask;
   for (; line <= end; line++) {
@@ -121,10 +119,10 @@ struct analytic *analytic_create(const struct machine_params *p) {
   CHECK(machine_params_problem(p, why, sizeof why) == NULL);
   struct analytic *a = xcalloc(1, sizeof *a);
   if (p->l1_size_bytes) {
-    struct cache_params l1 = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE, false};
+    struct cache_params l1 = {p->l1_size_bytes, p->l1_ways, SIM_LINE_LG2, false};
     a->l1 = cache_create(&l1);
   }
-  struct cache_params l2 = {p->l2_size_bytes, p->l2_ways, MACHINE_LG2_LINE, true};
+  struct cache_params l2 = {p->l2_size_bytes, p->l2_ways, SIM_LINE_LG2, true};
   a->l2 = cache_create(&l2);
   return a;
 }

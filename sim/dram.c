@@ -12,6 +12,7 @@
 
 #include "sim/dram_fixed.h"
 #include "sim/engine.h"
+#include "sim/line.h"
 #include "sim/ring.h"
 #include "sim/stats.h"
 
@@ -151,10 +152,10 @@ void dram_take(struct dram *d, uint64_t addr, bool write, uint64_t tag) {
   d->inflight++;
   if (write) {
     d->st.writes++;
-    d->st.write_bytes += 64;
+    d->st.write_bytes += SIM_LINE_BYTES;
   } else {
     d->st.reads++;
-    d->st.read_bytes += 64;
+    d->st.read_bytes += SIM_LINE_BYTES;
   }
   d->ops->take(d->level, addr, write, seq);
 }

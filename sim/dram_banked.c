@@ -77,7 +77,7 @@ struct dram_banked_req *dram_banked_enqueue(struct dram_banked *d, struct dram_b
   struct dram_banked_req *r = &q->r[q->n++];
   r->tag = tag;
   r->take_core = engine_now(d->e);
-  r->line = addr >> 6;
+  r->line = addr >> SIM_LINE_LG2;
   r->ready = ready;
   r->seq = d->seq++;
   r->row = co->row;
@@ -236,7 +236,7 @@ static bool banked_can_take(const void *self, uint64_t addr, bool write) {
 
 static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   struct dram_banked *d = self;
-  CHECK_EQ(addr & 63, 0);
+  CHECK_EQ(addr & (SIM_LINE_BYTES - 1), 0);
   advance(d);
   struct dram_banked_coord co;
   dram_banked_decode(d, addr, &co);

@@ -184,7 +184,7 @@ void dram_banked_ctrl_take(struct dram_banked *d, struct dram_banked_channel *c,
                            const struct dram_banked_coord *co, uint64_t addr, bool write,
                            uint64_t tag) {
   const int64_t arr = d->cursor - 1, ready = arr + (int64_t)d->p.controller_cycles;
-  const uint64_t line = addr >> 6;
+  const uint64_t line = addr >> SIM_LINE_LG2;
   CHECK_LT(c->took_at, arr);
   c->took_at = arr;
   struct dram_banked_req probe;

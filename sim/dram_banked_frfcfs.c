@@ -138,7 +138,7 @@ void dram_banked_frfcfs_take(struct dram_banked *d, struct dram_banked_channel *
    * address, as DRAMsim3's is): served the next DRAM cycle, no command. */
   const struct dram_banked_queue *wq = &c->q[DRAM_BANKED_WR_Q];
   for (uint32_t i = 0; i < wq->n; i++)
-    if (wq->r[i].line == addr >> 6) {
+    if (wq->r[i].line == addr >> SIM_LINE_LG2) {
       if (write) d->st.write_merges++;
       else d->st.write_forwards++;
       dram_banked_serve(d, dram_clock_to_core(d->clk, (uint64_t)d->cursor + 1), tag);

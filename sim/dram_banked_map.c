@@ -74,7 +74,7 @@ void dram_banked_map_init(struct dram_banked_map *m, const struct dram_banked_pa
 
 void dram_banked_map_decode(const struct dram_banked_map *m, uint64_t addr,
                             struct dram_banked_coord *out) {
-  uint64_t a = addr >> 6;
+  uint64_t a = addr >> SIM_LINE_LG2;
   out->channel = (uint32_t)((a >> m->sh_ch) & m->mk_ch);
   out->rank = (uint32_t)((a >> m->sh_ra) & m->mk_ra);
   out->bank_group = (uint32_t)((a >> m->sh_bg) & m->mk_bg);

@@ -24,14 +24,15 @@ const char *dram_banked_params_problem(const struct dram_banked_params *p) {
   if (!pow2(p->columns) || p->columns < p->burst_length)
     return "dram.columns: must be a power of two from burst_length to 2^20";
   /* 32: the widest bus a burst of two beats leaves for a 64-byte line. */
-  if (!pow2(p->bus_bytes) || p->bus_bytes > 32)
+  if (!pow2(p->bus_bytes) || p->bus_bytes > SIM_LINE_BYTES / 2)
     return "dram.bus_bytes: must be a power of two up to 32";
-  if (p->bus_bytes * p->burst_length != 64)
+  if (p->bus_bytes * p->burst_length != SIM_LINE_BYTES)
     return "dram.bus_bytes: bus_bytes x burst_length must be 64 (one line per burst)";
   if (!dram_banked_mapping_ok(p->mapping))
     return "dram.mapping: expected six two-letter fields, each of ro ch ra bg ba co once";
   /* The fields must fit above the 6 offset bits of a 64-bit address. */
-  if (dram_banked_map_bits(p) > 58) return "dram.rows: the address fields need more than 64 bits";
+  if (dram_banked_map_bits(p) > 64 - SIM_LINE_LG2)
+    return "dram.rows: the address fields need more than 64 bits";
   if (p->write_high > p->write_queue) return "dram.write_high: must be 1 to write_queue";
   if (p->write_low >= p->write_high) return "dram.write_low: must be below write_high";
   if (p->queue_structure != DRAM_BANKED_SHARED && p->controller_cycles < 1)

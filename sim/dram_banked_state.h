@@ -37,6 +37,7 @@
 
 #include "sim/dram_banked.h"
 #include "sim/dram_level.h"
+#include "sim/line.h"
 
 struct engine;
 struct stats_table;

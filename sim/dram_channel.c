@@ -9,6 +9,7 @@
 #include <stdlib.h>
 
 #include "sim/engine.h"
+#include "sim/line.h"
 #include "sim/ring.h"
 #include "sim/stats.h"
 
@@ -35,7 +36,6 @@ struct span {
   dram_tick entry, start;
 };
 
-#define LINE_BYTES 64u
 #define TICK_FOREVER (~(dram_tick)0)
 
 /* Advance the occupancy integral to tick x: entries and starts are each
@@ -109,7 +109,7 @@ static void ch_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   uint32_t slot = (uint32_t)(d->k % d->p.queue_depth);
   dram_tick start = arrive > d->free_ticks ? arrive : d->free_ticks;
   /* At least one tick, so a transfer always takes time. */
-  uint64_t dur = (uint64_t)llround((double)LINE_BYTES * d->ticks_per_byte);
+  uint64_t dur = (uint64_t)llround((double)SIM_LINE_BYTES * d->ticks_per_byte);
   if (dur == 0) dur = 1;
   dram_tick end = start + dur;
   d->starts[slot] = start;

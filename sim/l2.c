@@ -16,7 +16,6 @@
 #include "sim/timeline.h"
 
 #define NONE UINT32_MAX
-#define LINE_BYTES (1u << L2_LG2_LINE)
 
 struct req {
   uint64_t line;
@@ -60,7 +59,7 @@ struct l2 {
 };
 
 const char *l2_params_problem(const struct l2_params *p) {
-  struct cache_params c = {p->size_bytes, p->ways, L2_LG2_LINE, true};
+  struct cache_params c = {p->size_bytes, p->ways, SIM_LINE_LG2, true};
   if (cache_params_problem(&c)) return "l2: size and ways do not make a cache of 64-byte lines";
   return NULL;
 }
@@ -150,7 +149,7 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
   }
   if (cache_valid(l2->tags, victim) && cache_dirty(l2->tags, victim)) {
     l2->wb_used++;
-    l2->st.writeback_bytes += LINE_BYTES;
+    l2->st.writeback_bytes += SIM_LINE_BYTES;
     /* The victim's line and the evicting access's tag travel in a request. */
     uint32_t w = req_new(l2);
     l2->reqs[w].line = cache_line(l2->tags, victim);
@@ -166,8 +165,8 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
   cache_install(l2->tags, victim, line, r->op != L2_LOAD, true);
   l2->mshr_used++;
   l2->st.misses++;
-  l2->st.fetch_bytes += LINE_BYTES;
-  l2->st.fetch_bytes_by_class[r->cls] += LINE_BYTES;
+  l2->st.fetch_bytes += SIM_LINE_BYTES;
+  l2->st.fetch_bytes_by_class[r->cls] += SIM_LINE_BYTES;
   timeline_point(l2->tl, l2->col.misses, start, 1.0);
   cache_set_byte(l2->tags, victim, (uint8_t)r->cls);
   cache_set_word(l2->tags, victim, NONE);
@@ -252,7 +251,7 @@ static bool try_read(struct l2 *l2, uint64_t t) {
   if (!ring_len(&l2->miss_q)) return false;
   const struct qentry *h = RING_HEAD(&l2->miss_q, struct qentry);
   uint32_t slot = (uint32_t)h->value;
-  uint64_t addr = cache_line(l2->tags, slot) << L2_LG2_LINE;
+  uint64_t addr = cache_line(l2->tags, slot) << SIM_LINE_LG2;
   if (!dram_can_take(l2->dram, addr, false)) return false;
   qmeter_leave(&l2->st.miss_queue, &l2->qc.miss_queue, t, h->at);
   ring_pop(&l2->miss_q);
@@ -268,7 +267,7 @@ static bool try_write(struct l2 *l2, uint64_t t) {
     ring_pop(&l2->wb);
   if (!ring_len(&l2->wb)) return false;
   const struct qentry *h = RING_HEAD(&l2->wb, struct qentry);
-  uint64_t addr = h->value << L2_LG2_LINE;
+  uint64_t addr = h->value << SIM_LINE_LG2;
   if (!dram_can_take(l2->dram, addr, true)) return false;
   qmeter_leave(&l2->st.write_buffer, &l2->qc.write_buffer, t, h->at);
   const uint32_t tag = (uint32_t)h->tag;
@@ -317,9 +316,9 @@ static bool take_back(struct l2 *l2, uint32_t slot, uint64_t t) {
     qmeter_leave(&l2->st.write_buffer, &l2->qc.write_buffer, t, e->at);
     e->value = WB_TAKEN_BACK;
     l2->wb_used--;
-    l2->st.writeback_bytes -= LINE_BYTES;
-    l2->st.fetch_bytes -= LINE_BYTES;
-    l2->st.fetch_bytes_by_class[cache_byte(l2->tags, slot)] -= LINE_BYTES;
+    l2->st.writeback_bytes -= SIM_LINE_BYTES;
+    l2->st.fetch_bytes -= SIM_LINE_BYTES;
+    l2->st.fetch_bytes_by_class[cache_byte(l2->tags, slot)] -= SIM_LINE_BYTES;
     l2->st.write_buffer_hits++;
     cache_set_dirty(l2->tags, slot);
     fill(l2, slot, t, false);
@@ -363,8 +362,8 @@ static void ev_held_merge(void *ctx, uint64_t r) {
  * channel can move in it), else whole at cycle t, when it was served. */
 static void count_line(struct l2 *l2, unsigned col, uint64_t t) {
   double a, b;
-  if (dram_served_transfer(l2->dram, &a, &b)) timeline_spread(l2->tl, col, a, b, LINE_BYTES);
-  else timeline_point(l2->tl, col, t, LINE_BYTES);
+  if (dram_served_transfer(l2->dram, &a, &b)) timeline_spread(l2->tl, col, a, b, SIM_LINE_BYTES);
+  else timeline_point(l2->tl, col, t, SIM_LINE_BYTES);
 }
 
 static void fill(struct l2 *l2, uint32_t s, uint64_t t, bool from_dram) {
@@ -446,7 +445,7 @@ struct l2 *l2_create(const struct l2_params *p, struct engine *e, struct timelin
   l2->tl = tl;
   l2->col = *cols;
   l2->client = *client;
-  struct cache_params cp = {p->size_bytes, p->ways, L2_LG2_LINE, true};
+  struct cache_params cp = {p->size_bytes, p->ways, SIM_LINE_LG2, true};
   l2->tags = cache_create(&cp);
   l2->bank_free = xcalloc(p->banks, sizeof *l2->bank_free);
   l2->banks_pow2 = (p->banks & (p->banks - 1)) == 0;

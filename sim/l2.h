@@ -27,13 +27,12 @@
 
 #include "sim/engine.h"
 #include "sim/err.h"
+#include "sim/line.h"
 #include "sim/mem.h"
 #include "sim/qmeter.h"
 
 struct dram;
 struct timeline;
-
-#define L2_LG2_LINE 6
 
 struct l2_params {
   uint64_t size_bytes;

@@ -25,7 +25,6 @@
 #include "sim/timeline.h"
 
 #define NONE UINT32_MAX
-#define LINE_BYTES (1u << MACHINE_LG2_LINE)
 
 enum ctx_state { CTX_READY, CTX_WAIT, CTX_PARKED, CTX_DONE };
 enum th_state { TH_BUSY, TH_WAIT, TH_PARKED, TH_DONE };
@@ -169,7 +168,7 @@ const char *machine_params_problem(const struct machine_params *p, char *buf, si
   if ((uint64_t)p->cores * p->threads_per_core * p->rays_per_thread > MACHINE_MAX_CONTEXTS)
     return "cores x threads_per_core x rays_per_thread: at most 2^20 ray contexts";
   if (p->l1_size_bytes) {
-    struct cache_params c = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE, false};
+    struct cache_params c = {p->l1_size_bytes, p->l1_ways, SIM_LINE_LG2, false};
     if (cache_params_problem(&c)) return "l1: size and ways do not make a cache of 64-byte lines";
   }
   struct l2_params l2 = l2_params_of(p);
@@ -393,9 +392,9 @@ static void cost_finish(struct machine *m) {
   }
   CHECK_EQ(slots, m->st.issue_slots);
   CHECK_EQ(wait, m->st.load_latency.sum);
-  CHECK_EQ(wr * LINE_BYTES, m->st.l2.writeback_bytes);
+  CHECK_EQ(wr * SIM_LINE_BYTES, m->st.l2.writeback_bytes);
   for (unsigned c = 0; c < MEM_CLASS_MAX; c++)
-    CHECK_EQ(c < k->classes ? rd[c] * LINE_BYTES : 0, m->st.l2.fetch_bytes_by_class[c]);
+    CHECK_EQ(c < k->classes ? rd[c] * SIM_LINE_BYTES : 0, m->st.l2.fetch_bytes_by_class[c]);
 }
 
 /* ---- lines back ---- */
@@ -543,7 +542,7 @@ static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct machine *m = door_issue(c, size, cls);
   m->st.loads++;
   struct cache *l1 = m->core[c->info.core].l1;
-  uint64_t line = addr >> MACHINE_LG2_LINE, end = (addr + size - 1) >> MACHINE_LG2_LINE;
+  uint64_t line = addr >> SIM_LINE_LG2, end = (addr + size - 1) >> SIM_LINE_LG2;
   uint32_t pending = 0;
   for (; line <= end; line++) {
     if (l1) {
@@ -575,8 +574,8 @@ static void t_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   struct machine *m = door_issue(c, size, cls);
   m->st.stores++;
   struct cache *l1 = m->core[c->info.core].l1;
-  const uint64_t last = addr + size - 1, lmask = LINE_BYTES - 1;
-  uint64_t line = addr >> MACHINE_LG2_LINE, end = last >> MACHINE_LG2_LINE;
+  const uint64_t last = addr + size - 1, lmask = SIM_LINE_BYTES - 1;
+  uint64_t line = addr >> SIM_LINE_LG2, end = last >> SIM_LINE_LG2;
   const uint64_t first_whole = (addr & lmask) ? line + 1 : line;
   const bool last_whole = (last & lmask) == lmask;
   for (; line <= end; line++) {
@@ -647,8 +646,8 @@ static void warm_access(struct mwarm *w, uint64_t addr, uint32_t size, bool stor
   struct machine *m = w->m;
   m->warm_slots++;
   struct cache *l1 = m->core[w->core].l1;
-  for (uint64_t line = addr >> MACHINE_LG2_LINE, end = (addr + size - 1) >> MACHINE_LG2_LINE;
-       line <= end; line++) {
+  for (uint64_t line = addr >> SIM_LINE_LG2, end = (addr + size - 1) >> SIM_LINE_LG2; line <= end;
+       line++) {
     if (l1) {
       if (store) cache_use(l1, line);
       else if (cache_fill(l1, line, false)) continue;
@@ -745,7 +744,7 @@ static struct machine *create(const struct machine_params *p, uint64_t stack_byt
     m->warm[i].core = i;
     m->core[i].rr = p->threads_per_core - 1;
     if (p->l1_size_bytes) {
-      struct cache_params l1 = {p->l1_size_bytes, p->l1_ways, MACHINE_LG2_LINE, false};
+      struct cache_params l1 = {p->l1_size_bytes, p->l1_ways, SIM_LINE_LG2, false};
       m->core[i].l1 = cache_create(&l1);
     }
   }

@@ -31,13 +31,13 @@
 #include "sim/dram.h"
 #include "sim/hist.h"
 #include "sim/l2.h"
+#include "sim/line.h"
 #include "sim/mem.h"
 #include "sim/stats.h"
 #include "sim/timeline.h"
 
 struct timeline;
 
-#define MACHINE_LG2_LINE 6              /* 64-byte lines everywhere */
 #define MACHINE_MAX_CONTEXTS (1u << 20) /* cores x threads_per_core x rays_per_thread */
 
 /* The fidelity ladder's rungs, cheapest first (README "Fidelity ladder"): an

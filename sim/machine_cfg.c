@@ -504,9 +504,9 @@ static bool check_cache(const struct machine_cfg *c, const char *lvl, uint64_t s
   char sk[16], wk[16], got[64], msg[64];
   snprintf(sk, sizeof sk, "%s.size", lvl);
   snprintf(wk, sizeof wk, "%s.ways", lvl);
-  const struct cache_params cp = {size, ways, MACHINE_LG2_LINE, false};
-  const unsigned line = 1u << MACHINE_LG2_LINE;
-  const unsigned long long lines = size >> MACHINE_LG2_LINE;
+  const struct cache_params cp = {size, ways, SIM_LINE_LG2, false};
+  const unsigned line = 1u << SIM_LINE_LG2;
+  const unsigned long long lines = size >> SIM_LINE_LG2;
   snprintf(got, sizeof got, "%llu bytes", (unsigned long long)size);
   switch (cache_geometry(&cp)) {
   case CACHE_GEOMETRY_OK: return true;
