@@ -136,7 +136,7 @@ void dram_destroy(struct dram *d) {
   free(d);
 }
 
-bool dram_can_take(const struct dram *d, uint64_t addr, bool write) {
+bool dram_can_take(struct dram *d, uint64_t addr, bool write) {
   return d->ops->can_take(d->level, addr, write);
 }
 

@@ -51,7 +51,7 @@ void dram_destroy(struct dram *d); /* NULL ok */
 /* The level's questions and orders, at engine_now (sim/dram_level.h).
  * Requests are one 64-byte line at a line-aligned byte address; the tag is
  * the client's, handed back in client->done. */
-bool dram_can_take(const struct dram *d, uint64_t addr, bool write);
+bool dram_can_take(struct dram *d, uint64_t addr, bool write);
 void dram_take(struct dram *d, uint64_t addr, bool write, uint64_t tag);
 /* After the run (nothing in flight, CHECKed). */
 void dram_finish(struct dram *d);

@@ -212,11 +212,9 @@ static void advance(struct dram_banked *d) {
 
 /* ---- The level ---- */
 
-static bool banked_can_take(const void *self, uint64_t addr, bool write) {
-  /* NOTE: const only in the interface's sense: answering needs the state as of
-   * now, so pending cycles are handled first (results are the same whenever
-   * that happens). */
-  struct dram_banked *d = (struct dram_banked *)self;
+static bool banked_can_take(void *self, uint64_t addr, bool write) {
+  /* Answering needs the state as of now: the cycles before it first. */
+  struct dram_banked *d = self;
   advance(d);
   struct dram_banked_coord co;
   dram_banked_decode(d, addr, &co);

@@ -92,7 +92,7 @@ static bool place_free(const struct dram_channel *d, dram_tick now_ticks) {
   return d->k < d->p.queue_depth || d->starts[d->k % d->p.queue_depth] <= now_ticks;
 }
 
-static bool ch_can_take(const void *self, uint64_t addr, bool write) {
+static bool ch_can_take(void *self, uint64_t addr, bool write) {
   const struct dram_channel *d = self;
   (void)addr;
   (void)write;

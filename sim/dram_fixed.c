@@ -16,7 +16,7 @@ static void ev_done(void *ctx, uint64_t tag) {
   d->client.done(d->client.ctx, tag);
 }
 
-static bool fx_can_take(const void *self, uint64_t addr, bool write) {
+static bool fx_can_take(void *self, uint64_t addr, bool write) {
   (void)self;
   (void)addr;
   (void)write;

@@ -37,9 +37,12 @@ struct dram_client {
 
 struct dram_level_ops {
   /* Could the level take a read (write = false) or a write of the line at
-   * byte address addr now? (A level with channels answers for addr's.) */
-  bool (*can_take)(const void *self, uint64_t addr, bool write);
-  /* Take one request of one 64-byte line at byte address addr (line aligned)
+   * byte address addr now? (A level with channels answers for addr's.) Not
+   * const: a level that decides its cycles lazily (banked) first decides
+   * those before now, and may schedule a space callback; the answer and every
+   * later result are the same whenever that happens. */
+  bool (*can_take)(void *self, uint64_t addr, bool write);
+  /* Take one request of one line (SIM_LINE_BYTES) at byte address addr (line aligned)
    * now; only after can_take said yes (CHECKed). tag is the client's. */
   void (*take)(void *self, uint64_t addr, bool write, uint64_t tag);
   /* The run is over (nothing in flight, CHECKed): close time integrals at
