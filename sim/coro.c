@@ -58,12 +58,11 @@ struct chunk {
 #define CHUNK_MAX 64u
 
 /* Stack tops are page-aligned, so the hot frames of thousands of stacks
- * share host cache sets. They used to start (n mod 16) x 256 bytes below the
- * top to spread them, which halved the host time of 4,096 live stacks when a
- * switch waited for its stack; the machine now fetches a stack's top ahead of
- * the switch (coro_resume_point), and the skew only cost a second page, and
- * its first-touch fault, on most stacks: 26,000 page faults against 19,000 on
- * 8,192 stacks, and 15% of that run's host time. */
+ * share host cache sets: the machine fetches a stack's top ahead of the
+ * switch (coro_resume_point), so the shared sets cost no wait, while
+ * skewing each top below its page would cost a second page and its
+ * first-touch fault on most stacks (measured on 8,192 stacks: 26,000 page
+ * faults against 19,000, 15% of that run's host time). */
 
 struct coro_pool {
   size_t stack_bytes, page;

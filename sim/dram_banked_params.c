@@ -12,8 +12,8 @@ static bool pow2(uint64_t x) { return x && !(x & (x - 1)); }
 const char *dram_banked_params_problem(const struct dram_banked_params *p) {
   /* Each key's range is its row in the key table (machine_params_problem);
    * here, what a range cannot say: powers of two, and rules between keys.
-   * The messages still state the ranges, as they did when they were checked
-   * here, so a bad value reads the same from a config or from code. */
+   * The messages state the ranges too, so a bad value reads the same from a
+   * config or from code that fills the parameters itself. */
   if (!pow2(p->channels)) return "dram.channels: must be a power of two from 1 to 64";
   if (!pow2(p->ranks)) return "dram.ranks: must be a power of two from 1 to 16";
   if (!pow2(p->bank_groups)) return "dram.bank_groups: must be a power of two from 1 to 16";

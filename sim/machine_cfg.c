@@ -81,7 +81,7 @@ static const struct key KEYS[] = {
     {"l2.mshrs", K_U32, 1, 1u << 20, "64", "", R_ALL, P(l2_mshrs), "L2 misses outstanding at once"},
     {"l2.write_buffer", K_U32, 1, 1u << 20, "16", "lines", R_ALL, P(l2_write_buffer),
      "dirty victims waiting for the DRAM"},
-    /* Where dram.model stood (its successor), so columns keep their order. */
+    /* Here, among the DRAM keys, so stats.csv keeps its column order. */
     {"fidelity", K_ENUM, 0, MACHINE_FIDELITY_COUNT - 1, "banked", "", R_ALL,
      E(fidelity, FIDELITY_NAMES),
      "the rung of the fidelity ladder: an estimate, or the timed machine with the DRAM at that detail"},

@@ -53,8 +53,8 @@ void machine_cfg_defaults(struct machine_cfg *c);
 bool machine_cfg_load(struct machine_cfg *c, const char *path, struct err *e);
 /* Apply one "key=value" (the value as it would be written in YAML). */
 bool machine_cfg_set(struct machine_cfg *c, const char *assignment, struct err *e);
-/* What became of a key that is no more (a one-line hint: "renamed to ..."),
- * or NULL: dram.model is now fidelity. */
+/* A one-line hint for a key name rtsim no longer reads and what replaces it
+ * (dram.model: fidelity), or NULL for any other name. */
 const char *machine_cfg_renamed(const char *name);
 /* Index of key `name` ("l2.size"), or -1 when there is no such key. */
 int machine_cfg_find(const char *name);

@@ -46,8 +46,9 @@ void stats_write_json_str(FILE *f, const char *s);
  * turns to an exponent when the exponent reaches the precision, so the floor
  * shows: at 1, 1000 is "1e+03" and 0.1 + 0.2 "0.30000000000000004"; at 15,
  * 1386126720 stays "1386126720" and 5e-324 is "4.94065645841247e-324". Machine
- * config values are written at 1 and measured numbers at 15, as they always
- * were, so outputs compare byte for byte with older ones. buf: 32 bytes. */
+ * config values are written at 1 and measured numbers at 15 (committed
+ * results compare byte for byte with a new run only while both keep these
+ * floors). buf: 32 bytes. */
 void stats_f64_text(double v, int min_digits, char *buf, size_t cap);
 /* A double as JSON: stats_f64_text at 15 digits. Not always the shortest form,
  * but stable: outputs compare byte for byte. */
