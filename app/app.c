@@ -13,6 +13,7 @@
 #include "renderer/scene/scene_file.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
+#include "sim/derived.h"
 #include "sim/err.h"
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
@@ -165,7 +166,7 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
   struct policy_params pp;
   policy_params_machine(&pp, mp->l2_size_bytes);
   pp.dyn_sharing = work->dyn_sharing;
-  const uint32_t n = mp->cores * mp->threads_per_core * mp->rays_per_thread;
+  const uint32_t n = (uint32_t)derived_contexts(mp);
   struct timed_ctx r = {0};
   t->ar.setup.progress = work_progress;
   t->ar.setup.progress_ctx = &r;

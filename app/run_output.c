@@ -19,9 +19,11 @@
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/analytic.h"
+#include "sim/derived.h"
 #include "sim/dram.h"
 #include "sim/err.h"
 #include "sim/hist.h"
+#include "sim/line.h"
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
 #include "sim/outfile.h"
@@ -30,8 +32,6 @@
 
 const char *const run_output_files[] = {"image.exr",   "stats.csv",  "timeline.csv",
                                         "traffic.png", "stats.json", NULL};
-
-static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 
 /* ---- the image and its cost channels ---- */
 
@@ -99,14 +99,14 @@ static void identity(const struct run_output_report *r, struct stats_table *t) {
  * the renderer's data classes; st: the struct run_output_report. */
 
 static double run_seconds(const struct run_output_report *r) {
-  return (double)machine_get_stats(r->machine)->cycles / (r->cfg->p.clock_ghz * 1e9);
+  return derived_seconds((double)machine_get_stats(r->machine)->cycles, r->cfg->p.clock_ghz);
 }
 static uint64_t run_rays(const void *st, const struct stats_env *env) {
   (void)env;
   return render_stats_total(((const struct run_output_report *)st)->rstats);
 }
 static double run_rays_per_second(const void *st, const struct stats_env *env) {
-  return ratio((double)run_rays(st, env), run_seconds(st));
+  return derived_rays_per_second((double)run_rays(st, env), run_seconds(st));
 }
 static uint64_t run_node_visits(const void *st, const struct stats_env *env) {
   (void)env;
@@ -121,8 +121,8 @@ static double run_slots_per_geometry_miss(const void *st, const struct stats_env
   const struct machine_stats *s =
       machine_get_stats(((const struct run_output_report *)st)->machine);
   const uint64_t *by = s->l2.fetch_bytes_by_class;
-  uint64_t geo_misses = (by[TRACE_CLASS_GEOMETRY] + by[TRACE_CLASS_NODE]) / 64;
-  return ratio((double)s->issue_slots, (double)geo_misses);
+  uint64_t geo_misses = (by[TRACE_CLASS_GEOMETRY] + by[TRACE_CLASS_NODE]) / SIM_LINE_BYTES;
+  return derived_ratio((double)s->issue_slots, (double)geo_misses);
 }
 
 static const struct stats_desc run_desc[] = {
@@ -162,21 +162,22 @@ static const struct machine_params *an_p(const struct stats_env *env) {
 }
 static uint64_t an_threads(const void *st, const struct stats_env *env) {
   (void)st;
-  return (uint64_t)an_p(env)->cores * an_p(env)->threads_per_core;
+  return derived_threads(an_p(env));
 }
 static uint64_t an_contexts(const void *st, const struct stats_env *env) {
-  return an_threads(st, env) * an_p(env)->rays_per_thread;
+  (void)st;
+  return derived_contexts(an_p(env));
 }
 static double an_seconds(const void *st, const struct stats_env *env) {
   (void)st;
-  return (double)env->cycles / (an_p(env)->clock_ghz * 1e9);
+  return derived_seconds((double)env->cycles, an_p(env)->clock_ghz);
 }
 static uint64_t an_rays(const void *st, const struct stats_env *env) {
   (void)st;
   return run_rays(env->ctx, env);
 }
 static double an_rays_per_second(const void *st, const struct stats_env *env) {
-  return ratio((double)an_rays(st, env), an_seconds(st, env));
+  return derived_rays_per_second((double)an_rays(st, env), an_seconds(st, env));
 }
 static uint64_t an_node_visits(const void *st, const struct stats_env *env) {
   (void)st;
@@ -187,21 +188,22 @@ static uint64_t an_tri_tests(const void *st, const struct stats_env *env) {
   return run_tri_tests(env->ctx, env);
 }
 static double an_core_utilization(const void *st, const struct stats_env *env) {
-  return ratio((double)an_n(st)->issue_slots, (double)an_p(env)->cores * (double)env->cycles);
+  return derived_core_utilization((double)an_n(st)->issue_slots, (double)an_p(env)->cores,
+                                  (double)env->cycles);
 }
 static double an_slots_per_blocking_load(const void *st, const struct stats_env *env) {
   (void)env;
-  return ratio((double)an_n(st)->issue_slots, (double)an_n(st)->blocking_loads);
+  return derived_ratio((double)an_n(st)->issue_slots, (double)an_n(st)->blocking_loads);
 }
 static double an_slots_per_geometry_miss(const void *st, const struct stats_env *env) {
   (void)env;
   const uint64_t *by = an_n(st)->fetch_bytes_by_class;
-  uint64_t geo_misses = (by[TRACE_CLASS_GEOMETRY] + by[TRACE_CLASS_NODE]) / 64;
-  return ratio((double)an_n(st)->issue_slots, (double)geo_misses);
+  uint64_t geo_misses = (by[TRACE_CLASS_GEOMETRY] + by[TRACE_CLASS_NODE]) / SIM_LINE_BYTES;
+  return derived_ratio((double)an_n(st)->issue_slots, (double)geo_misses);
 }
 static double an_l2_miss_rate(const void *st, const struct stats_env *env) {
   (void)env;
-  return ratio((double)an_n(st)->l2_misses, (double)an_n(st)->l2_accesses);
+  return derived_ratio((double)an_n(st)->l2_misses, (double)an_n(st)->l2_accesses);
 }
 static uint64_t an_dram_reads(const void *st, const struct stats_env *env) {
   (void)env;
@@ -212,7 +214,8 @@ static uint64_t an_dram_writes(const void *st, const struct stats_env *env) {
   return an_n(st)->writeback_bytes / 64;
 }
 static double an_dram_bytes_per_cycle(const void *st, const struct stats_env *env) {
-  return ratio((double)(an_n(st)->fetch_bytes + an_n(st)->writeback_bytes), (double)env->cycles);
+  return derived_ratio((double)(an_n(st)->fetch_bytes + an_n(st)->writeback_bytes),
+                       (double)env->cycles);
 }
 #define AN_EST(f)                                                                                  \
   static double an_est_##f(const void *st, const struct stats_env *env) {                          \

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "renderer/rng.h"
+#include "sim/derived.h"
 #include "sim/err.h"
 #include "sim/stats.h"
 
@@ -70,7 +71,7 @@ void sample_init(struct sampler *s, const struct machine_params *p, uint64_t tot
   s->n = sample_units(p, total, contexts);
   CHECK_GE(s->n, SAMPLE_MIN_UNITS);
   s->cores = p->cores;
-  s->hz = p->clock_ghz * 1e9;
+  s->hz = derived_hz(p->clock_ghz);
   s->whole = p->sample_whole_image != 0;
   s->u = xcalloc(s->n, sizeof *s->u);
   s->drained = xcalloc(s->n, sizeof *s->drained);
@@ -249,8 +250,8 @@ static double figure(const struct sampler *s, const struct parts *p, enum sample
   case SF_CYCLES: return cycles;
   case SF_DRAM_BYTES: return bytes;
   case SF_BYTES_PER_CYCLE: return cycles > 0 ? bytes / cycles : 0;
-  case SF_UTIL: return cycles > 0 ? slots / (cycles * s->cores) : 0;
-  case SF_RAYS_PER_S: return cycles > 0 ? rays / (cycles / s->hz) : 0;
+  case SF_UTIL: return derived_core_utilization(slots, s->cores, cycles);
+  case SF_RAYS_PER_S: return cycles > 0 ? derived_rays_per_second(rays, cycles / s->hz) : 0;
   default: {
     double n = p->edge[SQ_LAT_N] + mid(s, p, SQ_LAT_N);
     return n > 0 ? (p->edge[SQ_LAT_SUM] + mid(s, p, SQ_LAT_SUM)) / n : 0;
@@ -380,7 +381,7 @@ enum sample_out {
 static struct est est_of(const void *st, const struct stats_env *env, enum sample_out o) {
   const struct sampler *s = st;
   const struct sample_env *x = env->ctx;
-  const double hz = x->p->clock_ghz * 1e9, c0 = min_cycles(s);
+  const double hz = derived_hz(x->p->clock_ghz), c0 = min_cycles(s);
   struct est e;
   switch (o) {
   case SO_CYCLES: return clamp_est(estimate(s, SF_CYCLES), c0, INFINITY);

@@ -24,6 +24,7 @@
 #include "renderer/scene/scene_file.h"
 #include "renderer/shade.h"
 #include "sim/cfg.h"
+#include "sim/derived.h"
 #include "sim/err.h"
 #include "sim/machine_cfg.h"
 #include "sim/scalar.h"
@@ -693,7 +694,7 @@ static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *
    * tiny.yaml, 64 contexts took 1.5x the host time of 2 for the same image).
    * Latencies and cache sizes are left out: they move simulated cycles far
    * more than host seconds. A guess for ordering only. */
-  const double contexts = (double)c.p.cores * c.p.threads_per_core * c.p.rays_per_thread;
+  const double contexts = (double)derived_contexts(&c.p);
   p->cost = (double)w * (double)h * rays_per_pixel(mask, si->lights) * log2(2.0 + si->tris) *
             (1.0 + log2(contexts) / 9.0);
   /* What a cluster job must request besides the simulation's own time, from

@@ -5,49 +5,50 @@
 #include "sim/machine_state.h"
 
 #include "sim/cache.h"
+#include "sim/derived.h"
 #include "sim/dram.h"
 #include "sim/engine.h"
 #include "sim/l2.h"
 #include "sim/stats.h"
 
-static double m_ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 #define M_ST(st) ((const struct machine_stats *)(st))
 #define M_OF(env) ((const struct machine *)(env)->ctx)
 static double m_seconds(const void *st, const struct stats_env *env) {
-  return (double)M_ST(st)->cycles / (M_OF(env)->p.clock_ghz * 1e9);
+  return derived_seconds((double)M_ST(st)->cycles, M_OF(env)->p.clock_ghz);
 }
 static double m_core_utilization(const void *st, const struct stats_env *env) {
-  return m_ratio((double)M_ST(st)->issue_slots,
-                 (double)M_OF(env)->p.cores * (double)M_ST(st)->cycles);
+  return derived_core_utilization((double)M_ST(st)->issue_slots, (double)M_OF(env)->p.cores,
+                                  (double)M_ST(st)->cycles);
 }
 static double m_thread_cycles(const void *st) {
   return (double)M_ST(st)->threads * (double)M_ST(st)->cycles;
 }
 static double m_busy_fraction(const void *st, const struct stats_env *env) {
   (void)env;
-  return m_ratio((double)M_ST(st)->thread_busy_cycles, m_thread_cycles(st));
+  return derived_ratio((double)M_ST(st)->thread_busy_cycles, m_thread_cycles(st));
 }
 static double m_idle_fraction(const void *st, const struct stats_env *env) {
   (void)env;
   const struct machine_stats *s = st;
-  return m_ratio((double)(s->thread_wait_cycles + s->thread_parked_cycles + s->thread_done_cycles),
-                 m_thread_cycles(st));
+  return derived_ratio(
+      (double)(s->thread_wait_cycles + s->thread_parked_cycles + s->thread_done_cycles),
+      m_thread_cycles(st));
 }
 static double m_wait_fraction(const void *st, const struct stats_env *env) {
   (void)env;
-  return m_ratio((double)M_ST(st)->thread_wait_cycles, m_thread_cycles(st));
+  return derived_ratio((double)M_ST(st)->thread_wait_cycles, m_thread_cycles(st));
 }
 static double m_parked_fraction(const void *st, const struct stats_env *env) {
   (void)env;
-  return m_ratio((double)M_ST(st)->thread_parked_cycles, m_thread_cycles(st));
+  return derived_ratio((double)M_ST(st)->thread_parked_cycles, m_thread_cycles(st));
 }
 static double m_done_fraction(const void *st, const struct stats_env *env) {
   (void)env;
-  return m_ratio((double)M_ST(st)->thread_done_cycles, m_thread_cycles(st));
+  return derived_ratio((double)M_ST(st)->thread_done_cycles, m_thread_cycles(st));
 }
 static double m_slots_per_blocking_load(const void *st, const struct stats_env *env) {
   (void)env;
-  return m_ratio((double)M_ST(st)->issue_slots, (double)M_ST(st)->blocking_loads);
+  return derived_ratio((double)M_ST(st)->issue_slots, (double)M_ST(st)->blocking_loads);
 }
 static double m_load_latency_mean(const void *st, const struct stats_env *env) {
   (void)env;
@@ -147,7 +148,7 @@ static bool m_dram_util_present(const void *st, const struct stats_env *env) {
 static double m_dram_utilization(const void *st, const struct stats_env *env) {
   const struct machine_stats *s = st;
   const double b = (double)(s->dram.read_bytes + s->dram.write_bytes);
-  return m_ratio(b, (double)s->cycles) / machine_dram_peak_bytes_per_cycle(&M_OF(env)->p);
+  return derived_ratio(b, (double)s->cycles) / machine_dram_peak_bytes_per_cycle(&M_OF(env)->p);
 }
 static const struct stats_desc dram_util_desc[] = {
     {.name = "dram_utilization",
