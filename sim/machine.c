@@ -7,7 +7,7 @@
  * coming back for a waiting ray; the L2 and the DRAM keep their own. Only the
  * issue event resumes a coroutine, so everything else may run in any handler
  * without re-entering the renderer. */
-#include "sim/machine_state.h"
+#include "sim/machine.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -20,6 +20,7 @@
 #include "sim/err.h"
 #include "sim/l2.h"
 #include "sim/machine_cfg.h"
+#include "sim/machine_state.h"
 #include "sim/ring.h"
 #include "sim/stats.h"
 #include "sim/timeline.h"
