@@ -250,6 +250,17 @@ cq_sum(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi, 
     col_refresh(d, c, qi, now, s);
     return s;
   }
+  if ((c->fresh[w] & bit) && now > s->t && c->col_stale) {
+    /* per_bank, past its least time with nothing it read changed: its
+     * candidates are the same entries (which entries offer a command does
+     * not depend on the cycle asked), the ACT or PRE one now at max(now, its
+     * time) (the identity h), the column ones asked again. */
+    c->col_stale[w] &= ~bit;
+    if (s->o_t < now) s->o_t = now;
+    if (s->act_t < now) s->act_t = now;
+    col_refresh(d, c, qi, now, s);
+    return s;
+  }
   bool act, col;
   cq_candidates(d, c, qi, now, s, &act, &col);
   if (c->col_stale) c->col_stale[w] &= ~bit;
