@@ -124,14 +124,4 @@ const struct l2_stats *l2_get_stats(const struct l2 *l2);
 struct stats_descs;
 extern const struct stats_descs l2_stats_descs;
 
-/* An access packed into one event argument: line, op and class. */
-static inline uint64_t l2_pack(uint64_t line, enum l2_op op, unsigned cls) {
-  CHECK_LT(line, 1ull << 56);
-  CHECK_LT(cls, 16u);
-  return line << 8 | (uint64_t)op << 4 | cls;
-}
-static inline uint64_t l2_unpack_line(uint64_t a) { return a >> 8; }
-static inline enum l2_op l2_unpack_op(uint64_t a) { return (enum l2_op)((a >> 4) & 3); }
-static inline unsigned l2_unpack_cls(uint64_t a) { return (unsigned)(a & 15); }
-
 #endif

@@ -176,13 +176,24 @@ static void ev_line_done(void *ctx, uint64_t line) {
   line_done(c->m, c, line, engine_now(c->m->eng));
 }
 
-/* An access reaches the L2: ctx is the ray that made it, arg l2_pack'ed. */
+/* An access on its way to the L2, packed into the event's one argument:
+ * line, op and class. */
+static inline uint64_t access_pack(uint64_t line, enum l2_op op, unsigned cls) {
+  CHECK_LT(line, 1ull << 56);
+  CHECK_LT(cls, 16u);
+  return line << 8 | (uint64_t)op << 4 | cls;
+}
+static inline uint64_t access_line(uint64_t a) { return a >> 8; }
+static inline enum l2_op access_op(uint64_t a) { return (enum l2_op)((a >> 4) & 3); }
+static inline unsigned access_cls(uint64_t a) { return (unsigned)(a & 15); }
+
+/* An access reaches the L2: ctx is the ray that made it, arg access_pack'ed. */
 static void ev_l2_access(void *ctx, uint64_t arg) {
   struct mctx *c = ctx;
-  enum l2_op op = l2_unpack_op(arg);
+  enum l2_op op = access_op(arg);
   /* A load's context waits for it, still working for the same items. */
   uint32_t tag = !c->acc ? 0 : op == L2_LOAD ? cost_tag(c) : cost_store_pop(c);
-  l2_access(c->m->l2, l2_unpack_line(arg), op, l2_unpack_cls(arg), op == L2_LOAD ? c : NULL, tag);
+  l2_access(c->m->l2, access_line(arg), op, access_cls(arg), op == L2_LOAD ? c : NULL, tag);
 }
 
 /* ---- cores ---- */
@@ -310,7 +321,7 @@ static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
         continue;
       }
     }
-    engine_at(m->eng, c->t, ev_l2_access, c, l2_pack(line, L2_LOAD, cls));
+    engine_at(m->eng, c->t, ev_l2_access, c, access_pack(line, L2_LOAD, cls));
     pending++;
   }
   if (!pending) {
@@ -343,7 +354,8 @@ static void t_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
     }
     bool whole = line >= first_whole && (line < end || last_whole);
     if (c->acc) cost_store_push(c, cost_tag(c));
-    engine_at(m->eng, c->t, ev_l2_access, c, l2_pack(line, whole ? L2_STORE_LINE : L2_STORE, cls));
+    engine_at(m->eng, c->t, ev_l2_access, c,
+              access_pack(line, whole ? L2_STORE_LINE : L2_STORE, cls));
   }
 }
 
