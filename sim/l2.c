@@ -426,12 +426,10 @@ struct dram_client l2_dram_client(struct l2 *l2) {
 
 void l2_attach(struct l2 *l2, struct dram *d) { l2->dram = d; }
 
-void l2_set_cost(struct l2 *l2, void *cost_ctx,
-                 void (*cost)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls,
-                              bool write)) {
+void l2_set_client(struct l2 *l2, const struct l2_client *client) {
   CHECK_EQ(l2->st.accesses + l2->st.stalls, 0);
-  l2->client.cost_ctx = cost_ctx;
-  l2->client.cost = cost;
+  CHECK(client->ready);
+  l2->client = *client;
 }
 
 /* ---- life ---- */

@@ -95,10 +95,8 @@ void l2_destroy(struct l2 *l2); /* NULL ok; the DRAM is not the L2's */
 /* The client the DRAM must be created with, and the DRAM to use (not owned). */
 struct dram_client l2_dram_client(struct l2 *l2);
 void l2_attach(struct l2 *l2, struct dram *d);
-/* Set the client's cost hook (struct l2_client) before the first access. */
-void l2_set_cost(struct l2 *l2, void *cost_ctx,
-                 void (*cost)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls,
-                              bool write));
+/* Replace the client (struct l2_client) before the first access. */
+void l2_set_client(struct l2 *l2, const struct l2_client *client);
 
 /* An access of one line at engine_now. waiter: a load's, handed back to
  * client->ready; NULL for a store (posted: nobody waits). tag: the client's

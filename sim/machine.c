@@ -157,15 +157,17 @@ static void ray_ready(struct machine *m, struct mctx *c, uint64_t t) {
 
 /* ---- lines back ---- */
 
-/* A line of ray c's load is back at cycle t (fills c's L1). */
-static void line_done(struct machine *m, struct mctx *c, uint64_t line, uint64_t t) {
+/* A line of ray c's load is back at cycle t (fills c's L1). costed: the
+ * cost layer is on (a constant at each call: two instances). */
+static inline void line_done(struct machine *m, struct mctx *c, uint64_t line, uint64_t t,
+                             const bool costed) {
   struct cache *l1 = m->core[c->info.core].l1;
   if (l1) cache_fill(l1, line, false); /* a victim: an L1 has no pending line */
   m->loads_back++;
   CHECK_GT(c->pending, 0);
   if (--c->pending == 0) {
     hist_add(&m->st.load_latency, t - c->wait_from);
-    cost_charge(c, COST_WAIT, t - c->wait_from);
+    if (costed) cost_charge(c, COST_WAIT, t - c->wait_from);
     ray_ready(m, c, t);
   }
 }
@@ -173,7 +175,11 @@ static void line_done(struct machine *m, struct mctx *c, uint64_t line, uint64_t
 /* The L2 answers a load (sim/l2.h's client): ctx is the waiting ray. */
 static void ev_line_done(void *ctx, uint64_t line) {
   struct mctx *c = ctx;
-  line_done(c->m, c, line, engine_now(c->m->eng));
+  line_done(c->m, c, line, engine_now(c->m->eng), false);
+}
+static void ev_line_done_costed(void *ctx, uint64_t line) {
+  struct mctx *c = ctx;
+  line_done(c->m, c, line, engine_now(c->m->eng), true);
 }
 
 /* An access on its way to the L2, packed into the event's one argument:
@@ -191,8 +197,15 @@ static inline unsigned access_cls(uint64_t a) { return (unsigned)(a & 15); }
 static void ev_l2_access(void *ctx, uint64_t arg) {
   struct mctx *c = ctx;
   enum l2_op op = access_op(arg);
-  /* A load's context waits for it, still working for the same items. */
-  uint32_t tag = !c->acc ? 0 : op == L2_LOAD ? cost_tag(c) : cost_store_pop(c);
+  l2_access(c->m->l2, access_line(arg), op, access_cls(arg), op == L2_LOAD ? c : NULL, 0);
+}
+/* The same with the cost layer on: the access carries the item it is for. A
+ * load's context waits for it, still working for the same items; a store's
+ * tag waits in the context's FIFO (cost_store_push). */
+static void ev_l2_access_costed(void *ctx, uint64_t arg) {
+  struct mctx *c = ctx;
+  enum l2_op op = access_op(arg);
+  uint32_t tag = op == L2_LOAD ? cost_tag(c) : cost_store_pop(c);
   l2_access(c->m->l2, access_line(arg), op, access_cls(arg), op == L2_LOAD ? c : NULL, tag);
 }
 
@@ -219,7 +232,7 @@ static void kick(struct machine *m, uint32_t core) {
 
 static void ctx_main(void *arg) {
   struct mctx *c = arg;
-  struct mem_port port = {&timed_ops, c};
+  struct mem_port port = {c->m->ops, c};
   c->m->fn(c->m->fn_arg, &c->info, port);
 }
 
@@ -287,28 +300,33 @@ static void ev_issue(void *ctx, uint64_t core) {
 
 /* ---- the door ---- */
 
-static void t_compute(void *ctx, uint64_t cycles) {
-  struct mctx *c = ctx;
+/* The door comes in two instances, without and with the cost layer
+ * (timed_ops, costed_ops: machine_door_costed picks the second): each
+ * function below takes `costed` as a constant, so with costs off the door
+ * carries nothing of them. */
+
+static inline void door_compute(struct mctx *c, uint64_t cycles, const bool costed) {
   c->t += cycles;
   c->slots += cycles;
   c->m->st.computes++;
-  cost_charge(c, COST_SLOTS, cycles);
+  if (costed) cost_charge(c, COST_SLOTS, cycles);
 }
 
 /* What a load and a store pay first: one issue slot at the context's time. */
-static struct machine *door_issue(struct mctx *c, uint32_t size, unsigned cls) {
+static inline struct machine *door_issue(struct mctx *c, uint32_t size, unsigned cls,
+                                         const bool costed) {
   CHECK(!c->parking); /* a parking worker returns without another access */
   CHECK_GT(size, 0);
   CHECK_LT(cls, MEM_CLASS_MAX);
   c->t++;
   c->slots++;
-  cost_charge(c, COST_SLOTS, 1);
+  if (costed) cost_charge(c, COST_SLOTS, 1);
   return c->m;
 }
 
-static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
-  struct mctx *c = ctx;
-  struct machine *m = door_issue(c, size, cls);
+static inline void door_load(struct mctx *c, uint64_t addr, uint32_t size, unsigned cls,
+                             const bool costed) {
+  struct machine *m = door_issue(c, size, cls, costed);
   m->st.loads++;
   struct cache *l1 = m->core[c->info.core].l1;
   uint64_t line = addr >> SIM_LINE_LG2, end = (addr + size - 1) >> SIM_LINE_LG2;
@@ -321,12 +339,13 @@ static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
         continue;
       }
     }
-    engine_at(m->eng, c->t, ev_l2_access, c, access_pack(line, L2_LOAD, cls));
+    engine_at(m->eng, c->t, costed ? ev_l2_access_costed : ev_l2_access, c,
+              access_pack(line, L2_LOAD, cls));
     pending++;
   }
   if (!pending) {
     hist_add(&m->st.load_latency, m->p.l1_latency_cycles);
-    cost_charge(c, COST_WAIT, m->p.l1_latency_cycles);
+    if (costed) cost_charge(c, COST_WAIT, m->p.l1_latency_cycles);
     c->t += m->p.l1_latency_cycles;
     return;
   }
@@ -338,9 +357,9 @@ static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
   coro_suspend(c->co);
 }
 
-static void t_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
-  struct mctx *c = ctx;
-  struct machine *m = door_issue(c, size, cls);
+static inline void door_store(struct mctx *c, uint64_t addr, uint32_t size, unsigned cls,
+                              const bool costed) {
+  struct machine *m = door_issue(c, size, cls, costed);
   m->st.stores++;
   struct cache *l1 = m->core[c->info.core].l1;
   const uint64_t last = addr + size - 1, lmask = SIM_LINE_BYTES - 1;
@@ -353,10 +372,25 @@ static void t_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
       cache_use(l1, line);
     }
     bool whole = line >= first_whole && (line < end || last_whole);
-    if (c->acc) cost_store_push(c, cost_tag(c));
-    engine_at(m->eng, c->t, ev_l2_access, c,
+    if (costed) cost_store_push(c, cost_tag(c));
+    engine_at(m->eng, c->t, costed ? ev_l2_access_costed : ev_l2_access, c,
               access_pack(line, whole ? L2_STORE_LINE : L2_STORE, cls));
   }
+}
+
+static void t_compute(void *ctx, uint64_t cycles) { door_compute(ctx, cycles, false); }
+static void t_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  door_load(ctx, addr, size, cls, false);
+}
+static void t_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  door_store(ctx, addr, size, cls, false);
+}
+static void tc_compute(void *ctx, uint64_t cycles) { door_compute(ctx, cycles, true); }
+static void tc_load(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  door_load(ctx, addr, size, cls, true);
+}
+static void tc_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
+  door_store(ctx, addr, size, cls, true);
 }
 
 static void ev_wake(void *ctx, uint64_t arg) {
@@ -406,6 +440,14 @@ static void t_wake(void *ctx, uint32_t id) {
 }
 
 static const struct mem_ops timed_ops = {t_load, t_store, t_compute, t_wait, t_park, t_wake};
+static const struct mem_ops costed_ops = {tc_load, tc_store, tc_compute, t_wait, t_park, t_wake};
+
+void machine_door_costed(struct machine *m, void *cost_ctx, l2_cost_fn cost) {
+  CHECK(!m->ran);
+  m->ops = &costed_ops;
+  const struct l2_client lc = {ev_line_done_costed, cost_ctx, cost};
+  l2_set_client(m->l2, &lc);
+}
 
 /* ---- machine ---- */
 
@@ -422,6 +464,7 @@ static struct machine *create(const struct machine_params *p, uint64_t stack_byt
   static const struct l2_timeline_cols cols = {MACHINE_TL_L2_ACCESSES, MACHINE_TL_L2_MISSES,
                                                MACHINE_TL_DRAM_READ_BYTES, MACHINE_TL_READ_CLASS0,
                                                MACHINE_TL_DRAM_WRITE_BYTES};
+  m->ops = &timed_ops;
   struct l2_client lc = {ev_line_done, NULL, NULL};
   m->l2 = l2_create(&lp, m->eng, &m->tl, &cols, &lc);
   struct dram_params dp = machine_dram_params(p);

@@ -72,7 +72,7 @@ void machine_costs_enable(struct machine *m, uint64_t items, unsigned classes) {
   m->cost_stride = COST_READ0 + classes;
   m->cost_acc = xcalloc((uint64_t)m->nctx * m->cost_stride, sizeof *m->cost_acc);
   for (uint32_t i = 0; i < m->nctx; i++) m->ctx[i].acc = m->cost_acc + (uint64_t)i * m->cost_stride;
-  l2_set_cost(m->l2, m, l2_cost);
+  machine_door_costed(m, m, l2_cost);
 }
 
 void machine_attribute(struct machine *m, uint32_t ctx, const uint32_t *items, uint32_t n) {

@@ -118,6 +118,7 @@ struct machine {
   struct mctx *running; /* the ray inside a block, if any (machine_probe) */
   struct mwarm *warm;   /* one warming port context a core (machine_warm_port) */
   uint64_t warm_slots, count_slots;
+  const struct mem_ops *ops;  /* the door: timed, or with the cost layer */
   struct machine_costs costs; /* per item (machine_costs_enable) */
   uint64_t *cost_acc;         /* every context's counters; NULL: costs not counted */
   unsigned cost_stride;       /* counters a context */
@@ -129,18 +130,18 @@ struct mwarm {
   uint32_t core;
 };
 
-/* ---- machine_cost.c: per-item costs ---- */
+/* ---- machine_cost.c: per-item costs ----
+ * The helpers below are called by the door's costed instance alone
+ * (machine.c), so every context has its counters (c->acc). */
 
 /* c's own work (slots, waits, its loads' DRAM reads), charged when told anew. */
 static inline void cost_charge(struct mctx *c, unsigned ch, uint64_t v) {
-  if (!c->acc) return;
   CHECK_GT(c->nitems, 0); /* every access is attributed */
   c->acc[ch] += v;
 }
 
 /* The tag an access of c carries to the L2: the first item it works for. */
 static inline uint32_t cost_tag(const struct mctx *c) {
-  if (!c->acc) return 0;
   CHECK_GT(c->nitems, 0);
   return c->items[0];
 }
@@ -164,6 +165,12 @@ static inline uint32_t cost_store_pop(struct mctx *c) {
   if (--h->n == 0) ring_pop(&c->runs);
   return tag;
 }
+
+/* The L2's cost hook (struct l2_client's cost). */
+typedef void (*l2_cost_fn)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls, bool write);
+/* Install the cost layer (machine.c): the door's costed instance, and an L2
+ * client that hears every transfer through `cost`. Before the run. */
+void machine_door_costed(struct machine *m, void *cost_ctx, l2_cost_fn cost);
 /* Charge what c has cost since it was told whom it works for to its items. */
 void machine_cost_flush(struct mctx *c);
 /* The end of a run that counted costs (CHECKs conservation). */
