@@ -67,6 +67,7 @@
 #include "renderer/policy/policy.h"
 #include "renderer/policy/policy_impl.h"
 #include "renderer/policy/qdrain.h"
+#include "renderer/policy/qpark.h"
 #include "renderer/policy/qpoint.h"
 #include "renderer/policy/qstore.h"
 #include "renderer/policy/qwalk.h"
@@ -75,7 +76,6 @@
 #include "renderer/trace.h"
 #include "sim/err.h"
 
-#define QS_NONE UINT32_MAX
 /* Host-only mark of a ray that ended during a blocked pass (never simulated). */
 #define QS_FLAG_DEAD 0x80u
 
@@ -91,17 +91,6 @@ struct ray_buf {
 };
 
 enum qsched_phase { QS_ADMIT, QS_CLOSEST, QS_SHADOW };
-
-/* A list of parked workers (by worker id), first parked first woken. */
-struct qsched_parked {
-  uint32_t head, tail;
-};
-
-/* Worker id waits for the ray in slot to be stored. */
-struct qsched_slot_wait {
-  uint64_t slot;
-  uint32_t id;
-};
 
 /* The job's shared state: queue points and the policy's routes, the queue
  * store and the drains, the primary rays' order, the batch and its phase. */
@@ -124,14 +113,7 @@ struct qsched {
   uint64_t pending;
   /* Rays spawned and terminated by all workers, for progress. */
   uint64_t spawned, terminated, progress_at;
-  /* Parked workers: those with nothing to do (idle), per core those waiting
-   * for the end of its pass (pass[core]), linked by park_next; and those
-   * whose claim waits for a ray's store (slot_wait, slot_waits of them). */
-  struct qsched_parked idle, *pass;
-  uint32_t *park_next;
-  struct qsched_slot_wait *slot_wait;
-  uint32_t slot_waits, slot_wait_cap;
-  uint32_t parked, parked_busy; /* all, and those that are not idle */
+  struct qpark pk; /* the parked workers */
 };
 
 /* A worker's own (its scratch): where its accesses and counts go, the rays
@@ -145,26 +127,17 @@ struct qsched_worker {
   struct render_stats *st;
   struct ray_buf pend;
   struct qdrain_claim cl;
-  struct qsched_parked *wait; /* where work() found nothing: the list to park in
+  struct qpark_list *wait; /* where work() found nothing: the list to park in
                               (NULL: it waits for a ray's store) */
-  bool holding;               /* cl is claimed and not yet traced */
+  bool holding;            /* cl is claimed and not yet traced */
 };
 
 /* ---- parking ------------------------------------------------------------------ */
 
-/* Park x in list l (NULL: x is in slot_wait): its worker function returns now
- * (qsched_step), and runs again when woken. */
-static void park(struct qsched_worker *x, struct qsched_parked *l) {
-  struct qsched *q = x->q;
-  const uint32_t id = x->wk->id;
-  if (l) {
-    q->park_next[id] = QS_NONE;
-    if (l->tail == QS_NONE) l->head = id;
-    else q->park_next[l->tail] = id;
-    l->tail = id;
-  }
-  q->parked++;
-  q->parked_busy += l != &q->idle;
+/* Park x in list l (NULL: x waits for a slot, qpark_wait_slot): its worker
+ * function returns now (qsched_step), and runs again when woken. */
+static void park(struct qsched_worker *x, struct qpark_list *l) {
+  qpark_add(&x->q->pk, l, x->wk->id);
   /* A parked worker holds no host memory it does not need: its spawned rays
    * are all started (a machine of thousands of mostly parked contexts). */
   CHECK_EQ(x->pend.n, 0);
@@ -175,34 +148,9 @@ static void park(struct qsched_worker *x, struct qsched_parked *l) {
   x->wk->parked = true;
 }
 
-/* Wake up to n workers of list l, first parked first, at x's time. Returns
- * how many. */
-static uint64_t wake(struct qsched_worker *x, struct qsched_parked *l, uint64_t n) {
-  struct qsched *q = x->q;
-  uint64_t k = 0;
-  for (; k < n && l->head != QS_NONE; k++) {
-    const uint32_t id = l->head;
-    l->head = q->park_next[id];
-    if (l->head == QS_NONE) l->tail = QS_NONE;
-    q->parked--;
-    q->parked_busy -= l != &q->idle;
-    mem_wake(&x->tr->mem, id);
-  }
-  return k;
-}
-
-/* The ray in slot is stored: wake the worker whose claim waits for it. */
-static void wake_slot(struct qsched_worker *x, uint64_t slot) {
-  struct qsched *q = x->q;
-  for (uint32_t i = 0; i < q->slot_waits; i++) {
-    if (q->slot_wait[i].slot != slot) continue;
-    const uint32_t id = q->slot_wait[i].id;
-    q->slot_wait[i] = q->slot_wait[--q->slot_waits];
-    q->parked--;
-    q->parked_busy--;
-    mem_wake(&x->tr->mem, id);
-    return;
-  }
+/* Wake up to n workers of list l at x's time. Returns how many. */
+static uint64_t wake(struct qsched_worker *x, struct qpark_list *l, uint64_t n) {
+  return qpark_wake(&x->q->pk, l, n, &x->tr->mem);
 }
 
 static void buf_push(struct ray_buf *b, const struct ray *r) {
@@ -226,8 +174,8 @@ static void enqueue(struct qsched_worker *x, uint32_t qi, const struct ray *r, u
   const bool fresh = qstore_free_queues(&q->st) > free0; /* a queue to take */
   if (set == QS_SET_NOW) q->pending++;
   qstore_write(&q->st, &x->tr->mem, qi, slot);
-  if (q->slot_waits) wake_slot(x, slot);
-  if (fresh) wake(x, &q->idle, 1);
+  if (q->pk.slot_waits) qpark_wake_slot(&q->pk, slot, &x->tr->mem);
+  if (fresh) wake(x, &q->pk.idle, 1);
 }
 
 /* ---- ray ends ---------------------------------------------------------------- */
@@ -415,27 +363,23 @@ static bool admit(struct qsched_worker *x) {
 }
 
 /* Trace x's claim once all its rays are stored (a ray that ended in an
- * earlier pass is never read again); until then x waits in slot_wait for the
- * first that is not (qstore.h's hazards: its enqueuer wakes x). One worker
- * never waits: its enqueues are over before it drains. False when x must
- * wait. */
+ * earlier pass is never read again); until then x waits (qpark_wait_slot)
+ * for the first that is not (qstore.h's hazards: its enqueuer wakes x). One
+ * worker never waits: its enqueues are over before it drains. False when x
+ * must wait. */
 static bool trace_claim(struct qsched_worker *x) {
   struct qsched *q = x->q;
   for (uint32_t t = 0; t < x->cl.n; t++) {
     const uint64_t slot = x->cl.slot[t];
     if ((qstore_ray(&q->st, slot)->flags & QS_FLAG_DEAD) || qstore_stored(&q->st, slot)) continue;
-    if (q->slot_waits == q->slot_wait_cap) {
-      q->slot_wait_cap = q->slot_wait_cap ? 2 * q->slot_wait_cap : 16;
-      q->slot_wait = xrealloc(q->slot_wait, (uint64_t)q->slot_wait_cap * sizeof *q->slot_wait);
-    }
-    q->slot_wait[q->slot_waits++] = (struct qsched_slot_wait){slot, x->wk->id};
+    qpark_wait_slot(&q->pk, slot, x->wk->id);
     x->wait = NULL;
     return false;
   }
   x->holding = false;
   if (x->cl.leaf) trace_leaf_claim(x);
   else trace_subtree_claim(x);
-  if (qdrain_claim_done(&q->ds, &x->cl)) wake(x, &q->pass[x->cl.drain], UINT64_MAX);
+  if (qdrain_claim_done(&q->ds, &x->cl)) wake(x, &q->pk.pass[x->cl.drain], UINT64_MAX);
   return true;
 }
 
@@ -446,18 +390,18 @@ static bool trace_claim(struct qsched_worker *x) {
 static bool work(struct qsched_worker *x) {
   struct qsched *q = x->q;
   const uint32_t core = x->wk->core;
-  x->wait = &q->idle;
+  x->wait = &q->pk.idle;
   if (x->holding) return trace_claim(x); /* woken by the store it waited for */
   if (q->phase == QS_ADMIT) return admit(x);
   switch (qdrain_work(&q->ds, core, x->tr, &x->cl)) {
   case QDRAIN_NOTHING: return false;
-  case QDRAIN_PASS_WAIT: x->wait = &q->pass[core]; return false;
+  case QDRAIN_PASS_WAIT: x->wait = &q->pk.pass[core]; return false;
   case QDRAIN_STARTED: {
     /* x takes one of the new pass's claims itself. */
     uint64_t n = qdrain_claims_left(&q->ds, core);
     n = n > 0 ? n - 1 : 0;
-    n -= wake(x, &q->pass[core], n);
-    wake(x, &q->idle, n);
+    n -= wake(x, &q->pk.pass[core], n);
+    wake(x, &q->pk.idle, n);
     return true;
   }
   case QDRAIN_CLAIMED: break;
@@ -559,10 +503,7 @@ struct qsched *qsched_create(struct policy_job *job, const struct qpoint_set *qs
   q->route = route;
   q->ctx = ctx;
   q->wt = (struct qwalk_tree){job->setup.kd, job->setup.scene, qs->nodes, qs->mark};
-  q->idle.head = q->idle.tail = QS_NONE;
-  q->pass = xmalloc((uint64_t)job->cores * sizeof *q->pass);
-  for (uint32_t c = 0; c < job->cores; c++) q->pass[c] = q->idle;
-  q->park_next = xmalloc((uint64_t)job->workers * sizeof *q->park_next);
+  qpark_init(&q->pk, job->cores, job->workers);
   qstore_init(&q->st, qs->count, QS_SETS, l->qtable_base, l->queue_base);
   qdrain_init(&q->ds, &q->st, qs, job->cores, block_tris, group);
   if (p->dyn_sharing == POLICY_DYN_CHIP) qdrain_share_chip(&q->ds, (uint64_t)job->workers * group);
@@ -581,9 +522,7 @@ struct qsched *qsched_create(struct policy_job *job, const struct qpoint_set *qs
 void qsched_destroy(struct qsched *q) {
   if (!q) return;
   free(q->order);
-  free(q->pass);
-  free(q->park_next);
-  free(q->slot_wait);
+  qpark_fini(&q->pk);
   qdrain_fini(&q->ds);
   qstore_fini(&q->st);
   free(q);
@@ -642,12 +581,12 @@ bool qsched_step(struct qsched *q, struct policy_job *job, struct policy_worker 
     if (!x->holding && phase_over(q)) {
       /* No worker waits for a pass between phases (a pass left is no phase
        * over): the idle ones get a free queue each, or all go on at the end. */
-      CHECK_EQ(q->parked_busy, 0);
+      CHECK_EQ(q->pk.busy, 0);
       if (advance(q)) {
         batch_end(job, q);
-        wake(x, &q->idle, UINT64_MAX);
+        wake(x, &q->pk.idle, UINT64_MAX);
       } else {
-        wake(x, &q->idle, qstore_free_queues(&q->st));
+        wake(x, &q->pk.idle, qstore_free_queues(&q->st));
       }
       continue;
     }
@@ -664,7 +603,7 @@ bool qsched_step(struct qsched *q, struct policy_job *job, struct policy_worker 
 void qsched_finish(const struct qsched *q, struct render_stats *st) {
   CHECK(!q->active);
   CHECK_EQ(q->pending, 0);
-  CHECK_EQ(q->parked, 0);
+  CHECK_EQ(q->pk.parked, 0);
   qstore_check_empty(&q->st);
   qdrain_check_done(&q->ds);
   st->ray_slots_max += (uint64_t)qstore_chunks(&q->st) * QSTORE_CHUNK_RAYS;
