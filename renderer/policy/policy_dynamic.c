@@ -9,6 +9,7 @@
 #include <stdlib.h>
 
 #include "renderer/policy/policy.h"
+#include "renderer/policy/qplan.h"
 #include "renderer/policy/qpoint.h"
 #include "renderer/policy/qsched.h"
 #include "renderer/policy/qwalk.h"
@@ -63,7 +64,7 @@ static const struct qsched_route dyn_route = {dyn_queue, dyn_start, dyn_run, dyn
 void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32_t cores,
                          const struct kd_tree *kd, uint32_t tri_bytes, struct qpoint_set *qs,
                          struct qpoint_budget *b, uint32_t *block_tris, uint32_t *group) {
-  qsched_plan(p, workers, cores, kd, NULL, tri_bytes, qs, b, block_tris, group);
+  qplan_make(p, workers, cores, kd, NULL, tri_bytes, qs, b, block_tris, group);
 }
 
 static void dyn_create(struct policy_job *job) {
@@ -71,7 +72,7 @@ static void dyn_create(struct policy_job *job) {
   /* Queue points for the cache and the machine (policy.h). */
   struct qpoint_budget bud;
   uint32_t block_tris, group;
-  qsched_plan_job(job, &d->qs, &bud, &block_tris, &group);
+  qplan_job(job, &d->qs, &bud, &block_tris, &group);
   d->q = qsched_create(job, &d->qs, block_tris, group, &dyn_route, d);
   job->shared = d;
 }

@@ -10,6 +10,7 @@
 
 #include "renderer/kdtree.h"
 #include "renderer/policy/policy.h"
+#include "renderer/policy/qplan.h"
 #include "renderer/policy/qpoint.h"
 #include "renderer/policy/qsched.h"
 #include "renderer/policy/qwalk.h"
@@ -93,7 +94,7 @@ static void tl_create(struct policy_job *job) {
   /* The dynamic policy's budget; its queue points are not used. */
   struct qpoint_budget bud;
   uint32_t block_tris, group;
-  qsched_plan_job(job, &p->qs, &bud, &block_tris, &group);
+  qplan_job(job, &p->qs, &bud, &block_tris, &group);
   qpoint_fini(&p->qs);
   tl_select(p, job->setup.kd, job->setup.layout.tri_bytes, bud.gmax_bytes);
   p->q = qsched_create(job, &p->qs, block_tris, group, &tl_route, p);

@@ -1,14 +1,16 @@
 /* The queue scheduler (qsched.h), after the paper's section 2: rays wait in
  * queues at queue points and a queue is processed as a whole, so that the
- * geometry below it is loaded once for all its rays. This file holds the
- * plan, phases and generations and the rays' lives; the policy says which
- * queue a ray goes to and how its walk goes on (qsched_route: queue points
- * whose subtree fits the cache in policy_dynamic.c, treelets in
- * policy_treelet.c), and the parts it is built from are each their own module:
+ * geometry below it is loaded once for all its rays. This file holds phases
+ * and generations and the rays' lives; the policy says which queue a ray goes
+ * to and how its walk goes on (qsched_route: queue points whose subtree fits
+ * the cache in policy_dynamic.c, treelets in policy_treelet.c), and the parts
+ * it is built from are each their own module:
+ * - the plan (qplan.h): the budget the cache gives, the block and group sizes;
  * - the resumable walk (qwalk.h): a traversal cut at queue points;
  * - the queue store (qstore.h): queues in simulated memory, the chunk arena,
  *   the order in which queues are taken (the fullest first);
- * - the multi-core drain (qdrain.h): how the cores' workers share the queues.
+ * - the multi-core drain (qdrain.h): how the cores' workers share the queues;
+ * - the parked workers (qpark.h): who waits for what, who is woken first.
  *
  * Rays are traced in generations (section 2.1.2): the closest hits of a
  * generation, then its shadow rays (traced from the light toward the points),
@@ -450,45 +452,6 @@ static bool advance(struct qsched *q) {
     }
     if (!phase_over(q)) return false;
   }
-}
-
-/* ---- the plan ------------------------------------------------------------------ */
-
-static uint32_t clamp_u32(uint64_t v) {
-  return v == 0 ? 1 : (v > UINT32_MAX ? UINT32_MAX : (uint32_t)v);
-}
-
-void qsched_plan(const struct policy_params *p, uint32_t workers, uint32_t cores,
-                 const struct kd_tree *kd, const uint32_t *tris, uint32_t tri_bytes,
-                 struct qpoint_set *qs, struct qpoint_budget *b, uint32_t *block_tris,
-                 uint32_t *group) {
-  CHECK_GE(workers, 1);
-  CHECK_GE(cores, 1);
-  CHECK_LE(cores, workers);
-  CHECK_GT(tri_bytes, 0);
-  uint32_t *counted = NULL;
-  if (!tris) {
-    counted = xmalloc((uint64_t)kd->node_count * sizeof *counted + 1);
-    qpoint_subtree_tris(kd, counted);
-    tris = counted;
-  }
-  const uint64_t rays =
-      p->dyn_ray_buffer_bytes ? p->dyn_ray_buffer_bytes : (uint64_t)workers * sizeof(struct ray);
-  /* Geometry resident at once: one queue point a core, or one for the chip. */
-  const uint32_t holders = p->dyn_sharing == POLICY_DYN_CHIP ? 1 : cores;
-  struct qpoint_reserve res = {
-      p->cache_bytes, p->dyn_node_share, p->dyn_table_share, p->dyn_ray_share, rays, holders};
-  qpoint_plan(qs, b, kd, tris, tri_bytes, &res);
-  *block_tris = clamp_u32(b->gmax_bytes / tri_bytes);
-  *group = clamp_u32(b->ray_bytes / sizeof(struct ray) / workers);
-  free(counted);
-}
-
-void qsched_plan_job(const struct policy_job *job, struct qpoint_set *qs, struct qpoint_budget *b,
-                     uint32_t *block_tris, uint32_t *group) {
-  const struct policy_setup *s = &job->setup;
-  qsched_plan(&job->params, job->workers, job->cores, s->kd, s->subtree_tris, s->layout.tri_bytes,
-              qs, b, block_tris, group);
 }
 
 /* ---- the scheduler --------------------------------------------------------------- */

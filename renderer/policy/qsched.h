@@ -14,11 +14,8 @@
 
 #include "renderer/policy/qwalk.h"
 
-struct kd_tree;
 struct policy_job;
-struct policy_params;
 struct policy_worker;
-struct qpoint_budget;
 struct qpoint_set;
 struct render_stats;
 struct trace_ctx;
@@ -46,7 +43,7 @@ struct qsched;
 
 /* The job's scheduler over the queue points qs marks (borrowed: qs->nodes and
  * qs->mark are the walk's, queue i is at qs->qnode[i]), routed by route with
- * context ctx (both borrowed); block_tris and group as qsched_plan gives
+ * context ctx (both borrowed); block_tris and group as qplan_make gives
  * them. Sets the job's total (its primary rays, the work items) and its
  * progress reporting. The caller destroys it (qsched_destroy). */
 struct qsched *qsched_create(struct policy_job *job, const struct qpoint_set *qs,
@@ -64,17 +61,5 @@ void qsched_scratch_free(void *scratch);
 /* policy_module.finish: CHECKs every queue empty and every worker done, and
  * adds the queue arena at its largest (the rays in flight) to st. */
 void qsched_finish(const struct qsched *q, struct render_stats *st);
-
-/* The queue points and budget for the cache and the machine (policy.h's
- * rules): policy_dynamic_plan, with the subtree triangle counts given (tris,
- * qpoint_subtree_tris of kd) or counted here (tris NULL). */
-void qsched_plan(const struct policy_params *p, uint32_t workers, uint32_t cores,
-                 const struct kd_tree *kd, const uint32_t *tris, uint32_t tri_bytes,
-                 struct qpoint_set *qs, struct qpoint_budget *b, uint32_t *block_tris,
-                 uint32_t *group);
-
-/* qsched_plan for a job: its parameters, machine and setup. */
-void qsched_plan_job(const struct policy_job *job, struct qpoint_set *qs, struct qpoint_budget *b,
-                     uint32_t *block_tris, uint32_t *group);
 
 #endif
