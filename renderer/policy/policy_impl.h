@@ -1,7 +1,7 @@
 /* What the policy dispatcher (policy.c) shares with the policy modules
- * (policy_recursive.c, policy_packet.c, policy_dynamic.c): the job's fields,
- * each module's table of operations, and the work-list helpers every module
- * uses the same way. Private to renderer/. */
+ * (policy_recursive.c, policy_packet.c, policy_dynamic.c, policy_treelet.c):
+ * the job's fields, each module's table of operations, and the work-list
+ * helpers every module uses the same way. Private to renderer/. */
 #ifndef RTSIM_RENDERER_POLICY_POLICY_IMPL_H
 #define RTSIM_RENDERER_POLICY_POLICY_IMPL_H
 

@@ -17,8 +17,8 @@
  * Whoever traces a claim's rays (the policy) tells the drain when each ray and
  * the claim are done: a pass moves on once all its claims are, and a releasing
  * (last) pass frees chunks behind the rays (qstore_chunk_drop). With one
- * worker this is the single loop it always was: take the fullest queue, pass
- * over its rays in order, take the next. Private to renderer/. */
+ * worker this is one loop: take the fullest queue, pass over its rays in
+ * order, take the next. Private to renderer/. */
 #ifndef RTSIM_RENDERER_POLICY_QDRAIN_H
 #define RTSIM_RENDERER_POLICY_QDRAIN_H
 
@@ -126,8 +126,8 @@ bool qdrain_claim_done(struct qdrain_set *ds, const struct qdrain_claim *cl);
  * left in this pass, in groups at a leaf. 0 when the core has none. */
 uint64_t qdrain_claims_left(struct qdrain_set *ds, uint32_t core);
 
-/* No drain has rays to hand out or passes left (passes go on over rays that
- * all ended, as one worker's loop did). */
+/* No drain has rays to hand out or passes left (a pass goes on over its rays
+ * even when they have all ended). */
 bool qdrain_idle(const struct qdrain_set *ds);
 
 /* Before the store's active set changes: every core lets its queue point go
