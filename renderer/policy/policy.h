@@ -22,7 +22,8 @@
  * - a worker with nothing to do until others make it some parks (mem_park)
  *   rather than spin, and whoever makes the work wakes it (mem_wake): the
  *   dynamic policy's workers share one batch.
- * With one worker every policy makes exactly the accesses it always made. */
+ * With one worker (policy_run: rtsim render and traffic) nothing interleaves,
+ * and a policy's accesses are those of its plain sequential loop. */
 #ifndef RTSIM_RENDERER_POLICY_POLICY_H
 #define RTSIM_RENDERER_POLICY_POLICY_H
 
