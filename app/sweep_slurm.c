@@ -57,7 +57,9 @@ void sweep_emit_slurm(const struct sweep_line_base *b, struct sweep_job **todo, 
                       unsigned per, struct sweep_job *all, unsigned npoints, unsigned complete) {
   const char *sweep_file = b->sweep;
   const unsigned tasks = (n + per - 1) / per;
-  struct sweep_job **by_task = xcalloc(n ? n : 1, sizeof *by_task);
+  /* per slots a task: the snake may give a later task per points while an
+   * earlier one has fewer. */
+  struct sweep_job **by_task = xcalloc(tasks ? (size_t)tasks * per : 1, sizeof *by_task);
   unsigned *count = xcalloc(tasks ? tasks : 1, sizeof *count);
   double *secs = xcalloc(tasks ? tasks : 1, sizeof *secs);
   double rate, seen_mb, mem = 0;
