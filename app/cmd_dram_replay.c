@@ -7,7 +7,6 @@
  * place in the trace, which puts the per-request file in trace order. */
 #include "app/app.h"
 
-#include <errno.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,6 +14,7 @@
 
 #include "app/opts.h"
 #include "sim/dram.h"
+#include "sim/dram_trace_read.h"
 #include "sim/engine.h"
 #include "sim/err.h"
 #include "sim/hist.h"
@@ -65,232 +65,6 @@ static const char HELP[] =
     "                        (the level's are rtsim run --help-stats' dram rows)\n"
     "  -h, --help            this text\n";
 
-#define REPLAY_LINE_MAX 4096          /* bytes a line, its newline not counted */
-#define REPLAY_CYCLE_MAX (1ull << 40) /* latest arrival, in core cycles */
-/* Refreshes a trace may span, over the banked level's channels: the level
- * steps through each one (an idle stretch too), some 40 ns apiece. */
-#define REPLAY_REFRESHES_MAX (1ull << 20)
-#define REPLAY_LINE_BYTES 64u
-#define REPLAY_FIELDS_MAX 6 /* fields kept of a line (one past the most allowed) */
-#define REPLAY_ECHO_MAX 40  /* bytes of a bad field quoted in a message */
-
-/* ---- the trace reader ---- */
-
-struct field {
-  const char *s;
-  size_t len;
-  int col; /* 1-based */
-};
-
-struct request {
-  uint64_t addr, arrival;
-  bool write;
-};
-
-struct reader {
-  FILE *f;
-  const char *path;
-  char buf[REPLAY_LINE_MAX];
-  unsigned long line;
-  unsigned fields;           /* the trace's fields a line; 0 until its first request */
-  unsigned long format_line; /* the line that set it */
-  struct dram_clock clock;
-  uint64_t dram_cycle_max; /* latest arrival in DRAM cycles (REPLAY_REFRESHES_MAX) */
-  uint64_t refresh_every;  /* the banked level's refresh interval, DRAM cycles (0: none) */
-  uint64_t requests;       /* read so far */
-  uint64_t last_at;        /* the last request's arrival as written (its field's unit) */
-  struct err *e;
-};
-
-static int line_no(const struct reader *r) {
-  return r->line > 2147483647ul ? 2147483647 : (int)r->line;
-}
-
-/* Quote at most REPLAY_ECHO_MAX bytes of a field for a message. */
-static const char *echo(const struct field *f, char *buf, size_t cap) {
-  size_t n = f->len < REPLAY_ECHO_MAX ? f->len : REPLAY_ECHO_MAX;
-  snprintf(buf, cap, "'%.*s%s'", (int)n, f->s, n < f->len ? "..." : "");
-  return buf;
-}
-
-static bool is_blank(char c) {
-  return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
-}
-
-/* A whole decimal number below 2^64. */
-static bool parse_dec(const struct field *f, uint64_t *out) {
-  uint64_t v = 0;
-  if (f->len == 0) return false;
-  for (size_t i = 0; i < f->len; i++) {
-    char c = f->s[i];
-    if (c < '0' || c > '9') return false;
-    uint64_t d = (uint64_t)(c - '0');
-    if (v > (UINT64_MAX - d) / 10) return false;
-    v = v * 10 + d;
-  }
-  *out = v;
-  return true;
-}
-
-/* 0x (or 0X) and hexadecimal digits, or decimal; below 2^64 either way. */
-static bool parse_addr(const struct field *f, uint64_t *out) {
-  if (f->len > 2 && f->s[0] == '0' && (f->s[1] == 'x' || f->s[1] == 'X')) {
-    uint64_t v = 0;
-    for (size_t i = 2; i < f->len; i++) {
-      char c = f->s[i];
-      unsigned d;
-      if (c >= '0' && c <= '9') d = (unsigned)(c - '0');
-      else if (c >= 'a' && c <= 'f') d = (unsigned)(c - 'a' + 10);
-      else if (c >= 'A' && c <= 'F') d = (unsigned)(c - 'A' + 10);
-      else return false;
-      if (v >> 60) return false;
-      v = v << 4 | d;
-    }
-    *out = v;
-    return true;
-  }
-  return parse_dec(f, out);
-}
-
-static bool parse_op(const struct field *f, bool *write) {
-  static const struct {
-    const char *name;
-    bool write;
-  } ops[] = {{"READ", false}, {"WRITE", true}, {"R", false}, {"W", true}};
-  for (size_t i = 0; i < sizeof ops / sizeof ops[0]; i++)
-    if (f->len == strlen(ops[i].name) && !memcmp(f->s, ops[i].name, f->len)) {
-      *write = ops[i].write;
-      return true;
-    }
-  return false;
-}
-
-/* Read one line into r->buf: 1 and its length, 0 at the end of the file, -1
- * on a line too long or a read error (e set). */
-static int read_line(struct reader *r, size_t *len) {
-  size_t n = 0;
-  int c;
-  while ((c = getc(r->f)) != EOF && c != '\n') {
-    if (n == 0) r->line++;
-    if (n == REPLAY_LINE_MAX)
-      return err_set(r->e, r->path, line_no(r), REPLAY_LINE_MAX + 1,
-                     "line too long (got more than %d bytes, expected at most %d)", REPLAY_LINE_MAX,
-                     REPLAY_LINE_MAX),
-             -1;
-    r->buf[n++] = (char)c;
-  }
-  if (c == EOF && ferror(r->f))
-    return err_set(r->e, r->path, 0, 0, "cannot read: %s", strerror(errno)), -1;
-  if (c == EOF && n == 0) return 0;
-  if (n == 0) r->line++; /* an empty line */
-  *len = n;
-  return 1;
-}
-
-/* The next request: 1 (in *q), 0 at the end of the trace, -1 on a bad line
- * (e set at its line and the offending field's column). */
-static int reader_next(struct reader *r, struct request *q) {
-  char got[REPLAY_ECHO_MAX + 8];
-  for (;;) {
-    size_t len;
-    int rc = read_line(r, &len);
-    if (rc <= 0) return rc;
-    struct field f[REPLAY_FIELDS_MAX];
-    unsigned n = 0;
-    size_t i = 0;
-    while (i < len) {
-      while (i < len && is_blank(r->buf[i])) i++;
-      if (i == len) break;
-      size_t start = i;
-      while (i < len && !is_blank(r->buf[i])) i++;
-      if (n < REPLAY_FIELDS_MAX) f[n] = (struct field){r->buf + start, i - start, (int)start + 1};
-      n++;
-    }
-    if (n == 0 || f[0].s[0] == '#') continue;
-    const int line = line_no(r);
-    /* Where a missing field would begin: one past the line's end. */
-    const int end_col = (int)len + 1;
-    if (r->fields && n != r->fields)
-      return err_set(r->e, r->path, line, n < r->fields ? end_col : f[r->fields].col,
-                     "wrong number of fields (got %u, expected %u as on line %lu: one format a "
-                     "trace)",
-                     n, r->fields, r->format_line),
-             -1;
-    if (n < 2)
-      return err_set(r->e, r->path, line, end_col,
-                     "too few fields (got %u, expected 2 (0xADDR R|W), 3 (0xADDR READ|WRITE "
-                     "DRAM_CYCLE) or 5 (rtsim's trace))",
-                     n),
-             -1;
-    if (n == 4 || n > 5)
-      return err_set(r->e, r->path, line, f[n == 4 ? 3 : 5].col,
-                     "wrong number of fields (got %u, expected 2 (0xADDR R|W), 3 (0xADDR "
-                     "READ|WRITE DRAM_CYCLE) or 5 (rtsim's trace))",
-                     n),
-             -1;
-    if (!r->fields) {
-      r->fields = n;
-      r->format_line = r->line;
-    }
-    uint64_t addr;
-    if (!parse_addr(&f[0], &addr))
-      return err_set(r->e, r->path, line, f[0].col,
-                     "address: not a number (got %s, expected 0x and hexadecimal digits, or "
-                     "decimal digits, below 2^64)",
-                     echo(&f[0], got, sizeof got)),
-             -1;
-    if (!parse_op(&f[1], &q->write))
-      return err_set(r->e, r->path, line, f[1].col,
-                     "operation: unknown (got %s, expected READ, WRITE, R or W)",
-                     echo(&f[1], got, sizeof got)),
-             -1;
-    q->addr = addr & ~(uint64_t)(REPLAY_LINE_BYTES - 1);
-    /* The arrival as written: Ramulator's is the request's index, in DRAM cycles. */
-    uint64_t v = r->requests;
-    if (n > 2) {
-      const struct field *at = &f[n == 3 ? 2 : 3];
-      const char *what = n == 3 ? "arrival DRAM cycle" : "arrival cycle";
-      if (!parse_dec(at, &v) || v > REPLAY_CYCLE_MAX)
-        return err_set(r->e, r->path, line, at->col,
-                       "%s: not a cycle (got %s, expected a whole number from 0 to %llu)", what,
-                       echo(at, got, sizeof got), REPLAY_CYCLE_MAX),
-               -1;
-      if (r->requests && v < r->last_at)
-        return err_set(r->e, r->path, line, at->col,
-                       "%s: earlier than the request before (got %llu, expected at least %llu)",
-                       what, (unsigned long long)v, (unsigned long long)r->last_at),
-               -1;
-    }
-    q->arrival = n == 5 ? v : dram_clock_to_core(r->clock, v);
-    /* A fast core against a slow DRAM clock multiplies DRAM cycles. */
-    if (q->arrival > REPLAY_CYCLE_MAX)
-      return err_set(r->e, r->path, line, n == 3 ? f[2].col : f[0].col,
-                     "arrival DRAM cycle: too late (got %llu, core cycle %llu; expected at most "
-                     "core cycle %llu)",
-                     (unsigned long long)v, (unsigned long long)q->arrival, REPLAY_CYCLE_MAX),
-             -1;
-    /* A banked DRAM with refresh steps through every refresh until then. */
-    const uint64_t dram_at = n == 5 ? dram_clock_from_core(r->clock, v) : v;
-    if (dram_at > r->dram_cycle_max)
-      return err_set(r->e, r->path, line, n == 2 ? f[0].col : f[n == 3 ? 2 : 3].col,
-                     "%s: too late for the replay (got DRAM cycle %llu, expected at most %llu: "
-                     "the DRAM refreshes every tREFI / ranks = %llu DRAM cycles on each channel "
-                     "and the replay steps through every refresh, at most %llu in all; "
-                     "--set dram.tREFI=0 turns refresh off)",
-                     n == 2   ? "request"
-                     : n == 3 ? "arrival DRAM cycle"
-                              : "arrival cycle",
-                     (unsigned long long)dram_at, (unsigned long long)r->dram_cycle_max,
-                     (unsigned long long)r->refresh_every, REPLAY_REFRESHES_MAX),
-             -1;
-    r->last_at = v;
-    r->requests++;
-    return 1;
-  }
-}
-
-/* ---- the replay ---- */
-
 /* A request taken by the DRAM, at its index in the trace. */
 struct slot {
   uint64_t arrival, taken, done;
@@ -300,8 +74,8 @@ struct slot {
 struct replay {
   struct engine *eng;
   struct dram *dram;
-  struct reader rd;
-  struct request next; /* the next request to offer, when have_next */
+  struct dram_trace_reader rd;
+  struct dram_trace_request next; /* the next request to offer, when have_next */
   bool have_next, blocked, failed;
   uint64_t feed_at;  /* the pending feed event's cycle, or UINT64_MAX */
   struct slot *ring; /* capacity a power of two; requests [head, taken) by index */
@@ -336,7 +110,7 @@ static void take(struct replay *p) {
   *s = (struct slot){p->next.arrival, now, 0, p->next.write, false};
   p->wait_sum += now - p->next.arrival;
   dram_take(p->dram, p->next.addr, p->next.write, idx);
-  int rc = reader_next(&p->rd, &p->next);
+  int rc = dram_trace_next(&p->rd, &p->next);
   p->have_next = rc > 0;
   /* A bad line stops the feed; what is in flight drains, then main reports. */
   if (rc < 0) p->failed = true;
@@ -409,7 +183,7 @@ static double r_to_dram(const struct stats_env *env) {
   return (double)rmp(env)->dram_clock_mhz * 1000.0 / (double)machine_core_khz(rmp(env));
 }
 static double r_bpc(const void *st, const struct stats_env *env) {
-  return ratio((double)REPLAY_LINE_BYTES * (double)r_requests(st, env), (double)env->cycles);
+  return ratio((double)DRAM_TRACE_LINE_BYTES * (double)r_requests(st, env), (double)env->cycles);
 }
 static double r_clock_ghz(const void *st, const struct stats_env *env) {
   (void)st;
@@ -576,16 +350,11 @@ int cmd_dram_replay(int argc, char **argv) {
     goto done;
   }
   p = xcalloc(1, sizeof *p);
-  p->rd.f = in;
-  p->rd.path = trace_path;
-  p->rd.e = &e;
-  p->rd.clock = dram_clock_make(core_khz, (uint64_t)dp.clock_mhz * 1000);
-  p->rd.dram_cycle_max = UINT64_MAX;
-  if (dp.model == DRAM_MODEL_BANKED && dp.banked.tREFI > 0) {
-    p->rd.refresh_every = dp.banked.tREFI / dp.banked.ranks;
-    p->rd.dram_cycle_max = REPLAY_REFRESHES_MAX / dp.banked.channels * p->rd.refresh_every;
-  }
-  int got = reader_next(&p->rd, &p->next);
+  dram_trace_reader_init(&p->rd, in, trace_path,
+                         dram_clock_make(core_khz, (uint64_t)dp.clock_mhz * 1000), &e);
+  if (dp.model == DRAM_MODEL_BANKED && dp.banked.tREFI > 0)
+    dram_trace_reader_refresh(&p->rd, dp.banked.tREFI / dp.banked.ranks, dp.banked.channels);
+  int got = dram_trace_next(&p->rd, &p->next);
   if (got == 0)
     err_set(&e, trace_path, 0, 0,
             "no request in the trace (expected at least one line '0xADDR READ|WRITE ...')");
@@ -624,9 +393,8 @@ int cmd_dram_replay(int argc, char **argv) {
     rc = app_report(&e);
     goto done;
   }
-  static const char *const formats[6] = {NULL, NULL, "ramulator", "dramsim3", NULL, "rtsim"};
   struct stats_table t = {0};
-  report(p, trace_path, formats[p->rd.fields], &mc, &t);
+  report(p, trace_path, dram_trace_format(&p->rd), &mc, &t);
   stats_write_csv_header(&t, stdout);
   stats_write_csv_row(&t, stdout);
   stats_fini(&t);

@@ -136,6 +136,39 @@ static void add_column(char ***cols, unsigned *n, const char *name) {
   (*cols)[(*n)++] = (char *)name;
 }
 
+/* The table: the header cols[0..ncols), then a row a point; columns from
+ * nmeasured on may be provenance. Written whole or not at all; false with e
+ * set. */
+static bool write_table(const char *out, char **cols, unsigned ncols, unsigned nmeasured,
+                        const struct point *pts, unsigned n, struct err *e) {
+  struct outfile o;
+  outguard_beside(out); /* a signal while it is written removes its temporary */
+  if (!outfile_open(&o, out, "the table", e)) {
+    outguard_clear();
+    return false;
+  }
+  FILE *f = o.f;
+  for (unsigned k = 0; k < ncols; k++) {
+    if (k) fputc(',', f);
+    stats_write_csv_str(f, cols[k]);
+  }
+  fputc('\n', f);
+  for (unsigned i = 0; i < n; i++) {
+    stats_write_csv_str(f, pts[i].name);
+    for (unsigned k = 1; k < ncols; k++) {
+      fputc(',', f);
+      int prov = -1;
+      for (int q = 0; k >= nmeasured && q < PROV_COUNT; q++)
+        if (!strcmp(cols[k], PROV_NAMES[q])) prov = q;
+      stats_write_csv_str(f, prov >= 0 ? pts[i].prov[prov] : cell(&pts[i], cols[k]));
+    }
+    fputc('\n', f);
+  }
+  bool committed = outfile_commit(&o, e);
+  outguard_clear();
+  return committed;
+}
+
 int cmd_merge(int argc, char **argv) {
   const char *out = NULL;
   bool reproducible = false;
@@ -213,33 +246,7 @@ int cmd_merge(int argc, char **argv) {
   warn_mixed(pts, n, NULL, PROV_REVISION, NULL, "points from different builds");
   warn_mixed(pts, n, "scene_hash", 0, "scene", "a scene changed between points");
 
-  struct outfile o;
-  outguard_beside(out); /* a signal while it is written removes its temporary */
-  if (!outfile_open(&o, out, "the table", &e)) {
-    outguard_clear();
-    rc = app_report(&e);
-    goto done;
-  }
-  FILE *f = o.f;
-  for (unsigned k = 0; k < ncols; k++) {
-    if (k) fputc(',', f);
-    stats_write_csv_str(f, cols[k]);
-  }
-  fputc('\n', f);
-  for (unsigned i = 0; i < n; i++) {
-    stats_write_csv_str(f, pts[i].name);
-    for (unsigned k = 1; k < ncols; k++) {
-      fputc(',', f);
-      int prov = -1;
-      for (int q = 0; k >= nmeasured && q < PROV_COUNT; q++)
-        if (!strcmp(cols[k], PROV_NAMES[q])) prov = q;
-      stats_write_csv_str(f, prov >= 0 ? pts[i].prov[prov] : cell(&pts[i], cols[k]));
-    }
-    fputc('\n', f);
-  }
-  bool committed = outfile_commit(&o, &e);
-  outguard_clear();
-  if (!committed) {
+  if (!write_table(out, cols, ncols, nmeasured, pts, n, &e)) {
     rc = app_report(&e);
     goto done;
   }

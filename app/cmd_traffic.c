@@ -155,6 +155,49 @@ static bool parse_policies(const char *s, void *dst) {
   return true;
 }
 
+/* The table: its header, then a row a policy and cache size, each against
+ * recursive at the same size (the paper's relative columns). */
+static void write_table(FILE *f, const struct row *rows, unsigned nrows, const char *scene_name,
+                        const char *names, uint32_t W, uint32_t H, unsigned lg2,
+                        const struct policy_params *pp, bool clipped) {
+  fprintf(f, "scene,rays,width,height,policy,cache_bytes,frac_pot_vis,geometry_mb,total_mb,"
+             "rel_geometry,rel_total");
+  for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
+    fprintf(f, ",fetch_%s", trace_class_names[cl]);
+  fprintf(
+      f, ",writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes,"
+         "kd_splits\n");
+  struct trace_layout layout;
+  trace_layout_default(&layout);
+  const uint64_t tri_bytes = layout.tri_bytes;
+  /* The buffer the dynamic runs reserved (one worker: 0 is one ray). */
+  const uint64_t dyn_ray_buffer = pp->dyn_ray_buffer_bytes ? pp->dyn_ray_buffer_bytes : 64;
+  for (unsigned i = 0; i < nrows; i++) {
+    const struct row *r = &rows[i];
+    const struct row *base = NULL;
+    for (unsigned j = 0; j < nrows; j++)
+      if (rows[j].policy == POLICY_RECURSIVE && rows[j].s.capacity_bytes == r->s.capacity_bytes)
+        base = &rows[j];
+    uint64_t pv_bytes = r->pot_vis_tris * tri_bytes, wb = 0, acc = 0;
+    for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++) {
+      wb += r->s.writebacks[cl] << lg2;
+      acc += r->s.accesses[cl];
+    }
+    double g = geometry_bytes(r, lg2), t = total_bytes(r, lg2);
+    double bg = base ? geometry_bytes(base, lg2) : 0, bt = base ? total_bytes(base, lg2) : 0;
+    fprintf(f, "%s,%s,%u,%u,%s,%llu,%.6f,%.4f,%.4f,%.4f,%.4f", scene_name, names, W, H,
+            policy_name(r->policy), (unsigned long long)r->s.capacity_bytes,
+            pv_bytes ? (double)r->s.capacity_bytes / (double)pv_bytes : 0.0, g / MIB, t / MIB,
+            bg > 0 ? g / bg : 0.0, bt > 0 ? t / bt : 0.0);
+    for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
+      fprintf(f, ",%llu", (unsigned long long)fetched(&r->s, cl, lg2));
+    fprintf(f, ",%llu,%llu,%llu,%llu,%llu,%llu,%s\n", (unsigned long long)wb,
+            (unsigned long long)acc, (unsigned long long)r->pot_vis_tris,
+            (unsigned long long)pv_bytes, (unsigned long long)pp->dyn_batch_rays,
+            (unsigned long long)dyn_ray_buffer, clipped ? "clipped" : "whole");
+  }
+}
+
 int cmd_traffic(int argc, char **argv) {
   const char *out = NULL;
   uint32_t mask = 0; /* 0: no --rays */
@@ -244,43 +287,7 @@ int cmd_traffic(int argc, char **argv) {
   for (char *q = names; *q; q++)
     if (*q == ',') *q = '+'; /* a CSV field */
   const char *scene_name = w.scene.name[0] ? w.scene.name : scene_path;
-  fprintf(f, "scene,rays,width,height,policy,cache_bytes,frac_pot_vis,geometry_mb,total_mb,"
-             "rel_geometry,rel_total");
-  for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
-    fprintf(f, ",fetch_%s", trace_class_names[cl]);
-  fprintf(
-      f, ",writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes,"
-         "kd_splits\n");
-  const unsigned lg2 = lp.lg2_line;
-  struct trace_layout layout;
-  trace_layout_default(&layout);
-  const uint64_t tri_bytes = layout.tri_bytes;
-  /* The buffer the dynamic runs reserved (one worker: 0 is one ray). */
-  const uint64_t dyn_ray_buffer = pp.dyn_ray_buffer_bytes ? pp.dyn_ray_buffer_bytes : 64;
-  for (unsigned i = 0; i < nrows; i++) {
-    const struct row *r = &rows[i];
-    const struct row *base = NULL;
-    for (unsigned j = 0; j < nrows; j++)
-      if (rows[j].policy == POLICY_RECURSIVE && rows[j].s.capacity_bytes == r->s.capacity_bytes)
-        base = &rows[j];
-    uint64_t pv_bytes = r->pot_vis_tris * tri_bytes, wb = 0, acc = 0;
-    for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++) {
-      wb += r->s.writebacks[cl] << lg2;
-      acc += r->s.accesses[cl];
-    }
-    double g = geometry_bytes(r, lg2), t = total_bytes(r, lg2);
-    double bg = base ? geometry_bytes(base, lg2) : 0, bt = base ? total_bytes(base, lg2) : 0;
-    fprintf(f, "%s,%s,%u,%u,%s,%llu,%.6f,%.4f,%.4f,%.4f,%.4f", scene_name, names, W, H,
-            policy_name(r->policy), (unsigned long long)r->s.capacity_bytes,
-            pv_bytes ? (double)r->s.capacity_bytes / (double)pv_bytes : 0.0, g / MIB, t / MIB,
-            bg > 0 ? g / bg : 0.0, bt > 0 ? t / bt : 0.0);
-    for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
-      fprintf(f, ",%llu", (unsigned long long)fetched(&r->s, cl, lg2));
-    fprintf(f, ",%llu,%llu,%llu,%llu,%llu,%llu,%s\n", (unsigned long long)wb,
-            (unsigned long long)acc, (unsigned long long)r->pot_vis_tris,
-            (unsigned long long)pv_bytes, (unsigned long long)pp.dyn_batch_rays,
-            (unsigned long long)dyn_ray_buffer, w.scene.kd_clip ? "clipped" : "whole");
-  }
+  write_table(f, rows, nrows, scene_name, names, W, H, lp.lg2_line, &pp, w.scene.kd_clip);
   bool committed = outfile_commit(&o, &e);
   outguard_clear();
   if (!committed) {
@@ -289,6 +296,7 @@ int cmd_traffic(int argc, char **argv) {
     return app_report(&e);
   }
   printf("scene: %s\nrays: %s\nimage: %ux%u\nruns: %u\n", scene_name, names, W, H, runs);
+  const uint64_t dyn_ray_buffer = pp.dyn_ray_buffer_bytes ? pp.dyn_ray_buffer_bytes : 64;
   if (want[POLICY_DYNAMIC] || want[POLICY_TREELET]) {
     printf("dyn_batch: %llu%s\n", (unsigned long long)pp.dyn_batch_rays,
            pp.dyn_batch_rays ? " primary rays at a time" : " (all primary rays at once)");

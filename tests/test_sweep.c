@@ -168,6 +168,13 @@ static void test_expansion(void) {
   EXPECTF(sh && strstr(sh, "--set dynamic.sharing=chip"), "zip_repeat.yaml: %s",
           sh ? sh : "(no command.sh)");
   free(sh);
+  /* Three points, two a task: the snake gives task 2 two points, task 1 one. */
+  int slurm_rc = run("(%s sweep %szip_repeat.yaml -o %s/sw_zip --emit-slurm 2 2>/dev/null)",
+                     RTSIM_BINARY, SW, RTSIM_TMP);
+  unsigned named = 0;
+  for (const char *q = out; (q = strstr(q, " --point ")); q++) named++;
+  EXPECTF(slurm_rc == 0 && strstr(out, "\n#SBATCH --array=1-2\n") && named == 3,
+          "zip_repeat.yaml --emit-slurm 2: %d %s", slurm_rc, out);
 }
 
 /* Bad sweep files: exit 2, one line at file:line:col, nothing created. */

@@ -1,4 +1,4 @@
-/* libFuzzer target: rtsim dram-replay's trace reader (app/cmd_dram_replay.c)
+/* libFuzzer target: rtsim dram-replay's trace reader (sim/dram_trace_read.c)
  * and the replay it drives, on configs/default.yaml's DRAM. The input's first
  * line is options, separated by spaces: each word fidelity=..., clock_ghz=...
  * or dram.<key>=... is passed as --set, and the word per-request adds

@@ -1,5 +1,5 @@
 /* libFuzzer target: rtsim plot's table reading (app/csv.c) and everything it
- * does with the table before gnuplot (app/cmd_plot.c: columns, --where,
+ * does with the table before gnuplot (app/plot_figure.c: columns, --where,
  * distinct lines and panels, numbers, log scales, rows that collide). The
  * input's first line is plot's options, separated by spaces; only --x, --y,
  * --lines, --panels, --where, --logx, --logy, --mark-x, --bars, --stack,
