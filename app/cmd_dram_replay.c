@@ -13,14 +13,17 @@
 #include <string.h>
 
 #include "app/opts.h"
+#include "sim/derived.h"
 #include "sim/dram.h"
 #include "sim/dram_trace_read.h"
 #include "sim/engine.h"
 #include "sim/err.h"
 #include "sim/hist.h"
+#include "sim/line.h"
 #include "sim/machine.h"
 #include "sim/machine_cfg.h"
 #include "sim/outfile.h"
+#include "sim/ring.h"
 #include "sim/stats.h"
 
 static const char HELP[] =
@@ -77,10 +80,9 @@ struct replay {
   struct dram_trace_reader rd;
   struct dram_trace_request next; /* the next request to offer, when have_next */
   bool have_next, blocked, failed;
-  uint64_t feed_at;  /* the pending feed event's cycle, or UINT64_MAX */
-  struct slot *ring; /* capacity a power of two; requests [head, taken) by index */
-  uint64_t cap, head, taken;
-  FILE *per;                /* the per-request file, or NULL */
+  uint64_t feed_at; /* the pending feed event's cycle, or UINT64_MAX */
+  struct ring fl;   /* struct slot: requests taken, by index; head: the oldest not retired */
+  FILE *per;        /* the per-request file, or NULL */
   struct hist read_latency; /* arrival to done, core cycles */
   uint64_t reads, writes, write_latency_sum, wait_sum;
   uint64_t first_arrival, last_done;
@@ -96,17 +98,8 @@ static void ev_feed(void *ctx, uint64_t at) {
 
 /* Hand the next request to the DRAM now and read the one after it. */
 static void take(struct replay *p) {
-  if (p->taken - p->head == p->cap) {
-    /* Grow the ring, keeping each request at its index modulo the new size. */
-    uint64_t cap = 2 * p->cap;
-    struct slot *n = xcalloc(cap, sizeof *n);
-    for (uint64_t i = p->head; i < p->taken; i++) n[i & (cap - 1)] = p->ring[i & (p->cap - 1)];
-    free(p->ring);
-    p->ring = n;
-    p->cap = cap;
-  }
-  const uint64_t now = engine_now(p->eng), idx = p->taken++;
-  struct slot *s = &p->ring[idx & (p->cap - 1)];
+  const uint64_t now = engine_now(p->eng), idx = p->fl.tail;
+  struct slot *s = RING_PUSH(&p->fl, struct slot);
   *s = (struct slot){p->next.arrival, now, 0, p->next.write, false};
   p->wait_sum += now - p->next.arrival;
   dram_take(p->dram, p->next.addr, p->next.write, idx);
@@ -141,8 +134,8 @@ static void on_space(void *ctx) {
 
 static void on_done(void *ctx, uint64_t idx) {
   struct replay *p = ctx;
-  CHECK(idx >= p->head && idx < p->taken);
-  struct slot *s = &p->ring[idx & (p->cap - 1)];
+  CHECK(idx >= p->fl.head && idx < p->fl.tail);
+  struct slot *s = RING_AT(&p->fl, struct slot, idx);
   CHECK(!s->served);
   const uint64_t now = engine_now(p->eng);
   s->served = true;
@@ -156,18 +149,16 @@ static void on_done(void *ctx, uint64_t idx) {
   }
   if (now > p->last_done) p->last_done = now;
   /* Retire, in trace order, every request served from the head on. */
-  while (p->head < p->taken) {
-    struct slot *h = &p->ring[p->head & (p->cap - 1)];
+  while (ring_len(&p->fl)) {
+    struct slot *h = RING_HEAD(&p->fl, struct slot);
     if (!h->served) break;
     if (p->per)
-      fprintf(p->per, "%llu %llu %llu %llu\n", (unsigned long long)p->head,
+      fprintf(p->per, "%llu %llu %llu %llu\n", (unsigned long long)p->fl.head,
               (unsigned long long)h->arrival, (unsigned long long)h->taken,
               (unsigned long long)h->done);
-    p->head++;
+    ring_pop(&p->fl);
   }
 }
-
-static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 
 /* ---- the replay's numbers, declared once (st: the struct replay; env->ctx:
  * the machine params; env->cycles: first arrival to last done) ---- */
@@ -183,7 +174,7 @@ static double r_to_dram(const struct stats_env *env) {
   return (double)rmp(env)->dram_clock_mhz * 1000.0 / (double)machine_core_khz(rmp(env));
 }
 static double r_bpc(const void *st, const struct stats_env *env) {
-  return ratio((double)DRAM_TRACE_LINE_BYTES * (double)r_requests(st, env), (double)env->cycles);
+  return derived_ratio((double)SIM_LINE_BYTES * (double)r_requests(st, env), (double)env->cycles);
 }
 static double r_clock_ghz(const void *st, const struct stats_env *env) {
   (void)st;
@@ -227,10 +218,10 @@ static uint64_t r_taken_max(const void *st, const struct stats_env *env) {
 }
 static double r_write_mean(const void *st, const struct stats_env *env) {
   (void)env;
-  return ratio((double)rp(st)->write_latency_sum, (double)rp(st)->writes);
+  return derived_ratio((double)rp(st)->write_latency_sum, (double)rp(st)->writes);
 }
 static double r_wait_mean(const void *st, const struct stats_env *env) {
-  return ratio((double)rp(st)->wait_sum, (double)r_requests(st, env));
+  return derived_ratio((double)rp(st)->wait_sum, (double)r_requests(st, env));
 }
 static double r_gbps(const void *st, const struct stats_env *env) {
   return r_bpc(st, env) * rmp(env)->clock_ghz;
@@ -373,8 +364,6 @@ int cmd_dram_replay(int argc, char **argv) {
 
   p->have_next = true;
   p->first_arrival = p->next.arrival;
-  p->cap = 64;
-  p->ring = xcalloc(p->cap, sizeof *p->ring);
   p->eng = engine_create();
   const struct dram_client client = {p, on_done, on_space, NULL};
   p->dram = dram_create(&dp, core_khz, p->eng, &client);
@@ -383,7 +372,7 @@ int cmd_dram_replay(int argc, char **argv) {
   engine_run(p->eng);
   /* Every request offered was taken and served, unless a bad line stopped the feed. */
   CHECK(p->failed || !p->have_next);
-  CHECK_EQ(p->head, p->taken);
+  CHECK_EQ(ring_len(&p->fl), 0);
   dram_finish(p->dram);
   if (p->failed) {
     rc = app_report(&e);
@@ -404,7 +393,7 @@ done:
   if (p) {
     dram_destroy(p->dram);
     engine_destroy(p->eng);
-    free(p->ring);
+    ring_free(&p->fl);
     free(p);
   }
   if (in) fclose(in);

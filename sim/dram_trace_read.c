@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "sim/err.h"
+#include "sim/line.h"
 
 #define FIELDS_MAX 6 /* fields kept of a line (one past the most allowed) */
 #define ECHO_MAX 40  /* bytes of a bad field quoted in a message */
@@ -175,7 +176,7 @@ int dram_trace_next(struct dram_trace_reader *r, struct dram_trace_request *q) {
                      "operation: unknown (got %s, expected READ, WRITE, R or W)",
                      echo(&f[1], got, sizeof got)),
              -1;
-    q->addr = addr & ~(uint64_t)(DRAM_TRACE_LINE_BYTES - 1);
+    q->addr = addr & ~(uint64_t)(SIM_LINE_BYTES - 1);
     /* The arrival as written: Ramulator's is the request's index, in DRAM cycles. */
     uint64_t v = r->requests;
     if (n > 2) {

@@ -25,7 +25,6 @@ struct err;
 /* Refreshes a trace may span, over the banked level's channels: the level
  * steps through each one (an idle stretch too), some 40 ns apiece. */
 #define DRAM_TRACE_REFRESHES_MAX (1ull << 20)
-#define DRAM_TRACE_LINE_BYTES 64u /* every request is one line */
 
 /* One request: its line's address, the operation, the arrival in core cycles. */
 struct dram_trace_request {
