@@ -195,12 +195,13 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
     uint32_t W = width ? (uint32_t)width : w.scene.width;
     uint32_t H = height ? (uint32_t)height : w.scene.height;
     if (sample < 1) {
-      struct machine_params p = mc.p;
-      p.sample_fraction = sample;
+      struct machine_cfg_sample sc = mc.sample;
+      sc.fraction = sample;
+      const struct machine_params *p = &mc.p;
       char why[512];
       const char *bad =
-          sample_problem(&p, POLICY_RECURSIVE, app_work_items(POLICY_RECURSIVE, W, H),
-                         p.cores * p.threads_per_core * p.rays_per_thread, why, sizeof why);
+          sample_problem(&sc, p->fidelity, POLICY_RECURSIVE, app_work_items(POLICY_RECURSIVE, W, H),
+                         p->cores * p->threads_per_core * p->rays_per_thread, why, sizeof why);
       if (bad) {
         app_world_fini(&w);
         return app_usage_error("bench", "--sample %g on %s at %ux%u: %s", sample, argv[i], W, H,
@@ -216,11 +217,12 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
     for (int run = 0; run < (sample < 1 ? 3 : 2); run++) {
       const bool one = run == 0, sampled = run == 2;
       struct machine_params p = mc.p;
-      p.sample_fraction = sampled ? sample : 1;
+      struct machine_cfg_sample sc = mc.sample;
+      sc.fraction = sampled ? sample : 1;
       if (one) p.cores = p.threads_per_core = p.rays_per_thread = 1;
       struct app_timed t;
-      app_timed_run(&t, &w, mask, w.scene.seed, W, H, POLICY_RECURSIVE, &p, &mc.work, false, NULL,
-                    false);
+      app_timed_run(&t, &w, mask, w.scene.seed, W, H, POLICY_RECURSIVE, &p, &mc.work, &sc, false,
+                    NULL, false);
       const struct machine_stats *st = machine_get_stats(t.m);
       double cycles = (double)st->cycles, lo = 0, hi = 0;
       if (sampled) cycles = sample_cycles(&t.sample, &lo, &hi);

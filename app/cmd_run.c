@@ -157,7 +157,7 @@ int cmd_run(int argc, char **argv) {
     app_report(&e);
     goto done;
   }
-  if (cost_preview && (mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC || mc.p.sample_fraction < 1)) {
+  if (cost_preview && (mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC || mc.sample.fraction < 1)) {
     app_usage_error("run", "--cost-preview: per-pixel costs are counted by whole timed runs only "
                            "(not at fidelity analytic, not with sample.fraction below 1)");
     goto done;
@@ -179,9 +179,9 @@ int cmd_run(int argc, char **argv) {
   char whybuf[512];
   const char *key = "sample.fraction";
   const uint32_t contexts = mc.p.cores * mc.p.threads_per_core * mc.p.rays_per_thread;
-  const char *why =
-      sample_problem(&mc.p, policy, app_work_items(policy, W, H), contexts, whybuf, sizeof whybuf);
-  if (!why && mc.p.sample_fraction < 1 && trace_path)
+  const char *why = sample_problem(&mc.sample, mc.p.fidelity, policy, app_work_items(policy, W, H),
+                                   contexts, whybuf, sizeof whybuf);
+  if (!why && mc.sample.fraction < 1 && trace_path)
     why = "sample.fraction: --dram-trace records a whole run; a sampled run skips most of the work";
   /* Every ray context may hold a coroutine stack at once (the timed rungs). */
   const uint64_t stack_limit = coro_host_stack_limit();
@@ -236,7 +236,7 @@ int cmd_run(int argc, char **argv) {
     app_analytic_run(&a, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, &mc.work);
   else
     app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, &mc.work,
-                  isatty(2), trace.f, true);
+                  &mc.sample, isatty(2), trace.f, true);
   /* A whole run at a cheaper rung says how wrong that rung was measured to be
    * in runs like it (README "Fidelity ladder"). */
   struct rung_error rung = {0};
