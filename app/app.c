@@ -158,7 +158,8 @@ static void cycle_progress(void *ctx, uint64_t cycle) {
 void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask, uint64_t seed,
                    uint32_t width, uint32_t height, enum policy_kind k,
                    const struct machine_params *mp, const struct machine_cfg_work *work,
-                   bool progress, FILE *dram_trace, bool costs) {
+                   const struct machine_cfg_sample *sample, bool progress, FILE *dram_trace,
+                   bool costs) {
   app_render_init(&t->ar, w, mask, seed, width, height);
   t->ar.setup.layout.node_cycles = work->cost_node_cycles;
   t->ar.setup.layout.tri_cycles = work->cost_triangle_cycles;
@@ -170,7 +171,7 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
   struct timed_ctx r = {0};
   t->ar.setup.progress = work_progress;
   t->ar.setup.progress_ctx = &r;
-  t->sampled = mp->sample_fraction < 1;
+  t->sampled = sample->fraction < 1;
   if (t->sampled) {
     t->ar.setup.item = sample_item;
     t->ar.setup.item_done = sample_item_done;
@@ -190,8 +191,9 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
   if (t->costs) machine_costs_enable(t->m, (uint64_t)width * height, TRACE_CLASS_COUNT);
   if (t->sampled) {
     char why[512];
-    CHECK(sample_problem(mp, k, policy_job_total(r.job), n, why, sizeof why) == NULL);
-    sample_init(&t->sample, mp, policy_job_total(r.job), n);
+    CHECK(sample_problem(sample, mp->fidelity, k, policy_job_total(r.job), n, why, sizeof why) ==
+          NULL);
+    sample_init(&t->sample, sample, mp->cores, mp->clock_ghz, policy_job_total(r.job), n);
     t->sample.m = t->m;
     t->sample.rays_now = rays_now;
     t->sample.rays_ctx = &r;

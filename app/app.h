@@ -103,12 +103,13 @@ void app_render_fini(struct app_render *r);
 struct machine;
 struct machine_params;
 struct machine_cfg_work;
+struct machine_cfg_sample;
 /* One render on the timed machine: the machine (its statistics and timeline),
  * the framebuffer in ar, the render's counters and the host seconds it took. */
 struct app_timed {
   struct app_render ar;
   struct machine *m;
-  struct sampler sample; /* mp->sample_fraction < 1 (sampled): the plan and probes */
+  struct sampler sample; /* sample.fraction < 1 (sampled): the plan and probes */
   bool sampled;
   bool costs; /* per-pixel costs counted (machine_get_costs) */
   struct render_stats st;
@@ -117,13 +118,15 @@ struct app_timed {
 };
 /* Render a width x height image of w with policy k on machine mp (which must
  * pass machine_params_problem), one worker per ray context; the compute the
- * renderer announces and the dynamic policy's sharing come from work. progress: a progress line on
- * stderr. costs: count what every pixel cost the machine (machine_get_costs; a whole run only, not
- * a sampled one). */
+ * renderer announces and the dynamic policy's sharing come from work; the run
+ * is sampled as `sample` says (sample_problem must pass it). progress: a
+ * progress line on stderr. costs: count what every pixel cost the machine
+ * (machine_get_costs; a whole run only, not a sampled one). */
 void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask, uint64_t seed,
                    uint32_t width, uint32_t height, enum policy_kind k,
                    const struct machine_params *mp, const struct machine_cfg_work *work,
-                   bool progress, FILE *dram_trace, bool costs);
+                   const struct machine_cfg_sample *sample, bool progress, FILE *dram_trace,
+                   bool costs);
 void app_timed_fini(struct app_timed *t);
 /* The work items a render of policy k at width x height takes (sampling's
  * population: pixels, or tiles for packet). */

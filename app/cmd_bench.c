@@ -195,12 +195,13 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
     uint32_t W = width ? (uint32_t)width : w.scene.width;
     uint32_t H = height ? (uint32_t)height : w.scene.height;
     if (sample < 1) {
-      struct machine_params p = mc.p;
-      p.sample_fraction = sample;
+      struct machine_cfg_sample sc = mc.sample;
+      sc.fraction = sample;
+      const struct machine_params *p = &mc.p;
       char why[512];
       const char *bad =
-          sample_problem(&p, POLICY_RECURSIVE, app_work_items(POLICY_RECURSIVE, W, H),
-                         p.cores * p.threads_per_core * p.rays_per_thread, why, sizeof why);
+          sample_problem(&sc, p->fidelity, POLICY_RECURSIVE, app_work_items(POLICY_RECURSIVE, W, H),
+                         p->cores * p->threads_per_core * p->rays_per_thread, why, sizeof why);
       if (bad) {
         app_world_fini(&w);
         return app_usage_error("bench", "--sample %g on %s at %ux%u: %s", sample, argv[i], W, H,
@@ -216,11 +217,12 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
     for (int run = 0; run < (sample < 1 ? 3 : 2); run++) {
       const bool one = run == 0, sampled = run == 2;
       struct machine_params p = mc.p;
-      p.sample_fraction = sampled ? sample : 1;
+      struct machine_cfg_sample sc = mc.sample;
+      sc.fraction = sampled ? sample : 1;
       if (one) p.cores = p.threads_per_core = p.rays_per_thread = 1;
       struct app_timed t;
-      app_timed_run(&t, &w, mask, w.scene.seed, W, H, POLICY_RECURSIVE, &p, &mc.work, false, NULL,
-                    false);
+      app_timed_run(&t, &w, mask, w.scene.seed, W, H, POLICY_RECURSIVE, &p, &mc.work, &sc, false,
+                    NULL, false);
       const struct machine_stats *st = machine_get_stats(t.m);
       double cycles = (double)st->cycles, lo = 0, hi = 0;
       if (sampled) cycles = sample_cycles(&t.sample, &lo, &hi);
@@ -256,6 +258,86 @@ static bool parse_fraction(const char *text, void *dst) {
   if (scalar_f64(text, &v) != SCALAR_OK || !(v > 0 && v <= 1)) return false;
   *(double *)dst = v;
   return true;
+}
+
+/* One row of the native bench for the scene at scene_path: the native render
+ * (and the functional model, Embree) timed, best of `repeat`. 0, or the exit
+ * code after the error was reported. */
+static int bench_native_scene(const char *scene_path, uint32_t mask, uint64_t width,
+                              uint64_t height, uint64_t repeat, bool functional, bool embree) {
+  struct app_world w;
+  if (!app_world_load(&w, scene_path)) return 2;
+  uint32_t W = width ? (uint32_t)width : w.scene.width;
+  uint32_t H = height ? (uint32_t)height : w.scene.height;
+  /* Native and functional renders alternate, so both see the same machine
+   * state (the other core's load, frequency); each keeps its best time. */
+  double best = 0, fbest = 0, f2best = 0, tbest = 0, ebest = 0, ebuild = 0;
+  uint64_t nrays = 0, acc = 0, mismatches = 0;
+  struct bench_embree *be = NULL;
+  struct ray *prays = NULL;
+  int32_t *tprim = NULL, *eprim = NULL;
+  uint32_t np = W * H;
+  if (embree) {
+    be = embree_from_ply(&w, &ebuild);
+    if (!be) {
+      app_world_fini(&w);
+      return 1;
+    }
+    prays = primary_rays(&w.scene, W, H);
+    tprim = xmalloc((unsigned long long)np * sizeof *tprim);
+    eprim = xmalloc((unsigned long long)np * sizeof *eprim);
+  }
+  for (uint64_t k = 0; k < repeat; k++) {
+    double s = render_once(&w, mask, W, H, mem_port_native(), &nrays);
+    if (k == 0 || s < best) best = s;
+    if (embree) {
+      double ts = trace_only(&w, prays, np, tprim), es = bench_embree_trace(be, prays, np, eprim);
+      if (k == 0 || ts < tbest) tbest = ts;
+      if (k == 0 || es < ebest) ebest = es;
+    }
+    if (!functional) continue;
+    /* One host thread, then the analyser on a second (rtsim traffic's
+     * default with two host CPUs); the time includes waiting for it. */
+    for (int th = 0; th < 2; th++) {
+      struct lru_stack_params lp = lru_stack_params_default();
+      struct mem_functional *b = mem_functional_create(&lp, NULL, th == 1);
+      double fs = render_once(&w, mask, W, H, mem_functional_port(b), &nrays);
+      const double t0 = app_now();
+      mem_functional_stack(b); /* waits for the analyser */
+      fs += app_now() - t0;
+      double *keep = th ? &f2best : &fbest;
+      if (k == 0 || fs < *keep) *keep = fs;
+      acc = 0;
+      for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
+        acc += mem_functional_get_stats(b)->line_accesses[cl];
+      mem_functional_destroy(b);
+    }
+  }
+  printf("%s,%u,%u,%.3f,%u,%u,%llu,%.4f,%.0f", w.scene.name[0] ? w.scene.name : scene_path,
+         w.scene.tri_count, w.kd.stats.nodes, w.build_s, W, H, (unsigned long long)nrays, best,
+         best > 0 ? (double)nrays / best : 0.0);
+  if (functional)
+    printf(",%.4f,%.2f,%llu,%.0f,%.4f,%.2f", fbest, best > 0 ? fbest / best : 0.0,
+           (unsigned long long)acc, fbest > 0 ? (double)acc / fbest : 0.0, f2best,
+           best > 0 ? f2best / best : 0.0);
+  if (embree) {
+    for (uint32_t j = 0; j < np; j++) mismatches += tprim[j] != eprim[j];
+    double rps = best > 0 ? (double)nrays / best : 0.0, trps = tbest > 0 ? np / tbest : 0.0,
+           erps = ebest > 0 ? np / ebest : 0.0;
+    printf(",%s,%.2f,%u,%.4f,%.0f,%.3f,%.4f,%.0f,%.3f,%.3f,%llu",
+           w.scene.kd_clip ? "clipped" : "whole",
+           w.scene.tri_count ? (double)w.kd.stats.leaf_prim_refs / w.scene.tri_count : 0.0,
+           w.kd.stats.max_leaf_prims, tbest, trps, ebuild, ebest, erps, erps > 0 ? rps / erps : 0.0,
+           erps > 0 ? trps / erps : 0.0, (unsigned long long)mismatches);
+    bench_embree_destroy(be);
+    free(prays);
+    free(tprim);
+    free(eprim);
+  }
+  printf("\n");
+  fflush(stdout);
+  app_world_fini(&w);
+  return 0;
 }
 
 /* cmd_bench with its --set list (sized for argc entries, owned by the caller). */
@@ -337,79 +419,8 @@ static int bench_main(int argc, char **argv, struct app_sets *sets) {
             "embree_rays_per_s,vs_embree,trace_vs_embree,prim_mismatches"
           : "");
   for (int i = optind; i < argc; i++) {
-    struct app_world w;
-    if (!app_world_load(&w, argv[i])) return 2;
-    uint32_t W = width ? (uint32_t)width : w.scene.width;
-    uint32_t H = height ? (uint32_t)height : w.scene.height;
-    /* Native and functional renders alternate, so both see the same machine
-     * state (the other core's load, frequency); each keeps its best time. */
-    double best = 0, fbest = 0, f2best = 0, tbest = 0, ebest = 0, ebuild = 0;
-    uint64_t nrays = 0, acc = 0, mismatches = 0;
-    struct bench_embree *be = NULL;
-    struct ray *prays = NULL;
-    int32_t *tprim = NULL, *eprim = NULL;
-    uint32_t np = W * H;
-    if (embree) {
-      be = embree_from_ply(&w, &ebuild);
-      if (!be) {
-        app_world_fini(&w);
-        return 1;
-      }
-      prays = primary_rays(&w.scene, W, H);
-      tprim = xmalloc((unsigned long long)np * sizeof *tprim);
-      eprim = xmalloc((unsigned long long)np * sizeof *eprim);
-    }
-    for (uint64_t k = 0; k < repeat; k++) {
-      double s = render_once(&w, mask, W, H, mem_port_native(), &nrays);
-      if (k == 0 || s < best) best = s;
-      if (embree) {
-        double ts = trace_only(&w, prays, np, tprim), es = bench_embree_trace(be, prays, np, eprim);
-        if (k == 0 || ts < tbest) tbest = ts;
-        if (k == 0 || es < ebest) ebest = es;
-      }
-      if (!functional) continue;
-      /* One host thread, then the analyser on a second (rtsim traffic's
-       * default with two host CPUs); the time includes waiting for it. */
-      for (int th = 0; th < 2; th++) {
-        struct lru_stack_params lp = lru_stack_params_default();
-        struct mem_functional *b = mem_functional_create(&lp, NULL, th == 1);
-        double fs = render_once(&w, mask, W, H, mem_functional_port(b), &nrays);
-        const double t0 = app_now();
-        mem_functional_stack(b); /* waits for the analyser */
-        fs += app_now() - t0;
-        double *keep = th ? &f2best : &fbest;
-        if (k == 0 || fs < *keep) *keep = fs;
-        acc = 0;
-        for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
-          acc += mem_functional_get_stats(b)->line_accesses[cl];
-        mem_functional_destroy(b);
-      }
-    }
-    printf("%s,%u,%u,%.3f,%u,%u,%llu,%.4f,%.0f", w.scene.name[0] ? w.scene.name : argv[i],
-           w.scene.tri_count, w.kd.stats.nodes, w.build_s, W, H, (unsigned long long)nrays, best,
-           best > 0 ? (double)nrays / best : 0.0);
-    if (functional)
-      printf(",%.4f,%.2f,%llu,%.0f,%.4f,%.2f", fbest, best > 0 ? fbest / best : 0.0,
-             (unsigned long long)acc, fbest > 0 ? (double)acc / fbest : 0.0, f2best,
-             best > 0 ? f2best / best : 0.0);
-    if (embree) {
-      for (uint32_t j = 0; j < np; j++) mismatches += tprim[j] != eprim[j];
-      double rps = best > 0 ? (double)nrays / best : 0.0, trps = tbest > 0 ? np / tbest : 0.0,
-             erps = ebest > 0 ? np / ebest : 0.0;
-      printf(",%s,%.2f,%u,%.4f,%.0f,%.3f,%.4f,%.0f,%.3f,%.3f,%llu",
-             w.scene.kd_clip ? "clipped" : "whole",
-             w.scene.tri_count ? (double)w.kd.stats.leaf_prim_refs / w.scene.tri_count : 0.0,
-             w.kd.stats.max_leaf_prims, tbest, trps, ebuild, ebest, erps,
-             erps > 0 ? rps / erps : 0.0, erps > 0 ? trps / erps : 0.0,
-             (unsigned long long)mismatches);
-      bench_embree_destroy(be);
-      free(prays);
-      free(tprim);
-      free(eprim);
-    }
-    printf("\n");
-    fflush(stdout);
-    app_world_fini(&w);
+    rc = bench_native_scene(argv[i], mask, width, height, repeat, functional, embree);
+    if (rc) return rc;
   }
   return 0;
 }

@@ -96,96 +96,92 @@ static bool parse_cost_channel(const char *text, void *dst) {
   return true;
 }
 
-int cmd_run(int argc, char **argv) {
-  const char *out = NULL;
-  uint32_t mask = RAY_MASK(RAY_TYPE_COUNT) - 1; /* every ray type */
-  uint64_t width = 0, height = 0, seed = 0;
-  bool have_seed = false;
-  enum policy_kind policy = POLICY_RECURSIVE;
-  const char *trace_path = NULL, *cost_preview = NULL, *cost_channel = "cost.issue_slots";
-  double cost_max = 0;
-  bool help_keys = false;
-  bool help_stats = false, help_stats_md = false;
-  struct outfile trace = {0}, heat = {0};
-  struct outdir od = {0};
-  struct app_sets sets = {xcalloc((size_t)argc + 1, sizeof *sets.v),
-                          0}; /* at most one an argument */
+/* What rtsim run was asked: its options and files (argv's strings). */
+struct run_plan {
+  const char *out, *machine_path, *scene_path;
+  uint32_t mask;
+  uint64_t width, height, seed;
+  bool have_seed;
+  enum policy_kind policy;
+  const char *trace_path, *cost_preview, *cost_channel;
+  double cost_max;
+  bool help_keys, help_stats, help_stats_md;
+  struct app_sets sets; /* sized by the caller for argc entries */
+};
+
+/* Parse argv into pl. OPTS_GO to go on; else the exit code, after the help
+ * asked for on stdout or a usage error on stderr. */
+static int run_plan_parse(struct run_plan *pl, int argc, char **argv) {
   char policy_expect[160];
   app_policy_expect(policy_expect, sizeof policy_expect, "");
   const struct opts_spec spec[] = {
-      OPTS_STR("output", 'o', &out),
-      APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy, policy_expect),
-      OPTS_PARSE("set", 0, &sets, app_sets_add, "KEY=VALUE"),
-      OPTS_STR("dram-trace", 0, &trace_path),
-      OPTS_STR("cost-preview", 0, &cost_preview),
-      OPTS_PARSE("cost-channel", 0, &cost_channel, parse_cost_channel,
+      OPTS_STR("output", 'o', &pl->out),
+      APP_RENDER_OPTS(&pl->width, &pl->height, &pl->mask, &pl->seed, &pl->have_seed, &pl->policy,
+                      policy_expect),
+      OPTS_PARSE("set", 0, &pl->sets, app_sets_add, "KEY=VALUE"),
+      OPTS_STR("dram-trace", 0, &pl->trace_path),
+      OPTS_STR("cost-preview", 0, &pl->cost_preview),
+      OPTS_PARSE("cost-channel", 0, &pl->cost_channel, parse_cost_channel,
                  "one of: cost.issue_slots, cost.load_wait_cycles, cost.dram_read_bytes.geometry, "
                  ".node, .ray, .queue, .other, cost.dram_write_bytes"),
-      OPTS_PARSE("cost-max", 0, &cost_max, parse_cost_max, "a number above 0"),
-      OPTS_FLAG("help-keys", 0, &help_keys),
-      OPTS_FLAG("help-stats", 0, &help_stats),
-      OPTS_FLAG("help-stats-markdown", 0, &help_stats_md),
+      OPTS_PARSE("cost-max", 0, &pl->cost_max, parse_cost_max, "a number above 0"),
+      OPTS_FLAG("help-keys", 0, &pl->help_keys),
+      OPTS_FLAG("help-stats", 0, &pl->help_stats),
+      OPTS_FLAG("help-stats-markdown", 0, &pl->help_stats_md),
       OPTS_END};
   struct opts_args args;
   int rc = opts_parse("run", HELP, spec, argc, argv, &args);
-  if (rc != OPTS_GO) goto done;
-  if (help_keys) {
+  if (rc != OPTS_GO) return rc;
+  if (pl->help_keys) {
     machine_cfg_write_keys(stdout);
-    rc = 0;
-    goto done;
+    return 0;
   }
-  if (help_stats || help_stats_md) {
-    run_output_stats_help(stdout, help_stats_md);
-    rc = fflush(stdout) == 0 ? 0 : 1;
-    goto done;
+  if (pl->help_stats || pl->help_stats_md) {
+    run_output_stats_help(stdout, pl->help_stats_md);
+    return fflush(stdout) == 0 ? 0 : 1;
   }
-  rc = APP_EXIT_USAGE;
-  if (args.n != 2) {
-    app_usage_error("run", "expected MACHINE.yaml SCENE.yaml, got %d file%s", args.n,
-                    args.n == 1 ? "" : "s");
-    goto done;
-  }
-  const char *machine_path = args.v[0], *scene_path = args.v[1];
-  if (!out) {
-    app_usage_error("run", "missing -o OUTDIR");
-    goto done;
-  }
-  struct machine_cfg mc;
-  struct err e;
-  memset(&e, 0, sizeof e);
-  if (!app_machine_load(&mc, machine_path, &sets, &e)) {
-    app_report(&e);
-    goto done;
-  }
-  if (cost_preview && (mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC || mc.p.sample_fraction < 1)) {
+  if (args.n != 2)
+    return app_usage_error("run", "expected MACHINE.yaml SCENE.yaml, got %d file%s", args.n,
+                           args.n == 1 ? "" : "s");
+  pl->machine_path = args.v[0];
+  pl->scene_path = args.v[1];
+  if (!pl->out) return app_usage_error("run", "missing -o OUTDIR");
+  return OPTS_GO;
+}
+
+/* The options pl gives that machine mc cannot take, as a usage error; false
+ * after reporting one. */
+static bool run_plan_fits(const struct run_plan *pl, const struct machine_cfg *mc) {
+  if (pl->cost_preview &&
+      (mc->p.fidelity == MACHINE_FIDELITY_ANALYTIC || mc->sample.fraction < 1)) {
     app_usage_error("run", "--cost-preview: per-pixel costs are counted by whole timed runs only "
                            "(not at fidelity analytic, not with sample.fraction below 1)");
-    goto done;
+    return false;
   }
-  if (trace_path && mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC) {
+  if (pl->trace_path && mc->p.fidelity == MACHINE_FIDELITY_ANALYTIC) {
     app_usage_error("run", "--dram-trace: fidelity analytic makes no DRAM requests (choose a "
                            "timed rung: --set fidelity=fixed, channel or banked)");
-    goto done;
+    return false;
   }
-  /* Everything that can refuse the run is checked before OUTDIR is touched:
-   * the config, the scene, then what the host cannot run. */
-  struct app_world w;
-  if (!app_world_load(&w, scene_path)) goto done;
-  uint32_t W = width ? (uint32_t)width : w.scene.width;
-  uint32_t H = height ? (uint32_t)height : w.scene.height;
-  const bool analytic = mc.p.fidelity == MACHINE_FIDELITY_ANALYTIC;
-  /* What the config asks that cannot run here, refused at the key that asks
-   * it before anything runs. */
+  return true;
+}
+
+/* What the config asks that cannot run here (a W x H render of pl on mc),
+ * refused at the key that asks it before anything runs: false after
+ * reporting it. */
+static bool run_plan_runs_here(const struct run_plan *pl, const struct machine_cfg *mc, uint32_t W,
+                               uint32_t H, struct err *e) {
   char whybuf[512];
   const char *key = "sample.fraction";
-  const uint32_t contexts = mc.p.cores * mc.p.threads_per_core * mc.p.rays_per_thread;
+  const uint32_t contexts = mc->p.cores * mc->p.threads_per_core * mc->p.rays_per_thread;
   const char *why =
-      sample_problem(&mc.p, policy, app_work_items(policy, W, H), contexts, whybuf, sizeof whybuf);
-  if (!why && mc.p.sample_fraction < 1 && trace_path)
+      sample_problem(&mc->sample, mc->p.fidelity, pl->policy, app_work_items(pl->policy, W, H),
+                     contexts, whybuf, sizeof whybuf);
+  if (!why && mc->sample.fraction < 1 && pl->trace_path)
     why = "sample.fraction: --dram-trace records a whole run; a sampled run skips most of the work";
   /* Every ray context may hold a coroutine stack at once (the timed rungs). */
   const uint64_t stack_limit = coro_host_stack_limit();
-  if (!why && !analytic && contexts > stack_limit) {
+  if (!why && mc->p.fidelity != MACHINE_FIDELITY_ANALYTIC && contexts > stack_limit) {
     snprintf(whybuf, sizeof whybuf,
              "cores x threads_per_core x rays_per_thread = %u ray contexts, and this host lets "
              "a process map the stacks of at most %llu (vm.max_map_count: two mappings a "
@@ -194,75 +190,100 @@ int cmd_run(int argc, char **argv) {
     why = whybuf;
     key = "cores";
   }
-  if (why) {
-    const struct machine_cfg_origin *o = &mc.at[machine_cfg_find(key)];
-    err_set(&e, o->file[0] ? o->file : machine_path, o->line, o->col, "%s", why);
-    app_report(&e);
-    app_world_fini(&w);
-    goto done;
-  }
-  /* The outputs go to a fresh sibling of OUTDIR put in its place at the end;
-   * a signal from here on removes it (app/outdir.h). */
-  if (!outdir_begin(&od, out, run_output_files, &e)) {
-    app_report(&e);
-    app_world_fini(&w);
-    goto done;
-  }
-  /* The trace and the heat map: in the sibling when asked for in OUTDIR,
-   * else beside their names, committed only when every output is written. */
-  const char *const extra[2] = {trace_path, cost_preview};
+  if (!why) return true;
+  const struct machine_cfg_origin *o = &mc->at[machine_cfg_find(key)];
+  err_set(e, o->file[0] ? o->file : pl->machine_path, o->line, o->col, "%s", why);
+  app_report(e);
+  return false;
+}
+
+/* Open the trace and the heat map: in od's sibling when asked for in OUTDIR,
+ * else beside their names, committed only when every output is written.
+ * False after reporting why not. */
+static bool run_open_extras(const struct run_plan *pl, struct outdir *od, struct outfile *trace,
+                            struct outfile *heat, struct err *e) {
+  const char *const extra[2] = {pl->trace_path, pl->cost_preview};
   for (int k = 0; k < 2; k++) {
     if (!extra[k]) continue;
     char place[OUTDIR_PATH_MAX + 300];
-    if (!outdir_place(&od, extra[k], place, sizeof place)) {
+    if (!outdir_place(od, extra[k], place, sizeof place)) {
       app_usage_error("run", "%s %s: that is one of the run's own outputs in OUTDIR",
                       k ? "--cost-preview" : "--dram-trace", extra[k]);
-      app_world_fini(&w);
-      goto done;
+      return false;
     }
     if (strcmp(place, extra[k]) == 0) outguard_beside(place);
-    bool opened = k ? outfile_open_named(&heat, place, "the heat map", &e)
-                    : outfile_open(&trace, place, "the DRAM trace", &e);
+    bool opened = k ? outfile_open_named(heat, place, "the heat map", e)
+                    : outfile_open(trace, place, "the DRAM trace", e);
     if (!opened) {
-      outdir_name_in_err(&od, &e);
-      app_report(&e);
-      app_world_fini(&w);
-      goto done;
+      outdir_name_in_err(od, e);
+      app_report(e);
+      return false;
     }
   }
+  return true;
+}
+
+/* Write rep's outputs, then commit the trace and the heat map (if pl asked
+ * for them) and od; on success the rung's warning (if any) on stderr and the
+ * summary on stdout. The exit code. */
+static int run_write(const struct run_plan *pl, struct run_output_report *rep,
+                     const struct rung_error *rung, struct outdir *od, struct outfile *trace,
+                     struct outfile *heat, struct err *e) {
+  /* The files outside OUTDIR before OUTDIR itself: a complete OUTDIR means
+   * every output is in place. */
+  bool ok = run_output_write(rep, e) && (!pl->trace_path || outfile_commit(trace, e)) &&
+            (!pl->cost_preview || outfile_commit(heat, e)) && outdir_commit(od, e);
+  if (!ok) outdir_name_in_err(od, e);
+  int rc = ok ? 0 : app_report(e);
+  if (rc == 0 && rung && rung->warn) {
+    char line[1024];
+    rung_error_warning(rung, line, sizeof line);
+    fprintf(stderr, "rtsim run: warning: %s\n", line);
+  }
+  rep->out_dir = pl->out;
+  if (rc == 0) run_output_summary(rep, stdout);
+  return rc;
+}
+
+/* Run pl's W x H render of w on mc and write its outputs (run_write). The
+ * exit code. */
+static int run_render(const struct run_plan *pl, const struct machine_cfg *mc,
+                      const struct app_world *w, uint32_t W, uint32_t H, struct outdir *od,
+                      struct outfile *trace, struct outfile *heat, struct err *e) {
+  const bool analytic = mc->p.fidelity == MACHINE_FIDELITY_ANALYTIC;
+  const uint64_t seed = pl->have_seed ? pl->seed : w->scene.seed;
   struct app_timed t = {0};
   struct app_analytic a;
-  if (analytic)
-    app_analytic_run(&a, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, &mc.work);
+  if (analytic) app_analytic_run(&a, w, pl->mask, seed, W, H, pl->policy, &mc->p, &mc->work);
   else
-    app_timed_run(&t, &w, mask, have_seed ? seed : w.scene.seed, W, H, policy, &mc.p, &mc.work,
-                  isatty(2), trace.f, true);
+    app_timed_run(&t, w, pl->mask, seed, W, H, pl->policy, &mc->p, &mc->work, &mc->sample,
+                  isatty(2), trace->f, true);
   /* A whole run at a cheaper rung says how wrong that rung was measured to be
    * in runs like it (README "Fidelity ladder"). */
   struct rung_error rung = {0};
-  const bool cheaper = mc.p.fidelity != MACHINE_FIDELITY_BANKED && !t.sampled;
+  const bool cheaper = mc->p.fidelity != MACHINE_FIDELITY_BANKED && !t.sampled;
   if (cheaper && analytic) {
-    rung_error_match(&rung, &mc.p, policy_name(policy),
+    rung_error_match(&rung, &mc->p, policy_name(pl->policy),
                      a.est.bandwidth_bound_cycles > a.est.latency_bound_cycles, a.est.cycles,
                      a.counts.issue_slots, a.counts.fetch_bytes + a.counts.writeback_bytes);
   } else if (cheaper) {
     const struct machine_stats *s = machine_get_stats(t.m);
-    rung_error_match(&rung, &mc.p, policy_name(policy), -1, s->cycles, s->issue_slots,
+    rung_error_match(&rung, &mc->p, policy_name(pl->policy), -1, s->cycles, s->issue_slots,
                      s->dram.read_bytes + s->dram.write_bytes);
   }
   struct run_output_report rep = {
-      .out_dir = od.write,
-      .machine_path = machine_path,
-      .scene_path = scene_path,
-      .scene_name = w.scene.name[0] ? w.scene.name : "unnamed",
-      .policy = policy_name(policy),
-      .mask = mask,
+      .out_dir = od->write,
+      .machine_path = pl->machine_path,
+      .scene_path = pl->scene_path,
+      .scene_name = w->scene.name[0] ? w->scene.name : "unnamed",
+      .policy = policy_name(pl->policy),
+      .mask = pl->mask,
       .width = W,
       .height = H,
       .seed = analytic ? a.ar.sc.seed : t.ar.sc.seed,
-      .scene_hash = scene_hash(&w.scene),
-      .kd_splits = w.scene.kd_clip ? "clipped" : "whole",
-      .cfg = &mc,
+      .scene_hash = scene_hash(&w->scene),
+      .kd_splits = w->scene.kd_clip ? "clipped" : "whole",
+      .cfg = mc,
       .machine = t.m,
       .sample = t.sampled ? &t.sample : NULL,
       .rung = cheaper ? &rung : NULL,
@@ -271,32 +292,58 @@ int cmd_run(int argc, char **argv) {
       .tstats = analytic ? &a.ts : &t.ts,
       .fb = analytic ? &a.ar.fb : &t.ar.fb,
       .costs = !analytic && t.costs ? machine_get_costs(t.m) : NULL,
-      .cost_preview = cost_preview ? &heat : NULL,
-      .cost_channel = cost_channel,
-      .cost_max = cost_max,
+      .cost_preview = pl->cost_preview ? heat : NULL,
+      .cost_channel = pl->cost_channel,
+      .cost_max = pl->cost_max,
       .wall_s = analytic ? a.wall_s : t.wall_s,
   };
-  /* The files outside OUTDIR before OUTDIR itself: a complete OUTDIR means
-   * every output is in place. */
-  bool ok = run_output_write(&rep, &e) && (!trace_path || outfile_commit(&trace, &e)) &&
-            (!cost_preview || outfile_commit(&heat, &e)) && outdir_commit(&od, &e);
-  if (!ok) outdir_name_in_err(&od, &e);
-  rc = ok ? 0 : app_report(&e);
-  if (rc == 0 && cheaper && rung.warn) {
-    char line[1024];
-    rung_error_warning(&rung, line, sizeof line);
-    fprintf(stderr, "rtsim run: warning: %s\n", line);
-  }
-  rep.out_dir = out;
-  if (rc == 0) run_output_summary(&rep, stdout);
+  int rc = run_write(pl, &rep, cheaper ? &rung : NULL, od, trace, heat, e);
   if (analytic) app_analytic_fini(&a);
   else app_timed_fini(&t);
-  app_world_fini(&w);
+  return rc;
+}
+
+int cmd_run(int argc, char **argv) {
+  struct run_plan pl = {
+      .mask = RAY_MASK(RAY_TYPE_COUNT) - 1, /* every ray type */
+      .policy = POLICY_RECURSIVE,
+      .cost_channel = "cost.issue_slots",
+      .sets = {xcalloc((size_t)argc + 1, sizeof *pl.sets.v), 0}}; /* at most one an argument */
+  struct outfile trace = {0}, heat = {0};
+  struct outdir od = {0};
+  struct app_world w;
+  bool have_world = false;
+  struct machine_cfg mc;
+  struct err e;
+  memset(&e, 0, sizeof e);
+  int rc = run_plan_parse(&pl, argc, argv);
+  if (rc != OPTS_GO) goto done;
+  rc = APP_EXIT_USAGE;
+  if (!app_machine_load(&mc, pl.machine_path, &pl.sets, &e)) {
+    app_report(&e);
+    goto done;
+  }
+  if (!run_plan_fits(&pl, &mc)) goto done;
+  /* Everything that can refuse the run is checked before OUTDIR is touched:
+   * the config, the scene, then what the host cannot run. */
+  if (!(have_world = app_world_load(&w, pl.scene_path))) goto done;
+  const uint32_t W = pl.width ? (uint32_t)pl.width : w.scene.width;
+  const uint32_t H = pl.height ? (uint32_t)pl.height : w.scene.height;
+  if (!run_plan_runs_here(&pl, &mc, W, H, &e)) goto done;
+  /* The outputs go to a fresh sibling of OUTDIR put in its place at the end;
+   * a signal from here on removes it (app/outdir.h). */
+  if (!outdir_begin(&od, pl.out, run_output_files, &e)) {
+    app_report(&e);
+    goto done;
+  }
+  if (!run_open_extras(&pl, &od, &trace, &heat, &e)) goto done;
+  rc = run_render(&pl, &mc, &w, W, H, &od, &trace, &heat, &e);
 done:
+  if (have_world) app_world_fini(&w);
   outfile_abort(&trace);
   outfile_abort(&heat);
   outdir_abort(&od);
   outguard_clear();
-  free(sets.v);
+  free(pl.sets.v);
   return rc;
 }

@@ -344,7 +344,7 @@ static void measured(const struct run_output_report *r, struct stats_table *t) {
   if (r->sample) {
     /* Estimates with their intervals; the machine's own counters cover only
      * the detailed units, so they are not written. */
-    sample_stats(r->sample, p, peak, s->contexts, s->threads, t);
+    sample_stats(r->sample, p->clock_ghz, peak, s->contexts, s->threads, t);
     return;
   }
   machine_stats_emit(r->machine, t, trace_class_names, TRACE_CLASS_COUNT, run_slot, r);

@@ -16,16 +16,17 @@
  * at least three pipelines long (3 x the ray contexts), at most this many. */
 #define SAMPLE_AUTO_UNITS_MAX 40
 
-uint32_t sample_units(const struct machine_params *p, uint64_t total, uint32_t contexts) {
-  if (p->sample_units) return p->sample_units;
-  double n = p->sample_fraction * (double)total / (3.0 * contexts);
+uint32_t sample_units(const struct machine_cfg_sample *c, uint64_t total, uint32_t contexts) {
+  if (c->units) return c->units;
+  double n = c->fraction * (double)total / (3.0 * contexts);
   return n >= SAMPLE_AUTO_UNITS_MAX ? SAMPLE_AUTO_UNITS_MAX : (uint32_t)n;
 }
 
-const char *sample_problem(const struct machine_params *p, enum policy_kind k, uint64_t total,
-                           uint32_t contexts, char *buf, size_t cap) {
-  if (p->sample_fraction >= 1) return NULL;
-  if (p->fidelity == MACHINE_FIDELITY_ANALYTIC)
+const char *sample_problem(const struct machine_cfg_sample *c, uint32_t fidelity,
+                           enum policy_kind k, uint64_t total, uint32_t contexts, char *buf,
+                           size_t cap) {
+  if (c->fraction >= 1) return NULL;
+  if (fidelity == MACHINE_FIDELITY_ANALYTIC)
     return "sample.fraction: sampling simulates units in time: a timed fidelity (fixed, channel "
            "or banked), not analytic";
   if (policy_queues(k))
@@ -37,12 +38,12 @@ const char *sample_problem(const struct machine_params *p, enum policy_kind k, u
   /* A unit warms the pipeline with two items a ray context, then measures
    * at least one a context: the measured window then holds the unit's own
    * items, started at spread times. */
-  uint32_t n = sample_units(p, total, contexts);
-  if (n < SAMPLE_MIN_UNITS || p->sample_fraction * (double)total / n < 3.0 * contexts) {
+  uint32_t n = sample_units(c, total, contexts);
+  if (n < SAMPLE_MIN_UNITS || c->fraction * (double)total / n < 3.0 * contexts) {
     /* The fraction that gives SAMPLE_MIN_UNITS units of 3 x contexts items. */
     const double need = SAMPLE_MIN_UNITS * 3.0 * contexts / (double)total;
     char hint[160];
-    if (p->sample_units && p->sample_units < SAMPLE_MIN_UNITS)
+    if (c->units && c->units < SAMPLE_MIN_UNITS)
       snprintf(hint, sizeof hint, "sample.units 0 or at least %u", SAMPLE_MIN_UNITS);
     else if (need <= 1)
       snprintf(hint, sizeof hint,
@@ -57,22 +58,22 @@ const char *sample_problem(const struct machine_params *p, enum policy_kind k, u
              "a unit needs 3 x %u (the ray contexts: two pipelines to warm, one to measure) and "
              "there must be at least %u units (fewer leave a 95%% interval that means nothing); "
              "%s",
-             p->sample_fraction * (double)total, (unsigned long long)total, n, n == 1 ? "" : "s",
-             contexts, SAMPLE_MIN_UNITS, hint);
+             c->fraction * (double)total, (unsigned long long)total, n, n == 1 ? "" : "s", contexts,
+             SAMPLE_MIN_UNITS, hint);
     return buf;
   }
   return NULL;
 }
 
-void sample_init(struct sampler *s, const struct machine_params *p, uint64_t total,
-                 uint32_t contexts) {
+void sample_init(struct sampler *s, const struct machine_cfg_sample *c, uint32_t cores,
+                 double clock_ghz, uint64_t total, uint32_t contexts) {
   memset(s, 0, sizeof *s);
   s->total = total;
-  s->n = sample_units(p, total, contexts);
+  s->n = sample_units(c, total, contexts);
   CHECK_GE(s->n, SAMPLE_MIN_UNITS);
-  s->cores = p->cores;
-  s->hz = derived_hz(p->clock_ghz);
-  s->whole = p->sample_whole_image != 0;
+  s->cores = cores;
+  s->hz = derived_hz(clock_ghz);
+  s->whole = c->whole_image != 0;
   s->u = xcalloc(s->n, sizeof *s->u);
   s->drained = xcalloc(s->n, sizeof *s->drained);
   uint64_t prev_end = 0;
@@ -81,7 +82,7 @@ void sample_init(struct sampler *s, const struct machine_params *p, uint64_t tot
     u->stratum_lo = total * h / s->n;
     u->stratum_hi = total * (h + 1) / s->n;
     const uint64_t size = u->stratum_hi - u->stratum_lo;
-    uint64_t d = (uint64_t)llround(p->sample_fraction * (double)size);
+    uint64_t d = (uint64_t)llround(c->fraction * (double)size);
     if (d > size) d = size;
     /* Two items a ray context warm the pipeline: after the drain every
      * context starts at once, and by the second round their items' starts
@@ -91,12 +92,12 @@ void sample_init(struct sampler *s, const struct machine_params *p, uint64_t tot
     uint64_t wc = 2 * (uint64_t)contexts;
     uint64_t warm = h == 0 ? 0 : wc < d - contexts ? wc : d - contexts;
     uint64_t off = h == 0 ? 0 : size - d;
-    if (h > 0 && h + 1 < s->n) off = rng_hash2(p->sample_seed, h) % (size - d + 1);
+    if (h > 0 && h + 1 < s->n) off = rng_hash2(c->seed, h) % (size - d + 1);
     u->start = u->stratum_lo + off;
     u->measure = u->start + warm;
     u->end = u->start + d;
     CHECK_GT(u->end, u->measure);
-    uint64_t w = (uint64_t)llround(p->sample_warming * (double)d);
+    uint64_t w = (uint64_t)llround(c->warming * (double)d);
     u->warm_from = u->start - (w < u->start - prev_end ? w : u->start - prev_end);
     prev_end = u->end;
     s->detailed += d;
@@ -354,7 +355,7 @@ double sample_cycles(const struct sampler *s, double *lo, double *hi) {
  * estimate is three numbers: NAME, NAME_ci95_low and NAME_ci95_high. */
 
 struct sample_env {
-  const struct machine_params *p;
+  double clock_ghz;
   double peak; /* the DRAM's peak bytes a cycle (0: none) */
   uint64_t contexts, threads;
 };
@@ -381,7 +382,7 @@ enum sample_out {
 static struct est est_of(const void *st, const struct stats_env *env, enum sample_out o) {
   const struct sampler *s = st;
   const struct sample_env *x = env->ctx;
-  const double hz = derived_hz(x->p->clock_ghz), c0 = min_cycles(s);
+  const double hz = derived_hz(x->clock_ghz), c0 = min_cycles(s);
   struct est e;
   switch (o) {
   case SO_CYCLES: return clamp_est(estimate(s, SF_CYCLES), c0, INFINITY);
@@ -531,10 +532,9 @@ static const struct stats_desc sample_desc[] = {
 const struct stats_descs sample_stats_descs = {"sampled", sample_desc, STATS_COUNT(sample_desc),
                                                0,         NULL,        0};
 
-void sample_stats(const struct sampler *s, const struct machine_params *p,
-                  double peak_bytes_per_cycle, uint64_t contexts, uint64_t threads,
-                  struct stats_table *t) {
-  const struct sample_env x = {p, peak_bytes_per_cycle, contexts, threads};
+void sample_stats(const struct sampler *s, double clock_ghz, double peak_bytes_per_cycle,
+                  uint64_t contexts, uint64_t threads, struct stats_table *t) {
+  const struct sample_env x = {clock_ghz, peak_bytes_per_cycle, contexts, threads};
   const struct stats_env env = {.ctx = &x};
   stats_emit(t, &sample_stats_descs, s, &env);
 }

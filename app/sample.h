@@ -36,7 +36,7 @@
 #include <stdint.h>
 
 #include "renderer/policy/policy.h"
-#include "sim/machine.h"
+#include "sim/machine_cfg.h"
 
 struct stats_table;
 struct err;
@@ -81,17 +81,19 @@ struct sampler {
 
 /* The units a job of `total` items gets on a machine of `contexts` ray
  * contexts (sample.units, or when 0 as many as fit, at most 40). */
-uint32_t sample_units(const struct machine_params *p, uint64_t total, uint32_t contexts);
+uint32_t sample_units(const struct machine_cfg_sample *c, uint64_t total, uint32_t contexts);
 
-/* NULL if a job of `total` items can be sampled with p's sample.* keys on a
- * machine of `contexts` ray contexts by policy k, else why not (naming the
- * key; may be written into buf). */
-const char *sample_problem(const struct machine_params *p, enum policy_kind k, uint64_t total,
-                           uint32_t contexts, char *buf, size_t cap);
+/* NULL if a job of `total` items can be sampled with c's sample.* keys on a
+ * machine of `contexts` ray contexts at `fidelity` (enum machine_fidelity) by
+ * policy k, else why not (naming the key; may be written into buf). */
+const char *sample_problem(const struct machine_cfg_sample *c, uint32_t fidelity,
+                           enum policy_kind k, uint64_t total, uint32_t contexts, char *buf,
+                           size_t cap);
 
-/* Plan the units (sample_problem must have said yes; CHECKed). */
-void sample_init(struct sampler *s, const struct machine_params *p, uint64_t total,
-                 uint32_t contexts);
+/* Plan the units for a machine of `cores` cores at clock_ghz (sample_problem
+ * must have said yes; CHECKed). */
+void sample_init(struct sampler *s, const struct machine_cfg_sample *c, uint32_t cores,
+                 double clock_ghz, uint64_t total, uint32_t contexts);
 void sample_fini(struct sampler *s);
 
 /* The policy_setup.item and item_done hooks: ctx is the sampler. */
@@ -103,11 +105,10 @@ void sample_finish(struct sampler *s, uint64_t rays_total);
 
 /* The run's shape (contexts, threads), the estimates as stats members (name,
  * name_ci95_low, name_ci95_high) and the sampling's own figures, as
- * sample_stats_descs declares them. peak_bytes_per_cycle: the DRAM's peak (0:
- * none, no utilization). */
-void sample_stats(const struct sampler *s, const struct machine_params *p,
-                  double peak_bytes_per_cycle, uint64_t contexts, uint64_t threads,
-                  struct stats_table *t);
+ * sample_stats_descs declares them. clock_ghz: the cores' clock;
+ * peak_bytes_per_cycle: the DRAM's peak (0: none, no utilization). */
+void sample_stats(const struct sampler *s, double clock_ghz, double peak_bytes_per_cycle,
+                  uint64_t contexts, uint64_t threads, struct stats_table *t);
 struct stats_descs;
 extern const struct stats_descs sample_stats_descs;
 

@@ -650,7 +650,7 @@ static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *
   CHECK(policy_parse(policy ? policy : "recursive", &pk));
   char whybuf[512];
   const char *why =
-      sample_problem(&c.p, pk, app_work_items(pk, (uint32_t)w, (uint32_t)h),
+      sample_problem(&c.sample, c.p.fidelity, pk, app_work_items(pk, (uint32_t)w, (uint32_t)h),
                      c.p.cores * c.p.threads_per_core * c.p.rays_per_thread, whybuf, sizeof whybuf);
   if (why) {
     const struct machine_cfg_origin *o = &c.at[machine_cfg_find("sample.fraction")];

@@ -75,18 +75,10 @@ struct machine_params {
   uint32_t dram_clock_mhz;
   struct dram_banked_params dram_banked; /* fidelity banked (its clock: dram_clock_mhz) */
   /* A thread's switch to another ray's registers. (The compute the renderer
-   * announces per step is the renderer's: struct machine_cfg_work.) */
+   * announces per step is the renderer's: struct machine_cfg_work; how a run
+   * is sampled is the run's: struct machine_cfg_sample.) */
   uint32_t cost_ray_switch_cycles;
   uint64_t timeline_window_cycles;
-  /* Sampling (README "Sampling"; the run reads these, the machine does not):
-   * the share of work items simulated in detail (1: all, no sampling), the
-   * strata (one detailed unit each), the items warmed functionally before a
-   * unit as a multiple of its detailed items, the seed of the units' places. */
-  double sample_fraction;
-  uint32_t sample_units;
-  double sample_warming;
-  uint32_t sample_whole_image; /* 1: every item traced (sample.image: whole) */
-  uint64_t sample_seed;
 };
 
 /* Columns of a timeline row (values are per window; see machine.c). */

@@ -32,7 +32,7 @@ struct key {
   const char *def;          /* the default, as a config writes it */
   const char *unit;         /* of the value ("" for a count or a name) */
   unsigned rungs;           /* R_*: the fidelity rungs that read it */
-  size_t off;               /* where it goes in struct machine_cfg (p: the machine's; work) */
+  size_t off;               /* where it goes in struct machine_cfg (p, work or sample) */
   const char *const *names; /* K_ENUM: the values' names (a uint32_t index), hi + 1 of them */
   const char *doc;          /* one line: what it is (README's key table) */
 };
@@ -55,6 +55,8 @@ static const char *const IMAGE_NAMES[] = {"sampled", "whole"};    /* sample.imag
 #define E(f, names) offsetof(struct machine_cfg, p.f), names
 #define W(f) offsetof(struct machine_cfg, work.f), NULL
 #define WE(f, names) offsetof(struct machine_cfg, work.f), names
+#define S(f) offsetof(struct machine_cfg, sample.f), NULL
+#define SE(f, names) offsetof(struct machine_cfg, sample.f), names
 static const struct key KEYS[] = {
     {"clock_ghz", K_F64, 1e-3, 1e3, "1.4", "GHz", R_ALL, P(clock_ghz),
      "the core clock; converts cycles to seconds (rays_per_second)"},
@@ -166,22 +168,26 @@ static const struct key KEYS[] = {
      "a timeline.csv row (windows double past 4096 rows)"},
     {"dynamic.sharing", K_ENUM, 0, 1, "chip", "", R_ALL, WE(dyn_sharing, SHARING_NAMES),
      "the dynamic and treelet policies' queue points: one a core (g_max divided) or chip-wide"},
-    {"sample.fraction", K_F64, 1e-6, 1, "1", "", R_ALL, P(sample_fraction),
+    {"sample.fraction", K_F64, 1e-6, 1, "1", "", R_ALL, S(fraction),
      "share of work items simulated in detail, warm-up included (1: no sampling)"},
-    {"sample.units", K_U32, 0, 1u << 20, "0", "", R_ALL, P(sample_units),
+    {"sample.units", K_U32, 0, 1u << 20, "0", "", R_ALL, S(units),
      "strata of the work list, one detailed unit each (0: as many as fit, at most 40)"},
-    {"sample.warming", K_F64, 0, 1e6, "4", "", R_ALL, P(sample_warming),
+    {"sample.warming", K_F64, 0, 1e6, "4", "", R_ALL, S(warming),
      "items warmed without time before a unit, a multiple of its detailed items"},
-    {"sample.image", K_ENUM, 0, 1, "whole", "", R_ALL, E(sample_whole_image, IMAGE_NAMES),
+    {"sample.image", K_ENUM, 0, 1, "whole", "", R_ALL, SE(whole_image, IMAGE_NAMES),
      "whole: every item is traced (rays and issue slots exact); sampled: only the units and "
      "the items warmed before them (the rest of the image black, rays and issue slots "
      "estimated)"},
-    {"sample.seed", K_U64, 0, 1e15, "1", "", R_ALL, P(sample_seed),
+    {"sample.seed", K_U64, 0, 1e15, "1", "", R_ALL, S(seed),
      "where each middle unit falls in its stratum"},
 };
 #undef P
 #undef B
 #undef E
+#undef W
+#undef WE
+#undef S
+#undef SE
 #define NKEYS (unsigned)(sizeof KEYS / sizeof KEYS[0])
 _Static_assert(sizeof KEYS / sizeof KEYS[0] <= MACHINE_CFG_KEYS_MAX, "raise MACHINE_CFG_KEYS_MAX");
 
@@ -666,13 +672,16 @@ static void bound_text(double v, bool bytes, char *buf, size_t cap) {
   }
 }
 
-const char *machine_cfg_range_problem(const struct machine_params *p, char *buf, size_t cap) {
-  const size_t at = offsetof(struct machine_cfg, p);
+/* NULL if every key whose value lies in struct machine_cfg's member at
+ * [at, at + size), given at `base`, is within its row's range, else why not
+ * in buf. */
+static const char *range_problem(const void *base, size_t at, size_t size, char *buf, size_t cap) {
   for (unsigned i = 0; i < NKEYS; i++) {
     const struct key *k = &KEYS[i];
-    /* The work's keys are the renderer's; a mapping's shape is the DRAM's rule. */
-    if (k->off < at || k->off >= at + sizeof *p || k->kind == K_MAPPING) continue;
-    const char *src = (const char *)p + (k->off - at);
+    /* Other members' keys are checked with their own member; a mapping's
+     * shape is the DRAM's rule. */
+    if (k->off < at || k->off >= at + size || k->kind == K_MAPPING) continue;
+    const char *src = (const char *)base + (k->off - at);
     double v;
     uint32_t v32;
     uint64_t v64;
@@ -703,6 +712,15 @@ const char *machine_cfg_range_problem(const struct machine_params *p, char *buf,
     return buf;
   }
   return NULL;
+}
+
+const char *machine_cfg_range_problem(const struct machine_params *p, char *buf, size_t cap) {
+  return range_problem(p, offsetof(struct machine_cfg, p), sizeof *p, buf, cap);
+}
+
+const char *machine_cfg_sample_range_problem(const struct machine_cfg_sample *s, char *buf,
+                                             size_t cap) {
+  return range_problem(s, offsetof(struct machine_cfg, sample), sizeof *s, buf, cap);
 }
 
 void machine_cfg_write_keys(FILE *f) {

@@ -37,9 +37,23 @@ struct machine_cfg_work {
   uint32_t dyn_sharing; /* renderer/policy/policy.h: 0 partition, 1 chip */
 };
 
+/* How a timed run is sampled (README "Sampling"; app/sample.h): the share of
+ * work items simulated in detail (1: all, no sampling), the strata (one
+ * detailed unit each), the items warmed functionally before a unit as a
+ * multiple of its detailed items, the seed of the units' places. Not in
+ * struct machine_params: the machine never reads them; the run does. */
+struct machine_cfg_sample {
+  double fraction;
+  uint32_t units;
+  double warming;
+  uint32_t whole_image; /* 1: every item traced (sample.image: whole) */
+  uint64_t seed;
+};
+
 struct machine_cfg {
   struct machine_params p;
   struct machine_cfg_work work;
+  struct machine_cfg_sample sample;
   struct machine_cfg_origin at[MACHINE_CFG_KEYS_MAX]; /* [0, machine_cfg_count()) */
   unsigned seq;                                       /* settings so far */
 };
@@ -71,6 +85,9 @@ bool machine_cfg_check(const struct machine_cfg *c, struct err *e);
  * value gets as it is read, for parameters built in code), else "key: must
  * be LO to HI ..." in buf. Relations between keys are machine_params_problem's. */
 const char *machine_cfg_range_problem(const struct machine_params *p, char *buf, size_t cap);
+/* The same for the sample.* keys s holds (for sampling set in code). */
+const char *machine_cfg_sample_range_problem(const struct machine_cfg_sample *s, char *buf,
+                                             size_t cap);
 
 /* How many keys there are; key i's name (dotted; NULL past the last) and its
  * value as text ("4194304", "full", "0.5"). */

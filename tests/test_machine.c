@@ -37,7 +37,6 @@ static struct machine_params base(void) {
   machine_cfg_defaults(&c);
   p.dram_banked = c.p.dram_banked;
   p.timeline_window_cycles = 1000;
-  p.sample_fraction = 1; /* the key table's range holds for every key p carries */
   return p;
 }
 

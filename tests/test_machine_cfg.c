@@ -66,12 +66,14 @@ static void test_readme_table(void) {
 }
 
 /* Parameters built in code (tests, bench) meet each key's range in the key
- * table itself, not in a copy of it: machine_params_problem names the key. */
+ * table itself, not in a copy of it: machine_params_problem (for the sample.*
+ * keys, machine_cfg_sample_range_problem) names the key. */
 static void test_params_ranges(void) {
   struct machine_cfg c;
   machine_cfg_defaults(&c);
   char buf[MACHINE_PROBLEM_MAX];
   EXPECT(machine_params_problem(&c.p, buf, sizeof buf) == NULL);
+  EXPECT(machine_cfg_sample_range_problem(&c.sample, buf, sizeof buf) == NULL);
   static const struct {
     const char *key, *want;
   } cases[] = {
@@ -121,9 +123,12 @@ static void test_params_ranges(void) {
     else if (!strcmp(k, "dram.bytes_per_cycle")) b.p.dram_bytes_per_cycle = 0;
     else if (!strcmp(k, "dram.latency")) b.p.dram_latency_cycles = 1ull << 40;
     else if (!strcmp(k, "timeline.window")) b.p.timeline_window_cycles = 0;
-    else if (!strcmp(k, "sample.fraction")) b.p.sample_fraction = 1.5;
-    else if (!strcmp(k, "sample.image")) b.p.sample_whole_image = 2;
-    const char *why = machine_params_problem(&b.p, buf, sizeof buf);
+    else if (!strcmp(k, "sample.fraction")) b.sample.fraction = 1.5;
+    else if (!strcmp(k, "sample.image")) b.sample.whole_image = 2;
+    /* The sample.* keys are the run's, not the machine's: their own check. */
+    const bool sample = !strncmp(k, "sample.", 7);
+    const char *why = sample ? machine_cfg_sample_range_problem(&b.sample, buf, sizeof buf)
+                             : machine_params_problem(&b.p, buf, sizeof buf);
     EXPECTF(why && !strcmp(why, cases[i].want), "%s: got '%s', want '%s'", k, why ? why : "NULL",
             cases[i].want);
   }
