@@ -208,6 +208,154 @@ static void print_rows(const char *machine, const char *set_text, const char *ra
   free(b);
 }
 
+/* What every child run of one bench shares. */
+struct bench_ctx {
+  const char *machine, *bin, *rays, *wtext, *htext, *image;
+  const struct app_sets *sets;
+  const struct bench_policy_list *l; /* NULL: levels */
+  const struct bench_level_list *lv;
+  enum policy_kind policy;
+  uint64_t width, height;
+  struct bench_tmp t;
+};
+
+/* This program's path (for its children) and a fresh temporary folder; 0 or
+ * an exit code after saying why. */
+static int bench_setup(char *bin, size_t cap, struct bench_tmp *t) {
+  ssize_t bl = readlink("/proc/self/exe", bin, cap - 1);
+  if (bl <= 0) {
+    fprintf(stderr, "rtsim bench: error: cannot find this program's path (/proc/self/exe)\n");
+    return 1;
+  }
+  bin[bl] = '\0';
+  const char *tmpdir = getenv("TMPDIR");
+  snprintf(t->dir, sizeof t->dir, "%s/rtsim-bench-XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
+  if (!mkdtemp(t->dir)) {
+    fprintf(stderr, "rtsim bench: error: cannot make a temporary folder %s: %s\n", t->dir,
+            strerror(errno));
+    return 1;
+  }
+  snprintf(t->out, sizeof t->out, "%s/run", t->dir);
+  snprintf(t->err, sizeof t->err, "%s/stderr.txt", t->dir);
+  return 0;
+}
+
+/* The command line of variant j on scene: bin run MACHINE SCENE --policy P
+ * [--set fidelity=L] --rays R [--width W --height H] [--set KV]... -o OUT, or
+ * bin render SCENE --rays R [...] -o IMAGE for the native level; NULL-ended. */
+static void child_args(const struct bench_ctx *b, unsigned j, const char *fid, const char *scene,
+                       const char **args) {
+  const bool native = !b->l && !strcmp(b->lv->name[j], "native");
+  unsigned a = 0;
+  args[a++] = b->bin;
+  args[a++] = native ? "render" : "run";
+  if (!native) args[a++] = b->machine;
+  args[a++] = scene;
+  if (!native) {
+    args[a++] = "--policy";
+    args[a++] = b->l ? policy_name(b->l->k[j]) : policy_name(b->policy);
+  }
+  if (!b->l && !native) {
+    args[a++] = "--set";
+    args[a++] = fid;
+  }
+  args[a++] = "--rays";
+  args[a++] = b->rays;
+  if (b->width) {
+    args[a++] = "--width";
+    args[a++] = b->wtext;
+  }
+  if (b->height) {
+    args[a++] = "--height";
+    args[a++] = b->htext;
+  }
+  for (unsigned s = 0; s < b->sets->n && !native; s++) {
+    args[a++] = "--set";
+    args[a++] = b->sets->v[s];
+  }
+  args[a++] = "-o";
+  args[a++] = native ? b->image : b->t.out;
+  args[a] = NULL;
+}
+
+/* Run variant j (labelled label) on scene into x: its host time, and for a
+ * timed run the figures of its stats.json; 0 or an exit code after saying
+ * why. */
+static int one_run(struct bench_ctx *b, unsigned j, const char *fid, const char *label,
+                   const char *scene, const char **args, struct bench_run *x) {
+  const bool native = !b->l && !strcmp(b->lv->name[j], "native");
+  child_args(b, j, fid, scene, args);
+  if (native && mkdir(b->t.out, 0755) != 0 && errno != EEXIST) {
+    fprintf(stderr, "rtsim bench: error: cannot make %s: %s\n", b->t.out, strerror(errno));
+    return 1;
+  }
+  int status = 0;
+  double peak_mb = 0;
+  if (!run_child(b->bin, (char **)args, &b->t, &status, &x->host_s, &peak_mb)) {
+    fprintf(stderr, "rtsim bench: error: cannot run %s: %s\n", b->bin, strerror(errno));
+    return 1;
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    show_failure(&b->t, scene, label, status);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 1;
+  }
+  if (native) {
+    /* The render's own figures: its host time, no events. */
+    x->run_s = x->host_s;
+    x->peak_mb = peak_mb;
+    snprintf(x->scene, sizeof x->scene, "%s", "");
+    x->width = b->width;
+    x->height = b->height;
+    clear_out(&b->t);
+    return 0;
+  }
+  char *json = read_stats(&b->t);
+  double ev = 0, w = 0, h = 0;
+  if (!json || !member_f64(json, "wall_s", &x->run_s) || !member_f64(json, "events", &ev) ||
+      !member_f64(json, "peak_rss_mb", &x->peak_mb) || !member_f64(json, "width", &w) ||
+      !member_f64(json, "height", &h) ||
+      !csv_json_member(json, "scene", x->scene, sizeof x->scene)) {
+    fprintf(stderr, "rtsim bench: error: rtsim run of %s wrote no readable %s/stats.json\n", scene,
+            b->t.out);
+    free(json);
+    return 1;
+  }
+  free(json);
+  x->events = (uint64_t)ev;
+  x->width = (uint64_t)w;
+  x->height = (uint64_t)h;
+  clear_out(&b->t);
+  return 0;
+}
+
+/* A native row takes the scene and image size of the timed rows. */
+static void native_rows_fill(struct bench_run *r, uint64_t count) {
+  for (uint64_t k = 0; k < count; k++)
+    if (!r[k].scene[0]) {
+      for (uint64_t m = 0; m < count; m++)
+        if (r[m].scene[0]) {
+          memcpy(r[k].scene, r[m].scene, sizeof r[k].scene);
+          r[k].width = r[m].width;
+          r[k].height = r[m].height;
+          break;
+        }
+    }
+}
+
+/* The set column: the policy of a levels bench, then the --set values. */
+static char *set_text_of(const struct app_sets *sets, const struct bench_policy_list *l,
+                         enum policy_kind policy) {
+  size_t set_len = 32;
+  for (unsigned i = 0; i < sets->n; i++) set_len += strlen(sets->v[i]) + 1;
+  char *set_text = xcalloc(set_len, 1);
+  if (!l) snprintf(set_text, set_len, "policy=%s", policy_name(policy));
+  for (unsigned i = 0; i < sets->n; i++) {
+    if (*set_text) strcat(set_text, ";");
+    strcat(set_text, sets->v[i]);
+  }
+  return set_text;
+}
+
 int bench_policies(const char *machine, const struct app_sets *sets,
                    const struct bench_policy_list *l, const struct bench_level_list *lv,
                    enum policy_kind policy, uint32_t mask, uint64_t width, uint64_t height,
@@ -224,125 +372,35 @@ int bench_policies(const char *machine, const struct app_sets *sets,
   struct machine_cfg mc;
   struct err e = {0};
   if (!app_machine_load(&mc, machine, sets, &e)) return app_report(&e);
-  char bin[4096];
-  ssize_t bl = readlink("/proc/self/exe", bin, sizeof bin - 1);
-  if (bl <= 0) {
-    fprintf(stderr, "rtsim bench: error: cannot find this program's path (/proc/self/exe)\n");
-    return 1;
-  }
-  bin[bl] = '\0';
-  struct bench_tmp t;
-  const char *tmpdir = getenv("TMPDIR");
-  snprintf(t.dir, sizeof t.dir, "%s/rtsim-bench-XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
-  if (!mkdtemp(t.dir)) {
-    fprintf(stderr, "rtsim bench: error: cannot make a temporary folder %s: %s\n", t.dir,
-            strerror(errno));
-    return 1;
-  }
-  snprintf(t.out, sizeof t.out, "%s/run", t.dir);
-  snprintf(t.err, sizeof t.err, "%s/stderr.txt", t.dir);
-
-  char rays[64], wtext[24], htext[24];
+  char bin[4096], rays[64], wtext[24], htext[24], image[4300];
+  struct bench_ctx b = {.machine = machine,
+                        .bin = bin,
+                        .rays = rays,
+                        .wtext = wtext,
+                        .htext = htext,
+                        .image = image,
+                        .sets = sets,
+                        .l = l,
+                        .lv = lv,
+                        .policy = policy,
+                        .width = width,
+                        .height = height};
+  int rc = bench_setup(bin, sizeof bin, &b.t);
+  if (rc) return rc;
   shade_rays_name(mask, rays, sizeof rays);
   snprintf(wtext, sizeof wtext, "%llu", (unsigned long long)width);
   snprintf(htext, sizeof htext, "%llu", (unsigned long long)height);
-  size_t set_len = 32;
-  for (unsigned i = 0; i < sets->n; i++) set_len += strlen(sets->v[i]) + 1;
-  char *set_text = xcalloc(set_len, 1);
-  if (!l) snprintf(set_text, set_len, "policy=%s", policy_name(policy));
-  for (unsigned i = 0; i < sets->n; i++) {
-    if (*set_text) strcat(set_text, ";");
-    strcat(set_text, sets->v[i]);
-  }
-  char image[4300];
-  snprintf(image, sizeof image, "%s/image.exr", t.out);
-  /* bin run MACHINE SCENE --policy P --rays R [--width W --height H]
-   * [--set KV]... -o OUT, NULL */
+  char *set_text = set_text_of(sets, l, policy);
+  snprintf(image, sizeof image, "%s/image.exr", b.t.out);
   const char **args = xcalloc(18 + 2 * (size_t)sets->n, sizeof *args);
-  int rc = 0;
   const bool progress = isatty(2);
   struct bench_run *r = xcalloc(rounds * n, sizeof *r);
   for (int i = first_scene; i < argc && rc == 0; i++) {
     for (uint64_t k = 0; k < rounds && rc == 0; k++) {
       for (unsigned j = 0; j < n && rc == 0; j++) {
-        /* native: rtsim render of the same image (no machine, no stats). */
+        rc = one_run(&b, j, l ? NULL : fid[j], label[j], argv[i], args, &r[k * n + j]);
         const bool native = !l && !strcmp(lv->name[j], "native");
-        unsigned a = 0;
-        args[a++] = bin;
-        args[a++] = native ? "render" : "run";
-        if (!native) args[a++] = machine;
-        args[a++] = argv[i];
-        if (!native) {
-          args[a++] = "--policy";
-          args[a++] = l ? policy_name(l->k[j]) : policy_name(policy);
-        }
-        if (!l && !native) {
-          args[a++] = "--set";
-          args[a++] = fid[j];
-        }
-        args[a++] = "--rays";
-        args[a++] = rays;
-        if (width) {
-          args[a++] = "--width";
-          args[a++] = wtext;
-        }
-        if (height) {
-          args[a++] = "--height";
-          args[a++] = htext;
-        }
-        for (unsigned s = 0; s < sets->n && !native; s++) {
-          args[a++] = "--set";
-          args[a++] = sets->v[s];
-        }
-        args[a++] = "-o";
-        args[a++] = native ? image : t.out;
-        args[a] = NULL;
-        if (native && mkdir(t.out, 0755) != 0 && errno != EEXIST) {
-          fprintf(stderr, "rtsim bench: error: cannot make %s: %s\n", t.out, strerror(errno));
-          rc = 1;
-          break;
-        }
-        int status = 0;
-        double peak_mb = 0;
-        struct bench_run *x = &r[k * n + j];
-        if (!run_child(bin, (char **)args, &t, &status, &x->host_s, &peak_mb)) {
-          fprintf(stderr, "rtsim bench: error: cannot run %s: %s\n", bin, strerror(errno));
-          rc = 1;
-          break;
-        }
-        if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-          show_failure(&t, argv[i], label[j], status);
-          rc = WIFEXITED(status) ? WEXITSTATUS(status) : 1;
-          break;
-        }
-        if (native) {
-          /* The render's own figures: its host time, no events. */
-          x->run_s = x->host_s;
-          x->peak_mb = peak_mb;
-          snprintf(x->scene, sizeof x->scene, "%s", "");
-          x->width = width;
-          x->height = height;
-          clear_out(&t);
-          continue;
-        }
-        char *json = read_stats(&t);
-        double ev = 0, w = 0, h = 0;
-        if (!json || !member_f64(json, "wall_s", &x->run_s) || !member_f64(json, "events", &ev) ||
-            !member_f64(json, "peak_rss_mb", &x->peak_mb) || !member_f64(json, "width", &w) ||
-            !member_f64(json, "height", &h) ||
-            !csv_json_member(json, "scene", x->scene, sizeof x->scene)) {
-          fprintf(stderr, "rtsim bench: error: rtsim run of %s wrote no readable %s/stats.json\n",
-                  argv[i], t.out);
-          free(json);
-          rc = 1;
-          break;
-        }
-        free(json);
-        x->events = (uint64_t)ev;
-        x->width = (uint64_t)w;
-        x->height = (uint64_t)h;
-        clear_out(&t);
-        if (progress)
+        if (rc == 0 && !native && progress)
           fprintf(stderr, "\rbench: %s, round %llu of %llu   ", argv[i], (unsigned long long)k + 1,
                   (unsigned long long)rounds);
       }
@@ -354,23 +412,13 @@ int bench_policies(const char *machine, const struct app_sets *sets,
                "run_s_best,run_s_median,events,peak_rss_mb,host_vs_base_median,host_vs_base_max,"
                "run_vs_base_median,events_vs_base,peak_rss_vs_base,base\n",
                l ? "policy" : "level");
-      /* A native row takes the scene and image size of the timed rows. */
-      for (uint64_t k = 0; k < rounds * n; k++)
-        if (!r[k].scene[0]) {
-          for (uint64_t m = 0; m < rounds * n; m++)
-            if (r[m].scene[0]) {
-              memcpy(r[k].scene, r[m].scene, sizeof r[k].scene);
-              r[k].width = r[m].width;
-              r[k].height = r[m].height;
-              break;
-            }
-        }
+      native_rows_fill(r, rounds * n);
       print_rows(machine, set_text, rays, label, n, r, rounds);
     }
   }
   free(r);
   free(args);
   free(set_text);
-  tmp_fini(&t);
+  tmp_fini(&b.t);
   return rc;
 }
