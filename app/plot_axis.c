@@ -6,8 +6,11 @@
 #include <string.h>
 
 #include "app/csv.h"
+#include "app/run_output.h"
 
-const char *plot_unit_of(const char *name) {
+/* The unit a column's name states, for names no table holds (a sweep's
+ * point columns, a bench's). */
+static const char *unit_by_name(const char *name) {
   size_t n = strlen(name);
 #define ENDS(s) (n >= strlen(s) && !strcmp(name + n - strlen(s), s))
 #define STARTS(s) (!strncmp(name, s, strlen(s)))
@@ -37,6 +40,16 @@ const char *plot_unit_of(const char *name) {
 #undef ENDS
 #undef STARTS
 #undef IS
+}
+
+const char *plot_unit_of(const char *name) {
+  const char *u = run_output_unit_of(name);
+  if (!u) return unit_by_name(name);
+  /* A count, or a 0/1 flag, has no unit to write on an axis; a rate of bytes
+   * reads one way on every figure whichever way its table spells it. */
+  if (!strcmp(u, "count") || !strcmp(u, "flag")) return "";
+  if (!strcmp(u, "bytes a cycle") || !strcmp(u, "bytes/cycle")) return "bytes per cycle";
+  return u;
 }
 
 void plot_fmt_tick(double v, const char *unit, char *out, size_t cap) {

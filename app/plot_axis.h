@@ -8,8 +8,9 @@
 #include <stdbool.h>
 #include <stddef.h>
 
-/* The unit a column's name states ("bytes", "cycles", "fraction", ...), or ""
- * (a count or a label). README's Sweeps section has the table. */
+/* A column's unit ("bytes", "cycles", "fraction", ...), or "" (a count or a
+ * label): the one rtsim run's tables state for it (run_output_unit_of), else
+ * the one its name states. README's Sweeps section has the rules. */
 const char *plot_unit_of(const char *name);
 
 /* A tick label of v on an axis of unit `unit`: bytes as "512 KiB" when an

@@ -528,23 +528,65 @@ void run_output_summary(const struct run_output_report *r, FILE *f) {
   stats_fini(&t);
 }
 
+/* Every table of numbers a run writes, in the order machine_stats_emit fills
+ * the machine's slots: what --help-stats prints and run_output_unit_of reads. */
+static const struct stats_descs *const STATS_TABLES[] = {&machine_stats_descs,
+                                                         &run_output_stats_descs,
+                                                         &run_output_misses_stats_descs,
+                                                         &machine_l1_stats_descs,
+                                                         &l2_stats_descs,
+                                                         &dram_stats_descs,
+                                                         &machine_dram_util_stats_descs,
+                                                         &dram_channel_stats_descs,
+                                                         &dram_banked_stats_descs,
+                                                         &machine_engine_stats_descs,
+                                                         &run_output_json_stats_descs,
+                                                         &run_output_analytic_stats_descs,
+                                                         &sample_stats_descs,
+                                                         &rung_error_stats_descs};
+#define STATS_TABLE_COUNT (sizeof STATS_TABLES / sizeof STATS_TABLES[0])
+
 void run_output_stats_help(FILE *f, bool markdown) {
-  /* The tables in the order machine_stats_emit fills the machine's slots. */
-  static const struct stats_descs *const order[] = {&machine_stats_descs,
-                                                    &run_output_stats_descs,
-                                                    &run_output_misses_stats_descs,
-                                                    &machine_l1_stats_descs,
-                                                    &l2_stats_descs,
-                                                    &dram_stats_descs,
-                                                    &machine_dram_util_stats_descs,
-                                                    &dram_channel_stats_descs,
-                                                    &dram_banked_stats_descs,
-                                                    &machine_engine_stats_descs,
-                                                    &run_output_json_stats_descs,
-                                                    &run_output_analytic_stats_descs,
-                                                    &sample_stats_descs,
-                                                    &rung_error_stats_descs};
-  for (unsigned i = 0; i < sizeof order / sizeof order[0]; i++)
-    (markdown ? stats_write_markdown : stats_write_help)(order[i], f);
+  for (unsigned i = 0; i < STATS_TABLE_COUNT; i++)
+    (markdown ? stats_write_markdown : stats_write_help)(STATS_TABLES[i], f);
   timeline_write_help(machine_tl_cols, machine_tl_col_count, markdown, f);
+}
+
+/* Whether name is format (one %s: a data class) with a class put in. Class
+ * names are lowercase words (trace_class_names; per_class names take the
+ * renderer's at run time, so any such word is one): a class part of other
+ * characters, or none, is no match. */
+static bool per_class_match(const char *format, const char *name) {
+  const char *pc = strstr(format, "%s");
+  if (!pc) return false;
+  size_t pre = (size_t)(pc - format), suf = strlen(pc + 2), n = strlen(name);
+  if (n <= pre + suf || strncmp(name, format, pre) || strcmp(name + n - suf, pc + 2)) return false;
+  for (size_t i = pre; i < n - suf; i++)
+    if (!((name[i] >= 'a' && name[i] <= 'z') || (name[i] >= '0' && name[i] <= '9'))) return false;
+  return true;
+}
+
+/* A name the tables hold under one unit: the first match wins (a name in two
+ * tables, seconds in the machine's and the sampled run's, has one unit). */
+static const char *unit_in_tables(const char *name, bool per_class) {
+  for (unsigned t = 0; t < STATS_TABLE_COUNT; t++)
+    for (unsigned i = 0; i < STATS_TABLES[t]->n; i++) {
+      const struct stats_desc *d = &STATS_TABLES[t]->d[i];
+      if (d->how == STATS_HOW_SLOT || d->per_class != per_class) continue;
+      if (per_class ? per_class_match(d->name, name) : !strcmp(d->name, name)) return d->unit;
+    }
+  for (unsigned j = 0; j < machine_tl_col_count; j++) {
+    const struct timeline_col *c = &machine_tl_cols[j];
+    if (c->per_class != per_class) continue;
+    if (per_class ? per_class_match(c->name, name) : !strcmp(c->name, name)) return c->unit;
+  }
+  return NULL;
+}
+
+const char *run_output_unit_of(const char *name) {
+  for (unsigned i = 0; i < machine_cfg_count(); i++)
+    if (!strcmp(machine_cfg_key(i), name)) return machine_cfg_unit(i);
+  /* Whole names first: a fixed name never yields to a class pattern it fits. */
+  const char *u = unit_in_tables(name, false);
+  return u ? u : unit_in_tables(name, true);
 }

@@ -70,6 +70,11 @@ void run_output_summary(const struct run_output_report *r, FILE *f);
  * then timeline.csv's columns: name, unit, component, description, one a line
  * (`rtsim run --help-stats`), or as Markdown table rows (README "Numbers"). */
 void run_output_stats_help(FILE *f, bool markdown);
+/* The unit the tables state for NAME: a machine config key's (--help-keys),
+ * else a number's or timeline column's (--help-stats; fetch_node_bytes
+ * matches fetch_<class>_bytes), as written there ("cycles", "count", "" for a
+ * key's count); NULL when no table holds NAME. */
+const char *run_output_unit_of(const char *name);
 /* The run's own tables: its numbers at the machine's slots (over a struct
  * run_output_report), what only stats.json holds, and fidelity analytic's
  * numbers (over a struct app_analytic; a sampled run's: app/sample.h). */

@@ -211,6 +211,8 @@ unsigned machine_cfg_count(void) { return NKEYS; }
 
 const char *machine_cfg_key(unsigned i) { return i < NKEYS ? KEYS[i].name : NULL; }
 
+const char *machine_cfg_unit(unsigned i) { return i < NKEYS ? KEYS[i].unit : NULL; }
+
 void machine_cfg_key_list(char *buf, size_t cap) {
   size_t n = 0;
   buf[0] = '\0';

@@ -89,10 +89,12 @@ const char *machine_cfg_range_problem(const struct machine_params *p, char *buf,
 const char *machine_cfg_sample_range_problem(const struct machine_cfg_sample *s, char *buf,
                                              size_t cap);
 
-/* How many keys there are; key i's name (dotted; NULL past the last) and its
- * value as text ("4194304", "full", "0.5"). */
+/* How many keys there are; key i's name (dotted; NULL past the last), its
+ * unit as the key table states it ("bytes", "DRAM cycles"; "" for a count or
+ * a name; NULL past the last) and its value as text ("4194304", "full", "0.5"). */
 unsigned machine_cfg_count(void);
 const char *machine_cfg_key(unsigned i);
+const char *machine_cfg_unit(unsigned i);
 void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsigned cap);
 /* "key, key, ...": every key, for messages (cut to cap). */
 void machine_cfg_key_list(char *buf, size_t cap);

@@ -4,6 +4,7 @@
  * legend with units, a caption of the fixed parameters, bar charts for a
  * text x (side by side and stacked), PNG and SVG, and bad options refused
  * with exit code 2 and one line. Tables are written here, a few rows each. */
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -229,6 +230,61 @@ static void test_bars(void) {
   }
 }
 
+/* The unit rtsim run's tables give name: `rtsim run --help-stats` (name in
+ * 36 columns, unit in 16) or, for a dotted config key, --help-keys' 4th
+ * column; per-class names as their <class> row. Into unit; false if absent. */
+static bool table_unit(const char *name, const char *row, char *unit, size_t cap) {
+  bool key = strchr(name, '.') != NULL;
+  if (run("%s run %s", RTSIM_BINARY, key ? "--help-keys" : "--help-stats")) return false;
+  char pat[96];
+  snprintf(pat, sizeof pat, key ? "\n| `%s` |" : "\n%-36s ", row);
+  const char *p = strstr(out, pat);
+  if (!p) return false;
+  p += strlen(pat);
+  if (key)
+    for (int bar = 0; bar < 2; bar++) p = strstr(p, " | ") + 3; /* past default and range */
+  size_t n = key ? strcspn(p, "|") : 16;
+  snprintf(unit, cap, "%.*s", (int)n, p);
+  while (n && unit[n - 1] == ' ') unit[--n] = '\0';
+  return true;
+}
+
+/* A column's unit is its table's, not its name's ending: each case but the
+ * last has a name that misleads the guess (the comment after it), so only the
+ * lookup labels the axis "name (the table's unit)"; the last reaches its row
+ * through the class pattern. A count has no unit on the axis. */
+static void test_units(void) {
+  static const struct {
+    const char *name, *row;
+  } cases[] = {
+      {"dram_refresh_cycles", "dram_refresh_cycles"},           /* _cycles: core cycles */
+      {"dram.controller_cycles", "dram.controller_cycles"},     /* _cycles: core cycles */
+      {"issue_slots", "issue_slots"},                           /* no ending: a count */
+      {"seconds_ci95_low", "seconds_ci95_low"},                 /* no ending: a count */
+      {"l2_miss_queue_length_max", "l2_miss_queue_length_max"}, /* no ending: a count */
+      {"l2_node_accesses", "l2_<class>_accesses"},              /* fits l2_<class>_accesses */
+  };
+  for (unsigned i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+    const char *name = cases[i].name;
+    const char *table = T "units.csv";
+    char unit[64], want[160];
+    EXPECTF(table_unit(name, cases[i].row, unit, sizeof unit), "%s: not in rtsim run's tables",
+            cases[i].row);
+    char csv[256];
+    snprintf(csv, sizeof csv, "x,%s\n1,2\n2,3\n", name);
+    write_file(table, csv);
+    if (!strcmp(unit, "count")) snprintf(want, sizeof want, "set ylabel '%s'\n", name);
+    else snprintf(want, sizeof want, "set ylabel '%s (%s)'\n", name, unit);
+    char args[128];
+    snprintf(args, sizeof args, "--x x --y %s", name);
+    char *s = plot(table, args);
+    if (s) {
+      EXPECTF(strstr(s, want), "%s: expected %s got %s", name, want, lines_with(s, "set ylabel"));
+      free(s);
+    }
+  }
+}
+
 /* Bad options and tables: exit 2, one line, no picture. */
 /* --points: a scatter, markers only; a series may hold several rows at one x
  * (refused without it: they would be one line's two values). */
@@ -291,6 +347,7 @@ int main(void) {
   test_lines();
   test_bars();
   test_points();
+  test_units();
   test_refusals();
   return testing_done("test_plot");
 }
