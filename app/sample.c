@@ -250,9 +250,9 @@ static double figure(const struct sampler *s, const struct parts *p, enum sample
   case SF_RAYS: return rays;
   case SF_CYCLES: return cycles;
   case SF_DRAM_BYTES: return bytes;
-  case SF_BYTES_PER_CYCLE: return cycles > 0 ? bytes / cycles : 0;
+  case SF_BYTES_PER_CYCLE: return derived_ratio(bytes, cycles);
   case SF_UTIL: return derived_core_utilization(slots, s->cores, cycles);
-  case SF_RAYS_PER_S: return cycles > 0 ? derived_rays_per_second(rays, cycles / s->hz) : 0;
+  case SF_RAYS_PER_S: return derived_rays_per_second(rays, cycles / s->hz);
   default: {
     double n = p->edge[SQ_LAT_N] + mid(s, p, SQ_LAT_N);
     return n > 0 ? (p->edge[SQ_LAT_SUM] + mid(s, p, SQ_LAT_SUM)) / n : 0;

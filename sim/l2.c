@@ -11,6 +11,8 @@
 
 #include "sim/cache.h"
 #include "sim/dram.h"
+#include "sim/err.h"
+#include "sim/line.h"
 #include "sim/ring.h"
 #include "sim/stats.h"
 #include "sim/timeline.h"

@@ -26,8 +26,6 @@
 #include <stdint.h>
 
 #include "sim/engine.h"
-#include "sim/err.h"
-#include "sim/line.h"
 #include "sim/mem.h"
 #include "sim/qmeter.h"
 
