@@ -254,6 +254,13 @@ static int dispatch(const struct plan *p, struct jobs *J) {
   if (!sweep_make_dirs(p->dir, &e)) return app_report(&e);
   const struct sweep_line_base base = {p->bin, J->sweep_abs, p->dir, p->max_points};
   if (!p->emit && !p->slurm) return run_here(p, J);
+  /* Nothing incomplete: no job line and no script, so that nothing handed to
+   * parallel or sbatch can run and fail (a Slurm array needs a task). */
+  if (J->ntodo == 0) {
+    fprintf(stderr, "rtsim sweep: nothing to run: all %u points complete (no %s written)\n",
+            J->complete, p->slurm ? "script" : "job line");
+    return 0;
+  }
   for (unsigned i = 0; i < J->ntodo; i++)
     if (!sweep_job_prepare(&J->s, J->todo[i], &e)) return app_report(&e);
   if (p->slurm)

@@ -56,12 +56,13 @@ static void calibrate(struct sweep_job *all, unsigned n, double *rate, double *p
 void sweep_emit_slurm(const struct sweep_line_base *b, struct sweep_job **todo, unsigned n,
                       unsigned per, struct sweep_job *all, unsigned npoints, unsigned complete) {
   const char *sweep_file = b->sweep;
+  CHECK(n > 0 && per > 0); /* cmd_sweep.c writes no script when nothing is left */
   const unsigned tasks = (n + per - 1) / per;
   /* per slots a task: the snake may give a later task per points while an
    * earlier one has fewer. */
-  struct sweep_job **by_task = xcalloc(tasks ? (size_t)tasks * per : 1, sizeof *by_task);
-  unsigned *count = xcalloc(tasks ? tasks : 1, sizeof *count);
-  double *secs = xcalloc(tasks ? tasks : 1, sizeof *secs);
+  struct sweep_job **by_task = xcalloc((size_t)tasks * per, sizeof *by_task);
+  unsigned *count = xcalloc(tasks, sizeof *count);
+  double *secs = xcalloc(tasks, sizeof *secs);
   double rate, seen_mb, mem = 0;
   calibrate(all, npoints, &rate, &seen_mb);
   const bool measured = rate > 0;
@@ -93,7 +94,7 @@ void sweep_emit_slurm(const struct sweep_line_base *b, struct sweep_job **todo, 
                   : "estimate (no point is complete to measure from)");
   printf("#SBATCH --job-name=rtsim-sweep\n#SBATCH --array=1-%u\n#SBATCH --ntasks=1\n"
          "#SBATCH --cpus-per-task=1\n#SBATCH --time=%u\n#SBATCH --mem=%uM\n",
-         tasks ? tasks : 1, minutes, mib);
+         tasks, minutes, mib);
   printf("case \"${SLURM_ARRAY_TASK_ID:-}\" in\n");
   for (unsigned k = 0; k < tasks; k++) {
     printf("%u) exec ", k + 1);

@@ -7,7 +7,7 @@
 struct sweep_job;
 struct sweep_line_base;
 
-/* The script of todo[0..n) (longest first), per points a task, on stdout,
+/* The script of todo[0..n) (longest first; n > 0), per points a task, on stdout,
  * then the count on stderr. all[0..npoints): every point of the sweep, the
  * complete ones (complete of them) measured for the requests. */
 void sweep_emit_slurm(const struct sweep_line_base *b, struct sweep_job **todo, unsigned n,

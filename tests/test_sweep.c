@@ -440,6 +440,21 @@ static void test_jobs_elsewhere(void) {
           "unknown point: %d %s", rc, out);
   rc = run("%s sweep %s -o %s --point ''", RTSIM_BINARY, GOOD, sl);
   EXPECTF(rc == 2 && strstr(out, "--point: got ''"), "empty point: %d %s", rc, out);
+  /* Every point complete (#40): emitting again says so and writes no script
+   * and no job line, so nothing submitted can run a task that fails. */
+  rc = run("(cd %s && %s sweep %s -o sw_slurm --emit-slurm 3 > sw_slurm.sbatch)", RTSIM_TMP,
+           RTSIM_BINARY, GOOD);
+  EXPECTF(rc == 0 && strstr(out, "nothing to run: all 8 points complete (no script written)"),
+          "emit-slurm when complete: %d %s", rc, out);
+  struct stat st;
+  EXPECTF(stat(RTSIM_TMP "/sw_slurm.sbatch", &st) == 0 && st.st_size == 0,
+          "the script of a complete sweep is not empty (%lld bytes)", (long long)st.st_size);
+  rc = run("(cd %s && %s sweep %s -o sw_slurm --emit-jobs > sw_jobs.txt)", RTSIM_TMP, RTSIM_BINARY,
+           GOOD);
+  EXPECTF(rc == 0 && strstr(out, "nothing to run: all 8 points complete (no job line written)"),
+          "emit-jobs when complete: %d %s", rc, out);
+  EXPECTF(stat(RTSIM_TMP "/sw_jobs.txt", &st) == 0 && st.st_size == 0,
+          "job lines for a complete sweep (%lld bytes)", (long long)st.st_size);
 }
 
 /* --status (#19 item 2) on a sweep with points complete, failed, running
