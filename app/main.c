@@ -5,6 +5,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "sim/near.h"
+
 /* Every command: its name, its entry, its lines in the usage text. The
  * unknown-command message lists the names from here too. */
 static const struct command {
@@ -64,6 +66,9 @@ int main(int argc, char **argv) {
     snprintf(names + strlen(names), sizeof names - strlen(names), "%s%s", i ? ", " : "",
              COMMANDS[i].name);
   }
-  fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: %s)\n", cmd, names);
+  char near[128];
+  if (near_words(cmd, names, near, sizeof near))
+    fprintf(stderr, "rtsim: error: unknown command '%s' (did you mean %s?)\n", cmd, near);
+  else fprintf(stderr, "rtsim: error: unknown command '%s' (expected one of: %s)\n", cmd, names);
   return APP_EXIT_USAGE;
 }

@@ -9,6 +9,7 @@
 
 #include "app/app.h"
 #include "sim/err.h"
+#include "sim/near.h"
 #include "sim/scalar.h"
 
 /* getopt_long's value for options without a letter: past every char. */
@@ -56,6 +57,19 @@ static const struct opts_spec *find(const struct opts_spec *spec, unsigned n, in
   return NULL;
 }
 
+/* "unknown option '--x'", naming the nearest long options of spec (and
+ * --help) when some are near. Returns APP_EXIT_USAGE. */
+static int unknown_option(const char *cmd, const struct opts_spec *spec, unsigned n,
+                          const char *typed) {
+  char names[2048] = "--help", near[256], word[128];
+  for (unsigned i = 0; i < n; i++)
+    snprintf(names + strlen(names), sizeof names - strlen(names), ", --%s", spec[i].name);
+  snprintf(word, sizeof word, "%.*s", (int)strcspn(typed, "="), typed);
+  if (strncmp(typed, "--", 2) == 0 && near_words(word, names, near, sizeof near))
+    return app_usage_error(cmd, "unknown option '%s' (did you mean %s?)", typed, near);
+  return app_usage_error(cmd, "unknown option '%s'", typed);
+}
+
 int opts_parse(const char *cmd, const char *help, const struct opts_spec *spec, int argc,
                char **argv, struct opts_args *rest) {
   unsigned n = 0;
@@ -100,7 +114,7 @@ int opts_parse(const char *cmd, const char *help, const struct opts_spec *spec, 
     } else if (c == '?' && optopt) {
       rc = app_usage_error(cmd, "unknown option '-%c'", optopt);
     } else if (c == '?' || !s) {
-      rc = app_usage_error(cmd, "unknown option '%s'", argv[optind - 1]);
+      rc = unknown_option(cmd, spec, n, argv[optind - 1]);
     } else {
       char opt[128];
       if (li >= 0) snprintf(opt, sizeof opt, "--%s", s->name);

@@ -27,6 +27,7 @@
 #include "sim/derived.h"
 #include "sim/err.h"
 #include "sim/machine_cfg.h"
+#include "sim/near.h"
 #include "sim/scalar.h"
 
 /* Workload keys; machine keys are machine_cfg's. */
@@ -144,7 +145,7 @@ static bool check_workload(const struct priv *pv, enum wl k, const struct cfg_no
 /* A key that is neither a machine nor a workload key. */
 static bool unknown_key(const struct priv *pv, const struct cfg_node *v, const char *section,
                         struct err *e, bool workload_too) {
-  char keys[2048], wl[256] = "";
+  char keys[2048], wl[256] = "", near[256];
   machine_cfg_key_list(keys, sizeof keys);
   if (machine_cfg_renamed(v->key))
     return err_set(e, pv->doc.file, v->key_line, v->key_col, "%s.%s: %s", section, v->key,
@@ -152,6 +153,13 @@ static bool unknown_key(const struct priv *pv, const struct cfg_node *v, const c
   for (int k = 0; workload_too && k < WL_COUNT; k++)
     snprintf(wl + strlen(wl), sizeof wl - strlen(wl), "%s%s",
              k ? ", " : "; or a workload key: ", WL_NAMES[k]);
+  /* The nearest of both kinds, else every name. */
+  char all[2400];
+  snprintf(all, sizeof all, "%s%s%s", keys, workload_too ? ", " : "",
+           workload_too ? wl + strlen("; or a workload key: ") : "");
+  if (near_words(v->key, all, near, sizeof near))
+    return err_set(e, pv->doc.file, v->key_line, v->key_col,
+                   "%s.%s: unknown key '%s' (did you mean %s?)", section, v->key, v->key, near);
   return err_set(e, pv->doc.file, v->key_line, v->key_col,
                  "%s.%s: unknown key '%s' (expected a machine config key: %s%s)", section, v->key,
                  v->key, keys, wl);

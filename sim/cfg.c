@@ -14,6 +14,7 @@
 #include <yaml.h>
 
 #include "sim/err.h"
+#include "sim/near.h"
 #include "sim/scalar.h"
 
 #define PN_ALIAS 3 /* pool node kind besides enum cfg_kind */
@@ -601,6 +602,10 @@ bool cfg_check_keys(const struct cfg_doc *d, const struct cfg_node *m, const cha
     char where[256];
     if (path && path[0]) snprintf(where, sizeof where, "%s.%s", path, v->key);
     else snprintf(where, sizeof where, "%s", v->key);
+    char near[256];
+    if (near_words(v->key, expected, near, sizeof near))
+      return err_set(e, d->file, v->key_line, v->key_col, "%s: unknown key '%s' (did you mean %s?)",
+                     where, v->key, near);
     return err_set(e, d->file, v->key_line, v->key_col,
                    "%s: unknown key '%s' (expected one of: %s)", where, v->key, expected);
   }

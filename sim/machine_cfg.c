@@ -12,6 +12,7 @@
 #include "sim/cfg.h"
 #include "sim/dram_banked.h"
 #include "sim/err.h"
+#include "sim/near.h"
 #include "sim/scalar.h"
 #include "sim/stats.h"
 
@@ -474,21 +475,25 @@ bool machine_cfg_set(struct machine_cfg *c, const char *assignment, struct err *
   char where[300];
   snprintf(where, sizeof where, "--set %s", assignment);
   const char *eq = strchr(assignment, '=');
-  if (!eq) {
-    char keys[2048];
-    machine_cfg_key_list(keys, sizeof keys);
-    return err_set(e, where, 0, 0, "expected KEY=VALUE (keys: %s)", keys);
-  }
+  if (!eq)
+    return err_set(e, where, 0, 0,
+                   "expected KEY=VALUE, e.g. l2.size=1MiB ('rtsim run --help-keys' lists the %u "
+                   "keys)",
+                   NKEYS);
   char key[64];
   snprintf(key, sizeof key, "%.*s", (int)(eq - assignment), assignment);
   int i = (size_t)(eq - assignment) < sizeof key ? machine_cfg_find(key) : -1;
   if (i < 0 && machine_cfg_renamed(key))
     return err_set(e, where, 0, 0, "%s: %s", key, machine_cfg_renamed(key));
   if (i < 0) {
-    char keys[2048];
+    char keys[2048], near[256];
     machine_cfg_key_list(keys, sizeof keys);
-    return err_set(e, where, 0, 0, "unknown key '%.*s' (expected one of: %s)",
-                   (int)(eq - assignment), assignment, keys);
+    if (near_words(key, keys, near, sizeof near))
+      return err_set(e, where, 0, 0, "unknown key '%.*s' (did you mean %s?)",
+                     (int)(eq - assignment), assignment, near);
+    return err_set(e, where, 0, 0,
+                   "unknown key '%.*s' (no key is near it; 'rtsim run --help-keys' lists all %u)",
+                   (int)(eq - assignment), assignment, NKEYS);
   }
   return machine_cfg_set_at(c, (unsigned)i, eq + 1, where, 0, 0, e);
 }
