@@ -328,7 +328,7 @@ const struct stats_descs run_output_json_stats_descs = {"run", json_desc, STATS_
                                                         0,     NULL,      0};
 
 /* Every measured scalar, units in the names. */
-static void measured(const struct run_output_report *r, struct stats_table *t) {
+void run_output_measured(const struct run_output_report *r, struct stats_table *t) {
   if (r->analytic) {
     const struct stats_env env = {.cycles = r->analytic->est.cycles,
                                   .ctx = r,
@@ -365,7 +365,7 @@ static bool write_csv(const struct run_output_report *r, struct err *e) {
   struct stats_table t = {0};
   identity(r, &t);
   machine_cfg_to_stats(r->cfg, &t);
-  measured(r, &t);
+  run_output_measured(r, &t);
   stats_write_csv_header(&t, o.f);
   stats_write_csv_row(&t, o.f);
   stats_fini(&t);
@@ -451,7 +451,7 @@ static bool write_json(const struct run_output_report *r, struct err *e) {
   fputs(",\n  \"config\": {\n", f);
   machine_cfg_write_json(r->cfg, f, "    ");
   fputs("\n  },\n", f);
-  measured(r, &t);
+  run_output_measured(r, &t);
   stats_write_json_members(&t, f, "  ");
   stats_fini(&t);
   if (r->machine && !r->sample) { /* a whole timed run: its timeline and latency histograms */
@@ -508,24 +508,6 @@ bool run_output_write(const struct run_output_report *r, struct err *e) {
   ok = ok && write_csv(r, e);
   if (ok && r->machine && !r->sample) ok = write_timeline(r, e) && write_plot(r, e);
   return ok && write_json(r, e);
-}
-
-void run_output_summary(const struct run_output_report *r, FILE *f) {
-  struct stats_table t = {0};
-  measured(r, &t);
-  static const char *const show[] = {
-      "cycles",       "cycles_ci95_low",       "cycles_ci95_high",       "sample_detailed_fraction",
-      "rays_traced",  "rays_per_second",       "core_utilization",       "thread_idle_fraction",
-      "l2_miss_rate", "dram_bytes_per_cycle",  "dram_read_latency_mean", "load_latency_mean",
-      "events",       "rung_cycles_error_min", "rung_cycles_error_max",  "rung_error_warning"};
-  for (unsigned i = 0; i < sizeof show / sizeof show[0]; i++)
-    for (unsigned j = 0; j < t.n; j++)
-      if (!strcmp(t.e[j].name, show[i])) {
-        if (t.e[j].kind == STATS_F64) fprintf(f, "%s: %.6g\n", show[i], t.e[j].f);
-        else fprintf(f, "%s: %llu\n", show[i], (unsigned long long)t.e[j].u);
-      }
-  fprintf(f, "wall_s: %.3f\noutput: %s\n", r->wall_s, r->out_dir);
-  stats_fini(&t);
 }
 
 /* Every table of numbers a run writes, in the order machine_stats_emit fills

@@ -61,8 +61,15 @@ extern const char *const run_output_files[];
  * (left for the caller to commit); on failure fills e (file = the one that
  * failed). */
 bool run_output_write(const struct run_output_report *r, struct err *e);
-/* A few "key: value" lines for a person. */
+/* What a person reads on stdout after a run (app/run_summary.c): the policy
+ * and the machine, then the main numbers as "name: value unit" (the names
+ * are stats.json's), DRAM bytes read and written, the host seconds and
+ * OUTDIR. */
 void run_output_summary(const struct run_output_report *r, FILE *f);
+/* The run's measured numbers as stats.json and stats.csv hold them (t
+ * zero-initialised; stats_fini it). */
+struct stats_table;
+void run_output_measured(const struct run_output_report *r, struct stats_table *t);
 
 /* Every number a whole timed run writes, table by table (each component's in
  * its order), then what only stats.json holds, fidelity analytic's and a

@@ -549,6 +549,30 @@ static int exists(const char *dir, const char *name) {
 
 /* rtsim run through the command line: the image of rtsim render, the same
  * bytes twice, every output present; bad input refused with exit 2. */
+/* The stdout summary of a run (#40): the policy, the machine, and each
+ * number with its unit; DRAM bytes as stats.json has them. */
+static void check_summary(const char *out, const char *dir) {
+  EXPECTF(strstr(out, "\npolicy: packet\nmachine: "), "the summary's first lines: %s", out);
+  EXPECTF(strstr(out, "\nmachine: 3 cores x 2 threads x 2 rays a thread, L2 8 KiB, fidelity "
+                      "channel, 1 GHz\n"),
+          "the machine line: %s", out);
+  char want[256];
+  snprintf(want, sizeof want, "\ndram_bytes: %.0f bytes (read %.0f, written %.0f)\n",
+           testing_json_num(dir, "dram_bytes"), testing_json_num(dir, "dram_read_bytes"),
+           testing_json_num(dir, "dram_write_bytes"));
+  EXPECTF(strstr(out, want), "want '%s' in %s", want + 1, out);
+  snprintf(want, sizeof want, "\ncycles: %.0f core cycles\n", testing_json_num(dir, "cycles"));
+  EXPECTF(strstr(out, want), "want '%s' in %s", want + 1, out);
+  EXPECTF(strstr(out, " rays per simulated second\n"), "rays_per_second's unit: %s", out);
+  /* Every number has a unit: no line ends right after its value. */
+  for (const char *l = strstr(out, "\ncycles: "); l && l[1]; l = strchr(l + 1, '\n')) {
+    const char *value = strchr(l, ':'), *end = strchr(l + 1, '\n');
+    if (!value || !end || !strncmp(l + 1, "output: ", 8)) continue;
+    EXPECTF(memchr(value + 2, ' ', (size_t)(end - value - 2)), "a number without a unit: %.*s",
+            (int)(end - l - 1), l + 1);
+  }
+}
+
 static void test_command(void) {
   char cmd[4096], out[8192];
   const char *scene = RTSIM_SOURCE_DIR "/scenes/small/grove.yaml";
@@ -565,6 +589,7 @@ static void test_command(void) {
              scene, opts[i], dirs[i]);
     int rc = testing_run(cmd, out, sizeof out);
     EXPECTF(rc == 0, "%s: exit %d: %s", cmd, rc, out);
+    if (i == 2) check_summary(out, dirs[i]);
     const char *files[] = {"image.exr", "stats.json", "stats.csv", "timeline.csv", "traffic.png"};
     for (int f = 0; f < 5; f++)
       EXPECTF(exists(dirs[i], files[f]), "%s/%s missing", dirs[i], files[f]);
