@@ -81,7 +81,9 @@ static const struct key KEYS[] = {
      "an L2 hit's latency"},
     {"l2.banks", K_U32, 1, 4096, "8", "", R_ALL, P(l2_banks),
      "line-interleaved L2 banks, one access a cycle each"},
-    {"l2.mshrs", K_U32, 1, 1u << 20, "64", "", R_ALL, P(l2_mshrs), "L2 misses outstanding at once"},
+    {"l2.mshrs", K_U32, 1, 1u << 20, "64", "", R_ALL, P(l2_mshrs),
+     "L2 misses outstanding at once; a fixed number, not scaled with cores or threads (64: one a "
+     "hardware thread of the default 16 x 4)"},
     {"l2.write_buffer", K_U32, 1, 1u << 20, "16", "lines", R_ALL, P(l2_write_buffer),
      "dirty victims waiting for the DRAM"},
     /* Here, among the DRAM keys, so stats.csv keeps its column order. */
