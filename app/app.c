@@ -46,6 +46,24 @@ void app_policy_expect(char *buf, size_t cap, const char *more) {
   snprintf(buf, cap, "one of: %s%s", list, more);
 }
 
+void app_help(char *buf, size_t cap, const char *text) {
+  static const char mark[] = "{policies}\n";
+  size_t n = 0;
+  buf[0] = '\0';
+  while (*text && n < cap) {
+    const size_t len = strcspn(text, "\n") + (text[strcspn(text, "\n")] == '\n');
+    const size_t indent = strspn(text, " ");
+    if (!strncmp(text + indent, mark, sizeof mark - 1)) {
+      for (int k = 0; k < POLICY_COUNT && n < cap; k++)
+        n += (size_t)snprintf(buf + n, cap - n, "%*s%-10s %s\n", (int)indent, "",
+                              policy_name((enum policy_kind)k), policy_about((enum policy_kind)k));
+    } else {
+      n += (size_t)snprintf(buf + n, cap - n, "%.*s", (int)len, text);
+    }
+    text += len;
+  }
+}
+
 double app_now(void) {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);

@@ -31,6 +31,16 @@ int cmd_merge(int argc, char **argv);
 int cmd_plot(int argc, char **argv);
 int cmd_dram_replay(int argc, char **argv);
 
+/* A command of the program: its name, its entry, its lines in the usage. */
+struct app_command {
+  const char *name;
+  int (*run)(int argc, char **argv);
+  const char *usage;
+};
+/* rtsim --man (app/man.c): the manual page in roff on f, from usage (the
+ * program's) and each of cmds[0..n)'s --help-full. The exit code. */
+int app_man(FILE *f, const char *usage, const struct app_command *cmds, unsigned n);
+
 /* Print "rtsim: <formatted err>" once to stderr; returns APP_EXIT_USAGE. */
 int app_report(const struct err *e);
 /* Print "rtsim CMD: message" plus a hint to run --help; returns APP_EXIT_USAGE. */
@@ -44,6 +54,11 @@ bool app_parse_rays(const char *text, void *mask);
 bool app_parse_policy(const char *text, void *kind);
 /* What --policy takes, "one of: recursive, ..." and then `more` (", all"). */
 void app_policy_expect(char *buf, size_t cap, const char *more);
+/* A command's help text with every line "{policies}" (after any indent) made
+ * the table of policies, a line each at that indent: name and what it does
+ * (renderer/policy), so that a policy added there is in every help. Into
+ * buf (cut to cap). */
+void app_help(char *buf, size_t cap, const char *text);
 /* The opts.h table entries render and run share: --width, --height (uint64_t),
  * --rays (uint32_t mask), --seed (uint64_t, and a bool set when given),
  * --policy (enum policy_kind; policy_expect: app_policy_expect's text). */

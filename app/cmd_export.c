@@ -16,6 +16,9 @@ static const char HELP[] =
     "vertices per face, face i is primitive i (the 'prim' of 'rtsim hits'), so any\n"
     "other ray tracer can load exactly this geometry.\n"
     "\n"
+    "example:\n"
+    "  rtsim export scenes/small/room.yaml -o build/room.ply\n"
+    "\n"
     "options:\n"
     "  -o, --output FILE   PLY file to write (required)\n"
     "  -h, --help          this text\n";

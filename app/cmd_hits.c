@@ -24,6 +24,10 @@ static const char HELP[] =
     "face index in 'rtsim export' order; a miss is 'id,inf,-1'. t is printed with 9\n"
     "significant digits, which round-trips a 32-bit float.\n"
     "\n"
+    "example (one ray straight down from (0, 1, 0)):\n"
+    "  printf 'id,ox,oy,oz,dx,dy,dz,tmin,tmax\\n1,0,1,0,0,-1,0,0,inf\\n' |\n"
+    "      rtsim hits scenes/small/room.yaml\n"
+    "\n"
     "options:\n"
     "  -h, --help          this text\n";
 

@@ -24,6 +24,10 @@ static const char HELP[] =
     "and cost.nodes, cost.tris (k-d node visits and triangle tests per pixel).\n"
     "Prints a summary on stdout; progress on stderr when it is a terminal.\n"
     "\n"
+    "example:\n"
+    "  rtsim render scenes/small/sphereflake.yaml --width 128 --height 128 \\\n"
+    "      -o build/sphereflake.exr --preview build/sphereflake.png\n"
+    "\n"
     "options:\n"
     "  -o, --output FILE   image to write (required); it and the preview are written\n"
     "                      whole, both or neither (a failure or SIGINT leaves the\n"
@@ -32,10 +36,8 @@ static const char HELP[] =
     "  --height H          image height in pixels (default: the scene's)\n"
     "  --rays LIST         ray types, comma-separated from primary,shadow,specular,diffuse\n"
     "                      (default: all; primary is always traced)\n"
-    "  --policy P          ray scheduling: recursive (single rays in Hilbert order,\n"
-    "                      secondary rays depth-first; default), packet (8x8 packets),\n"
-    "                      dynamic (queue points) or treelet (queues at treelets\n"
-    "                      sized to the cache); all give the same image\n"
+    "  --policy P          ray scheduling (default recursive; all give the same image):\n"
+    "                        {policies}\n"
     "  --seed S            seed of the diffuse sampling streams (default: the scene's seed)\n"
     "  --half              store 16-bit floats (smaller file) instead of 32-bit\n"
     "  --preview PNG       also write an sRGB PNG preview (through gnuplot)\n"
@@ -81,7 +83,9 @@ int cmd_render(int argc, char **argv) {
       APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy, policy_expect),
       OPTS_FLAG("half", 0, &half), OPTS_STR("preview", 0, &preview), OPTS_END};
   struct opts_args args;
-  int rc = opts_parse("render", HELP, spec, argc, argv, &args);
+  char help[sizeof HELP + 1024];
+  app_help(help, sizeof help, HELP);
+  int rc = opts_parse("render", help, spec, argc, argv, &args);
   if (rc != OPTS_GO) return rc;
   const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;

@@ -32,26 +32,30 @@ static const char TRAFFIC_HELP[] =
     "packet schedules do not depend on the cache size and run once; the dynamic and\n"
     "treelet ones are made for a cache size, so they run once per size.\n"
     "\n"
+    "example (the paper's Figure 5, primary rays, on a small scene):\n"
+    "  rtsim traffic scenes/small/sphereflake.yaml --rays primary -o build/traffic.csv\n"
+    "\n"
     "options:\n"
     "  --rays CONFIG       the paper's configurations: primary; shadow (primary + hard\n"
     "                      shadows); specular (+ shadows + specular); diffuse (+ shadows\n"
     "                      + diffuse); or an explicit list such as primary,diffuse\n"
-    "  --policy P          recursive, packet, dynamic, treelet or all (default: the\n"
-    "                      paper's three, recursive, packet and dynamic); relative\n"
-    "                      columns need recursive, which then runs too\n"
+    "  --policy P          a policy or all (default: the paper's three, recursive,\n"
+    "                      packet and dynamic; relative columns need recursive):\n"
+    "                        {policies}\n"
     "  --width W --height H  image size (default: the scene's)\n"
     "  --dyn-batch N       dynamic: admit N primary rays at a time, each batch traced\n"
     "                      through all its generations (default 0: all at once)\n"
     "  --dyn-ray-buffer B  dynamic: bytes of cache reserved for the rays being traced\n"
-    "                      (default 4096: 64 rays; 0: one 64-byte ray, the rule of\n"
-    "                      rtsim run for one ray context); also the rays streamed at\n"
-    "                      once against a block of an oversized leaf's geometry\n"
+    "                      (default 4096: 64 rays; 0: one ray, as rtsim run's)\n"
     "  --threads N         host threads: 2 runs the cache analyser beside the tracer\n"
-    "                      (the same numbers, in less time with a host core to\n"
-    "                      spare); 1 runs both on one (default: 2 when this process\n"
-    "                      may use two host CPUs or more, else 1)\n"
+    "                      (default: 2 when this process may use two host CPUs)\n"
     "  -o, --output FILE   CSV to write (required), one row per policy and cache size\n"
-    "  -h, --help          this text\n"
+    "  -h, --help          this text; --help-full: also the columns\n"
+    "\f"
+    "\n"
+    "--dyn-ray-buffer is also the rays streamed at once against a block of an\n"
+    "oversized leaf's geometry. --threads 2 gives the same numbers, in less time\n"
+    "with a host core to spare; 1 runs tracer and analyser on one.\n"
     "\n"
     "Columns: scene, rays, width, height, policy, cache_bytes; frac_pot_vis (cache size\n"
     "over the potentially visible geometry's bytes); geometry_mb (triangles + k-d nodes\n"
@@ -213,7 +217,9 @@ int cmd_traffic(int argc, char **argv) {
       OPTS_STR("output", 'o', &out), TRAFFIC_OPTS(&width, &height, &mask, &pp, &threads),
       OPTS_PARSE("policy", 0, want, parse_policies, policy_expect), OPTS_END};
   struct opts_args args;
-  int rc = opts_parse("traffic", TRAFFIC_HELP, spec, argc, argv, &args);
+  char help[sizeof TRAFFIC_HELP + 1024];
+  app_help(help, sizeof help, TRAFFIC_HELP);
+  int rc = opts_parse("traffic", help, spec, argc, argv, &args);
   if (rc != OPTS_GO) return rc;
   const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;
@@ -314,21 +320,17 @@ static const char TRACE_HELP[] =
     "\n"
     "Write the access stream of one run as a Dinero IV din trace: records\n"
     "'LABEL ADDRESS' (label 0 read, 1 write; address in hex), one per 64-byte line\n"
-    "touched. A store that covers a line whole is one write record (the line is\n"
-    "allocated without a fetch); a store to part of a line is a read record, then\n"
-    "a write record. So Dinero IV 7 with 64-byte blocks, full associativity, LRU,\n"
-    "write-back and write-allocate without fetch counts exactly our fetches and\n"
-    "write-backs. Dinero takes associativity as a number of ways (0 means its\n"
-    "default, direct-mapped), so full associativity is one way per line: for a\n"
-    "512 KB cache,\n"
-    "  dineroIV -informat d -l1-ubsize 64 -l1-usize 512k -l1-uassoc 8192\n"
-    "           -l1-urepl l -l1-uwback a -l1-uwalloc f < FILE\n"
-    "and the exact command for the --cache size is printed on stderr. Prints on\n"
-    "stdout, as CSV, what our one-pass analyser counted for each cache size, to\n"
-    "check a replay against.\n"
+    "touched; print the Dinero IV command that replays it for the --cache size on\n"
+    "stderr, and on stdout, as CSV, what rtsim's one-pass analyser counted for\n"
+    "each cache size, to check the replay against.\n"
+    "\n"
+    "example:\n"
+    "  rtsim trace scenes/small/room.yaml --policy packet --rays primary \\\n"
+    "      --width 64 --height 64 --din build/room.din\n"
     "\n"
     "options:\n"
-    "  --policy P          recursive, packet, dynamic or treelet (required)\n"
+    "  --policy P          one of (required):\n"
+    "                        {policies}\n"
     "  --rays CONFIG       primary, shadow, specular, diffuse or a list (required)\n"
     "  --din FILE          trace to write (required); written whole or not at all\n"
     "  --cache BYTES       the cache size of the printed replay command and, for\n"
@@ -340,7 +342,18 @@ static const char TRACE_HELP[] =
     "  --dyn-ray-buffer B  dynamic: bytes reserved for the rays being traced (default\n"
     "                      4096; 0: one ray)\n"
     "  --width W --height H  image size (default: the scene's)\n"
-    "  -h, --help          this text\n";
+    "  -h, --help          this text; --help-full: also the records in detail\n"
+    "\f"
+    "\n"
+    "A store that covers a line whole is one write record (the line is allocated\n"
+    "without a fetch); a store to part of a line is a read record, then a write\n"
+    "record. So Dinero IV 7 with 64-byte blocks, full associativity, LRU,\n"
+    "write-back and write-allocate without fetch counts exactly our fetches and\n"
+    "write-backs. Dinero takes associativity as a number of ways (0 means its\n"
+    "default, direct-mapped), so full associativity is one way per line: for a\n"
+    "512 KB cache,\n"
+    "  dineroIV -informat d -l1-ubsize 64 -l1-usize 512k -l1-uassoc 8192\n"
+    "           -l1-urepl l -l1-uwback a -l1-uwalloc f < FILE\n";
 
 /* The Dinero IV 7 command that replays a din trace of lines of 2^lg2_line
  * bytes as the analyser's fully associative LRU cache of `bytes` (a multiple of
@@ -379,7 +392,9 @@ int cmd_trace(int argc, char **argv) {
       OPTS_PARSE_GIVEN("policy", 0, &pk, app_parse_policy, policy_expect, &have_policy),
       OPTS_PARSE("cache", 0, &cache, parse_cache, "a power of two from 1024 to 4194304"), OPTS_END};
   struct opts_args args;
-  int rc = opts_parse("trace", TRACE_HELP, spec, argc, argv, &args);
+  char help[sizeof TRACE_HELP + 1024];
+  app_help(help, sizeof help, TRACE_HELP);
+  int rc = opts_parse("trace", help, spec, argc, argv, &args);
   if (rc != OPTS_GO) return rc;
   const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;

@@ -8,12 +8,8 @@
 #include "sim/near.h"
 
 /* Every command: its name, its entry, its lines in the usage text. The
- * unknown-command message lists the names from here too. */
-static const struct command {
-  const char *name;
-  int (*run)(int argc, char **argv);
-  const char *usage;
-} COMMANDS[] = {
+ * unknown-command message and the manual page take the names from here too. */
+static const struct app_command COMMANDS[] = {
     {"render", cmd_render,
      "  render SCENE.yaml -o IMAGE.exr   ray trace a scene to an OpenEXR image\n"},
     {"export", cmd_export,
@@ -44,10 +40,25 @@ static const struct command {
 };
 #define NCOMMANDS (sizeof COMMANDS / sizeof COMMANDS[0])
 
+/* The program's usage: the commands, an example, where to read more (also
+ * the manual page's description). */
+static void usage_text(char *buf, size_t cap) {
+  size_t n = (size_t)snprintf(buf, cap, "usage: rtsim COMMAND [options]\n\ncommands:\n");
+  for (size_t i = 0; i < NCOMMANDS && n < cap; i++)
+    n += (size_t)snprintf(buf + n, cap - n, "%s", COMMANDS[i].usage);
+  if (n < cap)
+    snprintf(buf + n, cap - n,
+             "\nexample (a timed run on the default machine, its summary on stdout):\n"
+             "  rtsim run configs/default.yaml scenes/small/room.yaml --width 32 --height 32 \\\n"
+             "      -o build/run-room\n"
+             "\nRun 'rtsim COMMAND --help' for a command's options and an example,\n"
+             "'rtsim COMMAND --help-full' for its reference; 'man rtsim' has them all.\n");
+}
+
 static void usage(FILE *f) {
-  fputs("usage: rtsim COMMAND [options]\n\ncommands:\n", f);
-  for (size_t i = 0; i < NCOMMANDS; i++) fputs(COMMANDS[i].usage, f);
-  fputs("\nRun 'rtsim COMMAND --help' for a command's options.\n", f);
+  char text[4096];
+  usage_text(text, sizeof text);
+  fputs(text, f);
 }
 
 int main(int argc, char **argv) {
@@ -59,6 +70,11 @@ int main(int argc, char **argv) {
   if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
     usage(stdout);
     return 0;
+  }
+  if (!strcmp(cmd, "--man")) {
+    char text[4096];
+    usage_text(text, sizeof text);
+    return app_man(stdout, text, COMMANDS, NCOMMANDS);
   }
   char names[256] = "";
   for (size_t i = 0; i < NCOMMANDS; i++) {

@@ -12,8 +12,9 @@
 #include "sim/near.h"
 #include "sim/scalar.h"
 
-/* getopt_long's value for options without a letter: past every char. */
-enum { OPTS_LONG_ONLY = 256 };
+/* getopt_long's value for options without a letter: past every char; and
+ * for --help-full: past every option's. */
+enum { OPTS_LONG_ONLY = 256, OPTS_HELP_FULL = 1 << 20 };
 
 bool opts_u64(const char *text, uint64_t lo, uint64_t hi, uint64_t *out) {
   uint64_t v;
@@ -61,7 +62,7 @@ static const struct opts_spec *find(const struct opts_spec *spec, unsigned n, in
  * --help) when some are near. Returns APP_EXIT_USAGE. */
 static int unknown_option(const char *cmd, const struct opts_spec *spec, unsigned n,
                           const char *typed) {
-  char names[2048] = "--help", near[256], word[128];
+  char names[2048] = "--help, --help-full", near[256], word[128];
   for (unsigned i = 0; i < n; i++)
     snprintf(names + strlen(names), sizeof names - strlen(names), ", --%s", spec[i].name);
   snprintf(word, sizeof word, "%.*s", (int)strcspn(typed, "="), typed);
@@ -70,12 +71,45 @@ static int unknown_option(const char *cmd, const struct opts_spec *spec, unsigne
   return app_usage_error(cmd, "unknown option '%s'", typed);
 }
 
+/* The help's first part, what --help prints: up to its form feed. */
+static size_t screen_len(const char *help) { return strcspn(help, "\f"); }
+
+/* Whether help[0..screen) holds word. */
+static bool names(const char *help, size_t screen, const char *word) {
+  const char *at = strstr(help, word);
+  return at && (size_t)(at - help) < screen;
+}
+
+/* Every option of spec is named in help's first part ("--name", or "-x "
+ * for one with a letter), so that an option cannot be added without a line
+ * in --help (a programmer error: CHECK). */
+static void check_help(const char *help, const struct opts_spec *spec, unsigned n) {
+  const size_t screen = screen_len(help);
+  for (unsigned i = 0; i < n; i++) {
+    char opt[128], letter[8];
+    snprintf(opt, sizeof opt, "--%s", spec[i].name);
+    snprintf(letter, sizeof letter, "-%c ", spec[i].letter);
+    if (!names(help, screen, opt) && !(spec[i].letter && names(help, screen, letter))) {
+      fprintf(stderr, "rtsim: internal error: the help text does not name %s\n", opt);
+      CHECK(!"every option in the help's first part");
+    }
+  }
+}
+
+void opts_help_write(const char *help, bool full, FILE *f) {
+  const size_t screen = screen_len(help);
+  fwrite(help, 1, screen, f);
+  if (full && help[screen]) fputs(help + screen + 1, f);
+}
+
 int opts_parse(const char *cmd, const char *help, const struct opts_spec *spec, int argc,
                char **argv, struct opts_args *rest) {
   unsigned n = 0;
   while (spec[n].name) n++;
-  /* getopt_long's tables: ours, then --help, then the terminator. */
-  struct option *lo = xcalloc(n + 2, sizeof *lo);
+  check_help(help, spec, n);
+  /* getopt_long's tables: ours, then --help and --help-full, then the
+   * terminator. */
+  struct option *lo = xcalloc(n + 3, sizeof *lo);
   char *shorts = xmalloc(2 * n + 3);
   size_t k = 0;
   shorts[k++] = ':'; /* a missing value is ':', not '?' */
@@ -91,6 +125,7 @@ int opts_parse(const char *cmd, const char *help, const struct opts_spec *spec, 
     }
   }
   lo[n] = (struct option){"help", no_argument, NULL, 'h'};
+  lo[n + 1] = (struct option){"help-full", no_argument, NULL, OPTS_HELP_FULL};
   shorts[k++] = 'h';
   shorts[k] = '\0';
 
@@ -102,15 +137,19 @@ int opts_parse(const char *cmd, const char *help, const struct opts_spec *spec, 
     int c = getopt_long(argc, argv, shorts, lo, &li);
     if (c == -1) break;
     const struct opts_spec *s = find(spec, n, c);
-    if (c == 'h') {
-      fputs(help, stdout);
+    if (c == 'h' || c == OPTS_HELP_FULL) {
+      opts_help_write(help, c == OPTS_HELP_FULL, stdout);
       rc = 0;
     } else if (c == ':') {
       rc = app_usage_error(cmd, "option %s needs a value", argv[optind - 1]);
-    } else if (c == '?' && optopt && (optopt == 'h' || find(spec, n, optopt))) {
+    } else if (c == '?' && optopt &&
+               (optopt == 'h' || optopt == OPTS_HELP_FULL || find(spec, n, optopt))) {
       /* --flag=value: getopt_long names the flag in optopt. */
       const struct opts_spec *f = find(spec, n, optopt);
-      rc = app_usage_error(cmd, "option --%s takes no value", f ? f->name : "help");
+      rc = app_usage_error(cmd, "option --%s takes no value",
+                           f                          ? f->name
+                           : optopt == OPTS_HELP_FULL ? "help-full"
+                                                      : "help");
     } else if (c == '?' && optopt) {
       rc = app_usage_error(cmd, "unknown option '-%c'", optopt);
     } else if (c == '?' || !s) {

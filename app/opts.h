@@ -3,12 +3,15 @@
  * reads argv against it through getopt_long. Every bad option gets one
  * message naming the command and the option as typed, "rtsim CMD: error:
  * --width: got '0', expected a whole number from 1 to 16384 (see 'rtsim CMD
- * --help')", and exit code 2. -h and --help print the command's help. */
+ * --help')", and exit code 2. -h and --help print the command's help: its
+ * text up to a form feed ('\f'), a screen's worth; --help-full all of it
+ * (the rest is the reference that the man page also holds). */
 #ifndef RTSIM_APP_OPTS_H
 #define RTSIM_APP_OPTS_H
 
 #include <stdbool.h>
 #include <stdint.h>
+#include <stdio.h>
 
 enum opts_kind {
   OPTS_KIND_FLAG,  /* no value: *(bool *)dst = true */
@@ -68,7 +71,11 @@ struct opts_args {
 /* Continue with the command (returned by opts_parse). */
 #define OPTS_GO (-1)
 
-/* Parse argv[1..argc) (argv[0] is the command's name) against spec. Returns
+/* Write help's screen (up to its form feed), or all of it when full. */
+void opts_help_write(const char *help, bool full, FILE *f);
+
+/* Parse argv[1..argc) (argv[0] is the command's name) against spec. Every
+ * option of spec must be named ("--name") in help's screen (a CHECK). Returns
  * OPTS_GO with the operands in *rest (getopt_long moves them last, so they
  * are also argv[optind..argc)); else the exit code: 0 after printing help on
  * stdout, 2 after one message on stderr. */

@@ -109,7 +109,8 @@ static void private_to(const char *path, const char *name, FILE *f, const void *
 }
 
 /* The base pieces: a file of sim/ named for one of them. */
-static const char *const BASE[] = {"err", "cfg", "scalar", "outfile", "stats", "hist", NULL};
+static const char *const BASE[] = {"err",     "cfg",   "scalar", "near",
+                                   "outfile", "stats", "hist",   NULL};
 
 static bool is_base(const char *name) {
   for (int i = 0; BASE[i]; i++) {
@@ -126,14 +127,14 @@ static void base_only(const char *path, const char *name, FILE *f, const void *a
 }
 
 int main(void) {
-  static const char *const base_rule[] = {
-      "sim/",          "sim/err.h",   "sim/cfg.h",  "sim/scalar.h",
-      "sim/outfile.h", "sim/stats.h", "sim/hist.h", NULL};
+  static const char *const base_rule[] = {"sim/",         "sim/err.h",  "sim/cfg.h",
+                                          "sim/scalar.h", "sim/near.h", "sim/outfile.h",
+                                          "sim/stats.h",  "sim/hist.h", NULL};
   static const char *const base_up[] = {"renderer/", NULL};
   static const char *const sim_rule[] = {"renderer/", NULL};
-  static const char *const renderer_rule[] = {"sim/",        "sim/mem.h",    "sim/err.h",
-                                              "sim/cfg.h",   "sim/scalar.h", "sim/outfile.h",
-                                              "sim/stats.h", "sim/hist.h",   NULL};
+  static const char *const renderer_rule[] = {
+      "sim/",       "sim/mem.h",     "sim/err.h",   "sim/cfg.h",  "sim/scalar.h",
+      "sim/near.h", "sim/outfile.h", "sim/stats.h", "sim/hist.h", NULL};
   EXPECT(each_source("sim", base_only, base_rule) > 0);
   EXPECT(each_source("sim", base_only, base_up) > 0);
   EXPECT(each_source("sim", no_crossing, sim_rule) > 0);

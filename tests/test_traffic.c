@@ -223,7 +223,7 @@ int main(void) {
       RTSIM_BINARY, RTSIM_SOURCE_DIR, din);
   EXPECT(testing_run(cmd, out, sizeof out) == 0);
   EXPECTF(strstr(out, "-l1-usize 512k -l1-uassoc 8192 ") != NULL, "%s", out);
-  snprintf(cmd, sizeof cmd, "%s trace --help", RTSIM_BINARY);
+  snprintf(cmd, sizeof cmd, "%s trace --help-full", RTSIM_BINARY);
   EXPECT(testing_run(cmd, out, sizeof out) == 0);
   EXPECTF(strstr(out, "-l1-usize 512k -l1-uassoc 8192\n") != NULL && !strstr(out, "-l1-uassoc 0"),
           "%s", out);

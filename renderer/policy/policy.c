@@ -13,6 +13,13 @@
 #include "sim/err.h"
 
 static const char *const NAMES[POLICY_COUNT] = {"recursive", "packet", "dynamic", "treelet"};
+/* One line each for help texts (at most 60 characters). */
+static const char *const ABOUT[POLICY_COUNT] = {
+    "single rays, a pixel at a time in Hilbert order",
+    "8x8 tiles of rays traced as packets",
+    "rays queued at queue points made for the L2 (the paper's)",
+    "the dynamic policy's queues at treelets sized to the L2",
+};
 
 static const struct policy_module *const MODULES[POLICY_COUNT] = {
     &policy_recursive_module, &policy_packet_module, &policy_dynamic_module,
@@ -36,6 +43,8 @@ void policy_params_machine(struct policy_params *p, uint64_t l2_bytes) {
 }
 
 const char *policy_name(enum policy_kind k) { return (unsigned)k < POLICY_COUNT ? NAMES[k] : "?"; }
+
+const char *policy_about(enum policy_kind k) { return (unsigned)k < POLICY_COUNT ? ABOUT[k] : "?"; }
 
 bool policy_parse(const char *name, enum policy_kind *k) {
   for (int i = 0; i < POLICY_COUNT; i++)

@@ -250,8 +250,10 @@ uint64_t policy_job_total(const struct policy_job *job);
 void policy_run(enum policy_kind k, const struct policy_setup *s, const struct policy_params *p,
                 struct mem_port port, struct render_stats *st, struct trace_stats *ts);
 
-/* "recursive", "packet", "dynamic". */
+/* "recursive", "packet", "dynamic", "treelet". */
 const char *policy_name(enum policy_kind k);
+/* What policy k does, in one line for help texts ("?" for no policy). */
+const char *policy_about(enum policy_kind k);
 /* Parse a name; false if unknown. */
 bool policy_parse(const char *name, enum policy_kind *k);
 /* Every policy's name in order, ", "-separated, `last` before the last one
