@@ -140,12 +140,6 @@ const struct stats_descs run_output_stats_descs = {"run", run_desc, STATS_COUNT(
 const struct stats_descs run_output_misses_stats_descs = {
     "run", run_misses_desc, STATS_COUNT(run_misses_desc), 0, NULL, 0};
 
-static void run_slot(const struct stats_env *env, int slot, struct stats_table *t) {
-  const void *r = env->slot_ctx;
-  if (slot == MACHINE_STATS_SLOT_RUN) stats_emit(t, &run_output_stats_descs, r, env);
-  else stats_emit(t, &run_output_misses_stats_descs, r, env);
-}
-
 /* ---- fidelity analytic's numbers ----
  * What its counts and estimate know, under the timed rungs' names and in
  * their order; what only time tells (threads' idle time, switches, waits,
@@ -347,7 +341,12 @@ static void measured(const struct run_output_report *r, struct stats_table *t) {
     sample_stats(r->sample, p->clock_ghz, peak, s->contexts, s->threads, t);
     return;
   }
-  machine_stats_emit(r->machine, t, trace_class_names, TRACE_CLASS_COUNT, run_slot, r);
+  const struct stats_part run_parts[] = {
+      {MACHINE_STATS_AT_RUN, &run_output_stats_descs, r, NULL},
+      {MACHINE_STATS_AT_RUN_MISSES, &run_output_misses_stats_descs, r, NULL},
+  };
+  machine_stats_emit(r->machine, t, trace_class_names, TRACE_CLASS_COUNT, run_parts,
+                     STATS_COUNT(run_parts));
   if (r->rung) stats_emit(t, &rung_error_stats_descs, r->rung, &(struct stats_env){0});
 }
 
@@ -572,7 +571,7 @@ static const char *unit_in_tables(const char *name, bool per_class) {
   for (unsigned t = 0; t < STATS_TABLE_COUNT; t++)
     for (unsigned i = 0; i < STATS_TABLES[t]->n; i++) {
       const struct stats_desc *d = &STATS_TABLES[t]->d[i];
-      if (d->how == STATS_HOW_SLOT || d->per_class != per_class) continue;
+      if (d->how == STATS_HOW_AT || d->per_class != per_class) continue;
       if (per_class ? per_class_match(d->name, name) : !strcmp(d->name, name)) return d->unit;
     }
   for (unsigned j = 0; j < machine_tl_col_count; j++) {

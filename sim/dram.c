@@ -174,8 +174,23 @@ bool dram_served_transfer(const struct dram *d, double *start, double *end) {
   return d->served_has_xfer;
 }
 
+bool dram_level_stats(const struct dram *d, struct stats_part *out) {
+  *out = (struct stats_part){.at = DRAM_STATS_AT_LEVEL};
+  d->ops->stats(d->level, out);
+  return out->g != NULL;
+}
+
+void dram_level_report(const struct dram_level_ops *ops, const void *level, struct stats_table *t,
+                       uint64_t cycles) {
+  struct stats_part p = {.at = DRAM_STATS_AT_LEVEL};
+  ops->stats(level, &p);
+  if (!p.g) return;
+  const struct stats_env env = {.cycles = cycles, .ctx = p.ctx};
+  stats_emit(t, p.g, p.st, &env);
+}
+
 void dram_report(const struct dram *d, struct stats_table *t, uint64_t cycles) {
-  d->ops->report(d->level, t, cycles);
+  dram_level_report(d->ops, d->level, t, cycles);
 }
 
 void dram_trace_to(struct dram *d, FILE *f) {
@@ -228,7 +243,7 @@ static const struct stats_desc dram_desc[] = {
               "bytes read and written"),
     STATS_F64(struct dram_stats, write_bytes, dram_bytes_per_cycle, "dram_bytes_per_cycle",
               "bytes/cycle", "bytes read and written per core cycle of the run"),
-    STATS_SLOT(DRAM_STATS_SLOT_UTILIZATION),
+    STATS_AT(DRAM_STATS_AT_UTILIZATION),
     STATS_F64(struct dram_stats, read_latency, dram_read_latency_mean, "dram_read_latency_mean",
               "cycles", "reads, taken to data delivered: mean"),
     STATS_U64(struct dram_stats, read_latency, dram_read_latency_p50, "dram_read_latency_p50",
@@ -249,7 +264,7 @@ static const struct stats_desc dram_desc[] = {
               "cycles", "the same, 99th percentile"),
     STATS_FIELD(struct dram_stats, write_latency.max, "dram_write_latency_max", "cycles",
                 "the same, most"),
-    STATS_SLOT(DRAM_STATS_SLOT_LEVEL),
+    STATS_AT(DRAM_STATS_AT_LEVEL),
 };
 const struct stats_descs dram_stats_descs = {
     "dram", dram_desc, STATS_COUNT(dram_desc), sizeof(struct dram_stats), NULL, 0};

@@ -101,10 +101,11 @@ const struct stats_descs dram_banked_stats_descs = {"dram banked",
                                                     NULL,
                                                     0};
 
-void dram_banked_report(const void *self, struct stats_table *t, uint64_t cycles) {
+void dram_banked_stats_part(const void *self, struct stats_part *out) {
   const struct dram_banked *d = self;
-  const struct stats_env env = {.cycles = cycles, .ctx = d};
-  stats_emit(t, &dram_banked_stats_descs, &d->st, &env);
+  out->g = &dram_banked_stats_descs;
+  out->st = &d->st;
+  out->ctx = d;
 }
 
 const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d) {

@@ -187,10 +187,11 @@ const struct stats_descs dram_channel_stats_descs = {"dram channel",
                                                      channel_skip,
                                                      STATS_COUNT(channel_skip)};
 
-static void ch_report(const void *self, struct stats_table *t, uint64_t cycles) {
+static void ch_stats(const void *self, struct stats_part *out) {
   const struct dram_channel *d = self;
-  const struct stats_env env = {.cycles = cycles, .ctx = d};
-  stats_emit(t, &dram_channel_stats_descs, &d->st, &env);
+  out->g = &dram_channel_stats_descs;
+  out->st = &d->st;
+  out->ctx = d;
 }
 
 static void ch_destroy(void *self) {
@@ -201,7 +202,7 @@ static void ch_destroy(void *self) {
   free(d);
 }
 
-const struct dram_level_ops dram_channel_ops = {ch_can_take, ch_take, ch_finish, ch_report,
+const struct dram_level_ops dram_channel_ops = {ch_can_take, ch_take, ch_finish, ch_stats,
                                                 ch_destroy};
 
 struct dram_channel *dram_channel_create(const struct dram_channel_params *p, struct engine *e,

@@ -171,16 +171,17 @@ const struct machine_stats *machine_get_stats(const struct machine *m);
  * computes for the levels without their own. */
 extern const struct stats_descs machine_stats_descs, machine_l1_stats_descs,
     machine_engine_stats_descs, machine_dram_util_stats_descs;
-/* Where the run's own numbers go in the machine's order: after `seconds`, and
- * after issue_slots_per_blocking_load. */
-enum { MACHINE_STATS_SLOT_RUN = 200, MACHINE_STATS_SLOT_RUN_MISSES };
+/* The places in the machine's order where the run registers its own
+ * numbers: after `seconds`, and after issue_slots_per_blocking_load. */
+#define MACHINE_STATS_AT_RUN "run"
+#define MACHINE_STATS_AT_RUN_MISSES "run_misses"
 /* After machine_run: append every number of the machine and its components
  * to t, in their tables' order; per-class numbers for `classes` data classes
- * named class_names; run (NULL: none) fills the MACHINE_STATS_SLOT_RUN* slots
- * (its env: the machine's, slot_ctx = run_ctx). */
+ * named class_names; the caller's parts (n of them, for the places above;
+ * their ctx NULL: the machine) at their places. */
 void machine_stats_emit(const struct machine *m, struct stats_table *t,
-                        const char *const *class_names, unsigned classes, stats_slot_fn run,
-                        const void *run_ctx);
+                        const char *const *class_names, unsigned classes,
+                        const struct stats_part *parts, unsigned n);
 
 /* ---- sampling (README "Sampling") ----
  * The counters of a running machine at the current cycle: what a window of

@@ -66,12 +66,21 @@ enum stats_how {
   STATS_HOW_FIELD, /* the uint64_t at off */
   STATS_HOW_U64,   /* u64(st, env) */
   STATS_HOW_F64,   /* f64(st, env) */
-  STATS_HOW_SLOT   /* env->slot(env, slot, t): another table's numbers go here */
+  STATS_HOW_AT     /* a place: the tables registered for it (env->parts) go here */
 };
 
-struct stats_table;
-struct stats_env;
-typedef void (*stats_slot_fn)(const struct stats_env *env, int slot, struct stats_table *t);
+struct stats_descs;
+
+/* Another component's table registered for a place (a STATS_AT entry) of a
+ * table it does not know: its numbers are written there, read from st, with
+ * ctx as its env's ctx (NULL: the caller's). Several parts at one place are
+ * written in registration order. */
+struct stats_part {
+  const char *at;
+  const struct stats_descs *g;
+  const void *st;
+  const void *ctx;
+};
 
 /* What derived figures may read besides the stats struct. */
 struct stats_env {
@@ -79,8 +88,8 @@ struct stats_env {
   const void *ctx;                /* the component's own (its parameters, clocks) */
   const char *const *class_names; /* data class names (the renderer's), for per-class numbers */
   unsigned classes;
-  stats_slot_fn slot; /* fills a table's STATS_HOW_SLOT entries */
-  const void *slot_ctx;
+  const struct stats_part *parts; /* the tables registered for the places */
+  unsigned nparts;
 };
 
 struct stats_desc {
@@ -95,7 +104,7 @@ struct stats_desc {
   uint64_t (*u64)(const void *st, const struct stats_env *env);
   double (*f64)(const void *st, const struct stats_env *env);
   bool (*present)(const void *st, const struct stats_env *env); /* NULL: always written */
-  int slot;
+  const char *at;                                               /* STATS_HOW_AT: the place's name */
   bool per_class; /* one number per data class: field off + 8 x class */
 };
 
@@ -144,22 +153,25 @@ struct stats_descs {
   { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .u64 = fn }
 #define STATS_FN_F64(fn, nm, un, ds)                                                               \
   { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .f64 = fn }
-#define STATS_SLOT(id)                                                                             \
-  { .name = "", .unit = "", .desc = "", .how = STATS_HOW_SLOT, .slot = id }
+/* A place where the tables registered under `place` are written. */
+#define STATS_AT(place)                                                                            \
+  { .name = "", .unit = "", .desc = "", .how = STATS_HOW_AT, .at = place }
 #define STATS_SKIP(T, f, reason)                                                                   \
   { offsetof(T, f), STATS_FIELD_SIZE(T, f), reason, NULL }
 #define STATS_SKIP_BY(T, f, table)                                                                 \
   { offsetof(T, f), STATS_FIELD_SIZE(T, f), "another table", &(table) }
 #define STATS_COUNT(a) ((unsigned)(sizeof(a) / sizeof((a)[0])))
 
-/* Append g's numbers for stats struct st to t, in table order. */
+/* Append g's numbers for stats struct st to t, in table order, with the
+ * parts registered in env at their places (a part whose place is in neither
+ * g nor another part's table: CHECK). */
 void stats_emit(struct stats_table *t, const struct stats_descs *g, const void *st,
                 const struct stats_env *env);
 /* NULL if every byte of g's stats struct is read by a descriptor, its own or
  * a skip's other table's, or is a skip with a reason (or g has no struct of
  * its own); else a description of the first byte that is none, in buf. */
 const char *stats_uncovered(const struct stats_descs *g, char *buf, size_t len);
-/* One line per number: name, unit, description (slots left out). */
+/* One line per number: name, unit, description (places left out). */
 void stats_write_help(const struct stats_descs *g, FILE *f);
 /* The same as Markdown table rows `| name | unit | description |`. */
 void stats_write_markdown(const struct stats_descs *g, FILE *f);

@@ -268,11 +268,11 @@ static void test_components(void) {
     EXPECTF(why == NULL, "%s", why);
     for (unsigned j = 0; j < all[i]->n; j++) {
       const struct stats_desc *d = &all[i]->d[j];
-      if (d->how == STATS_HOW_SLOT) continue;
+      if (d->how == STATS_HOW_AT) continue;
       EXPECTF(d->unit[0] && d->desc[0], "%s: unit and description", d->name);
       for (unsigned k = i; k < n; k++)
         for (unsigned l = k == i ? j + 1 : 0; l < all[k]->n; l++)
-          EXPECTF(strcmp(d->name, all[k]->d[l].name) || all[k]->d[l].how == STATS_HOW_SLOT ||
+          EXPECTF(strcmp(d->name, all[k]->d[l].name) || all[k]->d[l].how == STATS_HOW_AT ||
                       d->present || all[k]->d[l].present,
                   "%s named twice", d->name);
     }
