@@ -262,7 +262,7 @@ static const struct stats_desc replay_desc[] = {
                  "a write's latency from its arrival, mean"),
     STATS_FN_F64(r_wait_mean, "refused_wait_mean", "cycles",
                  "cycles a request waited past its arrival for the DRAM to take it, mean"),
-    STATS_FN_F64(r_bpc, "bytes_per_cycle", "bytes a cycle", "64-byte lines moved / cycles"),
+    STATS_FN_F64(r_bpc, "bytes_per_cycle", "bytes/cycle", "64-byte lines moved / cycles"),
     STATS_FN_F64(r_gbps, "gb_per_s", "GB/s", "bytes_per_cycle at clock_ghz"),
     STATS_FN_F64(r_mean_dram, "read_latency_mean_dram_cycles", "DRAM cycles",
                  "read_latency_mean in DRAM clock cycles"),

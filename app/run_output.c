@@ -273,7 +273,7 @@ static const struct stats_desc analytic_desc[] = {
            "lines written to the DRAM"),
     AN_FIELD(counts.fetch_bytes, "dram_read_bytes", "bytes", "bytes read from the DRAM"),
     AN_FIELD(counts.writeback_bytes, "dram_write_bytes", "bytes", "bytes written to the DRAM"),
-    AN_F64(counts.fetch_bytes, an_dram_bytes_per_cycle, "dram_bytes_per_cycle", "bytes a cycle",
+    AN_F64(counts.fetch_bytes, an_dram_bytes_per_cycle, "dram_bytes_per_cycle", "bytes/cycle",
            "DRAM bytes read and written / cycles"),
     AN_F64(est.slots_per_blocking, an_est_slots_per_blocking, "analytic_slots_per_blocking_load",
            "cycles", "c: issue slots per blocking load (0 when no load blocks)"),

@@ -509,7 +509,7 @@ static const struct stats_desc sample_desc[] = {
     EST(SO_UTIL, "core_utilization", "fraction", "issue slots / cores x cycles, estimated", NULL),
     EST(SO_DRAM_BYTES, "dram_bytes", "bytes", "bytes read from and written to the DRAM, estimated",
         NULL),
-    EST(SO_BYTES_PER_CYCLE, "dram_bytes_per_cycle", "bytes a cycle",
+    EST(SO_BYTES_PER_CYCLE, "dram_bytes_per_cycle", "bytes/cycle",
         "DRAM bytes / cycles, estimated", NULL),
     EST(SO_DRAM_UTIL, "dram_utilization", "fraction",
         "dram_bytes_per_cycle / the DRAM's peak, estimated (a DRAM with a peak)", has_peak),

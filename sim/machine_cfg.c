@@ -89,7 +89,7 @@ static const struct key KEYS[] = {
      "the rung of the fidelity ladder: an estimate, or the timed machine with the DRAM at that detail"},
     {"dram.latency", K_U64, 0, 1e9, "50", "cycles", R_A | R_F | R_C, P(dram_latency_cycles),
      "a DRAM read's latency with an idle queue"},
-    {"dram.bytes_per_cycle", K_F64, 1e-6, 1e6, "13", "bytes a cycle", R_A | R_C,
+    {"dram.bytes_per_cycle", K_F64, 1e-6, 1e6, "13", "bytes/cycle", R_A | R_C,
      P(dram_bytes_per_cycle), "what the channel sustains"},
     {"dram.queue_depth", K_U32, 1, 1u << 20, "16", "entries", R_C, P(dram_queue_depth),
      "the channel's request queue"},

@@ -92,7 +92,7 @@ static void test_params_ranges(void) {
       {"dram.clock_mhz", "dram.clock_mhz: must be 1 to 16000 MHz"},
       {"dram.tCL", "dram.tCL: must be 1 to 1000 DRAM cycles"},
       {"dram.tFAW", "dram.tFAW: must be 1 to 10000 DRAM cycles"},
-      {"dram.bytes_per_cycle", "dram.bytes_per_cycle: must be 1e-06 to 10^6 bytes a cycle"},
+      {"dram.bytes_per_cycle", "dram.bytes_per_cycle: must be 1e-06 to 10^6 bytes/cycle"},
       {"dram.latency", "dram.latency: must be 0 to 10^9 cycles"},
       {"timeline.window", "timeline.window: must be 1 to 10^12 cycles"},
       {"sample.fraction", "sample.fraction: must be 1e-06 to 1"},
