@@ -213,27 +213,6 @@ static uint64_t dram_bytes(const void *st, const struct stats_env *env) {
 static double dram_bytes_per_cycle(const void *st, const struct stats_env *env) {
   return dram_ratio((double)dram_bytes(st, env), (double)env->cycles);
 }
-static double dram_read_latency_mean(const void *st, const struct stats_env *env) {
-  (void)env;
-  return hist_mean(&((const struct dram_stats *)st)->read_latency);
-}
-#define DRAM_QUANTILE(rw, pc)                                                                      \
-  static uint64_t dram_##rw##_latency_p##pc(const void *st, const struct stats_env *env) {         \
-    (void)env;                                                                                     \
-    return hist_quantile(&((const struct dram_stats *)st)->rw##_latency, pc / 100.0);              \
-  }
-DRAM_QUANTILE(read, 50)
-DRAM_QUANTILE(read, 95)
-DRAM_QUANTILE(read, 99)
-DRAM_QUANTILE(write, 50)
-DRAM_QUANTILE(write, 95)
-DRAM_QUANTILE(write, 99)
-#undef DRAM_QUANTILE
-static double dram_write_latency_mean(const void *st, const struct stats_env *env) {
-  (void)env;
-  return hist_mean(&((const struct dram_stats *)st)->write_latency);
-}
-
 static const struct stats_desc dram_desc[] = {
     STATS_FIELD(struct dram_stats, reads, "dram_reads", "count", "64-byte reads served"),
     STATS_FIELD(struct dram_stats, writes, "dram_writes", "count", "64-byte writes served"),
@@ -244,24 +223,24 @@ static const struct stats_desc dram_desc[] = {
     STATS_F64(struct dram_stats, write_bytes, dram_bytes_per_cycle, "dram_bytes_per_cycle",
               "bytes/cycle", "bytes read and written per core cycle of the run"),
     STATS_AT(DRAM_STATS_AT_UTILIZATION),
-    STATS_F64(struct dram_stats, read_latency, dram_read_latency_mean, "dram_read_latency_mean",
-              "cycles", "reads, taken to data delivered: mean"),
-    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p50, "dram_read_latency_p50",
-              "cycles", "the same, median"),
-    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p95, "dram_read_latency_p95",
-              "cycles", "the same, 95th percentile"),
-    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p99, "dram_read_latency_p99",
-              "cycles", "the same, 99th percentile"),
+    STATS_HIST_MEAN(struct dram_stats, read_latency, "dram_read_latency_mean", "cycles",
+                    "reads, taken to data delivered: mean"),
+    STATS_HIST_Q(struct dram_stats, read_latency, 0.50, "dram_read_latency_p50", "cycles",
+                 "the same, median"),
+    STATS_HIST_Q(struct dram_stats, read_latency, 0.95, "dram_read_latency_p95", "cycles",
+                 "the same, 95th percentile"),
+    STATS_HIST_Q(struct dram_stats, read_latency, 0.99, "dram_read_latency_p99", "cycles",
+                 "the same, 99th percentile"),
     STATS_FIELD(struct dram_stats, read_latency.max, "dram_read_latency_max", "cycles",
                 "the same, most"),
-    STATS_F64(struct dram_stats, write_latency.sum, dram_write_latency_mean,
-              "dram_write_latency_mean", "cycles", "writes, taken to written: mean"),
-    STATS_U64(struct dram_stats, write_latency, dram_write_latency_p50, "dram_write_latency_p50",
-              "cycles", "the same, median"),
-    STATS_U64(struct dram_stats, write_latency, dram_write_latency_p95, "dram_write_latency_p95",
-              "cycles", "the same, 95th percentile"),
-    STATS_U64(struct dram_stats, write_latency, dram_write_latency_p99, "dram_write_latency_p99",
-              "cycles", "the same, 99th percentile"),
+    STATS_HIST_MEAN(struct dram_stats, write_latency, "dram_write_latency_mean", "cycles",
+                    "writes, taken to written: mean"),
+    STATS_HIST_Q(struct dram_stats, write_latency, 0.50, "dram_write_latency_p50", "cycles",
+                 "the same, median"),
+    STATS_HIST_Q(struct dram_stats, write_latency, 0.95, "dram_write_latency_p95", "cycles",
+                 "the same, 95th percentile"),
+    STATS_HIST_Q(struct dram_stats, write_latency, 0.99, "dram_write_latency_p99", "cycles",
+                 "the same, 99th percentile"),
     STATS_FIELD(struct dram_stats, write_latency.max, "dram_write_latency_max", "cycles",
                 "the same, most"),
     STATS_AT(DRAM_STATS_AT_LEVEL),

@@ -50,14 +50,6 @@ static double m_slots_per_blocking_load(const void *st, const struct stats_env *
   (void)env;
   return derived_ratio((double)M_ST(st)->issue_slots, (double)M_ST(st)->blocking_loads);
 }
-static double m_load_latency_mean(const void *st, const struct stats_env *env) {
-  (void)env;
-  return hist_mean(&M_ST(st)->load_latency);
-}
-static uint64_t m_load_latency_p95(const void *st, const struct stats_env *env) {
-  (void)env;
-  return hist_quantile(&M_ST(st)->load_latency, 0.95);
-}
 
 #define MS struct machine_stats
 static const struct stats_desc machine_desc[] = {
@@ -101,10 +93,9 @@ static const struct stats_desc machine_desc[] = {
     STATS_AT("l1"),
     STATS_AT("l2"),
     STATS_AT("dram"),
-    STATS_F64(MS, load_latency, m_load_latency_mean, "load_latency_mean", "cycles",
-              "loads, issue to data (L1 hits too): mean"),
-    STATS_U64(MS, load_latency, m_load_latency_p95, "load_latency_p95", "cycles",
-              "the same, 95th percentile"),
+    STATS_HIST_MEAN(MS, load_latency, "load_latency_mean", "cycles",
+                    "loads, issue to data (L1 hits too): mean"),
+    STATS_HIST_Q(MS, load_latency, 0.95, "load_latency_p95", "cycles", "the same, 95th percentile"),
     STATS_FIELD(MS, load_latency.max, "load_latency_max", "cycles", "the same, most"),
     STATS_AT("engine"),
     STATS_FIELD(MS, stacks_max, "coroutine_stacks_max", "count",

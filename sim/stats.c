@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "sim/err.h"
+#include "sim/hist.h"
 
 static struct stats_entry *add(struct stats_table *t, const char *name, enum stats_kind k) {
   CHECK_LT(strlen(name), sizeof t->e[0].name);
@@ -125,6 +126,10 @@ static void emit_one(struct stats_table *t, const struct stats_desc *d, const vo
   }
   case STATS_HOW_U64: stats_u64(t, name, d->u64(st, env)); break;
   case STATS_HOW_F64: stats_f64(t, name, d->f64(st, env)); break;
+  case STATS_HOW_HIST_MEAN: stats_f64(t, name, hist_mean((const void *)(base + d->off))); break;
+  case STATS_HOW_HIST_Q:
+    stats_u64(t, name, hist_quantile((const void *)(base + d->off), d->q));
+    break;
   case STATS_HOW_AT: break;
   }
 }

@@ -63,10 +63,12 @@ void stats_write_json_f64(FILE *f, double v);
  * --help-stats` and the README's table all walk the tables, in table order. */
 
 enum stats_how {
-  STATS_HOW_FIELD, /* the uint64_t at off */
-  STATS_HOW_U64,   /* u64(st, env) */
-  STATS_HOW_F64,   /* f64(st, env) */
-  STATS_HOW_AT     /* a place: the tables registered for it (env->parts) go here */
+  STATS_HOW_FIELD,     /* the uint64_t at off */
+  STATS_HOW_U64,       /* u64(st, env) */
+  STATS_HOW_F64,       /* f64(st, env) */
+  STATS_HOW_HIST_MEAN, /* the mean of the struct hist at off */
+  STATS_HOW_HIST_Q,    /* its quantile q */
+  STATS_HOW_AT         /* a place: the tables registered for it (env->parts) go here */
 };
 
 struct stats_descs;
@@ -99,12 +101,13 @@ struct stats_desc {
   enum stats_how how;
   /* The bytes of the stats struct this entry reads: the field itself, or for a
    * function the field it is about (the lost-counter test covers the struct
-   * with these spans). size 0: none (a slot, or a figure of env alone). */
+   * with these spans). size 0: none (a place, or a figure of env alone). */
   size_t off, size;
   uint64_t (*u64)(const void *st, const struct stats_env *env);
   double (*f64)(const void *st, const struct stats_env *env);
   bool (*present)(const void *st, const struct stats_env *env); /* NULL: always written */
   const char *at;                                               /* STATS_HOW_AT: the place's name */
+  double q;       /* STATS_HOW_HIST_Q: the quantile, 0 to 1 */
   bool per_class; /* one number per data class: field off + 8 x class */
 };
 
@@ -153,6 +156,17 @@ struct stats_descs {
   { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .u64 = fn }
 #define STATS_FN_F64(fn, nm, un, ds)                                                               \
   { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .f64 = fn }
+/* The mean, and quantile q_ (0 to 1), of histogram field f (a struct hist). */
+#define STATS_HIST_MEAN(T, f, nm, un, ds)                                                          \
+  {                                                                                                \
+    .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_HIST_MEAN, .off = offsetof(T, f),         \
+    .size = STATS_FIELD_SIZE(T, f)                                                                 \
+  }
+#define STATS_HIST_Q(T, f, q_, nm, un, ds)                                                         \
+  {                                                                                                \
+    .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_HIST_Q, .off = offsetof(T, f),            \
+    .size = STATS_FIELD_SIZE(T, f), .q = q_                                                        \
+  }
 /* A place where the tables registered under `place` are written. */
 #define STATS_AT(place)                                                                            \
   { .name = "", .unit = "", .desc = "", .how = STATS_HOW_AT, .at = place }
