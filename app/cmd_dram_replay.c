@@ -174,7 +174,7 @@ static double r_to_dram(const struct stats_env *env) {
   return (double)rmp(env)->dram_clock_mhz * 1000.0 / (double)machine_core_khz(rmp(env));
 }
 static double r_bpc(const void *st, const struct stats_env *env) {
-  return derived_ratio((double)SIM_LINE_BYTES * (double)r_requests(st, env), (double)env->cycles);
+  return stats_ratio((double)SIM_LINE_BYTES * (double)r_requests(st, env), (double)env->cycles);
 }
 static double r_clock_ghz(const void *st, const struct stats_env *env) {
   (void)st;
@@ -198,10 +198,10 @@ static uint64_t r_taken_max(const void *st, const struct stats_env *env) {
 }
 static double r_write_mean(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)rp(st)->write_latency_sum, (double)rp(st)->writes);
+  return stats_ratio((double)rp(st)->write_latency_sum, (double)rp(st)->writes);
 }
 static double r_wait_mean(const void *st, const struct stats_env *env) {
-  return derived_ratio((double)rp(st)->wait_sum, (double)r_requests(st, env));
+  return stats_ratio((double)rp(st)->wait_sum, (double)r_requests(st, env));
 }
 static double r_gbps(const void *st, const struct stats_env *env) {
   return r_bpc(st, env) * rmp(env)->clock_ghz;

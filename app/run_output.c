@@ -122,7 +122,7 @@ static double run_slots_per_geometry_miss(const void *st, const struct stats_env
       machine_get_stats(((const struct run_output_report *)st)->machine);
   const uint64_t *by = s->l2.fetch_bytes_by_class;
   uint64_t geo_misses = (by[TRACE_CLASS_GEOMETRY] + by[TRACE_CLASS_NODE]) / SIM_LINE_BYTES;
-  return derived_ratio((double)s->issue_slots, (double)geo_misses);
+  return stats_ratio((double)s->issue_slots, (double)geo_misses);
 }
 
 static const struct stats_desc run_desc[] = {
@@ -187,17 +187,17 @@ static double an_core_utilization(const void *st, const struct stats_env *env) {
 }
 static double an_slots_per_blocking_load(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)an_n(st)->issue_slots, (double)an_n(st)->blocking_loads);
+  return stats_ratio((double)an_n(st)->issue_slots, (double)an_n(st)->blocking_loads);
 }
 static double an_slots_per_geometry_miss(const void *st, const struct stats_env *env) {
   (void)env;
   const uint64_t *by = an_n(st)->fetch_bytes_by_class;
   uint64_t geo_misses = (by[TRACE_CLASS_GEOMETRY] + by[TRACE_CLASS_NODE]) / SIM_LINE_BYTES;
-  return derived_ratio((double)an_n(st)->issue_slots, (double)geo_misses);
+  return stats_ratio((double)an_n(st)->issue_slots, (double)geo_misses);
 }
 static double an_l2_miss_rate(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)an_n(st)->l2_misses, (double)an_n(st)->l2_accesses);
+  return stats_ratio((double)an_n(st)->l2_misses, (double)an_n(st)->l2_accesses);
 }
 static uint64_t an_dram_reads(const void *st, const struct stats_env *env) {
   (void)env;
@@ -208,7 +208,7 @@ static uint64_t an_dram_writes(const void *st, const struct stats_env *env) {
   return an_n(st)->writeback_bytes / 64;
 }
 static double an_dram_bytes_per_cycle(const void *st, const struct stats_env *env) {
-  return derived_ratio((double)(an_n(st)->fetch_bytes + an_n(st)->writeback_bytes),
+  return stats_ratio((double)(an_n(st)->fetch_bytes + an_n(st)->writeback_bytes),
                        (double)env->cycles);
 }
 #define AN_EST(f)                                                                                  \

@@ -250,7 +250,7 @@ static double figure(const struct sampler *s, const struct parts *p, enum sample
   case SF_RAYS: return rays;
   case SF_CYCLES: return cycles;
   case SF_DRAM_BYTES: return bytes;
-  case SF_BYTES_PER_CYCLE: return derived_ratio(bytes, cycles);
+  case SF_BYTES_PER_CYCLE: return stats_ratio(bytes, cycles);
   case SF_UTIL: return derived_core_utilization(slots, s->cores, cycles);
   case SF_RAYS_PER_S: return derived_rays_per_second(rays, cycles / s->hz);
   default: {

@@ -204,14 +204,13 @@ void dram_trace_to(struct dram *d, FILE *f) {
 
 /* ---- the numbers every level shares (README "Numbers") ---- */
 
-static double dram_ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 static uint64_t dram_bytes(const void *st, const struct stats_env *env) {
   (void)env;
   const struct dram_stats *s = st;
   return s->read_bytes + s->write_bytes;
 }
 static double dram_bytes_per_cycle(const void *st, const struct stats_env *env) {
-  return dram_ratio((double)dram_bytes(st, env), (double)env->cycles);
+  return stats_ratio((double)dram_bytes(st, env), (double)env->cycles);
 }
 static const struct stats_desc dram_desc[] = {
     STATS_FIELD(struct dram_stats, reads, "dram_reads", "count", "64-byte reads served"),

@@ -9,8 +9,6 @@
 
 #include "sim/stats.h"
 
-static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
-
 /* The banked level's numbers (README "Numbers"); env->ctx is the level. */
 static double bk_dram_cycles(const struct stats_env *env) {
   const struct dram_banked *d = env->ctx;
@@ -19,28 +17,28 @@ static double bk_dram_cycles(const struct stats_env *env) {
 static double bk_row_hit_rate(const void *st, const struct stats_env *env) {
   (void)env;
   const struct dram_banked_stats *s = st;
-  return ratio((double)s->row_hits, (double)(s->reads + s->writes));
+  return stats_ratio((double)s->row_hits, (double)(s->reads + s->writes));
 }
 static double bk_bus_utilization(const void *st, const struct stats_env *env) {
   const struct dram_banked *d = env->ctx;
   const struct dram_banked_stats *s = st;
-  return ratio((double)s->bus_busy_cycles, bk_dram_cycles(env) * d->p.channels);
+  return stats_ratio((double)s->bus_busy_cycles, bk_dram_cycles(env) * d->p.channels);
 }
 static double bk_bank_active_fraction(const void *st, const struct stats_env *env) {
   const struct dram_banked *d = env->ctx;
   const struct dram_banked_stats *s = st;
-  return ratio((double)s->bank_open_cycles,
-               bk_dram_cycles(env) * d->banks_per_channel * d->p.channels);
+  return stats_ratio((double)s->bank_open_cycles,
+                     bk_dram_cycles(env) * d->banks_per_channel * d->p.channels);
 }
 #define BK_QUEUE_FNS(k, n)                                                                         \
   static double bk_queue_length_mean_##k(const void *st, const struct stats_env *env) {            \
-    return ratio((double)((const struct dram_banked_stats *)st)->queue_area[k],                    \
-                 (double)env->cycles);                                                             \
+    return stats_ratio((double)((const struct dram_banked_stats *)st)->queue_area[k],              \
+                       (double)env->cycles);                                                       \
   }                                                                                                \
   static double bk_queue_wait_mean_##k(const void *st, const struct stats_env *env) {              \
     (void)env;                                                                                     \
     const struct dram_banked_stats *s = st;                                                        \
-    return ratio((double)s->queue_wait_sum_cycles[k], (double)s->n);                               \
+    return stats_ratio((double)s->queue_wait_sum_cycles[k], (double)s->n);                         \
   }
 BK_QUEUE_FNS(0, reads)
 BK_QUEUE_FNS(1, writes)

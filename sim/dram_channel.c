@@ -142,13 +142,13 @@ static void ch_finish(void *self) { sweep_to(self, TICK_FOREVER); }
 static double ch_utilization(const void *st, const struct stats_env *env) {
   const struct dram_channel_stats *s = st;
   const double tick = (double)(1ull << DRAM_TICK_BITS), cyc = (double)env->cycles;
-  return cyc > 0 ? (double)s->busy_ticks / tick / cyc : 0.0;
+  return stats_ratio((double)s->busy_ticks / tick, cyc);
 }
 static double ch_fifo_wait_mean(const void *st, const struct stats_env *env) {
   (void)env;
   const struct dram_channel_stats *s = st;
   const double tick = (double)(1ull << DRAM_TICK_BITS), n = (double)s->requests;
-  return n > 0 ? (double)s->wait_ticks_sum / tick / n : 0.0;
+  return stats_ratio((double)s->wait_ticks_sum / tick, n);
 }
 static double ch_fifo_length_mean(const void *st, const struct stats_env *env) {
   const struct dram_channel_stats *s = st;

@@ -25,30 +25,30 @@ static double m_thread_cycles(const void *st) {
 }
 static double m_busy_fraction(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)M_ST(st)->thread_busy_cycles, m_thread_cycles(st));
+  return stats_ratio((double)M_ST(st)->thread_busy_cycles, m_thread_cycles(st));
 }
 static double m_idle_fraction(const void *st, const struct stats_env *env) {
   (void)env;
   const struct machine_stats *s = st;
-  return derived_ratio(
+  return stats_ratio(
       (double)(s->thread_wait_cycles + s->thread_parked_cycles + s->thread_done_cycles),
       m_thread_cycles(st));
 }
 static double m_wait_fraction(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)M_ST(st)->thread_wait_cycles, m_thread_cycles(st));
+  return stats_ratio((double)M_ST(st)->thread_wait_cycles, m_thread_cycles(st));
 }
 static double m_parked_fraction(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)M_ST(st)->thread_parked_cycles, m_thread_cycles(st));
+  return stats_ratio((double)M_ST(st)->thread_parked_cycles, m_thread_cycles(st));
 }
 static double m_done_fraction(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)M_ST(st)->thread_done_cycles, m_thread_cycles(st));
+  return stats_ratio((double)M_ST(st)->thread_done_cycles, m_thread_cycles(st));
 }
 static double m_slots_per_blocking_load(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)M_ST(st)->issue_slots, (double)M_ST(st)->blocking_loads);
+  return stats_ratio((double)M_ST(st)->issue_slots, (double)M_ST(st)->blocking_loads);
 }
 
 #define MS struct machine_stats
@@ -137,7 +137,7 @@ static bool m_dram_util_present(const void *st, const struct stats_env *env) {
 static double m_dram_utilization(const void *st, const struct stats_env *env) {
   const struct machine_stats *s = st;
   const double b = (double)(s->dram.read_bytes + s->dram.write_bytes);
-  return derived_ratio(b, (double)s->cycles) / machine_dram_peak_bytes_per_cycle(&M_OF(env)->p);
+  return stats_ratio(b, (double)s->cycles) / machine_dram_peak_bytes_per_cycle(&M_OF(env)->p);
 }
 static const struct stats_desc dram_util_desc[] = {
     {.name = "dram_utilization",

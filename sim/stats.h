@@ -10,6 +10,10 @@
 #include <stdint.h>
 #include <stdio.h>
 
+/* a / b, 0 when b is not positive (a figure of an empty run): every ratio a
+ * table reports. */
+static inline double stats_ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
+
 /* A table of scalars in insertion order. */
 enum stats_kind { STATS_U64, STATS_F64, STATS_STR };
 struct stats_entry {
