@@ -209,7 +209,7 @@ static uint64_t an_dram_writes(const void *st, const struct stats_env *env) {
 }
 static double an_dram_bytes_per_cycle(const void *st, const struct stats_env *env) {
   return stats_ratio((double)(an_n(st)->fetch_bytes + an_n(st)->writeback_bytes),
-                       (double)env->cycles);
+                     (double)env->cycles);
 }
 #define AN_EST(f)                                                                                  \
   static double an_est_##f(const void *st, const struct stats_env *env) {                          \
