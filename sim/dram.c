@@ -187,7 +187,7 @@ void dram_trace_to(struct dram *d, FILE *f) {
           dram_model_names[d->p.model], d->p.clock_mhz, (unsigned long long)d->core_khz);
 }
 
-/* ---- the numbers every level shares (README "Numbers") ---- */
+/* ---- the numbers every level shares (docs/stats.md) ---- */
 
 static double dram_ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 static uint64_t dram_bytes(const void *st, const struct stats_env *env) {
