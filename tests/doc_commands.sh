@@ -91,6 +91,9 @@ for f in "$src/README.md" "$src"/docs/*.md; do
   run_file "$f" "$rel" "$d" || exit 1
   total=$((total + $(wc -l < "$d/.commands")))
 done
+# The README is the door: a page a newcomer reads in minutes, not a manual.
+lines=$(wc -l < "$src/README.md")
+[ "$lines" -le 300 ] || { echo "error: README.md has $lines lines (at most 300: the rest goes to docs/)"; exit 1; }
 # A page set with no command would pass without checking anything.
 [ "$total" -ge 20 ] || { echo "error: only $total commands found in README.md and docs/"; exit 1; }
 echo "doc commands: $total run"
