@@ -37,7 +37,7 @@ static const char HELP[] =
     "Writes into a fresh sibling of OUTDIR put in its place at the end, so OUTDIR\n"
     "is absent or the earlier run until then, whole, never a mix; a run that\n"
     "fails or is stopped (SIGINT, SIGTERM) leaves it as it was and nothing else\n"
-    "behind (README: Output directories):\n"
+    "behind (docs/outputs.md):\n"
     "  image.exr     the picture, bit-identical in RGB to rtsim render's\n"
     "  stats.json    resolved config, scene, seed, wall time, every measured number\n"
     "  stats.csv     the same numbers as one tidy row (no wall time: bit-identical\n"
@@ -46,7 +46,7 @@ static const char HELP[] =
     "                accesses and misses, issued operations, busy threads\n"
     "  traffic.png   DRAM bytes per cycle over the run by data class (gnuplot)\n"
     "At the timed rungs, a whole run (not sampled) also writes per-pixel costs in\n"
-    "image.exr, each summing over the pixels to the run's total (README: Cost in\n"
+    "image.exr, each summing over the pixels to the run's total (docs/outputs.md: Cost in\n"
     "the picture): cost.issue_slots, cost.load_wait_cycles,\n"
     "cost.dram_read_bytes.<class> (geometry, node, ray, queue, other),\n"
     "cost.dram_write_bytes.\n"
@@ -64,10 +64,10 @@ static const char HELP[] =
     "  --seed S            diffuse sampling seed (default: the scene's)\n"
     "  --set KEY=VALUE     override a machine config key (repeatable), e.g.\n"
     "                      --set l2.size=1MiB --set rays_per_thread=4; keys:\n"
-    "                      every key of configs/default.yaml (README: Config keys)\n"
+    "                      every key of configs/default.yaml (docs/config-keys.md)\n"
     "  --dram-trace FILE   also write every DRAM request (address, READ or WRITE,\n"
     "                      arrival in DRAM cycles, arrival and completion in core\n"
-    "                      cycles), in arrival order; README: DRAM traces (not at\n"
+    "                      cycles), in arrival order; docs/dram-traces.md (not at\n"
     "                      fidelity analytic: it makes no requests)\n"
     "  --cost-preview PNG  also write a heat map of one cost channel (colour bar in\n"
     "                      its units)\n"
@@ -77,10 +77,10 @@ static const char HELP[] =
     "                      compare maps of several runs on one scale\n"
     "  --help-keys         every machine config key as a Markdown table (name,\n"
     "                      default, range, unit, the rungs that read it, what it\n"
-    "                      is): the README's table\n"
+    "                      is): docs/stats.md's table\n"
     "  --help-stats        list every number stats.json and stats.csv hold: name,\n"
-    "                      unit, component, description (README: Numbers)\n"
-    "  --help-stats-markdown  the same as the README's table rows\n"
+    "                      unit, component, description (docs/stats.md)\n"
+    "  --help-stats-markdown  the same as docs/stats.md's table rows\n"
     "  -h, --help          this text\n";
 
 static bool parse_cost_max(const char *text, void *dst) {
@@ -259,7 +259,7 @@ static int run_render(const struct run_plan *pl, const struct machine_cfg *mc,
     app_timed_run(&t, w, pl->mask, seed, W, H, pl->policy, &mc->p, &mc->work, &mc->sample,
                   isatty(2), trace->f, true);
   /* A whole run at a cheaper rung says how wrong that rung was measured to be
-   * in runs like it (README "Fidelity ladder"). */
+   * in runs like it (docs/fidelity-and-sampling.md). */
   struct rung_error rung = {0};
   const bool cheaper = mc->p.fidelity != MACHINE_FIDELITY_BANKED && !t.sampled;
   if (cheaper && analytic) {

@@ -30,7 +30,7 @@ static const char HELP[] =
     "       rtsim sweep SWEEP.yaml -o DIR (--emit-jobs | --emit-slurm N | --status)\n"
     "\n"
     "Run every point of a sweep file (a base machine config, a workload, and axes\n"
-    "over config or workload keys: see README.md, Sweeps) as an 'rtsim run' into\n"
+    "over config or workload keys: see docs/sweeps.md) as an 'rtsim run' into\n"
     "DIR/<point>, where <point> names the swept values (policy=packet,dram.latency=400).\n"
     "The whole file, every point's machine config and every scene are checked\n"
     "before anything runs. Points run N at a time, longest expected first; a\n"

@@ -19,8 +19,8 @@ static const char *unit_by_name(const char *name) {
   if (ENDS("_per_cycle")) return "per cycle";
   if (ENDS("_bytes") || IS("l1.size") || IS("l2.size")) return "bytes";
   if (ENDS("_per_second")) return "per second";
-  /* The banked DRAM's timings count its own clock, not the core's (README's
-   * config key table): dram.tCL, dram.tRCD, ... */
+  /* The banked DRAM's timings count its own clock, not the core's (docs/config-keys.md's
+   * key table): dram.tCL, dram.tRCD, ... */
   if (STARTS("dram.t") && n > 6 && name[6] >= 'A' && name[6] <= 'Z') return "DRAM cycles";
   if (IS("cycles") || ENDS("_cycles") || ENDS(".latency") || STARTS("costs.") ||
       IS("timeline.window") || ENDS("_wait_mean") || STARTS("load_latency_") ||

@@ -10,7 +10,7 @@
 
 /* A column's unit ("bytes", "cycles", "fraction", ...), or "" (a count or a
  * label): the one rtsim run's tables state for it (run_output_unit_of), else
- * the one its name states. README's Sweeps section has the rules. */
+ * the one its name states. docs/sweeps.md (Plotting) has the rules. */
 const char *plot_unit_of(const char *name);
 
 /* A tick label of v on an axis of unit `unit`: bytes as "512 KiB" when an

@@ -94,7 +94,7 @@ static void identity(const struct run_output_report *r, struct stats_table *t) {
   stats_u64(t, "seed", r->seed);
 }
 
-/* ---- the run's own numbers, at the machine's slots (README "Numbers") ----
+/* ---- the run's own numbers, at the machine's slots (docs/stats.md) ----
  * The workload's counts (the renderer's) and figures of the machine that need
  * the renderer's data classes; st: the struct run_output_report. */
 
@@ -144,7 +144,7 @@ const struct stats_descs run_output_misses_stats_descs = {
  * What its counts and estimate know, under the timed rungs' names and in
  * their order; what only time tells (threads' idle time, switches, waits,
  * merges, stalls, queues, latencies, events) is absent. Then its own numbers,
- * analytic_* (README "Fidelity ladder"). st: the struct app_analytic; env->ctx:
+ * analytic_* (docs/fidelity-and-sampling.md). st: the struct app_analytic; env->ctx:
  * the struct run_output_report. */
 
 #define AN(f) offsetof(struct app_analytic, f), STATS_FIELD_SIZE(struct app_analytic, f)

@@ -202,7 +202,7 @@ void dram_trace_to(struct dram *d, FILE *f) {
           dram_model_names[d->p.model], d->p.clock_mhz, (unsigned long long)d->core_khz);
 }
 
-/* ---- the numbers every level shares (README "Numbers") ---- */
+/* ---- the numbers every level shares (docs/stats.md) ---- */
 
 static uint64_t dram_bytes(const void *st, const struct stats_env *env) {
   (void)env;

@@ -3,7 +3,7 @@
  * implements), wrapped so that every level is counted, timed and traced the
  * same way: reads and writes, bytes, the latency of each request from the
  * cycle the level took it to the cycle it was served, and on request a trace
- * of every request in arrival order (README "DRAM traces"). */
+ * of every request in arrival order (docs/dram-traces.md). */
 #ifndef RTSIM_SIM_DRAM_H
 #define RTSIM_SIM_DRAM_H
 
@@ -81,7 +81,7 @@ void dram_report(const struct dram *d, struct stats_table *t, uint64_t cycles);
 
 /* Write a header line (# ...: the format, the level, both clocks), then every
  * request from now on to f, one line each in arrival order, as soon as it and
- * every earlier one are served (README "DRAM traces"); the caller owns f and
+ * every earlier one are served (docs/dram-traces.md); the caller owns f and
  * checks it for errors. */
 void dram_trace_to(struct dram *d, FILE *f);
 

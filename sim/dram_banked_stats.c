@@ -1,5 +1,5 @@
 /* The banked level's numbers: the table of its figures (names, units,
- * descriptions; README "Numbers"), each computed from its struct
+ * descriptions; docs/stats.md), each computed from its struct
  * dram_banked_stats and the run's length. Holds: every figure is a counter or
  * a ratio of counters the level keeps, so the table reads the same whatever
  * the level's controller structure. */
@@ -9,7 +9,7 @@
 
 #include "sim/stats.h"
 
-/* The banked level's numbers (README "Numbers"); env->ctx is the level. */
+/* The banked level's numbers (docs/stats.md); env->ctx is the level. */
 static double bk_dram_cycles(const struct stats_env *env) {
   const struct dram_banked *d = env->ctx;
   return (double)env->cycles * (double)d->clk.den / (double)d->clk.num;

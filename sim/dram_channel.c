@@ -138,7 +138,7 @@ static void ch_take(void *self, uint64_t addr, bool write, uint64_t tag) {
 
 static void ch_finish(void *self) { sweep_to(self, TICK_FOREVER); }
 
-/* The channel level's numbers (README "Numbers"). */
+/* The channel level's numbers (docs/stats.md). */
 static double ch_utilization(const void *st, const struct stats_env *env) {
   const struct dram_channel_stats *s = st;
   const double tick = (double)(1ull << DRAM_TICK_BITS), cyc = (double)env->cycles;

@@ -481,7 +481,7 @@ void l2_finish(struct l2 *l2, uint64_t end) {
 
 const struct l2_stats *l2_get_stats(const struct l2 *l2) { return &l2->st; }
 
-/* ---- the L2's numbers (README "Numbers") ---- */
+/* ---- the L2's numbers (docs/stats.md) ---- */
 
 static double l2_miss_rate(const void *st, const struct stats_env *env) {
   (void)env;

@@ -5,7 +5,7 @@
  * until the cycle the load completes. Knows nothing of rays: a worker is any
  * function that talks to memory through sim/mem.h.
  *
- * The model, in one place (README "The timed machine" says the same in prose):
+ * The model, in one place (docs/machine.md says the same in prose):
  * - A core issues one operation per cycle: compute(n) takes n issue slots, a
  *   load or store one. Threads get the issue port round robin, one block at a
  *   time: a block is what a ray runs between two waits (its compute, L1 hits
@@ -40,7 +40,7 @@ struct timeline;
 
 #define MACHINE_MAX_CONTEXTS (1u << 20) /* cores x threads_per_core x rays_per_thread */
 
-/* The fidelity ladder's rungs, cheapest first (README "Fidelity ladder"): an
+/* The fidelity ladder's rungs, cheapest first (docs/fidelity-and-sampling.md): an
  * analytic estimate from a functional pass (sim/analytic.h: no machine is
  * built), then the timed machine with each DRAM level of sim/dram.h. */
 enum machine_fidelity {
@@ -183,7 +183,7 @@ void machine_stats_emit(const struct machine *m, struct stats_table *t,
                         const char *const *class_names, unsigned classes,
                         const struct stats_part *parts, unsigned n);
 
-/* ---- sampling (README "Sampling") ----
+/* ---- sampling (docs/fidelity-and-sampling.md) ----
  * The counters of a running machine at the current cycle: what a window of
  * the run did is the difference of two probes. */
 struct machine_probe {
@@ -206,7 +206,7 @@ uint64_t machine_warm_slots(const struct machine *m);
 struct mem_port machine_count_port(struct machine *m);
 uint64_t machine_count_slots(const struct machine *m);
 
-/* ---- per-item costs (README "Cost in the picture") ----
+/* ---- per-item costs (docs/outputs.md "Cost in the picture") ----
  * The work of a run charged to items (pixels, to the renderer; integers here)
  * so that every item's costs sum, over the items, to the run's totals:
  * issue slots (= issue_slots), load latency from issue to data, L1 hits

@@ -1,5 +1,5 @@
 /* One table of keys, a row each, drives the defaults, reading, --set, the key
- * lists of messages, checking, writing and the README key table. */
+ * lists of messages, checking, writing and the key table of docs/config-keys.md. */
 #include "sim/machine_cfg.h"
 
 #include <math.h>
@@ -34,7 +34,7 @@ struct key {
   unsigned rungs;           /* R_*: the fidelity rungs that read it */
   size_t off;               /* where it goes in struct machine_cfg (p, work or sample) */
   const char *const *names; /* K_ENUM: the values' names (a uint32_t index), hi + 1 of them */
-  const char *doc;          /* one line: what it is (README's key table) */
+  const char *doc;          /* one line: what it is (docs/config-keys.md's key table) */
 };
 
 static const char *const PAGE_NAMES[] = {"open", "close"};
@@ -355,7 +355,7 @@ static void set_origin(struct machine_cfg *c, unsigned i, const char *file, int 
 const char *machine_cfg_renamed(const char *name) {
   if (!strcmp(name, "dram.model"))
     return "renamed to fidelity, a top-level key (fidelity: analytic, fixed, channel or "
-           "banked; README: Fidelity ladder)";
+           "banked; docs/fidelity-and-sampling.md, Fidelity ladder)";
   return NULL;
 }
 

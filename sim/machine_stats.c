@@ -1,4 +1,4 @@
-/* The machine's numbers (README "Numbers"): the cores' and threads'
+/* The machine's numbers (docs/stats.md): the cores' and threads'
  * counters, and at its places the L1's, the L2's, the DRAM's and the
  * engine's, each from its own table registered there (env->ctx is the
  * machine); and the timeline's columns. */

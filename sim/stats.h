@@ -64,7 +64,7 @@ void stats_write_json_f64(FILE *f, double v);
  * constant table: the stats.json key and stats.csv column (its unit in it),
  * the unit, one line of description, and where the value lives (the field's
  * offset, or a function for a derived figure). Writers, `rtsim run
- * --help-stats` and the README's table all walk the tables, in table order. */
+ * --help-stats` and docs/stats.md's table all walk the tables, in table order. */
 
 enum stats_how {
   STATS_HOW_FIELD,     /* the uint64_t at off */

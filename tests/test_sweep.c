@@ -373,7 +373,7 @@ static void test_failing_point(void) {
   EXPECT(rc == 0 && same_text(RTSIM_TMP "/sw_fail.csv", RTSIM_TMP "/sw_ref.csv"));
 }
 
-/* The README's recipes: job lines through GNU parallel, and a Slurm array
+/* docs/sweeps.md's recipes: job lines through GNU parallel, and a Slurm array
  * (each task runs line $SLURM_ARRAY_TASK_ID), both from another directory. */
 static void test_jobs_elsewhere(void) {
   if (run("parallel --version") != 0) {
@@ -390,7 +390,7 @@ static void test_jobs_elsewhere(void) {
   EXPECTF(rc == 0 && same_text(RTSIM_TMP "/sw_par.csv", RTSIM_TMP "/sw_ref.csv"),
           "the table through GNU parallel differs (%d: %s)", rc, out);
 
-  /* The README's Slurm recipe (#19 item 1): a script of 3 tasks of at most 3
+  /* docs/sweeps.md's Slurm recipe (#19 item 1): a script of 3 tasks of at most 3
    * points, which Slurm copies at submission (cp here). Task 2 runs; then the
    * jobs are emitted again (fewer now, over the same names) before tasks 1
    * and 3 of the submitted copy run, and task 2 again: nothing lost. */
