@@ -30,9 +30,13 @@ struct plot_values {
 };
 
 struct plot_row {
-  unsigned r; /* the table's row */
+  unsigned r; /* the table's row (the first of its seeds) */
   double x;   /* the value, or for bars the group's index */
   double y[PLOT_Y_MAX];
+  /* Rows that differ only in their seed are one row: y their mean, ylo and
+   * yhi the smallest and largest, nseeds how many (1: y = ylo = yhi). */
+  double ylo[PLOT_Y_MAX], yhi[PLOT_Y_MAX];
+  unsigned nseeds;
   unsigned panel, line; /* indices into the figure's panels and lines */
 };
 
@@ -57,7 +61,13 @@ struct plot_figure {
   int wcol[PLOT_WHERE_MAX];
   unsigned *kept; /* the rows every --where keeps and with x and y cells, in table order */
   unsigned nkept;
-  struct plot_row *rows; /* nkept, sorted by panel, line, x, row */
+  struct plot_row *rows;         /* nrows, sorted by panel, line, x, row */
+  unsigned nrows;                /* nkept less the rows merged into another's seeds */
+  unsigned seeds_min, seeds_max; /* over rows of several seeds; 0 when none */
+  /* The peak line's y in each panel (--peak, or the DRAM's peak bytes per
+   * cycle), or 0 for none. */
+  double *peak;
+  bool dram_peak; /* peak is the DRAM's */
   /* One "" when not given; groups: the bars' x values (bars only). */
   struct plot_values lines, panels, groups;
   bool bars;    /* the plan's, or --x holds text */
