@@ -257,11 +257,20 @@ static void make_legend(const struct plot_figure *f, struct layout *L) {
   }
 }
 
+/* A column's axis label without the unit in parentheses (a title's words:
+ * work_s "work", not "work s"). */
+static void words_of(const char *name, const char *unit, char *out, size_t cap) {
+  plot_axis_label(name, unit, out, cap);
+  const size_t n = strlen(out), u = strlen(unit);
+  if (u && n > u + 3 && !strncmp(out + n - u - 3, " (", 2) && !strncmp(out + n - u - 1, unit, u))
+    out[n - u - 3] = '\0';
+}
+
 /* The y axis in words without its unit (the default title's). */
 static void y_words(const struct plot_figure *f, char *out, size_t cap) {
   const struct plot_ycols *ys = f->ys;
   if (ys->n == 1 || strchr(ys->pattern, '*')) {
-    plot_axis_label(ys->pattern, "", out, cap);
+    words_of(ys->pattern, f->yunit, out, cap);
     return;
   }
   /* Columns with nothing in common: each named. */
@@ -269,7 +278,7 @@ static void y_words(const struct plot_figure *f, char *out, size_t cap) {
   out[0] = '\0';
   for (unsigned k = 0; k < ys->n; k++) {
     char w[256];
-    plot_axis_label(ys->name[k], "", w, sizeof w);
+    words_of(ys->name[k], f->yunit, w, sizeof w);
     len += (size_t)snprintf(out + len, len < cap ? cap - len : 0, "%s%s", k ? ", " : "", w);
   }
 }
@@ -283,7 +292,7 @@ static void make_title(const struct plot_figure *f, struct layout *L, unsigned W
   } else {
     char y[1024], x[512];
     y_words(f, y, sizeof y);
-    plot_axis_label(p->x, "", x, sizeof x);
+    words_of(p->x, L->xunit, x, sizeof x);
     snprintf(L->title, sizeof L->title, "%s %s %s", y, f->bars ? "by" : "against", x);
   }
   const unsigned width = (unsigned)((W - 40) / (PX_CHAR * 13 / 11 * 1.1));

@@ -411,6 +411,16 @@ static void test_paper(void) {
             lines_with(s, "set label"));
     free(s);
   }
+  /* The default title in words without units; the label with them, once. */
+  write_file(T "work.csv", "cores,work_s\n1,2\n4,3\n");
+  s = plot(T "work.csv", "--x cores --y work_s");
+  if (s) {
+    EXPECTF(strstr(s, "set label 'work against cores' at screen 0.5") &&
+                strstr(s, "set ylabel 'work (seconds)'\n"),
+            "%s", lines_with(s, "set"));
+    free(s);
+  }
+  unlink(T "work.csv");
   /* Rows that differ in a parameter besides the seed stay refused. */
   write_file(T "seeds2.csv", "point,l2.size,seed,x,cycles\n"
                              "\"seed=1,l2.size=1024\",1024,1,1,10\n"
