@@ -33,6 +33,8 @@
 #define PX_CAPTION_LINE 18
 /* The tag of the peak line's arrow (--mark-x's take the first tags). */
 #define PEAK_ARROW 1000
+/* Most points a line draws with markers. */
+#define PLOT_MARKERS_MAX 60
 /* Colours before the series repeat them dashed. */
 #define PLOT_COLOURS 7
 /* About the width of a character of the 11-point font (pngcairo and svg). */
@@ -161,6 +163,7 @@ struct layout {
   unsigned ntitle, titleh;            /* its lines, and the strip they take */
   char ylabel[1100];
   char peakleg[160]; /* the peak line's legend entry, or "" */
+  bool dense;        /* a series has more points than markers can show apart */
 };
 
 /* The axes. x: the same in every panel; at the values themselves when a
@@ -238,6 +241,13 @@ static void make_legend(const struct plot_figure *f, struct layout *L) {
     for (unsigned k = 0; k < ny; k++)
       snprintf(L->leg[L->nleg++], sizeof L->leg[0], "%s", f->ys->title[k]);
   }
+  /* Markers apart need room: a box about 400 pixels wide shows 60 a line. */
+  for (unsigned i = 0, run = 0; i < f->nrows; i++) {
+    const bool same =
+        i && f->rows[i].panel == f->rows[i - 1].panel && f->rows[i].line == f->rows[i - 1].line;
+    run = same ? run + 1 : 1;
+    L->dense |= run > PLOT_MARKERS_MAX;
+  }
   /* The peak line's entry: its value when every panel has the same. */
   double peak = 0;
   bool one = true;
@@ -250,10 +260,9 @@ static void make_legend(const struct plot_figure *f, struct layout *L) {
     const char *what = f->dram_peak ? "DRAM peak" : "peak";
     char v[64];
     plot_fmt_tick(peak, f->yunit, v, sizeof v);
+    /* The unit is the y axis's: the entry stays short, the legend a row. */
     if (!one) snprintf(L->peakleg, sizeof L->peakleg, "%s", what);
-    else if (f->yunit[0] && strcmp(f->yunit, "bytes"))
-      snprintf(L->peakleg, sizeof L->peakleg, "%s (%s %s)", what, v, f->yunit);
-    else snprintf(L->peakleg, sizeof L->peakleg, "%s (%s)", what, v);
+    else snprintf(L->peakleg, sizeof L->peakleg, "%s: %s", what, v);
   }
 }
 
@@ -498,14 +507,17 @@ static void write_bars(FILE *gp, const struct plot_figure *f, const struct layou
 }
 
 /* A series' style: lines with points (with the seeds' error bars when a row
- * has several), or markers only. */
-static const char *line_style(const struct plot_figure *f) {
+ * has several), or markers only; a series of more points than a marker can
+ * be told apart at (a timeline's) is a plain line. */
+static const char *line_style(const struct plot_figure *f, const struct layout *L) {
   if (f->plan->points) return "points ps 1.3";
-  return f->seeds_max ? "yerrorlines lw 2" : "linespoints lw 2";
+  if (f->seeds_max) return "yerrorlines lw 2";
+  return L->dense ? "lines lw 1.5" : "linespoints lw 2";
 }
 
 /* Rows [at, end) as lines (or markers): a data block a line and --y column. */
-static void write_lines(FILE *gp, const struct plot_figure *f, unsigned at, unsigned end) {
+static void write_lines(FILE *gp, const struct plot_figure *f, const struct layout *L, unsigned at,
+                        unsigned end) {
   const unsigned ny = f->ys->n;
   const struct plot_row *rows = f->rows;
   const bool seeds = f->seeds_max && !f->plan->points;
@@ -516,7 +528,7 @@ static void write_lines(FILE *gp, const struct plot_figure *f, unsigned at, unsi
     for (unsigned k = 0; k < ny; k++) {
       const unsigned c = f->lc >= 0 ? rows[i].line : k;
       fprintf(gp, "%s'-' using 1:2%s with %s lt %u pt %u notitle", nplotted++ ? ", " : "",
-              seeds ? ":3:4" : "", line_style(f), c + 1, c % 13 + 1);
+              seeds ? ":3:4" : "", line_style(f, L), c + 1, c % 13 + 1);
     }
   }
   fputc('\n', gp);
@@ -566,14 +578,14 @@ static void write_panels(FILE *gp, const struct plot_figure *f, const struct lay
     const double pk = f->peak[pn];
     if (pk > 0 && pk >= L->yaxes[pn].lo && pk <= L->yaxes[pn].hi)
       fprintf(gp,
-              "set arrow %d from graph 0, first %.17g to graph 1, first %.17g nohead dt 3 lw 2 lc "
-              "rgb 'gray25' back\n",
+              "set arrow %d from graph 0, first %.17g to graph 1, first %.17g nohead dt 2 lw 2 lc "
+              "rgb 'gray20' back\n",
               PEAK_ARROW, pk, pk);
     else fprintf(gp, "unset arrow %d\n", PEAK_ARROW);
     unsigned end = at;
     while (end < f->nrows && f->rows[end].panel == pn) end++;
     if (f->bars) write_bars(gp, f, L, at, end);
-    else write_lines(gp, f, at, end);
+    else write_lines(gp, f, L, at, end);
     at = end;
   }
 }
@@ -612,11 +624,12 @@ static void write_frame(FILE *gp, const struct plot_figure *f, const struct layo
                 i ? ", " : "", i % PLOT_COLOURS + 1);
       else
         fprintf(gp, "%sNaN with %s lt %u pt %u title ", i ? ", " : "",
-                f->plan->points ? "points ps 1.3" : "linespoints lw 2", i + 1, i % 13 + 1);
+                f->seeds_max && !f->plan->points ? "linespoints lw 2" : line_style(f, L), i + 1,
+                i % 13 + 1);
       plot_script_str(gp, L->leg[i]);
     }
     if (L->peakleg[0]) {
-      fprintf(gp, "%sNaN with lines dt 3 lw 2 lc rgb 'gray25' title ", L->nleg ? ", " : "");
+      fprintf(gp, "%sNaN with lines dt 2 lw 2 lc rgb 'gray20' title ", L->nleg ? ", " : "");
       plot_script_str(gp, L->peakleg);
     }
     fputc('\n', gp);

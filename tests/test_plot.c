@@ -421,6 +421,20 @@ static void test_paper(void) {
     free(s);
   }
   unlink(T "work.csv");
+  /* Markers on a line of 60 points; a plain line past that (a timeline). */
+  for (unsigned n = 60; n <= 61; n++) {
+    char csv[2048] = "x,cycles\n";
+    for (unsigned i = 1; i <= n; i++)
+      snprintf(csv + strlen(csv), sizeof csv - strlen(csv), "%u,%u\n", i, i % 7);
+    write_file(T "dense.csv", csv);
+    s = plot(T "dense.csv", "--x x --y cycles");
+    if (s) {
+      EXPECTF(strstr(s, n == 60 ? "with linespoints lw 2" : "with lines lw 1.5"), "%u points: %s",
+              n, lines_with(s, "plot"));
+      free(s);
+    }
+  }
+  unlink(T "dense.csv");
   /* Rows that differ in a parameter besides the seed stay refused. */
   write_file(T "seeds2.csv", "point,l2.size,seed,x,cycles\n"
                              "\"seed=1,l2.size=1024\",1024,1,1,10\n"
@@ -494,7 +508,7 @@ static void test_peak(void) {
   if (s) {
     EXPECTF(strstr(s, "set arrow 1000 from graph 0, first 13.714285714285714"), "%s",
             lines_with(s, "set arrow"));
-    EXPECTF(strstr(s, "title 'DRAM peak (13.71 bytes per cycle)'"), "%s", lines_with(s, "plot"));
+    EXPECTF(strstr(s, "title 'DRAM peak: 13.71'"), "%s", lines_with(s, "plot"));
     EXPECTF(
         strstr(caption_of(s), "DRAM: banked, 1 channel at 1200 MHz, peak 13.71 bytes per cycle"),
         "%s", caption_of(s));
@@ -505,15 +519,14 @@ static void test_peak(void) {
   }
   s = plot(t, "--x cycles --y dram_bytes_per_cycle --no-peak");
   if (s) {
-    EXPECTF(!strstr(s, "set arrow 1000 from") && !strstr(s, "peak ("), "%s", lines_with(s, "set"));
+    EXPECTF(!strstr(s, "set arrow 1000 from") && !strstr(s, "peak:"), "%s", lines_with(s, "set"));
     free(s);
   }
   /* --peak on any axis. */
   s = plot(t, "--x cycles --y dram_bytes_per_cycle --peak 20");
   if (s) {
-    EXPECTF(strstr(s, "first 20 to graph 1, first 20 ") &&
-                strstr(s, "title 'peak (20 bytes per cycle)'"),
-            "%s", lines_with(s, "set arrow"));
+    EXPECTF(strstr(s, "first 20 to graph 1, first 20 ") && strstr(s, "title 'peak: 20'"), "%s",
+            lines_with(s, "set arrow"));
     free(s);
   }
   /* A channel's peak is its dram.bytes_per_cycle. */
