@@ -23,7 +23,7 @@
 /* Widest a panel of bars grows, and widest a row of panels. */
 #define PX_PANEL_W_MAX 1400
 #define PX_BOX_LEFT 100
-#define PX_BOX_RIGHT 18
+#define PX_BOX_RIGHT 32
 #define PX_BOX_TOP 34
 #define PX_BOX_BOTTOM 66
 #define PX_TITLE 40
