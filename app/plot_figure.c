@@ -125,6 +125,7 @@ static int cmp_row(const void *a, const void *b) {
   const struct plot_row *p = a, *q = b;
   if (p->panel != q->panel) return p->panel < q->panel ? -1 : 1;
   if (p->line != q->line) return p->line < q->line ? -1 : 1;
+  if (p->dash != q->dash) return p->dash < q->dash ? -1 : 1;
   if (p->x != q->x) return p->x < q->x ? -1 : 1;
   return (p->r > q->r) - (p->r < q->r);
 }
@@ -367,6 +368,7 @@ static bool find_columns(struct plot_figure *f, struct err *e) {
   y_titles(ys);
   if (p->lines && (f->lc = column(t, "--lines", p->lines)) < 0) return false;
   if (p->panels && (f->pc = column(t, "--panels", p->panels)) < 0) return false;
+  if (p->dash && (f->dc = column(t, "--dash", p->dash)) < 0) return false;
   for (unsigned w = 0; w < p->nwhere; w++) {
     char key[256];
     snprintf(key, sizeof key, "%.*s", (int)(strchr(p->where[w], '=') - p->where[w]), p->where[w]);
@@ -444,15 +446,23 @@ static bool choose_series(struct plot_figure *f, struct err *e) {
                    "--y %s with --lines %s: several --y columns draw a %s each, and so does "
                    "--lines (expected one of them; --stack stacks the columns in each --lines bar)",
                    p->y, p->lines, f->bars ? "bar" : "line");
-  if (f->bars && (p->logx || p->logy || p->nmark || p->points))
+  if (f->bars && (p->logx || p->logy || p->nmark || p->points || p->dash))
     return err_set(e, t->file, 0, 0,
                    "--x %s holds text: bars have no numeric x and start at 0 (got %s)", p->x,
                    p->logx    ? "--logx"
                    : p->logy  ? "--logy"
                    : p->nmark ? "--mark-x"
+                   : p->dash  ? "--dash"
                               : "--points");
   distinct(t, f->lc, f->kept, f->nkept, PLOT_LINES_MAX, &f->lines);
   distinct(t, f->pc, f->kept, f->nkept, PLOT_PANELS_MAX, &f->panels);
+  distinct(t, f->dc, f->kept, f->nkept, PLOT_DASHES_MAX, &f->dashes);
+  apply_order(&f->dashes, p->order);
+  if (f->dashes.n > PLOT_DASHES_MAX)
+    return err_set(e, t->file, 1, 0,
+                   "--dash %s: more than %d values (expected at most %d dash patterns: keep fewer "
+                   "with --where KEY=VALUE)",
+                   p->dash, PLOT_DASHES_MAX, PLOT_DASHES_MAX);
   if (f->bars) distinct(t, f->xc, f->kept, f->nkept, PLOT_LINES_MAX, &f->groups);
   apply_order(&f->lines, p->order);
   apply_order(&f->panels, p->order);
@@ -567,7 +577,7 @@ static bool merge_rows(struct plot_figure *f, struct err *e) {
     b = a + 1;
     const struct plot_row *r0 = &f->rows[a];
     while (b < f->nkept && f->rows[b].panel == r0->panel && f->rows[b].line == r0->line &&
-           f->rows[b].x == r0->x)
+           f->rows[b].dash == r0->dash && f->rows[b].x == r0->x)
       b++;
     if (f->plan->points) b = a + 1;
     for (unsigned i = a + 1; i < b; i++) {
@@ -609,6 +619,7 @@ static bool make_rows(struct plot_figure *f, struct err *e) {
     w->nseeds = 1;
     w->line = f->lc < 0 ? 0 : index_of(&f->lines, csv_cell(t, r, (unsigned)f->lc));
     w->panel = f->pc < 0 ? 0 : index_of(&f->panels, csv_cell(t, r, (unsigned)f->pc));
+    w->dash = f->dc < 0 ? 0 : index_of(&f->dashes, csv_cell(t, r, (unsigned)f->dc));
   }
   qsort(f->rows, f->nkept, sizeof *f->rows, cmp_row);
   return merge_rows(f, e);
@@ -644,7 +655,7 @@ bool plot_figure_build(struct plot_figure *f, const struct plot_plan *p, const s
   f->plan = p;
   f->t = t;
   f->ys = xcalloc(1, sizeof *f->ys);
-  f->lc = f->pc = -1;
+  f->lc = f->pc = f->dc = -1;
   if (!find_columns(f, e) || !keep_rows(f, e) || !choose_series(f, e) || !make_rows(f, e))
     return false;
   find_peaks(f);
@@ -654,6 +665,7 @@ bool plot_figure_build(struct plot_figure *f, const struct plot_plan *p, const s
   for (unsigned k = 0; k < f->ys->n; k++) drawn[f->ys->col[k]] = true;
   if (f->lc >= 0) drawn[f->lc] = true;
   if (f->pc >= 0) drawn[f->pc] = true;
+  if (f->dc >= 0) drawn[f->dc] = true;
   caption(f, drawn, f->caption, sizeof f->caption);
   free(drawn);
   return true;
@@ -666,6 +678,7 @@ void plot_figure_fini(struct plot_figure *f) {
   free(f->lines.v);
   free(f->panels.v);
   free(f->groups.v);
+  free(f->dashes.v);
   free(f->ys);
   memset(f, 0, sizeof *f);
 }

@@ -38,6 +38,9 @@ static const char HELP[] =
     "  --lines KEY        one line (or bar in each group) per value of this\n"
     "                     column, with a legend (at most 100)\n"
     "  --panels KEY       one panel per value of this column (at most 100)\n"
+    "  --dash KEY         a dash pattern per value of this column (at most 4),\n"
+    "                     the colours staying --lines' (ours solid, a paper's\n"
+    "                     dashed); lines only\n"
     "  --where KEY=VALUE  keep only rows where KEY is VALUE (numbers compare as\n"
     "                     numbers); repeatable. Every other column that varies\n"
     "                     must be fixed so, or be --lines or --panels: two rows\n"
@@ -142,6 +145,9 @@ static int check(struct plot_plan *p) {
                            : p->logy ? "--logy"
                                      : "--mark-x",
                            p->stack ? "stack" : "bars");
+  if (p->dash && p->bars)
+    return app_usage_error("plot", "--dash: not with --%s (bars have no lines to dash)",
+                           p->stack ? "stack" : "bars");
   if (p->points && p->bars)
     return app_usage_error("plot", "--points: not with --%s (a scatter needs a numeric x)",
                            p->stack ? "stack" : "bars");
@@ -159,6 +165,7 @@ int plot_plan_parse(struct plot_plan *p, int argc, char **argv) {
       OPTS_STR("y", 0, &p->y),
       OPTS_STR("lines", 0, &p->lines),
       OPTS_STR("panels", 0, &p->panels),
+      OPTS_STR("dash", 0, &p->dash),
       OPTS_PARSE("where", 0, p, add_where, "KEY=VALUE" PLOT_AT_MOST(PLOT_WHERE_MAX)),
       OPTS_FLAG("logx", 0, &p->logx),
       OPTS_FLAG("logy", 0, &p->logy),

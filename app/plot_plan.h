@@ -19,8 +19,8 @@ enum plot_format { PLOT_PNG, PLOT_PDF, PLOT_SVG };
 
 struct plot_plan {
   const char *table; /* TABLE.csv */
-  /* --x, --y (as typed), --lines, --panels; NULL when not given. */
-  const char *x, *y, *lines, *panels;
+  /* --x, --y (as typed), --lines, --panels, --dash; NULL when not given. */
+  const char *x, *y, *lines, *panels, *dash;
   const char *out, *script, *order; /* -o, --script, --order */
   /* --title, --xlabel, --ylabel; NULL: made from the columns' names and units. */
   const char *title, *xlabel, *ylabel;

@@ -142,6 +142,11 @@ static unsigned wrap(const char *text, unsigned width, const char *sep, char *ou
   return n;
 }
 
+/* Rows a and b are on one series: the same line and dash. */
+static bool same_series(const struct plot_row *a, const struct plot_row *b) {
+  return a->line == b->line && a->dash == b->dash;
+}
+
 /* What the script draws besides the figure: axes, legend, layout. */
 struct layout {
   const char *xunit;
@@ -162,8 +167,10 @@ struct layout {
   char title[2200], titlelines[2400]; /* the title, and wrapped as caplines */
   unsigned ntitle, titleh;            /* its lines, and the strip they take */
   char ylabel[1100];
-  char peakleg[160]; /* the peak line's legend entry, or "" */
-  bool dense;        /* a series has more points than markers can show apart */
+  char peakleg[160];               /* the peak line's legend entry, or "" */
+  char dleg[PLOT_DASHES_MAX][256]; /* --dash's entries, a dash pattern each */
+  unsigned ndleg;
+  bool dense; /* a series has more points than markers can show apart */
 };
 
 /* The axes. x: the same in every panel; at the values themselves when a
@@ -241,10 +248,16 @@ static void make_legend(const struct plot_figure *f, struct layout *L) {
     for (unsigned k = 0; k < ny; k++)
       snprintf(L->leg[L->nleg++], sizeof L->leg[0], "%s", f->ys->title[k]);
   }
+  /* --dash's patterns, in grey: the colours are the lines'. */
+  for (unsigned d = 0; f->dc >= 0 && d < f->dashes.n; d++) {
+    char v[256];
+    plot_fmt_value(f->dashes.v[d], plot_unit_of(f->plan->dash), v, sizeof v);
+    snprintf(L->dleg[L->ndleg++], sizeof L->dleg[0], "%s = %s", f->plan->dash, v);
+  }
   /* Markers apart need room: a box about 400 pixels wide shows 60 a line. */
   for (unsigned i = 0, run = 0; i < f->nrows; i++) {
     const bool same =
-        i && f->rows[i].panel == f->rows[i - 1].panel && f->rows[i].line == f->rows[i - 1].line;
+        i && f->rows[i].panel == f->rows[i - 1].panel && same_series(&f->rows[i], &f->rows[i - 1]);
     run = same ? run + 1 : 1;
     L->dense |= run > PLOT_MARKERS_MAX;
   }
@@ -342,9 +355,11 @@ static void make_layout(const struct plot_figure *f, struct layout *L) {
   const unsigned prow = (npanels + cols - 1) / cols;
   const unsigned W = cols * pw;
   size_t legw = strlen(L->peakleg);
-  const unsigned nent = L->nleg + (L->peakleg[0] != '\0');
+  const unsigned nent = L->nleg + L->ndleg + (L->peakleg[0] != '\0');
   for (unsigned i = 0; i < L->nleg; i++)
     if (strlen(L->leg[i]) > legw) legw = strlen(L->leg[i]);
+  for (unsigned i = 0; i < L->ndleg; i++)
+    if (strlen(L->dleg[i]) > legw) legw = strlen(L->dleg[i]);
   unsigned perrow = nent ? (unsigned)((W - 40) / (legw * PX_CHAR + 80)) : 1;
   if (!perrow) perrow = 1;
   L->legrows = nent ? (nent + perrow - 1) / perrow : 0;
@@ -524,16 +539,18 @@ static void write_lines(FILE *gp, const struct plot_figure *f, const struct layo
   fputs("plot ", gp);
   unsigned nplotted = 0;
   for (unsigned i = at; i < end; i++) {
-    if (i > at && rows[i].line == rows[i - 1].line) continue;
+    if (i > at && same_series(&rows[i], &rows[i - 1])) continue;
     for (unsigned k = 0; k < ny; k++) {
       const unsigned c = f->lc >= 0 ? rows[i].line : k;
-      fprintf(gp, "%s'-' using 1:2%s with %s lt %u pt %u notitle", nplotted++ ? ", " : "",
+      fprintf(gp, "%s'-' using 1:2%s with %s lt %u pt %u", nplotted++ ? ", " : "",
               seeds ? ":3:4" : "", line_style(f, L), c + 1, c % 13 + 1);
+      if (f->dc >= 0) fprintf(gp, " dt %u", rows[i].dash + 1);
+      fputs(" notitle", gp);
     }
   }
   fputc('\n', gp);
   for (unsigned i = at, first = at; i < end; i++) {
-    if (i + 1 < end && rows[i + 1].line == rows[i].line) continue;
+    if (i + 1 < end && same_series(&rows[i + 1], &rows[i])) continue;
     for (unsigned k = 0; k < ny; k++) {
       for (unsigned j = first; j <= i; j++) {
         fprintf(gp, "%.17g %.17g", rows[j].x, rows[j].y[k]);
@@ -612,7 +629,7 @@ static void write_frame(FILE *gp, const struct plot_figure *f, const struct layo
             (L->caph - 8 - (i + 0.5) * PX_CAPTION_LINE) / H);
     o += (unsigned)strlen(L->caplines + o) + 1;
   }
-  if (L->nleg || L->peakleg[0]) {
+  if (L->nleg || L->ndleg || L->peakleg[0]) {
     fprintf(gp,
             "set key at screen 0.5, screen %.6f center top horizontal Left reverse maxrows %u "
             "samplen 3 spacing 1.1\n",
@@ -628,8 +645,14 @@ static void write_frame(FILE *gp, const struct plot_figure *f, const struct layo
                 i % 13 + 1);
       plot_script_str(gp, L->leg[i]);
     }
+    for (unsigned d = 0; d < L->ndleg; d++) {
+      fprintf(gp, "%sNaN with lines lw 2 lc rgb 'gray30' dt %u title ", L->nleg + d ? ", " : "",
+              d + 1);
+      plot_script_str(gp, L->dleg[d]);
+    }
     if (L->peakleg[0]) {
-      fprintf(gp, "%sNaN with lines dt 2 lw 2 lc rgb 'gray20' title ", L->nleg ? ", " : "");
+      fprintf(gp, "%sNaN with lines dt 2 lw 2 lc rgb 'gray20' title ",
+              L->nleg + L->ndleg ? ", " : "");
       plot_script_str(gp, L->peakleg);
     }
     fputc('\n', gp);

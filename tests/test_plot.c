@@ -494,6 +494,35 @@ static void test_paper(void) {
   unlink(T "seeds2.csv");
 }
 
+/* --dash: a colour a --lines value, a dash pattern a --dash value; the
+ * legend names each once (the dashes in grey). */
+static void test_dash(void) {
+  const char *t = T "dash.csv";
+  write_file(t, "source,series,x,y\n"
+                "ours,a,1,10\nours,a,2,20\nours,b,1,30\nours,b,2,40\n"
+                "paper,a,1,11\npaper,a,2,21\npaper,b,1,31\npaper,b,2,41\n");
+  char *s = plot(t, "--x x --y y --lines series --dash source --order ours,paper");
+  if (s) {
+    /* Series a is colour 1 both ways: solid for ours, dashed for the paper. */
+    EXPECTF(count(s, " lt 1 pt 1 dt 1 notitle") == 1 && count(s, " lt 1 pt 1 dt 2 notitle") == 1 &&
+                count(s, " lt 2 pt 2 dt 2 notitle") == 1,
+            "%s", lines_with(s, "plot '-'"));
+    /* The paper's a (second of a's series) holds its numbers. */
+    EXPECTF(strstr(s, "\ne\n1 11\n2 21\ne\n"), "%s", s);
+    EXPECTF(strstr(s, "title 'series = a'") && strstr(s, "title 'series = b'") &&
+                strstr(s, "lc rgb 'gray30' dt 2 title 'source = paper'") &&
+                count(s, "title 'source = ") == 2,
+            "%s", lines_with(s, "plot NaN"));
+    free(s);
+  }
+  write_file(t, "source,x,y\na,1,1\nb,1,2\nc,1,3\nd,1,4\ne,1,5\n");
+  run("rm -f " T "bad.png");
+  int rc = run("%s plot %s --x x --y y --dash source -o " T "bad.png", RTSIM_BINARY, t);
+  EXPECTF(rc == 2 && strstr(out, "--dash source: more than 4 values"), "exit %d: %s", rc, out);
+  EXPECT(access(T "bad.png", F_OK) != 0);
+  unlink(t);
+}
+
 /* The DRAM's peak: a dashed line and a legend entry where the y axis is DRAM
  * bytes per cycle and the table names the DRAM, in the caption too. */
 static void test_peak(void) {
@@ -550,5 +579,6 @@ int main(void) {
   test_refusals();
   test_paper();
   test_peak();
+  test_dash();
   return testing_done("test_plot");
 }

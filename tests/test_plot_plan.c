@@ -80,6 +80,7 @@ static void test_refusals(void) {
       "t.csv --x a --y b -o f.png --peak 2 --no-peak",
       "t.csv --x a --y b -o f.png --peak high",
       "t.csv --x a --y b -o f.png --peak 0",
+      "t.csv --x a --y b -o f.png --bars --dash c",
       "t.csv --x a --y b -o f.png --own-y --yrange 0:1",
       "t.csv --x a --y b -o f.png --logy --yrange 0:1",
       "t.csv --x a --y b -o f.png --yrange 2:1",
