@@ -2,7 +2,9 @@
  * writes with --script: a fraction on 0..1, panels sharing one y range (and
  * their own with --own-y), tick labels with SI and binary prefixes, one
  * legend with units, a caption of the fixed parameters, bar charts for a
- * text x (side by side and stacked), PNG and SVG, and bad options refused
+ * text x (side by side and stacked), PNG, PDF and SVG by the extension,
+ * titles and labels of the user's or in words, error bars over seeds, a y
+ * axis from 0, the DRAM's peak line, dash patterns, and bad options refused
  * with exit code 2 and one line. Tables are written here, a few rows each. */
 #include <stdbool.h>
 #include <stdio.h>
@@ -443,9 +445,19 @@ static void test_paper(void) {
   int rc = run("%s plot " T "seeds2.csv --x x --y cycles -o " T "bad.png", RTSIM_BINARY);
   EXPECTF(rc == 2 && strstr(out, "differ in") && strstr(out, "l2.size"), "exit %d: %s", rc, out);
   EXPECT(access(T "bad.png", F_OK) != 0);
+  unlink(t);
+  unlink(T "seeds2.csv");
+}
 
+/* A long title wraps; the extension chooses the format, and another is
+ * refused before anything is written. */
+static void test_formats(void) {
+  const char *t = T "formats.csv";
+  write_file(t, "rays_per_thread,cycles\n1,10\n2,20\n");
   /* A long title wraps to the canvas (one panel: 520 pixels, about 50
    * characters of the title's font a line). */
+  char *s;
+  int rc;
   s = plot(t, "--x rays_per_thread --y cycles --title 'DRAM traffic per cycle of every policy "
               "on the grove at 256x256 with primary and hard-shadow rays, sixteen cores'");
   if (s) {
@@ -491,7 +503,6 @@ static void test_paper(void) {
   rc = run("ls " T "fmt* 2>/dev/null | wc -l");
   EXPECTF(atoi(out) == 0, "files left: %s", out);
   unlink(t);
-  unlink(T "seeds2.csv");
 }
 
 /* --dash: a colour a --lines value, a dash pattern a --dash value; the
@@ -578,6 +589,7 @@ int main(void) {
   test_units();
   test_refusals();
   test_paper();
+  test_formats();
   test_peak();
   test_dash();
   return testing_done("test_plot");
