@@ -518,7 +518,7 @@ static bool cell_value(const struct plot_figure *f, struct plot_row *w, unsigned
 
 /* Columns that hold a run's seed: rows that differ in one of them and in no
  * parameter are one point measured several times. */
-static const char *const SEED_KEYS[] = {"seed", "sample.seed"};
+static const char *const SEED_KEYS[] = {"seed", "sample.seed", "sample_seed"};
 
 static bool is_seed(const char *name) {
   for (size_t k = 0; k < sizeof SEED_KEYS / sizeof SEED_KEYS[0]; k++)

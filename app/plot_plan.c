@@ -23,7 +23,7 @@ static const char HELP[] =
     "0 (a fraction runs 0..1). Panels share one y range, the figure one legend\n"
     "above them, and a caption names the parameters every plotted row has in\n"
     "common, the DRAM among them. Rows that differ only in their seed (seed,\n"
-    "sample.seed) are one point: the seeds' mean, with error bars from the\n"
+    "sample.seed, sample_seed) are one point: the seeds' mean, with bars from the\n"
     "smallest to the largest value (the caption says so). Where METRIC is DRAM\n"
     "bytes per cycle and the table names the DRAM (fidelity and its keys), a\n"
     "dashed line marks the DRAM's peak. Colours: Okabe and Ito's colour-blind-\n"
