@@ -23,6 +23,15 @@ void plot_fmt_tick(double v, const char *unit, char *out, size_t cap);
  * ("25 cycles", "1.4 GHz"); text as it is. */
 void plot_fmt_value(const char *cell, const char *unit, char *out, size_t cap);
 
+/* An axis label of a column's name (or a --y pattern such as dram_*_bytes)
+ * and its unit, in words: the name's parts between '_' and '.' as words,
+ * the acronyms in capitals, the '*' of a pattern left out, and the unit in
+ * parentheses unless the words already end with it: dram_bytes_per_cycle
+ * "DRAM bytes per cycle", l2.size "L2 size (bytes)", work_s "work
+ * (seconds)", dram_*_bytes "DRAM bytes". A name with a space is a label
+ * already and stays as it is. */
+void plot_axis_label(const char *name, const char *unit, char *out, size_t cap);
+
 #define PLOT_TICKS_MAX 64
 
 /* An axis: its range [lo, hi] and where its ticks go. */

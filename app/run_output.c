@@ -387,8 +387,12 @@ static void tl_header(unsigned col, char *buf, size_t len) {
 
 /* DRAM bytes per cycle over the run by data class, read from timeline.csv by
  * the columns' header names (from the machine's column table), so a column
- * added to the timeline cannot shift the plot. */
+ * added to the timeline cannot shift the plot. The legend sits under the
+ * plot (beside it, it took a third of the width); the classes take Okabe and
+ * Ito's colour-blind-safe colours (gnuplot's own gave two classes near-equal
+ * yellows); a dashed line marks the DRAM's peak, where it has one. */
 static bool write_plot(const struct run_output_report *r, struct err *e) {
+  static const char *const COLOURS[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00"};
   char csv[4200], final[4200], cmd[8192];
   snprintf(csv, sizeof csv, "%s/timeline.csv", r->out_dir);
   snprintf(final, sizeof final, "%s/traffic.png", r->out_dir);
@@ -407,8 +411,9 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
   static const char x[] = "((column(\"cycle\")+column(\"cycles\")/2)/1e6)";
   int n = snprintf(
       cmd, sizeof cmd,
-      "set terminal pngcairo size 1000,560 noenhanced\nset output '%s'\n"
-      "set datafile separator ','\nset datafile columnheaders\nset key outside right top\n"
+      "set terminal pngcairo size 1000,600 noenhanced font ',12'\nset output '%s'\n"
+      "set datafile separator ','\nset datafile columnheaders\n"
+      "set key outside bottom center horizontal Left reverse samplen 3 spacing 1.2\n"
       "set title 'DRAM traffic per cycle: %s, %s policy, %ux%u (window %llu cycles)'\n"
       "set xlabel 'simulated time (million cycles)'\n"
       "set ylabel 'DRAM bytes per cycle'\nset grid\nset yrange [0:*]\n"
@@ -419,13 +424,22 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
   for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) {
     tl_header(MACHINE_TL_READ_CLASS0 + c, cls, sizeof cls);
     n += snprintf(cmd + n, sizeof cmd - (size_t)n,
-                  ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps title 'read: %s'",
-                  x, cls, trace_class_names[c]);
+                  ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps lw 1.5 lc rgb '%s' "
+                  "title 'read: %s'",
+                  x, cls, COLOURS[c % 5], trace_class_names[c]);
   }
-  snprintf(cmd + n, sizeof cmd - (size_t)n,
-           ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps dt 2 title "
-           "'write-backs'\n",
-           x, wr);
+  n += snprintf(cmd + n, sizeof cmd - (size_t)n,
+                ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps lw 1.5 lc rgb "
+                "'#56B4E9' title 'write-backs'",
+                x, wr);
+  /* The peak as a constant function, so the y range reaches it. */
+  const double peak = machine_dram_peak_bytes_per_cycle(&r->cfg->p);
+  if (peak > 0)
+    n += snprintf(cmd + n, sizeof cmd - (size_t)n,
+                  ", %.17g with lines dt 2 lw 2 lc rgb 'gray20' title 'DRAM peak (%.4g bytes per "
+                  "cycle)'",
+                  peak, peak);
+  snprintf(cmd + n, sizeof cmd - (size_t)n, "\n");
   fputs(cmd, gnu.in);
   if (!gnuplot_close(&gnu)) {
     outfile_abort(&o);

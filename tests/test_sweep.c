@@ -241,7 +241,7 @@ static void test_bad_files(void) {
       {"merge", "missing DIR"},
       {"merge x", "missing -o TABLE.csv"},
       {"plot t.csv --y cycles -o t.png", "missing --x KEY"},
-      {"plot t.csv --x a --y b -o t.pdf", "expected a .png or .svg file"},
+      {"plot t.csv --x a --y b -o t.jpg", "expected a .png, .pdf or .svg file"},
       {"plot t.csv --x a --y b -o t.png --where a", "--where: got 'a', expected KEY=VALUE"},
       {"plot t.csv --x a --y b -o t.png --mark-x two", "--mark-x: got 'two', expected a number"},
   };
@@ -650,7 +650,7 @@ static void test_plot(void) {
            RTSIM_BINARY, t, RTSIM_TMP);
   EXPECTF(rc == 0 && strstr(out, "4 points, 2 lines, 1 panel"), "svg: %d %s", rc, out);
   char *svg = read_all(RTSIM_TMP "/sw_plot.svg");
-  EXPECTF(svg && strstr(svg, "<svg") && strstr(svg, "l2_fetch_bytes (bytes)") &&
+  EXPECTF(svg && strstr(svg, "<svg") && strstr(svg, "L2 fetch bytes") &&
               strstr(svg, "policy = packet"),
           "svg lacks its labels or legend");
   free(svg);
