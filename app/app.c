@@ -87,7 +87,7 @@ bool app_world_load(struct app_world *w, const char *path) {
   if (!kd_build(&w->kd, &w->scene, &p, &bytes)) {
     err_set(&e, path, 0, 0,
             "out of host memory building the k-d tree over the scene's %u "
-            "triangles (an allocation of %llu bytes failed; README: Limits)",
+            "triangles (an allocation of %llu bytes failed; docs/inputs.md, Limits)",
             w->scene.tri_count, bytes);
     app_report(&e);
     scene_fini(&w->scene);

@@ -88,7 +88,7 @@ static const char HELP[] =
     "x 1 ray of it, each against the best native render; prints scene, width,\n"
     "height, rays, machine, contexts, native_s, timed_s, slowdown, cycles, events,\n"
     "events_per_s, core_utilization, dram_bytes_per_cycle. --sample F adds the\n"
-    "machine sampled at F (README: Sampling) against its full run:\n"
+    "machine sampled at F (docs/fidelity-and-sampling.md) against its full run:\n"
     "cycles_ci95_low, cycles_ci95_high, speedup_vs_full (host time) and\n"
     "cycles_error_vs_full.\n"
     "\n"

@@ -183,7 +183,7 @@ static double r_to_dram(const struct stats_env *env) {
   return (double)rmp(env)->dram_clock_mhz * 1000.0 / (double)machine_core_khz(rmp(env));
 }
 static double r_bpc(const void *st, const struct stats_env *env) {
-  return derived_ratio((double)SIM_LINE_BYTES * (double)r_requests(st, env), (double)env->cycles);
+  return stats_ratio((double)SIM_LINE_BYTES * (double)r_requests(st, env), (double)env->cycles);
 }
 static double r_clock_ghz(const void *st, const struct stats_env *env) {
   (void)st;
@@ -197,26 +197,6 @@ static uint64_t r_cycles(const void *st, const struct stats_env *env) {
   (void)st;
   return env->cycles;
 }
-static double r_lat_mean(const void *st, const struct stats_env *env) {
-  (void)env;
-  return hist_mean(&rp(st)->read_latency);
-}
-static uint64_t r_p50(const void *st, const struct stats_env *env) {
-  (void)env;
-  return hist_quantile(&rp(st)->read_latency, 0.50);
-}
-static uint64_t r_p95(const void *st, const struct stats_env *env) {
-  (void)env;
-  return hist_quantile(&rp(st)->read_latency, 0.95);
-}
-static uint64_t r_p99(const void *st, const struct stats_env *env) {
-  (void)env;
-  return hist_quantile(&rp(st)->read_latency, 0.99);
-}
-static uint64_t r_lat_max(const void *st, const struct stats_env *env) {
-  (void)env;
-  return rp(st)->read_latency.max;
-}
 static double r_taken_mean(const void *st, const struct stats_env *env) {
   (void)env;
   return hist_mean(&dram_get_stats(rp(st)->dram)->read_latency);
@@ -227,26 +207,25 @@ static uint64_t r_taken_max(const void *st, const struct stats_env *env) {
 }
 static double r_write_mean(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)rp(st)->write_latency_sum, (double)rp(st)->writes);
+  return stats_ratio((double)rp(st)->write_latency_sum, (double)rp(st)->writes);
 }
 static double r_wait_mean(const void *st, const struct stats_env *env) {
-  return derived_ratio((double)rp(st)->wait_sum, (double)r_requests(st, env));
+  return stats_ratio((double)rp(st)->wait_sum, (double)r_requests(st, env));
 }
 static double r_gbps(const void *st, const struct stats_env *env) {
   return r_bpc(st, env) * rmp(env)->clock_ghz;
 }
 static double r_mean_dram(const void *st, const struct stats_env *env) {
-  return r_lat_mean(st, env) * r_to_dram(env);
+  return hist_mean(&rp(st)->read_latency) * r_to_dram(env);
 }
-static double r_p50_dram(const void *st, const struct stats_env *env) {
-  return (double)r_p50(st, env) * r_to_dram(env);
-}
-static double r_p95_dram(const void *st, const struct stats_env *env) {
-  return (double)r_p95(st, env) * r_to_dram(env);
-}
-static double r_p99_dram(const void *st, const struct stats_env *env) {
-  return (double)r_p99(st, env) * r_to_dram(env);
-}
+#define R_QUANTILE_DRAM(pc)                                                                        \
+  static double r_p##pc##_dram(const void *st, const struct stats_env *env) {                      \
+    return (double)hist_quantile(&rp(st)->read_latency, pc / 100.0) * r_to_dram(env);              \
+  }
+R_QUANTILE_DRAM(50)
+R_QUANTILE_DRAM(95)
+R_QUANTILE_DRAM(99)
+#undef R_QUANTILE_DRAM
 
 static const struct stats_desc replay_desc[] = {
     STATS_FN_F64(r_clock_ghz, "clock_ghz", "GHz", "the core clock (the config's)"),
@@ -258,12 +237,14 @@ static const struct stats_desc replay_desc[] = {
                 "the first request's arrival"),
     STATS_FIELD(struct replay, last_done, "last_done_cycle", "cycles", "the last request served"),
     STATS_FN_U64(r_cycles, "cycles", "cycles", "from the first arrival to the last served"),
-    STATS_FN_F64(r_lat_mean, "read_latency_mean", "cycles",
-                 "a read's latency from its arrival, mean"),
-    STATS_FN_U64(r_p50, "read_latency_p50", "cycles", "its median"),
-    STATS_FN_U64(r_p95, "read_latency_p95", "cycles", "its 95th percentile"),
-    STATS_FN_U64(r_p99, "read_latency_p99", "cycles", "its 99th percentile"),
-    STATS_FN_U64(r_lat_max, "read_latency_max", "cycles", "its largest"),
+    STATS_HIST_MEAN(struct replay, read_latency, "read_latency_mean", "cycles",
+                    "a read's latency from its arrival, mean"),
+    STATS_HIST_Q(struct replay, read_latency, 0.50, "read_latency_p50", "cycles", "its median"),
+    STATS_HIST_Q(struct replay, read_latency, 0.95, "read_latency_p95", "cycles",
+                 "its 95th percentile"),
+    STATS_HIST_Q(struct replay, read_latency, 0.99, "read_latency_p99", "cycles",
+                 "its 99th percentile"),
+    STATS_FIELD(struct replay, read_latency.max, "read_latency_max", "cycles", "its largest"),
     STATS_FN_F64(r_taken_mean, "read_latency_taken_mean", "cycles",
                  "a read's latency from the DRAM taking it, mean"),
     STATS_FN_U64(r_taken_max, "read_latency_taken_max", "cycles", "its largest"),
@@ -271,7 +252,7 @@ static const struct stats_desc replay_desc[] = {
                  "a write's latency from its arrival, mean"),
     STATS_FN_F64(r_wait_mean, "refused_wait_mean", "cycles",
                  "cycles a request waited past its arrival for the DRAM to take it, mean"),
-    STATS_FN_F64(r_bpc, "bytes_per_cycle", "bytes a cycle", "64-byte lines moved / cycles"),
+    STATS_FN_F64(r_bpc, "bytes_per_cycle", "bytes/cycle", "64-byte lines moved / cycles"),
     STATS_FN_F64(r_gbps, "gb_per_s", "GB/s", "bytes_per_cycle at clock_ghz"),
     STATS_FN_F64(r_mean_dram, "read_latency_mean_dram_cycles", "DRAM cycles",
                  "read_latency_mean in DRAM clock cycles"),

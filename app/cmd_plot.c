@@ -20,10 +20,16 @@
 #include "sim/err.h"
 #include "sim/outfile.h"
 
-/* The terminal's line and `set output`. */
+/* The terminal's line and `set output`. A PDF's size is in inches: at 72
+ * pixels an inch its 11-point font stands to the page as the PNG's to its
+ * pixels, so the three formats lay out alike. */
 static void terminal(FILE *f, const struct plot_plan *p, unsigned w, unsigned h, const char *out) {
-  fprintf(f, "set terminal %s size %u,%u noenhanced font ',11'\nset output ",
-          p->svg ? "svg" : "pngcairo", w, h);
+  if (p->format == PLOT_PDF)
+    fprintf(f, "set terminal pdfcairo size %.4gin,%.4gin noenhanced font ',11'\nset output ",
+            w / 72.0, h / 72.0);
+  else
+    fprintf(f, "set terminal %s size %u,%u noenhanced font ',11'\nset output ",
+            p->format == PLOT_SVG ? "svg" : "pngcairo", w, h);
   plot_script_str(f, out);
   fputc('\n', f);
 }
@@ -84,10 +90,10 @@ int cmd_plot(int argc, char **argv) {
   const unsigned ny = f.ys->n, ng = f.groups.n, np = f.panels.n, nl = f.lines.n * ny;
   if (f.bars)
     fprintf(stderr, "plot: %u bars in %u group%s, %u panel%s into %s\n",
-            f.nkept * (f.stacked ? 1 : ny), ng, ng == 1 ? "" : "s", np, np == 1 ? "" : "s",
+            f.nrows * (f.stacked ? 1 : ny), ng, ng == 1 ? "" : "s", np, np == 1 ? "" : "s",
             plan.out);
   else
-    fprintf(stderr, "plot: %u points, %u line%s, %u panel%s into %s\n", f.nkept * ny, nl,
+    fprintf(stderr, "plot: %u points, %u line%s, %u panel%s into %s\n", f.nrows * ny, nl,
             nl == 1 ? "" : "s", np, np == 1 ? "" : "s", plan.out);
 done:
   if (e.set) app_report(&e);

@@ -61,7 +61,7 @@ static const char HELP[] =
     "outputs: OUTDIR is written as a fresh sibling put in its place at the end, so it\n"
     "is absent or the earlier run until then, whole, never a mix; a run that fails\n"
     "or is stopped (SIGINT, SIGTERM) leaves it as it was and nothing else behind\n"
-    "(README: Output directories):\n"
+    "(docs/outputs.md):\n"
     "  image.exr     the picture, bit-identical in RGB to rtsim render's\n"
     "  stats.json    resolved config, scene, seed, wall time, every measured number\n"
     "  stats.csv     the same numbers as one tidy row (no wall time: bit-identical\n"
@@ -72,16 +72,16 @@ static const char HELP[] =
     "At fidelity analytic: no timed machine, one worker's counts and a closed-form\n"
     "estimate of the cycles (no timeline.csv or traffic.png, and only the numbers\n"
     "it knows). At the timed rungs, a whole run (not sampled) also writes per-pixel\n"
-    "costs in image.exr, each summing over the pixels to the run's total (README:\n"
-    "Cost in the picture): cost.issue_slots, cost.load_wait_cycles,\n"
+    "costs in image.exr, each summing over the pixels to the run's total\n"
+    "(docs/outputs.md: Cost in the picture): cost.issue_slots, cost.load_wait_cycles,\n"
     "cost.dram_read_bytes.<class> (geometry, node, ray, queue, other),\n"
     "cost.dram_write_bytes.\n"
     "--set takes every key of configs/default.yaml, e.g. --set l2.size=1MiB --set\n"
-    "rays_per_thread=4 (--help-keys; README: Config keys). With\n"
+    "rays_per_thread=4 (--help-keys; docs/config-keys.md). With\n"
     "--set dynamic.sharing=chip the dynamic policy's cores share its queue points.\n"
     "--dram-trace writes each request's address, READ or WRITE, arrival in DRAM\n"
-    "cycles, arrival and completion in core cycles, in arrival order (README: DRAM\n"
-    "traces); rtsim dram-replay reads it.\n";
+    "cycles, arrival and completion in core cycles, in arrival order\n"
+    "(docs/dram-traces.md); rtsim dram-replay reads it.\n";
 
 static bool parse_cost_max(const char *text, void *dst) {
   double v;
@@ -261,7 +261,7 @@ static int run_render(const struct run_plan *pl, const struct machine_cfg *mc,
     app_timed_run(&t, w, pl->mask, seed, W, H, pl->policy, &mc->p, &mc->work, &mc->sample,
                   isatty(2), trace->f, true);
   /* A whole run at a cheaper rung says how wrong that rung was measured to be
-   * in runs like it (README "Fidelity ladder"). */
+   * in runs like it (docs/fidelity-and-sampling.md). */
   struct rung_error rung = {0};
   const bool cheaper = mc->p.fidelity != MACHINE_FIDELITY_BANKED && !t.sampled;
   if (cheaper && analytic) {

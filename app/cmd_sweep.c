@@ -30,7 +30,7 @@ static const char HELP[] =
     "       rtsim sweep SWEEP.yaml -o DIR (--emit-jobs | --emit-slurm N | --status)\n"
     "\n"
     "Run every point of a sweep file (a base machine config, a workload, and axes\n"
-    "over config or workload keys: README.md, Sweeps) as an 'rtsim run' into\n"
+    "over config or workload keys: docs/sweeps.md) as an 'rtsim run' into\n"
     "DIR/<point>, named for its values (policy=packet,dram.latency=400). Everything\n"
     "is checked before anything runs; points run N at a time, longest first. A\n"
     "point with a stats.json is complete and skipped, so the same command resumes\n"

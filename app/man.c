@@ -87,8 +87,8 @@ int app_man(FILE *f, const char *usage, const struct app_command *cmds, unsigned
         "Machine configs, DRAM presets and sweeps are in share/rtsim/configs, scenes in\n"
         "share/rtsim/scenes (the source tree's configs/ and scenes/).\n"
         ".SH SEE ALSO\n"
-        "README.md (share/doc/rtsim) for the machine model, config keys, numbers,\n"
-        "sweeps and outputs in full.\n",
+        "README.md and the manual in docs/ (share/doc/rtsim): the machine model, config\n"
+        "keys, numbers, sweeps and outputs in full.\n",
         f);
   return fflush(f) == 0 && !ferror(f) ? 0 : 1;
 }

@@ -19,8 +19,8 @@ static const char *unit_by_name(const char *name) {
   if (ENDS("_per_cycle")) return "per cycle";
   if (ENDS("_bytes") || IS("l1.size") || IS("l2.size")) return "bytes";
   if (ENDS("_per_second")) return "per second";
-  /* The banked DRAM's timings count its own clock, not the core's (README's
-   * config key table): dram.tCL, dram.tRCD, ... */
+  /* The banked DRAM's timings count its own clock, not the core's (docs/config-keys.md's
+   * key table): dram.tCL, dram.tRCD, ... */
   if (STARTS("dram.t") && n > 6 && name[6] >= 'A' && name[6] <= 'Z') return "DRAM cycles";
   if (IS("cycles") || ENDS("_cycles") || ENDS(".latency") || STARTS("costs.") ||
       IS("timeline.window") || ENDS("_wait_mean") || STARTS("load_latency_") ||
@@ -115,6 +115,46 @@ void plot_fmt_value(const char *cell, const char *unit, char *out, size_t cap) {
   if (!unit[0] || !strcmp(unit, "bytes") || !strcmp(unit, "fraction"))
     snprintf(out, cap, "%s", num);
   else snprintf(out, cap, "%s %s", num, unit);
+}
+
+/* A word of a column's name as a figure writes it. */
+static const char *word_of(const char *w) {
+  static const char *const CAPS[][2] = {{"dram", "DRAM"}, {"l1", "L1"},       {"l2", "L2"},
+                                        {"mshr", "MSHR"}, {"mshrs", "MSHRs"}, {"rss", "RSS"},
+                                        {"kd", "k-d"},    {"ci95", "95% CI"}, {"exr", "EXR"}};
+  for (size_t i = 0; i < sizeof CAPS / sizeof CAPS[0]; i++)
+    if (!strcmp(w, CAPS[i][0])) return CAPS[i][1];
+  return w;
+}
+
+void plot_axis_label(const char *name, const char *unit, char *out, size_t cap) {
+  if (strchr(name, ' ')) {
+    if (!unit[0] || strstr(name, unit)) snprintf(out, cap, "%s", name);
+    else snprintf(out, cap, "%s (%s)", name, unit);
+    return;
+  }
+  char words[1024] = "", buf[1024];
+  snprintf(buf, sizeof buf, "%s", name);
+  size_t len = 0;
+  char *save = NULL;
+  for (char *w = strtok_r(buf, "_.", &save); w; w = strtok_r(NULL, "_.", &save)) {
+    if (!strcmp(w, "*")) continue;
+    len += (size_t)snprintf(words + len, len < sizeof words ? sizeof words - len : 0, "%s%s",
+                            len ? " " : "", word_of(w));
+  }
+  if (len >= sizeof words) len = sizeof words - 1;
+  /* A unit the last word abbreviates (work_s, peak_rss_mb) is said once. */
+  const char *last = strrchr(words, ' ');
+  last = last ? last + 1 : words;
+  if (last != words && ((!strcmp(unit, "seconds") && !strcmp(last, "s")) ||
+                        (!strcmp(unit, "MiB") && !strcmp(last, "mb"))))
+    words[last - words - 1] = '\0', len = strlen(words);
+  const size_t ul = strlen(unit);
+  if (!len) snprintf(out, cap, "%s", unit[0] ? unit : name);
+  else if (!ul || (len >= ul && !strcmp(words + len - ul, unit) &&
+                   (len == ul || words[len - ul - 1] == ' ')))
+    snprintf(out, cap, "%s", words);
+  else snprintf(out, cap, "%s (%s)", words, unit);
 }
 
 /* 1, 2, 2.5 or 5 x 10^k at or above raw (> 0). */

@@ -10,7 +10,7 @@
 
 /* A column's unit ("bytes", "cycles", "fraction", ...), or "" (a count or a
  * label): the one rtsim run's tables state for it (run_output_unit_of), else
- * the one its name states. README's Sweeps section has the rules. */
+ * the one its name states. docs/sweeps.md (Plotting) has the rules. */
 const char *plot_unit_of(const char *name);
 
 /* A tick label of v on an axis of unit `unit`: bytes as "512 KiB" when an
@@ -22,6 +22,15 @@ void plot_fmt_tick(double v, const char *unit, char *out, size_t cap);
  * as plot_fmt_tick, then the unit when it is not bytes or a fraction
  * ("25 cycles", "1.4 GHz"); text as it is. */
 void plot_fmt_value(const char *cell, const char *unit, char *out, size_t cap);
+
+/* An axis label of a column's name (or a --y pattern such as dram_*_bytes)
+ * and its unit, in words: the name's parts between '_' and '.' as words,
+ * the acronyms in capitals, the '*' of a pattern left out, and the unit in
+ * parentheses unless the words already end with it: dram_bytes_per_cycle
+ * "DRAM bytes per cycle", l2.size "L2 size (bytes)", work_s "work
+ * (seconds)", dram_*_bytes "DRAM bytes". A name with a space is a label
+ * already and stays as it is. */
+void plot_axis_label(const char *name, const char *unit, char *out, size_t cap);
 
 #define PLOT_TICKS_MAX 64
 

@@ -125,6 +125,7 @@ static int cmp_row(const void *a, const void *b) {
   const struct plot_row *p = a, *q = b;
   if (p->panel != q->panel) return p->panel < q->panel ? -1 : 1;
   if (p->line != q->line) return p->line < q->line ? -1 : 1;
+  if (p->dash != q->dash) return p->dash < q->dash ? -1 : 1;
   if (p->x != q->x) return p->x < q->x ? -1 : 1;
   return (p->r > q->r) - (p->r < q->r);
 }
@@ -166,6 +167,39 @@ static void y_titles(struct plot_ycols *y) {
   else snprintf(y->pattern, sizeof y->pattern, "%s", y->buf);
 }
 
+/* Column name's one value over the table rows rows[0..n), or NULL when the
+ * table lacks it, it is drawn, or it varies or is empty there. */
+static const char *fixed_cell(const struct plot_figure *f, const bool *drawn, const unsigned *rows,
+                              unsigned n, const char *name) {
+  const int c = csv_column(f->t, name);
+  if (c < 0 || (drawn && drawn[c]) || !n) return NULL;
+  const char *v = csv_cell(f->t, rows[0], (unsigned)c);
+  for (unsigned i = 1; i < n && v[0]; i++)
+    if (!same_value(csv_cell(f->t, rows[i], (unsigned)c), v)) return NULL;
+  return v[0] ? v : NULL;
+}
+
+static double num(const char *cell) {
+  double v = 0;
+  return cell && csv_number(cell, &v) ? v : 0;
+}
+
+/* The DRAM's peak bytes per core cycle over rows (table rows), as the
+ * machine reckons it (machine_dram_peak_bytes_per_cycle): a channel's
+ * dram.bytes_per_cycle; a banked DRAM's channels x bus x 2 transfers a DRAM
+ * cycle, in core cycles; 0 when the rows do not name one DRAM with a peak. */
+static double dram_peak_of(const struct plot_figure *f, const unsigned *rows, unsigned n) {
+  const char *fid = fixed_cell(f, NULL, rows, n, "fidelity");
+  if (!fid) return 0;
+  if (!strcmp(fid, "channel")) return num(fixed_cell(f, NULL, rows, n, "dram.bytes_per_cycle"));
+  if (strcmp(fid, "banked")) return 0;
+  const double ch = num(fixed_cell(f, NULL, rows, n, "dram.channels")),
+               bus = num(fixed_cell(f, NULL, rows, n, "dram.bus_bytes")),
+               mhz = num(fixed_cell(f, NULL, rows, n, "dram.clock_mhz")),
+               ghz = num(fixed_cell(f, NULL, rows, n, "clock_ghz"));
+  return ghz > 0 ? ch * bus * 2.0 * mhz / (ghz * 1e3) : 0;
+}
+
 /* Columns that name the machine and the workload: what a caption says when
  * they do not vary over the plotted rows, with the keys a sweep varied (in
  * its point names) and the --where keys. */
@@ -184,26 +218,76 @@ static bool in_point_name(const struct csv_table *t, int pc, unsigned r, const c
   return false;
 }
 
+/* The DRAM in words, for the caption, from the kept rows' fixed and undrawn
+ * columns: its rung, and what sets its speed there (a banked DRAM's
+ * channels, clock and peak; a channel's latency and bytes a cycle; a fixed
+ * latency). used[c] is set for each column said. Empty without a fidelity
+ * column. */
+static void dram_words(const struct plot_figure *f, const bool *drawn, bool *used, char *out,
+                       size_t cap) {
+  static const char *const KEYS[] = {"fidelity", "dram.channels", "dram.clock_mhz", "dram.latency",
+                                     "dram.bytes_per_cycle"};
+  const char *v[5];
+  for (unsigned k = 0; k < 5; k++) v[k] = fixed_cell(f, drawn, f->kept, f->nkept, KEYS[k]);
+  out[0] = '\0';
+  if (!v[0]) return;
+  size_t len = (size_t)snprintf(out, cap, "DRAM: %s", v[0]);
+  const bool banked = !strcmp(v[0], "banked"), fixed = !strcmp(v[0], "fixed");
+  char a[64], b[64];
+#define SAY(...) (len += (size_t)snprintf(out + len, len < cap ? cap - len : 0, __VA_ARGS__))
+  if (banked && v[1] && v[2])
+    SAY(", %s channel%s at %s MHz", v[1], strcmp(v[1], "1") ? "s" : "", v[2]);
+  const double peak = banked ? dram_peak_of(f, f->kept, f->nkept) : 0;
+  if (peak > 0) {
+    plot_fmt_tick(peak, "", a, sizeof a);
+    SAY(", peak %s bytes per cycle", a);
+  }
+  if (!banked && v[3]) {
+    plot_fmt_tick(num(v[3]), "", a, sizeof a);
+    SAY(", %s cycles", a);
+  }
+  if (!banked && !fixed && v[4]) {
+    plot_fmt_tick(num(v[4]), "", b, sizeof b);
+    SAY(", %s bytes per cycle", b);
+  }
+#undef SAY
+  for (unsigned k = 0; k < 5; k++) {
+    const int c = csv_column(f->t, KEYS[k]);
+    const bool said = k == 0 || (banked ? k <= 2 : k == 3 || (k == 4 && !fixed));
+    if (c >= 0 && v[k] && said) used[c] = true;
+  }
+}
+
 /* The caption: "key = value unit" for every caption column that is constant
- * over the kept rows and not drawn (x, y, lines, panels), in table order. A
- * table none of whose columns is such a key (not rtsim's) gets every constant
- * column that is not drawn. */
-static void caption(const struct csv_table *t, const unsigned *kept, unsigned nkept,
-                    const bool *drawn, const int *wcol, unsigned nwhere, char *out, size_t cap) {
+ * over the kept rows and not drawn (x, y, lines, panels), in table order,
+ * the DRAM said in words where its fidelity is; then how seeds are drawn. A
+ * table none of whose columns is such a key (not rtsim's) gets every
+ * constant column that is not drawn. */
+static void caption(const struct plot_figure *f, const bool *drawn, char *out, size_t cap) {
+  const struct csv_table *t = f->t;
+  const unsigned *kept = f->kept, nkept = f->nkept;
   int pc = csv_column(t, "point");
   bool known = pc >= 0;
   for (size_t k = 0; k < sizeof CAPTION_KEYS / sizeof CAPTION_KEYS[0]; k++)
     known |= csv_column(t, CAPTION_KEYS[k]) >= 0;
   size_t len = 0;
   out[0] = '\0';
-  int wc = csv_column(t, "width"), hc = csv_column(t, "height");
+  int wc = csv_column(t, "width"), hc = csv_column(t, "height"), fc = csv_column(t, "fidelity");
+  bool *used = xcalloc(t->ncols, sizeof *used);
+  char dram[512];
+  dram_words(f, drawn, used, dram, sizeof dram);
   for (unsigned c = 0; c < t->ncols; c++) {
     if (drawn[c] || (int)c == pc) continue;
+    if ((int)c == fc && dram[0]) {
+      len += (size_t)snprintf(out + len, len < cap ? cap - len : 0, "%s%s", len ? "; " : "", dram);
+      continue;
+    }
+    if (used[c]) continue;
     const char *name = t->names[c];
     bool want = !known;
     for (size_t k = 0; k < sizeof CAPTION_KEYS / sizeof CAPTION_KEYS[0] && !want; k++)
       want = !strcmp(name, CAPTION_KEYS[k]);
-    for (unsigned w = 0; w < nwhere && !want; w++) want = wcol[w] == (int)c;
+    for (unsigned w = 0; w < f->plan->nwhere && !want; w++) want = f->wcol[w] == (int)c;
     want = want || in_point_name(t, pc, kept[0], name);
     if (!want) continue;
     const char *v0 = csv_cell(t, kept[0], c);
@@ -236,6 +320,16 @@ static void caption(const struct csv_table *t, const unsigned *kept, unsigned nk
     plot_fmt_value(v0, plot_unit_of(name), val, sizeof val);
     snprintf(item, sizeof item, "%s = %s", name, val);
     len += (size_t)snprintf(out + len, len < cap ? cap - len : 0, "%s%s", len ? "; " : "", item);
+  }
+  free(used);
+  if (f->seeds_max) {
+    char n[32];
+    if (f->seeds_min == f->seeds_max) snprintf(n, sizeof n, "%u", f->seeds_max);
+    else snprintf(n, sizeof n, "%u to %u", f->seeds_min, f->seeds_max);
+    len += (size_t)snprintf(out + len, len < cap ? cap - len : 0,
+                            "%s%s: the mean of %s seeds, %s from the smallest to the largest",
+                            len ? "; " : "", f->bars ? "bars" : "points", n,
+                            f->stacked ? "its total's range not drawn" : "error bars");
   }
   if (len >= cap && cap > 4) strcpy(out + cap - 4, "...");
 }
@@ -274,6 +368,7 @@ static bool find_columns(struct plot_figure *f, struct err *e) {
   y_titles(ys);
   if (p->lines && (f->lc = column(t, "--lines", p->lines)) < 0) return false;
   if (p->panels && (f->pc = column(t, "--panels", p->panels)) < 0) return false;
+  if (p->dash && (f->dc = column(t, "--dash", p->dash)) < 0) return false;
   for (unsigned w = 0; w < p->nwhere; w++) {
     char key[256];
     snprintf(key, sizeof key, "%.*s", (int)(strchr(p->where[w], '=') - p->where[w]), p->where[w]);
@@ -351,15 +446,23 @@ static bool choose_series(struct plot_figure *f, struct err *e) {
                    "--y %s with --lines %s: several --y columns draw a %s each, and so does "
                    "--lines (expected one of them; --stack stacks the columns in each --lines bar)",
                    p->y, p->lines, f->bars ? "bar" : "line");
-  if (f->bars && (p->logx || p->logy || p->nmark || p->points))
+  if (f->bars && (p->logx || p->logy || p->nmark || p->points || p->dash))
     return err_set(e, t->file, 0, 0,
                    "--x %s holds text: bars have no numeric x and start at 0 (got %s)", p->x,
                    p->logx    ? "--logx"
                    : p->logy  ? "--logy"
                    : p->nmark ? "--mark-x"
+                   : p->dash  ? "--dash"
                               : "--points");
   distinct(t, f->lc, f->kept, f->nkept, PLOT_LINES_MAX, &f->lines);
   distinct(t, f->pc, f->kept, f->nkept, PLOT_PANELS_MAX, &f->panels);
+  distinct(t, f->dc, f->kept, f->nkept, PLOT_DASHES_MAX, &f->dashes);
+  apply_order(&f->dashes, p->order);
+  if (f->dashes.n > PLOT_DASHES_MAX)
+    return err_set(e, t->file, 1, 0,
+                   "--dash %s: more than %d values (expected at most %d dash patterns: keep fewer "
+                   "with --where KEY=VALUE)",
+                   p->dash, PLOT_DASHES_MAX, PLOT_DASHES_MAX);
   if (f->bars) distinct(t, f->xc, f->kept, f->nkept, PLOT_LINES_MAX, &f->groups);
   apply_order(&f->lines, p->order);
   apply_order(&f->panels, p->order);
@@ -413,8 +516,92 @@ static bool cell_value(const struct plot_figure *f, struct plot_row *w, unsigned
   return true;
 }
 
-/* The kept rows as numbers, sorted; two at one x on one line are refused
- * unless a scatter's (they are points apart, not a line's one value). */
+/* Columns that hold a run's seed: rows that differ in one of them and in no
+ * parameter are one point measured several times. */
+static const char *const SEED_KEYS[] = {"seed", "sample.seed", "sample_seed"};
+
+static bool is_seed(const char *name) {
+  for (size_t k = 0; k < sizeof SEED_KEYS / sizeof SEED_KEYS[0]; k++)
+    if (!strcmp(name, SEED_KEYS[k])) return true;
+  return false;
+}
+
+/* Rows r1 and r2 differ in a seed column and in no parameter: no key of
+ * their point names, no caption key and no config key (a dotted name). */
+static bool seeds_apart(const struct csv_table *t, unsigned r1, unsigned r2) {
+  const int pc = csv_column(t, "point");
+  bool seed_differs = false;
+  for (unsigned c = 0; c < t->ncols; c++) {
+    const char *name = t->names[c];
+    const bool same = same_value(csv_cell(t, r1, c), csv_cell(t, r2, c));
+    if (is_seed(name)) {
+      seed_differs |= !same;
+      continue;
+    }
+    bool param =
+        strchr(name, '.') || in_point_name(t, pc, r1, name) || in_point_name(t, pc, r2, name);
+    for (size_t k = 0; k < sizeof CAPTION_KEYS / sizeof CAPTION_KEYS[0] && !param; k++)
+      param = !strcmp(name, CAPTION_KEYS[k]);
+    if (param && !same) return false;
+  }
+  return seed_differs;
+}
+
+/* Rows [a, b) (one panel, line and x; seeds apart) into rows[a]: the mean,
+ * the smallest and the largest of each y. */
+static void merge_seeds(struct plot_figure *f, unsigned a, unsigned b) {
+  struct plot_row *w = &f->rows[a];
+  for (unsigned k = 0; k < f->ys->n; k++) {
+    double sum = 0, lo = w->y[k], hi = w->y[k];
+    for (unsigned i = a; i < b; i++) {
+      const double v = f->rows[i].y[k];
+      sum += v;
+      lo = v < lo ? v : lo;
+      hi = v > hi ? v : hi;
+    }
+    w->y[k] = sum / (b - a);
+    w->ylo[k] = lo;
+    w->yhi[k] = hi;
+  }
+  w->nseeds = b - a;
+  if (!f->seeds_min || w->nseeds < f->seeds_min) f->seeds_min = w->nseeds;
+  if (w->nseeds > f->seeds_max) f->seeds_max = w->nseeds;
+}
+
+/* The sorted rows with one panel, line and x: seeds of one point merged;
+ * else, unless a scatter's (points apart, not a line's one value), refused. */
+static bool merge_rows(struct plot_figure *f, struct err *e) {
+  const struct csv_table *t = f->t;
+  unsigned out = 0;
+  for (unsigned a = 0, b; a < f->nkept; a = b) {
+    b = a + 1;
+    const struct plot_row *r0 = &f->rows[a];
+    while (b < f->nkept && f->rows[b].panel == r0->panel && f->rows[b].line == r0->line &&
+           f->rows[b].dash == r0->dash && f->rows[b].x == r0->x)
+      b++;
+    if (f->plan->points) b = a + 1;
+    for (unsigned i = a + 1; i < b; i++) {
+      bool apart = true;
+      for (unsigned j = a; j < i && apart; j++) apart = seeds_apart(t, f->rows[j].r, f->rows[i].r);
+      if (apart) continue;
+      const struct plot_row *x = &f->rows[i - 1], *y = &f->rows[i];
+      char keys[1024];
+      differing_keys(t, x->r, y->r, keys, sizeof keys);
+      return err_set(e, t->file, t->lines[(size_t)y->r * t->ncols], 0,
+                     "rows at lines %d and %d fall on the same %s at %s = %s but differ in %s: "
+                     "fix it with --where KEY=VALUE, or show it with --lines or --panels",
+                     t->lines[(size_t)x->r * t->ncols], t->lines[(size_t)y->r * t->ncols],
+                     f->bars ? "bar" : "line", f->plan->x, csv_cell(t, y->r, (unsigned)f->xc),
+                     keys);
+    }
+    if (b - a > 1) merge_seeds(f, a, b);
+    f->rows[out++] = f->rows[a];
+  }
+  f->nrows = out;
+  return true;
+}
+
+/* The kept rows as numbers, sorted, seeds merged. */
 static bool make_rows(struct plot_figure *f, struct err *e) {
   const struct csv_table *t = f->t;
   const unsigned ny = f->ys->n;
@@ -428,22 +615,38 @@ static bool make_rows(struct plot_figure *f, struct err *e) {
       if (a == ny && f->bars) w->x = index_of(&f->groups, csv_cell(t, r, (unsigned)f->xc));
       else if (!cell_value(f, w, a, e)) return false;
     }
+    for (unsigned k = 0; k < ny; k++) w->ylo[k] = w->yhi[k] = w->y[k];
+    w->nseeds = 1;
     w->line = f->lc < 0 ? 0 : index_of(&f->lines, csv_cell(t, r, (unsigned)f->lc));
     w->panel = f->pc < 0 ? 0 : index_of(&f->panels, csv_cell(t, r, (unsigned)f->pc));
+    w->dash = f->dc < 0 ? 0 : index_of(&f->dashes, csv_cell(t, r, (unsigned)f->dc));
   }
   qsort(f->rows, f->nkept, sizeof *f->rows, cmp_row);
-  for (unsigned i = 1; i < f->nkept && !f->plan->points; i++) {
-    const struct plot_row *a = &f->rows[i - 1], *b = &f->rows[i];
-    if (a->panel != b->panel || a->line != b->line || a->x != b->x) continue;
-    char keys[1024];
-    differing_keys(t, a->r, b->r, keys, sizeof keys);
-    return err_set(e, t->file, t->lines[(size_t)b->r * t->ncols], 0,
-                   "rows at lines %d and %d fall on the same %s at %s = %s but differ in %s: fix "
-                   "it with --where KEY=VALUE, or show it with --lines or --panels",
-                   t->lines[(size_t)a->r * t->ncols], t->lines[(size_t)b->r * t->ncols],
-                   f->bars ? "bar" : "line", f->plan->x, csv_cell(t, b->r, (unsigned)f->xc), keys);
+  return merge_rows(f, e);
+}
+
+/* Each panel's peak line: --peak's, or where every --y column is DRAM bytes
+ * per cycle the DRAM's peak over the panel's rows. */
+static void find_peaks(struct plot_figure *f) {
+  const struct plot_plan *p = f->plan;
+  f->peak = xcalloc(f->panels.n, sizeof *f->peak);
+  bool dram = !p->no_peak && !p->peak_given && !strcmp(f->yunit, "bytes per cycle");
+  for (unsigned k = 0; k < f->ys->n && dram; k++) dram = !strncmp(f->ys->name[k], "dram", 4);
+  f->dram_peak = dram;
+  unsigned *rows = xcalloc(f->nkept, sizeof *rows);
+  for (unsigned pn = 0; pn < f->panels.n; pn++) {
+    if (p->peak_given) {
+      f->peak[pn] = p->peak;
+      continue;
+    }
+    if (!dram) continue;
+    unsigned n = 0;
+    for (unsigned i = 0; i < f->nkept; i++)
+      if (f->pc < 0 || same_value(csv_cell(f->t, f->kept[i], (unsigned)f->pc), f->panels.v[pn]))
+        rows[n++] = f->kept[i];
+    f->peak[pn] = dram_peak_of(f, rows, n);
   }
-  return true;
+  free(rows);
 }
 
 bool plot_figure_build(struct plot_figure *f, const struct plot_plan *p, const struct csv_table *t,
@@ -452,16 +655,18 @@ bool plot_figure_build(struct plot_figure *f, const struct plot_plan *p, const s
   f->plan = p;
   f->t = t;
   f->ys = xcalloc(1, sizeof *f->ys);
-  f->lc = f->pc = -1;
+  f->lc = f->pc = f->dc = -1;
   if (!find_columns(f, e) || !keep_rows(f, e) || !choose_series(f, e) || !make_rows(f, e))
     return false;
+  find_peaks(f);
   /* The caption: the fixed parameters, every column not drawn. */
   bool *drawn = xcalloc(t->ncols, sizeof *drawn);
   drawn[f->xc] = true;
   for (unsigned k = 0; k < f->ys->n; k++) drawn[f->ys->col[k]] = true;
   if (f->lc >= 0) drawn[f->lc] = true;
   if (f->pc >= 0) drawn[f->pc] = true;
-  caption(t, f->kept, f->nkept, drawn, f->wcol, p->nwhere, f->caption, sizeof f->caption);
+  if (f->dc >= 0) drawn[f->dc] = true;
+  caption(f, drawn, f->caption, sizeof f->caption);
   free(drawn);
   return true;
 }
@@ -469,9 +674,11 @@ bool plot_figure_build(struct plot_figure *f, const struct plot_plan *p, const s
 void plot_figure_fini(struct plot_figure *f) {
   free(f->kept);
   free(f->rows);
+  free(f->peak);
   free(f->lines.v);
   free(f->panels.v);
   free(f->groups.v);
+  free(f->dashes.v);
   free(f->ys);
   memset(f, 0, sizeof *f);
 }

@@ -22,6 +22,8 @@ struct err;
 /* Most lines a panel may have, and most bar groups: a legend of more cannot
  * be read, and the colours repeat long before. */
 #define PLOT_LINES_MAX 100
+/* Most --dash values: past four, dash patterns are hard to tell apart. */
+#define PLOT_DASHES_MAX 4
 
 /* Distinct values of a column over the kept rows (the table's strings). */
 struct plot_values {
@@ -30,10 +32,14 @@ struct plot_values {
 };
 
 struct plot_row {
-  unsigned r; /* the table's row */
+  unsigned r; /* the table's row (the first of its seeds) */
   double x;   /* the value, or for bars the group's index */
   double y[PLOT_Y_MAX];
-  unsigned panel, line; /* indices into the figure's panels and lines */
+  /* Rows that differ only in their seed are one row: y their mean, ylo and
+   * yhi the smallest and largest, nseeds how many (1: y = ylo = yhi). */
+  double ylo[PLOT_Y_MAX], yhi[PLOT_Y_MAX];
+  unsigned nseeds;
+  unsigned panel, line, dash; /* indices into the figure's panels, lines and dashes */
 };
 
 /* The --y columns: the names, and the part of each that differs from the
@@ -52,14 +58,20 @@ struct plot_figure {
   const struct plot_plan *plan;
   const struct csv_table *t;
   struct plot_ycols *ys;
-  const char *yunit; /* the --y columns' one unit (plot_unit_of) */
-  int xc, lc, pc;    /* the --x, --lines and --panels columns; -1 when not given */
+  const char *yunit;  /* the --y columns' one unit (plot_unit_of) */
+  int xc, lc, pc, dc; /* the --x, --lines, --panels, --dash columns; -1 when not given */
   int wcol[PLOT_WHERE_MAX];
   unsigned *kept; /* the rows every --where keeps and with x and y cells, in table order */
   unsigned nkept;
-  struct plot_row *rows; /* nkept, sorted by panel, line, x, row */
+  struct plot_row *rows;         /* nrows, sorted by panel, line, x, row */
+  unsigned nrows;                /* nkept less the rows merged into another's seeds */
+  unsigned seeds_min, seeds_max; /* over rows of several seeds; 0 when none */
+  /* The peak line's y in each panel (--peak, or the DRAM's peak bytes per
+   * cycle), or 0 for none. */
+  double *peak;
+  bool dram_peak; /* peak is the DRAM's */
   /* One "" when not given; groups: the bars' x values (bars only). */
-  struct plot_values lines, panels, groups;
+  struct plot_values lines, panels, groups, dashes;
   bool bars;    /* the plan's, or --x holds text */
   bool stacked; /* --stack with several --y columns */
   char caption[4096];

@@ -4,27 +4,31 @@
 
 #include <stdio.h>
 #include <string.h>
+#include <strings.h>
 
 #include "app/app.h"
 #include "app/opts.h"
 #include "sim/scalar.h"
 
 static const char HELP[] =
-    "usage: rtsim plot TABLE.csv --x KEY --y METRIC -o FILE.png|FILE.svg [options]\n"
+    "usage: rtsim plot TABLE.csv --x KEY --y METRIC -o FILE.png|.pdf|.svg [options]\n"
     "\n"
     "Plot column METRIC against column KEY of a tidy table (rtsim merge's)\n"
     "through gnuplot: lines with points when KEY holds numbers, bars when it\n"
-    "holds text (a policy) or with --bars. Axis labels carry the unit the\n"
-    "column name gives: _bytes, l1.size, l2.size: bytes; cycles, _cycles,\n"
-    ".latency, costs., timeline.window, _wait_mean, _latency_mean/_p50/_p95/\n"
-    "_p99/_max: cycles; dram.tCL and the other timings: DRAM cycles; _fraction,\n"
-    "utilization, _rate: fraction (drawn on 0..1); _per_second: per second;\n"
-    "_bytes_per_cycle: bytes per cycle; seconds, _s: seconds; clock_ghz: GHz;\n"
-    "dram.clock_mhz: MHz; _mb: MiB; l2.write_buffer: lines; the DRAM queues:\n"
-    "entries; width, height: pixels; anything else is a count or a label.\n"
-    "Panels share one y range, the figure one legend, and a caption names the\n"
-    "parameters every plotted row has in common. Rows with an empty KEY or\n"
-    "METRIC cell are left out.\n"
+    "holds text (a policy) or with --bars. Axis labels are the columns' names in\n"
+    "words with the unit rtsim's tables give them (dram_bytes_per_cycle: DRAM\n"
+    "bytes per cycle; dram_read_bytes,dram_write_bytes: DRAM bytes); a name the\n"
+    "tables lack takes the unit its ending states (_bytes, _cycles, _fraction,\n"
+    "_per_second, _s, ...), else it is a count or a label. The y axis starts at\n"
+    "0 (a fraction runs 0..1). Panels share one y range, the figure one legend\n"
+    "above them, and a caption names the parameters every plotted row has in\n"
+    "common, the DRAM among them. Rows that differ only in their seed (seed,\n"
+    "sample.seed, sample_seed) are one point: the seeds' mean, with bars from the\n"
+    "smallest to the largest value (the caption says so). Where METRIC is DRAM\n"
+    "bytes per cycle and the table names the DRAM (fidelity and its keys), a\n"
+    "dashed line marks the DRAM's peak. Colours: Okabe and Ito's colour-blind-\n"
+    "safe set without its yellow; past seven series they repeat, dashed. Rows\n"
+    "with an empty KEY or METRIC cell are left out.\n"
     "\n"
     "options:\n"
     "  --x KEY            the x axis: a numeric column (lines), or any column\n"
@@ -34,28 +38,37 @@ static const char HELP[] =
     "  --lines KEY        one line (or bar in each group) per value of this\n"
     "                     column, with a legend (at most 100)\n"
     "  --panels KEY       one panel per value of this column (at most 100)\n"
+    "  --dash KEY         a dash pattern per value of this column (at most 4),\n"
+    "                     the colours staying --lines' (ours solid, a paper's\n"
+    "                     dashed); lines only\n"
     "  --where KEY=VALUE  keep only rows where KEY is VALUE (numbers compare as\n"
     "                     numbers); repeatable. Every other column that varies\n"
     "                     must be fixed so, or be --lines or --panels: two rows\n"
-    "                     at the same x on one line are refused\n"
+    "                     at the same x on one line are refused (seeds apart)\n"
+    "  --title TEXT       the figure's title (default: METRIC against KEY in\n"
+    "                     words); a long title wraps\n"
+    "  --xlabel TEXT, --ylabel TEXT  the axes' labels (default: as above)\n"
     "  --bars             bars even when KEY holds numbers (one group a value)\n"
     "  --stack            bars with the --y columns stacked (bytes by data\n"
     "                     class); with --lines, one stacked bar per value\n"
     "  --points           markers only, no lines (a scatter: a series may hold\n"
     "                     several rows at one x); not with bars\n"
     "  --own-y            each panel its own y range (default: one for all)\n"
-    "  --yrange LO:HI     the y range (default: from the data; 0..1 for a\n"
-    "                     fraction)\n"
+    "  --y-from-data      the y range around the values, not from 0\n"
+    "  --yrange LO:HI     the y range (default: from 0; 0..1 for a fraction)\n"
     "  --logx, --logy     logarithmic axis (base 2 when every value is a power of\n"
     "                     2); lines only\n"
     "  --mark-x X         a dashed vertical line at x = X in every panel (e.g. a\n"
     "                     value a paper names); repeatable; lines only\n"
+    "  --peak Y           a dashed horizontal line at y = Y, labelled peak\n"
+    "  --no-peak          no DRAM peak line\n"
     "  --order A,B,...    these values first, in this order, where they are lines,\n"
     "                     panels or bar groups (e.g. the paper's recursive,packet,\n"
     "                     dynamic); the rest after them, sorted (default: all sorted)\n"
     "  --script FILE.gp   also write the gnuplot script (data inline), to adjust\n"
     "                     the figure by hand\n"
-    "  -o FILE            the plot: .png (pngcairo) or .svg\n"
+    "  -o FILE            the plot, by its extension: .png (pngcairo), .pdf\n"
+    "                     (pdfcairo) or .svg\n"
     "  -h, --help         this text\n";
 
 static bool add_where(const char *text, void *dst) {
@@ -71,6 +84,28 @@ static bool add_mark(const char *text, void *dst) {
   if (p->nmark == PLOT_WHERE_MAX || scalar_f64(text, &v) != SCALAR_OK) return false;
   p->mark[p->nmark++] = v;
   return true;
+}
+
+static bool parse_peak(const char *text, void *dst) {
+  struct plot_plan *p = dst;
+  if (scalar_f64(text, &p->peak) != SCALAR_OK || !(p->peak > 0)) return false;
+  p->peak_given = true;
+  return true;
+}
+
+/* The format -o's extension names (any case); false for another. */
+static bool format_of(const char *out, enum plot_format *fmt) {
+  static const struct {
+    const char *ext;
+    enum plot_format fmt;
+  } EXTS[] = {{".png", PLOT_PNG}, {".pdf", PLOT_PDF}, {".svg", PLOT_SVG}};
+  const size_t ol = strlen(out);
+  for (size_t i = 0; i < sizeof EXTS / sizeof EXTS[0]; i++)
+    if (ol > 4 && !strcasecmp(out + ol - 4, EXTS[i].ext)) {
+      *fmt = EXTS[i].fmt;
+      return true;
+    }
+  return false;
 }
 
 /* --yrange LO:HI. */
@@ -93,12 +128,14 @@ static bool parse_yrange(const char *text, void *dst) {
 /* The relations between options: one usage error, or OPTS_GO. */
 static int check(struct plot_plan *p) {
   if (!p->x || !p->y) return app_usage_error("plot", "missing --%s", p->x ? "y METRIC" : "x KEY");
-  if (!p->out) return app_usage_error("plot", "missing -o FILE.png or FILE.svg");
-  size_t ol = strlen(p->out);
-  p->svg = ol > 4 && !strcmp(p->out + ol - 4, ".svg");
-  if (!p->svg && !(ol > 4 && !strcmp(p->out + ol - 4, ".png")))
-    return app_usage_error("plot", "-o %s: expected a .png or .svg file", p->out);
+  if (!p->out) return app_usage_error("plot", "missing -o FILE.png, FILE.pdf or FILE.svg");
+  if (!format_of(p->out, &p->format))
+    return app_usage_error("plot", "-o %s: expected a .png, .pdf or .svg file", p->out);
   if (p->own_y && p->yrange) return app_usage_error("plot", "--own-y and --yrange: choose one");
+  if (p->yrange && p->y_from_data)
+    return app_usage_error("plot", "--y-from-data and --yrange: choose one");
+  if (p->peak_given && p->no_peak)
+    return app_usage_error("plot", "--peak and --no-peak: choose one");
   if (p->yrange && p->logy && p->ylo <= 0)
     return app_usage_error("plot", "--yrange %g:%g: a log scale needs LO > 0", p->ylo, p->yhi);
   if (p->stack) p->bars = true;
@@ -107,6 +144,9 @@ static int check(struct plot_plan *p) {
                            p->logx   ? "--logx"
                            : p->logy ? "--logy"
                                      : "--mark-x",
+                           p->stack ? "stack" : "bars");
+  if (p->dash && p->bars)
+    return app_usage_error("plot", "--dash: not with --%s (bars have no lines to dash)",
                            p->stack ? "stack" : "bars");
   if (p->points && p->bars)
     return app_usage_error("plot", "--points: not with --%s (a scatter needs a numeric x)",
@@ -125,6 +165,7 @@ int plot_plan_parse(struct plot_plan *p, int argc, char **argv) {
       OPTS_STR("y", 0, &p->y),
       OPTS_STR("lines", 0, &p->lines),
       OPTS_STR("panels", 0, &p->panels),
+      OPTS_STR("dash", 0, &p->dash),
       OPTS_PARSE("where", 0, p, add_where, "KEY=VALUE" PLOT_AT_MOST(PLOT_WHERE_MAX)),
       OPTS_FLAG("logx", 0, &p->logx),
       OPTS_FLAG("logy", 0, &p->logy),
@@ -135,6 +176,12 @@ int plot_plan_parse(struct plot_plan *p, int argc, char **argv) {
       OPTS_PARSE("yrange", 0, p, parse_yrange, "LO:HI, two numbers with LO < HI"),
       OPTS_STR("script", 0, &p->script),
       OPTS_STR("order", 0, &p->order),
+      OPTS_STR("title", 0, &p->title),
+      OPTS_STR("xlabel", 0, &p->xlabel),
+      OPTS_STR("ylabel", 0, &p->ylabel),
+      OPTS_FLAG("y-from-data", 0, &p->y_from_data),
+      OPTS_PARSE("peak", 0, p, parse_peak, "a number > 0"),
+      OPTS_FLAG("no-peak", 0, &p->no_peak),
       OPTS_STR("output", 'o', &p->out),
       OPTS_PARSE("mark-x", 0, p, add_mark, "a number" PLOT_AT_MOST(PLOT_WHERE_MAX)),
       OPTS_END};

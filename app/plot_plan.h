@@ -13,12 +13,18 @@
  * other). */
 #define PLOT_Y_MAX 8
 
+/* The picture's format, chosen by -o's extension: gnuplot's pngcairo,
+ * pdfcairo or svg terminal. */
+enum plot_format { PLOT_PNG, PLOT_PDF, PLOT_SVG };
+
 struct plot_plan {
   const char *table; /* TABLE.csv */
-  /* --x, --y (as typed), --lines, --panels; NULL when not given. */
-  const char *x, *y, *lines, *panels;
-  const char *out, *script, *order;  /* -o, --script, --order */
-  bool svg;                          /* -o names a .svg (else a .png) */
+  /* --x, --y (as typed), --lines, --panels, --dash; NULL when not given. */
+  const char *x, *y, *lines, *panels, *dash;
+  const char *out, *script, *order; /* -o, --script, --order */
+  /* --title, --xlabel, --ylabel; NULL: made from the columns' names and units. */
+  const char *title, *xlabel, *ylabel;
+  enum plot_format format;           /* by -o's extension */
   const char *where[PLOT_WHERE_MAX]; /* --where KEY=VALUE, each holding a '=' */
   unsigned nwhere;
   double mark[PLOT_WHERE_MAX]; /* --mark-x values */
@@ -26,9 +32,13 @@ struct plot_plan {
   bool yrange; /* --yrange given: ylo < yhi */
   double ylo, yhi;
   bool logx, logy, own_y, points;
-  bool bars;  /* --bars or --stack asked for bars (a text --x draws them too) */
-  bool stack; /* --stack */
-  int argc;   /* the command line, echoed in --script's file */
+  bool y_from_data; /* --y-from-data: the y range around the values, not from 0 */
+  bool peak_given;  /* --peak Y: a line at y = peak */
+  double peak;
+  bool no_peak; /* --no-peak: no DRAM peak line even where the table gives one */
+  bool bars;    /* --bars or --stack asked for bars (a text --x draws them too) */
+  bool stack;   /* --stack */
+  int argc;     /* the command line, echoed in --script's file */
   char **argv;
 };
 

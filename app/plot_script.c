@@ -23,20 +23,22 @@
 /* Widest a panel of bars grows, and widest a row of panels. */
 #define PX_PANEL_W_MAX 1400
 #define PX_BOX_LEFT 100
-#define PX_BOX_RIGHT 18
+#define PX_BOX_RIGHT 32
 #define PX_BOX_TOP 34
 #define PX_BOX_BOTTOM 66
 #define PX_TITLE 40
+/* A title's further lines. */
+#define PX_TITLE_LINE 20
 #define PX_LEGEND_ROW 21
 #define PX_CAPTION_LINE 18
+/* The tag of the peak line's arrow (--mark-x's take the first tags). */
+#define PEAK_ARROW 1000
+/* Most points a line draws with markers. */
+#define PLOT_MARKERS_MAX 60
+/* Colours before the series repeat them dashed. */
+#define PLOT_COLOURS 7
 /* About the width of a character of the 11-point font (pngcairo and svg). */
 #define PX_CHAR 7.2
-
-static void axis_label(const char *name, char *out, size_t cap) {
-  const char *u = plot_unit_of(name);
-  if (!u[0] || !strcmp(u, name)) snprintf(out, cap, "%s", name);
-  else snprintf(out, cap, "%s (%s)", name, u);
-}
 
 void plot_script_str(FILE *f, const char *s) {
   fputc('\'', f);
@@ -94,7 +96,8 @@ static void axis_fixed(struct plot_axis *a, double lo, double hi, bool log, int 
       a->ticks[a->nticks++] = n.ticks[i];
 }
 
-/* The y extent of rows [a, b): each value, or for stacked bars each bar's sum. */
+/* The y extent of rows [a, b): each value with its seeds' range, or for
+ * stacked bars each bar's sum. */
 static void y_extent(const struct plot_row *rows, unsigned a, unsigned b, unsigned ny, bool stack,
                      double *min, double *max) {
   *min = INFINITY;
@@ -102,27 +105,31 @@ static void y_extent(const struct plot_row *rows, unsigned a, unsigned b, unsign
   for (unsigned i = a; i < b; i++) {
     double sum = 0;
     for (unsigned k = 0; k < ny; k++) {
-      double v = rows[i].y[k];
-      sum += v;
-      if (!stack) *min = fmin(*min, v), *max = fmax(*max, v);
+      sum += rows[i].y[k];
+      if (!stack) *min = fmin(*min, rows[i].ylo[k]), *max = fmax(*max, rows[i].yhi[k]);
     }
     if (stack) *min = fmin(*min, sum), *max = fmax(*max, sum);
   }
 }
 
-/* Wrap text at "; " into lines of at most width characters; the number of
- * lines. Each line is written to out as a NUL-separated run. */
-static unsigned wrap(const char *text, unsigned width, char *out, size_t cap) {
+/* Wrap text at sep ("; " or " ") into lines of at most width characters
+ * (a longer word is cut); the number of lines. Each line is written to out
+ * as a NUL-separated run. */
+static unsigned wrap(const char *text, unsigned width, const char *sep, char *out, size_t cap) {
   unsigned n = 0;
   size_t o = 0;
   const char *p = text;
   while (*p && o + 2 < cap) {
-    size_t len = strlen(p), take = len;
+    size_t len = strlen(p), take = len, last = 0;
     if (len > width) {
       take = 0;
-      for (const char *s = p; (s = strstr(s, "; ")) && (size_t)(s - p) + 1 <= width; s += 2)
+      for (const char *s = p; (s = strstr(s, sep)) && (size_t)(s - p) + 1 <= width;
+           s += strlen(sep))
         take = (size_t)(s - p) + 1;
-      if (!take) take = width;
+      /* A part too long for a line: at a space, else anywhere. */
+      for (const char *s = p; !take && (s = strchr(s, ' ')) && (size_t)(s - p) <= width; s++)
+        last = (size_t)(s - p);
+      if (!take) take = last ? last : width;
     }
     if (o + take + 1 >= cap) take = cap - o - 2;
     memcpy(out + o, p, take);
@@ -133,6 +140,11 @@ static unsigned wrap(const char *text, unsigned width, char *out, size_t cap) {
     while (*p == ' ') p++;
   }
   return n;
+}
+
+/* Rows a and b are on one series: the same line and dash. */
+static bool same_series(const struct plot_row *a, const struct plot_row *b) {
+  return a->line == b->line && a->dash == b->dash;
 }
 
 /* What the script draws besides the figure: axes, legend, layout. */
@@ -151,8 +163,14 @@ struct layout {
   unsigned pw, cols; /* a panel's width, panels a row */
   unsigned W, H;     /* the canvas */
   unsigned legrows, legh, ncap, caph, boxbottom;
-  char caplines[4096]; /* the caption wrapped: NUL-separated lines */
+  char caplines[4096];                /* the caption wrapped: NUL-separated lines */
+  char title[2200], titlelines[2400]; /* the title, and wrapped as caplines */
+  unsigned ntitle, titleh;            /* its lines, and the strip they take */
   char ylabel[1100];
+  char peakleg[160];               /* the peak line's legend entry, or "" */
+  char dleg[PLOT_DASHES_MAX][256]; /* --dash's entries, a dash pattern each */
+  unsigned ndleg;
+  bool dense; /* a series has more points than markers can show apart */
 };
 
 /* The axes. x: the same in every panel; at the values themselves when a
@@ -160,7 +178,7 @@ struct layout {
  * --own-y; a fraction on 0..1. */
 static void make_axes(const struct plot_figure *f, struct layout *L) {
   const struct plot_plan *p = f->plan;
-  const unsigned nkept = f->nkept, ny = f->ys->n;
+  const unsigned nkept = f->nrows, ny = f->ys->n;
   const struct plot_row *rows = f->rows;
   const bool yfrac = !strcmp(f->yunit, "fraction");
   double *xs = xcalloc(nkept, sizeof *xs), *yv = xcalloc((size_t)nkept * ny, sizeof *yv);
@@ -188,19 +206,24 @@ static void make_axes(const struct plot_figure *f, struct layout *L) {
   L->yaxes = xcalloc(f->panels.n, sizeof *L->yaxes);
   unsigned at = 0;
   double gmin = INFINITY, gmax = -INFINITY;
+  /* From 0 unless asked otherwise: a range around the values makes a small
+   * change look steep. Bars start at 0 whatever is asked. */
+  const bool zero = f->bars || (!p->y_from_data && !p->logy);
   for (unsigned pn = 0; pn < f->panels.n; pn++) {
     unsigned end = at;
     while (end < nkept && rows[end].panel == pn) end++;
     double mn, mx;
     y_extent(rows, at, end, ny, f->stacked, &mn, &mx);
+    /* The peak line is in the range: it says how far the values are from it. */
+    if (f->peak[pn] > 0) mn = fmin(mn, f->peak[pn]), mx = fmax(mx, f->peak[pn]);
     gmin = fmin(gmin, mn);
     gmax = fmax(gmax, mx);
-    if (p->own_y) plot_axis_nice(&L->yaxes[pn], mn, mx, p->logy, L->ybase, yfrac, f->bars);
+    if (p->own_y) plot_axis_nice(&L->yaxes[pn], mn, mx, p->logy, L->ybase, yfrac, zero);
     at = end;
   }
   for (unsigned pn = 0; pn < f->panels.n && !p->own_y; pn++) {
     if (p->yrange) axis_fixed(&L->yaxes[pn], p->ylo, p->yhi, p->logy, L->ybase);
-    else plot_axis_nice(&L->yaxes[pn], gmin, gmax, p->logy, L->ybase, yfrac, f->bars);
+    else plot_axis_nice(&L->yaxes[pn], gmin, gmax, p->logy, L->ybase, yfrac, zero);
   }
 }
 
@@ -225,6 +248,78 @@ static void make_legend(const struct plot_figure *f, struct layout *L) {
     for (unsigned k = 0; k < ny; k++)
       snprintf(L->leg[L->nleg++], sizeof L->leg[0], "%s", f->ys->title[k]);
   }
+  /* --dash's patterns, in grey: the colours are the lines'. */
+  for (unsigned d = 0; f->dc >= 0 && d < f->dashes.n; d++) {
+    char v[256];
+    plot_fmt_value(f->dashes.v[d], plot_unit_of(f->plan->dash), v, sizeof v);
+    snprintf(L->dleg[L->ndleg++], sizeof L->dleg[0], "%s = %s", f->plan->dash, v);
+  }
+  /* Markers apart need room: a box about 400 pixels wide shows 60 a line. */
+  for (unsigned i = 0, run = 0; i < f->nrows; i++) {
+    const bool same =
+        i && f->rows[i].panel == f->rows[i - 1].panel && same_series(&f->rows[i], &f->rows[i - 1]);
+    run = same ? run + 1 : 1;
+    L->dense |= run > PLOT_MARKERS_MAX;
+  }
+  /* The peak line's entry: its value when every panel has the same. */
+  double peak = 0;
+  bool one = true;
+  for (unsigned pn = 0; pn < f->panels.n; pn++) {
+    if (f->peak[pn] > 0 && peak > 0 && f->peak[pn] != peak) one = false;
+    if (f->peak[pn] > 0) peak = f->peak[pn];
+  }
+  L->peakleg[0] = '\0';
+  if (peak > 0) {
+    const char *what = f->dram_peak ? "DRAM peak" : "peak";
+    char v[64];
+    plot_fmt_tick(peak, f->yunit, v, sizeof v);
+    /* The unit is the y axis's: the entry stays short, the legend a row. */
+    if (!one) snprintf(L->peakleg, sizeof L->peakleg, "%s", what);
+    else snprintf(L->peakleg, sizeof L->peakleg, "%s: %s", what, v);
+  }
+}
+
+/* A column's axis label without the unit in parentheses (a title's words:
+ * work_s "work", not "work s"). */
+static void words_of(const char *name, const char *unit, char *out, size_t cap) {
+  plot_axis_label(name, unit, out, cap);
+  const size_t n = strlen(out), u = strlen(unit);
+  if (u && n > u + 3 && !strncmp(out + n - u - 3, " (", 2) && !strncmp(out + n - u - 1, unit, u))
+    out[n - u - 3] = '\0';
+}
+
+/* The y axis in words without its unit (the default title's). */
+static void y_words(const struct plot_figure *f, char *out, size_t cap) {
+  const struct plot_ycols *ys = f->ys;
+  if (ys->n == 1 || strchr(ys->pattern, '*')) {
+    words_of(ys->pattern, f->yunit, out, cap);
+    return;
+  }
+  /* Columns with nothing in common: each named. */
+  size_t len = 0;
+  out[0] = '\0';
+  for (unsigned k = 0; k < ys->n; k++) {
+    char w[256];
+    words_of(ys->name[k], f->yunit, w, sizeof w);
+    len += (size_t)snprintf(out + len, len < cap ? cap - len : 0, "%s%s", k ? ", " : "", w);
+  }
+}
+
+/* The title, --title's or the axes' words, wrapped at spaces to the canvas's
+ * width in the title's 13-point font, so no line runs off an edge. */
+static void make_title(const struct plot_figure *f, struct layout *L, unsigned W) {
+  const struct plot_plan *p = f->plan;
+  if (p->title) {
+    snprintf(L->title, sizeof L->title, "%s", p->title);
+  } else {
+    char y[1024], x[512];
+    y_words(f, y, sizeof y);
+    words_of(p->x, L->xunit, x, sizeof x);
+    snprintf(L->title, sizeof L->title, "%s %s %s", y, f->bars ? "by" : "against", x);
+  }
+  const unsigned width = (unsigned)((W - 40) / (PX_CHAR * 13 / 11 * 1.1));
+  L->ntitle = L->title[0] ? wrap(L->title, width, " ", L->titlelines, sizeof L->titlelines) : 0;
+  L->titleh = L->ntitle > 1 ? PX_TITLE + (L->ntitle - 1) * PX_TITLE_LINE : PX_TITLE;
 }
 
 /* The layout. Bars get the width their labels need (up to a limit, past
@@ -259,17 +354,21 @@ static void make_layout(const struct plot_figure *f, struct layout *L) {
   while (cols > 1 && npanels <= 4 && pw > PX_PANEL_W && cols * pw > PX_PANEL_W_MAX) cols--;
   const unsigned prow = (npanels + cols - 1) / cols;
   const unsigned W = cols * pw;
-  size_t legw = 0;
+  size_t legw = strlen(L->peakleg);
+  const unsigned nent = L->nleg + L->ndleg + (L->peakleg[0] != '\0');
   for (unsigned i = 0; i < L->nleg; i++)
     if (strlen(L->leg[i]) > legw) legw = strlen(L->leg[i]);
-  unsigned perrow = L->nleg ? (unsigned)((W - 40) / (legw * PX_CHAR + 80)) : 1;
+  for (unsigned i = 0; i < L->ndleg; i++)
+    if (strlen(L->dleg[i]) > legw) legw = strlen(L->dleg[i]);
+  unsigned perrow = nent ? (unsigned)((W - 40) / (legw * PX_CHAR + 80)) : 1;
   if (!perrow) perrow = 1;
-  L->legrows = L->nleg ? (L->nleg + perrow - 1) / perrow : 0;
+  L->legrows = nent ? (nent + perrow - 1) / perrow : 0;
+  make_title(f, L, W);
   /* Wrapped a little short: the font's average is not its widest. */
   const char *capt = f->caption;
-  L->ncap =
-      capt[0] ? wrap(capt, (unsigned)((W - 20) / (PX_CHAR * 1.1)), L->caplines, sizeof L->caplines)
-              : 0;
+  L->ncap = capt[0] ? wrap(capt, (unsigned)((W - 20) / (PX_CHAR * 1.1)), "; ", L->caplines,
+                           sizeof L->caplines)
+                    : 0;
   L->legh = L->legrows ? L->legrows * PX_LEGEND_ROW + 8 : 0;
   L->caph = L->ncap ? L->ncap * PX_CAPTION_LINE + 12 : 0;
   const double boxw = pw - PX_BOX_LEFT - PX_BOX_RIGHT;
@@ -281,7 +380,7 @@ static void make_layout(const struct plot_figure *f, struct layout *L) {
   L->pw = pw;
   L->cols = cols;
   L->W = W;
-  L->H = PX_TITLE + L->legh + prow * PX_PANEL_H + L->caph;
+  L->H = L->titleh + L->legh + prow * PX_PANEL_H + L->caph;
 }
 
 /* The script's head: colours, grid, the x label, log scales, --mark-x lines;
@@ -289,26 +388,38 @@ static void make_layout(const struct plot_figure *f, struct layout *L) {
 static void write_head(FILE *gp, const struct plot_figure *f, struct layout *L) {
   const struct plot_plan *p = f->plan;
   char label[1100];
-  /* Okabe and Ito's colour-blind-safe colours, yellow last: gnuplot's
-   * default sixth and seventh colours vanish on white. */
+  /* Okabe and Ito's colour-blind-safe colours without their yellow, which
+   * vanishes on white (gnuplot's own sixth and seventh colours do too); the
+   * eighth series on repeats them dashed, so no two series look alike. */
   static const char *const COLOURS[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
-                                        "#E69F00", "#56B4E9", "#000000", "#F0E442"};
-  for (unsigned c = 0; c < 8; c++) fprintf(gp, "set linetype %u lc rgb '%s'\n", c + 1, COLOURS[c]);
-  fputs("set linetype cycle 8\nset grid\nunset key\nset pointsize 0.8\nset multiplot\n", gp);
+                                        "#E69F00", "#56B4E9", "#000000"};
+  for (unsigned c = 0; c < 2 * PLOT_COLOURS; c++)
+    fprintf(gp, "set linetype %u lc rgb '%s' dt %u\n", c + 1, COLOURS[c % PLOT_COLOURS],
+            c < PLOT_COLOURS ? 1 : 2);
+  fprintf(gp, "set linetype cycle %u\nset grid\nunset key\nset pointsize 0.8\nset multiplot\n",
+          2 * PLOT_COLOURS);
   if (f->bars) {
     fputs("set grid noxtics ytics\nset xtics scale 0\n", gp);
     if (L->rotate) fputs("set xtics rotate by 30 right\n", gp);
   }
   /* Stacked bars side by side say what the bars under a group are. */
-  if (L->twolevel) snprintf(label, sizeof label, "%s (bars: %s)", p->x, p->lines);
-  else if (f->bars) snprintf(label, sizeof label, "%s", p->x);
-  else axis_label(p->x, label, sizeof label);
+  char xw[512], lw[512];
+  plot_axis_label(p->x, "", xw, sizeof xw);
+  if (p->xlabel) snprintf(label, sizeof label, "%s", p->xlabel);
+  else if (L->twolevel) {
+    plot_axis_label(p->lines, "", lw, sizeof lw);
+    snprintf(label, sizeof label, "%s (bars: %s)", xw, lw);
+  } else if (f->bars) snprintf(label, sizeof label, "%s", xw);
+  else plot_axis_label(p->x, L->xunit, label, sizeof label);
   fputs("set xlabel ", gp);
   plot_script_str(gp, label);
   fputc('\n', gp);
-  if (f->yunit[0] && strcmp(f->yunit, f->ys->pattern))
-    snprintf(L->ylabel, sizeof L->ylabel, "%s (%s)", f->ys->pattern, f->yunit);
-  else snprintf(L->ylabel, sizeof L->ylabel, "%s", f->ys->pattern);
+  /* Columns with nothing in common: their unit says what the axis is. */
+  if (p->ylabel) snprintf(L->ylabel, sizeof L->ylabel, "%s", p->ylabel);
+  else if (f->ys->n > 1 && !strchr(f->ys->pattern, '*') && f->yunit[0])
+    snprintf(L->ylabel, sizeof L->ylabel, "%s", f->yunit);
+  else if (f->ys->n > 1 && !strchr(f->ys->pattern, '*')) y_words(f, L->ylabel, sizeof L->ylabel);
+  else plot_axis_label(f->ys->pattern, f->yunit, L->ylabel, sizeof L->ylabel);
   if (L->twolevel) fputs("set xlabel offset 0,-1.2\n", gp);
   if (p->logx)
     fprintf(gp, "set logscale x %d\n",
@@ -351,60 +462,101 @@ static void write_bar_ticks(FILE *gp, const struct plot_figure *f, const struct 
   }
 }
 
+/* Where a bar of rows[i] sits: its left and right ends, and its [lo, hi]
+ * for colour c. */
+static void bar_of(const struct plot_figure *f, const struct layout *L, unsigned i, unsigned c,
+                   double *l, double *r, double *lo, double *hi) {
+  const struct plot_row *w = &f->rows[i];
+  const unsigned b = f->lc >= 0 ? w->line : f->stacked ? 0 : c;
+  *l = w->x - 0.4 + b * 0.8 / L->nside;
+  *r = *l + 0.8 / L->nside;
+  *lo = 0;
+  if (f->stacked) {
+    for (unsigned k = 0; k < c; k++) *lo += w->y[k];
+    *hi = *lo + w->y[c];
+  } else {
+    *hi = w->y[f->lc >= 0 ? 0 : c];
+  }
+}
+
 /* Rows [at, end) as bars: one data block a colour, x y xlow xhigh ylow
- * yhigh per box. */
+ * yhigh per box; with seeds (bars side by side), a block of error bars over
+ * them. */
 static void write_bars(FILE *gp, const struct plot_figure *f, const struct layout *L, unsigned at,
                        unsigned end) {
   const unsigned ny = f->ys->n, nside = L->nside;
   const unsigned ncolour = f->stacked ? ny : nside;
+  const bool whiskers = f->seeds_max && !f->stacked;
   fputs("plot ", gp);
   for (unsigned c = 0; c < ncolour; c++)
     fprintf(gp,
             "%s'-' using 1:2:3:4:5:6 with boxxyerror lc %u fs solid 0.85 border lc rgb "
             "'gray20' notitle",
-            c ? ", " : "", c + 1);
+            c ? ", " : "", c % PLOT_COLOURS + 1);
+  if (whiskers) fputs(", '-' using 1:2:3:4 with yerrorbars lc rgb 'black' pt 0 notitle", gp);
   fputc('\n', gp);
   for (unsigned c = 0; c < ncolour; c++) {
     for (unsigned i = at; i < end; i++) {
       const struct plot_row *w = &f->rows[i];
-      unsigned b = f->lc >= 0 ? w->line : f->stacked ? 0 : c;
-      if (!f->stacked && f->lc >= 0 && b != c) continue;
-      const double l = w->x - 0.4 + b * 0.8 / nside, r = l + 0.8 / nside;
+      if (!f->stacked && f->lc >= 0 && w->line != c) continue;
+      double l, r, lo, hi;
+      bar_of(f, L, i, c, &l, &r, &lo, &hi);
       const double gap = 0.06 * 0.8 / nside;
-      double lo = 0, hi;
-      if (f->stacked) {
-        for (unsigned k = 0; k < c; k++) lo += w->y[k];
-        hi = lo + w->y[c];
-      } else {
-        hi = w->y[f->lc >= 0 ? 0 : c];
-      }
       fprintf(gp, "%.17g %.17g %.17g %.17g %.17g %.17g\n", (l + r) / 2, hi, l + gap, r - gap, lo,
               hi);
     }
     /* gnuplot needs a point in every block: an empty one is a box of nothing. */
     fputs("NaN NaN NaN NaN NaN NaN\ne\n", gp);
   }
+  if (!whiskers) return;
+  for (unsigned c = 0; c < ncolour; c++)
+    for (unsigned i = at; i < end; i++) {
+      const struct plot_row *w = &f->rows[i];
+      if (f->lc >= 0 && w->line != c) continue;
+      const unsigned k = f->lc >= 0 ? 0 : c;
+      double l, r, lo, hi;
+      bar_of(f, L, i, c, &l, &r, &lo, &hi);
+      fprintf(gp, "%.17g %.17g %.17g %.17g\n", (l + r) / 2, hi, w->ylo[k], w->yhi[k]);
+    }
+  fputs("NaN NaN NaN NaN\ne\n", gp);
+}
+
+/* A series' style: lines with points (with the seeds' error bars when a row
+ * has several), or markers only; a series of more points than a marker can
+ * be told apart at (a timeline's) is a plain line. */
+static const char *line_style(const struct plot_figure *f, const struct layout *L) {
+  if (f->plan->points) return "points ps 1.3";
+  if (f->seeds_max) return "yerrorlines lw 2";
+  return L->dense ? "lines lw 1.5" : "linespoints lw 2";
 }
 
 /* Rows [at, end) as lines (or markers): a data block a line and --y column. */
-static void write_lines(FILE *gp, const struct plot_figure *f, unsigned at, unsigned end) {
+static void write_lines(FILE *gp, const struct plot_figure *f, const struct layout *L, unsigned at,
+                        unsigned end) {
   const unsigned ny = f->ys->n;
   const struct plot_row *rows = f->rows;
+  const bool seeds = f->seeds_max && !f->plan->points;
   fputs("plot ", gp);
   unsigned nplotted = 0;
   for (unsigned i = at; i < end; i++) {
-    if (i > at && rows[i].line == rows[i - 1].line) continue;
+    if (i > at && same_series(&rows[i], &rows[i - 1])) continue;
     for (unsigned k = 0; k < ny; k++) {
       const unsigned c = f->lc >= 0 ? rows[i].line : k;
-      fprintf(gp, "%s'-' using 1:2 with %s lc %u pt %u notitle", nplotted++ ? ", " : "",
-              f->plan->points ? "points ps 1.3" : "linespoints lw 2", c + 1, c % 13 + 1);
+      fprintf(gp, "%s'-' using 1:2%s with %s lt %u pt %u", nplotted++ ? ", " : "",
+              seeds ? ":3:4" : "", line_style(f, L), c + 1, c % 13 + 1);
+      if (f->dc >= 0) fprintf(gp, " dt %u", rows[i].dash + 1);
+      fputs(" notitle", gp);
     }
   }
   fputc('\n', gp);
   for (unsigned i = at, first = at; i < end; i++) {
-    if (i + 1 < end && rows[i + 1].line == rows[i].line) continue;
+    if (i + 1 < end && same_series(&rows[i + 1], &rows[i])) continue;
     for (unsigned k = 0; k < ny; k++) {
-      for (unsigned j = first; j <= i; j++) fprintf(gp, "%.17g %.17g\n", rows[j].x, rows[j].y[k]);
+      for (unsigned j = first; j <= i; j++) {
+        fprintf(gp, "%.17g %.17g", rows[j].x, rows[j].y[k]);
+        if (seeds) fprintf(gp, " %.17g %.17g", rows[j].ylo[k], rows[j].yhi[k]);
+        fputc('\n', gp);
+      }
       fputs("e\n", gp);
     }
     first = i + 1;
@@ -418,7 +570,7 @@ static void write_panels(FILE *gp, const struct plot_figure *f, const struct lay
   unsigned at = 0;
   for (unsigned pn = 0; pn < f->panels.n; pn++) {
     const unsigned col = pn % L->cols, prw = pn / L->cols;
-    const double left = col * L->pw, top = PX_TITLE + L->legh + prw * PX_PANEL_H;
+    const double left = col * L->pw, top = L->titleh + L->legh + prw * PX_PANEL_H;
     fprintf(gp, "set lmargin at screen %.6f\nset rmargin at screen %.6f\n",
             (left + PX_BOX_LEFT) / W, (left + L->pw - PX_BOX_RIGHT) / W);
     fprintf(gp, "set tmargin at screen %.6f\nset bmargin at screen %.6f\n",
@@ -438,10 +590,19 @@ static void write_panels(FILE *gp, const struct plot_figure *f, const struct lay
     if (f->bars) write_bar_ticks(gp, f, L);
     else gp_range(gp, "x", &L->xa, L->xunit);
     gp_range(gp, "y", &L->yaxes[pn], f->yunit);
+    /* The peak: a dashed line across the panel, named in the legend (a label
+     * beside it could cover a point). */
+    const double pk = f->peak[pn];
+    if (pk > 0 && pk >= L->yaxes[pn].lo && pk <= L->yaxes[pn].hi)
+      fprintf(gp,
+              "set arrow %d from graph 0, first %.17g to graph 1, first %.17g nohead dt 2 lw 2 lc "
+              "rgb 'gray20' back\n",
+              PEAK_ARROW, pk, pk);
+    else fprintf(gp, "unset arrow %d\n", PEAK_ARROW);
     unsigned end = at;
-    while (end < f->nkept && f->rows[end].panel == pn) end++;
+    while (end < f->nrows && f->rows[end].panel == pn) end++;
     if (f->bars) write_bars(gp, f, L, at, end);
-    else write_lines(gp, f, at, end);
+    else write_lines(gp, f, L, at, end);
     at = end;
   }
 }
@@ -454,11 +615,13 @@ static void write_frame(FILE *gp, const struct plot_figure *f, const struct layo
         "set lmargin at screen 0\nset rmargin at screen 1\nset tmargin at screen 1\n"
         "set bmargin at screen 0\nset xrange [0:1]\nset yrange [0:1]\n",
         gp);
-  char title[2200];
-  snprintf(title, sizeof title, "%s %s %s", f->ys->pattern, f->bars ? "by" : "against", f->plan->x);
-  fputs("set label ", gp);
-  plot_script_str(gp, title);
-  fprintf(gp, " at screen 0.5, screen %.6f center font ',13'\n", 1 - 18.0 / H);
+  for (unsigned i = 0, o = 0; i < L->ntitle; i++) {
+    fputs("set label ", gp);
+    plot_script_str(gp, L->titlelines + o);
+    fprintf(gp, " at screen 0.5, screen %.6f center font ',13'\n",
+            1 - (18.0 + i * PX_TITLE_LINE) / H);
+    o += (unsigned)strlen(L->titlelines + o) + 1;
+  }
   for (unsigned i = 0, o = 0; i < L->ncap; i++) {
     fputs("set label ", gp);
     plot_script_str(gp, L->caplines + o);
@@ -466,20 +629,31 @@ static void write_frame(FILE *gp, const struct plot_figure *f, const struct layo
             (L->caph - 8 - (i + 0.5) * PX_CAPTION_LINE) / H);
     o += (unsigned)strlen(L->caplines + o) + 1;
   }
-  if (L->nleg) {
+  if (L->nleg || L->ndleg || L->peakleg[0]) {
     fprintf(gp,
             "set key at screen 0.5, screen %.6f center top horizontal Left reverse maxrows %u "
             "samplen 3 spacing 1.1\n",
-            1 - (PX_TITLE - 4.0) / H, L->legrows);
+            1 - (L->titleh - 4.0) / H, L->legrows);
     fputs("plot ", gp);
     for (unsigned i = 0; i < L->nleg; i++) {
       if (f->bars)
         fprintf(gp, "%sNaN with boxxyerror lc %u fs solid 0.85 border lc rgb 'gray20' title ",
-                i ? ", " : "", i + 1);
+                i ? ", " : "", i % PLOT_COLOURS + 1);
       else
-        fprintf(gp, "%sNaN with %s lc %u pt %u title ", i ? ", " : "",
-                f->plan->points ? "points ps 1.3" : "linespoints lw 2", i + 1, i % 13 + 1);
+        fprintf(gp, "%sNaN with %s lt %u pt %u title ", i ? ", " : "",
+                f->seeds_max && !f->plan->points ? "linespoints lw 2" : line_style(f, L), i + 1,
+                i % 13 + 1);
       plot_script_str(gp, L->leg[i]);
+    }
+    for (unsigned d = 0; d < L->ndleg; d++) {
+      fprintf(gp, "%sNaN with lines lw 2 lc rgb 'gray30' dt %u title ", L->nleg + d ? ", " : "",
+              d + 1);
+      plot_script_str(gp, L->dleg[d]);
+    }
+    if (L->peakleg[0]) {
+      fprintf(gp, "%sNaN with lines dt 2 lw 2 lc rgb 'gray20' title ",
+              L->nleg + L->ndleg ? ", " : "");
+      plot_script_str(gp, L->peakleg);
     }
     fputc('\n', gp);
   } else {

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "app/gnuplot.h"
+#include "app/plot_axis.h"
 #include "renderer/image.h"
 #include "sim/err.h"
 #include "sim/outfile.h"
@@ -90,21 +91,33 @@ bool preview_write_heat_png(const struct image *im, const char *channel, const c
     /* Small images are drawn enlarged (whole pixels), beside the colour bar. */
     const uint32_t big = im->width > im->height ? im->width : im->height;
     const uint32_t scale = big >= 512 ? 1 : 512 / big;
+    /* The colour bar's ticks: our labels (40k, not gnuplot's 40.0k), and the
+     * bar's label set off past the widest, so the two never overlap. */
+    struct plot_axis cb;
+    plot_axis_nice(&cb, 0, top, false, 10, false, true);
+    char ticks[2048] = "", l[64];
+    size_t tl = 0, widest = 0;
+    for (unsigned i = 0; i < cb.nticks && cb.ticks[i] <= top * (1 + 1e-9); i++) {
+      plot_fmt_tick(cb.ticks[i], "", l, sizeof l);
+      widest = strlen(l) > widest ? strlen(l) : widest;
+      tl += (size_t)snprintf(ticks + tl, tl < sizeof ticks ? sizeof ticks - tl : 0, "%s'%s' %.17g",
+                             i ? ", " : "", l, cb.ticks[i]);
+    }
     /* Viridis (matplotlib's): perceptually even, readable in grey and by
      * most colour-blind readers. */
-    fprintf(
-        gp,
-        "set terminal pngcairo size %u,%u noenhanced font ',11'\nset output '%s'\n"
-        "set title \"%s\\n%s; largest pixel %.0f%s\"\nset size ratio -1\nunset key\nunset xtics\nunset ytics\n"
-        "set border 0\nset xrange [-0.5:%u-0.5]\nset yrange [-0.5:%u-0.5]\n"
-        "set cbrange [0:%.17g]\nset cblabel '%s'\nset cbtics format '%s'\n"
-        "set palette defined (0 '#440154', 1 '#3b528b', 2 '#21908d', 3 '#5dc963', "
-        "4 '#fde725')\n"
-        "plot '%s' binary array=(%u,%u) flipy format='%%float' using ($1 > %.17g ? %.17g : $1) "
-        "with image\n",
-        im->width * scale + 260, im->height * scale + 90, out->tmp, t1, t2, max, clip, im->width,
-        im->height, top, units, top >= 1e4 ? "%.1s%c" : "%g", raw.tmp, im->width, im->height, top,
-        top);
+    fprintf(gp,
+            "set terminal pngcairo size %u,%u noenhanced font ',11'\nset output '%s'\n"
+            "set title \"%s\\n%s; largest pixel %.0f%s\"\nset size ratio -1\nunset key\n"
+            "unset xtics\nunset ytics\nset border 0\nset xrange [-0.5:%u-0.5]\n"
+            "set yrange [-0.5:%u-0.5]\nset cbrange [0:%.17g]\nset cbtics (%s)\n"
+            "set cblabel '%s' offset %.1f,0\n"
+            "set palette defined (0 '#440154', 1 '#3b528b', 2 '#21908d', 3 '#5dc963', "
+            "4 '#fde725')\n"
+            "plot '%s' binary array=(%u,%u) flipy format='%%float' using ($1 > %.17g ? %.17g : "
+            "$1) with image\n",
+            im->width * scale + 260, im->height * scale + 90, out->tmp, t1, t2, max, clip,
+            im->width, im->height, top, ticks, units, widest > 3 ? (widest - 3) * 0.8 + 0.5 : 0.5,
+            raw.tmp, im->width, im->height, top, top);
     if (!gnuplot_close(&gnu))
       ok = err_set(e, png, 0, 0, "gnuplot could not draw the heat map (is gnuplot-nox installed?)");
   }

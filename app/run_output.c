@@ -94,7 +94,7 @@ static void identity(const struct run_output_report *r, struct stats_table *t) {
   stats_u64(t, "seed", r->seed);
 }
 
-/* ---- the run's own numbers, at the machine's slots (README "Numbers") ----
+/* ---- the run's own numbers, at the machine's slots (docs/stats.md) ----
  * The workload's counts (the renderer's) and figures of the machine that need
  * the renderer's data classes; st: the struct run_output_report. */
 
@@ -122,7 +122,7 @@ static double run_slots_per_geometry_miss(const void *st, const struct stats_env
       machine_get_stats(((const struct run_output_report *)st)->machine);
   const uint64_t *by = s->l2.fetch_bytes_by_class;
   uint64_t geo_misses = (by[TRACE_CLASS_GEOMETRY] + by[TRACE_CLASS_NODE]) / SIM_LINE_BYTES;
-  return derived_ratio((double)s->issue_slots, (double)geo_misses);
+  return stats_ratio((double)s->issue_slots, (double)geo_misses);
 }
 
 static const struct stats_desc run_desc[] = {
@@ -140,17 +140,11 @@ const struct stats_descs run_output_stats_descs = {"run", run_desc, STATS_COUNT(
 const struct stats_descs run_output_misses_stats_descs = {
     "run", run_misses_desc, STATS_COUNT(run_misses_desc), 0, NULL, 0};
 
-static void run_slot(const struct stats_env *env, int slot, struct stats_table *t) {
-  const void *r = env->slot_ctx;
-  if (slot == MACHINE_STATS_SLOT_RUN) stats_emit(t, &run_output_stats_descs, r, env);
-  else stats_emit(t, &run_output_misses_stats_descs, r, env);
-}
-
 /* ---- fidelity analytic's numbers ----
  * What its counts and estimate know, under the timed rungs' names and in
  * their order; what only time tells (threads' idle time, switches, waits,
  * merges, stalls, queues, latencies, events) is absent. Then its own numbers,
- * analytic_* (README "Fidelity ladder"). st: the struct app_analytic; env->ctx:
+ * analytic_* (docs/fidelity-and-sampling.md). st: the struct app_analytic; env->ctx:
  * the struct run_output_report. */
 
 #define AN(f) offsetof(struct app_analytic, f), STATS_FIELD_SIZE(struct app_analytic, f)
@@ -193,17 +187,17 @@ static double an_core_utilization(const void *st, const struct stats_env *env) {
 }
 static double an_slots_per_blocking_load(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)an_n(st)->issue_slots, (double)an_n(st)->blocking_loads);
+  return stats_ratio((double)an_n(st)->issue_slots, (double)an_n(st)->blocking_loads);
 }
 static double an_slots_per_geometry_miss(const void *st, const struct stats_env *env) {
   (void)env;
   const uint64_t *by = an_n(st)->fetch_bytes_by_class;
   uint64_t geo_misses = (by[TRACE_CLASS_GEOMETRY] + by[TRACE_CLASS_NODE]) / SIM_LINE_BYTES;
-  return derived_ratio((double)an_n(st)->issue_slots, (double)geo_misses);
+  return stats_ratio((double)an_n(st)->issue_slots, (double)geo_misses);
 }
 static double an_l2_miss_rate(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)an_n(st)->l2_misses, (double)an_n(st)->l2_accesses);
+  return stats_ratio((double)an_n(st)->l2_misses, (double)an_n(st)->l2_accesses);
 }
 static uint64_t an_dram_reads(const void *st, const struct stats_env *env) {
   (void)env;
@@ -214,8 +208,8 @@ static uint64_t an_dram_writes(const void *st, const struct stats_env *env) {
   return an_n(st)->writeback_bytes / 64;
 }
 static double an_dram_bytes_per_cycle(const void *st, const struct stats_env *env) {
-  return derived_ratio((double)(an_n(st)->fetch_bytes + an_n(st)->writeback_bytes),
-                       (double)env->cycles);
+  return stats_ratio((double)(an_n(st)->fetch_bytes + an_n(st)->writeback_bytes),
+                     (double)env->cycles);
 }
 #define AN_EST(f)                                                                                  \
   static double an_est_##f(const void *st, const struct stats_env *env) {                          \
@@ -279,7 +273,7 @@ static const struct stats_desc analytic_desc[] = {
            "lines written to the DRAM"),
     AN_FIELD(counts.fetch_bytes, "dram_read_bytes", "bytes", "bytes read from the DRAM"),
     AN_FIELD(counts.writeback_bytes, "dram_write_bytes", "bytes", "bytes written to the DRAM"),
-    AN_F64(counts.fetch_bytes, an_dram_bytes_per_cycle, "dram_bytes_per_cycle", "bytes a cycle",
+    AN_F64(counts.fetch_bytes, an_dram_bytes_per_cycle, "dram_bytes_per_cycle", "bytes/cycle",
            "DRAM bytes read and written / cycles"),
     AN_F64(est.slots_per_blocking, an_est_slots_per_blocking, "analytic_slots_per_blocking_load",
            "cycles", "c: issue slots per blocking load (0 when no load blocks)"),
@@ -347,7 +341,12 @@ void run_output_measured(const struct run_output_report *r, struct stats_table *
     sample_stats(r->sample, p->clock_ghz, peak, s->contexts, s->threads, t);
     return;
   }
-  machine_stats_emit(r->machine, t, trace_class_names, TRACE_CLASS_COUNT, run_slot, r);
+  const struct stats_part run_parts[] = {
+      {MACHINE_STATS_AT_RUN, &run_output_stats_descs, r, NULL},
+      {MACHINE_STATS_AT_RUN_MISSES, &run_output_misses_stats_descs, r, NULL},
+  };
+  machine_stats_emit(r->machine, t, trace_class_names, TRACE_CLASS_COUNT, run_parts,
+                     STATS_COUNT(run_parts));
   if (r->rung) stats_emit(t, &rung_error_stats_descs, r->rung, &(struct stats_env){0});
 }
 
@@ -388,8 +387,12 @@ static void tl_header(unsigned col, char *buf, size_t len) {
 
 /* DRAM bytes per cycle over the run by data class, read from timeline.csv by
  * the columns' header names (from the machine's column table), so a column
- * added to the timeline cannot shift the plot. */
+ * added to the timeline cannot shift the plot. The legend sits under the
+ * plot (beside it, it took a third of the width); the classes take Okabe and
+ * Ito's colour-blind-safe colours (gnuplot's own gave two classes near-equal
+ * yellows); a dashed line marks the DRAM's peak, where it has one. */
 static bool write_plot(const struct run_output_report *r, struct err *e) {
+  static const char *const COLOURS[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00"};
   char csv[4200], final[4200], cmd[8192];
   snprintf(csv, sizeof csv, "%s/timeline.csv", r->out_dir);
   snprintf(final, sizeof final, "%s/traffic.png", r->out_dir);
@@ -408,8 +411,9 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
   static const char x[] = "((column(\"cycle\")+column(\"cycles\")/2)/1e6)";
   int n = snprintf(
       cmd, sizeof cmd,
-      "set terminal pngcairo size 1000,560 noenhanced\nset output '%s'\n"
-      "set datafile separator ','\nset datafile columnheaders\nset key outside right top\n"
+      "set terminal pngcairo size 1000,600 noenhanced font ',12'\nset output '%s'\n"
+      "set datafile separator ','\nset datafile columnheaders\n"
+      "set key outside bottom center horizontal Left reverse samplen 3 spacing 1.2\n"
       "set title 'DRAM traffic per cycle: %s, %s policy, %ux%u (window %llu cycles)'\n"
       "set xlabel 'simulated time (million cycles)'\n"
       "set ylabel 'DRAM bytes per cycle'\nset grid\nset yrange [0:*]\n"
@@ -420,13 +424,22 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
   for (unsigned c = 0; c < TRACE_CLASS_COUNT; c++) {
     tl_header(MACHINE_TL_READ_CLASS0 + c, cls, sizeof cls);
     n += snprintf(cmd + n, sizeof cmd - (size_t)n,
-                  ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps title 'read: %s'",
-                  x, cls, trace_class_names[c]);
+                  ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps lw 1.5 lc rgb '%s' "
+                  "title 'read: %s'",
+                  x, cls, COLOURS[c % 5], trace_class_names[c]);
   }
-  snprintf(cmd + n, sizeof cmd - (size_t)n,
-           ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps dt 2 title "
-           "'write-backs'\n",
-           x, wr);
+  n += snprintf(cmd + n, sizeof cmd - (size_t)n,
+                ", '' using %s:(column(\"%s\")/column(\"cycles\")) with steps lw 1.5 lc rgb "
+                "'#56B4E9' title 'write-backs'",
+                x, wr);
+  /* The peak as a constant function, so the y range reaches it. */
+  const double peak = machine_dram_peak_bytes_per_cycle(&r->cfg->p);
+  if (peak > 0)
+    n += snprintf(cmd + n, sizeof cmd - (size_t)n,
+                  ", %.17g with lines dt 2 lw 2 lc rgb 'gray20' title 'DRAM peak (%.4g bytes per "
+                  "cycle)'",
+                  peak, peak);
+  snprintf(cmd + n, sizeof cmd - (size_t)n, "\n");
   fputs(cmd, gnu.in);
   if (!gnuplot_close(&gnu)) {
     outfile_abort(&o);
@@ -554,7 +567,7 @@ static const char *unit_in_tables(const char *name, bool per_class) {
   for (unsigned t = 0; t < STATS_TABLE_COUNT; t++)
     for (unsigned i = 0; i < STATS_TABLES[t]->n; i++) {
       const struct stats_desc *d = &STATS_TABLES[t]->d[i];
-      if (d->how == STATS_HOW_SLOT || d->per_class != per_class) continue;
+      if (d->how == STATS_HOW_AT || d->per_class != per_class) continue;
       if (per_class ? per_class_match(d->name, name) : !strcmp(d->name, name)) return d->unit;
     }
   for (unsigned j = 0; j < machine_tl_col_count; j++) {

@@ -46,7 +46,7 @@ struct run_output_report {
   double wall_s;
 };
 
-/* The cost channels image.exr carries when the run counted them (README
+/* The cost channels image.exr carries when the run counted them (docs/outputs.md,
  * "Cost in the picture"), NULL-terminated; and whether name is one. */
 extern const char *const run_output_cost_channels[];
 bool run_output_is_cost_channel(const char *name);
@@ -75,7 +75,7 @@ void run_output_measured(const struct run_output_report *r, struct stats_table *
  * its order), then what only stats.json holds, fidelity analytic's and a
  * sampled run's numbers, a cheaper rung's measured error (app/rung_error.h),
  * then timeline.csv's columns: name, unit, component, description, one a line
- * (`rtsim run --help-stats`), or as Markdown table rows (README "Numbers"). */
+ * (`rtsim run --help-stats`), or as Markdown table rows (docs/stats.md). */
 void run_output_stats_help(FILE *f, bool markdown);
 /* The unit the tables state for NAME: a machine config key's (--help-keys),
  * else a number's or timeline column's (--help-stats; fetch_node_bytes

@@ -35,7 +35,7 @@ static const struct shown {
     {"events", "engine events"},
     {"rung_cycles_error_min", "(fraction; measured against fidelity banked)"},
     {"rung_cycles_error_max", "(fraction; measured against fidelity banked)"},
-    {"rung_error_warning", "(1: the rung's error here is above 5%)"},
+    {"rung_error_warning", "(1: not to be trusted here; the warning on stderr says why)"},
 };
 
 /* bytes as "4 MiB", "48 KiB" or "1000 bytes": the largest unit it is a whole
@@ -52,7 +52,9 @@ static void machine_line(const struct run_output_report *r, FILE *f) {
   const struct machine_params *p = &r->cfg->p;
   char l2[32];
   size_text(p->l2_size_bytes, l2, sizeof l2);
-  fprintf(f, "machine: %u cores x %u threads x %u rays a thread, L2 %s, fidelity %s, %g GHz\n",
+  fprintf(f,
+          "machine: %u x %u x %u (cores x threads_per_core x rays_per_thread), L2 %s, "
+          "fidelity %s, %g GHz\n",
           p->cores, p->threads_per_core, p->rays_per_thread, l2,
           machine_cfg_fidelity_name(p->fidelity), p->clock_ghz);
   if (r->sample) fprintf(f, "sampled: sample.fraction %g\n", r->cfg->sample.fraction);

@@ -103,7 +103,7 @@ void rung_error_warning(const struct rung_error *r, char *buf, size_t cap) {
            100 * w->dram_bytes_max, r->inside ? "" : ", and here the error is unknown", todo);
 }
 
-/* ---- its stats (README "Numbers", component rung) ---- */
+/* ---- its stats (docs/stats.md, component rung) ---- */
 
 static bool has_row(const void *st, const struct stats_env *env) {
   (void)env;

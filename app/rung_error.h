@@ -1,5 +1,5 @@
-/* How wrong a cheaper rung of the fidelity ladder may be (README "Fidelity
- * ladder"): the errors each rung showed against banked, measured by regime
+/* How wrong a cheaper rung of the fidelity ladder may be (docs/fidelity-and-sampling.md,
+ * "Fidelity ladder"): the errors each rung showed against banked, measured by regime
  * (results/speed-accuracy/rung-errors.csv, compiled in at build time), and the
  * lookup of a run's nearest regime by the figures that decide the error: its
  * DRAM utilization, its core utilization, its policy and, for analytic, the
@@ -62,7 +62,7 @@ void rung_error_match(struct rung_error *r, const struct machine_params *p, cons
 /* If r->warn, the warning's one line (no newline) in buf; else "". */
 void rung_error_warning(const struct rung_error *r, char *buf, size_t cap);
 
-/* The stats a run at a cheaper rung writes (README "Numbers", component
+/* The stats a run at a cheaper rung writes (docs/stats.md, component
  * rung): where it falls, the regime it matched and the errors there; st: the
  * struct rung_error. */
 struct stats_descs;

@@ -1,5 +1,5 @@
 /* Sampling a timed run: the plan, the claim hook, the probes and the
- * estimates (sample.h says the design; README "Sampling" says why). */
+ * estimates (sample.h says the design; docs/fidelity-and-sampling.md says why). */
 #include "app/sample.h"
 
 #include <math.h>
@@ -34,7 +34,7 @@ const char *sample_problem(const struct machine_cfg_sample *c, uint32_t fidelity
            "(recursive or packet); the dynamic and treelet policies trace every primary ray "
            "as one batch, and sampling them in time (fast-forwarding the whole machine "
            "between windows) was measured 2-18% off in cycles at 128x128 with intervals "
-           "that missed (README \"Sampling\"): run them whole";
+           "that missed (docs/fidelity-and-sampling.md): run them whole";
   /* A unit warms the pipeline with two items a ray context, then measures
    * at least one a context: the measured window then holds the unit's own
    * items, started at spread times. */
@@ -250,7 +250,7 @@ static double figure(const struct sampler *s, const struct parts *p, enum sample
   case SF_RAYS: return rays;
   case SF_CYCLES: return cycles;
   case SF_DRAM_BYTES: return bytes;
-  case SF_BYTES_PER_CYCLE: return derived_ratio(bytes, cycles);
+  case SF_BYTES_PER_CYCLE: return stats_ratio(bytes, cycles);
   case SF_UTIL: return derived_core_utilization(slots, s->cores, cycles);
   case SF_RAYS_PER_S: return derived_rays_per_second(rays, cycles / s->hz);
   default: {
@@ -350,7 +350,7 @@ double sample_cycles(const struct sampler *s, double *lo, double *hi) {
   return e.v;
 }
 
-/* ---- the sampled run's numbers (README "Numbers", component sampled) ----
+/* ---- the sampled run's numbers (docs/stats.md, component sampled) ----
  * st: the struct sampler; env->ctx: the struct sample_env below. Each
  * estimate is three numbers: NAME, NAME_ci95_low and NAME_ci95_high. */
 
@@ -509,8 +509,8 @@ static const struct stats_desc sample_desc[] = {
     EST(SO_UTIL, "core_utilization", "fraction", "issue slots / cores x cycles, estimated", NULL),
     EST(SO_DRAM_BYTES, "dram_bytes", "bytes", "bytes read from and written to the DRAM, estimated",
         NULL),
-    EST(SO_BYTES_PER_CYCLE, "dram_bytes_per_cycle", "bytes a cycle",
-        "DRAM bytes / cycles, estimated", NULL),
+    EST(SO_BYTES_PER_CYCLE, "dram_bytes_per_cycle", "bytes/cycle", "DRAM bytes / cycles, estimated",
+        NULL),
     EST(SO_DRAM_UTIL, "dram_utilization", "fraction",
         "dram_bytes_per_cycle / the DRAM's peak, estimated (a DRAM with a peak)", has_peak),
     EST(SO_LOAD_LAT, "load_latency_mean", "cycles", "a load's latency, mean, estimated", NULL),

@@ -1,4 +1,4 @@
-/* Sampling a timed run (README "Sampling"): the work list (pixels or tiles in
+/* Sampling a timed run (docs/fidelity-and-sampling.md): the work list (pixels or tiles in
  * the policy's order) is cut into sample.units strata of equal size; in each,
  * one unit of detailed items: its first items (two a ray context) warm the
  * machine's pipeline (rays in flight, MSHRs, DRAM queues), the rest (at

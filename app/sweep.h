@@ -1,4 +1,4 @@
-/* Sweep files (configs/sweeps/NAME.yaml; the format is in README.md, Sweeps):
+/* Sweep files (configs/sweeps/NAME.yaml; the format is in docs/sweeps.md):
  * a base machine config, a workload, fixed --set overrides, and axes over
  * machine config keys or workload keys, expanded into points: the cartesian
  * product of the axes and zipped groups, first dimension slowest. Everything

@@ -38,7 +38,7 @@ bool sweep_make_dirs(const char *path, struct err *e);
 bool sweep_job_prepare(const struct sweep *s, const struct sweep_job *j, struct err *e);
 /* Whether the job's command.sh (if any) runs the job's own command, with the
  * sweep directory now at dir: paths may differ where they name the same
- * files (README.md, Sweeps). */
+ * files (docs/sweeps.md). */
 bool sweep_job_same_command(const struct sweep_job *j, const char *dir);
 /* The first line of dir/error.txt that says "error", else its first line, or
  * "(no message)". */

@@ -88,7 +88,7 @@ void sweep_emit_slurm(const struct sweep_line_base *b, struct sweep_job **todo, 
          "# skips one complete (or running elsewhere) when it starts, keeps a failed one's\n"
          "# stderr in its error.txt, and exits 2 when its number is not in this file.\n"
          "# Requests: time twice the longest task's expected %.0f s; memory the largest\n"
-         "# point's %s (README.md, Sweeps).\n",
+         "# point's %s (docs/sweeps.md).\n",
          per, tasks, tasks == 1 ? "" : "s", per, n, sweep_file, npoints, b->dir, longest,
          measured ? "estimate, or twice the complete points' peak if larger"
                   : "estimate (no point is complete to measure from)");

@@ -80,7 +80,7 @@ void kd_build_params_default(struct kd_build_params *p);
 /* Build over all of s's triangles. The tree owns its arrays (kd_fini frees).
  * An empty scene gives a single empty leaf. False when the host's memory ran
  * out (an allocation of *failed_bytes failed, if given): the build is undone
- * and t is empty. About 250 bytes a triangle at the peak (README: Limits). */
+ * and t is empty. About 250 bytes a triangle at the peak (docs/inputs.md, Limits). */
 bool kd_build(struct kd_tree *t, const struct scene *s, const struct kd_build_params *p,
               unsigned long long *failed_bytes);
 void kd_fini(struct kd_tree *t);

@@ -292,16 +292,17 @@ static inline uint32_t pk_count(uint64_t m) {
   return (uint32_t)((m * 0x0101010101010101ull) >> 56);
 }
 
-/* Shared loop of trace_packet_closest (any_hit false: hits) and
- * trace_packet_any (true: occ). */
-static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk,
-                                   const struct ray *rays, uint32_t n, bool any_hit,
-                                   struct trace_hit *hits, bool *occ,
-                                   struct trace_packet_cost *cost) {
-  CHECK_LE(n, TRACE_PACKET_MAX);
+#define PK_INLINE static inline __attribute__((always_inline))
+
+/* The packet's rays set up for traversal: results cleared, the valid rays'
+ * slab state and sign masks filled; the mask of live rays (ignore_prim set:
+ * *ign). */
+PK_INLINE uint64_t pk_setup(struct trace_ctx *tr, struct trace_packet *pk, const struct ray *rays,
+                            uint32_t n, bool any_hit, struct trace_hit *hits, bool *occ,
+                            uint64_t *ign) {
   const struct kd_tree *kd = tr->kd;
-  const struct scene *s = tr->scene;
-  uint64_t live = 0, ign = 0, found = 0;
+  uint64_t live = 0;
+  *ign = 0;
   for (int a = 0; a < 3; a++) pk->flat[a] = pk->pos[a] = pk->neg[a] = 0;
   memset(pk->mb_prim, 0xff, sizeof pk->mb_prim);
   for (uint32_t i = 0; i < n; i++) {
@@ -337,9 +338,106 @@ static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk
     trace_isect_prepare(&pk->ir[i], r->o, r->d);
     pk->best_p[i] = 0;
     pk->ignore[i] = r->ignore_prim;
-    if (r->ignore_prim >= 0) ign |= bit;
+    if (r->ignore_prim >= 0) *ign |= bit;
   }
+  return live;
+}
 
+/* The rays in act tested against leaf nd's triangles (one fetch a triangle
+ * for the packet, a test a ray); a hit ends an any-hit ray (cleared from
+ * *live) and improves a closest-hit ray's best (*found). */
+PK_INLINE void pk_leaf(struct trace_ctx *tr, struct trace_packet *pk, struct kd_node nd,
+                       uint64_t act, uint64_t ign, bool any_hit, struct trace_hit *hits, bool *occ,
+                       uint64_t *live, uint64_t *found) {
+  const struct scene *s = tr->scene;
+  uint32_t off = kd_leaf_offset(nd), cnt = kd_leaf_count(nd);
+  uint64_t m_leaf = act;
+  for (uint64_t m = act; m; m &= m - 1) pk->ray[pk_first(m)].nodes++;
+  for (uint32_t j = 0; j < cnt && m_leaf; j++) {
+    const uint32_t p = trav_leaf_prim(tr, off + j);
+    uint64_t tm = m_leaf;
+    for (uint64_t m = tm & ign; m; m &= m - 1) {
+      int i = pk_first(m);
+      if ((int64_t)p == (int64_t)pk->ignore[i]) tm &= ~(1ull << i);
+    }
+    if (!tm) continue;
+    const uint32_t k = pk_count(tm);
+    trav_announce_tri(tr, p, k);
+    const struct scene_tri *tri = &s->tris[p];
+    const vec3 v0 = tri->v[0], v1 = tri->v[1], v2 = tri->v[2];
+    /* Rays tested against p before skip the arithmetic (see trav_best). */
+    const uint32_t slot = p & (2 * TRAV_MBOX - 1);
+    if (pk->mb_prim[slot] != p) {
+      pk->mb_prim[slot] = p;
+      pk->mb_rays[slot] = 0;
+    }
+    const uint64_t seen = pk->mb_rays[slot];
+    pk->mb_rays[slot] |= tm;
+    for (uint64_t m = tm; m; m &= m - 1) {
+      const int i = pk_first(m);
+      const uint64_t bit = 1ull << i;
+      struct pk_ray *q = &pk->ray[i];
+      pk->tris[i]++;
+      if (seen & bit) continue;
+      float t, b1, b2;
+      if (!trace_isect_tri(&pk->ir[i], v0, v1, v2, q->tmin, q->upper, &t, &b1, &b2)) continue;
+      if (any_hit) {
+        occ[i] = true;
+        *live &= ~bit;
+        m_leaf &= ~bit;
+        continue;
+      }
+      if (trav_hit_wins((*found & bit) != 0, t, p, q->best_t, pk->best_p[i])) {
+        *found |= bit;
+        q->best_t = t;
+        q->upper = float_next_up(t); /* equal t still competes on prim id */
+        pk->best_p[i] = p;
+        hits[i].t = t;
+        hits[i].prim = (int32_t)p;
+        hits[i].b1 = b1;
+        hits[i].b2 = b2;
+      }
+    }
+  }
+}
+
+/* The next node from the stack, with the rays still live and not beyond
+ * their best hit there (their intervals restored from the pool); 0 when the
+ * stack runs out. */
+PK_INLINE uint64_t pk_pop(struct trace_packet *pk, int *sp, uint32_t *ptop, uint32_t *ni,
+                          uint64_t live) {
+  uint64_t act = 0;
+  while (*sp > 0 && !act) {
+    (*sp)--;
+    const struct pk_entry *e = &pk->stack[*sp];
+    const float *pool = pk->pool + e->base;
+    *ptop = e->base;
+    uint32_t k = 0;
+    for (uint64_t m = e->mask; m; m &= m - 1, k += 2) {
+      const int i = pk_first(m);
+      const uint64_t bit = 1ull << i;
+      struct pk_ray *q = &pk->ray[i];
+      if (!(live & bit) || q->best_t < pool[k]) continue;
+      act |= bit;
+      q->t0 = pool[k];
+      q->t1 = pool[k + 1];
+    }
+    *ni = e->node;
+  }
+  return act;
+}
+
+/* Shared loop of trace_packet_closest (any_hit false: hits) and
+ * trace_packet_any (true: occ): the packet goes down the tree together, each
+ * node fetched once for the rays that need it. */
+static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk,
+                                   const struct ray *rays, uint32_t n, bool any_hit,
+                                   struct trace_hit *hits, bool *occ,
+                                   struct trace_packet_cost *cost) {
+  CHECK_LE(n, TRACE_PACKET_MAX);
+  const struct kd_tree *kd = tr->kd;
+  uint64_t ign, found = 0;
+  uint64_t live = pk_setup(tr, pk, rays, n, any_hit, hits, occ, &ign);
   int sp = 0;
   uint32_t ptop = 0; /* pool in use */
   uint32_t ni = 0;
@@ -349,15 +447,15 @@ static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk
     trav_announce_node(tr, ni, pk_count(act));
     struct kd_node nd = kd->nodes[ni];
     if (!kd_is_leaf(nd)) {
-      const int a = kd_axis(nd);
-      const float split = kd_split(nd);
       const uint32_t below = ni + 1, above = kd_above(nd);
       /* Near side of the majority of the rays here (fewest out-of-order rays). */
+      const int a = kd_axis(nd);
       const uint64_t up = act & pk->pos[a], down = act & pk->neg[a];
       const bool bf = !down || (up && pk_count(up) >= pk_count(down));
-      const uint64_t flat = pk->flat[a];
       CHECK_LT(sp, KD_DEPTH_LIMIT);
       float *restrict pool = pk->pool + ptop; /* the second child's intervals */
+      const float split = kd_split(nd);
+      const uint64_t flat = pk->flat[a];
       uint32_t k = 0;
       uint64_t mf = 0, ms = 0;
       for (uint64_t m = act; m; m &= m - 1) {
@@ -431,76 +529,9 @@ static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk
         continue;
       }
     } else {
-      uint32_t off = kd_leaf_offset(nd), cnt = kd_leaf_count(nd);
-      uint64_t m_leaf = act;
-      for (uint64_t m = act; m; m &= m - 1) pk->ray[pk_first(m)].nodes++;
-      for (uint32_t j = 0; j < cnt && m_leaf; j++) {
-        const uint32_t p = trav_leaf_prim(tr, off + j);
-        uint64_t tm = m_leaf;
-        for (uint64_t m = tm & ign; m; m &= m - 1) {
-          int i = pk_first(m);
-          if ((int64_t)p == (int64_t)pk->ignore[i]) tm &= ~(1ull << i);
-        }
-        if (!tm) continue;
-        /* One fetch of the triangle for the packet; a test per ray. */
-        const uint32_t k = pk_count(tm);
-        trav_announce_tri(tr, p, k);
-        const struct scene_tri *tri = &s->tris[p];
-        const vec3 v0 = tri->v[0], v1 = tri->v[1], v2 = tri->v[2];
-        /* Rays tested against p before skip the arithmetic (see trav_best). */
-        const uint32_t slot = p & (2 * TRAV_MBOX - 1);
-        if (pk->mb_prim[slot] != p) {
-          pk->mb_prim[slot] = p;
-          pk->mb_rays[slot] = 0;
-        }
-        const uint64_t seen = pk->mb_rays[slot];
-        pk->mb_rays[slot] |= tm;
-        for (uint64_t m = tm; m; m &= m - 1) {
-          const int i = pk_first(m);
-          const uint64_t bit = 1ull << i;
-          struct pk_ray *q = &pk->ray[i];
-          pk->tris[i]++;
-          if (seen & bit) continue;
-          float t, b1, b2;
-          if (!trace_isect_tri(&pk->ir[i], v0, v1, v2, q->tmin, q->upper, &t, &b1, &b2)) continue;
-          if (any_hit) {
-            occ[i] = true;
-            live &= ~bit;
-            m_leaf &= ~bit;
-            continue;
-          }
-          if (trav_hit_wins((found & bit) != 0, t, p, q->best_t, pk->best_p[i])) {
-            found |= bit;
-            q->best_t = t;
-            q->upper = float_next_up(t); /* equal t still competes on prim id */
-            pk->best_p[i] = p;
-            hits[i].t = t;
-            hits[i].prim = (int32_t)p;
-            hits[i].b1 = b1;
-            hits[i].b2 = b2;
-          }
-        }
-      }
+      pk_leaf(tr, pk, nd, act, ign, any_hit, hits, occ, &live, &found);
     }
-    /* Next node from the stack, without the rays that are done with it. */
-    act = 0;
-    while (sp > 0 && !act) {
-      sp--;
-      const struct pk_entry *e = &pk->stack[sp];
-      const float *pool = pk->pool + e->base;
-      ptop = e->base;
-      uint32_t k = 0;
-      for (uint64_t m = e->mask; m; m &= m - 1, k += 2) {
-        const int i = pk_first(m);
-        const uint64_t bit = 1ull << i;
-        struct pk_ray *q = &pk->ray[i];
-        if (!(live & bit) || q->best_t < pool[k]) continue;
-        act |= bit;
-        q->t0 = pool[k];
-        q->t1 = pool[k + 1];
-      }
-      ni = e->node;
-    }
+    act = pk_pop(pk, &sp, &ptop, &ni, live);
     if (!act) break;
   }
   if (cost)
@@ -509,6 +540,7 @@ static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk
       cost->tris[i] = pk->tris[i];
     }
 }
+#undef PK_INLINE
 
 void trace_packet_closest(struct trace_ctx *tr, struct trace_packet *pk, const struct ray *rays,
                           uint32_t n, struct trace_hit *hits, struct trace_packet_cost *cost) {

@@ -5,7 +5,7 @@
  * write-allocate, a store covering a whole line allocating it without a
  * fetch); then a closed-form estimate of the timed machine's cycles from its
  * counts. No engine, no coroutines, no time: seconds where a timed run takes
- * minutes. README "Fidelity ladder" states the formula and what it ignores. */
+ * minutes. docs/fidelity-and-sampling.md states the formula and what it ignores. */
 #ifndef RTSIM_SIM_ANALYTIC_H
 #define RTSIM_SIM_ANALYTIC_H
 
@@ -28,7 +28,7 @@ struct analytic_counts {
   uint64_t fetch_bytes_by_class[MEM_CLASS_MAX];
 };
 
-/* The estimate (README "Fidelity ladder"): per core n = threads_per_core x
+/* The estimate (docs/fidelity-and-sampling.md): per core n = threads_per_core x
  * rays_per_thread ray contexts; c = issue slots per blocking load; L = the
  * cycles a ray gives up its issue slots per blocking load: l2.latency + (the
  * share of blocking loads that miss the L2) x dram.latency + the L1 hits'

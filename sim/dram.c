@@ -174,8 +174,23 @@ bool dram_served_transfer(const struct dram *d, double *start, double *end) {
   return d->served_has_xfer;
 }
 
+bool dram_level_stats(const struct dram *d, struct stats_part *out) {
+  *out = (struct stats_part){.at = DRAM_STATS_AT_LEVEL};
+  d->ops->stats(d->level, out);
+  return out->g != NULL;
+}
+
+void dram_level_report(const struct dram_level_ops *ops, const void *level, struct stats_table *t,
+                       uint64_t cycles) {
+  struct stats_part p = {.at = DRAM_STATS_AT_LEVEL};
+  ops->stats(level, &p);
+  if (!p.g) return;
+  const struct stats_env env = {.cycles = cycles, .ctx = p.ctx};
+  stats_emit(t, p.g, p.st, &env);
+}
+
 void dram_report(const struct dram *d, struct stats_table *t, uint64_t cycles) {
-  d->ops->report(d->level, t, cycles);
+  dram_level_report(d->ops, d->level, t, cycles);
 }
 
 void dram_trace_to(struct dram *d, FILE *f) {
@@ -187,38 +202,16 @@ void dram_trace_to(struct dram *d, FILE *f) {
           dram_model_names[d->p.model], d->p.clock_mhz, (unsigned long long)d->core_khz);
 }
 
-/* ---- the numbers every level shares (README "Numbers") ---- */
+/* ---- the numbers every level shares (docs/stats.md) ---- */
 
-static double dram_ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
 static uint64_t dram_bytes(const void *st, const struct stats_env *env) {
   (void)env;
   const struct dram_stats *s = st;
   return s->read_bytes + s->write_bytes;
 }
 static double dram_bytes_per_cycle(const void *st, const struct stats_env *env) {
-  return dram_ratio((double)dram_bytes(st, env), (double)env->cycles);
+  return stats_ratio((double)dram_bytes(st, env), (double)env->cycles);
 }
-static double dram_read_latency_mean(const void *st, const struct stats_env *env) {
-  (void)env;
-  return hist_mean(&((const struct dram_stats *)st)->read_latency);
-}
-#define DRAM_QUANTILE(rw, pc)                                                                      \
-  static uint64_t dram_##rw##_latency_p##pc(const void *st, const struct stats_env *env) {         \
-    (void)env;                                                                                     \
-    return hist_quantile(&((const struct dram_stats *)st)->rw##_latency, pc / 100.0);              \
-  }
-DRAM_QUANTILE(read, 50)
-DRAM_QUANTILE(read, 95)
-DRAM_QUANTILE(read, 99)
-DRAM_QUANTILE(write, 50)
-DRAM_QUANTILE(write, 95)
-DRAM_QUANTILE(write, 99)
-#undef DRAM_QUANTILE
-static double dram_write_latency_mean(const void *st, const struct stats_env *env) {
-  (void)env;
-  return hist_mean(&((const struct dram_stats *)st)->write_latency);
-}
-
 static const struct stats_desc dram_desc[] = {
     STATS_FIELD(struct dram_stats, reads, "dram_reads", "count", "64-byte reads served"),
     STATS_FIELD(struct dram_stats, writes, "dram_writes", "count", "64-byte writes served"),
@@ -228,28 +221,28 @@ static const struct stats_desc dram_desc[] = {
               "bytes read and written"),
     STATS_F64(struct dram_stats, write_bytes, dram_bytes_per_cycle, "dram_bytes_per_cycle",
               "bytes/cycle", "bytes read and written per core cycle of the run"),
-    STATS_SLOT(DRAM_STATS_SLOT_UTILIZATION),
-    STATS_F64(struct dram_stats, read_latency, dram_read_latency_mean, "dram_read_latency_mean",
-              "cycles", "reads, taken to data delivered: mean"),
-    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p50, "dram_read_latency_p50",
-              "cycles", "the same, median"),
-    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p95, "dram_read_latency_p95",
-              "cycles", "the same, 95th percentile"),
-    STATS_U64(struct dram_stats, read_latency, dram_read_latency_p99, "dram_read_latency_p99",
-              "cycles", "the same, 99th percentile"),
+    STATS_AT(DRAM_STATS_AT_UTILIZATION),
+    STATS_HIST_MEAN(struct dram_stats, read_latency, "dram_read_latency_mean", "cycles",
+                    "reads, taken to data delivered: mean"),
+    STATS_HIST_Q(struct dram_stats, read_latency, 0.50, "dram_read_latency_p50", "cycles",
+                 "the same, median"),
+    STATS_HIST_Q(struct dram_stats, read_latency, 0.95, "dram_read_latency_p95", "cycles",
+                 "the same, 95th percentile"),
+    STATS_HIST_Q(struct dram_stats, read_latency, 0.99, "dram_read_latency_p99", "cycles",
+                 "the same, 99th percentile"),
     STATS_FIELD(struct dram_stats, read_latency.max, "dram_read_latency_max", "cycles",
                 "the same, most"),
-    STATS_F64(struct dram_stats, write_latency.sum, dram_write_latency_mean,
-              "dram_write_latency_mean", "cycles", "writes, taken to written: mean"),
-    STATS_U64(struct dram_stats, write_latency, dram_write_latency_p50, "dram_write_latency_p50",
-              "cycles", "the same, median"),
-    STATS_U64(struct dram_stats, write_latency, dram_write_latency_p95, "dram_write_latency_p95",
-              "cycles", "the same, 95th percentile"),
-    STATS_U64(struct dram_stats, write_latency, dram_write_latency_p99, "dram_write_latency_p99",
-              "cycles", "the same, 99th percentile"),
+    STATS_HIST_MEAN(struct dram_stats, write_latency, "dram_write_latency_mean", "cycles",
+                    "writes, taken to written: mean"),
+    STATS_HIST_Q(struct dram_stats, write_latency, 0.50, "dram_write_latency_p50", "cycles",
+                 "the same, median"),
+    STATS_HIST_Q(struct dram_stats, write_latency, 0.95, "dram_write_latency_p95", "cycles",
+                 "the same, 95th percentile"),
+    STATS_HIST_Q(struct dram_stats, write_latency, 0.99, "dram_write_latency_p99", "cycles",
+                 "the same, 99th percentile"),
     STATS_FIELD(struct dram_stats, write_latency.max, "dram_write_latency_max", "cycles",
                 "the same, most"),
-    STATS_SLOT(DRAM_STATS_SLOT_LEVEL),
+    STATS_AT(DRAM_STATS_AT_LEVEL),
 };
 const struct stats_descs dram_stats_descs = {
     "dram", dram_desc, STATS_COUNT(dram_desc), sizeof(struct dram_stats), NULL, 0};

@@ -3,7 +3,7 @@
  * implements), wrapped so that every level is counted, timed and traced the
  * same way: reads and writes, bytes, the latency of each request from the
  * cycle the level took it to the cycle it was served, and on request a trace
- * of every request in arrival order (README "DRAM traces"). */
+ * of every request in arrival order (docs/dram-traces.md). */
 #ifndef RTSIM_SIM_DRAM_H
 #define RTSIM_SIM_DRAM_H
 
@@ -63,18 +63,25 @@ void dram_finish(struct dram *d);
 bool dram_served_transfer(const struct dram *d, double *start, double *end);
 
 const struct dram_stats *dram_get_stats(const struct dram *d);
-/* The numbers every level shares, over a struct dram_stats (sim/stats.h): its
- * slots are where the caller puts a utilization figure of its own (the
- * channel level reports its own) and the level's numbers (dram_report). */
-enum { DRAM_STATS_SLOT_UTILIZATION = 100, DRAM_STATS_SLOT_LEVEL };
+/* The numbers every level shares, over a struct dram_stats (sim/stats.h),
+ * with two places: DRAM_STATS_AT_UTILIZATION, where the owner registers a
+ * utilization figure of its own for a level that has none (the channel level
+ * reports its own), and DRAM_STATS_AT_LEVEL, the level's own numbers. */
+#define DRAM_STATS_AT_UTILIZATION "dram_utilization"
+#define DRAM_STATS_AT_LEVEL "dram_level"
 struct stats_descs;
+struct stats_part;
+struct stats_table;
 extern const struct stats_descs dram_stats_descs;
-/* The level's own numbers (names with units), for a run of `cycles`. */
+/* The level's own numbers as a part for DRAM_STATS_AT_LEVEL: false when the
+ * level has none (fixed). */
+bool dram_level_stats(const struct dram *d, struct stats_part *out);
+/* The level's own numbers alone into t, for a run of `cycles`. */
 void dram_report(const struct dram *d, struct stats_table *t, uint64_t cycles);
 
 /* Write a header line (# ...: the format, the level, both clocks), then every
  * request from now on to f, one line each in arrival order, as soon as it and
- * every earlier one are served (README "DRAM traces"); the caller owns f and
+ * every earlier one are served (docs/dram-traces.md); the caller owns f and
  * checks it for errors. */
 void dram_trace_to(struct dram *d, FILE *f);
 

@@ -40,7 +40,7 @@
 #include "sim/line.h"
 
 struct engine;
-struct stats_table;
+struct stats_part;
 
 #define DRAM_BANKED_NEVER (-((int64_t)1 << 40))
 #define DRAM_BANKED_FAR INT64_MAX
@@ -376,7 +376,7 @@ bool dram_banked_params_within_model(const struct dram_banked_params *p);
 
 /* ---- dram_banked_stats.c ---- */
 
-/* The level's numbers into t (the level's report operation). */
-void dram_banked_report(const void *self, struct stats_table *t, uint64_t cycles);
+/* The level's table, stats and ctx (the level's stats operation). */
+void dram_banked_stats_part(const void *self, struct stats_part *out);
 
 #endif

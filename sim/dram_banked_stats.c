@@ -1,5 +1,5 @@
 /* The banked level's numbers: the table of its figures (names, units,
- * descriptions; README "Numbers"), each computed from its struct
+ * descriptions; docs/stats.md), each computed from its struct
  * dram_banked_stats and the run's length. Holds: every figure is a counter or
  * a ratio of counters the level keeps, so the table reads the same whatever
  * the level's controller structure. */
@@ -9,9 +9,7 @@
 
 #include "sim/stats.h"
 
-static double ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
-
-/* The banked level's numbers (README "Numbers"); env->ctx is the level. */
+/* The banked level's numbers (docs/stats.md); env->ctx is the level. */
 static double bk_dram_cycles(const struct stats_env *env) {
   const struct dram_banked *d = env->ctx;
   return (double)env->cycles * (double)d->clk.den / (double)d->clk.num;
@@ -19,28 +17,28 @@ static double bk_dram_cycles(const struct stats_env *env) {
 static double bk_row_hit_rate(const void *st, const struct stats_env *env) {
   (void)env;
   const struct dram_banked_stats *s = st;
-  return ratio((double)s->row_hits, (double)(s->reads + s->writes));
+  return stats_ratio((double)s->row_hits, (double)(s->reads + s->writes));
 }
 static double bk_bus_utilization(const void *st, const struct stats_env *env) {
   const struct dram_banked *d = env->ctx;
   const struct dram_banked_stats *s = st;
-  return ratio((double)s->bus_busy_cycles, bk_dram_cycles(env) * d->p.channels);
+  return stats_ratio((double)s->bus_busy_cycles, bk_dram_cycles(env) * d->p.channels);
 }
 static double bk_bank_active_fraction(const void *st, const struct stats_env *env) {
   const struct dram_banked *d = env->ctx;
   const struct dram_banked_stats *s = st;
-  return ratio((double)s->bank_open_cycles,
-               bk_dram_cycles(env) * d->banks_per_channel * d->p.channels);
+  return stats_ratio((double)s->bank_open_cycles,
+                     bk_dram_cycles(env) * d->banks_per_channel * d->p.channels);
 }
 #define BK_QUEUE_FNS(k, n)                                                                         \
   static double bk_queue_length_mean_##k(const void *st, const struct stats_env *env) {            \
-    return ratio((double)((const struct dram_banked_stats *)st)->queue_area[k],                    \
-                 (double)env->cycles);                                                             \
+    return stats_ratio((double)((const struct dram_banked_stats *)st)->queue_area[k],              \
+                       (double)env->cycles);                                                       \
   }                                                                                                \
   static double bk_queue_wait_mean_##k(const void *st, const struct stats_env *env) {              \
     (void)env;                                                                                     \
     const struct dram_banked_stats *s = st;                                                        \
-    return ratio((double)s->queue_wait_sum_cycles[k], (double)s->n);                               \
+    return stats_ratio((double)s->queue_wait_sum_cycles[k], (double)s->n);                         \
   }
 BK_QUEUE_FNS(0, reads)
 BK_QUEUE_FNS(1, writes)
@@ -101,10 +99,11 @@ const struct stats_descs dram_banked_stats_descs = {"dram banked",
                                                     NULL,
                                                     0};
 
-void dram_banked_report(const void *self, struct stats_table *t, uint64_t cycles) {
+void dram_banked_stats_part(const void *self, struct stats_part *out) {
   const struct dram_banked *d = self;
-  const struct stats_env env = {.cycles = cycles, .ctx = d};
-  stats_emit(t, &dram_banked_stats_descs, &d->st, &env);
+  out->g = &dram_banked_stats_descs;
+  out->st = &d->st;
+  out->ctx = d;
 }
 
 const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d) {

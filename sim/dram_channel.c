@@ -138,17 +138,17 @@ static void ch_take(void *self, uint64_t addr, bool write, uint64_t tag) {
 
 static void ch_finish(void *self) { sweep_to(self, TICK_FOREVER); }
 
-/* The channel level's numbers (README "Numbers"). */
+/* The channel level's numbers (docs/stats.md). */
 static double ch_utilization(const void *st, const struct stats_env *env) {
   const struct dram_channel_stats *s = st;
   const double tick = (double)(1ull << DRAM_TICK_BITS), cyc = (double)env->cycles;
-  return cyc > 0 ? (double)s->busy_ticks / tick / cyc : 0.0;
+  return stats_ratio((double)s->busy_ticks / tick, cyc);
 }
 static double ch_fifo_wait_mean(const void *st, const struct stats_env *env) {
   (void)env;
   const struct dram_channel_stats *s = st;
   const double tick = (double)(1ull << DRAM_TICK_BITS), n = (double)s->requests;
-  return n > 0 ? (double)s->wait_ticks_sum / tick / n : 0.0;
+  return stats_ratio((double)s->wait_ticks_sum / tick, n);
 }
 static double ch_fifo_length_mean(const void *st, const struct stats_env *env) {
   const struct dram_channel_stats *s = st;
@@ -187,10 +187,11 @@ const struct stats_descs dram_channel_stats_descs = {"dram channel",
                                                      channel_skip,
                                                      STATS_COUNT(channel_skip)};
 
-static void ch_report(const void *self, struct stats_table *t, uint64_t cycles) {
+static void ch_stats(const void *self, struct stats_part *out) {
   const struct dram_channel *d = self;
-  const struct stats_env env = {.cycles = cycles, .ctx = d};
-  stats_emit(t, &dram_channel_stats_descs, &d->st, &env);
+  out->g = &dram_channel_stats_descs;
+  out->st = &d->st;
+  out->ctx = d;
 }
 
 static void ch_destroy(void *self) {
@@ -201,7 +202,7 @@ static void ch_destroy(void *self) {
   free(d);
 }
 
-const struct dram_level_ops dram_channel_ops = {ch_can_take, ch_take, ch_finish, ch_report,
+const struct dram_level_ops dram_channel_ops = {ch_can_take, ch_take, ch_finish, ch_stats,
                                                 ch_destroy};
 
 struct dram_channel *dram_channel_create(const struct dram_channel_params *p, struct engine *e,

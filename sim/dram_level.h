@@ -18,6 +18,7 @@
 #include "sim/err.h"
 
 struct engine;
+struct stats_part;
 struct stats_table;
 
 /* What a level calls back, always from inside an engine event at engine_now. */
@@ -48,12 +49,17 @@ struct dram_level_ops {
   /* The run is over (nothing in flight, CHECKed): close time integrals at
    * engine_now. */
   void (*finish)(void *self);
-  /* Append the level's own numbers to t, names with units (dram_row_hits,
-   * dram_bank_utilization, ...); cycles: the run's length. Only what the level
-   * knows: a level without banks writes no bank figure. */
-  void (*report)(const void *self, struct stats_table *t, uint64_t cycles);
+  /* The level's own numbers (dram_row_hits, dram_bank_utilization, ...):
+   * its table, its stats struct and its table's ctx into out (out->g NULL:
+   * none). Only what the level knows: a level without banks has no bank
+   * figure. */
+  void (*stats)(const void *self, struct stats_part *out);
   void (*destroy)(void *self); /* NULL ok */
 };
+
+/* A level's own numbers (ops->stats) alone into t, for a run of `cycles`. */
+void dram_level_report(const struct dram_level_ops *ops, const void *level, struct stats_table *t,
+                       uint64_t cycles);
 
 /* Exact conversion between core cycles and a level's own clock: core_khz and
  * dram_khz reduced by their gcd, so a DRAM cycle d falls in core cycle

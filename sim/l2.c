@@ -481,13 +481,12 @@ void l2_finish(struct l2 *l2, uint64_t end) {
 
 const struct l2_stats *l2_get_stats(const struct l2 *l2) { return &l2->st; }
 
-/* ---- the L2's numbers (README "Numbers") ---- */
+/* ---- the L2's numbers (docs/stats.md) ---- */
 
-static double l2_ratio(uint64_t a, uint64_t b) { return b > 0 ? (double)a / (double)b : 0.0; }
 static double l2_miss_rate(const void *st, const struct stats_env *env) {
   (void)env;
   const struct l2_stats *s = st;
-  return l2_ratio(s->misses, s->accesses);
+  return stats_ratio(s->misses, s->accesses);
 }
 /* A queue's numbers for Little's law: requests that left it, their mean wait,
  * and the mean and most requests inside (length_mean x cycles = wait_mean x
@@ -496,11 +495,11 @@ static double l2_miss_rate(const void *st, const struct stats_env *env) {
   static double q##_wait_mean(const void *st, const struct stats_env *env) {                       \
     (void)env;                                                                                     \
     const struct l2_stats *s = st;                                                                 \
-    return l2_ratio(s->q.wait_sum, s->q.left);                                                     \
+    return stats_ratio(s->q.wait_sum, s->q.left);                                                  \
   }                                                                                                \
   static double q##_length_mean(const void *st, const struct stats_env *env) {                     \
     const struct l2_stats *s = st;                                                                 \
-    return l2_ratio(s->q.area, env->cycles);                                                       \
+    return stats_ratio(s->q.area, env->cycles);                                                    \
   }
 L2_QUEUE_FNS(stall_queue)
 L2_QUEUE_FNS(miss_queue)

@@ -4,7 +4,7 @@
  * misses to a pending line, a bounded write buffer for dirty victims, and the
  * DRAM below it (sim/dram.h), which it fills from and writes back to.
  *
- * The rules (README "The timed machine"):
+ * The rules (docs/machine.md):
  * - An access is taken by its bank at max(arrival, bank free) and answered
  *   l2.latency cycles later on a hit; a load merging into a pending line is
  *   answered at the fill, never before that same l2.latency.

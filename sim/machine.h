@@ -5,7 +5,7 @@
  * until the cycle the load completes. Knows nothing of rays: a worker is any
  * function that talks to memory through sim/mem.h.
  *
- * The model, in one place (README "The timed machine" says the same in prose):
+ * The model, in one place (docs/machine.md says the same in prose):
  * - A core issues one operation per cycle: compute(n) takes n issue slots, a
  *   load or store one. Threads get the issue port round robin, one block at a
  *   time: a block is what a ray runs between two waits (its compute, L1 hits
@@ -40,7 +40,7 @@ struct timeline;
 
 #define MACHINE_MAX_CONTEXTS (1u << 20) /* cores x threads_per_core x rays_per_thread */
 
-/* The fidelity ladder's rungs, cheapest first (README "Fidelity ladder"): an
+/* The fidelity ladder's rungs, cheapest first (docs/fidelity-and-sampling.md): an
  * analytic estimate from a functional pass (sim/analytic.h: no machine is
  * built), then the timed machine with each DRAM level of sim/dram.h. */
 enum machine_fidelity {
@@ -171,18 +171,19 @@ const struct machine_stats *machine_get_stats(const struct machine *m);
  * computes for the levels without their own. */
 extern const struct stats_descs machine_stats_descs, machine_l1_stats_descs,
     machine_engine_stats_descs, machine_dram_util_stats_descs;
-/* Where the run's own numbers go in the machine's order: after `seconds`, and
- * after issue_slots_per_blocking_load. */
-enum { MACHINE_STATS_SLOT_RUN = 200, MACHINE_STATS_SLOT_RUN_MISSES };
+/* The places in the machine's order where the run registers its own
+ * numbers: after `seconds`, and after issue_slots_per_blocking_load. */
+#define MACHINE_STATS_AT_RUN "run"
+#define MACHINE_STATS_AT_RUN_MISSES "run_misses"
 /* After machine_run: append every number of the machine and its components
  * to t, in their tables' order; per-class numbers for `classes` data classes
- * named class_names; run (NULL: none) fills the MACHINE_STATS_SLOT_RUN* slots
- * (its env: the machine's, slot_ctx = run_ctx). */
+ * named class_names; the caller's parts (n of them, for the places above;
+ * their ctx NULL: the machine) at their places. */
 void machine_stats_emit(const struct machine *m, struct stats_table *t,
-                        const char *const *class_names, unsigned classes, stats_slot_fn run,
-                        const void *run_ctx);
+                        const char *const *class_names, unsigned classes,
+                        const struct stats_part *parts, unsigned n);
 
-/* ---- sampling (README "Sampling") ----
+/* ---- sampling (docs/fidelity-and-sampling.md) ----
  * The counters of a running machine at the current cycle: what a window of
  * the run did is the difference of two probes. */
 struct machine_probe {
@@ -205,7 +206,7 @@ uint64_t machine_warm_slots(const struct machine *m);
 struct mem_port machine_count_port(struct machine *m);
 uint64_t machine_count_slots(const struct machine *m);
 
-/* ---- per-item costs (README "Cost in the picture") ----
+/* ---- per-item costs (docs/outputs.md "Cost in the picture") ----
  * The work of a run charged to items (pixels, to the renderer; integers here)
  * so that every item's costs sum, over the items, to the run's totals:
  * issue slots (= issue_slots), load latency from issue to data, L1 hits

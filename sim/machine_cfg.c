@@ -1,5 +1,5 @@
 /* One table of keys, a row each, drives the defaults, reading, --set, the key
- * lists of messages, checking, writing and the README key table. */
+ * lists of messages, checking, writing and the key table of docs/config-keys.md. */
 #include "sim/machine_cfg.h"
 
 #include <math.h>
@@ -35,7 +35,7 @@ struct key {
   unsigned rungs;           /* R_*: the fidelity rungs that read it */
   size_t off;               /* where it goes in struct machine_cfg (p, work or sample) */
   const char *const *names; /* K_ENUM: the values' names (a uint32_t index), hi + 1 of them */
-  const char *doc;          /* one line: what it is (README's key table) */
+  const char *doc;          /* one line: what it is (docs/config-keys.md's key table) */
 };
 
 static const char *const PAGE_NAMES[] = {"open", "close"};
@@ -92,7 +92,7 @@ static const struct key KEYS[] = {
      "the rung of the fidelity ladder: an estimate, or the timed machine with the DRAM at that detail"},
     {"dram.latency", K_U64, 0, 1e9, "50", "cycles", R_A | R_F | R_C, P(dram_latency_cycles),
      "a DRAM read's latency with an idle queue"},
-    {"dram.bytes_per_cycle", K_F64, 1e-6, 1e6, "13", "bytes a cycle", R_A | R_C,
+    {"dram.bytes_per_cycle", K_F64, 1e-6, 1e6, "13", "bytes/cycle", R_A | R_C,
      P(dram_bytes_per_cycle), "what the channel sustains"},
     {"dram.queue_depth", K_U32, 1, 1u << 20, "16", "entries", R_C, P(dram_queue_depth),
      "the channel's request queue"},
@@ -358,7 +358,7 @@ static void set_origin(struct machine_cfg *c, unsigned i, const char *file, int 
 const char *machine_cfg_renamed(const char *name) {
   if (!strcmp(name, "dram.model"))
     return "renamed to fidelity, a top-level key (fidelity: analytic, fixed, channel or "
-           "banked; README: Fidelity ladder)";
+           "banked; docs/fidelity-and-sampling.md, Fidelity ladder)";
   return NULL;
 }
 

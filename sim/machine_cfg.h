@@ -37,7 +37,7 @@ struct machine_cfg_work {
   uint32_t dyn_sharing; /* renderer/policy/policy.h: 0 partition, 1 chip */
 };
 
-/* How a timed run is sampled (README "Sampling"; app/sample.h): the share of
+/* How a timed run is sampled (docs/fidelity-and-sampling.md; app/sample.h): the share of
  * work items simulated in detail (1: all, no sampling), the strata (one
  * detailed unit each), the items warmed functionally before a unit as a
  * multiple of its detailed items, the seed of the units' places. Not in
@@ -101,7 +101,7 @@ void machine_cfg_key_list(char *buf, size_t cap);
 /* Every key as a JSON member `"key": value` (numbers, or "full"). */
 void machine_cfg_write_json(const struct machine_cfg *c, FILE *f, const char *indent);
 /* Every key as a row of a Markdown table: name, default, range, unit, the
- * fidelity rungs that read it, what it is (README's key table; rtsim run
+ * fidelity rungs that read it, what it is (docs/config-keys.md's key table; rtsim run
  * --help-keys). */
 void machine_cfg_write_keys(FILE *f);
 /* Every key as a column of t (numbers as numbers, "full" as text). */

@@ -1,7 +1,7 @@
-/* The machine's numbers (README "Numbers"): the cores' and threads'
- * counters, then at its slots the L1's, the L2's, the DRAM's and the
- * engine's, each from its own table (env->ctx is the machine); and the
- * timeline's columns. */
+/* The machine's numbers (docs/stats.md): the cores' and threads'
+ * counters, and at its places the L1's, the L2's, the DRAM's and the
+ * engine's, each from its own table registered there (env->ctx is the
+ * machine); and the timeline's columns. */
 #include "sim/machine_state.h"
 
 #include "sim/cache.h"
@@ -25,47 +25,37 @@ static double m_thread_cycles(const void *st) {
 }
 static double m_busy_fraction(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)M_ST(st)->thread_busy_cycles, m_thread_cycles(st));
+  return stats_ratio((double)M_ST(st)->thread_busy_cycles, m_thread_cycles(st));
 }
 static double m_idle_fraction(const void *st, const struct stats_env *env) {
   (void)env;
   const struct machine_stats *s = st;
-  return derived_ratio(
+  return stats_ratio(
       (double)(s->thread_wait_cycles + s->thread_parked_cycles + s->thread_done_cycles),
       m_thread_cycles(st));
 }
 static double m_wait_fraction(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)M_ST(st)->thread_wait_cycles, m_thread_cycles(st));
+  return stats_ratio((double)M_ST(st)->thread_wait_cycles, m_thread_cycles(st));
 }
 static double m_parked_fraction(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)M_ST(st)->thread_parked_cycles, m_thread_cycles(st));
+  return stats_ratio((double)M_ST(st)->thread_parked_cycles, m_thread_cycles(st));
 }
 static double m_done_fraction(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)M_ST(st)->thread_done_cycles, m_thread_cycles(st));
+  return stats_ratio((double)M_ST(st)->thread_done_cycles, m_thread_cycles(st));
 }
 static double m_slots_per_blocking_load(const void *st, const struct stats_env *env) {
   (void)env;
-  return derived_ratio((double)M_ST(st)->issue_slots, (double)M_ST(st)->blocking_loads);
+  return stats_ratio((double)M_ST(st)->issue_slots, (double)M_ST(st)->blocking_loads);
 }
-static double m_load_latency_mean(const void *st, const struct stats_env *env) {
-  (void)env;
-  return hist_mean(&M_ST(st)->load_latency);
-}
-static uint64_t m_load_latency_p95(const void *st, const struct stats_env *env) {
-  (void)env;
-  return hist_quantile(&M_ST(st)->load_latency, 0.95);
-}
-
-enum { M_SLOT_L1 = 1, M_SLOT_L2, M_SLOT_DRAM, M_SLOT_ENGINE };
 
 #define MS struct machine_stats
 static const struct stats_desc machine_desc[] = {
     STATS_FIELD(MS, cycles, "cycles", "cycles", "the run: last ray done and the DRAM drained"),
     STATS_F64(MS, cycles, m_seconds, "seconds", "seconds", "the run at clock_ghz"),
-    STATS_SLOT(MACHINE_STATS_SLOT_RUN),
+    STATS_AT(MACHINE_STATS_AT_RUN),
     STATS_FIELD(MS, contexts, "ray_contexts", "count", "ray contexts: cores x threads x rays"),
     STATS_FIELD(MS, threads, "threads", "count", "hardware threads: cores x threads_per_core"),
     STATS_FIELD(MS, issue_slots, "issue_slots", "cycles",
@@ -99,16 +89,15 @@ static const struct stats_desc machine_desc[] = {
                 "loads that left the L1 and suspended their ray"),
     STATS_F64(MS, blocking_loads, m_slots_per_blocking_load, "issue_slots_per_blocking_load",
               "cycles", "issue slots / blocking loads"),
-    STATS_SLOT(MACHINE_STATS_SLOT_RUN_MISSES),
-    STATS_SLOT(M_SLOT_L1),
-    STATS_SLOT(M_SLOT_L2),
-    STATS_SLOT(M_SLOT_DRAM),
-    STATS_F64(MS, load_latency, m_load_latency_mean, "load_latency_mean", "cycles",
-              "loads, issue to data (L1 hits too): mean"),
-    STATS_U64(MS, load_latency, m_load_latency_p95, "load_latency_p95", "cycles",
-              "the same, 95th percentile"),
+    STATS_AT(MACHINE_STATS_AT_RUN_MISSES),
+    STATS_AT("l1"),
+    STATS_AT("l2"),
+    STATS_AT("dram"),
+    STATS_HIST_MEAN(MS, load_latency, "load_latency_mean", "cycles",
+                    "loads, issue to data (L1 hits too): mean"),
+    STATS_HIST_Q(MS, load_latency, 0.95, "load_latency_p95", "cycles", "the same, 95th percentile"),
     STATS_FIELD(MS, load_latency.max, "load_latency_max", "cycles", "the same, most"),
-    STATS_SLOT(M_SLOT_ENGINE),
+    STATS_AT("engine"),
     STATS_FIELD(MS, stacks_max, "coroutine_stacks_max", "count",
                 "coroutine stacks alive at once (parked contexts hold none)"),
 };
@@ -148,7 +137,7 @@ static bool m_dram_util_present(const void *st, const struct stats_env *env) {
 static double m_dram_utilization(const void *st, const struct stats_env *env) {
   const struct machine_stats *s = st;
   const double b = (double)(s->dram.read_bytes + s->dram.write_bytes);
-  return derived_ratio(b, (double)s->cycles) / machine_dram_peak_bytes_per_cycle(&M_OF(env)->p);
+  return stats_ratio(b, (double)s->cycles) / machine_dram_peak_bytes_per_cycle(&M_OF(env)->p);
 }
 static const struct stats_desc dram_util_desc[] = {
     {.name = "dram_utilization",
@@ -162,45 +151,26 @@ const struct stats_descs machine_dram_util_stats_descs = {
     "dram", dram_util_desc, STATS_COUNT(dram_util_desc), 0, NULL, 0};
 #undef MS
 
-struct m_emit {
-  const struct machine *m;
-  stats_slot_fn run;
-  const void *run_ctx;
-};
-
-static void m_slot(const struct stats_env *env, int slot, struct stats_table *t) {
-  const struct m_emit *x = env->slot_ctx;
-  const struct machine *m = x->m;
-  struct stats_env sub = *env;
-  switch (slot) {
-  case MACHINE_STATS_SLOT_RUN:
-  case MACHINE_STATS_SLOT_RUN_MISSES:
-    if (!x->run) return;
-    sub.slot_ctx = x->run_ctx;
-    x->run(&sub, slot, t);
-    return;
-  case M_SLOT_L1: stats_emit(t, &machine_l1_stats_descs, &m->st, env); return;
-  case M_SLOT_L2: stats_emit(t, &l2_stats_descs, &m->st.l2, env); return;
-  case M_SLOT_DRAM: stats_emit(t, &dram_stats_descs, &m->st.dram, env); return;
-  case DRAM_STATS_SLOT_UTILIZATION:
-    stats_emit(t, &machine_dram_util_stats_descs, &m->st, env);
-    return;
-  case DRAM_STATS_SLOT_LEVEL: dram_report(m->dram, t, m->st.cycles); return;
-  case M_SLOT_ENGINE: stats_emit(t, &machine_engine_stats_descs, &m->st, env); return;
-  default: CHECK(!"a slot the machine knows");
-  }
-}
-
 void machine_stats_emit(const struct machine *m, struct stats_table *t,
-                        const char *const *class_names, unsigned classes, stats_slot_fn run,
-                        const void *run_ctx) {
-  const struct m_emit x = {m, run, run_ctx};
+                        const char *const *class_names, unsigned classes,
+                        const struct stats_part *parts, unsigned n) {
+  struct stats_part all[16] = {
+      {"l1", &machine_l1_stats_descs, &m->st, NULL},
+      {"l2", &l2_stats_descs, &m->st.l2, NULL},
+      {"dram", &dram_stats_descs, &m->st.dram, NULL},
+      {DRAM_STATS_AT_UTILIZATION, &machine_dram_util_stats_descs, &m->st, NULL},
+      {"engine", &machine_engine_stats_descs, &m->st, NULL},
+  };
+  unsigned k = 5;
+  if (dram_level_stats(m->dram, &all[k])) k++;
+  CHECK_LE(k + n, STATS_COUNT(all));
+  for (unsigned i = 0; i < n; i++) all[k++] = parts[i];
   const struct stats_env env = {.cycles = m->st.cycles,
                                 .ctx = m,
                                 .class_names = class_names,
                                 .classes = classes,
-                                .slot = m_slot,
-                                .slot_ctx = &x};
+                                .parts = all,
+                                .nparts = k};
   stats_emit(t, &machine_stats_descs, &m->st, &env);
 }
 

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "sim/err.h"
+#include "sim/hist.h"
 
 static struct stats_entry *add(struct stats_table *t, const char *name, enum stats_kind k) {
   CHECK_LT(strlen(name), sizeof t->e[0].name);
@@ -125,17 +126,40 @@ static void emit_one(struct stats_table *t, const struct stats_desc *d, const vo
   }
   case STATS_HOW_U64: stats_u64(t, name, d->u64(st, env)); break;
   case STATS_HOW_F64: stats_f64(t, name, d->f64(st, env)); break;
-  case STATS_HOW_SLOT: break;
+  case STATS_HOW_HIST_MEAN: stats_f64(t, name, hist_mean((const void *)(base + d->off))); break;
+  case STATS_HOW_HIST_Q:
+    stats_u64(t, name, hist_quantile((const void *)(base + d->off), d->q));
+    break;
+  case STATS_HOW_AT: break;
   }
 }
 
-void stats_emit(struct stats_table *t, const struct stats_descs *g, const void *st,
-                const struct stats_env *env) {
+static bool has_place(const struct stats_descs *g, const char *at) {
+  for (unsigned i = 0; i < g->n; i++)
+    if (g->d[i].how == STATS_HOW_AT && strcmp(g->d[i].at, at) == 0) return true;
+  return false;
+}
+
+static void emit_table(struct stats_table *t, const struct stats_descs *g, const void *st,
+                       const struct stats_env *env);
+
+/* The parts registered for place `at`, each with its own ctx. */
+static void emit_place(struct stats_table *t, const char *at, const struct stats_env *env) {
+  for (unsigned j = 0; j < env->nparts; j++) {
+    const struct stats_part *p = &env->parts[j];
+    if (strcmp(p->at, at) != 0) continue;
+    struct stats_env sub = *env;
+    if (p->ctx) sub.ctx = p->ctx;
+    emit_table(t, p->g, p->st, &sub);
+  }
+}
+
+static void emit_table(struct stats_table *t, const struct stats_descs *g, const void *st,
+                       const struct stats_env *env) {
   for (unsigned i = 0; i < g->n; i++) {
     const struct stats_desc *d = &g->d[i];
-    if (d->how == STATS_HOW_SLOT) {
-      CHECK(env->slot != NULL);
-      env->slot(env, d->slot, t);
+    if (d->how == STATS_HOW_AT) {
+      emit_place(t, d->at, env);
       continue;
     }
     if (d->present && !d->present(st, env)) continue;
@@ -147,6 +171,18 @@ void stats_emit(struct stats_table *t, const struct stats_descs *g, const void *
     CHECK_LE((uint64_t)env->classes * sizeof(uint64_t), d->size);
     for (unsigned c = 0; c < env->classes; c++) emit_one(t, d, st, env, c);
   }
+}
+
+void stats_emit(struct stats_table *t, const struct stats_descs *g, const void *st,
+                const struct stats_env *env) {
+  /* A part registered for a place no table has would vanish from the output. */
+  for (unsigned j = 0; j < env->nparts; j++) {
+    bool found = has_place(g, env->parts[j].at);
+    for (unsigned k = 0; k < env->nparts && !found; k++)
+      found = has_place(env->parts[k].g, env->parts[j].at);
+    CHECK(found);
+  }
+  emit_table(t, g, st, env);
 }
 
 /* Mark the bytes g's descriptors read, and its skips, at base in seen[0..size). */
@@ -202,7 +238,7 @@ static void help_name(const struct stats_desc *d, char *buf, size_t len) {
 void stats_write_help(const struct stats_descs *g, FILE *f) {
   for (unsigned i = 0; i < g->n; i++) {
     const struct stats_desc *d = &g->d[i];
-    if (d->how == STATS_HOW_SLOT) continue;
+    if (d->how == STATS_HOW_AT) continue;
     char name[64];
     help_name(d, name, sizeof name);
     fprintf(f, "%-36s %-16s %s: %s\n", name, d->unit, g->component, d->desc);
@@ -212,7 +248,7 @@ void stats_write_help(const struct stats_descs *g, FILE *f) {
 void stats_write_markdown(const struct stats_descs *g, FILE *f) {
   for (unsigned i = 0; i < g->n; i++) {
     const struct stats_desc *d = &g->d[i];
-    if (d->how == STATS_HOW_SLOT) continue;
+    if (d->how == STATS_HOW_AT) continue;
     char name[64];
     help_name(d, name, sizeof name);
     fprintf(f, "| `%s` | %s | %s | %s |\n", name, d->unit, g->component, d->desc);

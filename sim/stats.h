@@ -10,6 +10,10 @@
 #include <stdint.h>
 #include <stdio.h>
 
+/* a / b, 0 when b is not positive (a figure of an empty run): every ratio a
+ * table reports. */
+static inline double stats_ratio(double a, double b) { return b > 0 ? a / b : 0.0; }
+
 /* A table of scalars in insertion order. */
 enum stats_kind { STATS_U64, STATS_F64, STATS_STR };
 struct stats_entry {
@@ -60,18 +64,29 @@ void stats_write_json_f64(FILE *f, double v);
  * constant table: the stats.json key and stats.csv column (its unit in it),
  * the unit, one line of description, and where the value lives (the field's
  * offset, or a function for a derived figure). Writers, `rtsim run
- * --help-stats` and the README's table all walk the tables, in table order. */
+ * --help-stats` and docs/stats.md's table all walk the tables, in table order. */
 
 enum stats_how {
-  STATS_HOW_FIELD, /* the uint64_t at off */
-  STATS_HOW_U64,   /* u64(st, env) */
-  STATS_HOW_F64,   /* f64(st, env) */
-  STATS_HOW_SLOT   /* env->slot(env, slot, t): another table's numbers go here */
+  STATS_HOW_FIELD,     /* the uint64_t at off */
+  STATS_HOW_U64,       /* u64(st, env) */
+  STATS_HOW_F64,       /* f64(st, env) */
+  STATS_HOW_HIST_MEAN, /* the mean of the struct hist at off */
+  STATS_HOW_HIST_Q,    /* its quantile q */
+  STATS_HOW_AT         /* a place: the tables registered for it (env->parts) go here */
 };
 
-struct stats_table;
-struct stats_env;
-typedef void (*stats_slot_fn)(const struct stats_env *env, int slot, struct stats_table *t);
+struct stats_descs;
+
+/* Another component's table registered for a place (a STATS_AT entry) of a
+ * table it does not know: its numbers are written there, read from st, with
+ * ctx as its env's ctx (NULL: the caller's). Several parts at one place are
+ * written in registration order. */
+struct stats_part {
+  const char *at;
+  const struct stats_descs *g;
+  const void *st;
+  const void *ctx;
+};
 
 /* What derived figures may read besides the stats struct. */
 struct stats_env {
@@ -79,8 +94,8 @@ struct stats_env {
   const void *ctx;                /* the component's own (its parameters, clocks) */
   const char *const *class_names; /* data class names (the renderer's), for per-class numbers */
   unsigned classes;
-  stats_slot_fn slot; /* fills a table's STATS_HOW_SLOT entries */
-  const void *slot_ctx;
+  const struct stats_part *parts; /* the tables registered for the places */
+  unsigned nparts;
 };
 
 struct stats_desc {
@@ -90,12 +105,13 @@ struct stats_desc {
   enum stats_how how;
   /* The bytes of the stats struct this entry reads: the field itself, or for a
    * function the field it is about (the lost-counter test covers the struct
-   * with these spans). size 0: none (a slot, or a figure of env alone). */
+   * with these spans). size 0: none (a place, or a figure of env alone). */
   size_t off, size;
   uint64_t (*u64)(const void *st, const struct stats_env *env);
   double (*f64)(const void *st, const struct stats_env *env);
   bool (*present)(const void *st, const struct stats_env *env); /* NULL: always written */
-  int slot;
+  const char *at;                                               /* STATS_HOW_AT: the place's name */
+  double q;       /* STATS_HOW_HIST_Q: the quantile, 0 to 1 */
   bool per_class; /* one number per data class: field off + 8 x class */
 };
 
@@ -144,22 +160,36 @@ struct stats_descs {
   { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_U64, .u64 = fn }
 #define STATS_FN_F64(fn, nm, un, ds)                                                               \
   { .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_F64, .f64 = fn }
-#define STATS_SLOT(id)                                                                             \
-  { .name = "", .unit = "", .desc = "", .how = STATS_HOW_SLOT, .slot = id }
+/* The mean, and quantile q_ (0 to 1), of histogram field f (a struct hist). */
+#define STATS_HIST_MEAN(T, f, nm, un, ds)                                                          \
+  {                                                                                                \
+    .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_HIST_MEAN, .off = offsetof(T, f),         \
+    .size = STATS_FIELD_SIZE(T, f)                                                                 \
+  }
+#define STATS_HIST_Q(T, f, q_, nm, un, ds)                                                         \
+  {                                                                                                \
+    .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_HIST_Q, .off = offsetof(T, f),            \
+    .size = STATS_FIELD_SIZE(T, f), .q = q_                                                        \
+  }
+/* A place where the tables registered under `place` are written. */
+#define STATS_AT(place)                                                                            \
+  { .name = "", .unit = "", .desc = "", .how = STATS_HOW_AT, .at = place }
 #define STATS_SKIP(T, f, reason)                                                                   \
   { offsetof(T, f), STATS_FIELD_SIZE(T, f), reason, NULL }
 #define STATS_SKIP_BY(T, f, table)                                                                 \
   { offsetof(T, f), STATS_FIELD_SIZE(T, f), "another table", &(table) }
 #define STATS_COUNT(a) ((unsigned)(sizeof(a) / sizeof((a)[0])))
 
-/* Append g's numbers for stats struct st to t, in table order. */
+/* Append g's numbers for stats struct st to t, in table order, with the
+ * parts registered in env at their places (a part whose place is in neither
+ * g nor another part's table: CHECK). */
 void stats_emit(struct stats_table *t, const struct stats_descs *g, const void *st,
                 const struct stats_env *env);
 /* NULL if every byte of g's stats struct is read by a descriptor, its own or
  * a skip's other table's, or is a skip with a reason (or g has no struct of
  * its own); else a description of the first byte that is none, in buf. */
 const char *stats_uncovered(const struct stats_descs *g, char *buf, size_t len);
-/* One line per number: name, unit, description (slots left out). */
+/* One line per number: name, unit, description (places left out). */
 void stats_write_help(const struct stats_descs *g, FILE *f);
 /* The same as Markdown table rows `| name | unit | description |`. */
 void stats_write_markdown(const struct stats_descs *g, FILE *f);

@@ -83,7 +83,7 @@ static void test_hostile_yaml(void) {
   unlink(big);
 }
 
-/* Scenes past the triangle cap (README: Limits) are refused from their
+/* Scenes past the triangle cap (docs/inputs.md, Limits) are refused from their
  * counts, before anything is built: quickly, in little memory, exit 2 and one
  * line at the entry that crosses the cap with its figures. Every case is
  * past the cap's hard maximum (100M), so it is refused on any host. */

@@ -1,4 +1,4 @@
-/* Per-pixel costs (README "Cost in the picture"): the machine's per-item
+/* Per-pixel costs (docs/outputs.md "Cost in the picture"): the machine's per-item
  * counters add up to the run's totals for every policy, counting them moves
  * no simulated number, a hand-worked case splits as the rule says, and
  * rtsim run's image.exr channels sum to its stats.json. */

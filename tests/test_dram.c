@@ -174,7 +174,7 @@ static void channel_case(double bytes_per_cycle, uint64_t latency, unsigned dept
   uint64_t cycles = 0;
   for (unsigned k = 0; k < NREQ; k++)
     if (r[k].done > cycles) cycles = r[k].done;
-  c.ops->report(c.level, &t, cycles);
+  dram_level_report(c.ops, c.level, &t, cycles);
   bool found = false;
   for (unsigned i = 0; i < t.n; i++)
     if (!strcmp(t.e[i].name, "dram_utilization")) {

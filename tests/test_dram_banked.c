@@ -609,7 +609,7 @@ static void test_cq_in_order(void) {
  * answered from the buffer): 3 hits of 4 commands, not of 5 requests. */
 static double row_hit_rate(const struct dram_banked *d) {
   struct stats_table t = {0};
-  dram_banked_ops.report(d, &t, 1000);
+  dram_level_report(&dram_banked_ops, d, &t, 1000);
   double v = -1;
   for (unsigned i = 0; i < t.n; i++)
     if (!strcmp(t.e[i].name, "dram_row_hit_rate")) v = t.e[i].f;
@@ -749,7 +749,7 @@ static void test_oracle_and_little(void) {
       for (int k = 0; k < 2; k++) little_bad += sa->queue_area[k] != sa->queue_wait_sum_cycles[k];
       if (seed == 1) {
         struct stats_table t = {0};
-        dram_banked_ops.report(a, &t, fin);
+        dram_level_report(&dram_banked_ops, a, &t, fin);
         double len[2] = {-1, -1}, wmean[2] = {-1, -1};
         for (unsigned i = 0; i < t.n; i++) {
           if (!strcmp(t.e[i].name, "dram_read_queue_length_mean")) len[0] = t.e[i].f;

@@ -1,7 +1,7 @@
 /* rtsim dram-replay against oracles: a fixed latency, the channel and the
  * banked DDR4 level worked out by hand; a round trip through rtsim run's
  * --dram-trace, which must give every request the cycles the run gave it; the
- * three trace formats, converted with the README's awk commands, giving the
+ * three trace formats, converted with the manual's awk commands, giving the
  * same numbers; and every bad input one file:line:col message and exit 2.
  * Fixtures live in tests/data/dram_traces. */
 #include <inttypes.h>
@@ -16,7 +16,7 @@
 #define SRC RTSIM_SOURCE_DIR "/"
 #define TMP RTSIM_TMP "/dram_replay_"
 
-/* The README's conversions of an rtsim trace (README "DRAM traces"). */
+/* The manual's conversions of an rtsim trace (docs/dram-traces.md). */
 #define AWK_DRAMSIM3 "awk '!/^#/ && NF { print $1, $2, $3 }'"
 #define AWK_RAMULATOR "awk '!/^#/ && NF { print $1, substr($2, 1, 1) }'"
 
@@ -357,14 +357,14 @@ static void test_round_trip(void) {
 
 /* mixed.trace (rtsim's format, one request a cycle at equal clocks, so
  * Ramulator's one request a DRAM cycle says the same) converted with the
- * README's commands: all three give the same row (but for the trace's name
+ * manual's commands (docs/dram-traces.md): all three give the same row (but for the trace's name
  * and format) and the same cycles for every request. */
 static void test_formats(void) {
-  char *readme = slurp(SRC "README.md");
-  EXPECTF(readme && strstr(readme, AWK_DRAMSIM3 " run.trace > dramsim3.trace"), "README lacks: %s",
-          AWK_DRAMSIM3);
+  char *readme = slurp(SRC "docs/dram-traces.md");
+  EXPECTF(readme && strstr(readme, AWK_DRAMSIM3 " run.trace > dramsim3.trace"),
+          "docs/dram-traces.md lacks: %s", AWK_DRAMSIM3);
   EXPECTF(readme && strstr(readme, AWK_RAMULATOR " run.trace > ramulator.trace"),
-          "README lacks: %s", AWK_RAMULATOR);
+          "docs/dram-traces.md lacks: %s", AWK_RAMULATOR);
   free(readme);
 
   char msg[4096];

@@ -1,5 +1,5 @@
 /* The machine at its extremes, through the real binary: every accepted config
- * runs or is refused before it starts (README: "Config keys").
+ * runs or is refused before it starts (docs/config-keys.md "Config keys").
  * 1. Every numeric machine key at both ends of its range (the range read from
  *    the binary's own refusal of a value outside it): the run either ends
  *    (exit 0) with whole outputs that keep the invariants below, or is refused
@@ -66,7 +66,7 @@ static double timeline_sum(const char *col) {
 }
 
 static void check_finished(const char *what, bool image) {
-  /* The analytic rung writes no timeline and no thread figures (README:
+  /* The analytic rung writes no timeline and no thread figures (docs/fidelity-and-sampling.md:
    * "what it cannot know is absent"). */
   char *json = testing_slurp(DIR, "stats.json", NULL);
   const bool timed = !json || !strstr(json, "\"fidelity\": \"analytic\"");
@@ -259,7 +259,7 @@ static void check_table(void) {
   }
 }
 
-/* Scale invariance on the machine (README: "Rendering model"): the small
+/* Scale invariance on the machine (docs/renderer.md "Rendering model"): the small
  * room, exported as a mesh and written at scales 1e-4 to 1e4 (mesh `scale`,
  * camera and lights multiplied alike), makes the same triangle tests and
  * simulated cycles: exactly by a power of two, within 0.1% otherwise (DRAM
@@ -267,7 +267,7 @@ static void check_table(void) {
  * that rounding flips deep in the tree renumbers the nodes after it, and on
  * tiny's own 32 KiB L2 the moved addresses change conflict misses by up to
  * 3% (cycles 0.2%); on 16 cores at 32x32 the end of the run moves cycles by
- * up to 3% (README). */
+ * up to 3% (docs/renderer.md). */
 static void check_scales(void) {
   const char *ply = RTSIM_TMP "/extremes_room.ply", *yaml = RTSIM_TMP "/extremes_scaled.yaml";
   char cmd[4096];

@@ -354,7 +354,7 @@ static void test_grove_draw_order(void) {
  * result of its scenes: one draw a statement, as C leaves the order of a
  * call's arguments and of an initializer's expressions open. On purpose, a
  * new hash goes here with the results made again. They hold on x86-64 with
- * glibc's libm (README: Same bits from any compiler); elsewhere untested. */
+ * glibc's libm (docs/testing.md, Same bits from any compiler); elsewhere untested. */
 static void test_scene_hashes(void) {
 #if defined(__x86_64__) && defined(__GLIBC__)
   static const struct {

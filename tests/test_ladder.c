@@ -96,7 +96,7 @@ static bool analytic_own(const char *name) {
   return !strncmp(name, "analytic_", 9) || rung_own(name);
 }
 
-/* The DRAM level's own report (README: level-specific): the channel's and the
+/* The DRAM level's own report (docs/stats.md): the channel's and the
  * banked level's numbers. */
 static bool dram_own(const char *name) {
   if (rung_own(name)) return true;
@@ -314,7 +314,7 @@ static void test_exact(void) {
  * end of the run, where contexts run out of work (the packet policy's 8x8
  * tiles: 16 of them on a 32x32 image for 128 ray contexts), so it may not
  * exceed the timed cycles by more than 5%, and must come within the factor
- * measured per policy (README "Fidelity ladder" has the table). */
+ * measured per policy (docs/fidelity-and-sampling.md has the table). */
 static void test_default_machine(void) {
   static char out[1 << 16];
   /* Lowest analytic / banked measured at 32x32 (grove, room, sphereflake;
@@ -385,7 +385,7 @@ static void test_refusals(void) {
           "exit %d: %s", rc, out);
 }
 
-/* The timeline's DRAM bytes at the channel rung (README "Outputs"): each line
+/* The timeline's DRAM bytes at the channel rung (docs/outputs.md, "A run's directory"): each line
  * is spread over the cycles its transfer holds the channel, so no row of
  * timeline.csv holds more than cycles x dram.bytes_per_cycle (up to the two
  * decimals it is written with), the columns sum to the run's totals, and a

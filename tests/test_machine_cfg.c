@@ -32,17 +32,17 @@ static void set_err(const char *assignment, char *out, unsigned cap) {
   if (e.set) err_format(&e, out, cap);
 }
 
-/* README's key table is what `rtsim run --help-keys` prints from the table of
- * keys: a key added, renamed or redocumented without the README fails here
- * (regenerate the lines between the markers with that command). */
+/* docs/config-keys.md's key table is what `rtsim run --help-keys` prints from
+ * the table of keys: a key added, renamed or redocumented without the manual
+ * fails here (regenerate the lines between the markers with that command). */
 static void test_readme_table(void) {
-  char *readme = testing_slurp(RTSIM_SOURCE_DIR, "README.md", NULL);
+  char *readme = testing_slurp(RTSIM_SOURCE_DIR, "docs/config-keys.md", NULL);
   EXPECT(readme != NULL);
   if (!readme) return;
   const char *begin = strstr(readme, "--help-keys`, one row a key");
   const char *end = strstr(readme, "<!-- end of rtsim run --help-keys -->");
   begin = begin ? strstr(begin, "-->\n") : NULL;
-  EXPECTF(begin && end && begin < end, "README has no marked key table%s", "");
+  EXPECTF(begin && end && begin < end, "docs/config-keys.md has no marked key table%s", "");
   FILE *f = tmpfile();
   CHECK(f);
   machine_cfg_write_keys(f);
@@ -57,7 +57,8 @@ static void test_readme_table(void) {
     size_t same = 0;
     while (same < have && same < (size_t)n && begin[same] == want[same]) same++;
     EXPECTF(have == (size_t)n && same == have,
-            "README's key table differs from rtsim run --help-keys at byte %zu: README '%.60s', "
+            "docs/config-keys.md's key table differs from rtsim run --help-keys at byte %zu: "
+            "docs '%.60s', "
             "table '%.60s'",
             same, begin + same, want + same);
   }
@@ -92,7 +93,7 @@ static void test_params_ranges(void) {
       {"dram.clock_mhz", "dram.clock_mhz: must be 1 to 16000 MHz"},
       {"dram.tCL", "dram.tCL: must be 1 to 1000 DRAM cycles"},
       {"dram.tFAW", "dram.tFAW: must be 1 to 10000 DRAM cycles"},
-      {"dram.bytes_per_cycle", "dram.bytes_per_cycle: must be 1e-06 to 10^6 bytes a cycle"},
+      {"dram.bytes_per_cycle", "dram.bytes_per_cycle: must be 1e-06 to 10^6 bytes/cycle"},
       {"dram.latency", "dram.latency: must be 0 to 10^9 cycles"},
       {"timeline.window", "timeline.window: must be 1 to 10^12 cycles"},
       {"sample.fraction", "sample.fraction: must be 1e-06 to 1"},

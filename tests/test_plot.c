@@ -2,7 +2,9 @@
  * writes with --script: a fraction on 0..1, panels sharing one y range (and
  * their own with --own-y), tick labels with SI and binary prefixes, one
  * legend with units, a caption of the fixed parameters, bar charts for a
- * text x (side by side and stacked), PNG and SVG, and bad options refused
+ * text x (side by side and stacked), PNG, PDF and SVG by the extension,
+ * titles and labels of the user's or in words, error bars over seeds, a y
+ * axis from 0, the DRAM's peak line, dash patterns, and bad options refused
  * with exit code 2 and one line. Tables are written here, a few rows each. */
 #include <stdbool.h>
 #include <stdio.h>
@@ -52,6 +54,20 @@ static const char *lines_with(const char *s, const char *prefix) {
       buf[o++] = '\n';
       buf[o] = '\0';
     }
+  }
+  return buf;
+}
+
+/* The caption's lines (labels placed left) joined by spaces (static). */
+static const char *caption_of(const char *s) {
+  static char buf[1 << 13];
+  size_t o = 0;
+  buf[0] = '\0';
+  for (const char *p = s; (p = strstr(p, "set label '")); p++) {
+    const char *e = strstr(p, "' at screen "), *nl = strchr(p, '\n');
+    if (!e || !nl || e > nl || !strstr(e, " left\n") || strstr(e, " left\n") > nl) continue;
+    o += (size_t)snprintf(buf + o, o < sizeof buf ? sizeof buf - o : 0, "%s%.*s", o ? " " : "",
+                          (int)(e - p - 11), p + 11);
   }
   return buf;
 }
@@ -110,11 +126,21 @@ static void test_lines(void) {
     EXPECTF(count(r, "set yrange [0:125000]\n") == 2, "a shared range: %s", r);
     free(s);
   }
+  /* Each its own, from 0 (scene a's 900-1100 cycles: steps of 1100 / 5 made
+   * round, 250); around the values only when asked. */
   s = plot(t, "--x rays_per_thread --y cycles --lines dram.latency --panels scene --own-y");
   if (s) {
     const char *r = lines_with(s, "set yrange");
+    EXPECTF(strstr(r, "set yrange [0:1250]\n") && strstr(r, "set yrange [0:125000]\n"),
+            "own ranges from 0: %s", r);
+    free(s);
+  }
+  s = plot(t, "--x rays_per_thread --y cycles --lines dram.latency --panels scene --own-y "
+              "--y-from-data");
+  if (s) {
+    const char *r = lines_with(s, "set yrange");
     EXPECTF(strstr(r, "set yrange [900:1100]\n") && strstr(r, "set yrange [90000:120000]\n"),
-            "own ranges: %s", r);
+            "own ranges from the data: %s", r);
     free(s);
   }
   s = plot(t, "--x rays_per_thread --y cycles --lines dram.latency --panels scene --yrange 0:2e5");
@@ -219,7 +245,8 @@ static void test_bars(void) {
     EXPECT(strstr(s, "title 'geometry'") && strstr(s, "title 'ray'"));
     EXPECTF(strstr(s, "'512 KiB'") && strstr(s, "set label 'recursive' at first 2"), "labels: %s",
             lines_with(s, "set"));
-    EXPECT(strstr(s, "set ylabel 'fetch_*_bytes (bytes)'"));
+    /* The columns' shared words and unit, not their names. */
+    EXPECTF(strstr(s, "set ylabel 'fetch bytes'\n"), "%s", lines_with(s, "set ylabel"));
     free(s);
   }
   /* A numeric x as groups with --bars. */
@@ -254,15 +281,17 @@ static bool table_unit(const char *name, const char *row, char *unit, size_t cap
  * lookup labels the axis "name (the table's unit)"; the last reaches its row
  * through the class pattern. A count has no unit on the axis. */
 static void test_units(void) {
+  /* label: the name in words, then the table's unit unless the words end
+   * with it (a count has none). */
   static const struct {
-    const char *name, *row;
+    const char *name, *row, *label;
   } cases[] = {
-      {"dram_refresh_cycles", "dram_refresh_cycles"},           /* _cycles: core cycles */
-      {"dram.controller_cycles", "dram.controller_cycles"},     /* _cycles: core cycles */
-      {"issue_slots", "issue_slots"},                           /* no ending: a count */
-      {"seconds_ci95_low", "seconds_ci95_low"},                 /* no ending: a count */
-      {"l2_miss_queue_length_max", "l2_miss_queue_length_max"}, /* no ending: a count */
-      {"l2_node_accesses", "l2_<class>_accesses"},              /* fits l2_<class>_accesses */
+      {"dram_refresh_cycles", "dram_refresh_cycles", "DRAM refresh cycles"},
+      {"dram.controller_cycles", "dram.controller_cycles", "DRAM controller cycles"},
+      {"issue_slots", "issue_slots", "issue slots"},
+      {"seconds_ci95_low", "seconds_ci95_low", "seconds 95% CI low"},
+      {"l2_miss_queue_length_max", "l2_miss_queue_length_max", "L2 miss queue length max"},
+      {"l2_node_accesses", "l2_<class>_accesses", "L2 node accesses"},
   };
   for (unsigned i = 0; i < sizeof cases / sizeof cases[0]; i++) {
     const char *name = cases[i].name;
@@ -273,8 +302,8 @@ static void test_units(void) {
     char csv[256];
     snprintf(csv, sizeof csv, "x,%s\n1,2\n2,3\n", name);
     write_file(table, csv);
-    if (!strcmp(unit, "count")) snprintf(want, sizeof want, "set ylabel '%s'\n", name);
-    else snprintf(want, sizeof want, "set ylabel '%s (%s)'\n", name, unit);
+    if (!strcmp(unit, "count")) snprintf(want, sizeof want, "set ylabel '%s'\n", cases[i].label);
+    else snprintf(want, sizeof want, "set ylabel '%s (%s)'\n", cases[i].label, unit);
     char args[128];
     snprintf(args, sizeof args, "--x x --y %s", name);
     char *s = plot(table, args);
@@ -343,11 +372,225 @@ static void test_refusals(void) {
   unlink(m);
 }
 
+/* What a paper needs: titles and labels of the user's, the format by the
+ * extension, error bars over seeds, the y axis from 0, the DRAM's peak. */
+static void test_paper(void) {
+  const char *t = T "seeds.csv";
+  /* Three seeds a point: at x = 1 the values 10, 20, 30 (mean 20); at x = 2
+   * the values 40, 44, 54 (mean 46). The seeds are the only difference. */
+  write_file(t, "point,scene,l2.size,seed,rays_per_thread,cycles\n"
+                "\"seed=1,rays_per_thread=1\",a,1024,1,1,10\n"
+                "\"seed=2,rays_per_thread=1\",a,1024,2,1,30\n"
+                "\"seed=3,rays_per_thread=1\",a,1024,3,1,20\n"
+                "\"seed=1,rays_per_thread=2\",a,1024,1,2,54\n"
+                "\"seed=2,rays_per_thread=2\",a,1024,2,2,40\n"
+                "\"seed=3,rays_per_thread=2\",a,1024,3,2,44\n");
+  char *s = plot(t, "--x rays_per_thread --y cycles --title 'Cycles of a frame' --xlabel 'rays a "
+                    "thread' --ylabel 'time (cycles)'");
+  if (s) {
+    EXPECTF(strstr(s, "set label 'Cycles of a frame' at screen 0.5"), "title: %s",
+            lines_with(s, "set label"));
+    EXPECT(strstr(s, "set xlabel 'rays a thread'\n") && strstr(s, "set ylabel 'time (cycles)'\n"));
+    EXPECTF(strstr(s, "with yerrorlines") && strstr(s, "\n1 20 10 30\n2 46 40 54\ne\n"),
+            "seeds: mean, smallest, largest: %s", lines_with(s, "plot"));
+    EXPECTF(strstr(caption_of(s),
+                   "points: the mean of 3 seeds, error bars from the smallest to the largest"),
+            "the caption says what the bars are: %s", caption_of(s));
+    /* From 0 though the values start at 10: 54 / 5 made round is 20. */
+    EXPECTF(strstr(s, "set yrange [0:60]\n"), "%s", lines_with(s, "set yrange"));
+    free(s);
+  }
+  s = plot(t, "--x rays_per_thread --y cycles --y-from-data");
+  if (s) {
+    EXPECTF(strstr(s, "set yrange [10:60]\n"), "%s", lines_with(s, "set yrange"));
+    free(s);
+  }
+  /* Bars of seeds get whiskers; a default title in words. */
+  s = plot(t, "--x scene --y cycles --where rays_per_thread=2");
+  if (s) {
+    EXPECTF(strstr(s, "with yerrorbars") && strstr(s, "\n0 46 40 54\n"), "whiskers: %s", s);
+    EXPECTF(strstr(s, "set label 'cycles by scene' at screen 0.5"), "%s",
+            lines_with(s, "set label"));
+    free(s);
+  }
+  /* The default title in words without units; the label with them, once. */
+  write_file(T "work.csv", "cores,work_s\n1,2\n4,3\n");
+  s = plot(T "work.csv", "--x cores --y work_s");
+  if (s) {
+    EXPECTF(strstr(s, "set label 'work against cores' at screen 0.5") &&
+                strstr(s, "set ylabel 'work (seconds)'\n"),
+            "%s", lines_with(s, "set"));
+    free(s);
+  }
+  unlink(T "work.csv");
+  /* Markers on a line of 60 points; a plain line past that (a timeline). */
+  for (unsigned n = 60; n <= 61; n++) {
+    char csv[2048] = "x,cycles\n";
+    for (unsigned i = 1; i <= n; i++)
+      snprintf(csv + strlen(csv), sizeof csv - strlen(csv), "%u,%u\n", i, i % 7);
+    write_file(T "dense.csv", csv);
+    s = plot(T "dense.csv", "--x x --y cycles");
+    if (s) {
+      EXPECTF(strstr(s, n == 60 ? "with linespoints lw 2" : "with lines lw 1.5"), "%u points: %s",
+              n, lines_with(s, "plot"));
+      free(s);
+    }
+  }
+  unlink(T "dense.csv");
+  /* Rows that differ in a parameter besides the seed stay refused. */
+  write_file(T "seeds2.csv", "point,l2.size,seed,x,cycles\n"
+                             "\"seed=1,l2.size=1024\",1024,1,1,10\n"
+                             "\"seed=2,l2.size=2048\",2048,2,1,30\n");
+  run("rm -f " T "bad.png");
+  int rc = run("%s plot " T "seeds2.csv --x x --y cycles -o " T "bad.png", RTSIM_BINARY);
+  EXPECTF(rc == 2 && strstr(out, "differ in") && strstr(out, "l2.size"), "exit %d: %s", rc, out);
+  EXPECT(access(T "bad.png", F_OK) != 0);
+  unlink(t);
+  unlink(T "seeds2.csv");
+}
+
+/* A long title wraps; the extension chooses the format, and another is
+ * refused before anything is written. */
+static void test_formats(void) {
+  const char *t = T "formats.csv";
+  write_file(t, "rays_per_thread,cycles\n1,10\n2,20\n");
+  /* A long title wraps to the canvas (one panel: 520 pixels, about 50
+   * characters of the title's font a line). */
+  char *s;
+  int rc;
+  s = plot(t, "--x rays_per_thread --y cycles --title 'DRAM traffic per cycle of every policy "
+              "on the grove at 256x256 with primary and hard-shadow rays, sixteen cores'");
+  if (s) {
+    const char *l = lines_with(s, "set label");
+    EXPECTF(count(l, "center font ',13'") == 3 && strstr(l, "set label 'DRAM traffic per cycle"),
+            "%s", l);
+    for (const char *q = strstr(l, "set label '"); q; q = strstr(q + 1, "set label '")) {
+      const char *e = strstr(q, "' at screen 0.5");
+      if (e && e < strchr(q, '\n'))
+        EXPECTF(e - q - 11 <= 52, "a title line of %d characters", (int)(e - q - 11));
+    }
+    free(s);
+  }
+
+  /* The extension chooses gnuplot's terminal, and the file is that format. */
+  static const struct {
+    const char *ext, *term, *magic;
+  } fmts[] = {{"png", "set terminal pngcairo ", "\x89PNG"},
+              {"pdf", "set terminal pdfcairo ", "%PDF"},
+              {"svg", "set terminal svg ", "<?xml"}};
+  for (unsigned i = 0; i < 3; i++) {
+    run("rm -f " T "fmt.%s " T "fmt.gp", fmts[i].ext);
+    rc = run("%s plot %s --x rays_per_thread --y cycles -o " T "fmt.%s --script " T "fmt.gp",
+             RTSIM_BINARY, t, fmts[i].ext);
+    char path[256];
+    snprintf(path, sizeof path, T "fmt.%s", fmts[i].ext);
+    char *pic = read_all(path), *gp = read_all(T "fmt.gp");
+    EXPECTF(rc == 0 && pic && !memcmp(pic, fmts[i].magic, strlen(fmts[i].magic)), "%s: exit %d: %s",
+            fmts[i].ext, rc, out);
+    EXPECTF(gp && strstr(gp, fmts[i].term), "%s: %s", fmts[i].ext,
+            gp ? lines_with(gp, "set term") : "");
+    free(pic);
+    free(gp);
+    unlink(path);
+  }
+  /* Another extension: exit 2 before anything is written, script included. */
+  run("rm -f " T "fmt.jpg " T "fmt.gp");
+  rc = run("%s plot %s --x rays_per_thread --y cycles -o " T "fmt.jpg --script " T "fmt.gp",
+           RTSIM_BINARY, t);
+  EXPECTF(rc == 2 && strstr(out, "expected a .png, .pdf or .svg file"), "jpg: exit %d: %s", rc,
+          out);
+  EXPECT(access(T "fmt.jpg", F_OK) != 0 && access(T "fmt.gp", F_OK) != 0);
+  rc = run("ls " T "fmt* 2>/dev/null | wc -l");
+  EXPECTF(atoi(out) == 0, "files left: %s", out);
+  unlink(t);
+}
+
+/* --dash: a colour a --lines value, a dash pattern a --dash value; the
+ * legend names each once (the dashes in grey). */
+static void test_dash(void) {
+  const char *t = T "dash.csv";
+  write_file(t, "source,series,x,y\n"
+                "ours,a,1,10\nours,a,2,20\nours,b,1,30\nours,b,2,40\n"
+                "paper,a,1,11\npaper,a,2,21\npaper,b,1,31\npaper,b,2,41\n");
+  char *s = plot(t, "--x x --y y --lines series --dash source --order ours,paper");
+  if (s) {
+    /* Series a is colour 1 both ways: solid for ours, dashed for the paper. */
+    EXPECTF(count(s, " lt 1 pt 1 dt 1 notitle") == 1 && count(s, " lt 1 pt 1 dt 2 notitle") == 1 &&
+                count(s, " lt 2 pt 2 dt 2 notitle") == 1,
+            "%s", lines_with(s, "plot '-'"));
+    /* The paper's a (second of a's series) holds its numbers. */
+    EXPECTF(strstr(s, "\ne\n1 11\n2 21\ne\n"), "%s", s);
+    EXPECTF(strstr(s, "title 'series = a'") && strstr(s, "title 'series = b'") &&
+                strstr(s, "lc rgb 'gray30' dt 2 title 'source = paper'") &&
+                count(s, "title 'source = ") == 2,
+            "%s", lines_with(s, "plot NaN"));
+    free(s);
+  }
+  write_file(t, "source,x,y\na,1,1\nb,1,2\nc,1,3\nd,1,4\ne,1,5\n");
+  run("rm -f " T "bad.png");
+  int rc = run("%s plot %s --x x --y y --dash source -o " T "bad.png", RTSIM_BINARY, t);
+  EXPECTF(rc == 2 && strstr(out, "--dash source: more than 4 values"), "exit %d: %s", rc, out);
+  EXPECT(access(T "bad.png", F_OK) != 0);
+  unlink(t);
+}
+
+/* The DRAM's peak: a dashed line and a legend entry where the y axis is DRAM
+ * bytes per cycle and the table names the DRAM, in the caption too. */
+static void test_peak(void) {
+  const char *t = T "peak.csv";
+  /* Banked: 1 channel x 8-byte bus x 2 transfers x 1200 MHz / 1400 MHz of the
+   * cores = 13.714... bytes a core cycle. */
+  write_file(t, "scene,fidelity,clock_ghz,dram.channels,dram.bus_bytes,dram.clock_mhz,"
+                "dram.latency,dram.bytes_per_cycle,cycles,dram_bytes_per_cycle\n"
+                "a,banked,1.4,1,8,1200,50,13,1000,2.5\n"
+                "a,banked,1.4,1,8,1200,50,13,2000,7\n");
+  char *s = plot(t, "--x cycles --y dram_bytes_per_cycle");
+  if (s) {
+    EXPECTF(strstr(s, "set arrow 1000 from graph 0, first 13.714285714285714"), "%s",
+            lines_with(s, "set arrow"));
+    EXPECTF(strstr(s, "title 'DRAM peak: 13.71'"), "%s", lines_with(s, "plot"));
+    EXPECTF(
+        strstr(caption_of(s), "DRAM: banked, 1 channel at 1200 MHz, peak 13.71 bytes per cycle"),
+        "%s", caption_of(s));
+    /* The peak is in the range; the label is in words. */
+    EXPECTF(strstr(s, "set yrange [0:15]\n"), "%s", lines_with(s, "set yrange"));
+    EXPECT(strstr(s, "set ylabel 'DRAM bytes per cycle'\n") != NULL);
+    free(s);
+  }
+  s = plot(t, "--x cycles --y dram_bytes_per_cycle --no-peak");
+  if (s) {
+    EXPECTF(!strstr(s, "set arrow 1000 from") && !strstr(s, "peak:"), "%s", lines_with(s, "set"));
+    free(s);
+  }
+  /* --peak on any axis. */
+  s = plot(t, "--x cycles --y dram_bytes_per_cycle --peak 20");
+  if (s) {
+    EXPECTF(strstr(s, "first 20 to graph 1, first 20 ") && strstr(s, "title 'peak: 20'"), "%s",
+            lines_with(s, "set arrow"));
+    free(s);
+  }
+  /* A channel's peak is its dram.bytes_per_cycle. */
+  write_file(t, "fidelity,dram.latency,dram.bytes_per_cycle,cycles,dram_bytes_per_cycle\n"
+                "channel,50,6.5,1000,2.5\nchannel,50,6.5,2000,3\n");
+  s = plot(t, "--x cycles --y dram_bytes_per_cycle");
+  if (s) {
+    EXPECTF(strstr(s, "first 6.5 to graph 1, first 6.5 ") &&
+                strstr(caption_of(s), "DRAM: channel, 50 cycles, 6.5 bytes per cycle"),
+            "%s", lines_with(s, "set"));
+    free(s);
+  }
+  unlink(t);
+}
+
 int main(void) {
   test_lines();
   test_bars();
   test_points();
   test_units();
   test_refusals();
+  test_paper();
+  test_formats();
+  test_peak();
+  test_dash();
   return testing_done("test_plot");
 }

@@ -38,15 +38,31 @@ static void test_fields(void) {
   EXPECT(p.nmark == 2 && p.mark[0] == 2 && p.mark[1] == 4.5);
   EXPECT(p.logx && !p.logy && !p.bars && !p.stack && !p.points && !p.own_y);
   EXPECT(p.yrange && p.ylo == 1 && p.yhi == 10);
-  EXPECT(p.svg && !strcmp(p.out, "out.svg") && !strcmp(p.script, "s.gp"));
+  EXPECT(p.format == PLOT_SVG && !strcmp(p.out, "out.svg") && !strcmp(p.script, "s.gp"));
   EXPECT(p.order && !strcmp(p.order, "a,b"));
   free(w);
 
   /* --stack asks for bars; a .png is not an svg; nothing else is set. */
   rc = parse(&p, "t.csv --x policy --y a,b --stack -o f.png", &w);
   EXPECTF(rc == OPTS_GO, "rc %d", rc);
-  EXPECT(p.stack && p.bars && !p.svg && !p.yrange && p.nwhere == 0 && p.nmark == 0);
+  EXPECT(p.stack && p.bars && p.format == PLOT_PNG && !p.yrange && p.nwhere == 0 && p.nmark == 0);
   EXPECT(!p.lines && !p.panels && !p.script && !p.order);
+  EXPECT(!p.title && !p.xlabel && !p.ylabel && !p.y_from_data && !p.peak_given && !p.no_peak);
+  free(w);
+
+  /* The extension names the format, in any case; the labels are taken as
+   * typed (one word each here: the test splits at spaces). */
+  rc = parse(&p,
+             "t.csv --x a --y b --title Traffic --xlabel Cores --ylabel Bytes --y-from-data "
+             "--peak 13.5 -o f.PDF",
+             &w);
+  EXPECTF(rc == OPTS_GO, "rc %d", rc);
+  EXPECT(p.format == PLOT_PDF && p.y_from_data && p.peak_given && p.peak == 13.5);
+  EXPECT(p.title && !strcmp(p.title, "Traffic") && p.xlabel && !strcmp(p.xlabel, "Cores") &&
+         p.ylabel && !strcmp(p.ylabel, "Bytes"));
+  free(w);
+  rc = parse(&p, "t.csv --x a --y b --no-peak -o dir.v2/f.svg", &w);
+  EXPECT(rc == OPTS_GO && p.format == PLOT_SVG && p.no_peak && !p.peak_given);
   free(w);
 }
 
@@ -56,7 +72,15 @@ static void test_refusals(void) {
       "t.csv --y b -o f.png",       /* no --x */
       "t.csv --x a -o f.png",       /* no --y */
       "t.csv --x a --y b",          /* no -o */
-      "t.csv --x a --y b -o f.jpg", /* not png or svg */
+      "t.csv --x a --y b -o f.jpg", /* not png, pdf or svg */
+      "t.csv --x a --y b -o f.eps",
+      "t.csv --x a --y b -o pdf",      /* no extension */
+      "t.csv --x a --y b -o f.png.gp", /* the extension is the last */
+      "t.csv --x a --y b -o f.png --yrange 0:1 --y-from-data",
+      "t.csv --x a --y b -o f.png --peak 2 --no-peak",
+      "t.csv --x a --y b -o f.png --peak high",
+      "t.csv --x a --y b -o f.png --peak 0",
+      "t.csv --x a --y b -o f.png --bars --dash c",
       "t.csv --x a --y b -o f.png --own-y --yrange 0:1",
       "t.csv --x a --y b -o f.png --logy --yrange 0:1",
       "t.csv --x a --y b -o f.png --yrange 2:1",

@@ -553,8 +553,8 @@ static int exists(const char *dir, const char *name) {
  * number with its unit; DRAM bytes as stats.json has them. */
 static void check_summary(const char *out, const char *dir) {
   EXPECTF(strstr(out, "\npolicy: packet\nmachine: "), "the summary's first lines: %s", out);
-  EXPECTF(strstr(out, "\nmachine: 3 cores x 2 threads x 2 rays a thread, L2 8 KiB, fidelity "
-                      "channel, 1 GHz\n"),
+  EXPECTF(strstr(out, "\nmachine: 3 x 2 x 2 (cores x threads_per_core x rays_per_thread), L2 8 "
+                      "KiB, fidelity channel, 1 GHz\n"),
           "the machine line: %s", out);
   char want[256];
   snprintf(want, sizeof want, "\ndram_bytes: %.0f bytes (read %.0f, written %.0f)\n",

@@ -1,4 +1,4 @@
-/* Sampling through rtsim run (README "Sampling"): a sampled run traces every
+/* Sampling through rtsim run (docs/fidelity-and-sampling.md): a sampled run traces every
  * work item, so its image, rays and issue slots are the full run's exactly;
  * its estimates of cycles, DRAM bytes and load latency fall near the full
  * run's on every small scene, with intervals that are intervals (low <=

@@ -268,11 +268,11 @@ static void test_components(void) {
     EXPECTF(why == NULL, "%s", why);
     for (unsigned j = 0; j < all[i]->n; j++) {
       const struct stats_desc *d = &all[i]->d[j];
-      if (d->how == STATS_HOW_SLOT) continue;
+      if (d->how == STATS_HOW_AT) continue;
       EXPECTF(d->unit[0] && d->desc[0], "%s: unit and description", d->name);
       for (unsigned k = i; k < n; k++)
         for (unsigned l = k == i ? j + 1 : 0; l < all[k]->n; l++)
-          EXPECTF(strcmp(d->name, all[k]->d[l].name) || all[k]->d[l].how == STATS_HOW_SLOT ||
+          EXPECTF(strcmp(d->name, all[k]->d[l].name) || all[k]->d[l].how == STATS_HOW_AT ||
                       d->present || all[k]->d[l].present,
                   "%s named twice", d->name);
     }
@@ -293,14 +293,14 @@ static void test_timeline_cols(void) {
     EXPECTF(seen[i] == 1, "timeline column %u: %u descriptors", i, seen[i]);
 }
 
-/* The README's table of numbers is `rtsim run --help-stats-markdown`. */
+/* docs/stats.md's table of numbers is `rtsim run --help-stats-markdown`. */
 static void test_readme(void) {
   FILE *p = popen(RTSIM_BINARY " run --help-stats-markdown", "r");
   static char want[1 << 16], readme[1 << 20];
   size_t wn = fread(want, 1, sizeof want - 1, p);
   want[wn] = '\0';
   EXPECT(pclose(p) == 0 && wn > 0);
-  FILE *f = fopen(RTSIM_SOURCE_DIR "/README.md", "r");
+  FILE *f = fopen(RTSIM_SOURCE_DIR "/docs/stats.md", "r");
   EXPECT(f != NULL);
   if (!f) return;
   size_t rn = fread(readme, 1, sizeof readme - 1, f);
@@ -310,12 +310,12 @@ static void test_readme(void) {
   const char *a = strstr(readme, begin);
   const char *h = a ? strstr(a, "|---|") : NULL;
   const char *b = strstr(readme, "<!-- numbers end -->");
-  EXPECTF(a && h && b && h < b, "README: the table between the markers");
+  EXPECTF(a && h && b && h < b, "docs/stats.md: the table between the markers");
   if (!(a && h && b && h < b)) return;
   h = strchr(h, '\n') + 1;
   const size_t have = (size_t)(b - h);
   EXPECTF(have == wn && !memcmp(h, want, wn),
-          "README \"Numbers\" differs from rtsim run --help-stats-markdown: paste its output "
+          "docs/stats.md differs from rtsim run --help-stats-markdown: paste its output "
           "between the markers");
 }
 

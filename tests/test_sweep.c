@@ -241,7 +241,7 @@ static void test_bad_files(void) {
       {"merge", "missing DIR"},
       {"merge x", "missing -o TABLE.csv"},
       {"plot t.csv --y cycles -o t.png", "missing --x KEY"},
-      {"plot t.csv --x a --y b -o t.pdf", "expected a .png or .svg file"},
+      {"plot t.csv --x a --y b -o t.jpg", "expected a .png, .pdf or .svg file"},
       {"plot t.csv --x a --y b -o t.png --where a", "--where: got 'a', expected KEY=VALUE"},
       {"plot t.csv --x a --y b -o t.png --mark-x two", "--mark-x: got 'two', expected a number"},
   };
@@ -373,7 +373,7 @@ static void test_failing_point(void) {
   EXPECT(rc == 0 && same_text(RTSIM_TMP "/sw_fail.csv", RTSIM_TMP "/sw_ref.csv"));
 }
 
-/* The README's recipes: job lines through GNU parallel, and a Slurm array
+/* docs/sweeps.md's recipes: job lines through GNU parallel, and a Slurm array
  * (each task runs line $SLURM_ARRAY_TASK_ID), both from another directory. */
 static void test_jobs_elsewhere(void) {
   if (run("parallel --version") != 0) {
@@ -390,7 +390,7 @@ static void test_jobs_elsewhere(void) {
   EXPECTF(rc == 0 && same_text(RTSIM_TMP "/sw_par.csv", RTSIM_TMP "/sw_ref.csv"),
           "the table through GNU parallel differs (%d: %s)", rc, out);
 
-  /* The README's Slurm recipe (#19 item 1): a script of 3 tasks of at most 3
+  /* docs/sweeps.md's Slurm recipe (#19 item 1): a script of 3 tasks of at most 3
    * points, which Slurm copies at submission (cp here). Task 2 runs; then the
    * jobs are emitted again (fewer now, over the same names) before tasks 1
    * and 3 of the submitted copy run, and task 2 again: nothing lost. */
@@ -665,7 +665,7 @@ static void test_plot(void) {
            RTSIM_BINARY, t, RTSIM_TMP);
   EXPECTF(rc == 0 && strstr(out, "4 points, 2 lines, 1 panel"), "svg: %d %s", rc, out);
   char *svg = read_all(RTSIM_TMP "/sw_plot.svg");
-  EXPECTF(svg && strstr(svg, "<svg") && strstr(svg, "l2_fetch_bytes (bytes)") &&
+  EXPECTF(svg && strstr(svg, "<svg") && strstr(svg, "L2 fetch bytes") &&
               strstr(svg, "policy = packet"),
           "svg lacks its labels or legend");
   free(svg);

@@ -153,7 +153,7 @@ struct policy_setup {
   void (*item_done)(void *ctx, uint64_t k);
   void *item_ctx;
   /* Optional (NULL: not told): whom a worker's accesses are for, so that a
-   * backend can charge their cost to pixels (README "Cost in the picture").
+   * backend can charge their cost to pixels (docs/outputs.md "Cost in the picture").
    * Before its accesses for one ray the worker calls it with that ray's
    * pixel (n = 1); before work shared by several rays (a packet's traversal,
    * a queue point's table entry and geometry) with their pixels, one a ray

@@ -286,7 +286,7 @@ static bool load_geometry(const struct cfg_doc *d, struct cfg_node *n, const cha
                         "too many triangles: this entry %s %llu, the scene would "
                         "have %s%llu, expected at most %llu (about %u bytes of host memory a "
                         "triangle, scene and k-d tree, within half of this host's memory; "
-                        "README: Limits)",
+                        "docs/inputs.md, Limits)",
                         is_gen ? "builds" : "holds at least", (unsigned long long)k,
                         is_gen ? "" : "at least ", (unsigned long long)total,
                         (unsigned long long)cap, SCENE_FILE_HOST_BYTES_PER_TRIANGLE);

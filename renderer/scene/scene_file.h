@@ -13,7 +13,7 @@ struct err;
 
 /* The most triangles a scene may have: half of the host's physical memory
  * at SCENE_FILE_HOST_BYTES_PER_TRIANGLE (the measured peak of loading a scene
- * and building its k-d tree, README: Limits), and never more than
+ * and building its k-d tree, docs/inputs.md, Limits), and never more than
  * SCENE_FILE_TRIANGLES_HARD_MAX. Every scene file entry's triangles are
  * counted against it before anything is built. */
 #define SCENE_FILE_HOST_BYTES_PER_TRIANGLE 600u

@@ -1,7 +1,7 @@
 /* libFuzzer entry point for the PLY reader: any bytes must give a mesh whose
  * indices are in range and whose coordinates are finite, or one error; never
  * a crash, a hang or unbounded memory. Built with -DRTSIM_FUZZ=ON and run by
- * .ci/fuzz on corpus/ply with ply.dict (README: Quick start). */
+ * .ci/fuzz on corpus/ply with ply.dict (docs/testing.md, Fuzzing). */
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
