@@ -70,8 +70,8 @@ static void example_of(const char *help, char *cmds, size_t cap) {
 static void run_example(const char *cmd, const char *cmds) {
   char script[8192] = "", tmp[512];
   snprintf(tmp, sizeof tmp, "%s/help-example-%s", RTSIM_TMP, cmd);
-  size_t n = (size_t)snprintf(script, sizeof script, "set -e; rm -rf %s; mkdir -p %s; cd %s; ", tmp,
-                              tmp, RTSIM_SOURCE_DIR);
+  size_t n = (size_t)snprintf(script, sizeof script, "(set -e; rm -rf %s; mkdir -p %s; cd %s; ",
+                              tmp, tmp, RTSIM_SOURCE_DIR);
   for (const char *p = cmds; *p && n < sizeof script;) {
     size_t w = strcspn(p, "\n");
     for (size_t i = 0; i < w && n + 600 < sizeof script; i++) {
@@ -88,6 +88,8 @@ static void run_example(const char *cmd, const char *cmds) {
     n += (size_t)snprintf(script + n, sizeof script - n, " >/dev/null; ");
     p += w + (p[w] == '\n');
   }
+  /* One group, so that testing_run's 2>&1 takes every line's stderr. */
+  if (n + 2 < sizeof script) strcat(script, ")");
   int rc = testing_run(script, out, sizeof out);
   EXPECTF(rc == 0, "rtsim %s --help's example failed (%d): %s\n%s", cmd, rc, cmds, out);
 }
@@ -134,9 +136,11 @@ int main(void) {
     const char *cmd = names[i];
     rc = testing_runf(help, sizeof help, "%s %s --help 2>&1", RTSIM_BINARY, cmd);
     EXPECTF(rc == 0, "rtsim %s --help: %d %s", cmd, rc, help);
-    char ss[64];
-    snprintf(ss, sizeof ss, ".SS rtsim %s\n", cmd);
-    if (strchr(cmd, '-')) snprintf(ss, sizeof ss, ".SS rtsim dram\\-replay\n");
+    /* The section's title, its minus signs escaped as roff wants them. */
+    char ss[96] = ".SS rtsim ";
+    for (const char *c = cmd; *c && strlen(ss) + 3 < sizeof ss; c++)
+      strcat(ss, *c == '-' ? "\\-" : (char[]){*c, '\0'});
+    strcat(ss, "\n");
     EXPECTF(strstr(man, ss), "the manual page has no section '%s'", ss);
     rc = testing_runf(out, sizeof out, "%s %s --help-full 2>&1", RTSIM_BINARY, cmd);
     EXPECTF(rc == 0 && !strncmp(out, help, strlen(help)),
