@@ -240,7 +240,7 @@ void trace_finish(struct machine *m, uint64_t end) {
     mark(m, i, MACHINE_TRACE_KINDS, end); /* closes the last slice */
     tr->th[i].kind = MACHINE_TRACE_DONE;
   }
-  if (end < tr->end) tr->end = end;
+  if (end < tr->end) tr->end = end > tr->p.from_cycle ? end : tr->p.from_cycle;
 }
 
 /* ---- life ---- */
