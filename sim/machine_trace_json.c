@@ -3,8 +3,10 @@
  * ts and dur are cycles, read as microseconds (integers, exact in every
  * viewer; a core cycle at clock_ghz is 1/clock_ghz ns of real time, written
  * in otherData). Processes: "memory" (pid 1, the counters), then core c (pid
- * c + 2) with its hardware threads (tid: the global thread index + 1, unique
- * across processes as viewers expect). Everything is cut to the window. */
+ * c + 2) with its hardware threads (tid: after every pid, the global thread
+ * index + cores + 2). NOTE: a viewer takes an event without a tid (a
+ * counter, a process's name) as its pid's thread of that number, so no tid
+ * may equal a pid. Everything is cut to the window. */
 #include <inttypes.h>
 
 #include "sim/machine_state.h"
@@ -14,6 +16,10 @@
 static void sep(bool *first, FILE *f) {
   fputs(*first ? "" : ",\n", f);
   *first = false;
+}
+
+static unsigned tid_of(const struct mtrace *tr, uint32_t thread) {
+  return thread + tr->p.cores + 2;
 }
 
 static void meta(FILE *f, bool *first, unsigned pid, unsigned tid, const char *what,
@@ -37,8 +43,8 @@ static void write_names(const struct machine *m, const struct mtrace *tr, bool *
     meta(f, first, c + 2, 0, "process_sort_index", "sort_index", NULL, c + 1);
     for (uint32_t t = 0; t < T; t++) {
       snprintf(name, sizeof name, "thread %u", t);
-      meta(f, first, c + 2, c * T + t + 1, "thread_name", "name", name, 0);
-      meta(f, first, c + 2, c * T + t + 1, "thread_sort_index", "sort_index", NULL, t);
+      meta(f, first, c + 2, tid_of(tr, c * T + t), "thread_name", "name", name, 0);
+      meta(f, first, c + 2, tid_of(tr, c * T + t), "thread_sort_index", "sort_index", NULL, t);
     }
   }
 }
@@ -72,7 +78,7 @@ static void write_event(const struct machine *m, const struct mtrace *tr, const 
   fprintf(f,
           "{\"ph\":\"X\",\"pid\":%u,\"tid\":%u,\"ts\":%" PRIu64 ",\"dur\":%" PRIu64
           ",\"name\":\"%s\"}",
-          e->track / m->p.threads_per_core + 2, e->track + 1, e->ts, end - e->ts,
+          e->track / m->p.threads_per_core + 2, tid_of(tr, e->track), e->ts, end - e->ts,
           machine_trace_kind_names[e->kind]);
 }
 

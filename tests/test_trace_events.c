@@ -189,31 +189,34 @@ static int by_thread(const void *a, const void *b) {
   return x->ts < y->ts ? -1 : x->ts > y->ts;
 }
 
-/* Slices of the threads tid 1..threads: each tiles [from, to) with slices
- * of positive length, in time order; sums[k] gets each state's cycles
- * (k: 0 busy, 1 waiting, 2 parked, 3 done). True when all hold. */
-static bool tiles(struct trace *t, unsigned threads, int64_t from, int64_t to, double sums[4]) {
+/* Slices of the threads of the first `cores` cores (core c: pid c + 2;
+ * thread i of them all: tid i + cores + 2, no tid a pid): each tiles [from,
+ * to) with slices of positive length, in time order; sums[k] gets each
+ * state's cycles (k: 0 busy, 1 waiting, 2 parked, 3 done). True when all
+ * hold. */
+static bool tiles(struct trace *t, unsigned cores, unsigned threads, int64_t from, int64_t to,
+                  double sums[4]) {
   qsort(t->v, t->n, sizeof *t->v, by_thread);
   int64_t at[1024];
-  bool ok = threads <= 1024;
+  bool ok = threads <= 1024 && cores && threads % cores == 0;
   for (unsigned i = 0; i < threads && ok; i++) at[i] = from;
   for (size_t i = 0; i < t->n && ok; i++) {
     const struct tev *e = &t->v[i];
     if (e->ph != 'X') continue;
-    ok = e->tid >= 1 && e->tid <= (int64_t)threads && e->ts == at[e->tid - 1] && e->dur > 0;
+    const int64_t k = e->tid - cores - 2;
+    ok = k >= 0 && k < (int64_t)threads && e->pid == k / (threads / cores) + 2 && e->ts == at[k] &&
+         e->dur > 0;
     if (!ok) {
-      fprintf(stderr,
-              "slice tid %" PRId64 " ts %" PRId64 " dur %" PRId64 " %s: expected ts %" PRId64 "\n",
-              e->tid, e->ts, e->dur, e->name,
-              e->tid >= 1 && e->tid <= (int64_t)threads ? at[e->tid - 1] : -1);
+      fprintf(stderr, "slice pid %" PRId64 " tid %" PRId64 " ts %" PRId64 " dur %" PRId64 " %s\n",
+              e->pid, e->tid, e->ts, e->dur, e->name);
       break;
     }
-    at[e->tid - 1] += e->dur;
-    const int k = !strncmp(e->name, "wait", 4) ? 1
+    at[k] += e->dur;
+    const int s = !strncmp(e->name, "wait", 4) ? 1
                   : !strcmp(e->name, "parked") ? 2
                   : !strcmp(e->name, "done")   ? 3
                                                : 0;
-    sums[k] += (double)e->dur;
+    sums[s] += (double)e->dur;
   }
   for (unsigned i = 0; i < threads && ok; i++) ok = at[i] == to;
   return ok;
@@ -331,8 +334,8 @@ static void hand_timed(void) {
    * switches back [131, 133) and ray 0 runs its 5 cycles [133, 138). */
   struct trace t;
   trace_of(&t, tiny(1, 2, 64), w_switch);
-  const struct want a[] = {{1, 0, 11, "run"},          {1, 11, 2, "switch"},  {1, 13, 4, "run"},
-                           {1, 17, 114, "wait: load"}, {1, 131, 2, "switch"}, {1, 133, 5, "run"}};
+  const struct want a[] = {{3, 0, 11, "run"},          {3, 11, 2, "switch"},  {3, 13, 4, "run"},
+                           {3, 17, 114, "wait: load"}, {3, 131, 2, "switch"}, {3, 133, 5, "run"}};
   expect_slices(&t, a, sizeof a / sizeof a[0], "switch");
   free(t.v);
   /* Two threads, one MSHR: thread 0 issues at 0, its load leaves at 1 and
@@ -341,15 +344,15 @@ static void hand_timed(void) {
    * 121, then misses: back at 121 + 20 + 100 = 241. Thread 0 runs its empty
    * last block at 121 and is done until the run ends at 241. */
   trace_of(&t, tiny(2, 1, 1), w_load);
-  const struct want b[] = {{1, 0, 1, "run"},           {1, 1, 120, "wait: load"},
-                           {1, 121, 120, "done"},      {2, 0, 1, "ready"},
-                           {2, 1, 1, "run"},           {2, 2, 119, "wait: L2 MSHRs full"},
-                           {2, 121, 120, "wait: load"}};
+  const struct want b[] = {{3, 0, 1, "run"},           {3, 1, 120, "wait: load"},
+                           {3, 121, 120, "done"},      {4, 0, 1, "ready"},
+                           {4, 1, 1, "run"},           {4, 2, 119, "wait: L2 MSHRs full"},
+                           {4, 121, 120, "wait: load"}};
   expect_slices(&t, b, sizeof b / sizeof b[0], "mshr");
   free(t.v);
   /* The kernel's own wait: [3, 53), resumed with no switch (its last ray). */
   trace_of(&t, tiny(1, 1, 64), w_wait);
-  const struct want c[] = {{1, 0, 3, "run"}, {1, 3, 50, "wait: mem_wait"}, {1, 53, 2, "run"}};
+  const struct want c[] = {{3, 0, 3, "run"}, {3, 3, 50, "wait: mem_wait"}, {3, 53, 2, "run"}};
   expect_slices(&t, c, sizeof c / sizeof c[0], "mem_wait");
   free(t.v);
 }
@@ -359,6 +362,7 @@ static void hand_timed(void) {
 #define CFG RTSIM_SOURCE_DIR "/configs/default.yaml"
 #define SCENE RTSIM_SOURCE_DIR "/scenes/small/grove.yaml"
 #define TMP RTSIM_TMP "/trace_events"
+#define CORES 16 /* configs/default.yaml's */
 
 static off_t file_size(const char *path) {
   struct stat st;
@@ -379,7 +383,7 @@ static void whole_run(char *out, unsigned cap, const char *policy) {
   EXPECT(trace_load(&t, TMP, "whole.json"));
   EXPECT(!strcmp(t.capped, "no"));
   double sums[4] = {0};
-  EXPECT(tiles(&t, (unsigned)threads, 0, (int64_t)cycles, sums));
+  EXPECT(tiles(&t, CORES, (unsigned)threads, 0, (int64_t)cycles, sums));
   static const char *const frac[4] = {"thread_busy_fraction", "thread_wait_fraction",
                                       "thread_parked_fraction", "thread_done_fraction"};
   for (int k = 0; k < 4; k++) {
@@ -406,8 +410,8 @@ static void bounded(char *out, unsigned cap) {
   struct trace t;
   EXPECT(trace_load(&t, TMP, "win.json"));
   double sums[4] = {0};
-  const unsigned T = (unsigned)testing_json_num(TMP "/win", "threads") / 16; /* 16 cores */
-  EXPECT(tiles(&t, T, 20000, 30000, sums));
+  const unsigned T = (unsigned)testing_json_num(TMP "/win", "threads") / CORES;
+  EXPECT(tiles(&t, 1, T, 20000, 30000, sums));
   size_t slices, counters;
   bool in;
   count(&t, 20000, 30000, &slices, &counters, &in);
@@ -428,7 +432,8 @@ static void bounded(char *out, unsigned cap) {
   EXPECTF(slices + counters <= 1000, "cap: %zu events", slices + counters);
   const char *at = strstr(t.capped, "at cycle ");
   const int64_t cut = at ? strtoll(at + 9, NULL, 10) : -1;
-  EXPECT(cut > 0 && tiles(&t, (unsigned)testing_json_num(TMP "/cap", "threads"), 0, cut, sums));
+  EXPECT(cut > 0 &&
+         tiles(&t, CORES, (unsigned)testing_json_num(TMP "/cap", "threads"), 0, cut, sums));
   EXPECTF(file_size(TMP "/cap.json") < 1000 * 100, "cap: %lld bytes",
           (long long)file_size(TMP "/cap.json"));
   free(t.v);
