@@ -182,23 +182,18 @@ static inline void line_done(struct machine *m, struct mctx *c, uint64_t line, u
   if (traced) trace_tick(m, t);
 }
 
-/* The L2 answers a load (sim/l2.h's client): ctx is the waiting ray. */
-static void ev_line_done(void *ctx, uint64_t line) {
-  struct mctx *c = ctx;
-  line_done(c->m, c, line, engine_now(c->m->eng), false, false);
-}
-static void ev_line_done_costed(void *ctx, uint64_t line) {
-  struct mctx *c = ctx;
-  line_done(c->m, c, line, engine_now(c->m->eng), true, false);
-}
-static void ev_line_done_traced(void *ctx, uint64_t line) {
-  struct mctx *c = ctx;
-  line_done(c->m, c, line, engine_now(c->m->eng), false, true);
-}
-static void ev_line_done_costed_traced(void *ctx, uint64_t line) {
-  struct mctx *c = ctx;
-  line_done(c->m, c, line, engine_now(c->m->eng), true, true);
-}
+/* The L2 answers a load (sim/l2.h's client): ctx is the waiting ray. One
+ * instance for each combination of the cost and trace layers. */
+#define EV_LINE_DONE(name, costed, traced)                                                         \
+  static void name(void *ctx, uint64_t line) {                                                     \
+    struct mctx *c = ctx;                                                                          \
+    line_done(c->m, c, line, engine_now(c->m->eng), costed, traced);                               \
+  }
+EV_LINE_DONE(ev_line_done, false, false)
+EV_LINE_DONE(ev_line_done_costed, true, false)
+EV_LINE_DONE(ev_line_done_traced, false, true)
+EV_LINE_DONE(ev_line_done_costed_traced, true, true)
+#undef EV_LINE_DONE
 
 /* An access on its way to the L2, packed into the event's one argument:
  * line, op and class. */
