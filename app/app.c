@@ -177,7 +177,7 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
                    uint32_t width, uint32_t height, enum policy_kind k,
                    const struct machine_params *mp, const struct machine_cfg_work *work,
                    const struct machine_cfg_sample *sample, bool progress, FILE *dram_trace,
-                   bool costs) {
+                   bool costs, const struct machine_trace_params *events) {
   app_render_init(&t->ar, w, mask, seed, width, height);
   t->ar.setup.layout.node_cycles = work->cost_node_cycles;
   t->ar.setup.layout.tri_cycles = work->cost_triangle_cycles;
@@ -217,6 +217,7 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
     t->sample.rays_ctx = &r;
   }
   if (dram_trace) dram_trace_to(machine_dram(t->m), dram_trace);
+  if (events) machine_trace_enable(t->m, events);
   r.t0 = app_now();
   machine_run(t->m, run_worker, &r, progress ? cycle_progress : NULL, &r);
   t->wall_s = app_now() - r.t0;

@@ -117,6 +117,7 @@ void app_render_fini(struct app_render *r);
 
 struct machine;
 struct machine_params;
+struct machine_trace_params;
 struct machine_cfg_work;
 struct machine_cfg_sample;
 /* One render on the timed machine: the machine (its statistics and timeline),
@@ -136,12 +137,13 @@ struct app_timed {
  * renderer announces and the dynamic policy's sharing come from work; the run
  * is sampled as `sample` says (sample_problem must pass it). progress: a
  * progress line on stderr. costs: count what every pixel cost the machine
- * (machine_get_costs; a whole run only, not a sampled one). */
+ * (machine_get_costs; a whole run only, not a sampled one). events: the
+ * trace layer's window and cores (machine_trace_enable; NULL: none). */
 void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask, uint64_t seed,
                    uint32_t width, uint32_t height, enum policy_kind k,
                    const struct machine_params *mp, const struct machine_cfg_work *work,
                    const struct machine_cfg_sample *sample, bool progress, FILE *dram_trace,
-                   bool costs);
+                   bool costs, const struct machine_trace_params *events);
 void app_timed_fini(struct app_timed *t);
 /* The work items a render of policy k at width x height takes (sampling's
  * population: pixels, or tiles for packet). */

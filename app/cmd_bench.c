@@ -227,7 +227,7 @@ static int bench_timed(const char *cfg_path, uint32_t mask, uint64_t width, uint
       if (one) p.cores = p.threads_per_core = p.rays_per_thread = 1;
       struct app_timed t;
       app_timed_run(&t, &w, mask, w.scene.seed, W, H, POLICY_RECURSIVE, &p, &mc.work, &sc, false,
-                    NULL, false);
+                    NULL, false, NULL);
       const struct machine_stats *st = machine_get_stats(t.m);
       double cycles = (double)st->cycles, lo = 0, hi = 0;
       if (sampled) cycles = sample_cycles(&t.sample, &lo, &hi);

@@ -49,6 +49,12 @@ static const char HELP[] =
     "  --seed S              diffuse sampling seed (default: the scene's)\n"
     "  --set KEY=VALUE       override a machine config key (repeatable)\n"
     "  --dram-trace FILE     also write every DRAM request (not at fidelity analytic)\n"
+    "  --trace-events FILE   also write the run's activity as Chrome trace-event JSON\n"
+    "                        for Perfetto (not at fidelity analytic), bounded by:\n"
+    "  --trace-events-window FROM:TO  only cycles [FROM, TO) (FROM: to the end)\n"
+    "  --trace-events-cores N         only the first N cores (default 2)\n"
+    "  --trace-events-period C        counters every C cycles (default 1000)\n"
+    "  --trace-events-max N           at most N events, ~65 bytes each (default 1000000)\n"
     "  --cost-preview PNG    also draw one per-pixel cost channel as a heat map\n"
     "  --cost-channel C      the channel it draws (default cost.issue_slots)\n"
     "  --cost-max X          its colour bar's top (default: the largest pixel)\n"
@@ -81,7 +87,12 @@ static const char HELP[] =
     "--set dynamic.sharing=chip the dynamic policy's cores share its queue points.\n"
     "--dram-trace writes each request's address, READ or WRITE, arrival in DRAM\n"
     "cycles, arrival and completion in core cycles, in arrival order\n"
-    "(docs/dram-traces.md); rtsim dram-replay reads it.\n";
+    "(docs/dram-traces.md); rtsim dram-replay reads it.\n"
+    "--trace-events: for ui.perfetto.dev or chrome://tracing, per core, each\n"
+    "thread's state over time (run, switch, ready, wait by cause, parked, done) and\n"
+    "counters of the L2 and the DRAM; 1 us of trace time = 1 cycle (docs/outputs.md:\n"
+    "Timelines in Perfetto). When --trace-events-max is reached the trace ends there and a\n"
+    "warning says at which cycle (the default, 1000000 events, is about 65 MB).\n";
 
 static bool parse_cost_max(const char *text, void *dst) {
   double v;
@@ -96,6 +107,18 @@ static bool parse_cost_channel(const char *text, void *dst) {
   return true;
 }
 
+/* --trace-events-window FROM:TO (cycles, FROM < TO; TO empty: the end). */
+static bool parse_trace_window(const char *text, void *dst) {
+  struct machine_trace_params *tp = dst;
+  const char *colon = strchr(text, ':');
+  uint64_t from, to = UINT64_MAX;
+  if (!colon || scalar_u64_n(text, (size_t)(colon - text), &from) != SCALAR_OK) return false;
+  if (colon[1] && (scalar_u64(colon + 1, &to) != SCALAR_OK || to <= from)) return false;
+  tp->from_cycle = from;
+  tp->to_cycle = to;
+  return true;
+}
+
 /* What rtsim run was asked: its options and files (argv's strings). */
 struct run_plan {
   const char *out, *machine_path, *scene_path;
@@ -105,6 +128,9 @@ struct run_plan {
   enum policy_kind policy;
   const char *trace_path, *cost_preview, *cost_channel;
   double cost_max;
+  const char *events_path; /* --trace-events; tev its window, the rest below */
+  struct machine_trace_params tev;
+  uint64_t tev_cores, tev_period, tev_max;
   bool help_keys, help_stats, help_stats_md;
   struct app_sets sets; /* sized by the caller for argc entries */
 };
@@ -120,6 +146,12 @@ static int run_plan_parse(struct run_plan *pl, int argc, char **argv) {
                       policy_expect),
       OPTS_PARSE("set", 0, &pl->sets, app_sets_add, "KEY=VALUE"),
       OPTS_STR("dram-trace", 0, &pl->trace_path),
+      OPTS_STR("trace-events", 0, &pl->events_path),
+      OPTS_PARSE("trace-events-window", 0, &pl->tev, parse_trace_window,
+                 "FROM:TO, whole cycles with FROM below TO, or FROM: (to the end)"),
+      OPTS_U64("trace-events-cores", 0, &pl->tev_cores, 1, MACHINE_MAX_CONTEXTS),
+      OPTS_U64("trace-events-period", 0, &pl->tev_period, 1, UINT64_MAX),
+      OPTS_U64("trace-events-max", 0, &pl->tev_max, 1000, 1000000000),
       OPTS_STR("cost-preview", 0, &pl->cost_preview),
       OPTS_PARSE("cost-channel", 0, &pl->cost_channel, parse_cost_channel,
                  "one of: cost.issue_slots, cost.load_wait_cycles, cost.dram_read_bytes.geometry, "
@@ -148,6 +180,9 @@ static int run_plan_parse(struct run_plan *pl, int argc, char **argv) {
   pl->machine_path = args.v[0];
   pl->scene_path = args.v[1];
   if (!pl->out) return app_usage_error("run", "missing -o OUTDIR");
+  pl->tev.cores = (uint32_t)pl->tev_cores;
+  pl->tev.counter_period_cycles = pl->tev_period;
+  pl->tev.max_events = pl->tev_max;
   return OPTS_GO;
 }
 
@@ -163,6 +198,19 @@ static bool run_plan_fits(const struct run_plan *pl, const struct machine_cfg *m
   if (pl->trace_path && mc->p.fidelity == MACHINE_FIDELITY_ANALYTIC) {
     app_usage_error("run", "--dram-trace: fidelity analytic makes no DRAM requests (choose a "
                            "timed rung: --set fidelity=fixed, channel or banked)");
+    return false;
+  }
+  if (pl->events_path && mc->p.fidelity == MACHINE_FIDELITY_ANALYTIC) {
+    app_usage_error("run", "--trace-events: fidelity analytic runs no machine (choose a timed "
+                           "rung: --set fidelity=fixed, channel or banked)");
+    return false;
+  }
+  if (pl->events_path && 2 * (uint64_t)mc->p.threads_per_core *
+                                     (pl->tev.cores < mc->p.cores ? pl->tev.cores : mc->p.cores) +
+                                 2 >=
+                             pl->tev.max_events) {
+    app_usage_error("run", "--trace-events-max %llu: too few for two events a traced thread",
+                    (unsigned long long)pl->tev.max_events);
     return false;
   }
   return true;
@@ -199,23 +247,28 @@ static bool run_plan_runs_here(const struct run_plan *pl, const struct machine_c
   return false;
 }
 
-/* Open the trace and the heat map: in od's sibling when asked for in OUTDIR,
- * else beside their names, committed only when every output is written.
- * False after reporting why not. */
-static bool run_open_extras(const struct run_plan *pl, struct outdir *od, struct outfile *trace,
-                            struct outfile *heat, struct err *e) {
-  const char *const extra[2] = {pl->trace_path, pl->cost_preview};
-  for (int k = 0; k < 2; k++) {
+/* The files a run writes besides OUTDIR's own (struct run_extras). */
+enum { EXTRA_DRAM_TRACE, EXTRA_HEAT, EXTRA_EVENTS, EXTRAS };
+
+/* Open the DRAM trace, the heat map and the trace events: in od's sibling
+ * when asked for in OUTDIR, else beside their names, committed only when
+ * every output is written. False after reporting why not. */
+static bool run_open_extras(const struct run_plan *pl, struct outdir *od, struct outfile *x,
+                            struct err *e) {
+  const char *const extra[EXTRAS] = {pl->trace_path, pl->cost_preview, pl->events_path};
+  static const char *const option[EXTRAS] = {"--dram-trace", "--cost-preview", "--trace-events"};
+  static const char *const what[EXTRAS] = {"the DRAM trace", "the heat map", "the trace events"};
+  for (int k = 0; k < EXTRAS; k++) {
     if (!extra[k]) continue;
     char place[OUTDIR_PATH_MAX + 300];
     if (!outdir_place(od, extra[k], place, sizeof place)) {
-      app_usage_error("run", "%s %s: that is one of the run's own outputs in OUTDIR",
-                      k ? "--cost-preview" : "--dram-trace", extra[k]);
+      app_usage_error("run", "%s %s: that is one of the run's own outputs in OUTDIR", option[k],
+                      extra[k]);
       return false;
     }
     if (strcmp(place, extra[k]) == 0) outguard_beside(place);
-    bool opened = k ? outfile_open_named(heat, place, "the heat map", e)
-                    : outfile_open(trace, place, "the DRAM trace", e);
+    bool opened = k == EXTRA_HEAT ? outfile_open_named(&x[k], place, what[k], e)
+                                  : outfile_open(&x[k], place, what[k], e);
     if (!opened) {
       outdir_name_in_err(od, e);
       app_report(e);
@@ -229,12 +282,14 @@ static bool run_open_extras(const struct run_plan *pl, struct outdir *od, struct
  * for them) and od; on success the rung's warning (if any) on stderr and the
  * summary on stdout. The exit code. */
 static int run_write(const struct run_plan *pl, struct run_output_report *rep,
-                     const struct rung_error *rung, struct outdir *od, struct outfile *trace,
-                     struct outfile *heat, struct err *e) {
+                     const struct rung_error *rung, struct outdir *od, struct outfile *x,
+                     struct err *e) {
   /* The files outside OUTDIR before OUTDIR itself: a complete OUTDIR means
    * every output is in place. */
-  bool ok = run_output_write(rep, e) && (!pl->trace_path || outfile_commit(trace, e)) &&
-            (!pl->cost_preview || outfile_commit(heat, e)) && outdir_commit(od, e);
+  bool ok = run_output_write(rep, e) &&
+            (!pl->trace_path || outfile_commit(&x[EXTRA_DRAM_TRACE], e)) &&
+            (!pl->cost_preview || outfile_commit(&x[EXTRA_HEAT], e)) &&
+            (!pl->events_path || outfile_commit(&x[EXTRA_EVENTS], e)) && outdir_commit(od, e);
   if (!ok) outdir_name_in_err(od, e);
   int rc = ok ? 0 : app_report(e);
   if (rc == 0 && rung && rung->warn) {
@@ -247,11 +302,27 @@ static int run_write(const struct run_plan *pl, struct run_output_report *rep,
   return rc;
 }
 
+/* The trace events of the run on m into f; a warning on stderr when the
+ * cap cut them short. */
+static void run_write_events(const struct run_plan *pl, const struct machine *m, FILE *f) {
+  machine_trace_write(m, f);
+  bool capped;
+  uint64_t cut;
+  const uint64_t n = machine_trace_events(m, &capped, &cut);
+  if (capped)
+    fprintf(stderr,
+            "rtsim run: warning: --trace-events: %llu events, the cap (--trace-events-max): the "
+            "trace ends at cycle %llu; narrow --trace-events-window or --trace-events-cores, or "
+            "raise the cap\n",
+            (unsigned long long)n, (unsigned long long)cut);
+  (void)pl;
+}
+
 /* Run pl's W x H render of w on mc and write its outputs (run_write). The
  * exit code. */
 static int run_render(const struct run_plan *pl, const struct machine_cfg *mc,
                       const struct app_world *w, uint32_t W, uint32_t H, struct outdir *od,
-                      struct outfile *trace, struct outfile *heat, struct err *e) {
+                      struct outfile *x, struct err *e) {
   const bool analytic = mc->p.fidelity == MACHINE_FIDELITY_ANALYTIC;
   const uint64_t seed = pl->have_seed ? pl->seed : w->scene.seed;
   struct app_timed t = {0};
@@ -259,7 +330,8 @@ static int run_render(const struct run_plan *pl, const struct machine_cfg *mc,
   if (analytic) app_analytic_run(&a, w, pl->mask, seed, W, H, pl->policy, &mc->p, &mc->work);
   else
     app_timed_run(&t, w, pl->mask, seed, W, H, pl->policy, &mc->p, &mc->work, &mc->sample,
-                  isatty(2), trace->f, true);
+                  isatty(2), x[EXTRA_DRAM_TRACE].f, true, pl->events_path ? &pl->tev : NULL);
+  if (!analytic && pl->events_path) run_write_events(pl, t.m, x[EXTRA_EVENTS].f);
   /* A whole run at a cheaper rung says how wrong that rung was measured to be
    * in runs like it (docs/fidelity-and-sampling.md). */
   struct rung_error rung = {0};
@@ -294,12 +366,12 @@ static int run_render(const struct run_plan *pl, const struct machine_cfg *mc,
       .tstats = analytic ? &a.ts : &t.ts,
       .fb = analytic ? &a.ar.fb : &t.ar.fb,
       .costs = !analytic && t.costs ? machine_get_costs(t.m) : NULL,
-      .cost_preview = pl->cost_preview ? heat : NULL,
+      .cost_preview = pl->cost_preview ? &x[EXTRA_HEAT] : NULL,
       .cost_channel = pl->cost_channel,
       .cost_max = pl->cost_max,
       .wall_s = analytic ? a.wall_s : t.wall_s,
   };
-  int rc = run_write(pl, &rep, cheaper ? &rung : NULL, od, trace, heat, e);
+  int rc = run_write(pl, &rep, cheaper ? &rung : NULL, od, x, e);
   if (analytic) app_analytic_fini(&a);
   else app_timed_fini(&t);
   return rc;
@@ -310,8 +382,12 @@ int cmd_run(int argc, char **argv) {
       .mask = RAY_MASK(RAY_TYPE_COUNT) - 1, /* every ray type */
       .policy = POLICY_RECURSIVE,
       .cost_channel = "cost.issue_slots",
+      .tev = {.to_cycle = UINT64_MAX},
+      .tev_cores = 2,
+      .tev_period = 1000,
+      .tev_max = 1000000,
       .sets = {xcalloc((size_t)argc + 1, sizeof *pl.sets.v), 0}}; /* at most one an argument */
-  struct outfile trace = {0}, heat = {0};
+  struct outfile x[EXTRAS] = {{0}};
   struct outdir od = {0};
   struct app_world w;
   bool have_world = false;
@@ -338,12 +414,11 @@ int cmd_run(int argc, char **argv) {
     app_report(&e);
     goto done;
   }
-  if (!run_open_extras(&pl, &od, &trace, &heat, &e)) goto done;
-  rc = run_render(&pl, &mc, &w, W, H, &od, &trace, &heat, &e);
+  if (!run_open_extras(&pl, &od, x, &e)) goto done;
+  rc = run_render(&pl, &mc, &w, W, H, &od, x, &e);
 done:
   if (have_world) app_world_fini(&w);
-  outfile_abort(&trace);
-  outfile_abort(&heat);
+  for (int k = 0; k < EXTRAS; k++) outfile_abort(&x[k]);
   outdir_abort(&od);
   outguard_clear();
   free(pl.sets.v);

@@ -167,6 +167,7 @@ void dram_finish(struct dram *d) {
 }
 
 const struct dram_stats *dram_get_stats(const struct dram *d) { return &d->st; }
+uint64_t dram_in_flight(const struct dram *d) { return d->inflight; }
 
 bool dram_served_transfer(const struct dram *d, double *start, double *end) {
   *start = d->served_start;

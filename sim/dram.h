@@ -63,6 +63,8 @@ void dram_finish(struct dram *d);
 bool dram_served_transfer(const struct dram *d, double *start, double *end);
 
 const struct dram_stats *dram_get_stats(const struct dram *d);
+/* Requests taken and not yet served, now (the level's queues and banks). */
+uint64_t dram_in_flight(const struct dram *d);
 /* The numbers every level shares, over a struct dram_stats (sim/stats.h),
  * with two places: DRAM_STATS_AT_UTILIZATION, where the owner registers a
  * utilization figure of its own for a level that has none (the channel level

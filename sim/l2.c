@@ -203,6 +203,7 @@ static void stall_reason_set(struct l2 *l2, int reason, uint64_t t) {
   if (l2->stall_reason >= 0) l2->st.stall_cycles[l2->stall_reason] += t - l2->stall_since;
   l2->stall_reason = reason;
   l2->stall_since = t;
+  if (l2->client.stall) l2->client.stall(l2->client.stall_ctx, NULL, reason);
 }
 
 static void stall_push(struct l2 *l2, const struct req *r, uint64_t t) {
@@ -215,6 +216,7 @@ static void stall_push(struct l2 *l2, const struct req *r, uint64_t t) {
   l2->stall_tail = i;
   l2->st.stalls++;
   qmeter_enter(&l2->st.stall_queue, &l2->qc.stall_queue, t);
+  if (r->waiter && l2->client.stall) l2->client.stall(l2->client.stall_ctx, r->waiter, 1);
 }
 
 /* Retry stalled accesses, oldest first, until one must still wait. */
@@ -227,6 +229,7 @@ static void stall_retry(struct l2 *l2, uint64_t t) {
       return;
     }
     qmeter_leave(&l2->st.stall_queue, &l2->qc.stall_queue, t, r.ready_at);
+    if (r.waiter && l2->client.stall) l2->client.stall(l2->client.stall_ctx, r.waiter, -1);
     l2->stall_head = r.next;
     if (l2->stall_head == NONE) l2->stall_tail = NONE;
     req_release(l2, i);
@@ -477,6 +480,13 @@ void l2_finish(struct l2 *l2, uint64_t end) {
   /* Conservation: a quiet L2 holds nothing, so whatever entered a queue left it. */
   const struct qmeter *q[] = {&l2->st.stall_queue, &l2->st.miss_queue, &l2->st.write_buffer};
   for (unsigned i = 0; i < 3; i++) CHECK_EQ(q[i]->entered, q[i]->left);
+}
+
+void l2_occupancy(const struct l2 *l2, struct l2_occupancy *out) {
+  out->mshrs = l2->mshr_used;
+  out->stalled = (uint32_t)l2->qc.stall_queue.len;
+  out->misses_held = (uint32_t)ring_len(&l2->miss_q);
+  out->write_buffer = l2->wb_used;
 }
 
 const struct l2_stats *l2_get_stats(const struct l2 *l2) { return &l2->st; }

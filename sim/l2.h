@@ -75,6 +75,12 @@ struct l2_client {
   engine_fn ready;
   void *cost_ctx;
   void (*cost)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls, bool write);
+  /* stall (NULL: not wanted) hears the input's stalls as they change:
+   * (waiter, +1) when a load's access queues behind a stall and (waiter, -1)
+   * when it leaves that queue; (NULL, reason) when the oldest stalled
+   * access's reason becomes `reason` (enum l2_stall; -1: no stall). */
+  void *stall_ctx;
+  void (*stall)(void *stall_ctx, void *waiter, int what);
 };
 
 /* NULL if usable, else what is wrong (naming the l2.* key): the geometry.
@@ -116,6 +122,15 @@ bool l2_quiet(const struct l2 *l2);
 void l2_finish(struct l2 *l2, uint64_t end);
 
 const struct l2_stats *l2_get_stats(const struct l2 *l2);
+
+/* What the L2 holds at this cycle (for a trace's counters; changes nothing). */
+struct l2_occupancy {
+  uint32_t mshrs;        /* MSHRs in use: misses whose line is not yet back */
+  uint32_t stalled;      /* accesses queued at the input behind a stall */
+  uint32_t misses_held;  /* misses the DRAM has refused so far: back-pressure */
+  uint32_t write_buffer; /* places of the write buffer taken */
+};
+void l2_occupancy(const struct l2 *l2, struct l2_occupancy *out);
 /* The L2's numbers, over a struct l2_stats (sim/stats.h; cycles: the run's). */
 struct stats_descs;
 extern const struct stats_descs l2_stats_descs;

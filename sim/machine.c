@@ -27,6 +27,10 @@
 
 static const struct mem_ops timed_ops;
 
+/* NOTE: `traced` below is the trace layer (machine_trace_enable), a constant
+ * at each call like `costed`: the functions that change a thread's state come
+ * in two instances, and without the layer they carry nothing of it. */
+
 /* ---- parameters ---- */
 
 static struct l2_params l2_params_of(const struct machine_params *p) {
@@ -97,37 +101,41 @@ static void th_set(struct machine *m, struct mthread *th, enum th_state s, uint6
   th->state = (uint8_t)s;
 }
 
-static void kick(struct machine *m, uint32_t core);
+static inline void kick(struct machine *m, uint32_t core, const bool traced);
 
 /* Thread th takes ray c (ready) at cycle t: free if it ran c last. */
-static void th_take(struct machine *m, struct mthread *th, uint32_t c, uint64_t t) {
+static inline void th_take(struct machine *m, struct mthread *th, uint32_t c, uint64_t t,
+                           const bool traced) {
   th->cur = c;
   uint64_t *ready = &m->ready_at[th - m->th];
   *ready = t;
-  if (th->last != NONE && th->last != c) {
+  const bool switched = th->last != NONE && th->last != c;
+  if (switched) {
     *ready += m->p.cost_ray_switch_cycles;
     m->st.ray_switches++;
     m->st.switch_cycles += m->p.cost_ray_switch_cycles;
   }
   th_set(m, th, TH_BUSY, t);
+  if (traced) trace_take(m, (uint32_t)(th - m->th), t, switched);
 }
 
 /* The thread's ray stopped (waits or is done) at cycle t: take the next ready one. */
-static void th_next(struct machine *m, struct mthread *th, uint64_t t) {
+static inline void th_next(struct machine *m, struct mthread *th, uint64_t t, const bool traced) {
   if (th->q_head != NONE) {
     uint32_t c = th->q_head;
     th->q_head = m->ctx[c].next;
     if (th->q_head == NONE) th->q_tail = NONE;
-    th_take(m, th, c, t);
+    th_take(m, th, c, t, traced);
     return;
   }
   th->cur = NONE;
   m->ready_at[th - m->th] = UINT64_MAX;
   th_set(m, th, !th->live ? TH_DONE : th->parked == th->live ? TH_PARKED : TH_WAIT, t);
+  if (traced) trace_idle(m, (uint32_t)(th - m->th), t);
 }
 
 /* Ray c's data is back at cycle t. */
-static void ray_ready(struct machine *m, struct mctx *c, uint64_t t) {
+static inline void ray_ready(struct machine *m, struct mctx *c, uint64_t t, const bool traced) {
   c->state = CTX_READY;
   /* It runs soon: fetch the top of its stack, its coroutine's record and its
    * worker's state (machine_worker_state) into the host cache now. With
@@ -145,22 +153,23 @@ static void ray_ready(struct machine *m, struct mctx *c, uint64_t t) {
     /* NOTE: a block runs ahead of the engine (its ray's clock passes the
      * current event's cycle), so the thread may still be busy until its last
      * block's end, th->since: it cannot take the ray before that. */
-    th_take(m, th, id, t > th->since ? t : th->since);
+    th_take(m, th, id, t > th->since ? t : th->since, traced);
   } else {
     c->next = NONE;
     if (th->q_tail == NONE) th->q_head = id;
     else m->ctx[th->q_tail].next = id;
     th->q_tail = id;
   }
-  kick(m, th->core);
+  kick(m, th->core, traced);
 }
 
 /* ---- lines back ---- */
 
 /* A line of ray c's load is back at cycle t (fills c's L1). costed: the
- * cost layer is on (a constant at each call: two instances). */
+ * cost layer is on; traced: the trace layer (constants at each call: four
+ * instances). */
 static inline void line_done(struct machine *m, struct mctx *c, uint64_t line, uint64_t t,
-                             const bool costed) {
+                             const bool costed, const bool traced) {
   struct cache *l1 = m->core[c->info.core].l1;
   if (l1) cache_fill(l1, line, false); /* a victim: an L1 has no pending line */
   m->loads_back++;
@@ -168,19 +177,23 @@ static inline void line_done(struct machine *m, struct mctx *c, uint64_t line, u
   if (--c->pending == 0) {
     hist_add(&m->st.load_latency, t - c->wait_from);
     if (costed) cost_charge(c, COST_WAIT, t - c->wait_from);
-    ray_ready(m, c, t);
+    ray_ready(m, c, t, traced);
   }
+  if (traced) trace_tick(m, t);
 }
 
-/* The L2 answers a load (sim/l2.h's client): ctx is the waiting ray. */
-static void ev_line_done(void *ctx, uint64_t line) {
-  struct mctx *c = ctx;
-  line_done(c->m, c, line, engine_now(c->m->eng), false);
-}
-static void ev_line_done_costed(void *ctx, uint64_t line) {
-  struct mctx *c = ctx;
-  line_done(c->m, c, line, engine_now(c->m->eng), true);
-}
+/* The L2 answers a load (sim/l2.h's client): ctx is the waiting ray. One
+ * instance for each combination of the cost and trace layers. */
+#define EV_LINE_DONE(name, costed, traced)                                                         \
+  static void name(void *ctx, uint64_t line) {                                                     \
+    struct mctx *c = ctx;                                                                          \
+    line_done(c->m, c, line, engine_now(c->m->eng), costed, traced);                               \
+  }
+EV_LINE_DONE(ev_line_done, false, false)
+EV_LINE_DONE(ev_line_done_costed, true, false)
+EV_LINE_DONE(ev_line_done_traced, false, true)
+EV_LINE_DONE(ev_line_done_costed_traced, true, true)
+#undef EV_LINE_DONE
 
 /* An access on its way to the L2, packed into the event's one argument:
  * line, op and class. */
@@ -212,10 +225,11 @@ static void ev_l2_access_costed(void *ctx, uint64_t arg) {
 /* ---- cores ---- */
 
 static void ev_issue(void *ctx, uint64_t core);
+static void ev_issue_traced(void *ctx, uint64_t core);
 
 /* Make sure core has an issue event at the first cycle one of its threads can
  * issue (stale events are recognised by their cycle and ignored). */
-static void kick(struct machine *m, uint32_t core) {
+static inline void kick(struct machine *m, uint32_t core, const bool traced) {
   struct mcore *k = &m->core[core];
   const uint32_t T = m->p.threads_per_core;
   uint64_t best = UINT64_MAX;
@@ -227,7 +241,7 @@ static void kick(struct machine *m, uint32_t core) {
   if (k->ev && k->ev_at <= best) return;
   k->ev = true;
   k->ev_at = best;
-  engine_at(m->eng, best, ev_issue, m, core);
+  engine_at(m->eng, best, traced ? ev_issue_traced : ev_issue, m, core);
 }
 
 static void ctx_main(void *arg) {
@@ -236,8 +250,8 @@ static void ctx_main(void *arg) {
   c->m->fn(c->m->fn_arg, &c->info, port);
 }
 
-static void ev_issue(void *ctx, uint64_t core) {
-  struct machine *m = ctx;
+/* Core `core`'s issue slot: resume one ray for one block. */
+static inline void issue(struct machine *m, uint64_t core, const bool traced) {
   struct mcore *k = &m->core[core];
   const uint64_t t = engine_now(m->eng);
   if (!k->ev || k->ev_at != t) return; /* stale */
@@ -249,11 +263,12 @@ static void ev_issue(void *ctx, uint64_t core) {
     if (m->ready_at[core * T + j] <= t) pick = j;
   }
   if (pick == NONE || t < k->port_free) {
-    kick(m, (uint32_t)core);
+    kick(m, (uint32_t)core, traced);
     return;
   }
   k->rr = pick;
   struct mthread *th = &m->th[core * T + pick];
+  if (traced) trace_issue(m, (uint32_t)(core * T + pick), t);
   uint32_t id = th->cur;
   struct mctx *c = &m->ctx[id];
   th->last = id;
@@ -289,14 +304,17 @@ static void ev_issue(void *ctx, uint64_t core) {
       c->state = CTX_DONE;
       th->live--;
     }
-    th_next(m, th, c->t);
+    th_next(m, th, c->t, traced);
   } else {
     CHECK_EQ(c->state, CTX_WAIT);
-    th_next(m, th, c->t);
+    th_next(m, th, c->t, traced);
   }
-  kick(m, (uint32_t)core);
+  kick(m, (uint32_t)core, traced);
   if (m->progress && (m->st.blocks & 0xFFFF) == 0) m->progress(m->progress_ctx, t);
 }
+
+static void ev_issue(void *ctx, uint64_t core) { issue(ctx, core, false); }
+static void ev_issue_traced(void *ctx, uint64_t core) { issue(ctx, core, true); }
 
 /* ---- the door ---- */
 
@@ -396,21 +414,27 @@ static void tc_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
 static void ev_wake(void *ctx, uint64_t arg) {
   struct mctx *c = ctx;
   (void)arg;
-  ray_ready(c->m, c, engine_now(c->m->eng));
+  ray_ready(c->m, c, engine_now(c->m->eng), false);
+}
+static void ev_wake_traced(void *ctx, uint64_t arg) {
+  struct mctx *c = ctx;
+  (void)arg;
+  ray_ready(c->m, c, engine_now(c->m->eng), true);
 }
 
 /* The ray has nothing to do for `cycles`: it waits like a load that touches
  * no memory (its thread may switch to another ray), and takes no issue slot. */
-static void t_wait(void *ctx, uint64_t cycles) {
-  struct mctx *c = ctx;
+static inline void door_wait(struct mctx *c, uint64_t cycles, const bool traced) {
   struct machine *m = c->m;
   CHECK(!c->parking);
   m->st.waits++;
   m->st.wait_cycles += cycles;
   c->state = CTX_WAIT;
-  engine_at(m->eng, c->t + cycles, ev_wake, c, 0);
+  engine_at(m->eng, c->t + cycles, traced ? ev_wake_traced : ev_wake, c, 0);
   coro_suspend(c->co);
 }
+static void t_wait(void *ctx, uint64_t cycles) { door_wait(ctx, cycles, false); }
+static void tt_wait(void *ctx, uint64_t cycles) { door_wait(ctx, cycles, true); }
 
 /* Park (sim/mem.h): the worker function returns next; ev_issue then gives its
  * stack back and leaves the context off the machine until t_wake. */
@@ -425,8 +449,7 @@ static void t_park(void *ctx) {
  * line came back (its thread takes it, or queues it behind the running one).
  * A wake takes no issue slot: a hardware thread scheduler would flip the
  * context's ready bit, as a line fill does. */
-static void t_wake(void *ctx, uint32_t id) {
-  struct mctx *c = ctx;
+static inline void door_wake(struct mctx *c, uint32_t id, const bool traced) {
   struct machine *m = c->m;
   CHECK(!c->parking);
   CHECK_LT(id, m->nctx);
@@ -436,18 +459,43 @@ static void t_wake(void *ctx, uint32_t id) {
   struct mthread *th = &m->th[o->thread];
   CHECK_GT(th->parked, 0);
   th->parked--;
-  ray_ready(m, o, c->t);
+  ray_ready(m, o, c->t, traced);
 }
+static void t_wake(void *ctx, uint32_t id) { door_wake(ctx, id, false); }
+static void tt_wake(void *ctx, uint32_t id) { door_wake(ctx, id, true); }
 
 static const struct mem_ops timed_ops = {t_load, t_store, t_compute, t_wait, t_park, t_wake};
 static const struct mem_ops costed_ops = {tc_load, tc_store, tc_compute, t_wait, t_park, t_wake};
+static const struct mem_ops traced_ops = {t_load, t_store, t_compute, tt_wait, t_park, tt_wake};
+static const struct mem_ops costed_traced_ops = {tc_load, tc_store, tc_compute,
+                                                 tt_wait, t_park,   tt_wake};
 
-void machine_door_costed(struct machine *m, void *cost_ctx, l2_cost_fn cost) {
+/* The door's instance and the L2's client for the layers installed: the
+ * cost layer (m->cost_acc, machine_door_costed's hook) and the trace layer
+ * (m->trace). Before the run. */
+static void door_install(struct machine *m, void *cost_ctx, l2_cost_fn cost) {
   CHECK(!m->ran);
-  m->ops = &costed_ops;
-  const struct l2_client lc = {ev_line_done_costed, cost_ctx, cost};
+  static const engine_fn ready[2][2] = {{ev_line_done, ev_line_done_traced},
+                                        {ev_line_done_costed, ev_line_done_costed_traced}};
+  static const struct mem_ops *const ops[2][2] = {{&timed_ops, &traced_ops},
+                                                  {&costed_ops, &costed_traced_ops}};
+  const bool costed = cost != NULL, traced = m->trace != NULL;
+  m->ops = ops[costed][traced];
+  struct l2_client lc = {ready[costed][traced], cost_ctx, cost, NULL, NULL};
+  if (traced) {
+    lc.stall_ctx = m;
+    lc.stall = trace_l2_stall;
+  }
   l2_set_client(m->l2, &lc);
 }
+
+void machine_door_costed(struct machine *m, void *cost_ctx, l2_cost_fn cost) {
+  m->cost_ctx = cost_ctx;
+  m->cost_fn = cost;
+  door_install(m, cost_ctx, cost);
+}
+
+void machine_door_traced(struct machine *m) { door_install(m, m->cost_ctx, m->cost_fn); }
 
 /* ---- machine ---- */
 
@@ -465,7 +513,7 @@ static struct machine *create(const struct machine_params *p, uint64_t stack_byt
                                                MACHINE_TL_DRAM_READ_BYTES, MACHINE_TL_READ_CLASS0,
                                                MACHINE_TL_DRAM_WRITE_BYTES};
   m->ops = &timed_ops;
-  struct l2_client lc = {ev_line_done, NULL, NULL};
+  struct l2_client lc = {ev_line_done, NULL, NULL, NULL, NULL};
   m->l2 = l2_create(&lp, m->eng, &m->tl, &cols, &lc);
   struct dram_params dp = machine_dram_params(p);
   struct dram_client dc = l2_dram_client(m->l2);
@@ -535,6 +583,7 @@ void machine_destroy(struct machine *m) {
   free(m->costs.load_wait_cycles);
   for (unsigned c = 0; c < MEM_CLASS_MAX; c++) free(m->costs.read_lines[c]);
   free(m->costs.write_lines);
+  trace_destroy(m->trace);
   for (uint32_t i = 0; i < m->p.cores; i++) cache_destroy(m->core[i].l1);
   free(m->core);
   free(m->warm);
@@ -557,7 +606,10 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   m->fn_arg = arg;
   m->progress = progress;
   m->progress_ctx = progress_ctx;
-  for (uint32_t i = 0; i < m->p.cores; i++) kick(m, i);
+  for (uint32_t i = 0; i < m->p.cores; i++) {
+    if (m->trace) kick(m, i, true);
+    else kick(m, i, false);
+  }
   engine_run(m->eng);
   /* Everything must be over: every ray returned (none parked with nobody left
    * to wake it), no miss outstanding. */
@@ -575,6 +627,7 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
     CHECK_EQ(m->th[t].state, TH_DONE);
     th_account(m, &m->th[t], end);
   }
+  if (m->trace) trace_finish(m, end);
   l2_finish(m->l2, end);
   struct machine_stats *st = &m->st;
   st->cycles = end;

@@ -27,6 +27,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "sim/dram.h"
 #include "sim/hist.h"
@@ -240,6 +241,46 @@ void machine_costs_enable(struct machine *m, uint64_t items, unsigned classes);
 void machine_attribute(struct machine *m, uint32_t ctx, const uint32_t *items, uint32_t n);
 /* After machine_run: the costs per item, or NULL when not enabled. */
 const struct machine_costs *machine_get_costs(const struct machine *m);
+
+/* ---- trace events (README "Trace events") ----
+ * The run's activity as Chrome trace-event JSON (chrome://tracing,
+ * ui.perfetto.dev): per traced core, each hardware thread's state over time
+ * as slices that tile the window (MACHINE_TRACE_KINDS: running a block,
+ * switching, ready for the port, waiting by cause, parked, done), and the
+ * L2's and the DRAM's occupancy and bandwidth as counters. 1 microsecond of
+ * trace time is 1 core cycle. Installed only when asked (a layer, like
+ * costs): without it the machine carries nothing of it. The slices of a
+ * state sum, over the traced threads, to its thread_*_cycles counter when
+ * the window is the whole run and every core is traced. */
+struct machine_trace_params {
+  uint64_t from_cycle, to_cycle;  /* the window [from, to); to UINT64_MAX: the end */
+  uint32_t cores;                 /* the first `cores` cores (more: all of them) */
+  uint64_t counter_period_cycles; /* counters sampled about this often (>= 1) */
+  uint64_t max_events;            /* events at most (>= 1000): the file's bound */
+};
+/* Before machine_run; once. */
+void machine_trace_enable(struct machine *m, const struct machine_trace_params *tp);
+/* After machine_run: events kept; whether max_events cut the window short,
+ * and where (the cycle the trace then ends at). */
+uint64_t machine_trace_events(const struct machine *m, bool *capped, uint64_t *cut_cycle);
+/* After machine_run: the JSON to f (the caller checks f for errors). */
+void machine_trace_write(const struct machine *m, FILE *f);
+/* The slices' names, by kind: the states a thread's slices name. */
+enum {
+  MACHINE_TRACE_RUN,          /* a ray's block holds the issue port (its L1 hits too) */
+  MACHINE_TRACE_SWITCH,       /* switching to another ray's registers */
+  MACHINE_TRACE_READY,        /* a ray ready, the port another thread's */
+  MACHINE_TRACE_WAIT_LOAD,    /* every live ray waits; a load in the L2 or the DRAM */
+  MACHINE_TRACE_WAIT_MSHR,    /* a ray's load queued at the L2 behind a miss with no MSHR */
+  MACHINE_TRACE_WAIT_SET,     /* ... behind a miss whose set has every way pending */
+  MACHINE_TRACE_WAIT_WBUF,    /* ... behind a dirty victim with the write buffer full */
+  MACHINE_TRACE_WAIT_DRAM,    /* ... while the DRAM refuses requests (back-pressure) */
+  MACHINE_TRACE_WAIT_MEMWAIT, /* every waiting ray is in mem_wait (the kernel's own) */
+  MACHINE_TRACE_PARKED,       /* every live ray parked: no work */
+  MACHINE_TRACE_DONE,         /* no work left */
+  MACHINE_TRACE_KINDS
+};
+extern const char *const machine_trace_kind_names[MACHINE_TRACE_KINDS];
 
 /* The timeline: rows of MACHINE_TL_COLS values (sim/timeline.h), and its
  * columns as timeline.csv writes them, each declared once. */

@@ -5,7 +5,9 @@
  *                    a running ray calls); lines back from the L2; a run
  *   machine_cost.c   per-item cost attribution (machine_costs_enable)
  *   machine_ports.c  sampling's warming and counting ports, and the probe
- *   machine_stats.c  the machine's numbers and timeline columns */
+ *   machine_stats.c  the machine's numbers and timeline columns
+ *   machine_trace.c  the trace layer: threads' states and counters over time
+ *                    (machine_trace_enable); machine_trace_json.c writes it */
 #ifndef RTSIM_SIM_MACHINE_STATE_H
 #define RTSIM_SIM_MACHINE_STATE_H
 
@@ -24,8 +26,12 @@ struct coro_pool;
 struct dram;
 struct engine;
 struct l2;
+struct mtrace;
 
 #define NONE UINT32_MAX
+
+/* The L2's cost hook (struct l2_client's cost). */
+typedef void (*l2_cost_fn)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls, bool write);
 
 enum ctx_state { CTX_READY, CTX_WAIT, CTX_PARKED, CTX_DONE };
 enum th_state { TH_BUSY, TH_WAIT, TH_PARKED, TH_DONE };
@@ -122,6 +128,9 @@ struct machine {
   struct machine_costs costs; /* per item (machine_costs_enable) */
   uint64_t *cost_acc;         /* every context's counters; NULL: costs not counted */
   unsigned cost_stride;       /* counters a context */
+  void *cost_ctx;             /* the cost layer's L2 hook (machine_door_costed) */
+  l2_cost_fn cost_fn;
+  struct mtrace *trace; /* the trace layer (machine_trace_enable); NULL: none */
 };
 
 /* A core's warming port (machine_warm_port). */
@@ -166,8 +175,6 @@ static inline uint32_t cost_store_pop(struct mctx *c) {
   return tag;
 }
 
-/* The L2's cost hook (struct l2_client's cost). */
-typedef void (*l2_cost_fn)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls, bool write);
 /* Install the cost layer (machine.c): the door's costed instance, and an L2
  * client that hears every transfer through `cost`. Before the run. */
 void machine_door_costed(struct machine *m, void *cost_ctx, l2_cost_fn cost);
@@ -175,5 +182,25 @@ void machine_door_costed(struct machine *m, void *cost_ctx, l2_cost_fn cost);
 void machine_cost_flush(struct mctx *c);
 /* The end of a run that counted costs (CHECKs conservation). */
 void machine_cost_finish(struct machine *m);
+
+/* ---- machine_trace.c: the trace layer ----
+ * Called by the door's and the events' traced instances alone (machine.c),
+ * so m->trace is set; each ignores threads outside the traced cores. */
+
+/* Install the trace layer's instances (machine.c), keeping the cost layer's. */
+void machine_door_traced(struct machine *m);
+/* Thread th takes a ray at cycle t, after a switch to its registers if switched. */
+void trace_take(struct machine *m, uint32_t th, uint64_t t, bool switched);
+/* Thread th went idle at cycle t (its state: waiting, parked or done). */
+void trace_idle(struct machine *m, uint32_t th, uint64_t t);
+/* Thread th's ray runs a block from cycle t (engine time: counters too). */
+void trace_issue(struct machine *m, uint32_t th, uint64_t t);
+/* The engine reached cycle t: the counters' sample, when one is due. */
+void trace_tick(struct machine *m, uint64_t t);
+/* The L2's stall hook (struct l2_client's stall; stall_ctx: the machine). */
+void trace_l2_stall(void *ctx, void *waiter, int what);
+/* The run ended at cycle end: every thread's last slice. */
+void trace_finish(struct machine *m, uint64_t end);
+void trace_destroy(struct mtrace *t); /* NULL ok */
 
 #endif

@@ -37,14 +37,6 @@ static unsigned entries(void) {
   return n;
 }
 
-static void put(const char *path, const char *text) {
-  FILE *f = fopen(path, "w");
-  EXPECT(f != NULL);
-  if (!f) return;
-  fputs(text, f);
-  fclose(f);
-}
-
 static void test_commit_and_abort(void) {
   const char *path = DIR_ "/a.txt";
   struct outfile o;
@@ -92,12 +84,12 @@ static void test_named(void) {
   struct outfile o;
   struct err e = {0};
   EXPECT(outfile_open_named(&o, path, "the plot", &e) && o.f == NULL && o.tmp != NULL);
-  put(o.tmp, "drawn\n");
+  testing_write(o.tmp, "drawn\n");
   EXPECT(outfile_commit(&o, &e) && !e.set);
   const char *got = slurp(path);
   EXPECT(got && !strcmp(got, "drawn\n"));
   EXPECT(outfile_open_named(&o, path, "the plot", &e));
-  put(o.tmp, "half");
+  testing_write(o.tmp, "half");
   outfile_abort(&o);
   got = slurp(path);
   EXPECT(got && !strcmp(got, "drawn\n"));
@@ -123,7 +115,7 @@ static void test_failures(void) {
    * the reason, the directory untouched, no temporary left. */
   const char *dir_dest = DIR_ "/d.txt";
   EXPECT(mkdir(dir_dest, 0777) == 0);
-  put(DIR_ "/d.txt/keep", "kept\n");
+  testing_write(DIR_ "/d.txt/keep", "kept\n");
   memset(&e, 0, sizeof e);
   EXPECT(outfile_open(&o, dir_dest, "EXR", &e));
   fputs("data\n", o.f);
@@ -161,10 +153,10 @@ static void test_stale(void) {
   char dead[512], live[512];
   snprintf(dead, sizeof dead, DIR_ "/.f.txt.%ld.0.tmp", (long)child);
   snprintf(live, sizeof live, DIR_ "/.f.txt.%ld.0.tmp", (long)getpid());
-  put(dead, "stale");
-  put(live, "in progress");
-  put(DIR_ "/.f.txt.tmp", "not a temporary of ours");
-  put(DIR_ "/f.1.2.tmp", "not hidden: not ours");
+  testing_write(dead, "stale");
+  testing_write(live, "in progress");
+  testing_write(DIR_ "/.f.txt.tmp", "not a temporary of ours");
+  testing_write(DIR_ "/f.1.2.tmp", "not hidden: not ours");
   EXPECT(outfile_remove_stale(DIR_) == 1);
   EXPECT(access(dead, F_OK) != 0 && access(live, F_OK) == 0);
   EXPECT(access(DIR_ "/.f.txt.tmp", F_OK) == 0 && access(DIR_ "/f.1.2.tmp", F_OK) == 0);

@@ -594,14 +594,6 @@ static void test_provenance(void) {
       "scene hash warning: %s", out);
 }
 
-static void write_text(const char *path, const char *text) {
-  FILE *f = fopen(path, "w");
-  EXPECT(f != NULL);
-  if (!f) return;
-  fputs(text, f);
-  fclose(f);
-}
-
 /* Points with different columns merge into their union; a directory with no
  * complete point, or a broken stats.csv, is refused. */
 static void test_merge_edges(void) {
@@ -609,12 +601,13 @@ static void test_merge_edges(void) {
   run("rm -rf %s && mkdir -p %s/p10 %s/p9 %s/q", d, d, d, d);
   char p[4096];
   snprintf(p, sizeof p, "%s/p9/stats.json", d),
-      write_text(p, "{\n  \"revision\": \"r9\",\n  \"host\": \"h\\\"9\",\n  \"wall_s\": 1.5\n}\n");
-  snprintf(p, sizeof p, "%s/p9/stats.csv", d), write_text(p, "x,y\n1,\"a,b\"\n");
-  snprintf(p, sizeof p, "%s/p9/point.csv", d), write_text(p, "k,x\n7,5\n");
-  snprintf(p, sizeof p, "%s/p10/stats.json", d), write_text(p, "{}\n");
-  snprintf(p, sizeof p, "%s/p10/stats.csv", d), write_text(p, "x,z\n3,4\n");
-  snprintf(p, sizeof p, "%s/q/command.sh", d), write_text(p, "exec false\n");
+      testing_write(p,
+                    "{\n  \"revision\": \"r9\",\n  \"host\": \"h\\\"9\",\n  \"wall_s\": 1.5\n}\n");
+  snprintf(p, sizeof p, "%s/p9/stats.csv", d), testing_write(p, "x,y\n1,\"a,b\"\n");
+  snprintf(p, sizeof p, "%s/p9/point.csv", d), testing_write(p, "k,x\n7,5\n");
+  snprintf(p, sizeof p, "%s/p10/stats.json", d), testing_write(p, "{}\n");
+  snprintf(p, sizeof p, "%s/p10/stats.csv", d), testing_write(p, "x,z\n3,4\n");
+  snprintf(p, sizeof p, "%s/q/command.sh", d), testing_write(p, "exec false\n");
   int rc = run("%s merge %s -o %s.csv", RTSIM_BINARY, d, d);
   EXPECTF(rc == 0 && strstr(out, "1 incomplete skipped: q") &&
               strstr(out, "warning: points from different builds: revision 'r9' (p9) and '' (p10)"),
@@ -637,7 +630,7 @@ static void test_merge_edges(void) {
   rc = run("%s merge %s/sw_missing -o %s/sw_none.csv", RTSIM_BINARY, RTSIM_TMP, RTSIM_TMP);
   EXPECTF(rc == 2 && strstr(out, "cannot open the sweep directory"), "missing: %d %s", rc, out);
 
-  snprintf(p, sizeof p, "%s/p10/stats.csv", d), write_text(p, "x,z\n3,4,5\n");
+  snprintf(p, sizeof p, "%s/p10/stats.csv", d), testing_write(p, "x,z\n3,4,5\n");
   rc = run("%s merge %s -o %s/sw_broken.csv", RTSIM_BINARY, d, RTSIM_TMP);
   EXPECTF(rc == 2 && strstr(out, "p10/stats.csv:2:1: error: row has 3 fields, the header has 2"),
           "broken: %d %s", rc, out);

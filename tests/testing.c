@@ -47,6 +47,8 @@ bool testing_writef(const char *path, const char *fmt, ...) {
   return ok;
 }
 
+bool testing_write(const char *path, const char *text) { return testing_writef(path, "%s", text); }
+
 int testing_run(const char *cmd, char *buf, unsigned buf_size) {
   char full[8192];
   snprintf(full, sizeof full, "%s 2>&1", cmd);

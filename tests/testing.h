@@ -78,6 +78,8 @@ int testing_runf(char *buf, unsigned buf_size, const char *fmt, ...)
 
 /* Write path with printf's text (a check fails, and false, if it cannot). */
 bool testing_writef(const char *path, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Write text to path as it is (the same checks). */
+bool testing_write(const char *path, const char *text);
 
 /* The whole of dir/name (caller frees; *len its length if len), or NULL. */
 char *testing_slurp(const char *dir, const char *name, size_t *len);
