@@ -94,8 +94,6 @@ static void run_example(const char *cmd, const char *cmds) {
   EXPECTF(rc == 0, "rtsim %s --help's example failed (%d): %s\n%s", cmd, rc, cmds, out);
 }
 
-/* Commands whose help is not yet held to a screen and an example. */
-static const char *const NOT_YET[] = {"plot"};
 /* Examples too long for the suite: the example sweep has 120 points
  * (tests/test_sweep.c runs sweeps and merges). */
 static const char *const NOT_RUN[] = {"sweep", "merge"};
@@ -146,7 +144,6 @@ int main(void) {
     EXPECTF(rc == 0 && !strncmp(out, help, strlen(help)),
             "rtsim %s --help-full does not start with --help", cmd);
     check_policies(cmd, help);
-    if (listed(NOT_YET, sizeof NOT_YET / sizeof NOT_YET[0], cmd)) continue;
     char what[64];
     snprintf(what, sizeof what, "rtsim %s --help", cmd);
     check_screen(what, help);
