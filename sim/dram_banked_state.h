@@ -18,6 +18,7 @@
  *                          write queue
  *   dram_banked_map.c      the address mapping
  *   dram_banked_params.c   the rules between parameters
+ *   dram_banked_power.c    energy: joules from each rank's commands and states
  *   dram_banked_refresh.c  refresh: due times and the work they bring
  *   dram_banked_stats.c    the level's numbers
  *
