@@ -75,7 +75,9 @@ static const char HELP[] =
     "DRAM counts; mean, p50, p95, p99, max) and from taken to done (mean, max), the\n"
     "write latency and the wait to be taken (means), bytes a cycle and GB/s, the\n"
     "read latencies again in DRAM clock cycles, then the level's own numbers (row\n"
-    "hits, queues, ...).\n";
+    "hits, queues, ...; the banked level's energy by part, dram_energy_*_j, and\n"
+    "dram_power_w). Latencies and spans are in core cycles unless named\n"
+    "_dram_cycles.\n";
 
 /* A request taken by the DRAM, at its index in the trace. */
 struct slot {

@@ -127,7 +127,7 @@ void dram_banked_issue(struct dram_banked *d, struct dram_banked_channel *c,
   switch (k->type) {
   case DRAM_BANKED_CMD_PRE: {
     struct dram_banked_bank *bk = &c->banks[k->bank];
-    dram_banked_bank_close(d, c, bk, k->rank, now);
+    dram_banked_bank_close(d, c, bk, k->rank, now, now);
     if (r) r->kind = DRAM_BANKED_KIND_CONFLICT;
     break;
   }
@@ -259,6 +259,7 @@ static void banked_finish(void *self) {
       if (end > bk->act_at) d->st.bank_open_cycles += (uint64_t)(end - bk->act_at);
       bk->act_at = -1;
     }
+  dram_banked_power_finish(d, d->cursor);
   d->finished_dram_cycles = (uint64_t)d->cursor;
 }
 

@@ -175,6 +175,13 @@ struct dram_banked_params {
   /* Timing in DRAM clock cycles. */
   uint32_t tCL, tCWL, tRCD, tRP, tRAS, tRC, tCCD_S, tCCD_L, tRRD_S, tRRD_L, tFAW, tWR, tWTR_S,
       tWTR_L, tRTW, tRTP, tREFI, tRFC;
+  /* Energy (sim/dram_banked_stats.c): a device's data width in bits (a rank is
+   * bus_bytes x 8 / device_width devices), its supply in volts and its
+   * datasheet currents in mA: IDD0 (one bank activated and precharged every
+   * tRC), IDD2N (all banks precharged, standby), IDD3N (a bank active,
+   * standby), IDD4R / IDD4W (burst reads / writes), IDD5AB (all-bank refresh). */
+  uint32_t device_width;
+  double VDD, IDD0, IDD2N, IDD3N, IDD4R, IDD4W, IDD5AB;
   bool tick_every_cycle; /* test only: wake every DRAM cycle while work is queued */
   bool check_summaries;  /* test only: check each command queue's kept summary against its
                             candidates asked again (per_bank / per_rank) */
@@ -219,11 +226,37 @@ struct dram_banked_stats {
   uint64_t queue_max[2];     /* most entries queued at once, all channels together */
   uint64_t bus_busy_cycles;  /* data bus cycles carrying a burst, summed over channels */
   uint64_t bank_open_cycles; /* DRAM cycles with a row open, summed over banks */
+  /* Energy's (dram_banked_energy): rank-cycles (DRAM) with a bank open, and
+   * all rank-cycles the level ran (its DRAM cycles x ranks x channels). */
+  uint64_t rank_active_cycles, rank_cycles;
 };
 const struct dram_banked_stats *dram_banked_get_stats(const struct dram_banked *d);
 /* The DRAM cycles the level had simulated when it finished (its clock, not
  * one of its numbers: the figures use the run's length). */
 uint64_t dram_banked_finished_cycles(const struct dram_banked *d);
+/* The DRAM's energy in joules, DRAMsim3's model (its configuration.cc and
+ * controller.cc, commit 29817593): each command adds a fixed energy from the
+ * datasheet currents, devices = bus_bytes x 8 / device_width, tCK = 1 /
+ * clock_mhz:
+ *   ACT (with its PRE)  VDD (IDD0 tRC - IDD3N tRAS - IDD2N tRP) tCK devices
+ *   RD / WR             VDD (IDD4R / IDD4W - IDD3N) BL/2 tCK devices
+ *   REF                 VDD (IDD5AB - IDD3N) tRFC tCK devices
+ * and each rank each DRAM cycle VDD IDD3N tCK devices with a bank open
+ * (active standby), VDD IDD2N tCK devices with all banks precharged
+ * (precharge standby), whether or not it is refreshing. Power-down and self
+ * refresh (IDD2P, IDD3P, IDD6) are not modelled: a rank never leaves standby.
+ * DRAMsim3 prints these sums in V x mA x DRAM cycles ("pJ" in its output);
+ * here they are multiplied by tCK, so joules. */
+struct dram_banked_energy {
+  double activate_j, read_j, write_j, refresh_j;
+  double active_standby_j, precharge_standby_j; /* background, by rank state */
+  double total_j;                               /* the six summed, in that order */
+};
+/* Rank `rank` of channel `channel`'s energy over the run, or with channel -1
+ * every channel's, with rank -1 every rank's (complete after finish). */
+void dram_banked_energy_of(const struct dram_banked *d, int channel, int rank,
+                           struct dram_banked_energy *out);
+
 /* The level's numbers, over its struct dram_banked_stats (sim/stats.h). */
 struct stats_descs;
 extern const struct stats_descs dram_banked_stats_descs;

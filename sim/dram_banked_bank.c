@@ -68,20 +68,24 @@ void dram_banked_activate(struct dram_banked *d, struct dram_banked_channel *c,
   rk->act = g->act = now;
   rk->faw[rk->faw_i] = now;
   rk->faw_i = (rk->faw_i + 1) & 3;
-  rk->open++;
+  if (!rk->open++) rk->active_since = now;
+  rk->acts++;
   dram_banked_stale_bank(d, c, k->bank);
   dram_banked_stale_acts(d, c, k->rank, now);
   d->st.activates++;
 }
 
 void dram_banked_bank_close(struct dram_banked *d, struct dram_banked_channel *c,
-                            struct dram_banked_bank *bk, uint32_t rank, int64_t at) {
+                            struct dram_banked_bank *bk, uint32_t rank, int64_t now, int64_t at) {
+  struct dram_banked_rank *rk = &c->ranks[rank];
   bk->open = false;
   bk->close_at = at;
   bk->act_ok = max64(bk->act_ok, at + d->p.tRP);
   bk->ref_ok = at + d->p.tRP;
   dram_banked_stale_bank(d, c, (uint32_t)(bk - c->banks));
-  c->ranks[rank].open--;
+  /* The rank's state follows the command, as DRAMsim3's bank state does (an
+   * auto-precharge closes the bank at its RDA / WRA). */
+  if (!--rk->open) rk->active_cycles += (uint64_t)(now - rk->active_since);
   d->st.precharges++;
 }
 
@@ -102,14 +106,17 @@ int64_t dram_banked_column_state(struct dram_banked *d, struct dram_banked_chann
     end = now + d->p.tCWL + b;
     pre = end + d->p.tWR;
     d->st.writes++;
+    rk->writes++;
   } else {
     rk->rd = g->rd = c->rd = now;
     dram_banked_bus_add(d, c, now, now + d->p.tCL, r.rank, false);
     end = now + d->p.tCL + b;
     pre = now + d->p.tRTP;
     d->st.reads++;
+    rk->reads++;
   }
   bk->pre_ok = max64(bk->pre_ok, pre);
-  if (d->p.page == DRAM_BANKED_CLOSE_PAGE) dram_banked_bank_close(d, c, bk, r.rank, bk->pre_ok);
+  if (d->p.page == DRAM_BANKED_CLOSE_PAGE)
+    dram_banked_bank_close(d, c, bk, r.rank, now, bk->pre_ok);
   return end;
 }

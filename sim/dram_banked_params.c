@@ -44,6 +44,15 @@ const char *dram_banked_params_problem(const struct dram_banked_params *p) {
   if (p->tWTR_L < p->tWTR_S) return "dram.tWTR_L: must be at least tWTR_S";
   if (p->tREFI && p->tREFI / p->ranks <= p->tRFC)
     return "dram.tREFI: tREFI / ranks must exceed tRFC (or tREFI 0: no refresh)";
+  if (!pow2(p->device_width) || p->device_width > p->bus_bytes * 8)
+    return "dram.device_width: must be a power of two up to bus_bytes x 8";
+  /* No energy of a command below its standby's (DRAMsim3's increments). */
+  if (p->IDD0 * p->tRC < p->IDD3N * p->tRAS + p->IDD2N * p->tRP)
+    return "dram.IDD0: IDD0 x tRC must be at least IDD3N x tRAS + IDD2N x tRP (an activate's "
+           "energy is not negative)";
+  if (p->IDD4R < p->IDD3N) return "dram.IDD4R: must be at least IDD3N";
+  if (p->IDD4W < p->IDD3N) return "dram.IDD4W: must be at least IDD3N";
+  if (p->IDD5AB < p->IDD3N) return "dram.IDD5AB: must be at least IDD3N";
   return NULL;
 }
 

@@ -68,5 +68,6 @@ void dram_banked_refresh_issue(struct dram_banked *d, struct dram_banked_channel
   }
   dram_banked_stale_rank(d, c, rank);
   d->st.refreshes++;
+  rk->refs++;
   d->st.refresh_cycles += d->p.tRFC;
 }

@@ -18,6 +18,7 @@
  *                          write queue
  *   dram_banked_map.c      the address mapping
  *   dram_banked_params.c   the rules between parameters
+ *   dram_banked_power.c    energy: joules from each rank's commands and states
  *   dram_banked_refresh.c  refresh: due times and the work they bring
  *   dram_banked_stats.c    the level's numbers
  *
@@ -82,6 +83,12 @@ struct dram_banked_rank {
   int64_t next_due; /* the next refresh falls due (DRAM_BANKED_FAR: refresh off) */
   uint32_t pending; /* refreshes due and not yet issued */
   uint32_t open;    /* banks with a row open */
+  /* Energy's counts (dram_banked_power.c): its ACT, RD, WR and REF commands,
+   * and the DRAM cycles it had a bank open (DRAMsim3's rank state: active from
+   * the cycle of the ACT that opens its first bank to that of the precharge
+   * that closes its last; active_since: that ACT's, while open). */
+  uint64_t acts, reads, writes, refs, active_cycles;
+  int64_t active_since;
 };
 
 struct dram_banked_req {
@@ -321,9 +328,10 @@ int64_t dram_banked_req_earliest(const struct dram_banked *d, const struct dram_
 void dram_banked_activate(struct dram_banked *d, struct dram_banked_channel *c,
                           const struct dram_banked_cmd *k, const struct dram_banked_req *r,
                           int64_t now);
-/* Bank bk of rank `rank` precharges at `at`. */
+/* Bank bk of rank `rank` precharges at `at`, by a command issued at now (a PRE at
+ * now, or a column command's auto-precharge). */
 void dram_banked_bank_close(struct dram_banked *d, struct dram_banked_channel *c,
-                            struct dram_banked_bank *bk, uint32_t rank, int64_t at);
+                            struct dram_banked_bank *bk, uint32_t rank, int64_t now, int64_t at);
 /* The bank, rank, group and bus state of r's column command at now; returns
  * the cycle its data transfer ends. */
 int64_t dram_banked_column_state(struct dram_banked *d, struct dram_banked_channel *c,
@@ -373,6 +381,14 @@ unsigned dram_banked_map_bits(const struct dram_banked_params *p);
 
 /* Are p's timings and clock within what the level's arithmetic holds? */
 bool dram_banked_params_within_model(const struct dram_banked_params *p);
+
+/* ---- dram_banked_power.c: energy ---- */
+
+/* Close the ranks' active intervals at the level's last cycle, end (at finish). */
+void dram_banked_power_finish(struct dram_banked *d, int64_t end);
+/* The level's energy from its stats struct s (the stats table's figures). */
+void dram_banked_energy_total(const struct dram_banked *d, const struct dram_banked_stats *s,
+                              struct dram_banked_energy *out);
 
 /* ---- dram_banked_stats.c ---- */
 

@@ -30,6 +30,29 @@ static double bk_bank_active_fraction(const void *st, const struct stats_env *en
   return stats_ratio((double)s->bank_open_cycles,
                      bk_dram_cycles(env) * d->banks_per_channel * d->p.channels);
 }
+/* The energy figures (dram_banked_power.c), each one of struct
+ * dram_banked_energy's from the stats struct. */
+#define BK_ENERGY_FN(f)                                                                            \
+  static double bk_energy_##f(const void *st, const struct stats_env *env) {                       \
+    struct dram_banked_energy en;                                                                  \
+    dram_banked_energy_total(env->ctx, st, &en);                                                   \
+    return en.f;                                                                                   \
+  }
+BK_ENERGY_FN(activate_j)
+BK_ENERGY_FN(read_j)
+BK_ENERGY_FN(write_j)
+BK_ENERGY_FN(refresh_j)
+BK_ENERGY_FN(active_standby_j)
+BK_ENERGY_FN(precharge_standby_j)
+BK_ENERGY_FN(total_j)
+/* Joules over the level's own time (its DRAM cycles at clock_mhz). */
+static double bk_power_w(const void *st, const struct stats_env *env) {
+  const struct dram_banked *d = env->ctx;
+  const struct dram_banked_stats *s = st;
+  const double seconds =
+      (double)(s->rank_cycles / (d->p.ranks * d->p.channels)) / ((double)d->p.clock_mhz * 1e6);
+  return stats_ratio(bk_energy_total_j(st, env), seconds);
+}
 #define BK_QUEUE_FNS(k, n)                                                                         \
   static double bk_queue_length_mean_##k(const void *st, const struct stats_env *env) {            \
     return stats_ratio((double)((const struct dram_banked_stats *)st)->queue_area[k],              \
@@ -91,6 +114,23 @@ static const struct stats_desc banked_desc[] = {
               "dram_bank_active_fraction", "fraction", "bank-cycles with a row open"),
     BK_QUEUE(0, "read", "reads"),
     BK_QUEUE(1, "write", "writes"),
+    STATS_F64(struct dram_banked_stats, activates, bk_energy_activate_j, "dram_energy_activate_j",
+              "J", "activates, each with its precharge: VDD (IDD0 tRC - IDD3N tRAS - IDD2N tRP)"),
+    STATS_F64(struct dram_banked_stats, reads, bk_energy_read_j, "dram_energy_read_j", "J",
+              "read bursts: VDD (IDD4R - IDD3N) BL/2 each"),
+    STATS_F64(struct dram_banked_stats, writes, bk_energy_write_j, "dram_energy_write_j", "J",
+              "write bursts: VDD (IDD4W - IDD3N) BL/2 each"),
+    STATS_F64(struct dram_banked_stats, refreshes, bk_energy_refresh_j, "dram_energy_refresh_j",
+              "J", "refreshes: VDD (IDD5AB - IDD3N) tRFC each"),
+    STATS_F64(struct dram_banked_stats, rank_active_cycles, bk_energy_active_standby_j,
+              "dram_energy_active_standby_j", "J",
+              "background, rank-cycles with a bank open: VDD IDD3N each"),
+    STATS_F64(struct dram_banked_stats, rank_cycles, bk_energy_precharge_standby_j,
+              "dram_energy_precharge_standby_j", "J",
+              "background, rank-cycles with every bank precharged: VDD IDD2N each"),
+    STATS_FN_F64(bk_energy_total_j, "dram_energy_j", "J",
+                 "the DRAM's energy: the six above (DRAMsim3's model; x devices x tCK)"),
+    STATS_FN_F64(bk_power_w, "dram_power_w", "W", "dram_energy_j over the DRAM's time"),
 };
 const struct stats_descs dram_banked_stats_descs = {"dram banked",
                                                     banked_desc,

@@ -159,6 +159,19 @@ static const struct key KEYS[] = {
     {"dram.tREFI", K_U32, 0, 1u << 20, "9360", "DRAM cycles", R_B, B(tREFI),
      "refresh interval (0: no refresh)"},
     {"dram.tRFC", K_U32, 1, 100000, "420", "DRAM cycles", R_B, B(tRFC), "refresh to activate"},
+    {"dram.device_width", K_U32, 1, 512, "8", "bits", R_B, B(device_width),
+     "a DRAM device's data width; a rank is bus_bytes x 8 / device_width devices (energy)"},
+    {"dram.VDD", K_F64, 0, 10, "1.2", "V", R_B, B(VDD), "the devices' supply voltage (energy)"},
+    {"dram.IDD0", K_F64, 0, 1e5, "48", "mA", R_B, B(IDD0),
+     "a device's current, one bank activated and precharged every tRC"},
+    {"dram.IDD2N", K_F64, 0, 1e5, "34", "mA", R_B, B(IDD2N),
+     "a device's current, all banks precharged (standby)"},
+    {"dram.IDD3N", K_F64, 0, 1e5, "43", "mA", R_B, B(IDD3N),
+     "a device's current, a bank active (standby)"},
+    {"dram.IDD4R", K_F64, 0, 1e5, "135", "mA", R_B, B(IDD4R), "a device's current, burst reads"},
+    {"dram.IDD4W", K_F64, 0, 1e5, "123", "mA", R_B, B(IDD4W), "a device's current, burst writes"},
+    {"dram.IDD5AB", K_F64, 0, 1e5, "250", "mA", R_B, B(IDD5AB),
+     "a device's current, all-bank refresh (over tRFC)"},
     {"costs.node", K_U32, 0, 1e6, "7", "cycles", R_ALL, W(cost_node_cycles),
      "compute a k-d traversal step"},
     {"costs.triangle", K_U32, 0, 1e6, "20", "cycles", R_ALL, W(cost_triangle_cycles),
@@ -592,6 +605,13 @@ bool machine_cfg_check(const struct machine_cfg *c, struct err *e) {
   return err_set(e, NULL, 0, 0, "machine config: %s", why);
 }
 
+/* The fewest significant digits a K_F64 key's value is written with: 1, but
+ * 6 for a datasheet's volts and milliamperes, so 250 mA reads "250", not
+ * "2.5e+02". */
+static int f64_digits(const struct key *k) {
+  return !strcmp(k->unit, "mA") || !strcmp(k->unit, "V") ? 6 : 1;
+}
+
 void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsigned cap) {
   const struct key *k = &KEYS[i];
   const char *src = (const char *)c + k->off;
@@ -599,7 +619,7 @@ void machine_cfg_value(const struct machine_cfg *c, unsigned i, char *buf, unsig
   case K_F64: {
     double v;
     memcpy(&v, src, sizeof v);
-    stats_f64_text(v, 1, buf, cap);
+    stats_f64_text(v, f64_digits(k), buf, cap);
     break;
   }
   case K_ENUM: {

@@ -5,6 +5,7 @@
  * same numbers; and every bad input one file:line:col message and exit 2.
  * Fixtures live in tests/data/dram_traces. */
 #include <inttypes.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -261,6 +262,22 @@ static void test_banked(void) {
   EXPECT_COL(&c, "dram_row_hits", "1");
   EXPECT_COL(&c, "dram_row_conflicts", "0");
   EXPECT_COL(&c, "cycles", "1023");
+  /* Energy (DRAMsim3's model, the preset's currents: 8 x8 devices at 1.2 V,
+   * tCK 1/1.2 ns, so 8 pJ a mA-cycle): one ACT 8 (48 x 56 - 43 x 39 - 34 x 17)
+   * = 3464 pJ, two RDs 2 x 8 (135 - 43) 4 = 5888 pJ; the level ends at DRAM
+   * cycle 1024 (the last answer's, 1023, handled): rank 0 active from its ACT
+   * at 2, 1022 x 8 x 43 = 351568 pJ; precharged rank 0's first 2 cycles and
+   * rank 1's 1024, 1026 x 8 x 34 = 279072 pJ; no refresh falls due (4680). */
+  const double part[][2] = {{csv_num(&c, "dram_energy_activate_j"), 3464e-12},
+                            {csv_num(&c, "dram_energy_read_j"), 5888e-12},
+                            {csv_num(&c, "dram_energy_write_j"), 0},
+                            {csv_num(&c, "dram_energy_refresh_j"), 0},
+                            {csv_num(&c, "dram_energy_active_standby_j"), 351568e-12},
+                            {csv_num(&c, "dram_energy_precharge_standby_j"), 279072e-12},
+                            {csv_num(&c, "dram_energy_j"), 639992e-12}};
+  for (unsigned i = 0; i < sizeof part / sizeof part[0]; i++)
+    EXPECTF(fabs(part[i][0] - part[i][1]) <= 1e-12 * part[i][1],
+            "energy part %u: %.15g J, want %.15g", i, part[i][0], part[i][1]);
 }
 
 /* ---- 4. round trip through rtsim run ---- */

@@ -105,7 +105,8 @@ static bool dram_own(const char *name) {
       "dram_activates",    "dram_precharges",      "dram_refresh",
       "dram_write_drains", "dram_write_forwards",  "dram_write_merges",
       "dram_read_merges",  "dram_bus_utilization", "dram_bank_active_fraction",
-      "dram_read_queue_",  "dram_write_queue_"};
+      "dram_read_queue_",  "dram_write_queue_",    "dram_energy_",
+      "dram_power_w"};
   for (size_t i = 0; i < sizeof own / sizeof own[0]; i++)
     if (!strncmp(name, own[i], strlen(own[i]))) return true;
   return false;

@@ -213,5 +213,8 @@ struct dram_banked_params testing_ddr4_params(void) {
   p.tCCD_S = 4, p.tCCD_L = 6, p.tRRD_S = 4, p.tRRD_L = 6, p.tFAW = 26;
   p.tWR = 19, p.tWTR_S = 3, p.tWTR_L = 9, p.tRTW = 6, p.tRTP = 9;
   p.tREFI = 0, p.tRFC = 420;
+  p.device_width = 8; /* DRAMsim3's DDR4_8Gb_x8_2400.ini */
+  p.VDD = 1.2, p.IDD0 = 48, p.IDD2N = 34, p.IDD3N = 43, p.IDD4R = 135, p.IDD4W = 123;
+  p.IDD5AB = 250;
   return p;
 }

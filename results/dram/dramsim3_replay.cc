@@ -176,6 +176,18 @@ int main(int argc, char** argv) {
         for (auto& ch : js) if (ch.contains(k)) s += ch[k].get<uint64_t>();
         return s;
     };
+    // A double stat summed over channels; a per-rank one (an object by rank)
+    // summed over its ranks too.
+    auto sumd = [&](const char* k) -> double {
+        double s = 0;
+        for (auto& ch : js) {
+            if (!ch.contains(k)) continue;
+            if (ch[k].is_object())
+                for (auto it = ch[k].begin(); it != ch[k].end(); ++it) s += it.value().get<double>();
+            else s += ch[k].get<double>();
+        }
+        return s;
+    };
     auto histo_mean = [&](const char* k) -> double {
         long double s = 0; uint64_t n = 0;
         for (auto& ch : js)
@@ -219,6 +231,15 @@ int main(int argc, char** argv) {
            (double)sumc("num_read_row_hits") / sumc("num_read_cmds") : 0.0);
     printf("dramsim3.average_read_latency=%.3f\n", histo_mean("read_latency"));
     printf("dramsim3.average_write_cmd_latency=%.3f\n", histo_mean("write_latency"));
+    // DRAMsim3's energy (simple_stats.cc): sums of VDD x IDD x DRAM cycles x
+    // devices, which it labels pJ; multiply by tCK in ns for pJ. Background
+    // by rank state, summed over ranks; the rank-cycles in each state.
+    const char* ekeys[] = {"act_energy", "read_energy", "write_energy", "ref_energy",
+                           "refb_energy", "act_stb_energy", "pre_stb_energy",
+                           "sref_energy", "total_energy"};
+    for (auto k : ekeys) printf("dramsim3.%s=%.17g\n", k, sumd(k));
+    printf("dramsim3.rank_active_cycles=%.17g\ndramsim3.all_bank_idle_cycles=%.17g\n",
+           sumd("rank_active_cycles"), sumd("all_bank_idle_cycles"));
     printf("stats_json=%s\n", prefix_json.c_str());
 
     if (!per_req.empty()) {

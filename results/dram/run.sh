@@ -11,6 +11,11 @@
 #     DRAMsim3's side needs a DRAMsim3 build with results/dram/dramsim3_replay.cc
 #     (README here): DRAMSIM3=its binary DRAMSIM3_INI=its DDR4_8Gb_x8_2400.ini.
 #     Without them only rtsim's columns are filled.
+#  3. saturated.csv: three streams offered faster than a channel serves.
+#  4. energy.csv: the DRAM's energy of the replays of 2 and 3 by component,
+#     rtsim's and DRAMsim3's, in joules.
+#  5. energy-estimate.csv: a DRAM energy estimate from a cheaper rung's counts
+#     against the banked level's (from levels.csv).
 # From the repository top, after sh .ci/setup:
 #   [DRAMSIM3=... DRAMSIM3_INI=...] sh results/dram/run.sh
 set -eu
@@ -53,6 +58,36 @@ readlat() {
          { v[NR] = $1; s += $1 } END { printf "%.3f %d %d %d\n", s / NR, at(50), at(95), at(99) }'
 }
 
+# 4. energy.csv (filled as 2 and 3 run): the DRAM's energy of each replay by
+#    component, rtsim's (its dram_energy_*_j) and DRAMsim3's (its
+#    simple_stats sums, in V x mA x DRAM cycles though it names them pJ,
+#    times tCK = 1 / 1.2 GHz, in joules; the ini's tCK 0.83 is that rounded).
+energy=results/dram/energy.csv
+ecomp="activate read write refresh active_standby precharge_standby total"
+{
+  printf 'stream,requests,writes'
+  for c in $ecomp; do printf ',rtsim_%s_j,dramsim3_%s_j' "$c" "$c"; done
+  printf '\n'
+} > "$energy.tmp"
+# A replay's energy row: stream name, rtsim's CSV, DRAMsim3's output (may be
+# missing or unfinished: its columns empty).
+energy_row() {
+  printf '%s,%s,%s' "$1" "$(csvget "$2" requests)" "$(csvget "$2" writes)"
+  fin=; [ -f "$3" ] && fin=$(kvget "$3" finished)
+  for c in $ecomp; do
+    case $c in
+      activate) k=act_energy ;; read) k=read_energy ;; write) k=write_energy ;;
+      refresh) k=ref_energy ;; active_standby) k=act_stb_energy ;;
+      precharge_standby) k=pre_stb_energy ;; total) k=total_energy ;;
+    esac
+    rk=dram_energy_${c}_j; [ "$c" = total ] && rk=dram_energy_j
+    d3=
+    [ "$fin" = 1 ] && d3=$(awk -v v="$(kvget "$3" "dramsim3.$k")" 'BEGIN { printf "%.9g", v / 1.2 * 1e-12 }')
+    printf ',%s,%s' "$(csvget "$2" "$rk")" "$d3"
+  done
+  printf '\n'
+}
+
 table=results/dram/dramsim3.csv
 echo "scene,policy,requests,writes,rtsim_read_latency_mean,dramsim3_read_latency_mean,rtsim_read_latency_p50,dramsim3_read_latency_p50,rtsim_read_latency_p95,dramsim3_read_latency_p95,rtsim_read_latency_p99,dramsim3_read_latency_p99,rtsim_gb_per_s,dramsim3_gb_per_s,rtsim_row_hit_rate,dramsim3_row_hit_rate" > "$table.tmp"
 for scene in sphereflake grove room; do
@@ -86,6 +121,7 @@ for scene in sphereflake grove room; do
       "$(csvget "$r" requests)" "$(csvget "$r" writes)" "$1" "$d3_mean" "$2" "$d3_p50" \
       "$3" "$d3_p95" "$4" "$d3_p99" \
       "$(csvget "$r" gb_per_s)" "$d3_gbs" "$(csvget "$r" dram_row_hit_rate)" "$d3_hit" >> "$table.tmp"
+    energy_row "$scene-$policy" "$r" "$t.dramsim3.txt" >> "$energy.tmp"
   done
 done
 mv "$table.tmp" "$table"
@@ -118,5 +154,44 @@ for s in grove-recursive sphereflake-dynamic room-dynamic; do
     "$(csvget "$r" requests)" "$(csvget "$r" writes)" \
     "$(csvget "$r" bytes_per_cycle)" "$d3_bpc" "$(csvget "$r" dram_row_hit_rate)" "$d3_hit" \
     "$1" "$d3_mean" "$3" "$d3_p95" "$4" "$d3_p99" "$(csvget "$r" read_latency_taken_mean)" "$d3_taken" >> "$sat.tmp"
+  energy_row "$s-saturated" "$r" "$out/$s.saturated.dramsim3.txt" >> "$energy.tmp"
 done
 mv "$sat.tmp" "$sat"
+mv "$energy.tmp" "$energy"
+
+# 5. energy-estimate.csv: the DRAM energy a cheaper rung could estimate from
+#    its own counts (levels.csv: dram_reads, dram_writes, cycles) with
+#    DRAMsim3's increments, against the banked run's dram_energy_j for the same
+#    scene and policy: every request a burst, a row hit rate of 0.5 assumed (an
+#    ACT for every other request), a refresh every tREFI / ranks DRAM cycles,
+#    every rank-cycle in active standby. The banked rows apply it to the banked
+#    run's own counts: the formula's error alone.
+# (A quoted field's commas, as in the first column's point name, become ';'.)
+awk '{ o = ""; q = 0
+       for (i = 1; i <= length($0); i++) { ch = substr($0, i, 1); if (ch == "\"") q = !q; else if (ch == "," && q) ch = ";"; o = o ch }
+       print o }' results/dram/levels.csv |
+awk -F, -v h=0.5 '
+  NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+  { n++; for (k in c) v[n, k] = $c[k] }
+  function f(r, k) { return v[r, k] + 0 }
+  END {
+    print "scene,policy,fidelity,cycles,dram_reads,dram_writes,estimate_j,banked_j,error"
+    for (r = 1; r <= n; r++)
+      if (v[r, "fidelity"] == "banked") bk[v[r, "scene"], v[r, "policy"]] = f(r, "dram_energy_j")
+    for (r = 1; r <= n; r++) {
+      mhz = f(r, "dram.clock_mhz"); ranks = f(r, "dram.ranks"); chs = f(r, "dram.channels")
+      j = f(r, "dram.VDD") * (f(r, "dram.bus_bytes") * 8 / f(r, "dram.device_width")) * (1000 / mhz) * 1e-12
+      b = f(r, "dram.burst_length") / 2; i3 = f(r, "dram.IDD3N")
+      rd = f(r, "dram_reads"); wr = f(r, "dram_writes")
+      t = f(r, "cycles") * mhz / (f(r, "clock_ghz") * 1000)
+      act = j * (f(r, "dram.IDD0") * f(r, "dram.tRC") - i3 * f(r, "dram.tRAS") - f(r, "dram.IDD2N") * f(r, "dram.tRP"))
+      e = rd * j * (f(r, "dram.IDD4R") - i3) * b + wr * j * (f(r, "dram.IDD4W") - i3) * b
+      e += (rd + wr) * (1 - h) * act
+      e += int(t / int(f(r, "dram.tREFI") / ranks)) * chs * j * (f(r, "dram.IDD5AB") - i3) * f(r, "dram.tRFC")
+      e += ranks * chs * t * j * i3
+      ref = bk[v[r, "scene"], v[r, "policy"]]
+      printf "%s,%s,%s,%d,%d,%d,%.6g,%.6g,%.4f\n", v[r, "scene"], v[r, "policy"], v[r, "fidelity"],
+        f(r, "cycles"), rd, wr, e, ref, (e - ref) / ref
+    }
+  }' > results/dram/energy-estimate.csv.tmp
+mv results/dram/energy-estimate.csv.tmp results/dram/energy-estimate.csv
