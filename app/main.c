@@ -31,7 +31,7 @@ static const struct app_command COMMANDS[] = {
     {"merge", cmd_merge,
      "  merge DIR -o TABLE.csv           a sweep's complete points as one tidy table\n"},
     {"plot", cmd_plot,
-     "  plot TABLE.csv --x K --y M -o F  line plots of a merged table (PNG or SVG)\n"},
+     "  plot TABLE.csv --x K --y M -o F  figures of a merged table (PNG, PDF or SVG)\n"},
     {"bench", cmd_bench,
      "  bench SCENE.yaml...              primary-ray throughput (rays/s) per scene\n"},
     {"dram-replay", cmd_dram_replay,
