@@ -168,7 +168,7 @@ struct layout {
   unsigned ntitle, titleh;            /* its lines, and the strip they take */
   char ylabel[1100];
   char peakleg[160];               /* the peak line's legend entry, or "" */
-  char dleg[PLOT_DASHES_MAX][256]; /* --dash's entries, a dash pattern each */
+  char dleg[PLOT_DASHES_MAX][512]; /* --dash's entries, a dash pattern each */
   unsigned ndleg;
   bool dense; /* a series has more points than markers can show apart */
 };

@@ -145,7 +145,7 @@ int main(void) {
             "rtsim %s --help-full does not start with --help", cmd);
     check_policies(cmd, help);
     char what[64];
-    snprintf(what, sizeof what, "rtsim %s --help", cmd);
+    snprintf(what, sizeof what, "rtsim %.31s --help", cmd);
     check_screen(what, help);
     char cmds[2048];
     example_of(help, cmds, sizeof cmds);
