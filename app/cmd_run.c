@@ -15,6 +15,7 @@
 #include "app/outguard.h"
 #include "app/run_output.h"
 #include "app/rung_error.h"
+#include "app/spot_check.h"
 #include "renderer/policy/policy.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
@@ -55,6 +56,8 @@ static const char HELP[] =
     "  --trace-events-cores N         only the first N cores (default 2)\n"
     "  --trace-events-period C        counters every C cycles (default 1000)\n"
     "  --trace-events-max N           at most N events, ~65 bytes each (default 1000000)\n"
+    "  --spot-check F        at a cheaper rung, also run a banked sample (sample.fraction\n"
+    "                        F) of this point: this rung's error here, with intervals\n"
     "  --cost-preview PNG    also draw one per-pixel cost channel as a heat map\n"
     "  --cost-channel C      the channel it draws (default cost.issue_slots)\n"
     "  --cost-max X          its colour bar's top (default: the largest pixel)\n"
@@ -101,6 +104,13 @@ static bool parse_cost_max(const char *text, void *dst) {
   return true;
 }
 
+static bool parse_spot(const char *text, void *dst) {
+  double v;
+  if (scalar_f64(text, &v) != SCALAR_OK || !(v > 0 && v < 1)) return false;
+  *(double *)dst = v;
+  return true;
+}
+
 static bool parse_cost_channel(const char *text, void *dst) {
   if (!run_output_is_cost_channel(text)) return false;
   *(const char **)dst = text;
@@ -129,6 +139,7 @@ struct run_plan {
   const char *trace_path, *cost_preview, *cost_channel;
   double cost_max;
   const char *events_path; /* --trace-events; tev its window, the rest below */
+  double spot;             /* --spot-check: the banked sample's fraction (0: none) */
   struct machine_trace_params tev;
   uint64_t tev_cores, tev_period, tev_max;
   bool help_keys, help_stats, help_stats_md;
@@ -152,6 +163,7 @@ static int run_plan_parse(struct run_plan *pl, int argc, char **argv) {
       OPTS_U64("trace-events-cores", 0, &pl->tev_cores, 1, MACHINE_MAX_CONTEXTS),
       OPTS_U64("trace-events-period", 0, &pl->tev_period, 1, UINT64_MAX),
       OPTS_U64("trace-events-max", 0, &pl->tev_max, 1000, 1000000000),
+      OPTS_PARSE("spot-check", 0, &pl->spot, parse_spot, "a fraction above 0 and below 1"),
       OPTS_STR("cost-preview", 0, &pl->cost_preview),
       OPTS_PARSE("cost-channel", 0, &pl->cost_channel, parse_cost_channel,
                  "one of: cost.issue_slots, cost.load_wait_cycles, cost.dram_read_bytes.geometry, "
@@ -227,6 +239,8 @@ static bool run_plan_runs_here(const struct run_plan *pl, const struct machine_c
   const char *why =
       sample_problem(&mc->sample, mc->p.fidelity, pl->policy, app_work_items(pl->policy, W, H),
                      contexts, whybuf, sizeof whybuf);
+  if (!why && pl->spot > 0)
+    why = spot_check_problem(pl->spot, mc, pl->policy, W, H, whybuf, sizeof whybuf);
   if (!why && mc->sample.fraction < 1 && pl->trace_path)
     why = "sample.fraction: --dram-trace records a whole run; a sampled run skips most of the work";
   /* Every ray context may hold a coroutine stack at once (the timed rungs). */
@@ -299,6 +313,7 @@ static int run_write(const struct run_plan *pl, struct run_output_report *rep,
   }
   rep->out_dir = pl->out;
   if (rc == 0) run_output_summary(rep, stdout);
+  if (rc == 0 && rep->spot) spot_check_summary(rep->spot, stdout);
   return rc;
 }
 
@@ -345,6 +360,14 @@ static int run_render(const struct run_plan *pl, const struct machine_cfg *mc,
     rung_error_match(&rung, &mc->p, policy_name(pl->policy), -1, s->cycles, s->issue_slots,
                      s->dram.read_bytes + s->dram.write_bytes);
   }
+  struct spot_check spot;
+  if (pl->spot > 0) {
+    const struct machine_stats *s = analytic ? NULL : machine_get_stats(t.m);
+    spot_check_run(&spot, pl->spot, w, pl->mask, seed, W, H, pl->policy, mc,
+                   analytic ? a.est.cycles : (double)s->cycles,
+                   analytic ? (double)(a.counts.fetch_bytes + a.counts.writeback_bytes)
+                            : (double)(s->dram.read_bytes + s->dram.write_bytes));
+  }
   struct run_output_report rep = {
       .out_dir = od->write,
       .machine_path = pl->machine_path,
@@ -361,6 +384,7 @@ static int run_render(const struct run_plan *pl, const struct machine_cfg *mc,
       .machine = t.m,
       .sample = t.sampled ? &t.sample : NULL,
       .rung = cheaper ? &rung : NULL,
+      .spot = pl->spot > 0 ? &spot : NULL,
       .analytic = analytic ? &a : NULL,
       .rstats = analytic ? &a.st : &t.st,
       .tstats = analytic ? &a.ts : &t.ts,

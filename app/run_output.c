@@ -13,6 +13,7 @@
 #include "app/preview.h"
 #include "app/rung_error.h"
 #include "app/sample.h"
+#include "app/spot_check.h"
 #include "renderer/framebuffer.h"
 #include "renderer/image.h"
 #include "renderer/render.h"
@@ -330,6 +331,7 @@ void run_output_measured(const struct run_output_report *r, struct stats_table *
                                   .classes = TRACE_CLASS_COUNT};
     stats_emit(t, &run_output_analytic_stats_descs, r->analytic, &env);
     if (r->rung) stats_emit(t, &rung_error_stats_descs, r->rung, &env);
+    if (r->spot) stats_emit(t, &spot_check_stats_descs, r->spot, &env);
     return;
   }
   const struct machine_stats *s = machine_get_stats(r->machine);
@@ -348,6 +350,7 @@ void run_output_measured(const struct run_output_report *r, struct stats_table *
   machine_stats_emit(r->machine, t, trace_class_names, TRACE_CLASS_COUNT, run_parts,
                      STATS_COUNT(run_parts));
   if (r->rung) stats_emit(t, &rung_error_stats_descs, r->rung, &(struct stats_env){0});
+  if (r->spot) stats_emit(t, &spot_check_stats_descs, r->spot, &(struct stats_env){0});
 }
 
 /* Start OUTDIR/name through a temporary (commit with outfile_commit). */
@@ -538,7 +541,8 @@ static const struct stats_descs *const STATS_TABLES[] = {&machine_stats_descs,
                                                          &run_output_json_stats_descs,
                                                          &run_output_analytic_stats_descs,
                                                          &sample_stats_descs,
-                                                         &rung_error_stats_descs};
+                                                         &rung_error_stats_descs,
+                                                         &spot_check_stats_descs};
 #define STATS_TABLE_COUNT (sizeof STATS_TABLES / sizeof STATS_TABLES[0])
 
 void run_output_stats_help(FILE *f, bool markdown) {

@@ -35,6 +35,7 @@ struct run_output_report {
   const struct app_analytic *analytic; /* fidelity analytic's counts and estimate, else NULL */
   const struct sampler *sample;        /* a sampled run's estimates (NULL: a full run) */
   const struct rung_error *rung; /* a whole run at a cheaper rung: its measured error (else NULL) */
+  const struct spot_check *spot; /* --spot-check: a banked sample of this point (else NULL) */
   const struct render_stats *rstats;
   const struct trace_stats *tstats;
   const struct framebuffer *fb;

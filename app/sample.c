@@ -343,6 +343,15 @@ static double min_cycles(const struct sampler *s) {
   return issue > units ? issue : units;
 }
 
+double sample_dram_bytes(const struct sampler *s, double *lo, double *hi) {
+  double own = 0;
+  for (uint32_t h = 0; h < s->n; h++) own += delta(&s->u[h], SQ_DRAM_BYTES);
+  struct est e = clamp_est(estimate(s, SF_DRAM_BYTES), own, INFINITY);
+  *lo = e.lo;
+  *hi = e.hi;
+  return e.v;
+}
+
 double sample_cycles(const struct sampler *s, double *lo, double *hi) {
   struct est e = clamp_est(estimate(s, SF_CYCLES), min_cycles(s), INFINITY);
   *lo = e.lo;
@@ -402,9 +411,9 @@ static struct est est_of(const void *st, const struct stats_env *env, enum sampl
     return clamp_est(estimate(s, SF_UTIL), 0, top < 1 ? top : 1);
   }
   case SO_DRAM_BYTES: {
-    double own = 0;
-    for (uint32_t h = 0; h < s->n; h++) own += delta(&s->u[h], SQ_DRAM_BYTES);
-    return clamp_est(estimate(s, SF_DRAM_BYTES), own, INFINITY);
+    struct est d;
+    d.v = sample_dram_bytes(s, &d.lo, &d.hi);
+    return d;
   }
   case SO_BYTES_PER_CYCLE: return clamp_est(estimate(s, SF_BYTES_PER_CYCLE), 0, INFINITY);
   case SO_DRAM_UTIL: {

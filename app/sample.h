@@ -114,6 +114,8 @@ extern const struct stats_descs sample_stats_descs;
 
 /* The estimate of the run's cycles and its 95% interval (after sample_finish). */
 double sample_cycles(const struct sampler *s, double *lo, double *hi);
+/* The same for the DRAM bytes read and written. */
+double sample_dram_bytes(const struct sampler *s, double *lo, double *hi);
 
 /* Student's t quantile for probability 0.975 and dof degrees of freedom (>= 1). */
 double sample_t975(unsigned dof);
