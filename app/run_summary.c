@@ -15,9 +15,8 @@
 
 /* The numbers shown, in order, and the unit each is shown in when the stats
  * tables' own unit would not say enough (NULL: the tables' unit). */
-static const struct shown {
-  const char *name, *unit;
-} SHOWN[] = {
+static const char *const SHOWN[][2] = {
+    /* name, unit */
     {"cycles", "core cycles"},
     {"cycles_ci95_low", "core cycles"},
     {"cycles_ci95_high", "core cycles"},
@@ -88,13 +87,13 @@ void run_output_summary(const struct run_output_report *r, FILE *f) {
   machine_line(r, f);
   fprintf(f, "scene: %s, %u x %u pixels\n", r->scene_name, r->width, r->height);
   for (unsigned i = 0; i < sizeof SHOWN / sizeof SHOWN[0]; i++) {
-    if (!strcmp(SHOWN[i].name, "dram_bytes")) {
+    if (!strcmp(SHOWN[i][0], "dram_bytes")) {
       dram_line(&t, f);
       continue;
     }
-    const struct stats_entry *e = entry(&t, SHOWN[i].name);
+    const struct stats_entry *e = entry(&t, SHOWN[i][0]);
     if (!e) continue;
-    const char *unit = SHOWN[i].unit ? SHOWN[i].unit : run_output_unit_of(e->name);
+    const char *unit = SHOWN[i][1] ? SHOWN[i][1] : run_output_unit_of(e->name);
     if (e->kind == STATS_F64) fprintf(f, "%s: %.6g", e->name, e->f);
     else fprintf(f, "%s: %llu", e->name, (unsigned long long)e->u);
     fprintf(f, "%s%s\n", unit && *unit ? " " : "", unit ? unit : "");

@@ -77,9 +77,8 @@ int main(void) {
   EXPECT(rc == 0 && isnan(num("plain", "spot_cycles_error")));
 
   /* Refused before anything is written: exit 2, one message, no OUTDIR. */
-  static const struct {
-    const char *more, *want;
-  } bad[] = {
+  /* The options, and what the message must hold. */
+  static const char *const bad[][2] = {
       {"--spot-check 0.25 --set fidelity=banked", "at fidelity banked already"},
       {"--spot-check 0.25 --policy dynamic", "sample"},
       {"--spot-check 0.25 --set sample.fraction=0.5", "the run is sampled"},
@@ -88,11 +87,11 @@ int main(void) {
       {"--spot-check x", "a fraction above 0 and below 1"},
   };
   for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-    rc = run(bad[i].more, "bad");
-    EXPECTF(rc == 2 && strstr(out, bad[i].want), "'%s': %d: %s", bad[i].more, rc, out);
+    rc = run(bad[i][0], "bad");
+    EXPECTF(rc == 2 && strstr(out, bad[i][1]), "'%s': %d: %s", bad[i][0], rc, out);
     char d[256];
     snprintf(d, sizeof d, "%s/bad", TMP);
-    EXPECTF(access(d, F_OK) != 0, "'%s' left %s", bad[i].more, d);
+    EXPECTF(access(d, F_OK) != 0, "'%s' left %s", bad[i][0], d);
   }
   return testing_done("test_spot_check");
 }
