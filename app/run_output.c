@@ -20,6 +20,7 @@
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/analytic.h"
+#include "sim/chip_energy.h"
 #include "sim/derived.h"
 #include "sim/dram.h"
 #include "sim/err.h"
@@ -94,6 +95,8 @@ static void identity(const struct run_output_report *r, struct stats_table *t) {
   stats_u64(t, "height", r->height);
   stats_u64(t, "seed", r->seed);
 }
+
+static void energy_emit(const struct run_output_report *r, struct stats_table *t);
 
 /* ---- the run's own numbers, at the machine's slots (docs/stats.md) ----
  * The workload's counts (the renderer's) and figures of the machine that need
@@ -349,8 +352,41 @@ void run_output_measured(const struct run_output_report *r, struct stats_table *
   };
   machine_stats_emit(r->machine, t, trace_class_names, TRACE_CLASS_COUNT, run_parts,
                      STATS_COUNT(run_parts));
+  energy_emit(r, t);
   if (r->rung) stats_emit(t, &rung_error_stats_descs, r->rung, &(struct stats_env){0});
   if (r->spot) stats_emit(t, &spot_check_stats_descs, r->spot, &(struct stats_env){0});
+}
+
+/* The run's energy (sim/chip_energy.h) after the machine's numbers: the
+ * chip's from the machine's counters, the DRAM's as its level wrote it in t
+ * (dram_energy_j, where the level reports one). */
+static void energy_emit(const struct run_output_report *r, struct stats_table *t) {
+  const struct machine_stats *s = machine_get_stats(r->machine);
+  const struct machine_params *p = &r->cfg->p;
+  const struct chip_energy_params ep =
+      chip_energy_resolve(&p->energy, p->l1_size_bytes, p->l2_size_bytes);
+  const struct chip_energy_counts c = {.cores = p->cores,
+                                       .l1_size_bytes = p->l1_size_bytes,
+                                       .l2_size_bytes = p->l2_size_bytes,
+                                       .seconds = run_seconds(r),
+                                       .issue_slots = s->issue_slots,
+                                       .loads = s->loads,
+                                       .stores = s->stores,
+                                       .ray_switches = s->ray_switches,
+                                       .l1_accesses = s->l1_accesses,
+                                       .l1_hits = s->l1_hits,
+                                       .l2_accesses = s->l2.accesses,
+                                       .l2_misses = s->l2.misses,
+                                       .l2_writeback_lines =
+                                           s->l2.writeback_bytes / SIM_LINE_BYTES};
+  struct chip_energy_report rep = {.seconds = c.seconds, .rays = render_stats_total(r->rstats)};
+  chip_energy_compute(&ep, &c, &rep.chip);
+  for (unsigned i = 0; i < t->n; i++)
+    if (!strcmp(t->e[i].name, "dram_energy_j") && t->e[i].kind == STATS_F64) {
+      rep.has_dram = true;
+      rep.dram_j = t->e[i].f;
+    }
+  stats_emit(t, &chip_energy_stats_descs, &rep, &(struct stats_env){.cycles = s->cycles});
 }
 
 /* Start OUTDIR/name through a temporary (commit with outfile_commit). */
@@ -538,6 +574,7 @@ static const struct stats_descs *const STATS_TABLES[] = {&machine_stats_descs,
                                                          &dram_channel_stats_descs,
                                                          &dram_banked_stats_descs,
                                                          &machine_engine_stats_descs,
+                                                         &chip_energy_stats_descs,
                                                          &run_output_json_stats_descs,
                                                          &run_output_analytic_stats_descs,
                                                          &sample_stats_descs,

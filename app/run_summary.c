@@ -31,6 +31,7 @@ static const char *const SHOWN[][2] = {
     {"dram_bytes_per_cycle", "bytes per core cycle"},
     {"dram_read_latency_mean", "core cycles"},
     {"load_latency_mean", "core cycles"},
+    {"energy_mj_per_frame", NULL}, /* with power_w and rays_per_joule (energy_line) */
     {"events", "engine events"},
     {"rung_cycles_error_min", "(fraction; measured against fidelity banked)"},
     {"rung_cycles_error_max", "(fraction; measured against fidelity banked)"},
@@ -80,6 +81,15 @@ static void dram_line(const struct stats_table *t, FILE *f) {
   fputc('\n', f);
 }
 
+/* energy_mj_per_frame with the run's average watts and rays a joule. */
+static void energy_line(const struct stats_table *t, FILE *f) {
+  const struct stats_entry *mj = entry(t, "energy_mj_per_frame"), *w = entry(t, "power_w"),
+                           *rj = entry(t, "rays_per_joule");
+  if (!mj || !w || !rj) return;
+  fprintf(f, "energy_mj_per_frame: %.6g mJ a frame (power_w %.6g W, rays_per_joule %.6g)\n", mj->f,
+          w->f, rj->f);
+}
+
 void run_output_summary(const struct run_output_report *r, FILE *f) {
   struct stats_table t = {0};
   run_output_measured(r, &t);
@@ -89,6 +99,10 @@ void run_output_summary(const struct run_output_report *r, FILE *f) {
   for (unsigned i = 0; i < sizeof SHOWN / sizeof SHOWN[0]; i++) {
     if (!strcmp(SHOWN[i][0], "dram_bytes")) {
       dram_line(&t, f);
+      continue;
+    }
+    if (!strcmp(SHOWN[i][0], "energy_mj_per_frame")) {
+      energy_line(&t, f);
       continue;
     }
     const struct stats_entry *e = entry(&t, SHOWN[i][0]);

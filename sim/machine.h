@@ -29,6 +29,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "sim/chip_energy.h"
 #include "sim/dram.h"
 #include "sim/hist.h"
 #include "sim/l2.h"
@@ -80,6 +81,7 @@ struct machine_params {
    * is sampled is the run's: struct machine_cfg_sample.) */
   uint32_t cost_ray_switch_cycles;
   uint64_t timeline_window_cycles;
+  struct chip_energy_params energy; /* the timed rungs' chip energy (energy.* keys) */
 };
 
 /* Columns of a timeline row (values are per window; see machine.c). */

@@ -58,6 +58,8 @@ static const char *const IMAGE_NAMES[] = {"sampled", "whole"};    /* sample.imag
 #define WE(f, names) offsetof(struct machine_cfg, work.f), names
 #define S(f) offsetof(struct machine_cfg, sample.f), NULL
 #define SE(f, names) offsetof(struct machine_cfg, sample.f), names
+#define EN(f) offsetof(struct machine_cfg, p.energy.f), NULL
+#define R_T (R_F | R_C | R_B)
 static const struct key KEYS[] = {
     {"clock_ghz", K_F64, 1e-3, 1e3, "1.4", "GHz", R_ALL, P(clock_ghz),
      "the core clock; converts cycles to seconds (rays_per_second)"},
@@ -196,6 +198,35 @@ static const struct key KEYS[] = {
      "estimated)"},
     {"sample.seed", K_U64, 0, 1e15, "1", "", R_ALL, S(seed),
      "where each middle unit falls in its stratum"},
+    {"energy.l1_read", K_F64, -1, 1e6, "-1", "nJ", R_T, EN(l1.read_nj),
+     "an L1 load hit, 64 bytes read (negative: the 65 nm table's for l1.size)"},
+    {"energy.l1_write", K_F64, -1, 1e6, "-1", "nJ", R_T, EN(l1.write_nj),
+     "an L1 store write (negative: as a read)"},
+    {"energy.l1_fill", K_F64, -1, 1e6, "-1", "nJ", R_T, EN(l1.fill_nj),
+     "an L1 line filled after a miss (negative: as a read)"},
+    {"energy.l1_tag", K_F64, -1, 1e6, "-1", "nJ", R_T, EN(l1.tag_nj),
+     "an L1 tag probe that missed (negative: a tenth of a read)"},
+    {"energy.l2_read", K_F64, -1, 1e6, "-1", "nJ", R_T, EN(l2.read_nj),
+     "an L2 read, 64 bytes: a hit or a write-back's victim (negative: the 65 nm table's for "
+     "l2.size)"},
+    {"energy.l2_write", K_F64, -1, 1e6, "-1", "nJ", R_T, EN(l2.write_nj),
+     "an L2 store write (negative: as a read)"},
+    {"energy.l2_fill", K_F64, -1, 1e6, "-1", "nJ", R_T, EN(l2.fill_nj),
+     "an L2 line filled from the DRAM (negative: as a read)"},
+    {"energy.l2_tag", K_F64, -1, 1e6, "-1", "nJ", R_T, EN(l2.tag_nj),
+     "an L2 tag probe that missed (negative: a tenth of a read)"},
+    {"energy.sram_leakage", K_F64, 0, 1e6, "0.1", "mW/KiB", R_T, EN(sram_leakage_mw_per_kib),
+     "leakage of each KiB of the L1s and the L2"},
+    {"energy.compute", K_F64, 0, 1e6, "0.07", "nJ", R_T, EN(compute_nj),
+     "a core's compute issue slot"},
+    {"energy.load", K_F64, 0, 1e6, "0.07", "nJ", R_T, EN(load_nj),
+     "a core's load issue slot (its cache accesses apart)"},
+    {"energy.store", K_F64, 0, 1e6, "0.07", "nJ", R_T, EN(store_nj),
+     "a core's store issue slot (its cache accesses apart)"},
+    {"energy.ray_switch", K_F64, 0, 1e6, "0.07", "nJ", R_T, EN(ray_switch_nj),
+     "a thread switching to another ray's registers"},
+    {"energy.core_leakage", K_F64, 0, 1e6, "10", "mW", R_T, EN(core_leakage_mw),
+     "a core's leakage, its L1 apart"},
 };
 #undef P
 #undef B
@@ -204,6 +235,8 @@ static const struct key KEYS[] = {
 #undef WE
 #undef S
 #undef SE
+#undef EN
+#undef R_T
 #define NKEYS (unsigned)(sizeof KEYS / sizeof KEYS[0])
 _Static_assert(sizeof KEYS / sizeof KEYS[0] <= MACHINE_CFG_KEYS_MAX, "raise MACHINE_CFG_KEYS_MAX");
 
@@ -676,7 +709,7 @@ void machine_cfg_to_stats(const struct machine_cfg *c, struct stats_table *t) {
 /* A bound of a key's range as a person writes it: 4096, 2^20, 10^9, 1GiB, 0.001. */
 static void bound_text(double v, bool bytes, char *buf, size_t cap) {
   static const char *const UNITS[] = {"KiB", "MiB", "GiB"};
-  const bool whole = v == floor(v) && v < 0x1p63;
+  const bool whole = v == floor(v) && v >= 0 && v < 0x1p63;
   const uint64_t u = whole ? (uint64_t)v : 0;
   if (bytes && u >= 1024) {
     for (int k = 2; k >= 0; k--)

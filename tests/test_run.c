@@ -564,6 +564,20 @@ static void check_summary(const char *out, const char *dir) {
   snprintf(want, sizeof want, "\ncycles: %.0f core cycles\n", testing_json_num(dir, "cycles"));
   EXPECTF(strstr(out, want), "want '%s' in %s", want + 1, out);
   EXPECTF(strstr(out, " rays per simulated second\n"), "rays_per_second's unit: %s", out);
+  /* The energy line: stats.json's three figures; the chip's parts add to its total. */
+  snprintf(want, sizeof want,
+           "\nenergy_mj_per_frame: %.6g mJ a frame (power_w %.6g W, rays_per_joule %.6g)\n",
+           testing_json_num(dir, "energy_mj_per_frame"), testing_json_num(dir, "power_w"),
+           testing_json_num(dir, "rays_per_joule"));
+  EXPECTF(strstr(out, want), "want '%s' in %s", want + 1, out);
+  static const char *const parts[] = {"chip_energy_l1_dynamic_j",    "chip_energy_l2_dynamic_j",
+                                      "chip_energy_cores_dynamic_j", "chip_energy_l1_leakage_j",
+                                      "chip_energy_l2_leakage_j",    "chip_energy_cores_leakage_j"};
+  double sum = 0;
+  for (unsigned i = 0; i < 6; i++) sum += testing_json_num(dir, parts[i]);
+  const double chip = testing_json_num(dir, "chip_energy_j");
+  EXPECTF(chip > 0 && fabs(sum - chip) <= 1e-12 * chip, "parts %.17g, chip_energy_j %.17g", sum,
+          chip);
   /* Every number has a unit: no line ends right after its value. */
   for (const char *l = strstr(out, "\ncycles: "); l && l[1]; l = strchr(l + 1, '\n')) {
     const char *value = strchr(l, ':'), *end = strchr(l + 1, '\n');
