@@ -55,8 +55,13 @@ void spot_check_run(struct spot_check *sc, double fraction, const struct app_wor
   sc->fraction = fraction;
   sc->cheap_cycles = cheap_cycles;
   sc->cheap_dram_bytes = cheap_dram_bytes;
-  sc->cycles = sample_cycles(&t.sample, &sc->cycles_lo, &sc->cycles_hi);
-  sc->dram = sample_dram_bytes(&t.sample, &sc->dram_lo, &sc->dram_hi);
+  struct spot_figure *c = &sc->cycles, *d = &sc->dram;
+  c->v = sample_cycles(&t.sample, &c->lo, &c->hi);
+  d->v = sample_dram_bytes(&t.sample, &d->lo, &d->hi);
+  sc->cycles_err.v =
+      spot_check_error(cheap_cycles, c->v, c->lo, c->hi, &sc->cycles_err.lo, &sc->cycles_err.hi);
+  sc->dram_err.v =
+      spot_check_error(cheap_dram_bytes, d->v, d->lo, d->hi, &sc->dram_err.lo, &sc->dram_err.hi);
   sc->host_s = t.wall_s;
   app_timed_fini(&t);
 }
@@ -73,89 +78,31 @@ double spot_check_error(double cheap, double est, double lo, double hi, double *
 }
 
 void spot_check_summary(const struct spot_check *sc, FILE *f) {
-  double clo, chi, dlo, dhi;
-  const double c =
-      spot_check_error(sc->cheap_cycles, sc->cycles, sc->cycles_lo, sc->cycles_hi, &clo, &chi);
-  const double d =
-      spot_check_error(sc->cheap_dram_bytes, sc->dram, sc->dram_lo, sc->dram_hi, &dlo, &dhi);
+  const struct spot_figure *c = &sc->cycles_err, *d = &sc->dram_err;
   fprintf(f,
           "spot_check: this rung against a banked sample (sample.fraction %g, %.1f host "
           "seconds): cycles %+.1f%% [%+.1f%%, %+.1f%%], DRAM bytes %+.1f%% [%+.1f%%, %+.1f%%] "
           "(95%% intervals)\n",
-          sc->fraction, sc->host_s, 100 * c, 100 * clo, 100 * chi, 100 * d, 100 * dlo, 100 * dhi);
+          sc->fraction, sc->host_s, 100 * c->v, 100 * c->lo, 100 * c->hi, 100 * d->v, 100 * d->lo,
+          100 * d->hi);
 }
 
 /* ---- its numbers (docs/stats.md, component spot) ---- */
 
-#define SC(st) ((const struct spot_check *)(st))
-static double f_fraction(const void *st, const struct stats_env *env) {
-  (void)env;
-  return SC(st)->fraction;
-}
-#define SPOT_FIG(name, field)                                                                      \
-  static double name(const void *st, const struct stats_env *env) {                                \
-    (void)env;                                                                                     \
-    return SC(st)->field;                                                                          \
-  }
-SPOT_FIG(f_cycles, cycles)
-SPOT_FIG(f_cycles_lo, cycles_lo)
-SPOT_FIG(f_cycles_hi, cycles_hi)
-SPOT_FIG(f_dram, dram)
-SPOT_FIG(f_dram_lo, dram_lo)
-SPOT_FIG(f_dram_hi, dram_hi)
-#undef SPOT_FIG
-/* The errors: which = 0 the value, 1 the interval's low end, 2 its high. */
-static double cycles_err(const struct spot_check *s, int which) {
-  double lo, hi;
-  const double v =
-      spot_check_error(s->cheap_cycles, s->cycles, s->cycles_lo, s->cycles_hi, &lo, &hi);
-  return which == 0 ? v : which == 1 ? lo : hi;
-}
-static double dram_err(const struct spot_check *s, int which) {
-  double lo, hi;
-  const double v = spot_check_error(s->cheap_dram_bytes, s->dram, s->dram_lo, s->dram_hi, &lo, &hi);
-  return which == 0 ? v : which == 1 ? lo : hi;
-}
-#define SPOT_ERR(name, fn, which)                                                                  \
-  static double name(const void *st, const struct stats_env *env) {                                \
-    (void)env;                                                                                     \
-    return fn(SC(st), which);                                                                      \
-  }
-SPOT_ERR(f_cycles_err, cycles_err, 0)
-SPOT_ERR(f_cycles_err_lo, cycles_err, 1)
-SPOT_ERR(f_cycles_err_hi, cycles_err, 2)
-SPOT_ERR(f_dram_err, dram_err, 0)
-SPOT_ERR(f_dram_err_lo, dram_err, 1)
-SPOT_ERR(f_dram_err_hi, dram_err, 2)
-#undef SPOT_ERR
-
+/* A figure as three numbers: NAME, NAME_ci95_low, NAME_ci95_high. */
+#define SPOT_FIGURE(f, nm, un, ds)                                                                 \
+  STATS_DOUBLE(struct spot_check, f.v, nm, un, ds),                                                \
+      STATS_DOUBLE(struct spot_check, f.lo, nm "_ci95_low", un, "its 95% interval's low end"),     \
+      STATS_DOUBLE(struct spot_check, f.hi, nm "_ci95_high", un, "its 95% interval's high end")
 static const struct stats_desc spot_desc[] = {
-    STATS_FN_F64(f_fraction, "spot_check_fraction", "fraction",
+    STATS_DOUBLE(struct spot_check, fraction, "spot_check_fraction", "fraction",
                  "the banked sample's sample.fraction (--spot-check)"),
-    STATS_FN_F64(f_cycles, "spot_banked_cycles", "cycles",
-                 "the banked sample's estimate of this run's cycles"),
-    STATS_FN_F64(f_cycles_lo, "spot_banked_cycles_ci95_low", "cycles",
-                 "its 95% interval's low end"),
-    STATS_FN_F64(f_cycles_hi, "spot_banked_cycles_ci95_high", "cycles",
-                 "its 95% interval's high end"),
-    STATS_FN_F64(f_cycles_err, "spot_cycles_error", "fraction",
-                 "this run's cycles / spot_banked_cycles - 1: this rung's error on this point"),
-    STATS_FN_F64(f_cycles_err_lo, "spot_cycles_error_ci95_low", "fraction",
-                 "its 95% interval's low end (from the estimate's)"),
-    STATS_FN_F64(f_cycles_err_hi, "spot_cycles_error_ci95_high", "fraction",
-                 "its 95% interval's high end"),
-    STATS_FN_F64(f_dram, "spot_banked_dram_bytes", "bytes",
-                 "the banked sample's estimate of the DRAM bytes read and written"),
-    STATS_FN_F64(f_dram_lo, "spot_banked_dram_bytes_ci95_low", "bytes",
-                 "its 95% interval's low end"),
-    STATS_FN_F64(f_dram_hi, "spot_banked_dram_bytes_ci95_high", "bytes",
-                 "its 95% interval's high end"),
-    STATS_FN_F64(f_dram_err, "spot_dram_bytes_error", "fraction",
-                 "this run's DRAM bytes / spot_banked_dram_bytes - 1"),
-    STATS_FN_F64(f_dram_err_lo, "spot_dram_bytes_error_ci95_low", "fraction",
-                 "its 95% interval's low end"),
-    STATS_FN_F64(f_dram_err_hi, "spot_dram_bytes_error_ci95_high", "fraction",
-                 "its 95% interval's high end"),
+    SPOT_FIGURE(cycles, "spot_banked_cycles", "cycles", "the banked sample's estimate of cycles"),
+    SPOT_FIGURE(cycles_err, "spot_cycles_error", "fraction", "cycles / spot_banked_cycles - 1"),
+    SPOT_FIGURE(dram, "spot_banked_dram_bytes", "bytes", "its estimate of dram_bytes"),
+    SPOT_FIGURE(dram_err, "spot_dram_bytes_error", "fraction",
+                "dram_bytes / spot_banked_dram_bytes - 1"),
 };
 const struct stats_descs spot_check_stats_descs = {"spot", spot_desc, STATS_COUNT(spot_desc),
                                                    0,      NULL,      0};
+#undef SPOT_FIGURE

@@ -17,15 +17,19 @@ struct app_world;
 struct machine_cfg;
 struct stats_descs;
 
-struct spot_check {
-  double fraction;                     /* the banked sample's sample.fraction */
-  double cheap_cycles;                 /* the cheap run's */
-  double cheap_dram_bytes;             /* the cheap run's DRAM bytes read and written */
-  double cycles, cycles_lo, cycles_hi; /* the banked sample's estimate, 95% interval */
-  double dram, dram_lo, dram_hi;       /* the same for its DRAM bytes */
-  double host_s;                       /* the sample's host time (stdout only) */
+/* A figure and the ends of its 95% interval. */
+struct spot_figure {
+  double v, lo, hi;
 };
 
+struct spot_check {
+  double fraction;                         /* the banked sample's sample.fraction */
+  double cheap_cycles;                     /* the cheap run's */
+  double cheap_dram_bytes;                 /* the cheap run's DRAM bytes read and written */
+  struct spot_figure cycles, dram;         /* the banked sample's estimates */
+  struct spot_figure cycles_err, dram_err; /* the cheap run's errors against them */
+  double host_s;                           /* the sample's host time (stdout only) */
+};
 /* NULL if a run of policy k at width x height on mc can be spot-checked with
  * a banked sample of `fraction`, else why not (may be written into buf). */
 const char *spot_check_problem(double fraction, const struct machine_cfg *mc, enum policy_kind k,

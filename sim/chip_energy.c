@@ -90,18 +90,6 @@ double chip_energy_total_j(const struct chip_energy *e) {
 static double ce_total_j(const void *st) {
   return chip_energy_total_j(&R(st)->chip) + (R(st)->has_dram ? R(st)->dram_j : 0.0);
 }
-#define CE_FIELD(f)                                                                                \
-  static double ce_##f(const void *st, const struct stats_env *env) {                              \
-    (void)env;                                                                                     \
-    return R(st)->chip.f;                                                                          \
-  }
-CE_FIELD(l1_dynamic_j)
-CE_FIELD(l2_dynamic_j)
-CE_FIELD(cores_dynamic_j)
-CE_FIELD(l1_leakage_j)
-CE_FIELD(l2_leakage_j)
-CE_FIELD(cores_leakage_j)
-#undef CE_FIELD
 static double ce_chip_j(const void *st, const struct stats_env *env) {
   (void)env;
   return chip_energy_total_j(&R(st)->chip);
@@ -125,17 +113,16 @@ static double ce_rays_per_joule(const void *st, const struct stats_env *env) {
 }
 #undef R
 
+/* One of the six parts: field chip.f, named chip_energy_f, in joules. */
+#define CE_PART(f, ds) STATS_DOUBLE(struct chip_energy_report, chip.f, "chip_energy_" #f, "J", ds)
 static const struct stats_desc chip_energy_desc[] = {
-    STATS_FN_F64(ce_l1_dynamic_j, "chip_energy_l1_dynamic_j", "J",
-                 "the L1s' accesses: hits read, misses probe and fill, stores write"),
-    STATS_FN_F64(ce_l2_dynamic_j, "chip_energy_l2_dynamic_j", "J",
-                 "the L2's accesses: reads, writes, misses (probe and fill), write-backs"),
-    STATS_FN_F64(ce_cores_dynamic_j, "chip_energy_cores_dynamic_j", "J",
-                 "the cores' issue slots by kind (compute, load, store) and ray switches"),
-    STATS_FN_F64(ce_l1_leakage_j, "chip_energy_l1_leakage_j", "J", "the L1s' leakage over the run"),
-    STATS_FN_F64(ce_l2_leakage_j, "chip_energy_l2_leakage_j", "J", "the L2's leakage over the run"),
-    STATS_FN_F64(ce_cores_leakage_j, "chip_energy_cores_leakage_j", "J",
-                 "the cores' leakage over the run, their L1s apart"),
+    CE_PART(l1_dynamic_j, "the L1s' accesses: hits read, misses probe and fill, stores write"),
+    CE_PART(l2_dynamic_j, "the L2's accesses: reads, writes, misses (probe and fill), write-backs"),
+    CE_PART(cores_dynamic_j,
+            "the cores' issue slots by kind (compute, load, store) and ray switches"),
+    CE_PART(l1_leakage_j, "the L1s' leakage over the run"),
+    CE_PART(l2_leakage_j, "the L2's leakage over the run"),
+    CE_PART(cores_leakage_j, "the cores' leakage over the run, their L1s apart"),
     STATS_FN_F64(ce_chip_j, "chip_energy_j", "J", "the chip's energy: the six above"),
     STATS_FN_F64(ce_energy_j, "energy_j", "J",
                  "chip_energy_j + dram_energy_j where the DRAM level reports it; else the "
@@ -145,5 +132,6 @@ static const struct stats_desc chip_energy_desc[] = {
     STATS_FN_F64(ce_power_w, "power_w", "W", "energy_j / seconds"),
     STATS_FN_F64(ce_rays_per_joule, "rays_per_joule", "per joule", "rays_traced / energy_j"),
 };
+#undef CE_PART
 const struct stats_descs chip_energy_stats_descs = {
     "energy", chip_energy_desc, STATS_COUNT(chip_energy_desc), 0, NULL, 0};

@@ -125,6 +125,12 @@ static void emit_one(struct stats_table *t, const struct stats_desc *d, const vo
     break;
   }
   case STATS_HOW_U64: stats_u64(t, name, d->u64(st, env)); break;
+  case STATS_HOW_DOUBLE: {
+    double v;
+    memcpy(&v, base + d->off, sizeof v);
+    stats_f64(t, name, v);
+    break;
+  }
   case STATS_HOW_F64: stats_f64(t, name, d->f64(st, env)); break;
   case STATS_HOW_HIST_MEAN: stats_f64(t, name, hist_mean((const void *)(base + d->off))); break;
   case STATS_HOW_HIST_Q:

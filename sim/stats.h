@@ -70,6 +70,7 @@ enum stats_how {
   STATS_HOW_FIELD,     /* the uint64_t at off */
   STATS_HOW_U64,       /* u64(st, env) */
   STATS_HOW_F64,       /* f64(st, env) */
+  STATS_HOW_DOUBLE,    /* the double at off */
   STATS_HOW_HIST_MEAN, /* the mean of the struct hist at off */
   STATS_HOW_HIST_Q,    /* its quantile q */
   STATS_HOW_AT         /* a place: the tables registered for it (env->parts) go here */
@@ -142,6 +143,12 @@ struct stats_descs {
 #define STATS_FIELD(T, f, nm, un, ds)                                                              \
   {                                                                                                \
     .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_FIELD, .off = offsetof(T, f),             \
+    .size = STATS_FIELD_SIZE(T, f)                                                                 \
+  }
+/* A double field written as it is. */
+#define STATS_DOUBLE(T, f, nm, un, ds)                                                             \
+  {                                                                                                \
+    .name = nm, .unit = un, .desc = ds, .how = STATS_HOW_DOUBLE, .off = offsetof(T, f),            \
     .size = STATS_FIELD_SIZE(T, f)                                                                 \
   }
 /* A figure derived by fn, about field f. */

@@ -94,10 +94,9 @@ static void test_counts(void) {
 }
 
 static double stat(const struct stats_table *t, const char *name) {
-  for (unsigned i = 0; i < t->n; i++)
-    if (!strcmp(t->e[i].name, name)) return t->e[i].f;
-  EXPECTF(false, "no stat %s", name);
-  return NAN;
+  const double v = testing_stat(t, name);
+  EXPECTF(!isnan(v), "no stat %s", name);
+  return v;
 }
 
 /* The stats: the total with the DRAM's 1 mJ and without it, mJ a frame,

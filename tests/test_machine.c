@@ -44,9 +44,7 @@ static struct machine_params base(void) {
 static double level_stat(const struct machine *m, const char *name) {
   struct stats_table t = {0};
   dram_report(machine_dram(m), &t, machine_get_stats(m)->cycles);
-  double v = NAN;
-  for (unsigned i = 0; i < t.n; i++)
-    if (!strcmp(t.e[i].name, name)) v = t.e[i].kind == STATS_U64 ? (double)t.e[i].u : t.e[i].f;
+  const double v = testing_stat(&t, name);
   stats_fini(&t);
   return v;
 }

@@ -1,4 +1,5 @@
 #include "testing.h"
+#include "sim/stats.h"
 
 #include <dirent.h>
 #include <math.h>
@@ -16,6 +17,7 @@
 #include "renderer/scene/scene_file.h"
 #include "sim/dram_banked.h"
 #include "sim/err.h"
+#include "sim/stats.h"
 
 int testing_failures = 0;
 int testing_checks = 0;
@@ -45,6 +47,13 @@ bool testing_writef(const char *path, const char *fmt, ...) {
   bool ok = fclose(f) == 0;
   EXPECTF(ok, "cannot write %s", path);
   return ok;
+}
+
+double testing_stat(const struct stats_table *t, const char *name) {
+  for (unsigned i = 0; i < t->n; i++)
+    if (!strcmp(t->e[i].name, name))
+      return t->e[i].kind == STATS_U64 ? (double)t->e[i].u : t->e[i].f;
+  return NAN;
 }
 
 bool testing_write(const char *path, const char *text) { return testing_writef(path, "%s", text); }

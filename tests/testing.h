@@ -81,6 +81,10 @@ bool testing_writef(const char *path, const char *fmt, ...) __attribute__((forma
 /* Write text to path as it is (the same checks). */
 bool testing_write(const char *path, const char *text);
 
+struct stats_table;
+/* Number `name` of a stats table (a count as a double); NAN if absent. */
+double testing_stat(const struct stats_table *t, const char *name);
+
 /* The whole of dir/name (caller frees; *len its length if len), or NULL. */
 char *testing_slurp(const char *dir, const char *name, size_t *len);
 /* A number member of dir/stats.json ("cycles"); NAN when absent. */
