@@ -12,6 +12,16 @@
 #include "sim/machine_cfg.h"
 #include "sim/stats.h"
 
+const struct rung_energy_error rung_energy_error_table[] = {
+    {"fixed", "recursive", 3, -0.0143, 0.0468},    {"fixed", "packet", 3, -0.1335, 0.0225},
+    {"fixed", "dynamic", 3, -0.1370, 0.0313},      {"channel", "recursive", 3, -0.0132, 0.0486},
+    {"channel", "packet", 3, -0.1008, 0.0251},     {"channel", "dynamic", 3, -0.0650, 0.0344},
+    {"analytic", "recursive", 3, -0.0262, 0.0419}, {"analytic", "packet", 3, -0.4410, -0.2168},
+    {"analytic", "dynamic", 3, -0.1437, 0.0297},
+};
+const unsigned rung_energy_error_rows =
+    sizeof rung_energy_error_table / sizeof rung_energy_error_table[0];
+
 /* How far x lies outside [lo, hi). */
 static double outside(double x, double lo, double hi) {
   return x < lo ? lo - x : x >= hi ? x - hi : 0;
@@ -46,6 +56,10 @@ void rung_error_match_in(struct rung_error *r, const struct rung_error_row *rows
       r->distance = d;
     }
   }
+  for (unsigned i = 0; i < rung_energy_error_rows; i++)
+    if (!strcmp(rung_energy_error_table[i].rung, rung) &&
+        !strcmp(rung_energy_error_table[i].policy, policy))
+      r->energy = &rung_energy_error_table[i];
   const struct rung_error_row *w = r->row;
   r->warn = !w || !r->inside || fmax(fabs(w->cycles_min), fabs(w->cycles_max)) > RUNG_ERROR_WARN ||
             fmax(fabs(w->dram_bytes_min), fabs(w->dram_bytes_max)) > RUNG_ERROR_WARN;
@@ -109,6 +123,10 @@ static bool has_row(const void *st, const struct stats_env *env) {
   (void)env;
   return ((const struct rung_error *)st)->row != NULL;
 }
+static bool has_energy(const void *st, const struct stats_env *env) {
+  (void)env;
+  return ((const struct rung_error *)st)->energy != NULL;
+}
 static bool is_analytic(const void *st, const struct stats_env *env) {
   (void)env;
   return ((const struct rung_error *)st)->bandwidth_bound >= 0;
@@ -135,6 +153,8 @@ RE_F64(re_cycles_min, r->row->cycles_min)
 RE_F64(re_cycles_max, r->row->cycles_max)
 RE_F64(re_bytes_min, r->row->dram_bytes_min)
 RE_F64(re_bytes_max, r->row->dram_bytes_max)
+RE_F64(re_energy_min, r->energy->min)
+RE_F64(re_energy_max, r->energy->max)
 #undef RE_F64
 static uint64_t re_bound(const void *st, const struct stats_env *env) {
   (void)env;
@@ -181,6 +201,11 @@ static const struct stats_desc rung_desc[] = {
     RE(re_bytes_min, "rung_dram_bytes_error_min", "fraction",
        "the regime's lowest signed error of DRAM bytes read and written", has_row),
     RE(re_bytes_max, "rung_dram_bytes_error_max", "fraction", "its highest", has_row),
+    RE(re_energy_min, "rung_dram_energy_error_min", "fraction",
+       "the rung and policy's lowest signed error of dram_energy_j (its estimate) against "
+       "banked's, on " RUNG_ENERGY_ERROR_PATH "'s three scenes (absent: not measured)",
+       has_energy),
+    RE(re_energy_max, "rung_dram_energy_error_max", "fraction", "its highest", has_energy),
     RE_U(re_warn, "rung_error_warning", "flag",
          "1: outside every measured regime, or an error above 5% in it (and a line on stderr)",
          NULL),

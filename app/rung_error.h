@@ -30,6 +30,20 @@ extern const unsigned rung_error_table_rows;
 /* The CSV's path in the source tree, for messages and tests. */
 #define RUNG_ERROR_TABLE_PATH "results/speed-accuracy/rung-errors.csv"
 
+/* The cheaper rungs' DRAM energy estimate (dram_energy_j, estimated) against
+ * the banked level's counted one, by rung and policy: its lowest and highest
+ * signed relative error over the three scenes of RUNG_ENERGY_ERROR_PATH
+ * (default machine, 96x96; results/dram/energy-estimate.sh), which the table
+ * copies (tests/test_rung_error.c holds it to the CSV). */
+struct rung_energy_error {
+  const char *rung, *policy;
+  unsigned points;
+  double min, max;
+};
+extern const struct rung_energy_error rung_energy_error_table[];
+extern const unsigned rung_energy_error_rows;
+#define RUNG_ENERGY_ERROR_PATH "results/dram/energy-rungs.csv"
+
 /* |error| above this in the matched regime warns. */
 #define RUNG_ERROR_WARN 0.05
 
@@ -43,11 +57,13 @@ struct rung_error {
   bool inside;                      /* within both of row's bands */
   double distance; /* utilization outside row's bands, DRAM's plus the cores' (0 when inside) */
   bool warn;       /* outside every regime, or an error above RUNG_ERROR_WARN in row */
+  const struct rung_energy_error *energy; /* its rung and policy's; NULL: not measured */
 };
 
 /* Place a run in rows[0..n) (rung_error_table in the program): among the rows
  * of its rung, policy and bound, one whose bands hold it, else the nearest by
- * distance (the first on a tie). */
+ * distance (the first on a tie); and its energy error in
+ * rung_energy_error_table by rung and policy. */
 void rung_error_match_in(struct rung_error *r, const struct rung_error_row *rows, unsigned n,
                          const char *rung, const char *policy, int bandwidth_bound,
                          double dram_utilization, double core_utilization);

@@ -71,13 +71,19 @@ uint64_t dram_in_flight(const struct dram *d);
  * reports its own), and DRAM_STATS_AT_LEVEL, the level's own numbers. */
 #define DRAM_STATS_AT_UTILIZATION "dram_utilization"
 #define DRAM_STATS_AT_LEVEL "dram_level"
+/* And DRAM_STATS_AT_ESTIMATE, after the level's: at a cheaper level (fixed,
+ * channel) its DRAM energy estimate (sim/dram_energy_estimate.h), under the
+ * banked level's names, over the struct dram (st and ctx). */
+#define DRAM_STATS_AT_ESTIMATE "dram_energy_estimate"
 struct stats_descs;
 struct stats_part;
 struct stats_table;
 extern const struct stats_descs dram_stats_descs;
-/* The level's own numbers as a part for DRAM_STATS_AT_LEVEL: false when the
- * level has none (fixed). */
-bool dram_level_stats(const struct dram *d, struct stats_part *out);
+extern const struct stats_descs dram_estimate_stats_descs;
+/* The parts for the places above, into out[0..2), how many: the level's own
+ * numbers for DRAM_STATS_AT_LEVEL (none at fixed), then at fixed and channel
+ * the energy estimate for DRAM_STATS_AT_ESTIMATE. */
+unsigned dram_level_stats(const struct dram *d, struct stats_part *out);
 /* The level's own numbers alone into t, for a run of `cycles`. */
 void dram_report(const struct dram *d, struct stats_table *t, uint64_t cycles);
 

@@ -252,6 +252,14 @@ struct dram_banked_energy {
   double active_standby_j, precharge_standby_j; /* background, by rank state */
   double total_j;                               /* the six summed, in that order */
 };
+/* Joules one of each costs, the increments above times tCK: an ACT with its
+ * PRE, a RD burst, a WR burst, a REF, a rank-cycle in active standby and one
+ * in precharge standby (p's clock_mhz set; the cheaper rungs' estimate,
+ * sim/dram_energy_estimate.h, prices its counts with these too). */
+struct dram_banked_costs {
+  double act, read, write, ref, act_stb, pre_stb;
+};
+void dram_banked_costs_of(const struct dram_banked_params *p, struct dram_banked_costs *out);
 /* Rank `rank` of channel `channel`'s energy over the run, or with channel -1
  * every channel's, with rank -1 every rank's (complete after finish). */
 void dram_banked_energy_of(const struct dram_banked *d, int channel, int rank,

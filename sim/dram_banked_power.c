@@ -14,25 +14,19 @@ struct counts {
   uint64_t acts, reads, writes, refs, active_cycles, cycles;
 };
 
-/* Joules a unit of each count costs: DRAMsim3's increments (configuration.cc)
- * times tCK. */
-struct costs {
-  double act, read, write, ref, act_stb, pre_stb;
-};
-
-static struct costs costs_of(const struct dram_banked_params *p) {
+void dram_banked_costs_of(const struct dram_banked_params *p, struct dram_banked_costs *out) {
   /* mA x V x ns is pJ: a DRAM cycle is 1000 / clock_mhz ns. */
   const double devices = (double)(p->bus_bytes * 8 / p->device_width);
   const double j = p->VDD * devices * (1000.0 / p->clock_mhz) * 1e-12;
   const double burst = (double)(p->burst_length / 2);
-  struct costs k;
+  struct dram_banked_costs k;
   k.act = j * (p->IDD0 * p->tRC - (p->IDD3N * p->tRAS + p->IDD2N * p->tRP));
   k.read = j * (p->IDD4R - p->IDD3N) * burst;
   k.write = j * (p->IDD4W - p->IDD3N) * burst;
   k.ref = j * (p->IDD5AB - p->IDD3N) * p->tRFC;
   k.act_stb = j * p->IDD3N;
   k.pre_stb = j * p->IDD2N;
-  return k;
+  *out = k;
 }
 
 static void add_rank(struct counts *n, const struct dram_banked_rank *rk, uint64_t cycles) {
@@ -46,7 +40,8 @@ static void add_rank(struct counts *n, const struct dram_banked_rank *rk, uint64
 
 static void energy(const struct dram_banked_params *p, const struct counts *n,
                    struct dram_banked_energy *out) {
-  const struct costs k = costs_of(p);
+  struct dram_banked_costs k;
+  dram_banked_costs_of(p, &k);
   out->activate_j = (double)n->acts * k.act;
   out->read_j = (double)n->reads * k.read;
   out->write_j = (double)n->writes * k.write;

@@ -162,7 +162,7 @@ void machine_stats_emit(const struct machine *m, struct stats_table *t,
       {"engine", &machine_engine_stats_descs, &m->st, NULL},
   };
   unsigned k = 5;
-  if (dram_level_stats(m->dram, &all[k])) k++;
+  k += dram_level_stats(m->dram, &all[k]);
   CHECK_LE(k + n, STATS_COUNT(all));
   for (unsigned i = 0; i < n; i++) all[k++] = parts[i];
   const struct stats_env env = {.cycles = m->st.cycles,

@@ -3,7 +3,8 @@
  * outside all, another policy or bound), the compiled-in table against the
  * committed CSV it was generated from, and rtsim run at cheaper rungs on a
  * tiny machine: their stats carry the regime the table gives for their own
- * figures, a banked run carries none. */
+ * figures and the energy error measured for their rung and policy (the
+ * compiled-in one against its CSV), a banked run carries none. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -112,6 +113,43 @@ static void test_table_is_csv(void) {
   EXPECT(r.row && r.inside && r.warn && r.row->cycles_min < -0.3);
 }
 
+/* The compiled-in energy errors are RUNG_ENERGY_ERROR_PATH's: each rung and
+ * policy's lowest and highest energy_error, over its rows. */
+static void test_energy_table_is_csv(void) {
+  char *csv = testing_slurp(RTSIM_SOURCE_DIR, RUNG_ENERGY_ERROR_PATH, NULL);
+  EXPECTF(csv != NULL, "%s unreadable", RUNG_ENERGY_ERROR_PATH);
+  if (!csv) return;
+  unsigned seen[16] = {0};
+  double lo[16], hi[16];
+  char *save = NULL;
+  char *line = strtok_r(csv, "\n", &save);
+  EXPECT(line && strstr(line, ",rung,") && strstr(line, ",energy_error"));
+  while ((line = strtok_r(NULL, "\n", &save))) {
+    char *f[12], *fs = NULL;
+    unsigned k = 0;
+    for (char *t = strtok_r(line, ",", &fs); t && k < 12; t = strtok_r(NULL, ",", &fs)) f[k++] = t;
+    EXPECTF(k == 12, "%s: a row of %u fields", RUNG_ENERGY_ERROR_PATH, k);
+    if (k < 12) continue;
+    unsigned i = 0;
+    while (i < rung_energy_error_rows && (strcmp(rung_energy_error_table[i].rung, f[2]) ||
+                                          strcmp(rung_energy_error_table[i].policy, f[1])))
+      i++;
+    EXPECTF(i < rung_energy_error_rows, "%s %s: not in the compiled table", f[2], f[1]);
+    if (i >= rung_energy_error_rows || i >= 16) continue;
+    const double e = strtod(f[11], NULL);
+    lo[i] = seen[i] && lo[i] < e ? lo[i] : e;
+    hi[i] = seen[i] && hi[i] > e ? hi[i] : e;
+    seen[i]++;
+  }
+  free(csv);
+  for (unsigned i = 0; i < rung_energy_error_rows && i < 16; i++) {
+    const struct rung_energy_error *w = &rung_energy_error_table[i];
+    EXPECTF(seen[i] == w->points && lo[i] == w->min && hi[i] == w->max,
+            "%s %s: %u rows, %g to %g in the CSV; the table says %u, %g to %g", w->rung, w->policy,
+            seen[i], seen[i] ? lo[i] : 0, seen[i] ? hi[i] : 0, w->points, w->min, w->max);
+  }
+}
+
 /* rtsim run on tiny.yaml at rung (and more), into dir; the exit code, its
  * stderr and stdout in out. */
 static int run(const char *rung, const char *dir, char *out, unsigned cap) {
@@ -160,6 +198,9 @@ static void test_run(void) {
     rung_error_match_in(&r, rung_error_table, rung_error_table_rows, rungs[i], "recursive", bound,
                         util, core);
     EXPECTF(r.row, "%s recursive: no regime measured", rungs[i]);
+    EXPECTF(r.energy && testing_json_num(dir, "rung_dram_energy_error_min") == r.energy->min &&
+                testing_json_num(dir, "rung_dram_energy_error_max") == r.energy->max,
+            "%s: the energy error measured for its rung and policy", rungs[i]);
     EXPECTF(testing_json_num(dir, "rung_error_warning") == r.warn, "%s: rung_error_warning",
             rungs[i]);
     EXPECTF((strstr(out, "rtsim run: warning: fidelity ") != NULL) == r.warn,
@@ -185,6 +226,7 @@ static void test_run(void) {
 int main(void) {
   test_lookup();
   test_table_is_csv();
+  test_energy_table_is_csv();
   test_run();
   return testing_done("test_rung_error");
 }

@@ -258,9 +258,9 @@ static void test_uncovered(void) {
  * only when present, in place of another's: dram_utilization) and say a unit. */
 static void test_components(void) {
   const struct stats_descs *const all[] = {
-      &machine_stats_descs,           &machine_l1_stats_descs, &machine_engine_stats_descs,
-      &machine_dram_util_stats_descs, &l2_stats_descs,         &dram_stats_descs,
-      &dram_channel_stats_descs,      &dram_banked_stats_descs};
+      &machine_stats_descs,           &machine_l1_stats_descs,  &machine_engine_stats_descs,
+      &machine_dram_util_stats_descs, &l2_stats_descs,          &dram_stats_descs,
+      &dram_channel_stats_descs,      &dram_banked_stats_descs, &dram_estimate_stats_descs};
   const unsigned n = sizeof all / sizeof all[0];
   char buf[256];
   for (unsigned i = 0; i < n; i++) {
