@@ -216,44 +216,6 @@ static double an_dram_bytes_per_cycle(const void *st, const struct stats_env *en
   return stats_ratio((double)(an_n(st)->fetch_bytes + an_n(st)->writeback_bytes),
                      (double)env->cycles);
 }
-/* The DRAM energy estimate every cheaper rung makes (sim/dram_energy_estimate.h),
- * over the estimate's cycles. */
-static double an_dram_cycles(const struct stats_env *env) {
-  const struct machine_params *p = an_p(env);
-  return (double)env->cycles * p->dram_clock_mhz / (p->clock_ghz * 1000);
-}
-static void an_energy(const void *st, const struct stats_env *env, struct dram_banked_energy *out) {
-  const struct machine_params *p = an_p(env);
-  struct dram_banked_params b = p->dram_banked;
-  b.clock_mhz = p->dram_clock_mhz;
-  dram_energy_estimate(&b, an_dram_reads(st, env), an_dram_writes(st, env), an_dram_cycles(env),
-                       out);
-}
-#define AN_ENERGY(f)                                                                               \
-  static double an_energy_##f(const void *st, const struct stats_env *env) {                       \
-    struct dram_banked_energy en;                                                                  \
-    an_energy(st, env, &en);                                                                       \
-    return en.f;                                                                                   \
-  }
-AN_ENERGY(activate_j)
-AN_ENERGY(read_j)
-AN_ENERGY(write_j)
-AN_ENERGY(refresh_j)
-AN_ENERGY(active_standby_j)
-AN_ENERGY(precharge_standby_j)
-AN_ENERGY(total_j)
-#undef AN_ENERGY
-static double an_power_w(const void *st, const struct stats_env *env) {
-  const struct machine_params *p = an_p(env);
-  struct dram_banked_params b = p->dram_banked;
-  b.clock_mhz = p->dram_clock_mhz;
-  return dram_energy_estimate_power_w(&b, an_energy_total_j(st, env), an_dram_cycles(env));
-}
-static uint64_t an_energy_estimated(const void *st, const struct stats_env *env) {
-  (void)st;
-  (void)env;
-  return 1;
-}
 #define AN_EST(f)                                                                                  \
   static double an_est_##f(const void *st, const struct stats_env *env) {                          \
     (void)env;                                                                                     \
@@ -318,24 +280,7 @@ static const struct stats_desc analytic_desc[] = {
     AN_FIELD(counts.writeback_bytes, "dram_write_bytes", "bytes", "bytes written to the DRAM"),
     AN_F64(counts.fetch_bytes, an_dram_bytes_per_cycle, "dram_bytes_per_cycle", "bytes/cycle",
            "DRAM bytes read and written / cycles"),
-    STATS_FN_U64(an_energy_estimated, "dram_energy_estimated", "flag",
-                 "1: the dram_energy_* figures are estimated from dram_reads, dram_writes and "
-                 "cycles, a row-hit rate of 0.5 assumed (fixed and channel's formula)"),
-    STATS_FN_F64(an_energy_activate_j, "dram_energy_activate_j", "J",
-                 "estimate: an activate with its precharge for half the requests"),
-    STATS_FN_F64(an_energy_read_j, "dram_energy_read_j", "J", "estimate: a burst a read"),
-    STATS_FN_F64(an_energy_write_j, "dram_energy_write_j", "J", "estimate: a burst a write"),
-    STATS_FN_F64(an_energy_refresh_j, "dram_energy_refresh_j", "J",
-                 "estimate: a refresh every tREFI / ranks DRAM cycles on each channel"),
-    STATS_FN_F64(an_energy_active_standby_j, "dram_energy_active_standby_j", "J",
-                 "estimate: every rank-cycle in active standby"),
-    STATS_FN_F64(an_energy_precharge_standby_j, "dram_energy_precharge_standby_j", "J",
-                 "estimate: 0"),
-    STATS_FN_F64(
-        an_energy_total_j, "dram_energy_j", "J",
-        "estimate: the six above; measured against banked's, -44% to +4% (packet 22-44% low) "
-        "(results/dram/README.md)"),
-    STATS_FN_F64(an_power_w, "dram_power_w", "W", "estimate: dram_energy_j over cycles"),
+    STATS_AT("dram_energy"),
     AN_F64(est.slots_per_blocking, an_est_slots_per_blocking, "analytic_slots_per_blocking_load",
            "cycles", "c: issue slots per blocking load (0 when no load blocks)"),
     AN_F64(est.blocking_miss_rate, an_est_blocking_miss_rate, "analytic_blocking_miss_rate",
@@ -385,11 +330,25 @@ const struct stats_descs run_output_json_stats_descs = {"run", json_desc, STATS_
 /* Every measured scalar, units in the names. */
 void run_output_measured(const struct run_output_report *r, struct stats_table *t) {
   if (r->analytic) {
-    const struct stats_env env = {.cycles = r->analytic->est.cycles,
-                                  .ctx = r,
-                                  .class_names = trace_class_names,
-                                  .classes = TRACE_CLASS_COUNT};
+    struct stats_env env = {.cycles = r->analytic->est.cycles,
+                            .ctx = r,
+                            .class_names = trace_class_names,
+                            .classes = TRACE_CLASS_COUNT};
+    /* The DRAM energy estimate every cheaper rung makes, over the estimate's
+     * cycles (sim/dram_energy_estimate.h). */
+    const struct machine_params *p = &r->cfg->p;
+    struct dram_energy_estimate_in in = {.p = p->dram_banked,
+                                         .reads = r->analytic->counts.fetch_bytes / 64,
+                                         .writes = r->analytic->counts.writeback_bytes / 64,
+                                         .dram_per = p->dram_clock_mhz,
+                                         .core_per = p->clock_ghz * 1000};
+    in.p.clock_mhz = p->dram_clock_mhz;
+    const struct stats_part part = {"dram_energy", &dram_energy_estimate_stats_descs, &in, NULL};
+    env.parts = &part;
+    env.nparts = 1;
     stats_emit(t, &run_output_analytic_stats_descs, r->analytic, &env);
+    env.parts = NULL;
+    env.nparts = 0;
     if (r->rung) stats_emit(t, &rung_error_stats_descs, r->rung, &env);
     if (r->spot) stats_emit(t, &spot_check_stats_descs, r->spot, &env);
     return;
@@ -630,7 +589,7 @@ static const struct stats_descs *const STATS_TABLES[] = {&machine_stats_descs,
                                                          &machine_dram_util_stats_descs,
                                                          &dram_channel_stats_descs,
                                                          &dram_banked_stats_descs,
-                                                         &dram_estimate_stats_descs,
+                                                         &dram_energy_estimate_stats_descs,
                                                          &machine_engine_stats_descs,
                                                          &chip_energy_stats_descs,
                                                          &run_output_json_stats_descs,

@@ -32,6 +32,7 @@ struct dram {
   const struct dram_level_ops *ops;
   void *level;
   struct dram_clock clock;
+  struct dram_energy_estimate_in est; /* filled by dram_finish */
   uint64_t core_khz;
   struct ring fl;    /* requests taken, by sequence; head: the oldest not yet traced */
   uint64_t inflight; /* taken, not yet served */
@@ -165,6 +166,13 @@ void dram_finish(struct dram *d) {
   CHECK_EQ(d->inflight, 0);
   CHECK_EQ(ring_len(&d->fl), 0);
   d->ops->finish(d->level);
+  /* What a cheaper level's energy estimate is made of (dram_level_stats). */
+  d->est.p = d->p.banked;
+  d->est.p.clock_mhz = d->p.clock_mhz;
+  d->est.reads = d->st.reads;
+  d->est.writes = d->st.writes;
+  d->est.dram_per = (double)d->clock.den;
+  d->est.core_per = (double)d->clock.num;
 }
 
 const struct dram_stats *dram_get_stats(const struct dram *d) { return &d->st; }
@@ -183,7 +191,8 @@ unsigned dram_level_stats(const struct dram *d, struct stats_part *out) {
   if (out[n].g) n++;
   /* The banked level counts its own energy; the cheaper ones estimate it. */
   if (d->p.model != DRAM_MODEL_BANKED)
-    out[n++] = (struct stats_part){DRAM_STATS_AT_ESTIMATE, &dram_estimate_stats_descs, d, d};
+    out[n++] = (struct stats_part){DRAM_STATS_AT_ESTIMATE, &dram_energy_estimate_stats_descs,
+                                   &d->est, NULL};
   return n;
 }
 
@@ -219,6 +228,17 @@ static uint64_t dram_bytes(const void *st, const struct stats_env *env) {
 static double dram_bytes_per_cycle(const void *st, const struct stats_env *env) {
   return stats_ratio((double)dram_bytes(st, env), (double)env->cycles);
 }
+/* A latency histogram's mean, median, 95th and 99th percentiles and most. */
+#define DRAM_LATENCY(rw, ds)                                                                       \
+  STATS_HIST_MEAN(struct dram_stats, rw##_latency, "dram_" #rw "_latency_mean", "cycles", ds),     \
+      STATS_HIST_Q(struct dram_stats, rw##_latency, 0.50, "dram_" #rw "_latency_p50", "cycles",    \
+                   "the same, median"),                                                            \
+      STATS_HIST_Q(struct dram_stats, rw##_latency, 0.95, "dram_" #rw "_latency_p95", "cycles",    \
+                   "the same, 95th percentile"),                                                   \
+      STATS_HIST_Q(struct dram_stats, rw##_latency, 0.99, "dram_" #rw "_latency_p99", "cycles",    \
+                   "the same, 99th percentile"),                                                   \
+      STATS_FIELD(struct dram_stats, rw##_latency.max, "dram_" #rw "_latency_max", "cycles",       \
+                  "the same, most")
 static const struct stats_desc dram_desc[] = {
     STATS_FIELD(struct dram_stats, reads, "dram_reads", "count", "64-byte reads served"),
     STATS_FIELD(struct dram_stats, writes, "dram_writes", "count", "64-byte writes served"),
@@ -229,108 +249,11 @@ static const struct stats_desc dram_desc[] = {
     STATS_F64(struct dram_stats, write_bytes, dram_bytes_per_cycle, "dram_bytes_per_cycle",
               "bytes/cycle", "bytes read and written per core cycle of the run"),
     STATS_AT(DRAM_STATS_AT_UTILIZATION),
-    STATS_HIST_MEAN(struct dram_stats, read_latency, "dram_read_latency_mean", "cycles",
-                    "reads, taken to data delivered: mean"),
-    STATS_HIST_Q(struct dram_stats, read_latency, 0.50, "dram_read_latency_p50", "cycles",
-                 "the same, median"),
-    STATS_HIST_Q(struct dram_stats, read_latency, 0.95, "dram_read_latency_p95", "cycles",
-                 "the same, 95th percentile"),
-    STATS_HIST_Q(struct dram_stats, read_latency, 0.99, "dram_read_latency_p99", "cycles",
-                 "the same, 99th percentile"),
-    STATS_FIELD(struct dram_stats, read_latency.max, "dram_read_latency_max", "cycles",
-                "the same, most"),
-    STATS_HIST_MEAN(struct dram_stats, write_latency, "dram_write_latency_mean", "cycles",
-                    "writes, taken to written: mean"),
-    STATS_HIST_Q(struct dram_stats, write_latency, 0.50, "dram_write_latency_p50", "cycles",
-                 "the same, median"),
-    STATS_HIST_Q(struct dram_stats, write_latency, 0.95, "dram_write_latency_p95", "cycles",
-                 "the same, 95th percentile"),
-    STATS_HIST_Q(struct dram_stats, write_latency, 0.99, "dram_write_latency_p99", "cycles",
-                 "the same, 99th percentile"),
-    STATS_FIELD(struct dram_stats, write_latency.max, "dram_write_latency_max", "cycles",
-                "the same, most"),
+    DRAM_LATENCY(read, "reads, taken to data delivered: mean"),
+    DRAM_LATENCY(write, "writes, taken to written: mean"),
     STATS_AT(DRAM_STATS_AT_LEVEL),
     STATS_AT(DRAM_STATS_AT_ESTIMATE),
 };
+#undef DRAM_LATENCY
 const struct stats_descs dram_stats_descs = {
     "dram", dram_desc, STATS_COUNT(dram_desc), sizeof(struct dram_stats), NULL, 0};
-
-/* ---- a cheaper level's DRAM energy estimate (sim/dram_energy_estimate.h) ----
- * st and env->ctx: the struct dram; env->cycles: the run's core cycles. Named
- * as the banked level's figures are, so rungs compare by the same columns;
- * never written at banked (it reports its own, counted). */
-
-static double est_dram_cycles(const struct dram *d, const struct stats_env *env) {
-  return (double)env->cycles * (double)d->clock.den / (double)d->clock.num;
-}
-static void est_of(const void *st, const struct stats_env *env, struct dram_banked_energy *out) {
-  const struct dram *d = st;
-  struct dram_banked_params b = d->p.banked;
-  b.clock_mhz = d->p.clock_mhz;
-  dram_energy_estimate(&b, d->st.reads, d->st.writes, est_dram_cycles(d, env), out);
-}
-#define EST_FN(f)                                                                                  \
-  static double est_##f(const void *st, const struct stats_env *env) {                             \
-    struct dram_banked_energy en;                                                                  \
-    est_of(st, env, &en);                                                                          \
-    return en.f;                                                                                   \
-  }
-EST_FN(activate_j)
-EST_FN(read_j)
-EST_FN(write_j)
-EST_FN(refresh_j)
-EST_FN(active_standby_j)
-EST_FN(precharge_standby_j)
-EST_FN(total_j)
-#undef EST_FN
-static double est_power_w(const void *st, const struct stats_env *env) {
-  const struct dram *d = st;
-  struct dram_banked_params b = d->p.banked;
-  b.clock_mhz = d->p.clock_mhz;
-  return dram_energy_estimate_power_w(&b, est_total_j(st, env), est_dram_cycles(d, env));
-}
-static uint64_t est_flag(const void *st, const struct stats_env *env) {
-  (void)st;
-  (void)env;
-  return 1;
-}
-/* Written only where the level is not banked (the banked level's table holds
- * the same names, counted). */
-static bool est_present(const void *st, const struct stats_env *env) {
-  (void)env;
-  return ((const struct dram *)st)->p.model != DRAM_MODEL_BANKED;
-}
-#define EST(fn, nm, ds)                                                                            \
-  { .name = nm, .unit = "J", .desc = ds, .how = STATS_HOW_F64, .f64 = fn, .present = est_present }
-static const struct stats_desc estimate_desc[] = {
-    {.name = "dram_energy_estimated",
-     .unit = "flag",
-     .desc = "1: the dram_energy_* figures are a cheaper level's estimate from its reads, writes "
-             "and time, a row-hit rate of 0.5 assumed (absent at banked: counted)",
-     .how = STATS_HOW_U64,
-     .u64 = est_flag,
-     .present = est_present},
-    EST(est_activate_j, "dram_energy_activate_j",
-        "estimate: an activate with its precharge for half the requests (row-hit rate 0.5 "
-        "assumed), priced as banked's"),
-    EST(est_read_j, "dram_energy_read_j", "estimate: a read burst a 64-byte read"),
-    EST(est_write_j, "dram_energy_write_j", "estimate: a write burst a 64-byte write"),
-    EST(est_refresh_j, "dram_energy_refresh_j",
-        "estimate: a refresh every tREFI / ranks DRAM cycles of the run on each channel"),
-    EST(est_active_standby_j, "dram_energy_active_standby_j",
-        "estimate: every rank-cycle of the run in active standby"),
-    EST(est_precharge_standby_j, "dram_energy_precharge_standby_j",
-        "estimate: 0 (no rank-cycle assumed all banks precharged)"),
-    EST(est_total_j, "dram_energy_j",
-        "estimate: the six above; measured against banked's, fixed -14% to +5%, channel -10% to "
-        "+5% (results/dram/README.md)"),
-    {.name = "dram_power_w",
-     .unit = "W",
-     .desc = "estimate: dram_energy_j over the run's time",
-     .how = STATS_HOW_F64,
-     .f64 = est_power_w,
-     .present = est_present},
-};
-#undef EST
-const struct stats_descs dram_estimate_stats_descs = {
-    "dram estimate", estimate_desc, STATS_COUNT(estimate_desc), 0, NULL, 0};

@@ -73,13 +73,13 @@ uint64_t dram_in_flight(const struct dram *d);
 #define DRAM_STATS_AT_LEVEL "dram_level"
 /* And DRAM_STATS_AT_ESTIMATE, after the level's: at a cheaper level (fixed,
  * channel) its DRAM energy estimate (sim/dram_energy_estimate.h), under the
- * banked level's names, over the struct dram (st and ctx). */
+ * banked level's names (a struct dram_energy_estimate_in the DRAM fills at
+ * dram_finish). */
 #define DRAM_STATS_AT_ESTIMATE "dram_energy_estimate"
 struct stats_descs;
 struct stats_part;
 struct stats_table;
 extern const struct stats_descs dram_stats_descs;
-extern const struct stats_descs dram_estimate_stats_descs;
 /* The parts for the places above, into out[0..2), how many: the level's own
  * numbers for DRAM_STATS_AT_LEVEL (none at fixed), then at fixed and channel
  * the energy estimate for DRAM_STATS_AT_ESTIMATE. */

@@ -32,4 +32,18 @@ void dram_energy_estimate(const struct dram_banked_params *p, uint64_t reads, ui
 double dram_energy_estimate_power_w(const struct dram_banked_params *p, double joules,
                                     double dram_cycles);
 
+/* What a rung's estimate is made of, for its stats: the DRAM (its clock_mhz
+ * set), the requests, and the DRAM cycles of a run of c core cycles,
+ * c x dram_per / core_per. */
+struct dram_energy_estimate_in {
+  struct dram_banked_params p;
+  uint64_t reads, writes;
+  double dram_per, core_per;
+};
+/* The estimate's numbers, named as the banked level's (st: a struct
+ * dram_energy_estimate_in; env->cycles: the run's core cycles), with the flag
+ * dram_energy_estimated; every cheaper rung registers this one table. */
+struct stats_descs;
+extern const struct stats_descs dram_energy_estimate_stats_descs;
+
 #endif

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "sim/dram.h"
+#include "sim/dram_energy_estimate.h"
 #include "sim/l2.h"
 #include "sim/machine.h"
 #include "sim/stats.h"
@@ -260,7 +261,7 @@ static void test_components(void) {
   const struct stats_descs *const all[] = {
       &machine_stats_descs,           &machine_l1_stats_descs,  &machine_engine_stats_descs,
       &machine_dram_util_stats_descs, &l2_stats_descs,          &dram_stats_descs,
-      &dram_channel_stats_descs,      &dram_banked_stats_descs, &dram_estimate_stats_descs};
+      &dram_channel_stats_descs,      &dram_banked_stats_descs, &dram_energy_estimate_stats_descs};
   const unsigned n = sizeof all / sizeof all[0];
   char buf[256];
   for (unsigned i = 0; i < n; i++) {
