@@ -205,14 +205,7 @@ static void test_channel(void) {
 static void wrapper_case(enum dram_model model) {
   static struct req r[NREQ];
   make_requests(r, NREQ, 77 + model, 6);
-  struct dram_params p;
-  memset(&p, 0, sizeof p);
-  p.model = model;
-  p.latency_cycles = 40;
-  p.bytes_per_cycle = 8.0;
-  p.queue_depth = 4;
-  p.clock_mhz = 1200;
-  p.banked = testing_ddr4_params();
+  struct dram_params p = testing_dram_params(model, 4);
   EXPECT(dram_params_problem(&p) == NULL);
   struct client c = {.eng = engine_create(), .r = r, .n = NREQ};
   struct dram_client dc = {&c, on_done, on_space, NULL};

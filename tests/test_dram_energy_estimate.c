@@ -84,14 +84,7 @@ static void ev_send(void *ctx, uint64_t k) {
  * the wrapper, a 1.4 GHz core, the DRAM at 1200 MHz: a run of 7000 core
  * cycles is 6000 DRAM cycles. */
 static void wrapper_case(enum dram_model model) {
-  struct dram_params p;
-  memset(&p, 0, sizeof p);
-  p.model = model;
-  p.latency_cycles = 40;
-  p.bytes_per_cycle = 8.0;
-  p.queue_depth = 8;
-  p.clock_mhz = 1200;
-  p.banked = testing_ddr4_params();
+  struct dram_params p = testing_dram_params(model, 8);
   struct engine *e = engine_create();
   unsigned served = 0;
   const struct dram_client dc = {&served, on_done, on_space, NULL};

@@ -1,5 +1,4 @@
 #include "testing.h"
-#include "sim/stats.h"
 
 #include <dirent.h>
 #include <math.h>
@@ -15,6 +14,7 @@
 #include "renderer/ray.h"
 #include "renderer/scene.h"
 #include "renderer/scene/scene_file.h"
+#include "sim/dram.h"
 #include "sim/dram_banked.h"
 #include "sim/err.h"
 #include "sim/stats.h"
@@ -198,6 +198,18 @@ bool testing_same_rgb(const char *a, const char *b) {
   image_fini(&x);
   image_fini(&y);
   return same;
+}
+
+struct dram_params testing_dram_params(unsigned model, uint32_t depth) {
+  struct dram_params p;
+  memset(&p, 0, sizeof p);
+  p.model = (enum dram_model)model;
+  p.latency_cycles = 40;
+  p.bytes_per_cycle = 8.0;
+  p.queue_depth = depth;
+  p.clock_mhz = 1200;
+  p.banked = testing_ddr4_params();
+  return p;
 }
 
 struct dram_banked_params testing_ddr4_params(void) {

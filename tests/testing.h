@@ -95,5 +95,8 @@ bool testing_same_rgb(const char *a, const char *b);
 /* A DDR4-2400 x8 part's banked parameters (1200 MHz, 1 channel, 1 rank,
  * 4 x 4 banks, open page, queues of 32), refresh off: the DRAM tests' part. */
 struct dram_banked_params testing_ddr4_params(void);
+/* A DRAM of level `model` (enum dram_model): latency 40, 8 bytes a cycle, a queue of `depth`,
+ * 1200 MHz, the banked part above. */
+struct dram_params testing_dram_params(unsigned model, uint32_t depth);
 
 #endif
