@@ -12,7 +12,7 @@
  * its detailed items go through the warming port (caches updated, no time);
  * with sample.image whole, every other item through a port that only counts
  * issue slots (every item traced: the image, the rays and the issue slots
- * exact, the time estimated); by default (sample.image sampled) every other
+ * exact, the time estimated; the default); with sample.image sampled every other
  * item is skipped, not traced at all (its pixels black), and the rays and
  * issue slots are estimated too. A unit's measurement is the difference of two
  * machine probes: at the claim of its first measured item and at the claim of
