@@ -36,68 +36,10 @@ static int replay(const char *args, const char *csv, char *msg, unsigned cap) {
   return testing_run(cmd, msg, cap);
 }
 
-/* A two-line CSV (header, one row) as names and values. */
-#define CSV_COLS 256
-struct csv {
-  char name[CSV_COLS][128];
-  char value[CSV_COLS][128];
-  int n;
-};
-
-/* Split one line into at most CSV_COLS fields (RFC 4180 quotes undone). */
-static int csv_split(const char *line, char (*out)[128], size_t cap_each, int max) {
-  int n = 0;
-  const char *p = line;
-  while (n < max) {
-    size_t k = 0;
-    bool quoted = *p == '"';
-    if (quoted) p++;
-    while (*p && (quoted ? !(p[0] == '"' && p[1] != '"') : (*p != ',' && *p != '\n'))) {
-      if (quoted && p[0] == '"') p++; /* a doubled quote */
-      if (k + 1 < cap_each) out[n][k++] = *p;
-      p++;
-    }
-    if (quoted && *p == '"') p++;
-    out[n][k] = '\0';
-    n++;
-    if (*p != ',') break;
-    p++;
-  }
-  return n;
-}
-
-static bool csv_load(const char *path, struct csv *c) {
-  static char vals[CSV_COLS][128];
-  char line[65536];
-  memset(c, 0, sizeof *c);
-  FILE *f = fopen(path, "r");
-  if (!f) return false;
-  bool ok = fgets(line, sizeof line, f) != NULL;
-  if (ok) {
-    int n = csv_split(line, vals, sizeof vals[0], CSV_COLS);
-    for (int i = 0; i < n; i++) memcpy(c->name[i], vals[i], sizeof vals[i]);
-    c->n = n;
-    ok = fgets(line, sizeof line, f) != NULL;
-  }
-  if (ok) ok = csv_split(line, c->value, sizeof c->value[0], CSV_COLS) == c->n;
-  fclose(f);
-  return ok;
-}
-
-static const char *csv_get(const struct csv *c, const char *name) {
-  for (int i = 0; i < c->n; i++)
-    if (!strcmp(c->name[i], name)) return c->value[i];
-  EXPECTF(false, "no column %s", name);
-  return "";
-}
-
-static double csv_num(const struct csv *c, const char *name) {
-  return strtod(csv_get(c, name), NULL);
-}
-
 /* Expect column `name` of c to read `want` exactly. */
 #define EXPECT_COL(c, name, want)                                                                  \
-  EXPECTF(!strcmp(csv_get(c, name), want), "%s: got %s, want %s", name, csv_get(c, name), want)
+  EXPECTF(!strcmp(testing_csv_get(c, name), want), "%s: got %s, want %s", name,                    \
+          testing_csv_get(c, name), want)
 
 /* A per-request file: index arrival taken done. */
 struct per {
@@ -149,8 +91,8 @@ static void test_fixed(void) {
                       "--set dram.latency=100 --per-request " TMP "fixed.per",
                   csv, msg, sizeof msg);
   EXPECTF(rc == 0, "exit %d: %s", rc, msg);
-  static struct csv c;
-  EXPECT(csv_load(csv, &c));
+  static struct testing_csv c;
+  EXPECT(testing_csv_load(csv, &c));
   EXPECT_COL(&c, "trace_format", "rtsim");
   EXPECT_COL(&c, "fidelity", "fixed");
   EXPECT_COL(&c, "requests", "5");
@@ -167,8 +109,8 @@ static void test_fixed(void) {
   EXPECT_COL(&c, "first_arrival_cycle", "5");
   EXPECT_COL(&c, "last_done_cycle", "1100");
   EXPECT_COL(&c, "cycles", "1095");
-  EXPECTF(csv_num(&c, "bytes_per_cycle") == 5 * 64 / 1095.0, "bytes_per_cycle %s",
-          csv_get(&c, "bytes_per_cycle"));
+  EXPECTF(testing_csv_num(&c, "bytes_per_cycle") == 5 * 64 / 1095.0, "bytes_per_cycle %s",
+          testing_csv_get(&c, "bytes_per_cycle"));
   /* tiny.yaml: 1 GHz core, 1200 MHz DRAM: 100 core cycles are 120 DRAM cycles. */
   EXPECT_COL(&c, "read_latency_mean_dram_cycles", "120");
   EXPECT_COL(&c, "read_latency_p99_dram_cycles", "120");
@@ -213,8 +155,8 @@ static void test_channel(void) {
             " %" PRIu64,
             i, p[i].arrival, p[i].taken, p[i].done, want[i].arrival, want[i].taken, want[i].done);
   free(p);
-  static struct csv c;
-  EXPECT(csv_load(csv, &c));
+  static struct testing_csv c;
+  EXPECT(testing_csv_load(csv, &c));
   /* Reads from arrival: 51, 52, 53, 54; from taken: 51, 52, 53, 53. */
   EXPECT_COL(&c, "read_latency_mean", "52.5");
   EXPECT_COL(&c, "read_latency_max", "54");
@@ -250,8 +192,8 @@ static void test_banked(void) {
     EXPECT(p[1].arrival == 1000 && p[1].taken == 1000 && p[1].done == 1023);
   }
   free(p);
-  static struct csv c;
-  EXPECT(csv_load(csv, &c));
+  static struct testing_csv c;
+  EXPECT(testing_csv_load(csv, &c));
   EXPECT_COL(&c, "trace_format", "dramsim3");
   EXPECT_COL(&c, "fidelity", "banked");
   EXPECT_COL(&c, "read_latency_max", "40");
@@ -268,13 +210,13 @@ static void test_banked(void) {
    * cycle 1024 (the last answer's, 1023, handled): rank 0 active from its ACT
    * at 2, 1022 x 8 x 43 = 351568 pJ; precharged rank 0's first 2 cycles and
    * rank 1's 1024, 1026 x 8 x 34 = 279072 pJ; no refresh falls due (4680). */
-  const double part[][2] = {{csv_num(&c, "dram_energy_activate_j"), 3464e-12},
-                            {csv_num(&c, "dram_energy_read_j"), 5888e-12},
-                            {csv_num(&c, "dram_energy_write_j"), 0},
-                            {csv_num(&c, "dram_energy_refresh_j"), 0},
-                            {csv_num(&c, "dram_energy_active_standby_j"), 351568e-12},
-                            {csv_num(&c, "dram_energy_precharge_standby_j"), 279072e-12},
-                            {csv_num(&c, "dram_energy_j"), 639992e-12}};
+  const double part[][2] = {{testing_csv_num(&c, "dram_energy_activate_j"), 3464e-12},
+                            {testing_csv_num(&c, "dram_energy_read_j"), 5888e-12},
+                            {testing_csv_num(&c, "dram_energy_write_j"), 0},
+                            {testing_csv_num(&c, "dram_energy_refresh_j"), 0},
+                            {testing_csv_num(&c, "dram_energy_active_standby_j"), 351568e-12},
+                            {testing_csv_num(&c, "dram_energy_precharge_standby_j"), 279072e-12},
+                            {testing_csv_num(&c, "dram_energy_j"), 639992e-12}};
   for (unsigned i = 0; i < sizeof part / sizeof part[0]; i++)
     EXPECTF(fabs(part[i][0] - part[i][1]) <= 1e-12 * part[i][1],
             "energy part %u: %.15g J, want %.15g", i, part[i][0], part[i][1]);
@@ -338,23 +280,23 @@ static void test_round_trip(void) {
   EXPECTF(bad == 0, "%zu of %zu requests differ", bad, i);
   EXPECTF(i == n && n > 10000, "%zu requests in the trace, %zu replayed", i, n);
 
-  static struct csv c, run;
-  EXPECT(csv_load(csv, &c));
+  static struct testing_csv c, run;
+  EXPECT(testing_csv_load(csv, &c));
   char want[64];
   snprintf(want, sizeof want, "%zu", n);
   EXPECT_COL(&c, "requests", want);
   /* The run's figures: from the trace, and from its stats.csv. */
-  EXPECTF(csv_num(&c, "read_latency_taken_mean") == (double)sum / (double)reads,
-          "taken mean %s, run's %.17g", csv_get(&c, "read_latency_taken_mean"),
+  EXPECTF(testing_csv_num(&c, "read_latency_taken_mean") == (double)sum / (double)reads,
+          "taken mean %s, run's %.17g", testing_csv_get(&c, "read_latency_taken_mean"),
           (double)sum / (double)reads);
   snprintf(want, sizeof want, "%" PRIu64, max);
   EXPECT_COL(&c, "read_latency_taken_max", want);
   EXPECT_COL(&c, "refused_wait_mean", "0");
-  EXPECT(csv_load(TMP "run/stats.csv", &run));
-  EXPECT_COL(&c, "read_latency_taken_mean", csv_get(&run, "dram_read_latency_mean"));
-  EXPECT_COL(&c, "read_latency_taken_max", csv_get(&run, "dram_read_latency_max"));
-  EXPECT_COL(&c, "reads", csv_get(&run, "dram_reads"));
-  EXPECT_COL(&c, "writes", csv_get(&run, "dram_writes"));
+  EXPECT(testing_csv_load(TMP "run/stats.csv", &run));
+  EXPECT_COL(&c, "read_latency_taken_mean", testing_csv_get(&run, "dram_read_latency_mean"));
+  EXPECT_COL(&c, "read_latency_taken_max", testing_csv_get(&run, "dram_read_latency_max"));
+  EXPECT_COL(&c, "reads", testing_csv_get(&run, "dram_reads"));
+  EXPECT_COL(&c, "writes", testing_csv_get(&run, "dram_writes"));
 
   /* Deterministic: the same inputs give the same bytes. */
   rc = replay(SRC "configs/tiny.yaml " TMP "run.trace --set fidelity=banked --per-request " TMP
@@ -393,7 +335,7 @@ static void test_formats(void) {
   static const char *const name[3] = {"rtsim", "dramsim3", "ramulator"};
   static const char *const trace[3] = {DT "mixed.trace", TMP "mixed_dramsim3.trace",
                                        TMP "mixed_ramulator.trace"};
-  static struct csv c[3];
+  static struct testing_csv c[3];
   char *per[3];
   for (int k = 0; k < 3; k++) {
     char args[2048], csv[1024], perf[1024];
@@ -404,14 +346,14 @@ static void test_formats(void) {
              perf);
     rc = replay(args, csv, msg, sizeof msg);
     EXPECTF(rc == 0, "%s: exit %d: %s", name[k], rc, msg);
-    EXPECT(csv_load(csv, &c[k]));
+    EXPECT(testing_csv_load(csv, &c[k]));
     EXPECT_COL(&c[k], "trace_format", name[k]);
     per[k] = slurp(perf);
   }
   EXPECT_COL(&c[0], "requests", "256");
   /* The DRAM's queues fill: requests wait to be taken. */
-  EXPECTF(csv_num(&c[0], "refused_wait_mean") > 100, "refused_wait_mean %s",
-          csv_get(&c[0], "refused_wait_mean"));
+  EXPECTF(testing_csv_num(&c[0], "refused_wait_mean") > 100, "refused_wait_mean %s",
+          testing_csv_get(&c[0], "refused_wait_mean"));
   for (int k = 1; k < 3; k++) {
     EXPECT(c[k].n == c[0].n);
     for (int i = 0; i < c[0].n && i < c[k].n; i++) {

@@ -239,3 +239,56 @@ struct dram_banked_params testing_ddr4_params(void) {
   p.IDD5AB = 250;
   return p;
 }
+
+/* ---- two-line CSV files (a header and one row: stats.csv, dram-replay) ---- */
+
+/* Split one line into at most TESTING_CSV_COLS fields (RFC 4180 quotes undone). */
+static int csv_split(const char *line, char (*out)[128], size_t cap_each, int max) {
+  int n = 0;
+  const char *p = line;
+  while (n < max) {
+    size_t k = 0;
+    bool quoted = *p == '"';
+    if (quoted) p++;
+    while (*p && (quoted ? !(p[0] == '"' && p[1] != '"') : (*p != ',' && *p != '\n'))) {
+      if (quoted && p[0] == '"') p++; /* a doubled quote */
+      if (k + 1 < cap_each) out[n][k++] = *p;
+      p++;
+    }
+    if (quoted && *p == '"') p++;
+    out[n][k] = '\0';
+    n++;
+    if (*p != ',') break;
+    p++;
+  }
+  return n;
+}
+
+bool testing_csv_load(const char *path, struct testing_csv *c) {
+  static char vals[TESTING_CSV_COLS][128];
+  char line[65536];
+  memset(c, 0, sizeof *c);
+  FILE *f = fopen(path, "r");
+  if (!f) return false;
+  bool ok = fgets(line, sizeof line, f) != NULL;
+  if (ok) {
+    int n = csv_split(line, vals, sizeof vals[0], TESTING_CSV_COLS);
+    for (int i = 0; i < n; i++) memcpy(c->name[i], vals[i], sizeof vals[i]);
+    c->n = n;
+    ok = fgets(line, sizeof line, f) != NULL;
+  }
+  if (ok) ok = csv_split(line, c->value, sizeof c->value[0], TESTING_CSV_COLS) == c->n;
+  fclose(f);
+  return ok;
+}
+
+const char *testing_csv_get(const struct testing_csv *c, const char *name) {
+  for (int i = 0; i < c->n; i++)
+    if (!strcmp(c->name[i], name)) return c->value[i];
+  EXPECTF(false, "no column %s", name);
+  return "";
+}
+
+double testing_csv_num(const struct testing_csv *c, const char *name) {
+  return strtod(testing_csv_get(c, name), NULL);
+}

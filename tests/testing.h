@@ -89,6 +89,18 @@ double testing_stat(const struct stats_table *t, const char *name);
 char *testing_slurp(const char *dir, const char *name, size_t *len);
 /* A number member of dir/stats.json ("cycles"); NAN when absent. */
 double testing_json_num(const char *dir, const char *name);
+/* A two-line CSV file (a header and one row: stats.csv, rtsim dram-replay's
+ * output) as names and values, RFC 4180 quotes undone. */
+#define TESTING_CSV_COLS 512
+struct testing_csv {
+  char name[TESTING_CSV_COLS][128];
+  char value[TESTING_CSV_COLS][128];
+  int n;
+};
+bool testing_csv_load(const char *path, struct testing_csv *c);
+/* Column `name`'s value; a failed expectation (and "") when there is none. */
+const char *testing_csv_get(const struct testing_csv *c, const char *name);
+double testing_csv_num(const struct testing_csv *c, const char *name);
 /* The RGB planes of two EXR files are equal, bit for bit. */
 bool testing_same_rgb(const char *a, const char *b);
 
