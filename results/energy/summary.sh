@@ -69,7 +69,8 @@ END {
     for (j = i; j > 1 && prk[pts[j]] < prk[pts[j - 1]]; j--) { t = pts[j]; pts[j] = pts[j - 1]; pts[j - 1] = t }
   print "### " title ": millijoules a frame by policy"
   print ""
-  print what " **Bold**: the fewest millijoules at the point; *italic* policy: the fewest DRAM bytes."
+  print what
+  print "**Bold**: the fewest millijoules at the point; *italic* policy: the fewest DRAM bytes."
   print ""
   print "| scene | L2 | cores | policy | mJ/frame | chip dynamic / leakage (mJ) | DRAM traffic / background (mJ) | DRAM share | M rays/J | DRAM MiB | Mcycles |"
   print "|---|---|---|---|---|---|---|---|---|---|---|"
