@@ -440,6 +440,35 @@ static void tl_header(unsigned col, char *buf, size_t len) {
   timeline_col_header(machine_tl_cols, machine_tl_col_count, col, trace_class_names, buf, len);
 }
 
+/* The plot's second panel: power over the run, the whole and its three parts
+ * (a part's joules in a window over the window's seconds), from timeline.csv's
+ * energy columns by name, into cmd; x: the time axis's expression. */
+static void power_panel(const struct run_output_report *r, const char *csv, const char *x,
+                        char *cmd, size_t cap) {
+  static const struct {
+    unsigned col;
+    const char *colour, *title;
+  } PARTS[] = {{MACHINE_TL_DRAM_ENERGY, "#0072B2", "DRAM"},
+               {MACHINE_TL_CHIP_DYNAMIC_ENERGY, "#D55E00", "chip dynamic (L1s, L2, cores)"},
+               {MACHINE_TL_CHIP_LEAKAGE_ENERGY, "#009E73", "chip leakage"}};
+  char col[64];
+  tl_header(MACHINE_TL_POWER, col, sizeof col);
+  int n = snprintf(cmd, cap,
+                   "set title 'Power: the energy of each window over its seconds'\n"
+                   "set ylabel 'watts'\n"
+                   "plot '%s' using %s:(column(\"%s\")) with steps lw 2 lc rgb 'black' "
+                   "title 'all'",
+                   csv, x, col);
+  for (unsigned i = 0; i < sizeof PARTS / sizeof PARTS[0]; i++) {
+    tl_header(PARTS[i].col, col, sizeof col);
+    n += snprintf(cmd + n, cap - (size_t)n,
+                  ", '' using %s:(column(\"%s\")/column(\"cycles\")*%.17g) with steps lw 1.5 "
+                  "lc rgb '%s' title '%s'",
+                  x, col, derived_hz(r->cfg->p.clock_ghz), PARTS[i].colour, PARTS[i].title);
+  }
+  snprintf(cmd + n, cap - (size_t)n, "\nunset multiplot\n");
+}
+
 /* DRAM bytes per cycle over the run by data class, read from timeline.csv by
  * the columns' header names (from the machine's column table), so a column
  * added to the timeline cannot shift the plot. The legend sits under the
@@ -466,8 +495,9 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
   static const char x[] = "((column(\"cycle\")+column(\"cycles\")/2)/1e6)";
   int n = snprintf(
       cmd, sizeof cmd,
-      "set terminal pngcairo size 1000,600 noenhanced font ',12'\nset output '%s'\n"
+      "set terminal pngcairo size 1000,1000 noenhanced font ',12'\nset output '%s'\n"
       "set datafile separator ','\nset datafile columnheaders\n"
+      "set multiplot layout 2,1\nset lmargin 12\nset rmargin 4\n"
       "set key outside bottom center horizontal Left reverse samplen 3 spacing 1.2\n"
       "set title 'DRAM traffic per cycle: %s, %s policy, %ux%u (window %llu cycles)'\n"
       "set xlabel 'simulated time (million cycles)'\n"
@@ -494,7 +524,8 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
                   ", %.17g with lines dt 2 lw 2 lc rgb 'gray20' title 'DRAM peak (%.4g bytes per "
                   "cycle)'",
                   peak, peak);
-  snprintf(cmd + n, sizeof cmd - (size_t)n, "\n");
+  n += snprintf(cmd + n, sizeof cmd - (size_t)n, "\n");
+  power_panel(r, csv, x, cmd + n, sizeof cmd - (size_t)n);
   fputs(cmd, gnu.in);
   if (!gnuplot_close(&gnu)) {
     outfile_abort(&o);

@@ -93,6 +93,13 @@ enum machine_tl_col {
   MACHINE_TL_L2_MISSES,
   MACHINE_TL_ISSUED_OPS,
   MACHINE_TL_BUSY_THREAD_CYCLES,
+  /* Energy, J, sampled at the windows' ends (machine_energy.c); power: the
+   * window's joules x the clock's hertz, written per cycle (W). */
+  MACHINE_TL_DRAM_ENERGY,
+  MACHINE_TL_CHIP_DYNAMIC_ENERGY,
+  MACHINE_TL_CHIP_LEAKAGE_ENERGY,
+  MACHINE_TL_ENERGY,
+  MACHINE_TL_POWER,
   MACHINE_TL_COLS
 };
 
