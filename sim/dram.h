@@ -63,7 +63,7 @@ void dram_finish(struct dram *d);
 bool dram_served_transfer(const struct dram *d, double *start, double *end);
 
 const struct dram_stats *dram_get_stats(const struct dram *d);
-/* The DRAM's energy so far at core cycle t (>= every earlier call's), J: the
+/* The DRAM's energy so far at core cycle t, J: the
  * banked level's count (its ranks' present states carried on to t), or at a
  * cheaper level the estimate of its stats (sim/dram_energy_estimate.h) over
  * the requests taken and t's DRAM cycles. After dram_finish at the run's

@@ -15,17 +15,17 @@
 #include "sim/engine.h"
 #include "sim/l2.h"
 
-/* The run's energy at cycle t by the counters as they stand: the chip's
- * dynamic and leakage, the DRAM's. */
-static void energy_at(const struct machine *m, uint64_t t, double *dynamic_j, double *leakage_j,
-                      double *dram_j) {
+/* The run's energy at cycle t by the counters as they stand, `slots` issue
+ * slots used: the chip's dynamic and leakage, the DRAM's. */
+static void energy_at(const struct machine *m, uint64_t t, uint64_t slots, double *dynamic_j,
+                      double *leakage_j, double *dram_j) {
   const struct machine_params *p = &m->p;
   const struct l2_stats *l2 = l2_get_stats(m->l2);
   const struct chip_energy_counts c = {.cores = p->cores,
                                        .l1_size_bytes = p->l1_size_bytes,
                                        .l2_size_bytes = p->l2_size_bytes,
                                        .seconds = derived_seconds((double)t, p->clock_ghz),
-                                       .issue_slots = m->st.issue_slots,
+                                       .issue_slots = slots,
                                        .loads = m->st.loads,
                                        .stores = m->st.stores,
                                        .ray_switches = m->st.ray_switches,
@@ -45,7 +45,7 @@ static void energy_at(const struct machine *m, uint64_t t, double *dynamic_j, do
  * goes to the window holding cycle t - 1. */
 static void sample(struct machine *m, uint64_t t) {
   double dyn, leak, dram;
-  energy_at(m, t, &dyn, &leak, &dram);
+  energy_at(m, t, m->st.issue_slots, &dyn, &leak, &dram);
   const double d_dyn = dyn - m->en.dynamic_j, d_leak = leak - m->en.leakage_j,
                d_dram = dram - m->en.dram_j, all = d_dyn + d_leak + d_dram;
   const uint64_t at = t ? t - 1 : 0;
@@ -82,4 +82,10 @@ void machine_energy_finish(struct machine *m, uint64_t end) {
    * the last block does), then the end itself. */
   for (uint64_t b = next_end(m, m->en.at); b < end; b = next_end(m, b)) sample(m, b);
   sample(m, end);
+}
+
+double machine_energy_j(const struct machine *m, uint64_t t, uint64_t issue_slots) {
+  double dyn, leak, dram;
+  energy_at(m, t, issue_slots, &dyn, &leak, &dram);
+  return dyn + leak + dram;
 }
