@@ -167,7 +167,7 @@ static int run_plan_parse(struct run_plan *pl, int argc, char **argv) {
       OPTS_STR("cost-preview", 0, &pl->cost_preview),
       OPTS_PARSE("cost-channel", 0, &pl->cost_channel, parse_cost_channel,
                  "one of: cost.issue_slots, cost.load_wait_cycles, cost.dram_read_bytes.geometry, "
-                 ".node, .ray, .queue, .other, cost.dram_write_bytes"),
+                 ".node, .ray, .queue, .other, cost.dram_write_bytes, cost.energy_nj"),
       OPTS_PARSE("cost-max", 0, &pl->cost_max, parse_cost_max, "a number above 0"),
       OPTS_FLAG("help-keys", 0, &pl->help_keys),
       OPTS_FLAG("help-stats", 0, &pl->help_stats),

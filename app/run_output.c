@@ -39,18 +39,55 @@ const char *const run_output_files[] = {"image.exr",   "stats.csv",  "timeline.c
 /* ---- the image and its cost channels ---- */
 
 /* Issue slots, load wait, DRAM bytes read by class (trace_class_names'
- * order), DRAM bytes written back. */
-const char *const run_output_cost_channels[] = {
-    "cost.issue_slots",           "cost.load_wait_cycles",    "cost.dram_read_bytes.geometry",
-    "cost.dram_read_bytes.node",  "cost.dram_read_bytes.ray", "cost.dram_read_bytes.queue",
-    "cost.dram_read_bytes.other", "cost.dram_write_bytes",    NULL};
-#define COST_CHANNELS 8
+ * order), DRAM bytes written back, energy. */
+const char *const run_output_cost_channels[] = {"cost.issue_slots",
+                                                "cost.load_wait_cycles",
+                                                "cost.dram_read_bytes.geometry",
+                                                "cost.dram_read_bytes.node",
+                                                "cost.dram_read_bytes.ray",
+                                                "cost.dram_read_bytes.queue",
+                                                "cost.dram_read_bytes.other",
+                                                "cost.dram_write_bytes",
+                                                "cost.energy_nj",
+                                                NULL};
+#define COST_CHANNELS 9
 _Static_assert(TRACE_CLASS_COUNT == 5, "a cost channel for each data class");
 
 bool run_output_is_cost_channel(const char *name) {
   for (int i = 0; run_output_cost_channels[i]; i++)
     if (!strcmp(name, run_output_cost_channels[i])) return true;
   return false;
+}
+
+static struct chip_energy run_chip_energy(const struct run_output_report *r);
+
+/* A pixel's DRAM lines, read and written. */
+static uint64_t pixel_lines(const struct machine_costs *k, uint64_t i) {
+  uint64_t n = k->write_lines[i];
+  for (unsigned c = 0; c < k->classes; c++) n += k->read_lines[c][i];
+  return n;
+}
+
+/* cost.energy_nj: the run's energy_j shared out, in nJ: the chip's (dynamic
+ * and leakage) in proportion to the pixel's issue slots, the DRAM's to its
+ * DRAM lines read and written (to its slots in a run that moved none). Each
+ * pixel's share is a double rounded to a float. */
+static void energy_plane(const struct run_output_report *r, float *plane) {
+  const struct machine_costs *k = r->costs;
+  const struct chip_energy ce = run_chip_energy(r);
+  const double chip = chip_energy_total_j(&ce),
+               dram = dram_energy_so_far(machine_dram(r->machine),
+                                         machine_get_stats(r->machine)->cycles);
+  uint64_t slots = 0, lines = 0;
+  for (uint64_t i = 0; i < k->items; i++) {
+    slots += k->issue_slots[i];
+    lines += pixel_lines(k, i);
+  }
+  for (uint64_t i = 0; i < k->items; i++) {
+    const double s = stats_ratio((double)k->issue_slots[i], (double)slots);
+    const double l = lines ? (double)pixel_lines(k, i) / (double)lines : s;
+    plane[i] = (float)((chip * s + dram * l) * 1e9);
+  }
 }
 
 void run_output_image(const struct run_output_report *r, struct image *im) {
@@ -79,6 +116,7 @@ void run_output_image(const struct run_output_report *r, struct image *im) {
       im->planes[n + 2 + c][i] = (float)((uint64_t)k->read_lines[c][i] * 64);
     im->planes[n + 7][i] = (float)((uint64_t)k->write_lines[i] * 64);
   }
+  energy_plane(r, im->planes[n + 8]);
 }
 
 /* The workload's identity (first columns) and the resolved config. */
@@ -378,6 +416,19 @@ void run_output_measured(const struct run_output_report *r, struct stats_table *
  * (dram_energy_j, where the level reports one). */
 static void energy_emit(const struct run_output_report *r, struct stats_table *t) {
   const struct machine_stats *s = machine_get_stats(r->machine);
+  struct chip_energy_report rep = {
+      .chip = run_chip_energy(r), .seconds = run_seconds(r), .rays = render_stats_total(r->rstats)};
+  for (unsigned i = 0; i < t->n; i++)
+    if (!strcmp(t->e[i].name, "dram_energy_j") && t->e[i].kind == STATS_F64) {
+      rep.has_dram = true;
+      rep.dram_j = t->e[i].f;
+    }
+  stats_emit(t, &chip_energy_stats_descs, &rep, &(struct stats_env){.cycles = s->cycles});
+}
+
+/* The chip's energy of a whole timed run from the machine's counters. */
+static struct chip_energy run_chip_energy(const struct run_output_report *r) {
+  const struct machine_stats *s = machine_get_stats(r->machine);
   const struct machine_params *p = &r->cfg->p;
   const struct chip_energy_params ep =
       chip_energy_resolve(&p->energy, p->l1_size_bytes, p->l2_size_bytes);
@@ -395,14 +446,9 @@ static void energy_emit(const struct run_output_report *r, struct stats_table *t
                                        .l2_misses = s->l2.misses,
                                        .l2_writeback_lines =
                                            s->l2.writeback_bytes / SIM_LINE_BYTES};
-  struct chip_energy_report rep = {.seconds = c.seconds, .rays = render_stats_total(r->rstats)};
-  chip_energy_compute(&ep, &c, &rep.chip);
-  for (unsigned i = 0; i < t->n; i++)
-    if (!strcmp(t->e[i].name, "dram_energy_j") && t->e[i].kind == STATS_F64) {
-      rep.has_dram = true;
-      rep.dram_j = t->e[i].f;
-    }
-  stats_emit(t, &chip_energy_stats_descs, &rep, &(struct stats_env){.cycles = s->cycles});
+  struct chip_energy e;
+  chip_energy_compute(&ep, &c, &e);
+  return e;
 }
 
 /* Start OUTDIR/name through a temporary (commit with outfile_commit). */
@@ -440,6 +486,35 @@ static void tl_header(unsigned col, char *buf, size_t len) {
   timeline_col_header(machine_tl_cols, machine_tl_col_count, col, trace_class_names, buf, len);
 }
 
+/* The plot's second panel: power over the run, the whole and its three parts
+ * (a part's joules in a window over the window's seconds), from timeline.csv's
+ * energy columns by name, into cmd; x: the time axis's expression. */
+static void power_panel(const struct run_output_report *r, const char *csv, const char *x,
+                        char *cmd, size_t cap) {
+  static const struct {
+    unsigned col;
+    const char *colour, *title;
+  } PARTS[] = {{MACHINE_TL_DRAM_ENERGY, "#0072B2", "DRAM"},
+               {MACHINE_TL_CHIP_DYNAMIC_ENERGY, "#D55E00", "chip dynamic (L1s, L2, cores)"},
+               {MACHINE_TL_CHIP_LEAKAGE_ENERGY, "#009E73", "chip leakage"}};
+  char col[64];
+  tl_header(MACHINE_TL_POWER, col, sizeof col);
+  int n = snprintf(cmd, cap,
+                   "set title 'Power: the energy of each window over its seconds'\n"
+                   "set ylabel 'watts'\n"
+                   "plot '%s' using %s:(column(\"%s\")) with steps lw 2 lc rgb 'black' "
+                   "title 'all'",
+                   csv, x, col);
+  for (unsigned i = 0; i < sizeof PARTS / sizeof PARTS[0]; i++) {
+    tl_header(PARTS[i].col, col, sizeof col);
+    n += snprintf(cmd + n, cap - (size_t)n,
+                  ", '' using %s:(column(\"%s\")/column(\"cycles\")*%.17g) with steps lw 1.5 "
+                  "lc rgb '%s' title '%s'",
+                  x, col, derived_hz(r->cfg->p.clock_ghz), PARTS[i].colour, PARTS[i].title);
+  }
+  snprintf(cmd + n, cap - (size_t)n, "\nunset multiplot\n");
+}
+
 /* DRAM bytes per cycle over the run by data class, read from timeline.csv by
  * the columns' header names (from the machine's column table), so a column
  * added to the timeline cannot shift the plot. The legend sits under the
@@ -466,8 +541,9 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
   static const char x[] = "((column(\"cycle\")+column(\"cycles\")/2)/1e6)";
   int n = snprintf(
       cmd, sizeof cmd,
-      "set terminal pngcairo size 1000,600 noenhanced font ',12'\nset output '%s'\n"
+      "set terminal pngcairo size 1000,1000 noenhanced font ',12'\nset output '%s'\n"
       "set datafile separator ','\nset datafile columnheaders\n"
+      "set multiplot layout 2,1\nset lmargin 12\nset rmargin 4\n"
       "set key outside bottom center horizontal Left reverse samplen 3 spacing 1.2\n"
       "set title 'DRAM traffic per cycle: %s, %s policy, %ux%u (window %llu cycles)'\n"
       "set xlabel 'simulated time (million cycles)'\n"
@@ -494,7 +570,8 @@ static bool write_plot(const struct run_output_report *r, struct err *e) {
                   ", %.17g with lines dt 2 lw 2 lc rgb 'gray20' title 'DRAM peak (%.4g bytes per "
                   "cycle)'",
                   peak, peak);
-  snprintf(cmd + n, sizeof cmd - (size_t)n, "\n");
+  n += snprintf(cmd + n, sizeof cmd - (size_t)n, "\n");
+  power_panel(r, csv, x, cmd + n, sizeof cmd - (size_t)n);
   fputs(cmd, gnu.in);
   if (!gnuplot_close(&gnu)) {
     outfile_abort(&o);
@@ -561,9 +638,10 @@ bool run_output_write(const struct run_output_report *r, struct err *e) {
     snprintf(title, sizeof title, "%s per pixel", r->cost_channel);
     snprintf(sub, sizeof sub, "%s, %s policy, %ux%u", r->scene_name, r->policy, r->width,
              r->height);
-    const char *u = strstr(r->cost_channel, "bytes")   ? "bytes"
-                    : strstr(r->cost_channel, "slots") ? "issue slots (core cycles)"
-                                                       : "cycles";
+    const char *u = strstr(r->cost_channel, "bytes")    ? "bytes"
+                    : strstr(r->cost_channel, "slots")  ? "issue slots (core cycles)"
+                    : strstr(r->cost_channel, "energy") ? "nJ"
+                                                        : "cycles";
     snprintf(units, sizeof units, "%s a pixel", u);
     ok = preview_write_heat_png(&im, r->cost_channel, title, sub, units, r->cost_max,
                                 r->cost_preview, e);

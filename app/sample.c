@@ -12,6 +12,9 @@
 #include "sim/err.h"
 #include "sim/stats.h"
 
+/* Femtojoules a joule: the probes count energy in whole fJ. */
+#define FJ_PER_J 1e15
+
 /* Units when sample.units is 0: as many as the detailed items allow, each
  * at least three pipelines long (3 x the ray contexts), at most this many. */
 #define SAMPLE_AUTO_UNITS_MAX 40
@@ -114,6 +117,12 @@ void sample_fini(struct sampler *s) {
   s->drained = NULL;
 }
 
+/* The run's energy at cycle t with `slots` issue slots used, in whole
+ * femtojoules (a probe's integers; a run's joules are far below 2^64 fJ). */
+static uint64_t energy_fj(const struct machine *m, uint64_t t, uint64_t slots) {
+  return (uint64_t)llround(machine_energy_j(m, t, slots) * FJ_PER_J);
+}
+
 static void probe(struct sampler *s, uint64_t *at) {
   struct machine_probe p;
   machine_probe(s->m, &p);
@@ -123,6 +132,7 @@ static void probe(struct sampler *s, uint64_t *at) {
   at[SQ_LAT_SUM] = p.load_latency_sum;
   at[SQ_LAT_N] = p.loads_timed;
   at[SQ_RAYS] = s->rays_now ? s->rays_now(s->rays_ctx) : 0;
+  at[SQ_ENERGY_FJ] = energy_fj(s->m, p.cycle, p.issue_slots);
 }
 
 enum policy_item sample_item(void *ctx, uint64_t k, uint32_t core, struct mem_port *port) {
@@ -174,6 +184,7 @@ void sample_finish(struct sampler *s, uint64_t rays_total) {
   u->at1[SQ_LAT_SUM] = st->load_latency.sum;
   u->at1[SQ_LAT_N] = st->load_latency.count;
   u->at1[SQ_RAYS] = rays_total;
+  u->at1[SQ_ENERGY_FJ] = energy_fj(s->m, st->cycles, st->issue_slots);
   u->have1 = true;
   s->rays_total = rays_total;
   s->slots_detailed = st->issue_slots;
@@ -227,6 +238,8 @@ enum sample_fig {
   SF_UTIL,
   SF_RAYS_PER_S,
   SF_LOAD_LAT,
+  SF_ENERGY,
+  SF_POWER,
   SF_COUNT
 };
 
@@ -253,6 +266,9 @@ static double figure(const struct sampler *s, const struct parts *p, enum sample
   case SF_BYTES_PER_CYCLE: return stats_ratio(bytes, cycles);
   case SF_UTIL: return derived_core_utilization(slots, s->cores, cycles);
   case SF_RAYS_PER_S: return derived_rays_per_second(rays, cycles / s->hz);
+  case SF_ENERGY: return p->edge[SQ_ENERGY_FJ] + mid(s, p, SQ_ENERGY_FJ);
+  case SF_POWER:
+    return stats_ratio(p->edge[SQ_ENERGY_FJ] + mid(s, p, SQ_ENERGY_FJ), cycles / s->hz);
   default: {
     double n = p->edge[SQ_LAT_N] + mid(s, p, SQ_LAT_N);
     return n > 0 ? (p->edge[SQ_LAT_SUM] + mid(s, p, SQ_LAT_SUM)) / n : 0;
@@ -318,7 +334,8 @@ static struct est estimate(const struct sampler *s, enum sample_fig f) {
    * figures made of cycles carry a systematic +-SAMPLE_SYSTEMATIC, added in
    * quadrature; without it an issue-bound run's interval is narrower than
    * that bias. */
-  if (f == SF_CYCLES || f == SF_BYTES_PER_CYCLE || f == SF_UTIL || f == SF_RAYS_PER_S)
+  if (f == SF_CYCLES || f == SF_BYTES_PER_CYCLE || f == SF_UTIL || f == SF_RAYS_PER_S ||
+      f == SF_ENERGY || f == SF_POWER) /* (leakage and DRAM background follow cycles) */
     half = hypot(half, SAMPLE_SYSTEMATIC * v);
   struct est e = {v, v - half, v + half};
   return e;
@@ -352,6 +369,15 @@ double sample_dram_bytes(const struct sampler *s, double *lo, double *hi) {
   return e.v;
 }
 
+/* The run's energy, J: at least what the units spent themselves. */
+static struct est energy_est(const struct sampler *s) {
+  double own = 0;
+  for (uint32_t h = 0; h < s->n; h++) own += delta(&s->u[h], SQ_ENERGY_FJ);
+  const struct est e = clamp_est(estimate(s, SF_ENERGY), own, INFINITY);
+  const struct est j = {e.v / FJ_PER_J, e.lo / FJ_PER_J, e.hi / FJ_PER_J};
+  return j;
+}
+
 double sample_cycles(const struct sampler *s, double *lo, double *hi) {
   struct est e = clamp_est(estimate(s, SF_CYCLES), min_cycles(s), INFINITY);
   *lo = e.lo;
@@ -380,7 +406,9 @@ enum sample_out {
   SO_DRAM_BYTES,
   SO_BYTES_PER_CYCLE,
   SO_DRAM_UTIL,
-  SO_LOAD_LAT
+  SO_LOAD_LAT,
+  SO_ENERGY,
+  SO_POWER
 };
 
 /* Output o's estimate and interval, each number within the range its figure
@@ -421,6 +449,12 @@ static struct est est_of(const void *st, const struct stats_env *env, enum sampl
     struct est u = {e.v / x->peak, e.lo / x->peak, e.hi / x->peak};
     return clamp_est(u, 0, 1);
   }
+  case SO_ENERGY: return energy_est(s);
+  case SO_POWER: { /* (the femtojoules' watts) */
+    e = clamp_est(estimate(s, SF_POWER), 0, INFINITY);
+    struct est w = {e.v / FJ_PER_J, e.lo / FJ_PER_J, e.hi / FJ_PER_J};
+    return w;
+  }
   default: return clamp_est(estimate(s, SF_LOAD_LAT), 0, INFINITY);
   }
 }
@@ -445,6 +479,8 @@ SAMPLE_EST(SO_DRAM_BYTES)
 SAMPLE_EST(SO_BYTES_PER_CYCLE)
 SAMPLE_EST(SO_DRAM_UTIL)
 SAMPLE_EST(SO_LOAD_LAT)
+SAMPLE_EST(SO_ENERGY)
+SAMPLE_EST(SO_POWER)
 #undef SAMPLE_EST
 
 static bool has_peak(const void *st, const struct stats_env *env) {
@@ -523,6 +559,9 @@ static const struct stats_desc sample_desc[] = {
     EST(SO_DRAM_UTIL, "dram_utilization", "fraction",
         "dram_bytes_per_cycle / the DRAM's peak, estimated (a DRAM with a peak)", has_peak),
     EST(SO_LOAD_LAT, "load_latency_mean", "cycles", "a load's latency, mean, estimated", NULL),
+    EST(SO_ENERGY, "energy_j", "J",
+        "the chip's and the DRAM's energy, estimated (at least the units' own)", NULL),
+    EST(SO_POWER, "power_w", "W", "energy_j / seconds, estimated", NULL),
     STATS_FIELD(struct sampler, total, "sample_work_items", "count",
                 "work items (pixels or tiles) of the run"),
     STATS_FN_U64(s_units, "sample_units_measured", "count", "units simulated in detail"),

@@ -42,7 +42,16 @@ struct stats_table;
 struct err;
 
 /* What a unit measured, per quantity (differences of two probes). */
-enum sample_q { SQ_CYCLES, SQ_SLOTS, SQ_DRAM_BYTES, SQ_LAT_SUM, SQ_LAT_N, SQ_RAYS, SQ_COUNT };
+enum sample_q {
+  SQ_CYCLES,
+  SQ_SLOTS,
+  SQ_DRAM_BYTES,
+  SQ_LAT_SUM,
+  SQ_LAT_N,
+  SQ_RAYS,
+  SQ_ENERGY_FJ, /* the run's energy so far (machine_energy_j), femtojoules */
+  SQ_COUNT
+};
 
 struct sample_unit {
   uint64_t stratum_lo, stratum_hi; /* the stratum's items [lo, hi) */

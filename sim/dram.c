@@ -176,6 +176,17 @@ void dram_finish(struct dram *d) {
 }
 
 const struct dram_stats *dram_get_stats(const struct dram *d) { return &d->st; }
+
+double dram_energy_so_far(const struct dram *d, uint64_t t) {
+  if (d->ops->energy_j) return d->ops->energy_j(d->level, t);
+  struct dram_banked_params p = d->p.banked;
+  p.clock_mhz = d->p.clock_mhz;
+  /* est_dram_cycles' arithmetic, so the last figure is the stats' own. */
+  const double dram_cycles = (double)t * (double)d->clock.den / (double)d->clock.num;
+  struct dram_banked_energy e;
+  dram_energy_estimate(&p, d->st.reads, d->st.writes, dram_cycles, &e);
+  return e.total_j;
+}
 uint64_t dram_in_flight(const struct dram *d) { return d->inflight; }
 
 bool dram_served_transfer(const struct dram *d, double *start, double *end) {

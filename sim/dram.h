@@ -63,6 +63,12 @@ void dram_finish(struct dram *d);
 bool dram_served_transfer(const struct dram *d, double *start, double *end);
 
 const struct dram_stats *dram_get_stats(const struct dram *d);
+/* The DRAM's energy so far at core cycle t, J: the
+ * banked level's count (its ranks' present states carried on to t), or at a
+ * cheaper level the estimate of its stats (sim/dram_energy_estimate.h) over
+ * the requests taken and t's DRAM cycles. After dram_finish at the run's
+ * last cycle: the dram_energy_j its stats report. Reads only. */
+double dram_energy_so_far(const struct dram *d, uint64_t t);
 /* Requests taken and not yet served, now (the level's queues and banks). */
 uint64_t dram_in_flight(const struct dram *d);
 /* The numbers every level shares, over a struct dram_stats (sim/stats.h),

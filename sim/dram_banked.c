@@ -261,12 +261,14 @@ static void banked_finish(void *self) {
     }
   dram_banked_power_finish(d, d->cursor);
   d->finished_dram_cycles = (uint64_t)d->cursor;
+  d->finished = true;
 }
 
 static void banked_destroy(void *self) { dram_banked_destroy(self); }
 
-const struct dram_level_ops dram_banked_ops = {banked_can_take, banked_take, banked_finish,
-                                               dram_banked_stats_part, banked_destroy};
+const struct dram_level_ops dram_banked_ops = {banked_can_take, banked_take,
+                                               banked_finish,   dram_banked_stats_part,
+                                               banked_destroy,  dram_banked_energy_so_far};
 
 struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint64_t core_khz,
                                        struct engine *e, const struct dram_client *client) {

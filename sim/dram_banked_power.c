@@ -77,6 +77,29 @@ void dram_banked_energy_of(const struct dram_banked *d, int channel, int rank,
   energy(&d->p, &n, out);
 }
 
+/* Before finish: the commands counted, and each rank's cycles to DRAM cycle x
+ * (t's, or the cursor if that is later: its counts reach there), those since
+ * an open rank's ACT active. After: the total the stats report. */
+double dram_banked_energy_so_far(const void *self, uint64_t t) {
+  const struct dram_banked *d = self;
+  struct dram_banked_energy e;
+  if (d->finished) {
+    dram_banked_energy_total(d, &d->st, &e);
+    return e.total_j;
+  }
+  int64_t x = (int64_t)dram_clock_from_core(d->clk, t);
+  if (x < d->cursor) x = d->cursor;
+  struct counts n = {0};
+  for (uint32_t i = 0; i < d->p.channels; i++)
+    for (uint32_t k = 0; k < d->p.ranks; k++) {
+      const struct dram_banked_rank *rk = &d->ch[i].ranks[k];
+      add_rank(&n, rk, (uint64_t)x);
+      if (rk->open && x > rk->active_since) n.active_cycles += (uint64_t)(x - rk->active_since);
+    }
+  energy(&d->p, &n, &e);
+  return e.total_j;
+}
+
 void dram_banked_energy_total(const struct dram_banked *d, const struct dram_banked_stats *s,
                               struct dram_banked_energy *out) {
   const struct counts n = {s->activates,          s->reads,      s->writes, s->refreshes,

@@ -217,6 +217,7 @@ struct dram_banked {
   uint64_t q_len[2], q_last[2];
   bool space_due;
   uint64_t finished_dram_cycles; /* the cursor when finished */
+  bool finished;
   struct dram_banked_stats st;
 };
 
@@ -386,6 +387,9 @@ bool dram_banked_params_within_model(const struct dram_banked_params *p);
 
 /* Close the ranks' active intervals at the level's last cycle, end (at finish). */
 void dram_banked_power_finish(struct dram_banked *d, int64_t end);
+/* The level's energy so far at core cycle t, J (struct dram_level_ops's
+ * energy_j; self: the level). */
+double dram_banked_energy_so_far(const void *self, uint64_t t);
 /* The level's energy from its stats struct s (the stats table's figures). */
 void dram_banked_energy_total(const struct dram_banked *d, const struct dram_banked_stats *s,
                               struct dram_banked_energy *out);

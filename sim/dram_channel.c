@@ -202,8 +202,8 @@ static void ch_destroy(void *self) {
   free(d);
 }
 
-const struct dram_level_ops dram_channel_ops = {ch_can_take, ch_take, ch_finish, ch_stats,
-                                                ch_destroy};
+const struct dram_level_ops dram_channel_ops = {ch_can_take, ch_take,    ch_finish,
+                                                ch_stats,    ch_destroy, NULL};
 
 struct dram_channel *dram_channel_create(const struct dram_channel_params *p, struct engine *e,
                                          const struct dram_client *client) {

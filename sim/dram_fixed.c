@@ -40,8 +40,8 @@ static void fx_stats(const void *self, struct stats_part *out) {
 
 static void fx_destroy(void *self) { free(self); }
 
-const struct dram_level_ops dram_fixed_ops = {fx_can_take, fx_take, fx_finish, fx_stats,
-                                              fx_destroy};
+const struct dram_level_ops dram_fixed_ops = {fx_can_take, fx_take,    fx_finish,
+                                              fx_stats,    fx_destroy, NULL};
 
 struct dram_fixed *dram_fixed_create(uint64_t latency_cycles, struct engine *e,
                                      const struct dram_client *client) {

@@ -55,6 +55,11 @@ struct dram_level_ops {
    * figure. */
   void (*stats)(const void *self, struct stats_part *out);
   void (*destroy)(void *self); /* NULL ok */
+  /* Optional (NULL: the DRAM estimates it, sim/dram_energy_estimate.h): the
+   * level's energy so far, J, at core cycle t: what it has counted, its
+   * ranks' present states carried on to t (to where its counts reach, if t is
+   * before that); after finish, the figure its stats report. Reads only. */
+  double (*energy_j)(const void *self, uint64_t t);
 };
 
 /* A level's own numbers (ops->stats) alone into t, for a run of `cycles`. */

@@ -32,12 +32,16 @@ struct engine {
   struct far *heap;
   uint64_t far_n, far_cap, seq;
   uint64_t now, handled;
+  uint64_t tick_at; /* UINT64_MAX: no tick */
+  engine_tick_fn tick;
+  void *tick_ctx;
 };
 
 struct engine *engine_create(void) {
   struct engine *e = xcalloc(1, sizeof *e);
   for (uint32_t i = 0; i < ENGINE_WINDOW; i++) e->head[i] = e->tail[i] = NIL;
   e->free = NIL;
+  e->tick_at = UINT64_MAX;
   return e;
 }
 
@@ -51,6 +55,20 @@ void engine_destroy(struct engine *e) {
 uint64_t engine_now(const struct engine *e) { return e->now; }
 uint64_t engine_events(const struct engine *e) { return e->handled; }
 uint64_t engine_pending(const struct engine *e) { return e->near + e->far_n; }
+
+void engine_tick(struct engine *e, uint64_t at, engine_tick_fn fn, void *ctx) {
+  e->tick_at = fn ? at : UINT64_MAX;
+  e->tick = fn;
+  e->tick_ctx = ctx;
+}
+
+/* Time moved to e->now: the tick, when due. Checked only where time moves, so
+ * the events of one cycle pay nothing for it. */
+static inline void time_moved(struct engine *e) {
+  if (e->now < e->tick_at) return;
+  e->tick_at = UINT64_MAX;
+  e->tick(e->tick_ctx, e->now);
+}
 
 /* The slow paths of engine_at, kept out of it: inlined, their registers
  * made every call save six (17 of its 50-odd instructions an event). */
@@ -156,6 +174,7 @@ uint64_t engine_run(struct engine *e) {
       if (!e->far_n) break;
       e->now = e->heap[0].at;
       migrate(e);
+      time_moved(e);
     }
     uint32_t b = first_bucket(e);
     uint32_t n = e->head[b];
@@ -171,6 +190,7 @@ uint64_t engine_run(struct engine *e) {
     if (x.at != e->now) {
       e->now = x.at;
       migrate(e);
+      time_moved(e);
     }
     e->handled++;
     /* The next event's context (its first two host lines), which its

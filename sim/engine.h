@@ -27,6 +27,15 @@ uint64_t engine_now(const struct engine *e);
 /* Schedule fn(ctx, arg) at cycle `at` (>= engine_now, CHECKed). */
 void engine_at(struct engine *e, uint64_t at, engine_fn fn, void *ctx, uint64_t arg);
 
+/* A tick: fn(ctx, now) is called once, before the first event at a cycle >=
+ * at is handled (now: that event's cycle; every event before it handled), so
+ * a watcher samples counters at boundaries of simulated time without an
+ * event of its own (an event would count in engine_events and take a
+ * sequence number). fn reads state and may set the next tick; it schedules no
+ * event. One tick at a time: a new one replaces the old. */
+typedef void (*engine_tick_fn)(void *ctx, uint64_t now);
+void engine_tick(struct engine *e, uint64_t at, engine_tick_fn fn, void *ctx);
+
 /* Handle events in order until none is left. Returns the events handled. */
 uint64_t engine_run(struct engine *e);
 

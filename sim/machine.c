@@ -560,6 +560,7 @@ static struct machine *create(const struct machine_params *p, uint64_t stack_byt
   }
   m->st.contexts = m->nctx;
   m->st.threads = m->nth;
+  machine_energy_start(m);
   return m;
 }
 
@@ -629,6 +630,7 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   }
   if (m->trace) trace_finish(m, end);
   l2_finish(m->l2, end);
+  machine_energy_finish(m, end);
   struct machine_stats *st = &m->st;
   st->cycles = end;
   st->l2 = *l2_get_stats(m->l2);

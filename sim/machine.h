@@ -93,6 +93,13 @@ enum machine_tl_col {
   MACHINE_TL_L2_MISSES,
   MACHINE_TL_ISSUED_OPS,
   MACHINE_TL_BUSY_THREAD_CYCLES,
+  /* Energy, J, sampled at the windows' ends (machine_energy.c); power: the
+   * window's joules x the clock's hertz, written per cycle (W). */
+  MACHINE_TL_DRAM_ENERGY,
+  MACHINE_TL_CHIP_DYNAMIC_ENERGY,
+  MACHINE_TL_CHIP_LEAKAGE_ENERGY,
+  MACHINE_TL_ENERGY,
+  MACHINE_TL_POWER,
   MACHINE_TL_COLS
 };
 
@@ -196,6 +203,11 @@ struct machine_probe {
   uint64_t load_latency_sum, loads_timed; /* the load latency histogram's sum and count */
 };
 void machine_probe(const struct machine *m, struct machine_probe *out);
+/* The run's energy so far, J (the chip's and the DRAM's, as the timeline's
+ * energy columns price it: sim/machine_energy.c), at cycle t with
+ * issue_slots used (a probe's two figures). After the run, at its cycles and
+ * issue slots: the energy_j its stats give. */
+double machine_energy_j(const struct machine *m, uint64_t t, uint64_t issue_slots);
 
 /* A port that warms the caches instead of timing (sampling's fast-forward):
  * a load or store updates `core`'s L1 (a load that misses fills it) and the

@@ -6,6 +6,7 @@
  *   machine_cost.c   per-item cost attribution (machine_costs_enable)
  *   machine_ports.c  sampling's warming and counting ports, and the probe
  *   machine_stats.c  the machine's numbers and timeline columns
+ *   machine_energy.c the timeline's energy columns, sampled at windows' ends
  *   machine_trace.c  the trace layer: threads' states and counters over time
  *                    (machine_trace_enable); machine_trace_json.c writes it */
 #ifndef RTSIM_SIM_MACHINE_STATE_H
@@ -29,6 +30,14 @@ struct l2;
 struct mtrace;
 
 #define NONE UINT32_MAX
+
+/* The timeline's energy (machine_energy.c): the chip's figures resolved, and
+ * the run's energy so far at the last window end sampled, J. */
+struct menergy {
+  struct chip_energy_params ep;
+  uint64_t at;
+  double dynamic_j, leakage_j, dram_j;
+};
 
 /* The L2's cost hook (struct l2_client's cost). */
 typedef void (*l2_cost_fn)(void *cost_ctx, void *waiter, uint32_t tag, unsigned cls, bool write);
@@ -131,6 +140,7 @@ struct machine {
   void *cost_ctx;             /* the cost layer's L2 hook (machine_door_costed) */
   l2_cost_fn cost_fn;
   struct mtrace *trace; /* the trace layer (machine_trace_enable); NULL: none */
+  struct menergy en;
 };
 
 /* A core's warming port (machine_warm_port). */
@@ -182,6 +192,13 @@ void machine_door_costed(struct machine *m, void *cost_ctx, l2_cost_fn cost);
 void machine_cost_flush(struct mctx *c);
 /* The end of a run that counted costs (CHECKs conservation). */
 void machine_cost_finish(struct machine *m);
+
+/* ---- machine_energy.c: the timeline's energy ---- */
+
+/* Start sampling at the first window's end (machine creation). */
+void machine_energy_start(struct machine *m);
+/* The run's end at cycle end, after dram_finish: its last sample. */
+void machine_energy_finish(struct machine *m, uint64_t end);
 
 /* ---- machine_trace.c: the trace layer ----
  * Called by the door's and the events' traced instances alone (machine.c),

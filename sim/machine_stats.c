@@ -191,5 +191,16 @@ const struct timeline_col machine_tl_cols[] = {
      false},
     {"busy_threads", "threads", "mean threads with a ray ready, running or being switched to",
      MACHINE_TL_BUSY_THREAD_CYCLES, 1, 4, false, true},
+    {"dram_energy_j", "J",
+     "the DRAM's energy in the window: banked's commands and rank states, or the cheaper rung's "
+     "estimate (windows sum to dram_energy_j)",
+     MACHINE_TL_DRAM_ENERGY, 1, -10, false, false},
+    {"chip_dynamic_energy_j", "J", "the chip's dynamic energy in the window: L1s, L2, cores",
+     MACHINE_TL_CHIP_DYNAMIC_ENERGY, 1, -10, false, false},
+    {"chip_leakage_energy_j", "J", "the chip's leakage in the window: L1s, L2, cores",
+     MACHINE_TL_CHIP_LEAKAGE_ENERGY, 1, -10, false, false},
+    {"energy_j", "J", "the three above (windows sum to energy_j)", MACHINE_TL_ENERGY, 1, -10, false,
+     false},
+    {"power_w", "W", "energy_j over the window's seconds", MACHINE_TL_POWER, 1, -10, false, true},
 };
 const unsigned machine_tl_col_count = sizeof machine_tl_cols / sizeof machine_tl_cols[0];

@@ -148,7 +148,9 @@ void timeline_write_csv(const struct timeline *tl, const struct timeline_col *c,
       for (unsigned k = 0; k < (c[j].per_class ? classes : 1); k++) {
         CHECK_LT(c[j].col + k, tl->cols);
         double x = v[c[j].col + k];
-        fprintf(f, ",%.*f", c[j].decimals, c[j].mean ? x / (double)len : x);
+        x = c[j].mean ? x / (double)len : x;
+        if (c[j].decimals < 0) fprintf(f, ",%.*g", -c[j].decimals, x);
+        else fprintf(f, ",%.*f", c[j].decimals, x);
       }
     fputc('\n', f);
   }

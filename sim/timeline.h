@@ -63,8 +63,9 @@ const double *timeline_row(const struct timeline *tl, uint64_t i);
 /* A column of timeline.csv, declared once by whoever adds to it: its name
  * (with per_class, a format with one %s: one column per data class, values
  * in col + class), unit, one-line description, the decimals it is written
- * with, and whether it is written per cycle of its window (a mean) rather
- * than as the window's sum. span: the timeline columns it covers. */
+ * with (negative: that many significant digits, %g), and whether it is
+ * written per cycle of its window (a mean) rather than as the window's sum.
+ * span: the timeline columns it covers. */
 struct timeline_col {
   const char *name, *unit, *desc;
   unsigned col, span;

@@ -2,6 +2,7 @@
  * counters add up to the run's totals for every policy, counting them moves
  * no simulated number, a hand-worked case splits as the rule says, and
  * rtsim run's image.exr channels sum to its stats.json. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -227,6 +228,42 @@ static void test_policies(const char *scene, const char *config, uint32_t l2_siz
 
 /* ---- rtsim run: the channels in image.exr sum to stats.json ---- */
 
+/* cost.energy_nj (docs/outputs.md): each pixel is chip_energy_j shared by
+ * its issue slots plus dram_energy_j by its DRAM lines, from the image's own
+ * channels, to a float's rounding (2^-24 of the pixel); the pixels sum to
+ * energy_j in nJ to 2^-24 of it. */
+static void check_energy_channel(const struct image *im, const char *dir, const char *what) {
+  static const char *const lines_from[] = {
+      "cost.dram_write_bytes",    "cost.dram_read_bytes.geometry", "cost.dram_read_bytes.node",
+      "cost.dram_read_bytes.ray", "cost.dram_read_bytes.queue",    "cost.dram_read_bytes.other"};
+  const int en = image_channel(im, "cost.energy_nj"), sl = image_channel(im, "cost.issue_slots");
+  EXPECTF(en >= 0 && sl >= 0, "%s: no cost.energy_nj", what);
+  if (en < 0 || sl < 0) return;
+  const uint32_t px = im->width * im->height;
+  double slots = 0, lines = 0, sum = 0;
+  for (uint32_t p = 0; p < px; p++) {
+    slots += im->planes[sl][p];
+    for (int c = 0; c < 6; c++) lines += im->planes[image_channel(im, lines_from[c])][p];
+  }
+  const double chip = testing_json_num(dir, "chip_energy_j") * 1e9,
+               dram = testing_json_num(dir, "dram_energy_j") * 1e9,
+               all = testing_json_num(dir, "energy_j") * 1e9;
+  EXPECTF(chip > 0 && dram > 0 && lines > 0, "%s: chip %g nJ, DRAM %g nJ, %g bytes", what, chip,
+          dram, lines);
+  int bad = 0;
+  for (uint32_t p = 0; p < px; p++) {
+    double l = 0;
+    for (int c = 0; c < 6; c++) l += im->planes[image_channel(im, lines_from[c])][p];
+    const double want = chip * im->planes[sl][p] / slots + dram * l / lines;
+    const double got = im->planes[en][p];
+    sum += got;
+    if (fabs(got - want) > ldexp(want, -23)) bad++;
+  }
+  EXPECTF(bad == 0, "%s: %d of %u pixels' energy is not their share", what, bad, px);
+  EXPECTF(fabs(sum - all) <= ldexp(all, -24), "%s: cost.energy_nj sums to %.17g nJ, energy_j %.17g",
+          what, sum, all);
+}
+
 static void test_command(void) {
   static const char *const policies[] = {"recursive", "packet", "dynamic", "treelet"};
   static const char *const channels[] = {
@@ -270,6 +307,7 @@ static void test_command(void) {
       EXPECTF(sum == want && want == want, "%s %s: pixels sum to %.17g, %s is %.17g", policies[i],
               channels[c], sum, totals[c], want);
     }
+    check_energy_channel(&im, dir, policies[i]);
     image_fini(&im);
   }
   /* Refused before anything runs: an unknown channel, a sampled run. */

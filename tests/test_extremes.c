@@ -14,8 +14,9 @@
  * Invariants of a finished run (stats.json): the image is the reference
  * render's, bit for bit in RGB; 0 <= core_utilization <= 1; idle = wait + parked + done;
  * l2_miss_rate = misses / accesses; DRAM bytes = 64 x requests, and their
- * per-cycle figure; the timeline's DRAM bytes add up to the totals; no nan or
- * inf in any output. */
+ * per-cycle figure; the timeline's DRAM bytes add up to the totals, and its
+ * energy columns to energy_j, dram_energy_j and chip_energy_j (each window
+ * written to 10 significant digits); no nan or inf in any output. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdlib.h>
@@ -65,6 +66,19 @@ static double timeline_sum(const char *col) {
   return at < 0 ? NAN : sum;
 }
 
+/* a and b agree to the timeline's 10 significant digits a window. */
+static bool near_sum(double a, double b) { return fabs(a - b) <= 1e-9 * fabs(b) + 1e-30; }
+
+static void check_energy_windows(const char *what) {
+  const double e = timeline_sum("energy_j"), d = timeline_sum("dram_energy_j"),
+               c = timeline_sum("chip_dynamic_energy_j") + timeline_sum("chip_leakage_energy_j");
+  const double je = testing_json_num(DIR, "energy_j"), jd = testing_json_num(DIR, "dram_energy_j"),
+               jc = testing_json_num(DIR, "chip_energy_j");
+  EXPECTF(near_sum(e, je) && near_sum(d, jd) && near_sum(c, jc),
+          "%s: timeline energy %.10g J (DRAM %.10g, chip %.10g), stats.json %.10g (%.10g, %.10g)",
+          what, e, d, c, je, jd, jc);
+}
+
 static void check_finished(const char *what, bool image) {
   /* The analytic rung writes no timeline and no thread figures (docs/fidelity-and-sampling.md:
    * "what it cannot know is absent"). */
@@ -110,6 +124,7 @@ static void check_finished(const char *what, bool image) {
   if (timed)
     EXPECTF(fabs(tr - rb) <= 0.01 * (rd + 1) && fabs(tw - wb) <= 0.01 * (wr + 1),
             "%s: timeline %g/%g DRAM bytes, totals %g/%g", what, tr, tw, rb, wb);
+  if (timed) check_energy_windows(what);
   EXPECTF(testing_json_num(DIR, "rays_traced") > 0, "%s: no rays", what);
 }
 

@@ -41,6 +41,11 @@ static void expect_near(const char *f, const char *s, const char *name, double t
           hi, est);
 }
 
+/* The energy estimate's tolerance against the full run's energy_j and
+ * power_w (measured at 64x64: -2.4% to +0.3%, each interval holding the
+ * full run's figure). */
+#define ENERGY_TOL 0.05
+
 static void test_against_full(void) {
   char out[8192];
   for (size_t i = 0; i < sizeof SCENES / sizeof SCENES[0]; i++) {
@@ -70,6 +75,8 @@ static void test_against_full(void) {
     expect_near(full, samp, "core_utilization", 0.03);
     expect_near(full, samp, "dram_bytes", 0.25);
     expect_near(full, samp, "load_latency_mean", 0.15);
+    expect_near(full, samp, "energy_j", ENERGY_TOL);
+    expect_near(full, samp, "power_w", ENERGY_TOL);
     EXPECTF(testing_json_num(samp, "sample_detailed_fraction") > 0.15 &&
                 testing_json_num(samp, "sample_detailed_fraction") < 0.25,
             "%s: detailed fraction %g for sample.fraction 0.2", SCENES[i],
