@@ -2,6 +2,7 @@
  * written as stats.json members and one stats.csv row in the same order. */
 #include "app/run_output.h"
 
+#include <math.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -135,7 +136,9 @@ static void identity(const struct run_output_report *r, struct stats_table *t) {
   stats_u64(t, "seed", r->seed);
 }
 
-static void energy_emit(const struct run_output_report *r, struct stats_table *t);
+static void energy_emit(const struct run_output_report *r, const struct chip_energy *chip,
+                        double seconds, uint64_t cycles, struct stats_table *t);
+static struct chip_energy analytic_chip_energy(const struct run_output_report *r);
 
 /* ---- the run's own numbers, at the machine's slots (docs/stats.md) ----
  * The workload's counts (the renderer's) and figures of the machine that need
@@ -387,6 +390,9 @@ void run_output_measured(const struct run_output_report *r, struct stats_table *
     stats_emit(t, &run_output_analytic_stats_descs, r->analytic, &env);
     env.parts = NULL;
     env.nparts = 0;
+    const struct chip_energy chip = analytic_chip_energy(r);
+    energy_emit(r, &chip, derived_seconds(r->analytic->est.cycles, p->clock_ghz),
+                (uint64_t)llround(r->analytic->est.cycles), t);
     if (r->rung) stats_emit(t, &rung_error_stats_descs, r->rung, &env);
     if (r->spot) stats_emit(t, &spot_check_stats_descs, r->spot, &env);
     return;
@@ -406,32 +412,63 @@ void run_output_measured(const struct run_output_report *r, struct stats_table *
   };
   machine_stats_emit(r->machine, t, trace_class_names, TRACE_CLASS_COUNT, run_parts,
                      STATS_COUNT(run_parts));
-  energy_emit(r, t);
+  const struct chip_energy chip = run_chip_energy(r);
+  energy_emit(r, &chip, run_seconds(r), s->cycles, t);
   if (r->rung) stats_emit(t, &rung_error_stats_descs, r->rung, &(struct stats_env){0});
   if (r->spot) stats_emit(t, &spot_check_stats_descs, r->spot, &(struct stats_env){0});
 }
 
 /* The run's energy (sim/chip_energy.h) after the machine's numbers: the
- * chip's from the machine's counters, the DRAM's as its level wrote it in t
- * (dram_energy_j, where the level reports one). */
-static void energy_emit(const struct run_output_report *r, struct stats_table *t) {
-  const struct machine_stats *s = machine_get_stats(r->machine);
+ * chip's as given, the DRAM's as its level (or the cheaper rung's estimate)
+ * wrote it in t (dram_energy_j). */
+static void energy_emit(const struct run_output_report *r, const struct chip_energy *chip,
+                        double seconds, uint64_t cycles, struct stats_table *t) {
   struct chip_energy_report rep = {
-      .chip = run_chip_energy(r), .seconds = run_seconds(r), .rays = render_stats_total(r->rstats)};
+      .chip = *chip, .seconds = seconds, .rays = render_stats_total(r->rstats)};
   for (unsigned i = 0; i < t->n; i++)
     if (!strcmp(t->e[i].name, "dram_energy_j") && t->e[i].kind == STATS_F64) {
       rep.has_dram = true;
       rep.dram_j = t->e[i].f;
     }
-  stats_emit(t, &chip_energy_stats_descs, &rep, &(struct stats_env){.cycles = s->cycles});
+  stats_emit(t, &chip_energy_stats_descs, &rep, &(struct stats_env){.cycles = cycles});
 }
 
-/* The chip's energy of a whole timed run from the machine's counters. */
+/* The chip's energy from counts, with the config's figures. */
+static struct chip_energy chip_energy_of(const struct machine_params *p,
+                                         const struct chip_energy_counts *c) {
+  const struct chip_energy_params ep =
+      chip_energy_resolve(&p->energy, p->l1_size_bytes, p->l2_size_bytes);
+  struct chip_energy e;
+  chip_energy_compute(&ep, c, &e);
+  return e;
+}
+
+/* At fidelity analytic: the counting backend's counts over the estimate's
+ * time. It models no ray switch; a thread gives up its slots at each
+ * blocking load (the estimate's own rule), so each counts as one. */
+static struct chip_energy analytic_chip_energy(const struct run_output_report *r) {
+  const struct machine_params *p = &r->cfg->p;
+  const struct analytic_counts *n = &r->analytic->counts;
+  const struct chip_energy_counts c = {.cores = p->cores,
+                                       .l1_size_bytes = p->l1_size_bytes,
+                                       .l2_size_bytes = p->l2_size_bytes,
+                                       .seconds =
+                                           derived_seconds(r->analytic->est.cycles, p->clock_ghz),
+                                       .issue_slots = n->issue_slots,
+                                       .loads = n->loads,
+                                       .stores = n->stores,
+                                       .ray_switches = n->blocking_loads,
+                                       .l1_accesses = n->l1_accesses,
+                                       .l1_hits = n->l1_hits,
+                                       .l2_accesses = n->l2_accesses,
+                                       .l2_misses = n->l2_misses,
+                                       .l2_writeback_lines = n->writeback_bytes / SIM_LINE_BYTES};
+  return chip_energy_of(p, &c);
+}
+
 static struct chip_energy run_chip_energy(const struct run_output_report *r) {
   const struct machine_stats *s = machine_get_stats(r->machine);
   const struct machine_params *p = &r->cfg->p;
-  const struct chip_energy_params ep =
-      chip_energy_resolve(&p->energy, p->l1_size_bytes, p->l2_size_bytes);
   const struct chip_energy_counts c = {.cores = p->cores,
                                        .l1_size_bytes = p->l1_size_bytes,
                                        .l2_size_bytes = p->l2_size_bytes,
@@ -446,9 +483,7 @@ static struct chip_energy run_chip_energy(const struct run_output_report *r) {
                                        .l2_misses = s->l2.misses,
                                        .l2_writeback_lines =
                                            s->l2.writeback_bytes / SIM_LINE_BYTES};
-  struct chip_energy e;
-  chip_energy_compute(&ep, &c, &e);
-  return e;
+  return chip_energy_of(p, &c);
 }
 
 /* Start OUTDIR/name through a temporary (commit with outfile_commit). */
