@@ -562,20 +562,38 @@ static void test_cq_write_drain(void) {
   EXPECT(s->write_drains == 1 && s->writes == 3 && s->reads == 1 && s->write_forwards == 1);
   dram_banked_destroy(d);
   /* Two writes (not more than write_low) and no other traffic stay buffered
-   * until the channel has been idle DRAM_BANKED_IDLE_DRAIN_CYCLES: a read of
-   * another row of their bank at 500 finds it closed (ACT 502, done 538);
-   * they are written by the end (finish checks nothing is left queued). */
+   * until the channel has been idle idle_drain_cycles: a read of another row
+   * of their bank at 500 finds it closed (ACT 502, done 538); they are
+   * written by the end (finish checks nothing is left queued), the second
+   * arrived after cycle 1, so drained from the end of 1001 on. With
+   * idle_drain_cycles 0 (DRAMsim3's) the read is the same, the writes are
+   * never written and the run ends with the read. */
   struct rq b[] = {{0, addr_of(&p, 0, 0, 0, 0, 1, 0), true},
                    {1, addr_of(&p, 0, 0, 0, 0, 1, 1), true},
                    {500, addr_of(&p, 0, 0, 0, 0, 2, 0), false}};
-  d = run(&p, 1200 * MHZ, b, 3, done, 0);
-  EXPECTF(done[0] == 2 && done[1] == 3 && done[2] == 538,
-          "idle writes: %llu %llu %llu, expected 2 3 538", (unsigned long long)done[0],
-          (unsigned long long)done[1], (unsigned long long)done[2]);
-  s = dram_banked_get_stats(d);
-  EXPECT(s->writes == 2 && s->write_drains == 1 && s->row_conflicts == 1);
-  EXPECT(dram_banked_finished_cycles(d) >= 500 + DRAM_BANKED_IDLE_DRAIN_CYCLES);
-  dram_banked_destroy(d);
+  for (uint32_t idle = 1000; idle != UINT32_MAX; idle = idle ? 0 : UINT32_MAX) {
+    p.idle_drain_cycles = idle;
+    d = run(&p, 1200 * MHZ, b, 3, done, 0);
+    EXPECTF(done[0] == 2 && done[1] == 3 && done[2] == 538,
+            "idle writes (%u): %llu %llu %llu, expected 2 3 538", idle, (unsigned long long)done[0],
+            (unsigned long long)done[1], (unsigned long long)done[2]);
+    s = dram_banked_get_stats(d);
+    const uint64_t end = dram_banked_finished_cycles(d);
+    if (idle) {
+      EXPECT(s->writes == 2 && s->writes_left == 0 && s->write_drains == 1 &&
+             s->row_conflicts == 1);
+      EXPECTF(end > 1001 + 2 + 16,
+              "idle writes: finished at %llu, expected past the drain's ACT "
+              "(1002) and first WR (1018)",
+              (unsigned long long)end);
+    } else {
+      EXPECT(s->writes == 0 && s->writes_left == 2 && s->write_drains == 0 && s->row_misses == 1 &&
+             s->activates == 1);
+      EXPECTF(end == 539, "no idle drain: finished at %llu, expected 539 (the read's data at 538)",
+              (unsigned long long)end);
+    }
+    dram_banked_destroy(d);
+  }
 }
 
 /* 19: per_bank, a row hit does not pass an older request's ready ACT or PRE
