@@ -74,10 +74,9 @@ ecomp="activate read write refresh active_standby precharge_standby total"
   printf '\n'
 } > "$energy.tmp"
 # A replay's energy row: stream name, rtsim's CSV, DRAMsim3's output (may be
-# missing or unfinished: its columns empty).
+# missing or unfinished: its columns empty), rtsim's dram.idle_drain_cycles.
 energy_row() {
-  printf '%s,%s,%s,%s' "$1" "$(csvget "$2" dram.idle_drain_cycles)" "$(csvget "$2" requests)" \
-    "$(csvget "$2" writes)"
+  printf '%s,%s,%s,%s' "$1" "$4" "$(csvget "$2" requests)" "$(csvget "$2" writes)"
   fin=; [ -f "$3" ] && fin=$(kvget "$3" finished)
   for c in $ecomp; do
     case $c in
@@ -127,7 +126,7 @@ for scene in sphereflake grove room; do
         "$(csvget "$r" requests)" "$(csvget "$r" writes)" "$1" "$d3_mean" "$2" "$d3_p50" \
         "$3" "$d3_p95" "$4" "$d3_p99" \
         "$(csvget "$r" gb_per_s)" "$d3_gbs" "$(csvget "$r" dram_row_hit_rate)" "$d3_hit" >> "$table.tmp"
-      energy_row "$scene-$policy" "$r" "$t.dramsim3.txt" >> "$energy.tmp"
+      energy_row "$scene-$policy" "$r" "$t.dramsim3.txt" "$drain" >> "$energy.tmp"
     done
   done
 done
@@ -162,7 +161,7 @@ for s in grove-recursive sphereflake-dynamic room-dynamic; do
       "$(csvget "$r" requests)" "$(csvget "$r" writes)" \
       "$(csvget "$r" bytes_per_cycle)" "$d3_bpc" "$(csvget "$r" dram_row_hit_rate)" "$d3_hit" \
       "$1" "$d3_mean" "$3" "$d3_p95" "$4" "$d3_p99" "$(csvget "$r" read_latency_taken_mean)" "$d3_taken" >> "$sat.tmp"
-    energy_row "$s-saturated" "$r" "$out/$s.saturated.dramsim3.txt" >> "$energy.tmp"
+    energy_row "$s-saturated" "$r" "$out/$s.saturated.dramsim3.txt" "$drain" >> "$energy.tmp"
   done
 done
 mv "$sat.tmp" "$sat"
