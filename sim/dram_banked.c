@@ -177,13 +177,27 @@ static int64_t next_cycle(const struct dram_banked *d) {
   return w < d->cursor ? d->cursor : w;
 }
 
+/* Has the level queued work that needs a wake: a request queued in a
+ * channel that is not parked (dram_banked_ctrl_parked)? */
+static bool has_work(struct dram_banked *d) {
+  if (!d->queued) return false;
+  if (!d->cq_mode || d->p.idle_drain_cycles) return true;
+  for (uint32_t i = 0; i < d->p.channels; i++) {
+    struct dram_banked_channel *c = &d->ch[i];
+    const bool queued = c->q[DRAM_BANKED_RD_Q].n || c->q[DRAM_BANKED_WR_Q].n || c->cq_n;
+    if (queued && !dram_banked_ctrl_parked(d, c, d->cursor)) return true;
+  }
+  return false;
+}
+
 void dram_banked_schedule_wake(struct dram_banked *d) {
   if (d->space_due) {
     d->space_due = false;
     engine_at(d->e, engine_now(d->e), on_space, d, 0);
   }
-  /* Idle (nothing queued): no wake; refreshes are caught up at the next call. */
-  if (!d->queued) return;
+  /* Idle (nothing queued, or only parked writes): no wake; refreshes are
+   * caught up at the next call. */
+  if (!has_work(d)) return;
   int64_t w = next_cycle(d);
   CHECK_LT(w, DRAM_BANKED_FAR);
   uint64_t t = core_deciding(d, w);
@@ -246,7 +260,10 @@ static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
 static void banked_finish(void *self) {
   struct dram_banked *d = self;
   advance(d);
-  CHECK_EQ(d->queued, 0);
+  /* Nothing left but parked writes (idle_drain_cycles 0), never written. */
+  CHECK(!has_work(d));
+  for (uint32_t i = 0; i < d->p.channels; i++) d->st.writes_left += d->ch[i].q[DRAM_BANKED_WR_Q].n;
+  CHECK_EQ(d->queued, d->st.writes_left);
   CHECK_EQ(d->inflight, 0);
   uint64_t now = engine_now(d->e);
   area_to(d, DRAM_BANKED_RD_Q, now);

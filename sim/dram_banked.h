@@ -43,10 +43,14 @@
  *   issued is answered from it, and a write of such a line replaces it, both
  *   served controller_cycles after arrival; a read of a line another queued
  *   read waits for is served with it (one RD).
- * - Leftover writes ([ours]: DRAMsim3 leaves up to write_low writes buffered
- *   for ever): once no request has arrived and no request command issued for
- *   DRAM_BANKED_IDLE_DRAIN_CYCLES, with no read queued and every command
- *   queue empty, the buffered writes drain, so a run ends with them written.
+ * - Leftover writes (idle_drain_cycles, [ours]; DRAMsim3 leaves up to
+ *   write_low writes buffered for ever): once no request has arrived and no
+ *   request command issued for idle_drain_cycles DRAM cycles, with no read
+ *   queued and every command queue empty, the buffered writes drain, so a run
+ *   ends with them written. idle_drain_cycles 0: never, as DRAMsim3; a level
+ *   whose only work is such writes is idle (it schedules no wake), and the
+ *   writes still buffered when the run ends are never written (counted as
+ *   writes_left; their bursts are in no energy figure).
  * - Row hits (DRAMsim3's count): a column command is a hit when its row has
  *   served one since its ACT.
  * - A write burst may follow another rank's write burst with no idle cycle
@@ -146,9 +150,6 @@ struct engine;
 /* Column commands a row may serve since its ACT before younger hits stop
  * holding back an older conflict (DRAMsim3's row-hit cap). */
 #define DRAM_BANKED_ROW_HIT_CAP 4u
-/* per_bank / per_rank: DRAM cycles without an arrival or a request command,
- * with no read queued, after which buffered writes drain (see above). */
-#define DRAM_BANKED_IDLE_DRAIN_CYCLES 1000
 /* A read waiting longer than this many tRC holds the channel on reads (no
  * turn to writes at write_high) until it is served: a bound on starvation. */
 #define DRAM_BANKED_READ_AGE_CAP 4u
@@ -172,6 +173,10 @@ struct dram_banked_params {
   uint32_t controller_cycles;       /* DRAM cycles from taking a request to its first command */
   enum dram_banked_queues queue_structure;
   uint32_t command_queue; /* per_bank / per_rank: entries a command queue */
+  /* per_bank / per_rank: DRAM cycles without an arrival or a request command,
+   * with no read queued, after which buffered writes drain (see above; 0:
+   * never). */
+  uint32_t idle_drain_cycles;
   /* Timing in DRAM clock cycles. */
   uint32_t tCL, tCWL, tRCD, tRP, tRAS, tRC, tCCD_S, tCCD_L, tRRD_S, tRRD_L, tFAW, tWR, tWTR_S,
       tWTR_L, tRTW, tRTP, tREFI, tRFC;
@@ -219,6 +224,8 @@ struct dram_banked_stats {
   uint64_t write_forwards; /* reads answered from the write queue (no command) */
   uint64_t write_merges;   /* writes that found their line in the write queue */
   uint64_t read_merges;    /* per_bank / per_rank: reads served by another queued read's RD */
+  uint64_t writes_left;    /* writes still buffered at the end, never written (none unless
+                              idle_drain_cycles is 0) */
   /* Per queue kind [0] reads, [1] writes: */
   uint64_t queue_area[2]; /* time integral of the entries queued, core cycles x entries */
   uint64_t queue_wait_sum_cycles[2]; /* sum over requests of their queue time (core cycles) */

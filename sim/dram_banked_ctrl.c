@@ -52,7 +52,8 @@ static bool schedule_cq(struct dram_banked *d, struct dram_banked_channel *c, in
   uint32_t draining = c->draining;
   if (!draining && nw > 0 &&
       (nw >= d->p.write_high || (nw > d->p.write_low && c->cq_n == 0) ||
-       (nr == 0 && c->cq_n == 0 && t >= c->last_busy + DRAM_BANKED_IDLE_DRAIN_CYCLES)))
+       (nr == 0 && c->cq_n == 0 && d->p.idle_drain_cycles &&
+        t >= c->last_busy + (int64_t)d->p.idle_drain_cycles)))
     draining = nw;
   int k = draining ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
   uint32_t mi = UINT32_MAX; /* the transaction to move */
@@ -142,12 +143,18 @@ static int64_t next_cq(struct dram_banked *d, struct dram_banked_channel *c, int
     uint32_t v = visible(q, t);
     if (v < q->n && q->r[v].ready - 1 < nx) nx = q->r[v].ready - 1;
   }
-  if (!c->draining && c->q[DRAM_BANKED_WR_Q].n && !c->cq_n &&
+  if (d->p.idle_drain_cycles && !c->draining && c->q[DRAM_BANKED_WR_Q].n && !c->cq_n &&
       !visible(&c->q[DRAM_BANKED_RD_Q], t)) {
-    int64_t idle = c->last_busy + DRAM_BANKED_IDLE_DRAIN_CYCLES;
+    int64_t idle = c->last_busy + (int64_t)d->p.idle_drain_cycles;
     if (idle < nx) nx = idle;
   }
   return nx < t ? t : nx;
+}
+
+bool dram_banked_ctrl_parked(struct dram_banked *d, struct dram_banked_channel *c, int64_t t) {
+  const struct dram_banked_queue *w = &c->q[DRAM_BANKED_WR_Q];
+  return !d->p.idle_drain_cycles && w->n && !c->draining && !c->cq_n && !c->q[DRAM_BANKED_RD_Q].n &&
+         visible(w, t) == w->n && !schedule_cq(d, c, t, false);
 }
 
 /* Handle DRAM cycle `now` on channel c (refreshes fallen due): at most one

@@ -290,6 +290,10 @@ void dram_banked_ctrl_take(struct dram_banked *d, struct dram_banked_channel *c,
 /* Issue the column command of entry j of command queue qi at now. */
 void dram_banked_ctrl_issue_column(struct dram_banked *d, struct dram_banked_channel *c,
                                    uint32_t qi, uint32_t j, int64_t now);
+/* Is channel c parked at cycle t: idle_drain_cycles 0 and its only work
+ * writes in its write buffer, all arrived, that no drain will move before the
+ * next request arrives? (Such a channel needs no wake.) */
+bool dram_banked_ctrl_parked(struct dram_banked *d, struct dram_banked_channel *c, int64_t t);
 /* The command queue request r goes to. */
 uint32_t dram_banked_cq_of(const struct dram_banked *d, const struct dram_banked_req *r);
 

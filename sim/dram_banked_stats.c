@@ -108,6 +108,9 @@ static const struct stats_desc banked_desc[] = {
                 "writes that found their line in the write queue"),
     STATS_FIELD(struct dram_banked_stats, read_merges, "dram_read_merges", "count",
                 "reads served by another queued read's column command"),
+    STATS_FIELD(struct dram_banked_stats, writes_left, "dram_writes_left", "count",
+                "writes still buffered when the run ended, never written, so in no energy "
+                "figure (none unless dram.idle_drain_cycles is 0)"),
     STATS_F64(struct dram_banked_stats, bus_busy_cycles, bk_bus_utilization, "dram_bus_utilization",
               "fraction", "data bus busy, averaged over channels"),
     STATS_F64(struct dram_banked_stats, bank_open_cycles, bk_bank_active_fraction,

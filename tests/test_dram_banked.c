@@ -562,20 +562,38 @@ static void test_cq_write_drain(void) {
   EXPECT(s->write_drains == 1 && s->writes == 3 && s->reads == 1 && s->write_forwards == 1);
   dram_banked_destroy(d);
   /* Two writes (not more than write_low) and no other traffic stay buffered
-   * until the channel has been idle DRAM_BANKED_IDLE_DRAIN_CYCLES: a read of
-   * another row of their bank at 500 finds it closed (ACT 502, done 538);
-   * they are written by the end (finish checks nothing is left queued). */
+   * until the channel has been idle idle_drain_cycles: a read of another row
+   * of their bank at 500 finds it closed (ACT 502, done 538); they are
+   * written by the end (finish checks nothing is left queued), the second
+   * arrived after cycle 1, so drained from the end of 1001 on. With
+   * idle_drain_cycles 0 (DRAMsim3's) the read is the same, the writes are
+   * never written and the run ends with the read. */
   struct rq b[] = {{0, addr_of(&p, 0, 0, 0, 0, 1, 0), true},
                    {1, addr_of(&p, 0, 0, 0, 0, 1, 1), true},
                    {500, addr_of(&p, 0, 0, 0, 0, 2, 0), false}};
-  d = run(&p, 1200 * MHZ, b, 3, done, 0);
-  EXPECTF(done[0] == 2 && done[1] == 3 && done[2] == 538,
-          "idle writes: %llu %llu %llu, expected 2 3 538", (unsigned long long)done[0],
-          (unsigned long long)done[1], (unsigned long long)done[2]);
-  s = dram_banked_get_stats(d);
-  EXPECT(s->writes == 2 && s->write_drains == 1 && s->row_conflicts == 1);
-  EXPECT(dram_banked_finished_cycles(d) >= 500 + DRAM_BANKED_IDLE_DRAIN_CYCLES);
-  dram_banked_destroy(d);
+  for (uint32_t idle = 1000; idle != UINT32_MAX; idle = idle ? 0 : UINT32_MAX) {
+    p.idle_drain_cycles = idle;
+    d = run(&p, 1200 * MHZ, b, 3, done, 0);
+    EXPECTF(done[0] == 2 && done[1] == 3 && done[2] == 538,
+            "idle writes (%u): %llu %llu %llu, expected 2 3 538", idle, (unsigned long long)done[0],
+            (unsigned long long)done[1], (unsigned long long)done[2]);
+    s = dram_banked_get_stats(d);
+    const uint64_t end = dram_banked_finished_cycles(d);
+    if (idle) {
+      EXPECT(s->writes == 2 && s->writes_left == 0 && s->write_drains == 1 &&
+             s->row_conflicts == 1);
+      EXPECTF(end > 1001 + 2 + 16,
+              "idle writes: finished at %llu, expected past the drain's ACT "
+              "(1002) and first WR (1018)",
+              (unsigned long long)end);
+    } else {
+      EXPECT(s->writes == 0 && s->writes_left == 2 && s->write_drains == 0 && s->row_misses == 1 &&
+             s->activates == 1);
+      EXPECTF(end == 539, "no idle drain: finished at %llu, expected 539 (the read's data at 538)",
+              (unsigned long long)end);
+    }
+    dram_banked_destroy(d);
+  }
 }
 
 /* 19: per_bank, a row hit does not pass an older request's ready ACT or PRE
@@ -686,23 +704,28 @@ static void test_oracle_and_little(void) {
     uint64_t core_mhz;
     enum dram_banked_queues qs;
     uint32_t cmdq, cc;
+    bool never_drain; /* idle_drain_cycles 0 (else the presets' 1000) */
   } cfgs[] = {
       {"rochrababgco", 1, 1, 4, 4, 32, 32, 24, 8, DRAM_BANKED_OPEN_PAGE, 1200, DRAM_BANKED_SHARED,
-       0, 0},
+       0, 0, false},
       {"chrobabgraco", 2, 2, 4, 4, 16, 16, 12, 4, DRAM_BANKED_CLOSE_PAGE, 1400, DRAM_BANKED_SHARED,
-       0, 0},
+       0, 0, false},
       {"rorabgbachco", 4, 4, 2, 2, 4, 4, 3, 1, DRAM_BANKED_OPEN_PAGE, 1000, DRAM_BANKED_SHARED, 0,
-       0},
+       0, false},
       {"robgbarachco", 2, 2, 4, 2, 8, 8, 6, 0, DRAM_BANKED_OPEN_PAGE, 2000, DRAM_BANKED_SHARED, 0,
-       0},
+       0, false},
       {"rochrababgco", 1, 2, 4, 4, 16, 16, 16, 8, DRAM_BANKED_OPEN_PAGE, 1400, DRAM_BANKED_PER_BANK,
-       8, 2},
+       8, 2, false},
       {"chrobabgraco", 2, 2, 4, 4, 8, 8, 6, 2, DRAM_BANKED_CLOSE_PAGE, 1000, DRAM_BANKED_PER_BANK,
-       2, 1},
+       2, 1, false},
       {"rorabgbachco", 2, 1, 4, 4, 16, 16, 12, 4, DRAM_BANKED_OPEN_PAGE, 2000, DRAM_BANKED_PER_RANK,
-       32, 3},
+       32, 3, false},
       {"robgbarachco", 2, 4, 2, 2, 4, 4, 4, 0, DRAM_BANKED_OPEN_PAGE, 1200, DRAM_BANKED_PER_RANK, 3,
-       2},
+       2, false},
+      {"rochrababgco", 1, 2, 4, 4, 16, 16, 16, 8, DRAM_BANKED_OPEN_PAGE, 1400, DRAM_BANKED_PER_BANK,
+       8, 2, true},
+      {"rorabgbachco", 2, 1, 4, 4, 16, 16, 12, 4, DRAM_BANKED_OPEN_PAGE, 2000, DRAM_BANKED_PER_RANK,
+       32, 3, true},
   };
   enum { N = 1500, SEEDS = 6 };
   struct rq *r = xcalloc(N, sizeof *r);
@@ -724,6 +747,7 @@ static void test_oracle_and_little(void) {
     p.queue_structure = cfgs[ci].qs;
     p.command_queue = cfgs[ci].cmdq;
     if (cfgs[ci].cc) p.controller_cycles = cfgs[ci].cc;
+    if (cfgs[ci].never_drain) p.idle_drain_cycles = 0;
     p.tREFI = 2400; /* frequent, to exercise refresh */
     p.tRFC = 120;
     for (uint64_t seed = 1; seed <= SEEDS; seed++) {
@@ -742,11 +766,20 @@ static void test_oracle_and_little(void) {
         fprintf(stderr, "config %u seed %llu: skip-ahead differs from the per-cycle oracle\n", ci,
                 (unsigned long long)seed);
       }
-      /* Every request is served by a column command, or from the write queue. */
-      EXPECT(sa->reads + sa->writes + sa->write_forwards + sa->write_merges + sa->read_merges == N);
+      /* Every request is served by a column command, or from the write queue,
+       * or is a write left buffered (never draining only, at most write_low a
+       * channel). */
+      EXPECT(sa->reads + sa->writes + sa->write_forwards + sa->write_merges + sa->read_merges +
+                 sa->writes_left ==
+             N);
+      EXPECT(cfgs[ci].never_drain ? sa->writes_left <= p.write_low * p.channels
+                                  : sa->writes_left == 0);
       EXPECT(sa->row_hits + sa->row_misses + sa->row_conflicts == sa->reads + sa->writes);
-      /* Little: the occupancy integral by time equals the waits by request. */
-      for (int k = 0; k < 2; k++) little_bad += sa->queue_area[k] != sa->queue_wait_sum_cycles[k];
+      /* Little: the occupancy integral by time equals the waits by request
+       * (writes left buffered occupy the queue with no wait counted). */
+      for (int k = 0; k < 2; k++)
+        little_bad +=
+            (k == 0 || !sa->writes_left) && sa->queue_area[k] != sa->queue_wait_sum_cycles[k];
       if (seed == 1) {
         struct stats_table t = {0};
         dram_level_report(&dram_banked_ops, a, &t, fin);
@@ -759,6 +792,7 @@ static void test_oracle_and_little(void) {
         }
         double nk[2] = {(double)sa->reads, (double)sa->writes};
         for (int k = 0; k < 2; k++) {
+          if (k == 1 && sa->writes_left) continue; /* (as above) */
           double lhs = len[k] * (double)fin, rhs = wmean[k] * nk[k];
           EXPECTF(lhs > 0 && rhs > 0 && lhs <= rhs * (1 + 1e-9) && rhs <= lhs * (1 + 1e-9),
                   "Little, queue %d: length mean x cycles %.3f, waits %.3f", k, lhs, rhs);

@@ -174,8 +174,46 @@ static void test_per_rank(void) {
   dram_banked_destroy(d);
 }
 
+/* The idle write drain moves energy between the background parts (per_bank,
+ * two writes to one row taken at 100 and 101, finished at core cycle 3000:
+ * per_bank decides that cycle too, so the level runs 3001). Draining
+ * after 1000 idle cycles (the presets'): the second write arrived after cycle
+ * 101, so the drain starts at the end of 1101 and moves one write a cycle;
+ * ACT 1102, WR 1118 (tRCD) and 1124 (tCCD_L), the row open from 1102 to the
+ * end: 1899 cycles active, 1102 precharged. Never draining (0, DRAMsim3's):
+ * no command, 3001 cycles precharged, the two writes left in the buffer. So
+ * the drain costs 1899 precharged cycles turned active, ACT and two WR. */
+static void test_idle_drain(void) {
+  struct dram_banked_params p = testing_ddr4_params();
+  p.queue_structure = DRAM_BANKED_PER_BANK;
+  p.command_queue = 8;
+  p.controller_cycles = 2;
+  const struct rq a[] = {{100, line(&p, 0, 0, 7), true}, {101, line(&p, 0, 0, 7) + 64, true}};
+  struct dram_banked_energy drained, kept;
+  p.idle_drain_cycles = 1000;
+  struct dram_banked *d = run(&p, a, 2, 3000);
+  dram_banked_energy_of(d, -1, -1, &drained);
+  expect_energy("idle drain after 1000", &drained, ACT, 0, 2.0 * WR, 0, 1899.0 * ACT_STB,
+                1102.0 * PRE_STB);
+  EXPECT(dram_banked_get_stats(d)->writes == 2 && dram_banked_get_stats(d)->writes_left == 0);
+  dram_banked_destroy(d);
+  p.idle_drain_cycles = 0;
+  d = run(&p, a, 2, 3000);
+  dram_banked_energy_of(d, -1, -1, &kept);
+  expect_energy("no idle drain", &kept, 0, 0, 0, 0, 0, 3001.0 * PRE_STB);
+  struct stats_table t = {0};
+  dram_level_report(&dram_banked_ops, d, &t, 3000);
+  EXPECT(table_f64(&t, "dram_writes_left") == 2 && dram_banked_get_stats(d)->writes == 0);
+  stats_fini(&t);
+  dram_banked_destroy(d);
+  EXPECTF(near(kept.precharge_standby_j - drained.precharge_standby_j, 1899.0 * PRE_STB * PJ),
+          "the drain's precharged standby: %.15g J less, expected %.15g",
+          kept.precharge_standby_j - drained.precharge_standby_j, 1899.0 * PRE_STB * PJ);
+}
+
 int main(void) {
   test_read_open_page();
+  test_idle_drain();
   test_close_page();
   test_refresh();
   test_per_rank();

@@ -222,6 +222,47 @@ static void test_banked(void) {
             "energy part %u: %.15g J, want %.15g", i, part[i][0], part[i][1]);
 }
 
+/* The same preset's idle write drain, honoured by dram-replay (--set
+ * dram.idle_drain_cycles): two writes to one row arrive after DRAM cycles 100
+ * and 101 (served, posted, at 102 and 103). Drained after 1000 idle cycles
+ * (the preset's): the drain starts at the end of 1101, ACT 1102, WR 1119
+ * (tRCD 17) and 1125 (tCCD_L 6), the level's last cycle; it ends at 1126:
+ * rank 0 active 1102 to 1126, 24 x 344 = 8256 pJ; precharged rank 0's first
+ * 1102 cycles and rank 1's 1126, 2228 x 272 = 606016 pJ; ACT 3464 pJ, two WRs
+ * 2 x 8 (123 - 43) 4 = 5120 pJ. Never drained (0, DRAMsim3's): no command,
+ * the level ends after the second write is served (cycle 103 handled: 104),
+ * 2 x 104 x 272 = 56576 pJ precharged, and both writes left. */
+static void test_banked_idle_drain(void) {
+  const char *csv = TMP "idle.csv";
+  static const struct {
+    const char *set, *left;
+    double act, wr, act_stb, pre_stb;
+  } runs[] = {{"", "0", 3464e-12, 5120e-12, 8256e-12, 606016e-12},
+              {"--set dram.idle_drain_cycles=0", "2", 0, 0, 0, 56576e-12}};
+  for (unsigned r = 0; r < 2; r++) {
+    char args[1024], msg[4096];
+    snprintf(args, sizeof args,
+             SRC "configs/dram/ddr4-2400.yaml " DT "idle_writes.trace --set clock_ghz=1.2 %s",
+             runs[r].set);
+    int rc = replay(args, csv, msg, sizeof msg);
+    EXPECTF(rc == 0, "exit %d: %s", rc, msg);
+    static struct csv c;
+    EXPECT(csv_load(csv, &c));
+    EXPECT_COL(&c, "writes", "2");
+    EXPECT_COL(&c, "dram_writes_left", runs[r].left);
+    const double part[][2] = {{csv_num(&c, "dram_energy_activate_j"), runs[r].act},
+                              {csv_num(&c, "dram_energy_read_j"), 0},
+                              {csv_num(&c, "dram_energy_write_j"), runs[r].wr},
+                              {csv_num(&c, "dram_energy_refresh_j"), 0},
+                              {csv_num(&c, "dram_energy_active_standby_j"), runs[r].act_stb},
+                              {csv_num(&c, "dram_energy_precharge_standby_j"), runs[r].pre_stb}};
+    for (unsigned i = 0; i < sizeof part / sizeof part[0]; i++)
+      EXPECTF(fabs(part[i][0] - part[i][1]) <= 1e-12 * part[i][1],
+              "idle drain '%s', energy part %u: %.15g J, want %.15g", runs[r].set, i, part[i][0],
+              part[i][1]);
+  }
+}
+
 /* ---- 4. round trip through rtsim run ---- */
 
 /* The trace records each request at the cycle the DRAM took it (a request
@@ -482,6 +523,7 @@ int main(void) {
   test_fixed();
   test_channel();
   test_banked();
+  test_banked_idle_drain();
   test_round_trip();
   test_formats();
   test_bad();

@@ -106,13 +106,23 @@ static bool estimate_own(const char *name) {
  * banked level's numbers. */
 static bool dram_own(const char *name) {
   if (rung_own(name)) return true;
-  static const char *const own[] = {
-      "dram_utilization",  "dram_fifo_",           "dram_row_",
-      "dram_activates",    "dram_precharges",      "dram_refresh",
-      "dram_write_drains", "dram_write_forwards",  "dram_write_merges",
-      "dram_read_merges",  "dram_bus_utilization", "dram_bank_active_fraction",
-      "dram_read_queue_",  "dram_write_queue_",    "dram_energy_",
-      "dram_power_w"};
+  static const char *const own[] = {"dram_utilization",
+                                    "dram_fifo_",
+                                    "dram_row_",
+                                    "dram_activates",
+                                    "dram_precharges",
+                                    "dram_refresh",
+                                    "dram_write_drains",
+                                    "dram_write_forwards",
+                                    "dram_write_merges",
+                                    "dram_read_merges",
+                                    "dram_writes_left",
+                                    "dram_bus_utilization",
+                                    "dram_bank_active_fraction",
+                                    "dram_read_queue_",
+                                    "dram_write_queue_",
+                                    "dram_energy_",
+                                    "dram_power_w"};
   for (size_t i = 0; i < sizeof own / sizeof own[0]; i++)
     if (!strncmp(name, own[i], strlen(own[i]))) return true;
   return false;

@@ -95,6 +95,7 @@ static void test_params_ranges(void) {
       {"dram.tFAW", "dram.tFAW: must be 1 to 10000 DRAM cycles"},
       {"dram.bytes_per_cycle", "dram.bytes_per_cycle: must be 1e-06 to 10^6 bytes/cycle"},
       {"dram.latency", "dram.latency: must be 0 to 10^9 cycles"},
+      {"dram.idle_drain_cycles", "dram.idle_drain_cycles: must be 0 to 10^7 DRAM cycles"},
       {"timeline.window", "timeline.window: must be 1 to 10^12 cycles"},
       {"sample.fraction", "sample.fraction: must be 1e-06 to 1"},
       {"sample.image", "sample.image: expected one of: sampled, whole"},
@@ -123,6 +124,7 @@ static void test_params_ranges(void) {
     else if (!strcmp(k, "dram.tFAW")) b.p.dram_banked.tFAW = 1u << 21;
     else if (!strcmp(k, "dram.bytes_per_cycle")) b.p.dram_bytes_per_cycle = 0;
     else if (!strcmp(k, "dram.latency")) b.p.dram_latency_cycles = 1ull << 40;
+    else if (!strcmp(k, "dram.idle_drain_cycles")) b.p.dram_banked.idle_drain_cycles = 10000001;
     else if (!strcmp(k, "timeline.window")) b.p.timeline_window_cycles = 0;
     else if (!strcmp(k, "sample.fraction")) b.sample.fraction = 1.5;
     else if (!strcmp(k, "sample.image")) b.sample.whole_image = 2;

@@ -230,6 +230,7 @@ struct dram_banked_params testing_ddr4_params(void) {
   p.write_queue = 32;
   p.write_high = 24;
   p.write_low = 8;
+  p.idle_drain_cycles = 1000; /* the presets' */
   p.tCL = 16, p.tCWL = 16, p.tRCD = 16, p.tRP = 16, p.tRAS = 39, p.tRC = 55;
   p.tCCD_S = 4, p.tCCD_L = 6, p.tRRD_S = 4, p.tRRD_L = 6, p.tFAW = 26;
   p.tWR = 19, p.tWTR_S = 3, p.tWTR_L = 9, p.tRTW = 6, p.tRTP = 9;

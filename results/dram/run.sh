@@ -14,6 +14,10 @@
 #  3. saturated.csv: three streams offered faster than a channel serves.
 #  4. energy.csv: the DRAM's energy of the replays of 2 and 3 by component,
 #     rtsim's and DRAMsim3's, in joules.
+#  rtsim replays each stream of 2 and 3 twice: with the presets' idle write
+#  drain (dram.idle_drain_cycles 1000) and without it (0, as DRAMsim3); each
+#  table has a row for each (column idle_drain_cycles), DRAMsim3's columns the
+#  same on both.
 #  5. energy-estimate.csv: a DRAM energy estimate from a cheaper rung's counts
 #     against the banked level's (from levels.csv).
 # From the repository top, after sh .ci/setup:
@@ -65,14 +69,14 @@ readlat() {
 energy=results/dram/energy.csv
 ecomp="activate read write refresh active_standby precharge_standby total"
 {
-  printf 'stream,requests,writes'
+  printf 'stream,idle_drain_cycles,requests,writes'
   for c in $ecomp; do printf ',rtsim_%s_j,dramsim3_%s_j' "$c" "$c"; done
   printf '\n'
 } > "$energy.tmp"
 # A replay's energy row: stream name, rtsim's CSV, DRAMsim3's output (may be
-# missing or unfinished: its columns empty).
+# missing or unfinished: its columns empty), rtsim's dram.idle_drain_cycles.
 energy_row() {
-  printf '%s,%s,%s' "$1" "$(csvget "$2" requests)" "$(csvget "$2" writes)"
+  printf '%s,%s,%s,%s' "$1" "$4" "$(csvget "$2" requests)" "$(csvget "$2" writes)"
   fin=; [ -f "$3" ] && fin=$(kvget "$3" finished)
   for c in $ecomp; do
     case $c in
@@ -89,7 +93,7 @@ energy_row() {
 }
 
 table=results/dram/dramsim3.csv
-echo "scene,policy,requests,writes,rtsim_read_latency_mean,dramsim3_read_latency_mean,rtsim_read_latency_p50,dramsim3_read_latency_p50,rtsim_read_latency_p95,dramsim3_read_latency_p95,rtsim_read_latency_p99,dramsim3_read_latency_p99,rtsim_gb_per_s,dramsim3_gb_per_s,rtsim_row_hit_rate,dramsim3_row_hit_rate" > "$table.tmp"
+echo "scene,policy,idle_drain_cycles,requests,writes,rtsim_read_latency_mean,dramsim3_read_latency_mean,rtsim_read_latency_p50,dramsim3_read_latency_p50,rtsim_read_latency_p95,dramsim3_read_latency_p95,rtsim_read_latency_p99,dramsim3_read_latency_p99,rtsim_gb_per_s,dramsim3_gb_per_s,rtsim_row_hit_rate,dramsim3_row_hit_rate" > "$table.tmp"
 for scene in sphereflake grove room; do
   for policy in recursive dynamic; do
     t="$out/$scene-$policy"
@@ -97,9 +101,6 @@ for scene in sphereflake grove room; do
       --rays primary,shadow,diffuse --policy "$policy" --dram-trace "$t.trace" -o "$t" > /dev/null
     # Both replay the same three-column trace (DRAMsim3's format).
     awk '!/^#/ && NF { print $1, $2, $3 }' "$t.trace" > "$t.dramsim3.trace"
-    build/rtsim dram-replay configs/default.yaml "$t.dramsim3.trace" --set clock_ghz=1.2 \
-      --per-request "$t.rtsim.per" > "$t.rtsim.csv"
-    set -- $(readlat "$t.dramsim3.trace" "$t.rtsim.per")
     d3_mean= d3_p50= d3_p95= d3_p99= d3_gbs= d3_hit=
     if [ -n "${DRAMSIM3:-}" ]; then
       # DRAMsim3's controller can deadlock (a write drain that a queued read of
@@ -116,12 +117,17 @@ for scene in sphereflake grove room; do
         d3_hit=$(kvget "$d3" row_hit_rate)
       fi
     fi
-    r="$t.rtsim.csv"
-    printf '%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%.3f,%s,%.4f,%s\n' "$scene" "$policy" \
-      "$(csvget "$r" requests)" "$(csvget "$r" writes)" "$1" "$d3_mean" "$2" "$d3_p50" \
-      "$3" "$d3_p95" "$4" "$d3_p99" \
-      "$(csvget "$r" gb_per_s)" "$d3_gbs" "$(csvget "$r" dram_row_hit_rate)" "$d3_hit" >> "$table.tmp"
-    energy_row "$scene-$policy" "$r" "$t.dramsim3.txt" >> "$energy.tmp"
+    for drain in 1000 0; do
+      r="$t.rtsim-$drain.csv"
+      build/rtsim dram-replay configs/default.yaml "$t.dramsim3.trace" --set clock_ghz=1.2 \
+        --set dram.idle_drain_cycles=$drain --per-request "$t.rtsim-$drain.per" > "$r"
+      set -- $(readlat "$t.dramsim3.trace" "$t.rtsim-$drain.per")
+      printf '%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%.3f,%s,%.4f,%s\n' "$scene" "$policy" "$drain" \
+        "$(csvget "$r" requests)" "$(csvget "$r" writes)" "$1" "$d3_mean" "$2" "$d3_p50" \
+        "$3" "$d3_p95" "$4" "$d3_p99" \
+        "$(csvget "$r" gb_per_s)" "$d3_gbs" "$(csvget "$r" dram_row_hit_rate)" "$d3_hit" >> "$table.tmp"
+      energy_row "$scene-$policy" "$r" "$t.dramsim3.txt" "$drain" >> "$energy.tmp"
+    done
   done
 done
 mv "$table.tmp" "$table"
@@ -132,12 +138,9 @@ mv "$table.tmp" "$table"
 #    serves: the bandwidth each controller sustains, and the read latencies
 #    (DRAM cycles, from the request's arrival; from its taking, the mean).
 sat=results/dram/saturated.csv
-echo "stream,requests,writes,rtsim_bytes_per_cycle,dramsim3_bytes_per_cycle,rtsim_row_hit_rate,dramsim3_row_hit_rate,rtsim_read_latency_mean,dramsim3_read_latency_mean,rtsim_read_latency_p95,dramsim3_read_latency_p95,rtsim_read_latency_p99,dramsim3_read_latency_p99,rtsim_read_latency_taken_mean,dramsim3_read_latency_taken_mean" > "$sat.tmp"
+echo "stream,idle_drain_cycles,requests,writes,rtsim_bytes_per_cycle,dramsim3_bytes_per_cycle,rtsim_row_hit_rate,dramsim3_row_hit_rate,rtsim_read_latency_mean,dramsim3_read_latency_mean,rtsim_read_latency_p95,dramsim3_read_latency_p95,rtsim_read_latency_p99,dramsim3_read_latency_p99,rtsim_read_latency_taken_mean,dramsim3_read_latency_taken_mean" > "$sat.tmp"
 for s in grove-recursive sphereflake-dynamic room-dynamic; do
   awk '!/^#/ && NF { n++; if (n <= 400000) print $1, $2, n }' "$out/$s.trace" > "$out/$s.saturated.trace"
-  build/rtsim dram-replay configs/default.yaml "$out/$s.saturated.trace" --set clock_ghz=1.2 \
-    --per-request "$out/$s.saturated.per" > "$out/$s.saturated.csv"
-  set -- $(readlat "$out/$s.saturated.trace" "$out/$s.saturated.per")
   d3_bpc= d3_hit= d3_mean= d3_p95= d3_p99= d3_taken=
   if [ -n "${DRAMSIM3:-}" ]; then
     d3="$out/$s.saturated.dramsim3.txt"
@@ -149,12 +152,17 @@ for s in grove-recursive sphereflake-dynamic room-dynamic; do
       d3_p99=$(kvget "$d3" read_latency_p99) d3_taken=$(kvget "$d3" read_latency_from_accept_mean)
     fi
   fi
-  r="$out/$s.saturated.csv"
-  printf '%s,%s,%s,%.3f,%s,%.4f,%s,%s,%s,%s,%s,%s,%s,%.2f,%s\n' "$s" \
-    "$(csvget "$r" requests)" "$(csvget "$r" writes)" \
-    "$(csvget "$r" bytes_per_cycle)" "$d3_bpc" "$(csvget "$r" dram_row_hit_rate)" "$d3_hit" \
-    "$1" "$d3_mean" "$3" "$d3_p95" "$4" "$d3_p99" "$(csvget "$r" read_latency_taken_mean)" "$d3_taken" >> "$sat.tmp"
-  energy_row "$s-saturated" "$r" "$out/$s.saturated.dramsim3.txt" >> "$energy.tmp"
+  for drain in 1000 0; do
+    r="$out/$s.saturated-$drain.csv"
+    build/rtsim dram-replay configs/default.yaml "$out/$s.saturated.trace" --set clock_ghz=1.2 \
+      --set dram.idle_drain_cycles=$drain --per-request "$out/$s.saturated-$drain.per" > "$r"
+    set -- $(readlat "$out/$s.saturated.trace" "$out/$s.saturated-$drain.per")
+    printf '%s,%s,%s,%s,%.3f,%s,%.4f,%s,%s,%s,%s,%s,%s,%s,%.2f,%s\n' "$s" "$drain" \
+      "$(csvget "$r" requests)" "$(csvget "$r" writes)" \
+      "$(csvget "$r" bytes_per_cycle)" "$d3_bpc" "$(csvget "$r" dram_row_hit_rate)" "$d3_hit" \
+      "$1" "$d3_mean" "$3" "$d3_p95" "$4" "$d3_p99" "$(csvget "$r" read_latency_taken_mean)" "$d3_taken" >> "$sat.tmp"
+    energy_row "$s-saturated" "$r" "$out/$s.saturated.dramsim3.txt" "$drain" >> "$energy.tmp"
+  done
 done
 mv "$sat.tmp" "$sat"
 mv "$energy.tmp" "$energy"
