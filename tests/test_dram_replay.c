@@ -246,16 +246,16 @@ static void test_banked_idle_drain(void) {
              runs[r].set);
     int rc = replay(args, csv, msg, sizeof msg);
     EXPECTF(rc == 0, "exit %d: %s", rc, msg);
-    static struct csv c;
-    EXPECT(csv_load(csv, &c));
+    static struct testing_csv c;
+    EXPECT(testing_csv_load(csv, &c));
     EXPECT_COL(&c, "writes", "2");
     EXPECT_COL(&c, "dram_writes_left", runs[r].left);
-    const double part[][2] = {{csv_num(&c, "dram_energy_activate_j"), runs[r].act},
-                              {csv_num(&c, "dram_energy_read_j"), 0},
-                              {csv_num(&c, "dram_energy_write_j"), runs[r].wr},
-                              {csv_num(&c, "dram_energy_refresh_j"), 0},
-                              {csv_num(&c, "dram_energy_active_standby_j"), runs[r].act_stb},
-                              {csv_num(&c, "dram_energy_precharge_standby_j"), runs[r].pre_stb}};
+    const double part[][2] = {{testing_csv_num(&c, "dram_energy_activate_j"), runs[r].act},
+                              {testing_csv_num(&c, "dram_energy_read_j"), 0},
+                              {testing_csv_num(&c, "dram_energy_write_j"), runs[r].wr},
+                              {testing_csv_num(&c, "dram_energy_refresh_j"), 0},
+                              {testing_csv_num(&c, "dram_energy_active_standby_j"), runs[r].act_stb},
+                              {testing_csv_num(&c, "dram_energy_precharge_standby_j"), runs[r].pre_stb}};
     for (unsigned i = 0; i < sizeof part / sizeof part[0]; i++)
       EXPECTF(fabs(part[i][0] - part[i][1]) <= 1e-12 * part[i][1],
               "idle drain '%s', energy part %u: %.15g J, want %.15g", runs[r].set, i, part[i][0],
