@@ -60,8 +60,12 @@ struct cache {
   /* What a find, a use, a victim and an install read, first and in one host
    * line (the struct is line-aligned): on 1024 cores the L1s' headers are
    * as far from the host's near caches as their sets. */
-  bool scan;         /* few ways: find a line by scanning its set */
-  bool flat_ok;      /* small and scanned: flat, made at the first install */
+  bool scan;    /* few ways: find a line by scanning its set */
+  bool flat_ok; /* small and scanned: flat, made at the first install */
+  /* Flat, 4 or 16 ways (the configured L1s and L2), and a power-of-two
+   * count of sets: the ways, whose use and fill take a path with the
+   * geometry as constants (FAST_USE); else 0. */
+  uint8_t fast_ways;
   unsigned lg2_ways; /* ways a power of two: its log2, else 64 (divide) */
   uint64_t ways;
   uint64_t set_mask; /* sets - 1 when a power of two, else 0 (use %) */
@@ -318,6 +322,8 @@ struct cache *cache_create(const struct cache_params *p) {
   if (c->sets == 1) c->set_mask = 0;
   c->scan = c->ways <= SCAN_WAYS;
   c->flat_ok = c->scan && c->lines <= (p->shared ? FLAT_LINES_SHARED : FLAT_LINES);
+  const bool sets_pow2 = (c->sets & (c->sets - 1)) == 0; /* set_of_line masks */
+  if (c->flat_ok && sets_pow2 && (c->ways == 4 || c->ways == 16)) c->fast_ways = (uint8_t)c->ways;
   c->set_page_count = c->flat_ok ? 0 : (c->sets + SET_PAGE - 1) / SET_PAGE;
   c->set_pages = xcalloc(c->set_page_count ? c->set_page_count : 1, sizeof *c->set_pages);
   if (!c->scan) table_resize(c, 4);
@@ -368,6 +374,36 @@ static inline uint32_t flat_match(const uint64_t *t, uint64_t key, uint64_t n) {
   return mask;
 }
 #endif
+
+/* The index of key among the n (4 or 16) tags at t, or -1 (a line is in one
+ * slot at most). SSE2 compares 32-bit halves and packs the results narrower
+ * before one movemask, so a tag matches where all the bits of its halves
+ * are set: half the instructions of flat_match's two tags a compare. Four
+ * tags: words to 16 bits, four bits a tag; eight: on to bytes, two a tag. */
+static inline int64_t flat_find_n(const uint64_t *t, uint64_t key, uint64_t n) {
+#if defined(__SSE2__)
+  const __m128i kk = _mm_set1_epi64x((long long)key);
+#define FIND_EQ(i) _mm_cmpeq_epi32(_mm_loadu_si128((const __m128i *)(t + (i))), kk)
+  if (n == 4) {
+    uint32_t m = (uint32_t)_mm_movemask_epi8(_mm_packs_epi32(FIND_EQ(0), FIND_EQ(2)));
+    m &= (m >> 2) & 0x1111u;
+    return m ? (int64_t)(__builtin_ctz(m) >> 2) : -1;
+  }
+  uint64_t m = 0;
+  for (uint64_t k = 0; k < n; k += 8) {
+    const __m128i lo = _mm_packs_epi32(FIND_EQ(k), FIND_EQ(k + 2));
+    const __m128i hi = _mm_packs_epi32(FIND_EQ(k + 4), FIND_EQ(k + 6));
+    m |= (uint64_t)(uint32_t)_mm_movemask_epi8(_mm_packs_epi16(lo, hi)) << (2 * k);
+  }
+#undef FIND_EQ
+  m &= (m >> 1) & 0x5555555555555555ull;
+  return m ? (int64_t)(__builtin_ctzll(m) >> 1) : -1;
+#else
+  for (uint64_t k = 0; k < n; k++)
+    if (t[k] == key) return (int64_t)k;
+  return -1;
+#endif
+}
 
 /* A flat cache's scan: set s's tags only (one host line for 8 ways), no
  * set or slot read; the index in the set's vector of line's slot, or -1. */
@@ -461,7 +497,20 @@ void cache_touch(struct cache *c, uint32_t slot) {
   to_head(c, set_get(c, set_of_slot(c, slot)), slot);
 }
 
+/* cache_use of a fast_ways cache of W ways (a constant at each call). */
+static inline uint32_t fast_use(struct cache *c, uint64_t line, const uint64_t W) {
+  if (!c->ftag) return CACHE_NONE;
+  const uint64_t s = line & c->set_mask;
+  uint64_t *t = c->ftag + 2 * W * s;
+  const int64_t k = flat_find_n(t, line + 1, W);
+  if (k < 0) return CACHE_NONE;
+  flat_touch(c, t + W + k);
+  return (uint32_t)(s * W + W - 1 - (uint64_t)k);
+}
+
 uint32_t cache_use(struct cache *c, uint64_t line) {
+  if (c->fast_ways == 4) return fast_use(c, line, 4);
+  if (c->fast_ways == 16) return fast_use(c, line, 16);
   if (!c->scan) {
     const uint32_t slot = cache_find(c, line);
     if (slot != CACHE_NONE) cache_touch(c, slot);
@@ -598,7 +647,23 @@ void cache_set_byte(struct cache *c, uint32_t slot, uint8_t v) {
   else slot_get(c, slot)->byte = v;
 }
 
+/* cache_fill of a fast_ways cache of W ways (a constant at each call). */
+static inline bool fast_fill(struct cache *c, uint64_t line, bool dirty, const uint64_t W) {
+  if (!c->ftag) flat_make(c);
+  uint64_t *t = c->ftag + 2 * W * (line & c->set_mask);
+  int64_t k = flat_find_n(t, line + 1, W);
+  if (k >= 0) {
+    flat_touch(c, t + W + k);
+    return true;
+  }
+  k = flat_oldest(t + W, W);
+  if (k >= 0) flat_put(c, t + k, t + W + k, line, dirty, false);
+  return false;
+}
+
 bool cache_fill(struct cache *c, uint64_t line, bool dirty) {
+  if (c->fast_ways == 4) return fast_fill(c, line, dirty, 4);
+  if (c->fast_ways == 16) return fast_fill(c, line, dirty, 16);
   if (c->flat_ok) {
     /* cache_use, cache_victim and cache_install in one look at the set. */
     if (!c->ftag) flat_make(c);

@@ -17,7 +17,7 @@ struct dram_channel {
   struct dram_channel_params p;
   struct engine *eng;
   struct dram_client client;
-  double ticks_per_byte;
+  uint64_t line_ticks;  /* one line's transfer: at least one tick, so it takes time */
   dram_tick *starts;    /* ring: start ticks of the last queue_depth requests */
   uint64_t k;           /* requests so far */
   dram_tick free_ticks; /* when the channel is next free: the last transfer's end */
@@ -108,9 +108,7 @@ static void ch_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   sweep_to(d, arrive);
   uint32_t slot = (uint32_t)(d->k % d->p.queue_depth);
   dram_tick start = arrive > d->free_ticks ? arrive : d->free_ticks;
-  /* At least one tick, so a transfer always takes time. */
-  uint64_t dur = (uint64_t)llround((double)SIM_LINE_BYTES * d->ticks_per_byte);
-  if (dur == 0) dur = 1;
+  const uint64_t dur = d->line_ticks;
   dram_tick end = start + dur;
   d->starts[slot] = start;
   d->k++;
@@ -214,7 +212,9 @@ struct dram_channel *dram_channel_create(const struct dram_channel_params *p, st
   d->eng = e;
   d->client = *client;
   d->space_at = UINT64_MAX;
-  d->ticks_per_byte = (double)(1ull << DRAM_TICK_BITS) / p->bytes_per_cycle;
+  const double ticks_per_byte = (double)(1ull << DRAM_TICK_BITS) / p->bytes_per_cycle;
+  d->line_ticks = (uint64_t)llround((double)SIM_LINE_BYTES * ticks_per_byte);
+  if (d->line_ticks == 0) d->line_ticks = 1;
   d->starts = xcalloc(p->queue_depth, sizeof *d->starts);
   return d;
 }

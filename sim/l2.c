@@ -106,6 +106,7 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
   uint32_t slot = cache_use(l2->tags, line);
   bool hit = slot != CACHE_NONE;
   uint32_t victim = CACHE_NONE;
+  bool victim_dirty = false; /* a line to write back */
   if (!hit) {
     if (r->op != L2_STORE_LINE && l2->mshr_used >= l2->p.mshrs) {
       l2->last_refusal = L2_STALL_MSHR;
@@ -116,8 +117,8 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
       l2->last_refusal = L2_STALL_SET;
       return false;
     }
-    if (cache_valid(l2->tags, victim) && cache_dirty(l2->tags, victim) &&
-        l2->wb_used >= l2->p.write_buffer) {
+    victim_dirty = cache_valid(l2->tags, victim) && cache_dirty(l2->tags, victim);
+    if (victim_dirty && l2->wb_used >= l2->p.write_buffer) {
       l2->last_refusal = L2_STALL_WRITE_BUFFER;
       return false;
     }
@@ -149,7 +150,7 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
     }
     return true;
   }
-  if (cache_valid(l2->tags, victim) && cache_dirty(l2->tags, victim)) {
+  if (victim_dirty) {
     l2->wb_used++;
     l2->st.writeback_bytes += SIM_LINE_BYTES;
     /* The victim's line and the evicting access's tag travel in a request. */
@@ -171,18 +172,18 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
   l2->st.fetch_bytes_by_class[r->cls] += SIM_LINE_BYTES;
   timeline_point(l2->tl, l2->col.misses, start, 1.0);
   cache_set_byte(l2->tags, victim, (uint8_t)r->cls);
-  cache_set_word(l2->tags, victim, NONE);
   /* The access that missed heads the waiters (the oldest): a load's own
    * request, or for a store, when its DRAM read is to be charged, a record
    * that waits for nothing. */
+  uint32_t head = NONE;
   if (r->waiter || l2->client.cost) {
-    uint32_t w = req_new(l2);
-    l2->reqs[w] = *r;
-    l2->reqs[w].ready_at = ready;
-    l2->reqs[w].owner = true;
-    l2->reqs[w].next = NONE;
-    cache_set_word(l2->tags, victim, w);
+    head = req_new(l2);
+    l2->reqs[head] = *r;
+    l2->reqs[head].ready_at = ready;
+    l2->reqs[head].owner = true;
+    l2->reqs[head].next = NONE;
   }
+  cache_set_word(l2->tags, victim, head);
   engine_at(l2->eng, ready, ev_to_dram, l2, victim);
   return true;
 }
@@ -222,6 +223,11 @@ static void stall_push(struct l2 *l2, const struct req *r, uint64_t t) {
 /* Retry stalled accesses, oldest first, until one must still wait. */
 static void stall_retry(struct l2 *l2, uint64_t t) {
   while (l2->stall_head != NONE) {
+    if (ring_len(&l2->miss_q)) { /* l2_try's first refusal, without a copy of the access */
+      l2->last_refusal = L2_STALL_DRAM;
+      if (l2->stall_reason != L2_STALL_DRAM) stall_reason_set(l2, L2_STALL_DRAM, t);
+      return;
+    }
     uint32_t i = l2->stall_head;
     struct req r = l2->reqs[i];
     if (!l2_try(l2, &r, t)) {

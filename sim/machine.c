@@ -231,6 +231,11 @@ static void ev_issue_traced(void *ctx, uint64_t core);
  * issue (stale events are recognised by their cycle and ignored). */
 static inline void kick(struct machine *m, uint32_t core, const bool traced) {
   struct mcore *k = &m->core[core];
+  /* The event the core has comes no later than the port is free or than
+   * now, so no later than any cycle the scan below could find (it takes
+   * the later of both): the scan would change nothing. On a busy core,
+   * nearly every kick. */
+  if (k->ev && (k->ev_at <= k->port_free || k->ev_at <= engine_now(m->eng))) return;
   const uint32_t T = m->p.threads_per_core;
   uint64_t best = UINT64_MAX;
   for (uint32_t i = 0; i < T; i++)

@@ -77,7 +77,7 @@ void timeline_span_any(struct timeline *tl, unsigned col, uint64_t a, uint64_t b
   }
 }
 
-void timeline_spread(struct timeline *tl, unsigned col, double a, double b, double amount) {
+void timeline_spread_any(struct timeline *tl, unsigned col, double a, double b, double amount) {
   CHECK_LT(col, tl->cols);
   CHECK(a >= 0 && b >= a);
   const uint64_t first = (uint64_t)a;

@@ -34,7 +34,7 @@ void timeline_span_any(struct timeline *tl, unsigned col, uint64_t a, uint64_t b
 /* Add amount over the cycles [a, b) (a >= 0, with fractions), split between
  * windows in proportion to the time each holds; b == a adds it whole at
  * cycle a. The pieces sum to amount. */
-void timeline_spread(struct timeline *tl, unsigned col, double a, double b, double amount);
+void timeline_spread_any(struct timeline *tl, unsigned col, double a, double b, double amount);
 
 /* Cycle t lies in the row last reached (tl->hot). */
 static inline bool timeline_in_hot(const struct timeline *tl, uint64_t t) {
@@ -46,6 +46,14 @@ static inline bool timeline_in_hot(const struct timeline *tl, uint64_t t) {
 static inline void timeline_point(struct timeline *tl, unsigned col, uint64_t t, double amount) {
   if (timeline_in_hot(tl, t) && col < tl->cols) tl->hot[col] += amount;
   else timeline_point_any(tl, col, t, amount);
+}
+/* timeline_spread_any, inline when [a, b) lies in the row last reached (a
+ * DRAM transfer: two adds a line moved), where it adds amount whole. */
+static inline void timeline_spread(struct timeline *tl, unsigned col, double a, double b,
+                                   double amount) {
+  if (b >= a && a >= (double)tl->lo && a < (double)tl->hi && b <= (double)tl->hi && col < tl->cols)
+    tl->hot[col] += amount;
+  else timeline_spread_any(tl, col, a, b, amount);
 }
 static inline void timeline_span(struct timeline *tl, unsigned col, uint64_t a, uint64_t b,
                                  double per_cycle) {

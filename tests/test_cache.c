@@ -142,6 +142,35 @@ static void test_lazy(void) {
   }
 }
 
+/* cache_use, and cache_fill on a miss, against the reference LRU (the
+ * timed machine's L1 and L2 calls). Lines 2^32 apart share a set and the
+ * low half of their tag, so a find must compare both halves. */
+static void run_use_fill(uint64_t size, uint32_t ways, bool shared, uint64_t span) {
+  struct cache_params p = {size, ways, 6, shared};
+  struct cache *c = cache_create(&p);
+  struct ref r;
+  ref_init(&r, size / 64, ways);
+  uint64_t x = 11, hits = 0, mism = 0;
+  for (uint64_t i = 0; i < 200000; i++) {
+    x = x * 6364136223846793005ull + 1442695040888963407ull;
+    const uint64_t line = (x >> 33) % span + ((x >> 20) & 3) * (1ull << 32);
+    int want = ref_access(&r, line);
+    int got = (i & 1) ? cache_fill(c, line, false) : cache_use(c, line) != CACHE_NONE;
+    if (!got && !(i & 1)) mism += cache_fill(c, line, false); /* a miss, then installed */
+    const uint32_t s = cache_find(c, line);                   /* held now, under its own line */
+    mism += s == CACHE_NONE || cache_line(c, s) != line;
+    hits += (uint64_t)got;
+    mism += (uint64_t)(got != want);
+  }
+  EXPECTF(mism == 0, "use/fill size %llu ways %u: %llu disagreements", (unsigned long long)size,
+          ways, (unsigned long long)mism);
+  EXPECT(hits > 0 && hits < 200000);
+  cache_destroy(c);
+  free(r.line);
+  free(r.stamp);
+  free(r.valid);
+}
+
 static void test_params(void) {
   struct cache_params bad[] = {{32, 0, 6, false}, {100, 0, 6, false}, {64 * 12, 5, 6, false}};
   for (unsigned i = 0; i < 3; i++) EXPECT(cache_params_problem(&bad[i]) != NULL);
@@ -156,6 +185,11 @@ int main(void) {
   run_geometry(1 << 16, 0, 2048, 200000);
   run_geometry(1u << 30, 16, 1 << 18, 300000); /* 16M lines, sparsely touched */
   run_geometry(3u << 20, 12, 1 << 17, 300000); /* ways not a power of two */
+  run_use_fill(8192, 4, false, 300);           /* the default L1 */
+  run_use_fill(4u << 20, 16, true, 1 << 17);   /* the default L2 */
+  run_use_fill(64 * 4, 4, false, 16);          /* one set */
+  run_use_fill(64 * 96, 4, false, 200);        /* sets not a power of two */
+  run_use_fill(32768, 8, false, 1 << 10);      /* neither 4 nor 16 ways */
   test_pending();
   test_lazy();
   test_params();
