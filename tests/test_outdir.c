@@ -84,7 +84,7 @@ static void fingerprint(const char *dir, char *buf, size_t cap) {
 
 /* rtsim run into a new DIR, failing at timeline.csv (a window of 10 cycles
  * makes it the largest file before the plot), then at stats.json (fidelity
- * analytic: image.exr 0.8 KB, stats.csv 3.0 KB, stats.json 4.3 KB), the last
+ * analytic: image.exr 0.8 KB, stats.csv 3.7 KB, stats.json 5.2 KB), the last
  * file: nothing named DIR, no sibling, no trace in DIR or beside it. */
 static void test_run_new(void) {
   const char *dir = RTSIM_TMP "/od_new", *trace = RTSIM_TMP "/od_new.trace";
@@ -97,7 +97,7 @@ static void test_run_new(void) {
   EXPECT(testing_temps_of(trace) == 0);
   EXPECTF(count_named(RTSIM_TMP, ".od_new.", "") == 0, "a sibling is left");
 
-  rc = run_limited(3500, "%s -o %s --set fidelity=analytic", RUN, dir);
+  rc = run_limited(4500, "%s -o %s --set fidelity=analytic", RUN, dir);
   EXPECTF(rc == 2 && one_message("od_new/stats.json", "cannot write the file: File too large"),
           "stats.json: %d %s", rc, out);
   EXPECT(!exists(dir));
@@ -141,7 +141,7 @@ static void test_run_existing(void) {
   run("rm -rf %s && mkdir %s && echo old > %s/image.exr && echo keep > %s/point.csv", dir, dir, dir,
       dir);
   fingerprint(dir, before, sizeof before);
-  rc = run_limited(3500, "%s -o %s --set fidelity=analytic", RUN, dir);
+  rc = run_limited(4500, "%s -o %s --set fidelity=analytic", RUN, dir);
   EXPECTF(rc == 2 && one_message("od_old/stats.json", "cannot write the file: File too large"),
           "incomplete DIR: %d %s", rc, out);
   fingerprint(dir, after, sizeof after);
