@@ -365,7 +365,7 @@ int cmd_dram_replay(int argc, char **argv) {
   /* Every request offered was taken and served, unless a bad line stopped the feed. */
   CHECK(p->failed || !p->have_next);
   CHECK_EQ(ring_len(&p->fl), 0);
-  dram_finish(p->dram);
+  dram_finish(p->dram, engine_now(p->eng));
   if (p->failed) {
     rc = app_report(&e);
     goto done;

@@ -162,10 +162,10 @@ void dram_take(struct dram *d, uint64_t addr, bool write, uint64_t tag) {
   d->ops->take(d->level, addr, write, seq);
 }
 
-void dram_finish(struct dram *d) {
+void dram_finish(struct dram *d, uint64_t end) {
   CHECK_EQ(d->inflight, 0);
   CHECK_EQ(ring_len(&d->fl), 0);
-  d->ops->finish(d->level);
+  d->ops->finish(d->level, end);
   /* What a cheaper level's energy estimate is made of (dram_level_stats). */
   d->est.p = d->p.banked;
   d->est.p.clock_mhz = d->p.clock_mhz;

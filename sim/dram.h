@@ -53,8 +53,9 @@ void dram_destroy(struct dram *d); /* NULL ok */
  * the client's, handed back in client->done. */
 bool dram_can_take(struct dram *d, uint64_t addr, bool write);
 void dram_take(struct dram *d, uint64_t addr, bool write, uint64_t tag);
-/* After the run (nothing in flight, CHECKed). */
-void dram_finish(struct dram *d);
+/* After the run (nothing in flight, CHECKed), which ended at core cycle end
+ * (engine_now or later: the level idles to it). */
+void dram_finish(struct dram *d, uint64_t end);
 
 /* From inside client->done: the core cycles [*start, *end), with fractions,
  * the served request's data held the channel, when the level says so (the

@@ -209,8 +209,9 @@ void dram_banked_schedule_wake(struct dram_banked *d) {
 /* Handle every DRAM cycle that can be decided by now: those before the first
  * one that begins at or after engine_now (per_bank: that one too, since what
  * arrives in it arrives after its tick). */
-static void advance(struct dram_banked *d) {
-  const int64_t limit = (int64_t)dram_clock_from_core(d->clk, engine_now(d->e)) + d->cq_mode;
+/* Run the channels' cycles up to core cycle t's. */
+static void advance_to(struct dram_banked *d, uint64_t t) {
+  const int64_t limit = (int64_t)dram_clock_from_core(d->clk, t) + d->cq_mode;
   for (;;) {
     int64_t w = next_cycle(d);
     if (w >= limit) break;
@@ -221,6 +222,10 @@ static void advance(struct dram_banked *d) {
     d->cursor = w + 1;
   }
   if (d->cursor < limit) d->cursor = limit;
+}
+
+static void advance(struct dram_banked *d) {
+  advance_to(d, engine_now(d->e));
   dram_banked_schedule_wake(d);
 }
 
@@ -257,23 +262,25 @@ static void banked_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   else dram_banked_frfcfs_take(d, c, &co, addr, write, tag);
 }
 
-static void banked_finish(void *self) {
+static void banked_finish(void *self, uint64_t end) {
   struct dram_banked *d = self;
-  advance(d);
+  /* The run may end after its last event (a thread's last compute): the
+   * DRAM idles (and refreshes) to the end, so its time is the run's. */
+  CHECK_GE(end, engine_now(d->e));
+  advance_to(d, end);
   /* Nothing left but parked writes (idle_drain_cycles 0), never written. */
   CHECK(!has_work(d));
   for (uint32_t i = 0; i < d->p.channels; i++) d->st.writes_left += d->ch[i].q[DRAM_BANKED_WR_Q].n;
   CHECK_EQ(d->queued, d->st.writes_left);
   CHECK_EQ(d->inflight, 0);
-  uint64_t now = engine_now(d->e);
-  area_to(d, DRAM_BANKED_RD_Q, now);
-  area_to(d, DRAM_BANKED_WR_Q, now);
+  area_to(d, DRAM_BANKED_RD_Q, end);
+  area_to(d, DRAM_BANKED_WR_Q, end);
   for (uint32_t i = 0; i < d->p.channels; i++)
     for (uint32_t j = 0; j < d->banks_per_channel; j++) {
       struct dram_banked_bank *bk = &d->ch[i].banks[j];
       if (bk->act_at < 0) continue;
-      int64_t end = bk->close_at < d->cursor ? bk->close_at : d->cursor;
-      if (end > bk->act_at) d->st.bank_open_cycles += (uint64_t)(end - bk->act_at);
+      int64_t shut = bk->close_at < d->cursor ? bk->close_at : d->cursor;
+      if (shut > bk->act_at) d->st.bank_open_cycles += (uint64_t)(shut - bk->act_at);
       bk->act_at = -1;
     }
   dram_banked_power_finish(d, d->cursor);

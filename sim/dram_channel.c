@@ -134,7 +134,10 @@ static void ch_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   }
 }
 
-static void ch_finish(void *self) { sweep_to(self, TICK_FOREVER); }
+static void ch_finish(void *self, uint64_t end) {
+  (void)end;
+  sweep_to(self, TICK_FOREVER);
+}
 
 /* The channel level's numbers (docs/stats.md). */
 static double ch_utilization(const void *st, const struct stats_env *env) {

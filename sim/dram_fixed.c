@@ -31,7 +31,7 @@ static void fx_take(void *self, uint64_t addr, bool write, uint64_t tag) {
   engine_at(d->eng, engine_now(d->eng) + d->latency, ev_done, d, tag);
 }
 
-static void fx_finish(void *self) { (void)self; }
+static void fx_finish(void *self, uint64_t end) { (void)self, (void)end; }
 
 static void fx_stats(const void *self, struct stats_part *out) {
   (void)self;

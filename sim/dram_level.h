@@ -46,9 +46,10 @@ struct dram_level_ops {
   /* Take one request of one line (SIM_LINE_BYTES) at byte address addr (line aligned)
    * now; only after can_take said yes (CHECKed). tag is the client's. */
   void (*take)(void *self, uint64_t addr, bool write, uint64_t tag);
-  /* The run is over (nothing in flight, CHECKed): close time integrals at
-   * engine_now. */
-  void (*finish)(void *self);
+  /* The run is over (nothing in flight, CHECKed) at core cycle end, at or
+   * after engine_now: the level idles to end and closes its time integrals
+   * there. */
+  void (*finish)(void *self, uint64_t end);
   /* The level's own numbers (dram_row_hits, dram_bank_utilization, ...):
    * its table, its stats struct and its table's ctx into out (out->g NULL:
    * none). Only what the level knows: a level without banks has no bank

@@ -623,12 +623,12 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   for (uint32_t i = 0; i < m->nctx; i++) CHECK_EQ(m->ctx[i].state, CTX_DONE);
   CHECK(l2_quiet(m->l2));
   CHECK_EQ(m->loads_out, m->loads_back);
-  dram_finish(m->dram);
   /* The end: the last event (the last data served), the last block's last
    * cycle (blocks run ahead of the engine). */
   uint64_t end = engine_now(m->eng);
   for (uint32_t t = 0; t < m->nth; t++)
     if (m->th[t].since > end) end = m->th[t].since;
+  dram_finish(m->dram, end);
   for (uint32_t t = 0; t < m->nth; t++) {
     CHECK_EQ(m->th[t].state, TH_DONE);
     th_account(m, &m->th[t], end);

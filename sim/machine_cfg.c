@@ -174,7 +174,7 @@ static const struct key KEYS[] = {
     {"dram.IDD4W", K_F64, 0, 1e5, "123", "mA", R_B, B(IDD4W), "a device's current, burst writes"},
     {"dram.IDD5AB", K_F64, 0, 1e5, "250", "mA", R_B, B(IDD5AB),
      "a device's current, all-bank refresh (over tRFC)"},
-    {"dram.idle_drain_cycles", K_U32, 0, 1e7, "1000", "DRAM cycles", R_B, B(idle_drain_cycles),
+    {"dram.idle_drain_cycles", K_U32, 0, 1e7, "0", "DRAM cycles", R_B, B(idle_drain_cycles),
      "per_bank, per_rank: idle time (no arrival, no request command, no read queued) after which "
      "buffered writes drain (0: never, as DRAMsim3; those left at the end are never written)"},
     {"costs.node", K_U32, 0, 1e6, "7", "cycles", R_ALL, W(cost_node_cycles),

@@ -135,7 +135,7 @@ static void test_fixed(void) {
     EXPECTF(bad == 0 && c.next == NREQ, "fixed latency %llu: %u requests off",
             (unsigned long long)lats[i], bad);
     EXPECT(c.spaces == 0); /* it never refuses, so never frees a place */
-    c.ops->finish(c.level);
+    c.ops->finish(c.level, engine_now(c.eng));
     c.ops->destroy(c.level);
     engine_destroy(c.eng);
   }
@@ -168,7 +168,7 @@ static void channel_case(double bytes_per_cycle, uint64_t latency, unsigned dept
           first < NREQ ? (unsigned long long)taken[first] : 0ull,
           first < NREQ ? (unsigned long long)r[first].done : 0ull,
           first < NREQ ? (unsigned long long)done[first] : 0ull);
-  c.ops->finish(c.level);
+  c.ops->finish(c.level, engine_now(c.eng));
   /* Its own report: utilization is the transfer time over the run. */
   struct stats_table t = {0};
   uint64_t cycles = 0;
@@ -215,7 +215,7 @@ static void wrapper_case(enum dram_model model) {
   FILE *f = open_memstream(&buf, &len);
   dram_trace_to(c.dram, f);
   drive(&c);
-  dram_finish(c.dram);
+  dram_finish(c.dram, engine_now(c.eng));
   fclose(f);
   const struct dram_stats *s = dram_get_stats(c.dram);
   uint64_t reads = 0, writes = 0, rsum = 0, wsum = 0, rmax = 0;

@@ -74,7 +74,7 @@ static void h_inject(void *ctx, uint64_t i) {
 static void h_finish(void *ctx, uint64_t arg) {
   (void)arg;
   struct harness *h = ctx;
-  dram_banked_ops.finish(h->d);
+  dram_banked_ops.finish(h->d, engine_now(h->e));
 }
 
 /* Run reqs to completion on a fresh level (core_khz: the core clock);
@@ -98,7 +98,7 @@ static struct dram_banked *run(const struct dram_banked_params *p, uint64_t core
   }
   if (finish_at) engine_at(h.e, finish_at, h_finish, &h, 0);
   engine_run(h.e);
-  if (!finish_at) dram_banked_ops.finish(h.d);
+  if (!finish_at) dram_banked_ops.finish(h.d, engine_now(h.e));
   EXPECTF(h.served == n, "served %llu of %llu", (unsigned long long)h.served,
           (unsigned long long)n);
   EXPECT(h.nwait == 0);

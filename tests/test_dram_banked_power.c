@@ -42,9 +42,9 @@ static void h_inject(void *ctx, uint64_t i) {
   dram_banked_ops.take(h->d, r->addr, r->write, i);
 }
 
+/* The run's end at core cycle arg. */
 static void h_finish(void *ctx, uint64_t arg) {
-  (void)arg;
-  dram_banked_ops.finish(((struct harness *)ctx)->d);
+  dram_banked_ops.finish(((struct harness *)ctx)->d, arg);
 }
 
 /* Requests reqs (each taken at its core cycle) on a fresh level, finished
@@ -56,7 +56,7 @@ static struct dram_banked *run(const struct dram_banked_params *p, const struct 
   const struct dram_client cl = {&h, h_done, NULL, NULL};
   h.d = dram_banked_create(p, 1200000, e, &cl);
   for (uint64_t i = 0; i < n; i++) engine_at(e, reqs[i].at, h_inject, &h, i);
-  engine_at(e, end, h_finish, &h, 0);
+  engine_at(e, end, h_finish, &h, end);
   engine_run(e);
   EXPECT(h.served == n);
   engine_destroy(e);

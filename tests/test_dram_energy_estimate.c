@@ -91,7 +91,7 @@ static void wrapper_case(enum dram_model model) {
   struct dram *d = dram_create(&p, 1400000, e, &dc);
   for (uint64_t k = 0; k < 6; k++) engine_at(e, 100 + 300 * k, ev_send, d, k);
   engine_run(e);
-  dram_finish(d);
+  dram_finish(d, engine_now(e));
   EXPECT(served == 6);
   struct stats_part parts[2];
   const unsigned n = dram_level_stats(d, parts);

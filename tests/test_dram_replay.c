@@ -224,12 +224,13 @@ static void test_banked(void) {
 
 /* The same preset's idle write drain, honoured by dram-replay (--set
  * dram.idle_drain_cycles): two writes to one row arrive after DRAM cycles 100
- * and 101 (served, posted, at 102 and 103). Drained after 1000 idle cycles
- * (the preset's): the drain starts at the end of 1101, ACT 1102, WR 1119
+ * and 101 (served, posted, at 102 and 103). Drained after 1000 idle cycles:
+ * the drain starts at the end of 1101, ACT 1102, WR 1119
  * (tRCD 17) and 1125 (tCCD_L 6), the level's last cycle; it ends at 1126:
  * rank 0 active 1102 to 1126, 24 x 344 = 8256 pJ; precharged rank 0's first
  * 1102 cycles and rank 1's 1126, 2228 x 272 = 606016 pJ; ACT 3464 pJ, two WRs
- * 2 x 8 (123 - 43) 4 = 5120 pJ. Never drained (0, DRAMsim3's): no command,
+ * 2 x 8 (123 - 43) 4 = 5120 pJ. Never drained (0, the preset's and
+ * DRAMsim3's): no command,
  * the level ends after the second write is served (cycle 103 handled: 104),
  * 2 x 104 x 272 = 56576 pJ precharged, and both writes left. */
 static void test_banked_idle_drain(void) {
@@ -237,8 +238,8 @@ static void test_banked_idle_drain(void) {
   static const struct {
     const char *set, *left;
     double act, wr, act_stb, pre_stb;
-  } runs[] = {{"", "0", 3464e-12, 5120e-12, 8256e-12, 606016e-12},
-              {"--set dram.idle_drain_cycles=0", "2", 0, 0, 0, 56576e-12}};
+  } runs[] = {{"--set dram.idle_drain_cycles=1000", "0", 3464e-12, 5120e-12, 8256e-12, 606016e-12},
+              {"", "2", 0, 0, 0, 56576e-12}};
   for (unsigned r = 0; r < 2; r++) {
     char args[1024], msg[4096];
     snprintf(args, sizeof args,
@@ -250,12 +251,13 @@ static void test_banked_idle_drain(void) {
     EXPECT(testing_csv_load(csv, &c));
     EXPECT_COL(&c, "writes", "2");
     EXPECT_COL(&c, "dram_writes_left", runs[r].left);
-    const double part[][2] = {{testing_csv_num(&c, "dram_energy_activate_j"), runs[r].act},
-                              {testing_csv_num(&c, "dram_energy_read_j"), 0},
-                              {testing_csv_num(&c, "dram_energy_write_j"), runs[r].wr},
-                              {testing_csv_num(&c, "dram_energy_refresh_j"), 0},
-                              {testing_csv_num(&c, "dram_energy_active_standby_j"), runs[r].act_stb},
-                              {testing_csv_num(&c, "dram_energy_precharge_standby_j"), runs[r].pre_stb}};
+    const double part[][2] = {
+        {testing_csv_num(&c, "dram_energy_activate_j"), runs[r].act},
+        {testing_csv_num(&c, "dram_energy_read_j"), 0},
+        {testing_csv_num(&c, "dram_energy_write_j"), runs[r].wr},
+        {testing_csv_num(&c, "dram_energy_refresh_j"), 0},
+        {testing_csv_num(&c, "dram_energy_active_standby_j"), runs[r].act_stb},
+        {testing_csv_num(&c, "dram_energy_precharge_standby_j"), runs[r].pre_stb}};
     for (unsigned i = 0; i < sizeof part / sizeof part[0]; i++)
       EXPECTF(fabs(part[i][0] - part[i][1]) <= 1e-12 * part[i][1],
               "idle drain '%s', energy part %u: %.15g J, want %.15g", runs[r].set, i, part[i][0],
