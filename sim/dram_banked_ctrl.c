@@ -43,11 +43,37 @@ static bool line_waits(const struct dram_banked_channel *c, const struct dram_ba
   return false;
 }
 
+/* The first cycle after t at which schedule_cq's answer may change with no
+ * command issued and no transaction come or moved: a transaction's becoming
+ * visible, or the idle drain's time coming. */
+static int64_t idle_until(const struct dram_banked_channel *c, int64_t t) {
+  int64_t to = c->last_busy + DRAM_BANKED_IDLE_DRAIN_CYCLES;
+  if (to <= t) to = DRAM_BANKED_FAR;
+  for (int k = 0; k < 2; k++) {
+    const struct dram_banked_queue *q = &c->q[k];
+    const uint32_t v = visible(q, t);
+    if (v < q->n && q->r[v].ready - 1 < to) to = q->r[v].ready - 1;
+  }
+  return to;
+}
+
 /* The end of cycle t: maybe start a write drain, then move at most one
  * transaction to its command queue. apply false: change nothing, only say
- * whether anything would change. */
+ * whether anything would change. What it reads (the transaction queues and
+ * which of them are visible at t, the command queues, draining, cq_n,
+ * last_busy) changes only by a column command, a transaction taken or moved,
+ * or t reaching idle_until: so an answer of no change holds until one of
+ * those (idle_ok). An ACT or PRE moves last_busy, read only while cq_n is 0,
+ * when no request's ACT or PRE can issue; a later last_busy only delays the
+ * idle drain, so idle_to stays a safe bound. */
 static bool schedule_cq(struct dram_banked *d, struct dram_banked_channel *c, int64_t t,
                         bool apply) {
+  if (c->idle_ok && t >= c->idle_from && t < c->idle_to) {
+    if (!d->p.check_summaries) return false;
+    c->idle_ok = false; /* test only: asked again, it must agree */
+    CHECK(!schedule_cq(d, c, t, false));
+    return false;
+  }
   const uint32_t nw = visible(&c->q[DRAM_BANKED_WR_Q], t), nr = visible(&c->q[DRAM_BANKED_RD_Q], t);
   uint32_t draining = c->draining;
   if (!draining && nw > 0 &&
@@ -78,8 +104,13 @@ static bool schedule_cq(struct dram_banked *d, struct dram_banked_channel *c, in
   }
   struct dram_banked_queue *q = &c->q[k];
   const bool changed = mi != UINT32_MAX || draining != c->draining;
+  if (!changed) {
+    c->idle_ok = true;
+    c->idle_from = t;
+    c->idle_to = idle_until(c, t);
+  }
   if (!apply) return changed;
-  if (changed) c->memo_ok = false;
+  if (changed) c->memo_ok = c->idle_ok = false;
   if (mi != UINT32_MAX) {
     struct dram_banked_req m = q->r[mi];
     struct dram_banked_queue *cq = &c->cq[dram_banked_cq_of(d, &m)];
@@ -105,6 +136,7 @@ void dram_banked_ctrl_issue_column(struct dram_banked *d, struct dram_banked_cha
   struct dram_banked_req r = q->r[j];
   memmove(&q->r[j], &q->r[j + 1], (q->n - j - 1) * sizeof *q->r);
   q->n--;
+  c->idle_ok = false;
   c->full[qi / 64] &= ~(1ull << (qi % 64));
   dram_banked_stale_bank(d, c, r.bank);
   c->cq_n--;
@@ -192,6 +224,7 @@ void dram_banked_ctrl_take(struct dram_banked *d, struct dram_banked_channel *c,
                            uint64_t tag) {
   const int64_t arr = d->cursor - 1, ready = arr + (int64_t)d->p.controller_cycles;
   const uint64_t line = addr >> SIM_LINE_LG2;
+  c->idle_ok = false;
   CHECK_LT(c->took_at, arr);
   c->took_at = arr;
   struct dram_banked_req probe;

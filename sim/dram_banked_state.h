@@ -188,6 +188,11 @@ struct dram_banked_channel {
   bool memo_ok;
   int64_t memo_at, memo_t;
   struct dram_banked_cmd memo;
+  /* The end-of-cycle move (schedule_cq in dram_banked_ctrl.c) changes
+   * nothing at any cycle of [idle_from, idle_to), kept while no command
+   * issued and no transaction came or moved since (idle_ok). */
+  bool idle_ok;
+  int64_t idle_from, idle_to;
 };
 
 /* The address mapping: shift and mask of each field above the line offset. */
