@@ -46,8 +46,11 @@ static bool line_waits(const struct dram_banked_channel *c, const struct dram_ba
 /* The first cycle after t at which schedule_cq's answer may change with no
  * command issued and no transaction come or moved: a transaction's becoming
  * visible, or the idle drain's time coming. */
-static int64_t idle_until(const struct dram_banked_channel *c, int64_t t) {
-  int64_t to = c->last_busy + DRAM_BANKED_IDLE_DRAIN_CYCLES;
+static int64_t idle_until(const struct dram_banked *d, const struct dram_banked_channel *c,
+                          int64_t t) {
+  /* (idle_drain_cycles 0: no idle drain ever comes) */
+  int64_t to =
+      d->p.idle_drain_cycles ? c->last_busy + (int64_t)d->p.idle_drain_cycles : DRAM_BANKED_FAR;
   if (to <= t) to = DRAM_BANKED_FAR;
   for (int k = 0; k < 2; k++) {
     const struct dram_banked_queue *q = &c->q[k];
@@ -107,7 +110,7 @@ static bool schedule_cq(struct dram_banked *d, struct dram_banked_channel *c, in
   if (!changed) {
     c->idle_ok = true;
     c->idle_from = t;
-    c->idle_to = idle_until(c, t);
+    c->idle_to = idle_until(d, c, t);
   }
   if (!apply) return changed;
   if (changed) c->memo_ok = c->idle_ok = false;
