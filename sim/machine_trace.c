@@ -11,6 +11,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "sim/derived.h"
 #include "sim/dram.h"
 #include "sim/engine.h"
 #include "sim/err.h"
@@ -35,7 +36,7 @@ const char *const mtrace_counter_names[MTRACE_COUNTERS][2] = {
     {"DRAM read", "bytes/cycle"},       {"DRAM write", "bytes/cycle"},
     {"DRAM requests", "in flight"},     {"L2 MSHRs", "in use"},
     {"L2 input", "stalled accesses"},   {"L2 misses", "held by the DRAM"},
-    {"L2 write buffer", "lines taken"},
+    {"L2 write buffer", "lines taken"}, {"power: chip and DRAM", "W"},
 };
 
 /* The wait kind of an L2 stall reason (enum l2_stall). */
@@ -119,22 +120,27 @@ static void mark(struct machine *m, uint32_t th, uint8_t kind, uint64_t t) {
 
 /* ---- counters ---- */
 
-/* The DRAM's bytes served a cycle from the previous sample to cycle t, at
- * the previous sample's cycle; t becomes the previous sample. */
+/* The DRAM's bytes served a cycle and the power (the run's energy, as the
+ * timeline's columns price it, over the seconds) from the previous sample to
+ * cycle t, at the previous sample's cycle; t becomes the previous sample. */
 static void put_bandwidth(struct machine *m, uint64_t t) {
   struct mtrace *tr = m->trace;
   const struct dram_stats *d = dram_get_stats(m->dram);
   const uint64_t rd = d->read_latency.count * SIM_LINE_BYTES;
   const uint64_t wr = d->write_latency.count * SIM_LINE_BYTES;
+  const double energy = machine_energy_j(m, t, m->st.issue_slots);
   if (tr->sampled && t > tr->last_t) {
     const double dt = (double)(t - tr->last_t);
     put_counter(tr, MTRACE_DRAM_READ, tr->last_t, (double)(rd - tr->last_read) / dt);
     put_counter(tr, MTRACE_DRAM_WRITE, tr->last_t, (double)(wr - tr->last_write) / dt);
+    put_counter(tr, MTRACE_POWER, tr->last_t,
+                (energy - tr->last_energy_j) / derived_seconds(dt, m->p.clock_ghz));
   }
   tr->sampled = true;
   tr->last_t = t;
   tr->last_read = rd;
   tr->last_write = wr;
+  tr->last_energy_j = energy;
 }
 
 /* What the L2 and the DRAM hold at cycle t (the engine's). */

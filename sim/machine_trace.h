@@ -19,6 +19,7 @@ enum {
   MTRACE_L2_STALLED,  /* accesses queued at the L2's input */
   MTRACE_L2_HELD,     /* misses the DRAM refused so far */
   MTRACE_L2_WBUF,     /* write-buffer places taken */
+  MTRACE_POWER,       /* watts, chip and DRAM, since the previous sample */
   MTRACE_COUNTERS
 };
 /* A counter's name and its one argument's: Perfetto names the track by both
@@ -58,8 +59,10 @@ struct mtrace {
   struct mtrace_ev *ev;
   uint64_t n, cap, limit; /* events kept, room, the count that cuts (a reserve after) */
   /* Counters: the next sample's cycle; the previous sample's cycle, the DRAM
-   * bytes served by then and each counter's last value written. */
+   * bytes served and the run's energy (J) by then, and each counter's last
+   * value written. */
   uint64_t next_sample, last_t, last_read, last_write;
+  double last_energy_j;
   bool sampled;
   double last_value[MTRACE_COUNTERS];
 };

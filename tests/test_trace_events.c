@@ -21,6 +21,7 @@
 struct tev {
   char ph, name[64];
   int64_t pid, tid, ts, dur;
+  double value; /* a counter's (its args' one number) */
 };
 
 struct trace {
@@ -131,6 +132,13 @@ static void event(struct rd *r, struct tev *e) {
                !strcmp(key, "dur")) {
       const int64_t v = (int64_t)num(r);
       *(key[0] == 'p' ? &e->pid : key[0] == 'd' ? &e->dur : key[1] == 'i' ? &e->tid : &e->ts) = v;
+    } else if (!strcmp(key, "args") && e->ph == 'C') {
+      char name[64];
+      if (!eat(r, '{')) r->ok = false;
+      str(r, name, sizeof name);
+      if (!eat(r, ':')) r->ok = false;
+      e->value = num(r);
+      if (!eat(r, '}')) r->ok = false;
     } else {
       value(r, 2);
     }
@@ -396,6 +404,24 @@ static void whole_run(char *out, unsigned cap, const char *policy) {
   bool in;
   count(&t, 0, (int64_t)cycles, &slices, &counters, &in);
   EXPECT(in && counters > 0 && slices > 0);
+  /* The power track, a step function to the run's end, integrates to
+   * energy_j (each sample written to 9 significant digits). */
+  double joules = 0;
+  int64_t at = -1;
+  double w = 0;
+  for (size_t i = 0; i < t.n; i++) {
+    const struct tev *e = &t.v[i];
+    if (e->ph != 'C' || strcmp(e->name, "power: chip and DRAM")) continue;
+    EXPECT(e->ts > at);
+    if (at >= 0) joules += w * (double)(e->ts - at);
+    at = e->ts;
+    w = e->value;
+  }
+  if (at >= 0) joules += w * ((double)cycles - (double)at);
+  joules *= testing_json_num(TMP "/whole", "seconds") / cycles; /* cycles to seconds */
+  const double want = testing_json_num(TMP "/whole", "energy_j");
+  EXPECTF(at >= 0 && fabs(joules - want) <= 1e-6 * want,
+          "%s: the power track integrates to %.9g J, energy_j %.9g", policy, joules, want);
   free(t.v);
 }
 
