@@ -433,13 +433,17 @@ static void energy_emit(const struct run_output_report *r, const struct chip_ene
   stats_emit(t, &chip_energy_stats_descs, &rep, &(struct stats_env){.cycles = cycles});
 }
 
-/* The chip's energy from counts, with the config's figures. */
+/* The chip's energy from counts c (the machine's shape filled in here), with
+ * the config's figures. */
 static struct chip_energy chip_energy_of(const struct machine_params *p,
-                                         const struct chip_energy_counts *c) {
+                                         struct chip_energy_counts c) {
+  c.cores = p->cores;
+  c.l1_size_bytes = p->l1_size_bytes;
+  c.l2_size_bytes = p->l2_size_bytes;
   const struct chip_energy_params ep =
       chip_energy_resolve(&p->energy, p->l1_size_bytes, p->l2_size_bytes);
   struct chip_energy e;
-  chip_energy_compute(&ep, c, &e);
+  chip_energy_compute(&ep, &c, &e);
   return e;
 }
 
@@ -449,10 +453,7 @@ static struct chip_energy chip_energy_of(const struct machine_params *p,
 static struct chip_energy analytic_chip_energy(const struct run_output_report *r) {
   const struct machine_params *p = &r->cfg->p;
   const struct analytic_counts *n = &r->analytic->counts;
-  const struct chip_energy_counts c = {.cores = p->cores,
-                                       .l1_size_bytes = p->l1_size_bytes,
-                                       .l2_size_bytes = p->l2_size_bytes,
-                                       .seconds =
+  const struct chip_energy_counts c = {.seconds =
                                            derived_seconds(r->analytic->est.cycles, p->clock_ghz),
                                        .issue_slots = n->issue_slots,
                                        .loads = n->loads,
@@ -463,16 +464,13 @@ static struct chip_energy analytic_chip_energy(const struct run_output_report *r
                                        .l2_accesses = n->l2_accesses,
                                        .l2_misses = n->l2_misses,
                                        .l2_writeback_lines = n->writeback_bytes / SIM_LINE_BYTES};
-  return chip_energy_of(p, &c);
+  return chip_energy_of(p, c);
 }
 
 static struct chip_energy run_chip_energy(const struct run_output_report *r) {
   const struct machine_stats *s = machine_get_stats(r->machine);
   const struct machine_params *p = &r->cfg->p;
-  const struct chip_energy_counts c = {.cores = p->cores,
-                                       .l1_size_bytes = p->l1_size_bytes,
-                                       .l2_size_bytes = p->l2_size_bytes,
-                                       .seconds = run_seconds(r),
+  const struct chip_energy_counts c = {.seconds = run_seconds(r),
                                        .issue_slots = s->issue_slots,
                                        .loads = s->loads,
                                        .stores = s->stores,
@@ -483,7 +481,7 @@ static struct chip_energy run_chip_energy(const struct run_output_report *r) {
                                        .l2_misses = s->l2.misses,
                                        .l2_writeback_lines =
                                            s->l2.writeback_bytes / SIM_LINE_BYTES};
-  return chip_energy_of(p, &c);
+  return chip_energy_of(p, c);
 }
 
 /* Start OUTDIR/name through a temporary (commit with outfile_commit). */
