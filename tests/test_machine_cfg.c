@@ -207,6 +207,7 @@ int main(void) {
        "--set energy.l2_read=-5: error: energy.l2_read: out of range (got -5, expected -1 to "
        "1e+06)"},
       {"dram.IDD4R=1", "--set dram.IDD4R=1: error: dram.IDD4R: must be at least IDD3N (got 1)"},
+      {"dram.VDD=0", "--set dram.VDD=0: error: dram.VDD: out of range (got 0, expected 0.1 to 10)"},
       {"l2.size=32", "--set l2.size=32: error: l2.size: smaller than one 64-byte line"},
       {"dram.bytes_per_cycle=0",
        "--set dram.bytes_per_cycle=0: error: dram.bytes_per_cycle: out of range"},
