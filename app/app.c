@@ -3,6 +3,8 @@
  * setup, and a render on the timed machine. main.c only dispatches. */
 #include "app/app.h"
 
+#include "app/sample_aux.h"
+
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -219,6 +221,10 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
   if (dram_trace) dram_trace_to(machine_dram(t->m), dram_trace);
   if (events) machine_trace_enable(t->m, events);
   r.t0 = app_now();
+  /* The pre-pass is part of what a sampled run costs: inside wall_s. */
+  if (t->sampled && !sample->whole_image && sample->prepass)
+    sample_aux_run(&t->sample, sample->prepass, sample->seed, w, mask, seed, width, height, k, &pp,
+                   work);
   machine_run(t->m, run_worker, &r, progress ? cycle_progress : NULL, &r);
   t->wall_s = app_now() - r.t0;
   if (progress) fputc('\n', stderr);

@@ -2,6 +2,8 @@
  * estimates (sample.h says the design; docs/fidelity-and-sampling.md says why). */
 #include "app/sample.h"
 
+#include "app/sample_aux.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -113,8 +115,10 @@ void sample_init(struct sampler *s, const struct machine_cfg_sample *c, uint32_t
 void sample_fini(struct sampler *s) {
   free(s->u);
   free(s->drained);
+  sample_aux_free(s->aux);
   s->u = NULL;
   s->drained = NULL;
+  s->aux = NULL;
 }
 
 /* The run's energy at cycle t with `slots` issue slots used, in whole
@@ -174,6 +178,8 @@ void sample_item_done(void *ctx, uint64_t k) {
   s->in_flight--;
 }
 
+static void choose_cyc_aux(struct sampler *s);
+
 void sample_finish(struct sampler *s, uint64_t rays_total) {
   CHECK_EQ(s->cur, s->n - 1);
   struct sample_unit *u = &s->u[s->n - 1];
@@ -189,6 +195,12 @@ void sample_finish(struct sampler *s, uint64_t rays_total) {
   s->rays_total = rays_total;
   s->slots_detailed = st->issue_slots;
   s->slots_total = st->issue_slots + machine_warm_slots(s->m) + machine_count_slots(s->m);
+  for (uint32_t h = 0; h < s->n; h++) CHECK(s->u[h].have0 && s->u[h].have1);
+  sample_settle(s);
+}
+
+void sample_settle(struct sampler *s) {
+  const struct sample_unit *u = &s->u[s->n - 1];
   /* With a sampled image the middle units stand for every item outside the
    * first and last units' measured ones: their strata scaled up to that. */
   s->mid_scale = 1;
@@ -199,7 +211,7 @@ void sample_finish(struct sampler *s, uint64_t rays_total) {
                     (double)(u->end - u->measure)) /
                    w;
   }
-  for (uint32_t h = 0; h < s->n; h++) CHECK(s->u[h].have0 && s->u[h].have1);
+  if (s->aux) choose_cyc_aux(s);
 }
 
 double sample_t975(unsigned dof) {
@@ -222,11 +234,14 @@ static double items(const struct sample_unit *u) { return (double)(u->end - u->m
  * (certain), the middle units' per-item values weighted by their strata's
  * sizes (S, random), and the work the middle stands for: every issue slot of
  * the run (counted exactly: every item is traced) less the first and last
- * windows'. */
+ * windows'; with a pre-pass, the middle units' auxiliary figures weighted
+ * the same way (A) and the middle's auxiliary totals (X, estimated). */
 struct parts {
   double edge[SQ_COUNT]; /* first + last units' deltas */
   double S[SQ_COUNT];    /* sum over middle units of W_h x q_h / M_h */
   double slots_mid;      /* issue slots the middle stands for (the whole image) */
+  double A[SA_COUNT];    /* sum over middle units of W_h x a_h / M_h (pre-pass) */
+  double X[SA_COUNT];    /* the middle's auxiliary totals (pre-pass) */
 };
 
 enum sample_fig {
@@ -243,12 +258,31 @@ enum sample_fig {
   SF_COUNT
 };
 
-/* A middle quantity's total. With the whole image traced: its ratio to issue
- * slots over the middle units, times the issue slots the middle stands for
+/* The auxiliary figure quantity q is taken in ratio to: the work for issue
+ * slots, rays and the count of loads, the footprint for DRAM bytes and the
+ * loads' latencies (misses), the one chosen for cycles and energy. */
+static unsigned aux_of(const struct sampler *s, enum sample_q q) {
+  switch (q) {
+  case SQ_SLOTS:
+  case SQ_LAT_N: return SA_SLOTS;
+  case SQ_RAYS: return SA_RAYS;
+  case SQ_DRAM_BYTES:
+  case SQ_LAT_SUM: return SA_LINES;
+  default: return s->cyc_aux;
+  }
+}
+
+/* A middle quantity's total. With a pre-pass: its ratio to its auxiliary
+ * figure over the middle units, times the middle's auxiliary total. With the whole image traced:
+ * its ratio to issue slots over the middle units, times the issue slots the middle stands for
  * (known); with a sampled image, the middle units' values per item times the
  * items they stand for (S: parts_of weighs each stratum so that the weights
  * sum to the items outside the first and last units). */
 static double mid(const struct sampler *s, const struct parts *p, enum sample_q q) {
+  if (s->aux) {
+    const unsigned a = aux_of(s, q);
+    return p->A[a] > 0 ? p->S[q] / p->A[a] * p->X[a] : 0;
+  }
   if (!s->whole) return p->S[q];
   return p->S[SQ_SLOTS] > 0 ? p->S[q] / p->S[SQ_SLOTS] * p->slots_mid : 0;
 }
@@ -256,8 +290,8 @@ static double mid(const struct sampler *s, const struct parts *p, enum sample_q 
 static double figure(const struct sampler *s, const struct parts *p, enum sample_fig f) {
   double cycles = p->edge[SQ_CYCLES] + mid(s, p, SQ_CYCLES);
   double bytes = p->edge[SQ_DRAM_BYTES] + mid(s, p, SQ_DRAM_BYTES);
-  const double slots = s->whole ? (double)s->slots_total : p->edge[SQ_SLOTS] + p->S[SQ_SLOTS];
-  const double rays = s->whole ? (double)s->rays_total : p->edge[SQ_RAYS] + p->S[SQ_RAYS];
+  const double slots = s->whole ? (double)s->slots_total : p->edge[SQ_SLOTS] + mid(s, p, SQ_SLOTS);
+  const double rays = s->whole ? (double)s->rays_total : p->edge[SQ_RAYS] + mid(s, p, SQ_RAYS);
   switch (f) {
   case SF_SLOTS: return slots;
   case SF_RAYS: return rays;
@@ -281,6 +315,19 @@ static double weight(const struct sampler *s, uint32_t h) {
   return (double)(s->u[h].stratum_hi - s->u[h].stratum_lo) * s->mid_scale;
 }
 
+/* Middle unit h's auxiliary figure a over its measured window. The window
+ * (from the claim of its first measured item to the claim of the first
+ * after it) holds the tails of the warm-up's items and not those of its own
+ * last ones: on a machine of many contexts and a short unit its work is not
+ * its items' (measured: up to 2x). The issue slots it did are measured,
+ * so the window's figure a is those slots at the unit's detailed items'
+ * share of a per slot (the pre-pass's, over warm-up and measured items). */
+static double aux_unit(const struct sampler *s, uint32_t h, unsigned a) {
+  const double *x = &s->aux->unit[h * SA_COUNT];
+  const double slots = delta(&s->u[h], SQ_SLOTS);
+  return x[SA_SLOTS] > 0 ? slots * x[a] / x[SA_SLOTS] : 0;
+}
+
 static void parts_of(const struct sampler *s, struct parts *p) {
   memset(p, 0, sizeof *p);
   const struct sample_unit *f = &s->u[0], *l = &s->u[s->n - 1];
@@ -290,6 +337,12 @@ static void parts_of(const struct sampler *s, struct parts *p) {
       p->S[q] += weight(s, h) * delta(&s->u[h], q) / items(&s->u[h]);
   }
   p->slots_mid = (double)s->slots_total - p->edge[SQ_SLOTS];
+  if (!s->aux) return;
+  for (unsigned a = 0; a < SA_COUNT; a++) {
+    for (uint32_t h = 1; h + 1 < s->n; h++)
+      p->A[a] += weight(s, h) * aux_unit(s, h, a) / items(&s->u[h]);
+    p->X[a] = sample_aux_total(s->aux, a);
+  }
 }
 
 struct est {
@@ -298,6 +351,22 @@ struct est {
 
 /* The relative systematic uncertainty of figures made of cycles (estimate). */
 #define SAMPLE_SYSTEMATIC 0.005
+
+/* f's gradient in the middle units' auxiliary sums (ga) and in the middle's
+ * auxiliary totals (gx), numerically, at the estimate v. */
+static void aux_grad(const struct sampler *s, const struct parts *p, enum sample_fig f, double v,
+                     double ga[SA_COUNT], double gx[SA_COUNT]) {
+  for (unsigned a = 0; a < SA_COUNT; a++) {
+    struct parts d = *p;
+    double eps = fabs(p->A[a]) * 1e-7 + 1e-9;
+    d.A[a] += eps;
+    ga[a] = (figure(s, &d, f) - v) / eps;
+    d = *p;
+    eps = fabs(p->X[a]) * 1e-7 + 1e-9;
+    d.X[a] += eps;
+    gx[a] = (figure(s, &d, f) - v) / eps;
+  }
+}
 
 /* Figure f with its 95% interval. Linearization: f's gradient in the middle
  * sums S (numerically) turns each middle unit into one value l_h, and the
@@ -317,16 +386,23 @@ static struct est estimate(const struct sampler *s, enum sample_fig f) {
     d.S[q] += eps;
     grad[q] = (figure(s, &d, f) - v) / eps;
   }
+  double ga[SA_COUNT] = {0}, gx[SA_COUNT] = {0};
+  if (s->aux) aux_grad(s, &p, f, v, ga, gx);
   const uint32_t r = s->n - 2; /* middle units */
   double prev = 0, ss = 0, w2 = 0;
   for (uint32_t h = 1; h + 1 < s->n; h++) {
     double l = 0;
     for (unsigned q = 0; q < SQ_COUNT; q++) l += grad[q] * delta(&s->u[h], q) / items(&s->u[h]);
+    if (s->aux)
+      for (unsigned a = 0; a < SA_COUNT; a++) l += ga[a] * aux_unit(s, h, a) / items(&s->u[h]);
     if (h > 1) ss += (l - prev) * (l - prev);
     prev = l;
     w2 += weight(s, h) * weight(s, h);
   }
   double var = r > 1 ? ss / (2.0 * (r - 1)) * w2 : 0;
+  /* The pre-pass's own error: its sample of the rest stands for the middle's
+   * auxiliary totals (double sampling: the two stages' variances add). */
+  if (s->aux) var += sample_aux_var(s->aux, gx);
   double half = sample_t975(r > 1 ? r - 1 : 1) * sqrt(var);
   /* What the units' spread cannot show: a bias common to every window (the
    * restart after each drain, the edges). Measured against full runs
@@ -339,6 +415,25 @@ static struct est estimate(const struct sampler *s, enum sample_fig f) {
     half = hypot(half, SAMPLE_SYSTEMATIC * v);
   struct est e = {v, v - half, v + half};
   return e;
+}
+
+/* The cycles' auxiliary figure: the work (issue slots) where the cores
+ * bound the run, the footprint where the memory does; which one tracks the
+ * units' cycles better shows in the interval each gives, and the narrower
+ * is taken (the energy follows, its leakage and background being cycles). */
+static void choose_cyc_aux(struct sampler *s) {
+  double best = INFINITY;
+  unsigned pick = SA_SLOTS;
+  const unsigned cand[] = {SA_SLOTS, SA_LINES};
+  for (unsigned i = 0; i < 2; i++) {
+    s->cyc_aux = cand[i];
+    const struct est e = estimate(s, SF_CYCLES);
+    if (e.hi - e.lo < best) {
+      best = e.hi - e.lo;
+      pick = cand[i];
+    }
+  }
+  s->cyc_aux = pick;
 }
 
 /* e with each of its three numbers moved into [lo, hi]. */
@@ -514,6 +609,11 @@ static double s_warmed(const void *st, const struct stats_env *env) {
   (void)env;
   return items_fraction(st, ((const struct sampler *)st)->warmed);
 }
+static double s_prepass(const void *st, const struct stats_env *env) {
+  (void)env;
+  const struct sampler *s = st;
+  return items_fraction(st, s->aux ? s->aux->traced : 0);
+}
 static double s_detailed_slots(const void *st, const struct stats_env *env) {
   (void)env;
   const struct sampler *s = st;
@@ -573,6 +673,8 @@ static const struct stats_desc sample_desc[] = {
                  "work items warmed without time / work items"),
     STATS_FN_F64(s_traced, "sample_traced_fraction", "fraction",
                  "work items traced (detailed, warmed or counted) / work items"),
+    STATS_FN_F64(s_prepass, "sample_prepass_fraction", "fraction",
+                 "work items traced by the pre-pass (no time, auxiliary figures) / work items"),
     STATS_FN_F64(s_detailed_slots, "sample_detailed_slots_fraction", "fraction",
                  "issue slots simulated in detail / issue slots traced"),
 };

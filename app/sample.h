@@ -53,6 +53,10 @@ enum sample_q {
   SQ_COUNT
 };
 
+/* The pre-pass's auxiliary figures of an item (sample_aux.h): issue slots,
+ * rays, footprint (distinct lines touched). */
+enum sample_a { SA_SLOTS, SA_RAYS, SA_LINES, SA_COUNT };
+
 struct sample_unit {
   uint64_t stratum_lo, stratum_hi; /* the stratum's items [lo, hi) */
   uint64_t warm_from, start, measure,
@@ -80,6 +84,12 @@ struct sampler {
   /* After the run (sample_finish): the totals of what was traced. */
   uint64_t rays_total, slots_total, slots_detailed;
   double mid_scale; /* a middle stratum's items x this: the items its unit stands for */
+  /* With a sampled image and a pre-pass (sample.prepass > 0): the auxiliary
+   * figures (sample_aux.h; NULL: none, the expansion estimator), and the one
+   * the cycles and the energy are taken in ratio to (enum sample_a: slots or
+   * lines, whichever gives the narrower interval; sample_finish chooses). */
+  struct sample_aux *aux;
+  unsigned cyc_aux;
 };
 
 /* The fewest units a run may sample: 6 middle units, Student's t at 5 degrees
@@ -111,6 +121,9 @@ void sample_item_done(void *ctx, uint64_t k);
 
 /* After machine_run: the last unit's end is the end of the run. */
 void sample_finish(struct sampler *s, uint64_t rays_total);
+/* The part of sample_finish after the probes (every unit's at0 and at1, and
+ * slots_total, set): the middle's scale and the cycles' auxiliary figure. */
+void sample_settle(struct sampler *s);
 
 /* The run's shape (contexts, threads), the estimates as stats members (name,
  * name_ci95_low, name_ci95_high) and the sampling's own figures, as

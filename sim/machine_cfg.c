@@ -200,6 +200,9 @@ static const struct key KEYS[] = {
      "whole: every item is traced (rays and issue slots exact); sampled: only the units and "
      "the items warmed before them (the rest of the image black, rays and issue slots "
      "estimated)"},
+    {"sample.prepass", K_U32, 0, 1u << 20, "16", "", R_ALL, S(prepass),
+     "with sample.image sampled: the pre-pass traces one item in this many outside the units "
+     "(no time) for the ratio estimator's auxiliary totals (0: none, an expansion by items)"},
     {"sample.seed", K_U64, 0, 1e15, "1", "", R_ALL, S(seed),
      "where each middle unit falls in its stratum"},
     {"energy.l1_read", K_F64, -1, 1e6, "-1", "nJ", R_T, EN(l1.read_nj),

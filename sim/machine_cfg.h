@@ -47,6 +47,7 @@ struct machine_cfg_sample {
   uint32_t units;
   double warming;
   uint32_t whole_image; /* 1: every item traced (sample.image: whole) */
+  uint32_t prepass;     /* sampled image: the pre-pass traces one item in this many (0: none) */
   uint64_t seed;
 };
 

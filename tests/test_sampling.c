@@ -8,7 +8,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "app/sample.h"
+#include "app/sample_aux.h"
 #include "testing.h"
+
+#define EXPECT_NEAR(a, b, tol)                                                                     \
+  EXPECTF(fabs((a) - (b)) <= (tol), "%s = %.17g, expected %.17g", #a, (double)(a), (double)(b))
 
 static const char *const SCENES[] = {"grove", "room", "sphereflake"};
 
@@ -232,7 +237,83 @@ static void test_refusals(void) {
           "sweep with a dynamic point sampled: exit %d: %s", rc, out);
 }
 
+/* The pre-pass's totals and their variance, by hand: 10 slots in the units'
+ * items, two items sampled from a rest of 8 (3 and 5 slots): 10 + 8 x 8 / 2
+ * = 42; successive differences (5 - 3)^2 = 4 give s^2 = 2, and the
+ * variance 8^2 x (1 - 2/8) x 2 / 2 = 48. A census of the rest (every item
+ * sampled) is exact: variance 0. */
+static void test_aux_total(void) {
+  double sparse[2 * SA_COUNT] = {3, 1, 7, 5, 2, 9};
+  struct sample_aux x = {.every = 4, .sparse = sparse, .n_sparse = 2, .pop = 8};
+  x.exact[SA_SLOTS] = 10;
+  x.exact[SA_LINES] = 4;
+  const double g[SA_COUNT] = {1, 0, 0};
+  EXPECT_NEAR(sample_aux_total(&x, SA_SLOTS), 42, 1e-12);
+  EXPECT_NEAR(sample_aux_total(&x, SA_LINES), 4 + 16 * 4, 1e-12);
+  EXPECT_NEAR(sample_aux_var(&x, g), 48, 1e-9);
+  x.pop = 2;
+  EXPECT_NEAR(sample_aux_total(&x, SA_SLOTS), 18, 1e-12);
+  EXPECT_NEAR(sample_aux_var(&x, g), 0, 1e-12);
+}
+
+/* A hand-made run of 8 units whose cycles are 5 x and DRAM bytes 128 x their
+ * footprint (lines) while their work (issue slots) per line varies: the
+ * ratio estimator on the footprint is exact whatever the units' mix, it is
+ * the auxiliary the cycles get (narrower than the slots'), and the issue
+ * slots come out as the pre-pass's total. */
+static void test_ratio_exact(void) {
+  enum { N = 8 };
+  struct sample_unit u[N];
+  bool drained[N] = {0};
+  memset(u, 0, sizeof u);
+  double unit[N * SA_COUNT] = {0};
+  double sparse[3 * SA_COUNT] = {40, 4, 10, 90, 9, 12, 60, 6, 30};
+  struct sample_aux x = {.every = 10, .unit = unit, .sparse = sparse, .n_sparse = 3, .pop = 30};
+  const double slots[N] = {100, 120, 400, 90, 310, 150, 220, 100};
+  const double lines[N] = {10, 30, 20, 45, 12, 60, 25, 10};
+  for (unsigned h = 0; h < N; h++) {
+    u[h].stratum_lo = 100 * h;
+    u[h].stratum_hi = 100 * (h + 1);
+    u[h].start = 100 * h + (h ? 20 : 0);
+    u[h].measure = u[h].start + (h ? 10 : 0);
+    u[h].end = h + 1 < N ? u[h].start + 30 : 800;
+    u[h].at1[SQ_SLOTS] = (uint64_t)slots[h];
+    u[h].at1[SQ_CYCLES] = (uint64_t)(5 * lines[h]);
+    u[h].at1[SQ_DRAM_BYTES] = (uint64_t)(128 * lines[h]);
+    u[h].at1[SQ_RAYS] = (uint64_t)(slots[h] / 10);
+    u[h].at1[SQ_LAT_N] = 1;
+    u[h].have0 = u[h].have1 = true;
+    if (h == 0 || h + 1 == N) continue;
+    unit[h * SA_COUNT + SA_SLOTS] = slots[h];
+    unit[h * SA_COUNT + SA_RAYS] = slots[h] / 10;
+    unit[h * SA_COUNT + SA_LINES] = lines[h];
+    for (unsigned a = 0; a < SA_COUNT; a++) x.exact[a] += unit[h * SA_COUNT + a];
+  }
+  struct sampler s = {.total = 800,
+                      .n = N,
+                      .u = u,
+                      .drained = drained,
+                      .cores = 1,
+                      .hz = 1e9,
+                      .aux = &x,
+                      .slots_total = 1};
+  sample_settle(&s);
+  EXPECT(s.cyc_aux == SA_LINES);
+  const double edge_lines = lines[0] + lines[N - 1], X = sample_aux_total(&x, SA_LINES);
+  double lo, hi;
+  const double c = sample_cycles(&s, &lo, &hi), d = sample_dram_bytes(&s, &lo, &hi);
+  EXPECT_NEAR(c, 5 * (edge_lines + X), 1e-6 * c);
+  EXPECT_NEAR(d, 128 * (edge_lines + X), 1e-6 * d);
+  EXPECTF(lo <= d && d <= hi && lo < hi, "DRAM bytes %g [%g, %g]", d, lo, hi);
+  /* The pre-pass's own variance is the interval's (every unit on the line). */
+  const double g[SA_COUNT] = {0, 0, 128};
+  const double half = sample_t975(N - 3) * sqrt(sample_aux_var(&x, g));
+  EXPECT_NEAR(hi - d, half, 1e-3 * half);
+}
+
 int main(void) {
+  test_aux_total();
+  test_ratio_exact();
   test_against_full();
   test_seeds();
   test_packet();
