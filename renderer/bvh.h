@@ -24,9 +24,9 @@
 #ifndef RTSIM_RENDERER_BVH_H
 #define RTSIM_RENDERER_BVH_H
 
-#include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "renderer/vec.h"
 
@@ -64,8 +64,14 @@ struct bvh8_node {
 };
 _Static_assert(sizeof(struct bvh8_node) == 80, "Ylitie et al.'s 80-byte node");
 
-/* The scale of exponent byte e: 2^(e - 127), an exact power of two. */
-static inline float bvh8_scale(uint8_t e) { return ldexpf(1.0f, (int)e - 127); }
+/* The scale of exponent byte e (1..254): 2^(e - 127), an exact power of two
+ * (the float whose exponent field is e). */
+static inline float bvh8_scale(uint8_t e) {
+  const uint32_t u = (uint32_t)e << 23;
+  float f;
+  memcpy(&f, &u, sizeof f);
+  return f;
+}
 /* Plane q of an axis with origin p and scale s. One expression for the build's
  * check and the traversal, so the check holds for what traversal sees. */
 static inline float bvh8_plane(float p, uint8_t q, float s) { return p + (float)q * s; }

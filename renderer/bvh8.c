@@ -131,7 +131,8 @@ static void fill(struct collapse *c, uint32_t i) {
     CHECK_LE(ch[k].count, BVH_LEAF_MAX);
     static const uint8_t unary[4] = {0, 0x20, 0x60, 0xe0};
     meta[k] = (uint8_t)(unary[ch[k].count] | entries);
-    for (uint32_t j = 0; j < ch[k].count; j++) b->prims[b->prim_count++] = c->b2->prims[ch[k].ref + j];
+    for (uint32_t j = 0; j < ch[k].count; j++)
+      b->prims[b->prim_count++] = c->b2->prims[ch[k].ref + j];
     entries += ch[k].count;
     b->stats.leaves++;
     if (depth + 1 > b->stats.max_depth) b->stats.max_depth = depth + 1;

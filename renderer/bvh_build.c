@@ -9,6 +9,7 @@
 #include "renderer/bvh.h"
 
 #include <float.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,10 +32,11 @@ static void box_empty(struct box *b) {
   }
 }
 
+/* Written as selects (min and max instructions, no branches to mispredict). */
 static void box_grow(struct box *b, const struct box *o) {
   for (int a = 0; a < 3; a++) {
-    if (o->lo[a] < b->lo[a]) b->lo[a] = o->lo[a];
-    if (o->hi[a] > b->hi[a]) b->hi[a] = o->hi[a];
+    b->lo[a] = o->lo[a] < b->lo[a] ? o->lo[a] : b->lo[a];
+    b->hi[a] = o->hi[a] > b->hi[a] ? o->hi[a] : b->hi[a];
   }
 }
 
@@ -78,56 +80,82 @@ static void push(struct builder *bd, struct task t) {
   bd->todo[bd->ntodo++] = t;
 }
 
-/* The best binned SAH split of prims[begin, end) with centroid bounds cb:
- * its axis and the first bin of the upper side; the price in *cost
- * (relative to a triangle test). False when no bin plane separates them. */
-static bool sah_split(const struct builder *bd, const uint32_t *prims, uint32_t begin,
-                      uint32_t end, const struct box *node, const struct box *cb, int *axis,
-                      int *bin, double *cost) {
-  bool found = false;
-  const double area = box_area(node);
-  for (int a = 0; a < 3; a++) {
-    const float ext = cb->hi[a] - cb->lo[a];
-    if (!(ext > 0.0f)) continue;
-    const float k = (float)BVH_BINS * (1.0f - 1e-6f) / ext;
-    struct box bb[BVH_BINS];
-    uint32_t bn[BVH_BINS] = {0};
-    for (int i = 0; i < BVH_BINS; i++) box_empty(&bb[i]);
-    for (uint32_t j = begin; j < end; j++) {
-      const uint32_t p = prims[j];
-      int i = (int)((bd->cen[p][a] - cb->lo[a]) * k);
-      i = i < 0 ? 0 : (i >= BVH_BINS ? BVH_BINS - 1 : i);
-      bn[i]++;
-      box_grow(&bb[i], &bd->tb[p]);
-    }
-    /* Areas and counts of the lower sides, then a sweep from the top. */
-    double la[BVH_BINS];
-    uint32_t lc[BVH_BINS];
-    struct box acc;
-    box_empty(&acc);
-    uint32_t c = 0;
-    for (int i = 0; i < BVH_BINS; i++) {
-      box_grow(&acc, &bb[i]);
-      c += bn[i];
-      la[i] = box_area(&acc);
-      lc[i] = c;
-    }
-    box_empty(&acc);
-    c = 0;
-    for (int i = BVH_BINS - 1; i > 0; i--) {
-      box_grow(&acc, &bb[i]);
-      c += bn[i];
-      if (c == 0 || lc[i - 1] == 0) continue;
-      const double s =
-          BVH_COST_NODE + (la[i - 1] * lc[i - 1] + box_area(&acc) * c) / (area > 0 ? area : 1.0);
-      if (!found || s < *cost) {
-        found = true;
-        *cost = s;
-        *axis = a;
-        *bin = i;
-      }
+/* The binned SAH's bins: triangle counts and bounds, per axis. */
+struct bins {
+  struct box box[3][BVH_BINS];
+  uint32_t n[3][BVH_BINS];
+};
+
+static int bin_of(float c, float lo, float k) {
+  const int i = (int)((c - lo) * k);
+  return i < 0 ? 0 : (i >= BVH_BINS ? BVH_BINS - 1 : i);
+}
+
+/* The best split of axis a's bins: true if one separates them, its price
+ * and first upper bin if it beats *cost (or none was found yet). */
+static bool sweep(const struct bins *bn, int a, double area, bool found, double *cost, int *bin) {
+  double la[BVH_BINS];
+  uint32_t lc[BVH_BINS];
+  struct box acc;
+  box_empty(&acc);
+  uint32_t c = 0;
+  for (int i = 0; i < BVH_BINS; i++) {
+    box_grow(&acc, &bn->box[a][i]);
+    c += bn->n[a][i];
+    la[i] = box_area(&acc);
+    lc[i] = c;
+  }
+  box_empty(&acc);
+  c = 0;
+  bool better = false;
+  for (int i = BVH_BINS - 1; i > 0; i--) {
+    box_grow(&acc, &bn->box[a][i]);
+    c += bn->n[a][i];
+    if (c == 0 || lc[i - 1] == 0) continue;
+    const double s =
+        BVH_COST_NODE + (la[i - 1] * lc[i - 1] + box_area(&acc) * c) / (area > 0 ? area : 1.0);
+    if (!found || s < *cost) {
+      found = better = true;
+      *cost = s;
+      *bin = i;
     }
   }
+  return better;
+}
+
+/* The best binned SAH split of prims[begin, end) with centroid bounds cb:
+ * its axis and the first bin of the upper side; the price in *cost
+ * (relative to a triangle test). False when no bin plane separates them.
+ * One pass over the triangles bins all three axes. */
+static bool sah_split(const struct builder *bd, const uint32_t *prims, uint32_t begin, uint32_t end,
+                      const struct box *node, const struct box *cb, int *axis, int *bin,
+                      double *cost) {
+  struct bins bn;
+  float k[3];
+  bool live[3];
+  for (int a = 0; a < 3; a++) {
+    const float ext = cb->hi[a] - cb->lo[a];
+    live[a] = ext > 0.0f;
+    k[a] = live[a] ? (float)BVH_BINS * (1.0f - 1e-6f) / ext : 0.0f;
+    for (int i = 0; i < BVH_BINS; i++) {
+      box_empty(&bn.box[a][i]);
+      bn.n[a][i] = 0;
+    }
+  }
+  for (uint32_t j = begin; j < end; j++) {
+    const uint32_t p = prims[j];
+    for (int a = 0; a < 3; a++) {
+      const int i = bin_of(bd->cen[p][a], cb->lo[a], k[a]);
+      bn.n[a][i]++;
+      box_grow(&bn.box[a][i], &bd->tb[p]);
+    }
+  }
+  bool found = false;
+  for (int a = 0; a < 3; a++)
+    if (live[a] && sweep(&bn, a, box_area(node), found, cost, bin)) {
+      found = true;
+      *axis = a;
+    }
   return found;
 }
 
@@ -178,9 +206,7 @@ static uint32_t split_range(struct builder *bd, const struct task *t, const stru
     const float k = (float)BVH_BINS * (1.0f - 1e-6f) / (cb->hi[axis] - cb->lo[axis]);
     uint32_t i = t->begin, j = t->end;
     while (i < j) {
-      int bi = (int)((bd->cen[prims[i]][axis] - cb->lo[axis]) * k);
-      bi = bi < 0 ? 0 : (bi >= BVH_BINS ? BVH_BINS - 1 : bi);
-      if (bi < bin) {
+      if (bin_of(bd->cen[prims[i]][axis], cb->lo[axis], k) < bin) {
         i++;
       } else {
         const uint32_t tmp = prims[i];

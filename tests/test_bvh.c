@@ -131,9 +131,8 @@ static void check_structure(const struct scene *s, const struct bvh *b, const ch
   uint32_t *visits = calloc(b->node_count + 1, sizeof *visits);
   double slack = 0;
   uint64_t slack_n = 0;
-  struct exact root =
-      b->kind == ACCEL_BVH2 ? walk2(s, b, 0, 0, seen, visits)
-                            : walk8(s, b, 0, 0, seen, visits, &slack, &slack_n);
+  struct exact root = b->kind == ACCEL_BVH2 ? walk2(s, b, 0, 0, seen, visits)
+                                            : walk8(s, b, 0, 0, seen, visits, &slack, &slack_n);
   uint32_t bad = 0;
   for (uint32_t p = 0; p < s->tri_count; p++) bad += seen[p] != 1;
   EXPECTF(bad == 0, "%s: %u triangles not in exactly one leaf", what, bad);
@@ -337,8 +336,7 @@ static void check_tiny(void) {
     struct scene s;
     scene_init(&s);
     for (int i = 0; i < n; i++)
-      scene_add_tri(&s, v3((float)i, 0, 0), v3((float)i + 0.5f, 0, 0), v3((float)i, 1, 0), NULL,
-                    0);
+      scene_add_tri(&s, v3((float)i, 0, 0), v3((float)i + 0.5f, 0, 0), v3((float)i, 1, 0), NULL, 0);
     for (int k = ACCEL_BVH2; k <= ACCEL_BVH8; k++) {
       struct bvh b;
       bvh_build(&b, &s, (enum accel_kind)k);
