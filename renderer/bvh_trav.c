@@ -5,8 +5,8 @@
  * arithmetic is the k-d traversal's (trav.h): the same ray set-up and root
  * clip, box planes thickened by the ray's slack exactly as the root box is,
  * the same triangle test, best-hit rule and announcements, so a BVH returns
- * what brute force does. Quantized boxes are tested as bvh8_plane gives their
- * planes, which contain the exact boxes (bvh8.c checks it at build). */
+ * what brute force does. Quantized boxes contain the exact ones (bvh8.c
+ * checks each plane at build). */
 #include "renderer/bvh_trav.h"
 
 #include "renderer/bvh.h"
@@ -62,8 +62,12 @@ BT_INLINE uint32_t bt_children2(const struct bvh *b, uint32_t ni, const struct t
 
 /* The same for an 8-wide node, a plane of every slot at a time (loops the
  * compiler can keep in vector registers): the near plane of each axis is lo
- * for a ray going up it and hi going down, thickened as bt_box does, so
- * each slot's interval is bit for bit bt_box's on its dequantized box. */
+ * for a ray going up it and hi going down, thickened by the slack as bt_box
+ * does, and computed in t as the node's origin plane plus q steps of the
+ * scale (as k-d splits are tested in t): one multiply-add a plane. Its
+ * rounding, a few eps of the ray's reach R, lies well inside the slack
+ * (64 eps R, of which the triangle test needs 8), and the dequantized plane
+ * itself contains the exact box (bvh8.c checks it). */
 BT_INLINE uint32_t bt_children8(const struct bvh *b, uint32_t ni, const struct trav_ray *tv,
                                 float t0, float t1, struct bt_entry *out, uint32_t *tested) {
   const struct bvh8_node *nd = &b->n8[ni];
@@ -87,9 +91,9 @@ BT_INLINE uint32_t bt_children8(const struct bvh *b, uint32_t ni, const struct t
     const bool up = tv->inv[a] >= 0.0f;
     const uint8_t *qn = up ? nd->qlo[a] : nd->qhi[a], *qf = up ? nd->qhi[a] : nd->qlo[a];
     const float dn = up ? -d : d, df = -dn, inv = tv->inv[a];
+    const float bn = ((p - o) + dn) * inv, bf = ((p - o) + df) * inv, st = s * inv;
     for (int k = 0; k < 8; k++) {
-      const float n = ((bvh8_plane(p, qn[k], s) - o) + dn) * inv;
-      const float f = ((bvh8_plane(p, qf[k], s) - o) + df) * inv;
+      const float n = bn + (float)qn[k] * st, f = bf + (float)qf[k] * st;
       tn[k] = n > tn[k] ? n : tn[k];
       tf[k] = f < tf[k] ? f : tf[k];
     }
