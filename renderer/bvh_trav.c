@@ -68,23 +68,35 @@ BT_INLINE uint32_t bt_children2(const struct bvh *b, uint32_t ni, const struct t
  * rounding, a few eps of the ray's reach R, lies well inside the slack
  * (64 eps R, of which the triangle test needs 8), and the dequantized plane
  * itself contains the exact box (bvh8.c checks it). */
+/* Four lanes, a slot each, the node's eight slots in two halves (GCC's and
+ * Clang's vector extensions, SSE2 registers). Lane-wise IEEE arithmetic:
+ * the same values as a loop over the slots. */
+typedef float bt_f4 __attribute__((vector_size(16)));
+typedef int32_t bt_i4 __attribute__((vector_size(16)));
+
+BT_INLINE bt_f4 bt_q4(const uint8_t q[4]) {
+  const bt_i4 i = {q[0], q[1], q[2], q[3]};
+  return __builtin_convertvector(i, bt_f4);
+}
+
+/* Lane-wise m ? a : b (m all ones or zero a lane, as comparisons give). */
+BT_INLINE bt_f4 bt_sel(bt_i4 m, bt_f4 a, bt_f4 b) {
+  return (bt_f4)(((bt_i4)a & m) | ((bt_i4)b & ~m));
+}
+
 BT_INLINE uint32_t bt_children8(const struct bvh *b, uint32_t ni, const struct trav_ray *tv,
                                 float t0, float t1, struct bt_entry *out, uint32_t *tested) {
   const struct bvh8_node *nd = &b->n8[ni];
-  float tn[8], tf[8];
-  for (int k = 0; k < 8; k++) {
-    tn[k] = t0;
-    tf[k] = t1;
-  }
+  const bt_f4 zero = {0};
+  bt_f4 tn[2] = {zero + t0, zero + t0}, tf[2] = {zero + t1, zero + t1};
   for (int a = 0; a < 3; a++) {
     const float s = bvh8_scale(nd->e[a]), p = nd->p[a], o = tv->o[a], d = tv->delta;
     if (tv->flat[a]) {
-      for (int k = 0; k < 8; k++) {
-        const float lo = bvh8_plane(p, nd->qlo[a][k], s), hi = bvh8_plane(p, nd->qhi[a][k], s);
-        if (o - lo < -d || o - hi > d) {
-          tn[k] = INFINITY;
-          tf[k] = -INFINITY;
-        }
+      for (int h = 0; h < 2; h++) {
+        const bt_f4 lo = p + bt_q4(nd->qlo[a] + 4 * h) * s, hi = p + bt_q4(nd->qhi[a] + 4 * h) * s;
+        const bt_i4 outside = ((o - lo) < -d) | ((o - hi) > d);
+        tn[h] = bt_sel(outside, zero + INFINITY, tn[h]);
+        tf[h] = bt_sel(outside, zero - INFINITY, tf[h]);
       }
       continue;
     }
@@ -92,19 +104,20 @@ BT_INLINE uint32_t bt_children8(const struct bvh *b, uint32_t ni, const struct t
     const uint8_t *qn = up ? nd->qlo[a] : nd->qhi[a], *qf = up ? nd->qhi[a] : nd->qlo[a];
     const float dn = up ? -d : d, df = -dn, inv = tv->inv[a];
     const float bn = ((p - o) + dn) * inv, bf = ((p - o) + df) * inv, st = s * inv;
-    for (int k = 0; k < 8; k++) {
-      const float n = bn + (float)qn[k] * st, f = bf + (float)qf[k] * st;
-      tn[k] = n > tn[k] ? n : tn[k];
-      tf[k] = f < tf[k] ? f : tf[k];
+    for (int h = 0; h < 2; h++) {
+      const bt_f4 n = bn + bt_q4(qn + 4 * h) * st, f = bf + bt_q4(qf + 4 * h) * st;
+      tn[h] = bt_sel(n > tn[h], n, tn[h]);
+      tf[h] = bt_sel(f < tf[h], f, tf[h]);
     }
   }
+  const bt_i4 hit[2] = {tn[0] <= tf[0], tn[1] <= tf[1]};
   uint32_t m = 0;
   for (int k = 0; k < 8; k++) {
     bool interior;
     uint32_t ref, count;
     if (!bvh8_child(nd, k, &interior, &ref, &count)) continue;
     (*tested)++;
-    if (tn[k] <= tf[k]) out[m++] = (struct bt_entry){ref, count, tn[k]};
+    if (hit[k >> 2][k & 3]) out[m++] = (struct bt_entry){ref, count, tn[k >> 2][k & 3]};
   }
   return m;
 }
