@@ -82,6 +82,12 @@ bool app_world_load(struct app_world *w, const char *path) {
     return false;
   }
   double t1 = app_now();
+  if (w->scene.accel != ACCEL_KD) {
+    bvh_build(&w->bvh, &w->scene, (enum accel_kind)w->scene.accel);
+    w->load_s = t1 - t0;
+    w->build_s = app_now() - t1;
+    return true;
+  }
   struct kd_build_params p;
   kd_build_params_default(&p);
   p.clip = w->scene.kd_clip;
@@ -102,7 +108,23 @@ bool app_world_load(struct app_world *w, const char *path) {
 
 void app_world_fini(struct app_world *w) {
   kd_fini(&w->kd);
+  bvh_fini(&w->bvh);
   scene_fini(&w->scene);
+}
+
+const struct bvh *app_world_bvh(const struct app_world *w) {
+  return w->scene.accel != ACCEL_KD ? &w->bvh : NULL;
+}
+
+int app_accel_check(const struct app_world *w, const char *path, enum policy_kind k) {
+  if (policy_accel_supported(k, w->scene.accel)) return 0;
+  struct err e;
+  memset(&e, 0, sizeof e);
+  err_set(&e, path, w->scene.accel_line, w->scene.accel_col,
+          "accel: the %s policy traces the k-d tree only (got %s, expected kd, or policy "
+          "recursive on a BVH)",
+          policy_name(k), accel_names[w->scene.accel]);
+  return app_report(&e);
 }
 
 /* ---- the one render setup (struct app_render) --------------------------------- */
@@ -116,6 +138,7 @@ void app_render_init(struct app_render *r, const struct app_world *w, uint32_t m
   struct policy_setup *s = &r->setup;
   s->scene = &w->scene;
   s->kd = &w->kd;
+  s->bvh = app_world_bvh(w);
   trace_layout_default(&s->layout);
   s->sc = &r->sc;
   fb_init(&r->fb, width, height, s->layout.fb_base);

@@ -8,6 +8,7 @@
 #include <stdio.h>
 
 #include "app/sample.h"
+#include "renderer/bvh.h"
 #include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
 #include "renderer/policy/policy.h"
@@ -80,16 +81,25 @@ extern const char app_revision[];
 /* Host wall clock in seconds (for reports only; the model never reads it). */
 double app_now(void);
 
-/* A loaded scene and its k-d tree, with the host times they took. */
+/* A loaded scene and its acceleration structure (the scene's accel: the k-d
+ * tree, or a BVH and then kd is empty), with the host times they took. */
 struct app_world {
   struct scene scene;
   struct kd_tree kd;
+  struct bvh bvh;
   double load_s, build_s;
 };
 
 /* Load path and build the tree; on bad input prints and returns false. */
 bool app_world_load(struct app_world *w, const char *path);
 void app_world_fini(struct app_world *w);
+/* 0 if policy k traces w's structure (policy_accel_supported); otherwise
+ * prints one message at the scene's accel key (path:line:col) and returns
+ * APP_EXIT_USAGE. */
+/* The BVH w's scene is traced through, or NULL for the k-d tree (what a
+ * tracer's trace_ctx.bvh takes). */
+const struct bvh *app_world_bvh(const struct app_world *w);
+int app_accel_check(const struct app_world *w, const char *path, enum policy_kind k);
 
 struct trace_ctx;
 /* rtsim hits after its set-up: the rays CSV read from in (named <stdin> in

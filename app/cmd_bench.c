@@ -142,6 +142,7 @@ static double trace_only(const struct app_world *w, const struct ray *rays, uint
   struct trace_layout lay;
   trace_layout_default(&lay);
   trace_init(&tr, &w->scene, &w->kd, mem_port_native(), &lay);
+  tr.bvh = app_world_bvh(w);
   double t0 = app_now();
   for (uint32_t i = 0; i < n; i++) {
     struct trace_hit h;

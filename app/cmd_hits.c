@@ -177,6 +177,7 @@ int cmd_hits(int argc, char **argv) {
   struct trace_layout layout;
   trace_layout_default(&layout);
   trace_init(&tr, &w.scene, &w.kd, mem_port_native(), &layout);
+  tr.bvh = app_world_bvh(&w);
   rc = app_hits_answer(&tr, stdin, stdout);
   app_world_fini(&w);
   return rc;

@@ -21,7 +21,8 @@ static const char HELP[] =
     "usage: rtsim render SCENE.yaml -o IMAGE.exr [options]\n"
     "\n"
     "Ray trace SCENE.yaml and write IMAGE.exr with channels R, G, B (linear radiance)\n"
-    "and cost.nodes, cost.tris (k-d node visits and triangle tests per pixel).\n"
+    "and cost.nodes, cost.tris (node visits and triangle tests per pixel). The scene's\n"
+    "accel key chooses the structure traced (kd, bvh2 or bvh8; docs/inputs.md).\n"
     "Prints a summary on stdout; progress on stderr when it is a terminal.\n"
     "\n"
     "example:\n"
@@ -50,12 +51,30 @@ static void progress(void *ctx, uint64_t done, uint64_t total) {
   fflush(stderr);
 }
 
-/* Print the scene and k-d tree summary lines ("key: value") on stdout. */
+/* The BVH's summary lines, in place of the k-d tree's. */
+static void print_bvh(const struct app_world *w) {
+  const struct bvh_stats *b = &w->bvh.stats;
+  printf("accel: %s\n", accel_names[w->scene.accel]);
+  printf("bvh_build_s: %.3f\n", w->build_s);
+  printf("bvh_nodes: %u (%llu bytes)\n", b->nodes, (unsigned long long)b->node_bytes);
+  printf("bvh_leaves: %u\n", b->leaves);
+  printf("bvh_depth_max: %u\n", b->max_depth);
+  printf("bvh_leaf_prims_max: %u\n", b->max_leaf_prims);
+  printf("bvh_leaf_prims_mean: %.2f\n",
+         b->leaves ? (double)w->bvh.prim_count / (double)b->leaves : 0.0);
+}
+
+/* Print the scene and acceleration structure summary lines ("key: value")
+ * on stdout. */
 static void print_world(const struct app_world *w, const char *path) {
   const struct kd_stats *k = &w->kd.stats;
   printf("scene: %s (%s)\n", w->scene.name[0] ? w->scene.name : "unnamed", path);
   printf("triangles: %u\n", w->scene.tri_count);
   printf("load_s: %.3f\n", w->load_s);
+  if (app_world_bvh(w)) {
+    print_bvh(w);
+    return;
+  }
   printf("kd_build_s: %.3f\n", w->build_s);
   printf("kd_splits: %s\n", w->scene.kd_clip ? "clipped" : "whole");
   printf("kd_refs_per_triangle: %.2f\n",
@@ -94,6 +113,10 @@ int cmd_render(int argc, char **argv) {
 
   struct app_world w;
   if (!app_world_load(&w, path)) return 2;
+  if ((rc = app_accel_check(&w, path, policy)) != 0) {
+    app_world_fini(&w);
+    return rc;
+  }
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   struct app_render ar;
@@ -149,21 +172,24 @@ int cmd_render(int argc, char **argv) {
   printf("rays_total: %llu\n", (unsigned long long)total);
   printf("ray_slots_max: %llu (%.1f MB of 64-byte rays held at once)\n",
          (unsigned long long)st.ray_slots_max, (double)st.ray_slots_max * 64 / 1048576.0);
-  printf("kd_node_visits: %llu\n", (unsigned long long)ts.node_visits);
+  printf("%s_node_visits: %llu\n", app_world_bvh(&w) ? "bvh" : "kd",
+         (unsigned long long)ts.node_visits);
   printf("triangle_tests: %llu\n", (unsigned long long)ts.tri_tests);
   /* Peak memory against what the run must hold: the scene, the tree and the
    * rays in flight (the target is at most twice that), and apart the image
    * (the framebuffer's sums and costs, and the output planes). */
   const double mb = 1048576.0;
   double scene_mb = (double)w.scene.tri_count * sizeof *w.scene.tris / mb;
-  double tree_mb = ((double)w.kd.node_count * sizeof *w.kd.nodes +
-                    (double)w.kd.prim_ref_count * sizeof *w.kd.prims) /
-                   mb;
+  double tree_mb =
+      ((double)w.kd.node_count * sizeof *w.kd.nodes +
+       (double)w.kd.prim_ref_count * sizeof *w.kd.prims + (double)w.bvh.stats.node_bytes +
+       (double)w.bvh.prim_count * sizeof *w.bvh.prims) /
+      mb;
   double rays_mb = (double)st.ray_slots_max * sizeof(struct ray) / mb;
   double data_mb = scene_mb + tree_mb + rays_mb;
   double image_mb = image_bytes / mb;
-  printf("data_mb: %.1f (scene %.1f + k-d tree %.1f + rays %.1f)\n", data_mb, scene_mb, tree_mb,
-         rays_mb);
+  printf("data_mb: %.1f (scene %.1f + %s %.1f + rays %.1f)\n", data_mb, scene_mb,
+         app_world_bvh(&w) ? "BVH" : "k-d tree", tree_mb, rays_mb);
   printf("image_mb: %.1f (framebuffer and output planes)\n", image_mb);
   struct rusage ru;
   if (getrusage(RUSAGE_SELF, &ru) == 0) {

@@ -229,6 +229,11 @@ int cmd_traffic(int argc, char **argv) {
 
   struct app_world w;
   if (!app_world_load(&w, scene_path)) return 2;
+  for (int p = 0; p < POLICY_COUNT; p++)
+    if (want[p] && (rc = app_accel_check(&w, scene_path, (enum policy_kind)p)) != 0) {
+      app_world_fini(&w);
+      return rc;
+    }
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   struct lru_stack_params lp = lru_stack_params_default();
@@ -408,6 +413,10 @@ int cmd_trace(int argc, char **argv) {
     return app_usage_error("trace", "missing --rays (primary, shadow, specular or diffuse)");
   struct app_world w;
   if (!app_world_load(&w, scene_path)) return 2;
+  if ((rc = app_accel_check(&w, scene_path, pk)) != 0) {
+    app_world_fini(&w);
+    return rc;
+  }
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   struct lru_stack_params lp = lru_stack_params_default();

@@ -55,6 +55,11 @@ struct scene {
   uint64_t seed;          /* generator seed (also the default render seed) */
   bool kd_clip;           /* kd_tree.splits: clipped (perfect splits) rather than
                              whole (PBRT's and the paper's tree, the default) */
+
+  /* enum accel_kind (bvh.h): the structure traced (the scene file's `accel`,
+   * default kd), and where the file set it (line 0: not set). */
+  uint8_t accel;
+  int accel_line, accel_col;
 };
 
 void scene_init(struct scene *s);

@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "renderer/bvh_trav.h"
 #include "renderer/kdtree.h"
 #include "renderer/ray.h"
 #include "renderer/scene.h"
@@ -214,6 +215,7 @@ static inline __attribute__((always_inline)) bool traverse_n(struct trace_ctx *t
 /* One copy of the loop for the native port (no backend calls inside), one for
  * the others. */
 static bool traverse(struct trace_ctx *tr, const struct ray *r, bool any_hit, struct trace_hit *h) {
+  if (tr->bvh) return bvh_traverse(tr, r, any_hit, h);
   if (!tr->mem.ops) return traverse_n(tr, r, any_hit, h, true);
   return traverse_n(tr, r, any_hit, h, false);
 }
@@ -435,6 +437,7 @@ static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk
                                    struct trace_hit *hits, bool *occ,
                                    struct trace_packet_cost *cost) {
   CHECK_LE(n, TRACE_PACKET_MAX);
+  CHECK(tr->bvh == NULL); /* packets trace the k-d tree only (policy_accel_supported) */
   const struct kd_tree *kd = tr->kd;
   uint64_t ign, found = 0;
   uint64_t live = pk_setup(tr, pk, rays, n, any_hit, hits, occ, &ign);

@@ -61,7 +61,7 @@ extern const char *const trace_class_names[TRACE_CLASS_COUNT];
 #define TRACE_REGION_SHIFT 40
 struct trace_layout {
   uint64_t tri_base;      /* triangle p at tri_base + tri_bytes p */
-  uint64_t node_base;     /* k-d node i at node_base + 8 i */
+  uint64_t node_base;     /* k-d node i at node_base + 8 i (BVH: 64 i or 80 i) */
   uint64_t prim_idx_base; /* leaf index entry j at prim_idx_base + 4 j */
   uint64_t qtable_base;   /* queue-point table: entry q at qtable_base + 8 q */
   uint64_t queue_base;    /* ray queues (64-byte rays) */
@@ -80,9 +80,13 @@ struct trace_stats {
   uint64_t node_visits, tri_tests;
 };
 
+struct bvh;
 struct trace_ctx {
   const struct scene *scene;
   const struct kd_tree *kd;
+  /* The BVH to trace instead of kd (NULL: the k-d tree). trace_closest and
+   * trace_any take either; the packet queries the k-d tree only. */
+  const struct bvh *bvh;
   struct mem_port mem;
   struct trace_layout layout;
   struct trace_stats stats;

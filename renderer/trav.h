@@ -49,10 +49,11 @@ static inline bool trav_ray_valid(const struct ray *r) {
   return m >= TRAV_MIN_DIR;
 }
 
-/* Set up tr and clip the ray to the thickened root box; false if it misses.
+/* Set up tr and clip the ray to the thickened root box [blo, bhi] (the k-d
+ * tree's or a BVH's); false if it misses.
  * NOTE: inline keeps it inlined in traverse() now that packets call it too. */
-static inline bool trav_setup(struct trav_ray *tr, const struct kd_tree *kd, const struct ray *r) {
-  float lo[3] = {kd->lo.x, kd->lo.y, kd->lo.z}, hi[3] = {kd->hi.x, kd->hi.y, kd->hi.z};
+static inline bool trav_setup_box(struct trav_ray *tr, vec3 blo, vec3 bhi, const struct ray *r) {
+  float lo[3] = {blo.x, blo.y, blo.z}, hi[3] = {bhi.x, bhi.y, bhi.z};
   float d[3] = {r->d.x, r->d.y, r->d.z};
   tr->o[0] = r->o.x;
   tr->o[1] = r->o.y;
@@ -87,6 +88,9 @@ static inline bool trav_setup(struct trav_ray *tr, const struct kd_tree *kd, con
   tr->t0 = t0;
   tr->t1 = t1;
   return t0 <= t1;
+}
+static inline bool trav_setup(struct trav_ray *tr, const struct kd_tree *kd, const struct ray *r) {
+  return trav_setup_box(tr, kd->lo, kd->hi, r);
 }
 
 struct trav_entry {

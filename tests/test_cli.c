@@ -401,6 +401,53 @@ static void test_run_refuses_first(void) {
     }
 }
 
+/* A BVH scene under a policy that traces the k-d tree only: one message at
+ * the scene's accel key, exit 2, nothing written; the recursive policy runs. */
+static void test_accel_refusals(void) {
+  char cmd[4096], out[8192];
+  const char *dir = RTSIM_TMP "/cli_accel";
+  char refused[4][1024];
+  snprintf(refused[0], sizeof refused[0],
+           "render %sgood_room_tiny_bvh8.yaml -o %s.exr --width 4 --height 4 --policy packet", SCN,
+           dir);
+  snprintf(refused[1], sizeof refused[1],
+           "run %s/configs/tiny.yaml %sgood_room_tiny_bvh8.yaml -o %s --width 4 --height 4 "
+           "--policy dynamic",
+           RTSIM_SOURCE_DIR, SCN, dir);
+  snprintf(refused[2], sizeof refused[2],
+           "traffic %sgood_room_tiny_bvh8.yaml -o %s.csv --width 4 --height 4 --rays primary", SCN,
+           dir);
+  snprintf(refused[3], sizeof refused[3],
+           "trace %sgood_room_tiny_bvh8.yaml --din %s.din --width 4 --height 4 --rays primary "
+           "--policy treelet",
+           SCN, dir);
+  static const char *const policy[] = {"packet", "dynamic", "packet", "treelet"};
+  for (size_t i = 0; i < sizeof refused / sizeof refused[0]; i++) {
+    const char *args = refused[i];
+    char want[256];
+    snprintf(cmd, sizeof cmd, "rm -rf %s %s.exr %s.csv %s.din && %s %s", dir, dir, dir, dir,
+             RTSIM_BINARY, args);
+    const int rc = testing_run(cmd, out, sizeof out);
+    snprintf(want, sizeof want,
+             "good_room_tiny_bvh8.yaml:3:8: error: accel: the %s policy traces the k-d tree only "
+             "(got bvh8, expected kd, or policy recursive on a BVH)",
+             policy[i]);
+    EXPECTF(rc == 2 && count_lines(out) == 1 && strstr(out, want), "'%s': exit %d: %s", args, rc,
+            out);
+    static const char *const ext[] = {"", ".exr", ".csv", ".din"};
+    for (int k = 0; k < 4; k++) {
+      char left[512];
+      snprintf(left, sizeof left, "%s%s", dir, ext[k]);
+      EXPECTF(access(left, F_OK) != 0, "'%s' left %s", args, left);
+    }
+  }
+  snprintf(cmd, sizeof cmd,
+           "%s run %s/configs/tiny.yaml %sgood_room_tiny_bvh8.yaml -o %s --width 4 --height 4 "
+           "--rays primary",
+           RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, dir);
+  EXPECTF(testing_run(cmd, out, sizeof out) == 0, "a BVH run: %s", out);
+}
+
 /* dram-replay --help-stats: the replay's own numbers, one a line, and a value
  * given to the flag is a usage error (exit 2, one line, nothing written). */
 static void test_replay_help_stats(void) {
@@ -454,6 +501,8 @@ int main(void) {
        "bad_camera_degenerate.yaml:1:31: error: camera.at: equals camera.from"},
       {"bad_kd_splits.yaml",
        "bad_kd_splits.yaml:2:19: error: kd_tree.splits: unknown value (got 'perfect', expected one of: whole, clipped)"},
+      {"bad_accel.yaml",
+       "bad_accel.yaml:2:8: error: accel: unknown value (got 'bvh4', expected one of: kd, bvh2, bvh8)"},
       {"bad_color.yaml",
        "bad_color.yaml:3:20: error: materials.red.color[1]: out of range (got 2, expected 0 to 1)"},
       {"bad_empty.yaml", "bad_empty.yaml: error: empty file"},
@@ -498,6 +547,7 @@ int main(void) {
   test_hostile_yaml();
   test_not_regular();
   test_run_refuses_first();
+  test_accel_refusals();
 
   /* Command-line mistakes: exit 2 and a message naming the problem. */
   static const struct {

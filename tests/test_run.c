@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "renderer/bvh.h"
 #include "renderer/framebuffer.h"
 #include "renderer/image.h"
 #include "renderer/kdtree.h"
@@ -35,12 +36,14 @@
 struct world {
   struct scene s;
   struct kd_tree kd;
+  const struct bvh *bvh; /* traced instead of kd when set */
 };
 
 /* scenes/small/NAME.yaml and its tree; false (a failed check) if it does not load. */
 static bool load_small(struct world *w, const char *name) {
   char path[1024];
   snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, name);
+  w->bvh = NULL;
   bool ok = testing_load_world(&w->s, &w->kd, path);
   EXPECTF(ok, "cannot load %s", path);
   return ok;
@@ -64,6 +67,7 @@ static void render_init(struct render *r, struct world *w, uint32_t mask) {
   r->sc.seed = w->s.seed;
   r->setup.scene = &w->s;
   r->setup.kd = &w->kd;
+  r->setup.bvh = w->bvh;
   trace_layout_default(&r->setup.layout);
   r->setup.sc = &r->sc;
   fb_init(&r->fb, W, H, r->setup.layout.fb_base);
@@ -783,7 +787,20 @@ int main(int argc, char **argv) {
           part);
   struct world w;
   if (!load_small(&w, "room")) return testing_done("test_run");
-  if (all || !strcmp(part, "cross-a")) test_cross_check(&w, 0, 2);
+  if (all || !strcmp(part, "cross-a")) {
+    test_cross_check(&w, 0, 2);
+    /* The recursive policy on each BVH: the same cross-check, and their
+     * traversal stacks within the coroutines' margin. */
+    for (int k = ACCEL_BVH2; k <= ACCEL_BVH8; k++) {
+      struct bvh b;
+      bvh_build(&b, &w.s, (enum accel_kind)k);
+      w.bvh = &b;
+      test_cross_check(&w, 0, 1);
+      w.bvh = NULL;
+      bvh_fini(&b);
+    }
+    EXPECT(stack_used_max > 0 && 4 * stack_used_max <= coro_default_stack_bytes());
+  }
   if (all || !strcmp(part, "cross-b")) test_cross_check(&w, 2, 4);
   if (!rest) {
     world_fini(&w);

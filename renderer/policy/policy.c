@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "renderer/bvh.h"
 #include "renderer/camera.h"
 #include "renderer/framebuffer.h"
 #include "renderer/policy/policy_impl.h"
@@ -132,10 +133,15 @@ bool policy_workers_supported(enum policy_kind k, uint32_t workers) {
   return (uint64_t)workers * m->region_bytes <= 1ull << TRACE_REGION_SHIFT;
 }
 
+bool policy_accel_supported(enum policy_kind k, int a) {
+  return a == ACCEL_KD || k == POLICY_RECURSIVE;
+}
+
 struct policy_job *policy_job_create(enum policy_kind k, const struct policy_setup *s,
                                      const struct policy_params *p, uint32_t workers,
                                      uint32_t cores) {
   CHECK(policy_workers_supported(k, workers));
+  CHECK(policy_accel_supported(k, s->bvh ? (int)s->bvh->kind : ACCEL_KD));
   CHECK_GE(cores, 1);
   CHECK_EQ(s->sc->scene, s->scene);
   CHECK(!s->item || !policy_queues(k));
@@ -165,6 +171,7 @@ void policy_worker_init(struct policy_worker *w, struct policy_job *job, uint32_
   const struct policy_setup *s = &job->setup;
   memset(w, 0, sizeof *w);
   trace_init(&w->tr, s->scene, s->kd, port, &s->layout);
+  w->tr.bvh = s->bvh;
   w->tr.tested = s->tested;
   w->tr.attribute = s->attribute;
   w->tr.attribute_ctx = s->attribute_ctx;

@@ -35,6 +35,7 @@
 
 struct scene;
 struct kd_tree;
+struct bvh;
 struct shade_ctx;
 struct framebuffer;
 
@@ -128,6 +129,9 @@ void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32
 struct policy_setup {
   const struct scene *scene;
   const struct kd_tree *kd;
+  /* The BVH traced instead of kd (NULL: the k-d tree); policy k must pass
+   * policy_accel_supported (policy_job_create CHECKs). */
+  const struct bvh *bvh;
   struct trace_layout layout; /* simulated addresses of every region */
   const struct shade_ctx *sc;
   struct framebuffer *fb; /* its size is the image size */
@@ -192,7 +196,8 @@ struct policy_worker {
 
 /* Create a render of policy k for up to `workers` workers on `cores` cores.
  * s and p are copied (what s points to is borrowed). CHECKs
- * policy_workers_supported(k, workers) and cores >= 1. Caller destroys. */
+ * policy_workers_supported(k, workers), policy_accel_supported(k, the
+ * setup's structure) and cores >= 1. Caller destroys. */
 struct policy_job *policy_job_create(enum policy_kind k, const struct policy_setup *s,
                                      const struct policy_params *p, uint32_t workers,
                                      uint32_t cores);
@@ -201,6 +206,11 @@ struct policy_job *policy_job_create(enum policy_kind k, const struct policy_set
  * with any number whose ray regions fit the ray region of the layout; dynamic
  * with any (its rays wait in the shared queues). */
 bool policy_workers_supported(enum policy_kind k, uint32_t workers);
+
+/* Whether policy k traces acceleration structure a (enum accel_kind):
+ * recursive every structure; packet, dynamic and treelet the k-d tree only
+ * (their packet, queue-point and treelet kernels walk k-d nodes). */
+bool policy_accel_supported(enum policy_kind k, int a);
 
 /* Bytes of the memory image one worker's rays occupy (its ray stack or packet
  * buffers at their bound): worker i's region starts at ray_base + i x this.

@@ -7,6 +7,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "renderer/bvh.h"
 #include "renderer/camera.h"
 #include "renderer/scene.h"
 #include "renderer/scene/gen.h"
@@ -310,6 +311,19 @@ static bool load_kd_tree(struct cfg_doc *d, struct cfg_node *n, struct scene *s,
   return cfg_check_keys(d, n, "kd_tree", e);
 }
 
+/* accel: kd | bvh2 | bvh8, the acceleration structure the scene is traced
+ * through (bvh.h); its position is kept for messages about it. */
+static bool load_accel(struct cfg_doc *d, struct cfg_node *n, struct scene *s, struct err *e) {
+  static const char *const names[] = {"kd", "bvh2", "bvh8", NULL};
+  _Static_assert(ACCEL_COUNT == 3, "one name a structure");
+  int k = 0;
+  if (!cfg_enum(d, n, "accel", names, &k, e)) return false;
+  s->accel = (uint8_t)k;
+  s->accel_line = n->line;
+  s->accel_col = n->col;
+  return true;
+}
+
 bool scene_file_load(struct scene *s, const char *path, struct err *e) {
   scene_init(s);
   struct cfg_doc d;
@@ -332,6 +346,7 @@ bool scene_file_load(struct scene *s, const char *path, struct err *e) {
   if ((n = cfg_get(r, "lights")) && !load_lights(&d, n, s, e)) goto done;
   if ((n = cfg_get(r, "materials")) && !load_materials(&d, n, s, e)) goto done;
   if ((n = cfg_get(r, "kd_tree")) && !load_kd_tree(&d, n, s, e)) goto done;
+  if ((n = cfg_get(r, "accel")) && !load_accel(&d, n, s, e)) goto done;
   if (!(n = cfg_get(r, "geometry"))) {
     cfg_fail(&d, r, "", e, "missing required key 'geometry'");
     goto done;
