@@ -270,6 +270,29 @@ cq_sum(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi, 
   return s;
 }
 
+/* Test only (check_summaries): the scan's answer pk at now against every
+ * queue's candidates asked from scratch, in round-robin order, none skipped. */
+static void check_scan(const struct dram_banked *d, const struct dram_banked_channel *c,
+                       int64_t now, const struct dram_banked_pick *pk, int64_t refresh_t) {
+  int64_t best_t = refresh_t;
+  struct dram_banked_qsum full, best = {.t = DRAM_BANKED_FAR};
+  for (uint32_t n = 1; n <= c->ncq; n++) {
+    const uint32_t qi = (c->rr + n) % c->ncq;
+    const uint64_t bit = 1ull << (qi % 64);
+    if (!(c->cq_busy[qi / 64] & bit) || (c->blocked[qi / 64] & bit)) continue;
+    bool act, col;
+    cq_candidates(d, c, qi, now, &full, &act, &col);
+    if (full.t < best_t) {
+      best_t = full.t;
+      best = full;
+    }
+  }
+  CHECK_EQ(best_t < refresh_t ? best_t : refresh_t, pk->first_t);
+  CHECK(best_t >= refresh_t || (best.k.type == pk->first.type && best.k.cq == pk->first.cq &&
+                                best.k.qi == pk->first.qi && best.k.for_req == pk->first.for_req));
+  CHECK(pk->next <= pk->first_t);
+}
+
 /* Refresh work, then the command queues round robin from the one after the
  * last that issued; in each, the oldest command that can issue now. next:
  * the earliest any candidate could. */
@@ -278,25 +301,31 @@ void dram_banked_cmdq_scan(struct dram_banked *d, struct dram_banked_channel *c,
   pk->cmd.type = DRAM_BANKED_CMD_NONE;
   pk->next = pk->first_t = DRAM_BANKED_FAR;
   dram_banked_scan_refresh(d, c, now, pk);
+  const int64_t refresh_t = pk->first_t;
   /* The queues holding commands (but those of a rank with a refresh due: a
    * queue's commands share a rank), round robin from the one after rr: those
    * from there on, then those before it (rr last). A queue's candidates in
    * scan order are its own in entry order, so its summary (the first least)
    * stands for them all; and since every candidate is asked at now, one can
-   * issue now only if it is a least: the first least of the whole scan. */
+   * issue now only if it is a least: the first least of the whole scan.
+   * No time is below now, so the scan ends at the first candidate that can
+   * issue now (refresh work's included): nothing after it can come first,
+   * and a summary left unasked is asked when next scanned (a summary past its
+   * least time is asked again; the times it keeps are at or below its own,
+   * so the stale marks stay on the safe side). */
   const uint32_t start = (c->rr + 1) % c->ncq, nw = (c->ncq + 63) / 64;
   uint32_t best = UINT32_MAX;
-  int64_t best_t = DRAM_BANKED_FAR;
+  int64_t best_t = pk->first_t > now ? DRAM_BANKED_FAR : now;
   /* Words from start's on, the first of them from start's bit; then from the
    * first word up to start's, that one below start's bit. */
-  for (uint32_t step = 0; step <= nw; step++) {
+  for (uint32_t step = 0; step <= nw && best_t > now; step++) {
     const uint32_t w = (start / 64 + step) % nw;
     uint64_t bits = c->cq_busy[w] & ~c->blocked[w];
     const uint64_t from_start = ~0ull << (start % 64);
     if (step == 0) bits &= from_start;
     else if (step == nw) bits &= ~from_start;
     const uint64_t stale = ~c->fresh[w] | (c->col_stale ? c->col_stale[w] : 0);
-    while (bits) {
+    while (bits && best_t > now) {
       const uint32_t b = (uint32_t)__builtin_ctzll(bits);
       const uint32_t qi = w * 64 + b;
       bits &= bits - 1;
@@ -324,6 +353,7 @@ void dram_banked_cmdq_scan(struct dram_banked *d, struct dram_banked_channel *c,
     pk->first = c->sum[best].k;
   }
   if (pk->first_t == now) pk->cmd = pk->first;
+  if (d->p.check_summaries) check_scan(d, c, now, pk, refresh_t);
   c->memo = pk->first;
   c->memo_t = pk->first_t;
   c->memo_at = now;
