@@ -65,7 +65,9 @@ static const char TRAFFIC_HELP[] =
     "accesses, and the potentially visible triangles and their bytes; last, the\n"
     "dynamic policy's settings as given (dyn_batch, dyn_ray_buffer_bytes: the same on\n"
     "every row; they change the dynamic rows only); and kd_splits, the scene's k-d\n"
-    "tree (whole: PBRT's, the paper's; clipped: perfect splits; scene key kd_tree).\n";
+    "tree (whole: PBRT's, the paper's; clipped: perfect splits; scene key kd_tree), and\n"
+    "accel, the structure traced (kd, bvh2 or bvh8: the scene's accel key; geometry_mb\n"
+    "then counts the BVH's nodes and leaf lists).\n";
 
 /* The paper's ray configurations by name, or an explicit list, into a
  * uint32_t mask (an option's value: opts.h). */
@@ -163,14 +165,14 @@ static bool parse_policies(const char *s, void *dst) {
  * recursive at the same size (the paper's relative columns). */
 static void write_table(FILE *f, const struct row *rows, unsigned nrows, const char *scene_name,
                         const char *names, uint32_t W, uint32_t H, unsigned lg2,
-                        const struct policy_params *pp, bool clipped) {
+                        const struct policy_params *pp, const struct scene *sc) {
   fprintf(f, "scene,rays,width,height,policy,cache_bytes,frac_pot_vis,geometry_mb,total_mb,"
              "rel_geometry,rel_total");
   for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
     fprintf(f, ",fetch_%s", trace_class_names[cl]);
   fprintf(
       f, ",writeback_bytes,line_accesses,pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes,"
-         "kd_splits\n");
+         "kd_splits,accel\n");
   struct trace_layout layout;
   trace_layout_default(&layout);
   const uint64_t tri_bytes = layout.tri_bytes;
@@ -195,10 +197,11 @@ static void write_table(FILE *f, const struct row *rows, unsigned nrows, const c
             bg > 0 ? g / bg : 0.0, bt > 0 ? t / bt : 0.0);
     for (unsigned cl = 0; cl < TRACE_CLASS_COUNT; cl++)
       fprintf(f, ",%llu", (unsigned long long)fetched(&r->s, cl, lg2));
-    fprintf(f, ",%llu,%llu,%llu,%llu,%llu,%llu,%s\n", (unsigned long long)wb,
+    fprintf(f, ",%llu,%llu,%llu,%llu,%llu,%llu,%s,%s\n", (unsigned long long)wb,
             (unsigned long long)acc, (unsigned long long)r->pot_vis_tris,
             (unsigned long long)pv_bytes, (unsigned long long)pp->dyn_batch_rays,
-            (unsigned long long)dyn_ray_buffer, clipped ? "clipped" : "whole");
+            (unsigned long long)dyn_ray_buffer, sc->kd_clip ? "clipped" : "whole",
+            accel_names[sc->accel]);
   }
 }
 
@@ -298,7 +301,7 @@ int cmd_traffic(int argc, char **argv) {
   for (char *q = names; *q; q++)
     if (*q == ',') *q = '+'; /* a CSV field */
   const char *scene_name = w.scene.name[0] ? w.scene.name : scene_path;
-  write_table(f, rows, nrows, scene_name, names, W, H, lp.lg2_line, &pp, w.scene.kd_clip);
+  write_table(f, rows, nrows, scene_name, names, W, H, lp.lg2_line, &pp, &w.scene);
   bool committed = outfile_commit(&o, &e);
   outguard_clear();
   if (!committed) {

@@ -128,6 +128,7 @@ static void identity(const struct run_output_report *r, struct stats_table *t) {
   snprintf(hash, sizeof hash, "%016llx", (unsigned long long)r->scene_hash);
   stats_str(t, "scene", r->scene_name);
   stats_str(t, "scene_hash", hash);
+  stats_str(t, "accel", r->accel);
   stats_str(t, "kd_splits", r->kd_splits);
   stats_str(t, "policy", r->policy);
   stats_str(t, "rays", rays);
@@ -174,7 +175,8 @@ static double run_slots_per_geometry_miss(const void *st, const struct stats_env
 static const struct stats_desc run_desc[] = {
     STATS_FN_U64(run_rays, "rays_traced", "count", "rays traced, every kind"),
     STATS_FN_F64(run_rays_per_second, "rays_per_second", "per second", "rays traced / seconds"),
-    STATS_FN_U64(run_node_visits, "kd_node_visits", "count", "k-d tree nodes visited"),
+    STATS_FN_U64(run_node_visits, "kd_node_visits", "count",
+                 "nodes of the traced structure visited (accel: k-d tree or BVH nodes)"),
     STATS_FN_U64(run_tri_tests, "triangle_tests", "count", "ray-triangle tests"),
 };
 static const struct stats_desc run_misses_desc[] = {
@@ -280,7 +282,8 @@ static const struct stats_desc analytic_desc[] = {
     STATS_FN_F64(an_seconds, "seconds", "seconds", "the estimate at clock_ghz"),
     STATS_FN_U64(an_rays, "rays_traced", "count", "rays traced, every kind"),
     STATS_FN_F64(an_rays_per_second, "rays_per_second", "per second", "rays traced / seconds"),
-    STATS_FN_U64(an_node_visits, "kd_node_visits", "count", "k-d tree nodes visited"),
+    STATS_FN_U64(an_node_visits, "kd_node_visits", "count",
+                 "nodes of the traced structure visited (accel: k-d tree or BVH nodes)"),
     STATS_FN_U64(an_tri_tests, "triangle_tests", "count", "ray-triangle tests"),
     STATS_FN_U64(an_contexts, "ray_contexts", "count", "ray contexts: cores x threads x rays"),
     STATS_FN_U64(an_threads, "threads", "count", "hardware threads: cores x threads_per_core"),

@@ -30,6 +30,7 @@ struct run_output_report {
   uint64_t seed;
   uint64_t scene_hash;   /* scene_hash() of the loaded scene */
   const char *kd_splits; /* "whole" or "clipped": how the k-d tree was built */
+  const char *accel;     /* the structure traced: "kd", "bvh2" or "bvh8" */
   const struct machine_cfg *cfg;
   const struct machine *machine;       /* a timed rung's; NULL at fidelity analytic */
   const struct app_analytic *analytic; /* fidelity analytic's counts and estimate, else NULL */

@@ -446,6 +446,12 @@ static void test_accel_refusals(void) {
            "--rays primary",
            RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, dir);
   EXPECTF(testing_run(cmd, out, sizeof out) == 0, "a BVH run: %s", out);
+  /* Its outputs name the structure traced. */
+  char *json = testing_slurp(dir, "stats.json", NULL), *csv = testing_slurp(dir, "stats.csv", NULL);
+  EXPECT(json && strstr(json, "\"accel\": \"bvh8\""));
+  EXPECT(csv && strstr(csv, "scene_hash,accel,") && strstr(csv, ",bvh8,"));
+  free(json);
+  free(csv);
 }
 
 /* dram-replay --help-stats: the replay's own numbers, one a line, and a value

@@ -271,7 +271,7 @@ static void test_run_and_merge(void) {
   EXPECT(t != NULL);
   if (!t) return;
   static const char head[] =
-      "point,policy,rays_per_thread,l2.size,l2.ways,scene,scene_hash,kd_splits,rays,width,";
+      "point,policy,rays_per_thread,l2.size,l2.ways,scene,scene_hash,accel,kd_splits,rays,width,";
   EXPECTF(!strncmp(t, head, strlen(head)), "header: %.200s", t);
   EXPECT(count_lines(t) == 9);
   /* Rows in natural order of the names; a swept size takes its resolved value. */

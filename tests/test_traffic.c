@@ -239,15 +239,17 @@ int main(void) {
       "--dyn-ray-buffer 0 -o %s && cat %s",
       RTSIM_BINARY, RTSIM_SOURCE_DIR, csv, csv);
   EXPECT(testing_run(cmd, out, sizeof out) == 0);
-  EXPECT(strstr(out, ",pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes,kd_splits\n") !=
-         NULL);
+  EXPECT(
+      strstr(out, ",pot_vis_tris,pot_vis_bytes,dyn_batch,dyn_ray_buffer_bytes,kd_splits,accel\n") !=
+      NULL);
   int tagged = 0;
   for (const char *q = strstr(out, "\nroom"); q; q = strchr(q + 1, '\n')) {
     const char *eol = strchr(q + 1, '\n');
     if (!eol) break;
-    tagged += eol - q > 12 && !strncmp(eol - 11, ",7,64,whole", 11);
+    tagged += eol - q > 15 && !strncmp(eol - 14, ",7,64,whole,kd", 14);
   }
-  EXPECTF(tagged == 3 * SIZES, "%d of %d rows end with the dynamic settings and the tree", tagged,
+  EXPECTF(tagged == 3 * SIZES,
+          "%d of %d rows end with the dynamic settings, the tree and the structure", tagged,
           3 * SIZES);
 
   /* Bad command lines: exit 2. */
