@@ -1,8 +1,5 @@
 /* A calendar of ENGINE_WINDOW one-cycle buckets for near events and a binary
- * heap keyed by (cycle, sequence) for far ones. A bucket's events are in
- * sequence order: engine_at appends (its sequence is the newest), far events
- * migrate before anything can be appended for their cycle, and a reserved
- * event (engine_at_reserved), older than some, is inserted in its place. */
+ * heap keyed by (cycle, sequence) for far ones. */
 #include "sim/engine.h"
 
 #include <stdlib.h>
@@ -14,7 +11,7 @@
 #define NIL UINT32_MAX
 
 struct node {
-  uint64_t at, seq;
+  uint64_t at;
   engine_fn fn;
   void *ctx;
   uint64_t arg;
@@ -33,9 +30,8 @@ struct engine {
   uint64_t bits[ENGINE_WINDOW / 64]; /* non-empty buckets */
   uint64_t near;                     /* events in the calendar */
   struct far *heap;
-  uint64_t far_n, far_cap;
-  uint64_t seq; /* the next sequence number */
-  uint64_t now, now_seq, handled;
+  uint64_t far_n, far_cap, seq;
+  uint64_t now, handled;
   uint64_t tick_at; /* UINT64_MAX: no tick */
   engine_tick_fn tick;
   void *tick_ctx;
@@ -57,8 +53,6 @@ void engine_destroy(struct engine *e) {
 }
 
 uint64_t engine_now(const struct engine *e) { return e->now; }
-uint64_t engine_seq(const struct engine *e) { return e->now_seq; }
-uint64_t engine_reserve(struct engine *e) { return e->seq++; }
 uint64_t engine_events(const struct engine *e) { return e->handled; }
 uint64_t engine_pending(const struct engine *e) { return e->near + e->far_n; }
 
@@ -107,22 +101,6 @@ static void bucket_push(struct engine *e, uint32_t n) {
   e->near++;
 }
 
-/* Put node n (time within the window) into its bucket after the events of
- * smaller sequence: a reserved event, older than the bucket's newest. */
-static void bucket_insert(struct engine *e, uint32_t n) {
-  uint32_t b = (uint32_t)(e->nodes[n].at & MASK);
-  const uint64_t seq = e->nodes[n].seq;
-  if (e->tail[b] == NIL || e->nodes[e->tail[b]].seq < seq) {
-    bucket_push(e, n);
-    return;
-  }
-  uint32_t *link = &e->head[b];
-  while (e->nodes[*link].seq < seq) link = &e->nodes[*link].next;
-  e->nodes[n].next = *link;
-  *link = n;
-  e->near++;
-}
-
 static inline int far_before(const struct far *a, const struct far *b) {
   return a->at < b->at || (a->at == b->at && a->seq < b->seq);
 }
@@ -132,7 +110,7 @@ static __attribute__((noinline)) void far_push(struct engine *e, uint32_t n) {
     e->far_cap = e->far_cap ? 2 * e->far_cap : 256;
     e->heap = xrealloc(e->heap, e->far_cap * sizeof *e->heap);
   }
-  struct far f = {e->nodes[n].at, e->nodes[n].seq, n};
+  struct far f = {e->nodes[n].at, e->seq++, n};
   uint64_t i = e->far_n++;
   while (i > 0) {
     uint64_t p = (i - 1) / 2;
@@ -165,34 +143,15 @@ static void migrate(struct engine *e) {
   while (e->far_n && e->heap[0].at - e->now < ENGINE_WINDOW) bucket_push(e, far_pop(e));
 }
 
-uint64_t engine_at(struct engine *e, uint64_t at, engine_fn fn, void *ctx, uint64_t arg) {
+void engine_at(struct engine *e, uint64_t at, engine_fn fn, void *ctx, uint64_t arg) {
   CHECK_GE(at, e->now);
   uint32_t n = node_new(e);
   struct node *x = &e->nodes[n];
-  const uint64_t seq = e->seq++;
   x->at = at;
-  x->seq = seq;
   x->fn = fn;
   x->ctx = ctx;
   x->arg = arg;
   if (at - e->now < ENGINE_WINDOW) bucket_push(e, n);
-  else far_push(e, n);
-  return seq;
-}
-
-void engine_at_reserved(struct engine *e, uint64_t at, uint64_t seq, engine_fn fn, void *ctx,
-                        uint64_t arg) {
-  CHECK_LT(seq, e->seq);
-  /* Still to come: after the event being handled, if any. */
-  CHECK(e->handled == 0 || engine_key_before(e->now, e->now_seq, at, seq));
-  uint32_t n = node_new(e);
-  struct node *x = &e->nodes[n];
-  x->at = at;
-  x->seq = seq;
-  x->fn = fn;
-  x->ctx = ctx;
-  x->arg = arg;
-  if (at - e->now < ENGINE_WINDOW) bucket_insert(e, n);
   else far_push(e, n);
 }
 
@@ -234,7 +193,6 @@ uint64_t engine_run(struct engine *e) {
       time_moved(e);
     }
     e->handled++;
-    e->now_seq = x.seq;
     /* The next event's context (its first two host lines), which its
      * handler reads first, is fetched into the host cache while this one
      * runs: on a large machine the contexts of consecutive events (rays,

@@ -24,30 +24,8 @@ void engine_destroy(struct engine *e); /* NULL ok */
 /* The cycle of the event being handled (or of the last one handled). */
 uint64_t engine_now(const struct engine *e);
 
-/* Schedule fn(ctx, arg) at cycle `at` (>= engine_now, CHECKed). Returns its
- * sequence number: (at, sequence) is its key, and events run in key order. */
-uint64_t engine_at(struct engine *e, uint64_t at, engine_fn fn, void *ctx, uint64_t arg);
-
-/* The sequence number of the event being handled (of the last one handled;
- * 0 before the first): with engine_now, its key. */
-uint64_t engine_seq(const struct engine *e);
-
-/* Key (a, sa) comes before key (b, sb). */
-static inline int engine_key_before(uint64_t a, uint64_t sa, uint64_t b, uint64_t sb) {
-  return a < b || (a == b && sa < sb);
-}
-
-/* An event its maker keeps for now: take the sequence number engine_at would
- * give it here (its place among the events scheduled before and after), and
- * later either do what it stands for without the engine, where nothing can
- * tell the difference, or hand it over with engine_at_reserved. A reserved
- * number is never handled by the engine unless handed over. */
-uint64_t engine_reserve(struct engine *e);
-/* Schedule fn(ctx, arg) with key (at, seq), seq from engine_reserve: it runs
- * where engine_at, called when seq was taken, would have run it. The key must
- * still be to come: after the event being handled (CHECKed). */
-void engine_at_reserved(struct engine *e, uint64_t at, uint64_t seq, engine_fn fn, void *ctx,
-                        uint64_t arg);
+/* Schedule fn(ctx, arg) at cycle `at` (>= engine_now, CHECKed). */
+void engine_at(struct engine *e, uint64_t at, engine_fn fn, void *ctx, uint64_t arg);
 
 /* A tick: fn(ctx, now) is called once, before the first event at a cycle >=
  * at is handled (now: that event's cycle; every event before it handled), so
@@ -58,7 +36,7 @@ void engine_at_reserved(struct engine *e, uint64_t at, uint64_t seq, engine_fn f
 typedef void (*engine_tick_fn)(void *ctx, uint64_t now);
 void engine_tick(struct engine *e, uint64_t at, engine_tick_fn fn, void *ctx);
 
-/* Handle events in key order until none is left. Returns the events handled. */
+/* Handle events in order until none is left. Returns the events handled. */
 uint64_t engine_run(struct engine *e);
 
 /* Events handled so far, and events still queued. */

@@ -146,9 +146,7 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
       }
     } else {
       l2->st.hits++;
-      if (!r->waiter) return true;
-      if (l2->client.hit) l2->client.hit(r->waiter, line, ready);
-      else engine_at(l2->eng, ready, l2->client.ready, r->waiter, line);
+      if (r->waiter) engine_at(l2->eng, ready, l2->client.ready, r->waiter, line);
     }
     return true;
   }

@@ -81,10 +81,6 @@ struct l2_client {
    * access's reason becomes `reason` (enum l2_stall; -1: no stall). */
   void *stall_ctx;
   void (*stall)(void *stall_ctx, void *waiter, int what);
-  /* hit (NULL: ready is scheduled) takes a hit's answer, at cycle `at`, in
-   * place of the event ready would be: the client makes it happen as that
-   * event would have, where engine_at would have put it now. */
-  void (*hit)(void *waiter, uint64_t line, uint64_t at);
 };
 
 /* NULL if usable, else what is wrong (naming the l2.* key): the geometry.

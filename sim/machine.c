@@ -4,10 +4,9 @@
  *
  * Time flows through three kinds of event here: a core's issue slot (it
  * resumes one ray for one block), an access arriving at the L2, and a line
- * coming back for a waiting ray (unless its core keeps it: machine_defer.c);
- * the L2 and the DRAM keep their own. Only the issue event resumes a
- * coroutine, so everything else may run in any handler without re-entering
- * the renderer. */
+ * coming back for a waiting ray; the L2 and the DRAM keep their own. Only the
+ * issue event resumes a coroutine, so everything else may run in any handler
+ * without re-entering the renderer. */
 #include "sim/machine.h"
 
 #include <math.h>
@@ -183,20 +182,12 @@ static inline void line_done(struct machine *m, struct mctx *c, uint64_t line, u
   if (traced) trace_tick(m, t);
 }
 
-void machine_line_back(struct machine *m, struct mctx *c, uint64_t line, uint64_t t) {
-  if (m->cost_acc) line_done(m, c, line, t, true, false);
-  else line_done(m, c, line, t, false, false);
-}
-
 /* The L2 answers a load (sim/l2.h's client): ctx is the waiting ray. One
- * instance for each combination of the cost and trace layers. What its core
- * keeps from before comes first. */
+ * instance for each combination of the cost and trace layers. */
 #define EV_LINE_DONE(name, costed, traced)                                                         \
   static void name(void *ctx, uint64_t line) {                                                     \
     struct mctx *c = ctx;                                                                          \
-    struct machine *m = c->m;                                                                      \
-    defer_catch_up(m, &m->core[c->info.core]);                                                     \
-    line_done(m, c, line, engine_now(m->eng), costed, traced);                                     \
+    line_done(c->m, c, line, engine_now(c->m->eng), costed, traced);                               \
   }
 EV_LINE_DONE(ev_line_done, false, false)
 EV_LINE_DONE(ev_line_done_costed, true, false)
@@ -255,7 +246,7 @@ static inline void kick(struct machine *m, uint32_t core, const bool traced) {
   if (k->ev && k->ev_at <= best) return;
   k->ev = true;
   k->ev_at = best;
-  k->ev_seq = engine_at(m->eng, best, traced ? ev_issue_traced : ev_issue, m, core);
+  engine_at(m->eng, best, traced ? ev_issue_traced : ev_issue, m, core);
 }
 
 static void ctx_main(void *arg) {
@@ -265,9 +256,10 @@ static void ctx_main(void *arg) {
 }
 
 /* Core `core`'s issue slot: resume one ray for one block. */
-static inline void issue_block(struct machine *m, uint64_t core, const bool traced) {
+static inline void issue(struct machine *m, uint64_t core, const bool traced) {
   struct mcore *k = &m->core[core];
   const uint64_t t = engine_now(m->eng);
+  if (!k->ev || k->ev_at != t) return; /* stale */
   k->ev = false;
   const uint32_t T = m->p.threads_per_core;
   uint32_t pick = NONE;
@@ -324,17 +316,6 @@ static inline void issue_block(struct machine *m, uint64_t core, const bool trac
   }
   kick(m, (uint32_t)core, traced);
   if (m->progress && (m->st.blocks & 0xFFFF) == 0) m->progress(m->progress_ctx, t);
-}
-
-/* The issue event: the answers its core kept from before it first, and after
- * it, what the core keeps that its next issue would not come before becomes
- * events (machine_defer.c). */
-static inline void issue(struct machine *m, uint64_t core, const bool traced) {
-  struct mcore *k = &m->core[core];
-  if (!k->ev || k->ev_at != engine_now(m->eng)) return; /* stale */
-  defer_catch_up(m, k);
-  issue_block(m, core, traced);
-  defer_settle(m, k);
 }
 
 static void ev_issue(void *ctx, uint64_t core) { issue(ctx, core, false); }
@@ -438,7 +419,6 @@ static void tc_store(void *ctx, uint64_t addr, uint32_t size, unsigned cls) {
 static void ev_wake(void *ctx, uint64_t arg) {
   struct mctx *c = ctx;
   (void)arg;
-  defer_catch_up(c->m, &c->m->core[c->info.core]);
   ray_ready(c->m, c, engine_now(c->m->eng), false);
 }
 static void ev_wake_traced(void *ctx, uint64_t arg) {
@@ -483,7 +463,6 @@ static inline void door_wake(struct mctx *c, uint32_t id, const bool traced) {
   m->st.wakes++;
   struct mthread *th = &m->th[o->thread];
   CHECK_GT(th->parked, 0);
-  defer_catch_up(m, &m->core[th->core]);
   th->parked--;
   ray_ready(m, o, c->t, traced);
 }
@@ -507,9 +486,7 @@ static void door_install(struct machine *m, void *cost_ctx, l2_cost_fn cost) {
                                                   {&costed_ops, &costed_traced_ops}};
   const bool costed = cost != NULL, traced = m->trace != NULL;
   m->ops = ops[costed][traced];
-  m->line_ready = ready[costed][traced];
-  /* The trace layer sees every answer when it comes: none is kept. */
-  struct l2_client lc = {m->line_ready, cost_ctx, cost, NULL, NULL, traced ? NULL : defer_hit};
+  struct l2_client lc = {ready[costed][traced], cost_ctx, cost, NULL, NULL};
   if (traced) {
     lc.stall_ctx = m;
     lc.stall = trace_l2_stall;
@@ -541,8 +518,7 @@ static struct machine *create(const struct machine_params *p, uint64_t stack_byt
                                                MACHINE_TL_DRAM_READ_BYTES, MACHINE_TL_READ_CLASS0,
                                                MACHINE_TL_DRAM_WRITE_BYTES};
   m->ops = &timed_ops;
-  m->line_ready = ev_line_done;
-  struct l2_client lc = {ev_line_done, NULL, NULL, NULL, NULL, defer_hit};
+  struct l2_client lc = {ev_line_done, NULL, NULL, NULL, NULL};
   m->l2 = l2_create(&lp, m->eng, &m->tl, &cols, &lc);
   struct dram_params dp = machine_dram_params(p);
   struct dram_client dc = l2_dram_client(m->l2);
@@ -615,7 +591,6 @@ void machine_destroy(struct machine *m) {
   free(m->costs.write_lines);
   trace_destroy(m->trace);
   for (uint32_t i = 0; i < m->p.cores; i++) cache_destroy(m->core[i].l1);
-  for (uint32_t i = 0; i < m->p.cores; i++) free(m->core[i].dq);
   free(m->core);
   free(m->warm);
   free(m->th);
@@ -647,7 +622,6 @@ void machine_run(struct machine *m, machine_worker_fn fn, void *arg, machine_pro
   for (uint32_t i = 0; i < m->nctx; i++) CHECK_NE(m->ctx[i].state, CTX_PARKED);
   for (uint32_t i = 0; i < m->nctx; i++) CHECK_EQ(m->ctx[i].state, CTX_DONE);
   CHECK(l2_quiet(m->l2));
-  for (uint32_t i = 0; i < m->p.cores; i++) CHECK_EQ(m->core[i].dh, m->core[i].dn); /* none kept */
   CHECK_EQ(m->loads_out, m->loads_back);
   /* The end: the last event (the last data served), the last block's last
    * cycle (blocks run ahead of the engine). */

@@ -202,7 +202,7 @@ struct machine_probe {
   uint64_t dram_bytes;  /* asked of the DRAM so far: L2 fetches and write-backs */
   uint64_t load_latency_sum, loads_timed; /* the load latency histogram's sum and count */
 };
-void machine_probe(struct machine *m, struct machine_probe *out);
+void machine_probe(const struct machine *m, struct machine_probe *out);
 /* The run's energy so far, J (the chip's and the DRAM's, as the timeline's
  * energy columns price it: sim/machine_energy.c), at cycle t with
  * issue_slots used (a probe's two figures). After the run, at its cycles and

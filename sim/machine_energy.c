@@ -62,16 +62,10 @@ static uint64_t next_end(const struct machine *m, uint64_t t) {
   return (t / m->tl.window + 1) * m->tl.window;
 }
 
-/* Every window end up to now, then the next tick. A window end's sample
- * reads what the events before it did (the tick comes before the first event
- * at or after it): the answers cores keep from before it are done first
- * (machine_defer.c; they count ray switches). */
+/* Every window end up to now, then the next tick. */
 static void tick(void *ctx, uint64_t now) {
   struct machine *m = ctx;
-  for (uint64_t b = next_end(m, m->en.at); b <= now; b = next_end(m, b)) {
-    defer_until_all(m, b, 0);
-    sample(m, b);
-  }
+  for (uint64_t b = next_end(m, m->en.at); b <= now; b = next_end(m, b)) sample(m, b);
   engine_tick(m->eng, next_end(m, m->en.at), tick, m);
 }
 

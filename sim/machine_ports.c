@@ -14,7 +14,6 @@
 static void warm_access(struct mwarm *w, uint64_t addr, uint32_t size, bool store) {
   struct machine *m = w->m;
   m->warm_slots++;
-  defer_catch_up(m, &m->core[w->core]);
   struct cache *l1 = m->core[w->core].l1;
   for (uint64_t line = addr >> SIM_LINE_LG2, end = (addr + size - 1) >> SIM_LINE_LG2; line <= end;
        line++) {
@@ -71,9 +70,7 @@ struct mem_port machine_count_port(struct machine *m) {
 
 uint64_t machine_count_slots(const struct machine *m) { return m->count_slots; }
 
-void machine_probe(struct machine *m, struct machine_probe *out) {
-  /* The answers cores keep from before now first: they end loads' waits. */
-  defer_until_all(m, engine_now(m->eng), engine_seq(m->eng));
+void machine_probe(const struct machine *m, struct machine_probe *out) {
   const struct mctx *c = m->running;
   out->cycle = c ? c->t : engine_now(m->eng);
   out->issue_slots = m->st.issue_slots + (c ? c->slots : 0);

@@ -8,15 +8,13 @@
  *   machine_stats.c  the machine's numbers and timeline columns
  *   machine_energy.c the timeline's energy columns, sampled at windows' ends
  *   machine_trace.c  the trace layer: threads' states and counters over time
- *                    (machine_trace_enable); machine_trace_json.c writes it
- *   machine_defer.c  L2-hit answers a core keeps instead of queuing events */
+ *                    (machine_trace_enable); machine_trace_json.c writes it */
 #ifndef RTSIM_SIM_MACHINE_STATE_H
 #define RTSIM_SIM_MACHINE_STATE_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "sim/engine.h"
 #include "sim/err.h"
 #include "sim/line.h"
 #include "sim/machine.h"
@@ -27,6 +25,7 @@ struct cache;
 struct coro;
 struct coro_pool;
 struct dram;
+struct engine;
 struct l2;
 struct mtrace;
 
@@ -93,22 +92,12 @@ struct mthread {
   uint64_t since;
 };
 
-/* An L2 hit's answer a core keeps (machine_defer.c): the key of the event it
- * stands for, the ray context and the line. */
-struct mdefer {
-  uint64_t at, seq, line;
-  uint32_t ctx;
-};
-
 struct mcore {
   uint64_t port_free;
-  uint64_t ev_at, ev_seq; /* its issue event's key, when ev */
+  uint64_t ev_at;
   bool ev;
   uint32_t rr; /* thread (local index) that issued last */
   struct cache *l1;
-  /* The answers it keeps, in key order: dq[dh, dn). */
-  struct mdefer *dq;
-  uint32_t dh, dn, dcap;
 };
 
 struct machine {
@@ -151,7 +140,6 @@ struct machine {
   void *cost_ctx;             /* the cost layer's L2 hook (machine_door_costed) */
   l2_cost_fn cost_fn;
   struct mtrace *trace; /* the trace layer (machine_trace_enable); NULL: none */
-  engine_fn line_ready; /* the L2 client's ready: what a kept answer becomes as an event */
   struct menergy en;
 };
 
@@ -204,30 +192,6 @@ void machine_door_costed(struct machine *m, void *cost_ctx, l2_cost_fn cost);
 void machine_cost_flush(struct mctx *c);
 /* The end of a run that counted costs (CHECKs conservation). */
 void machine_cost_finish(struct machine *m);
-
-/* ---- machine_defer.c: answers a core keeps ----
- * An L2 hit's answer (a line back for a waiting ray) that nothing can see
- * before it arrives is kept by the ray's core instead of queued as an event,
- * and done, in key order, before anything that could see it: the core's
- * issue, another line back or wake of its rays, a warming access to its L1,
- * the energy's sample, a probe. */
-
-/* The L2 client's hit hook (struct l2_client's hit; waiter: the ray). */
-void defer_hit(void *waiter, uint64_t line, uint64_t at);
-/* Do core's kept answers whose keys come before (at, seq). */
-void defer_until(struct machine *m, struct mcore *k, uint64_t at, uint64_t seq);
-/* The same, before the event being handled: a call where the core's L1 or
- * threads are about to be read or changed. */
-static inline void defer_catch_up(struct machine *m, struct mcore *k) {
-  if (k->dh != k->dn) defer_until(m, k, engine_now(m->eng), engine_seq(m->eng));
-}
-/* Every core's kept answers before (at, seq). */
-void defer_until_all(struct machine *m, uint64_t at, uint64_t seq);
-/* After core k's issue: what it keeps that its next issue would no longer
- * come before, now an event. */
-void defer_settle(struct machine *m, struct mcore *k);
-/* A line of ray c's load back at cycle t (machine.c's line_done, no trace). */
-void machine_line_back(struct machine *m, struct mctx *c, uint64_t line, uint64_t t);
 
 /* ---- machine_energy.c: the timeline's energy ---- */
 
