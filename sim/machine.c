@@ -195,31 +195,42 @@ EV_LINE_DONE(ev_line_done_traced, false, true)
 EV_LINE_DONE(ev_line_done_costed_traced, true, true)
 #undef EV_LINE_DONE
 
-/* An access on its way to the L2, packed into the event's one argument:
- * line, op and class. */
-static inline uint64_t access_pack(uint64_t line, enum l2_op op, unsigned cls) {
-  CHECK_LT(line, 1ull << 56);
+/* Accesses on their way to the L2, packed into the event's one argument:
+ * the first line, the lines in a row from it (1 to ACCESS_RUN_MAX), op and
+ * class. A load's lines that miss the L1 in a row travel in one event: the
+ * events they were, one a line, came one right after another (same cycle,
+ * scheduled in a row), so nothing ran between them. */
+#define ACCESS_RUN_MAX 64u
+static inline uint64_t access_pack(uint64_t line, uint32_t n, enum l2_op op, unsigned cls) {
+  CHECK_LT(line, 1ull << 52);
+  CHECK(n >= 1 && n <= ACCESS_RUN_MAX);
   CHECK_LT(cls, 16u);
-  return line << 8 | (uint64_t)op << 4 | cls;
+  return line << 12 | (uint64_t)(n - 1) << 6 | (uint64_t)op << 4 | cls;
 }
-static inline uint64_t access_line(uint64_t a) { return a >> 8; }
+static inline uint64_t access_line(uint64_t a) { return a >> 12; }
+static inline uint32_t access_lines(uint64_t a) { return (uint32_t)((a >> 6) & 63) + 1; }
 static inline enum l2_op access_op(uint64_t a) { return (enum l2_op)((a >> 4) & 3); }
 static inline unsigned access_cls(uint64_t a) { return (unsigned)(a & 15); }
 
-/* An access reaches the L2: ctx is the ray that made it, arg access_pack'ed. */
+/* Accesses reach the L2: ctx is the ray that made them, arg access_pack'ed. */
 static void ev_l2_access(void *ctx, uint64_t arg) {
   struct mctx *c = ctx;
-  enum l2_op op = access_op(arg);
-  l2_access(c->m->l2, access_line(arg), op, access_cls(arg), op == L2_LOAD ? c : NULL, 0);
+  const enum l2_op op = access_op(arg);
+  const uint64_t line = access_line(arg);
+  for (uint32_t i = 0, n = access_lines(arg); i < n; i++)
+    l2_access(c->m->l2, line + i, op, access_cls(arg), op == L2_LOAD ? c : NULL, 0);
 }
-/* The same with the cost layer on: the access carries the item it is for. A
+/* The same with the cost layer on: an access carries the item it is for. A
  * load's context waits for it, still working for the same items; a store's
  * tag waits in the context's FIFO (cost_store_push). */
 static void ev_l2_access_costed(void *ctx, uint64_t arg) {
   struct mctx *c = ctx;
-  enum l2_op op = access_op(arg);
-  uint32_t tag = op == L2_LOAD ? cost_tag(c) : cost_store_pop(c);
-  l2_access(c->m->l2, access_line(arg), op, access_cls(arg), op == L2_LOAD ? c : NULL, tag);
+  const enum l2_op op = access_op(arg);
+  const uint64_t line = access_line(arg);
+  for (uint32_t i = 0, n = access_lines(arg); i < n; i++) {
+    uint32_t tag = op == L2_LOAD ? cost_tag(c) : cost_store_pop(c);
+    l2_access(c->m->l2, line + i, op, access_cls(arg), op == L2_LOAD ? c : NULL, tag);
+  }
 }
 
 /* ---- cores ---- */
@@ -353,18 +364,24 @@ static inline void door_load(struct mctx *c, uint64_t addr, uint32_t size, unsig
   m->st.loads++;
   struct cache *l1 = m->core[c->info.core].l1;
   uint64_t line = addr >> SIM_LINE_LG2, end = (addr + size - 1) >> SIM_LINE_LG2;
-  uint32_t pending = 0;
+  uint32_t pending = 0, run = 0; /* the last `run` lines missed, not yet sent */
   for (; line <= end; line++) {
+    bool hit = false;
     if (l1) {
       m->st.l1_accesses++;
-      if (cache_use(l1, line) != CACHE_NONE) {
-        m->st.l1_hits++;
-        continue;
-      }
+      hit = cache_use(l1, line) != CACHE_NONE;
+      m->st.l1_hits += hit;
     }
-    engine_at(m->eng, c->t, costed ? ev_l2_access_costed : ev_l2_access, c,
-              access_pack(line, L2_LOAD, cls));
-    pending++;
+    if (!hit) {
+      pending++;
+      run++;
+    }
+    /* Send the run when a hit, the end or the run's limit closes it. */
+    if (run && (hit || line == end || run == ACCESS_RUN_MAX)) {
+      engine_at(m->eng, c->t, costed ? ev_l2_access_costed : ev_l2_access, c,
+                access_pack(line + !hit - run, run, L2_LOAD, cls));
+      run = 0;
+    }
   }
   if (!pending) {
     hist_add(&m->st.load_latency, m->p.l1_latency_cycles);
@@ -397,7 +414,7 @@ static inline void door_store(struct mctx *c, uint64_t addr, uint32_t size, unsi
     bool whole = line >= first_whole && (line < end || last_whole);
     if (costed) cost_store_push(c, cost_tag(c));
     engine_at(m->eng, c->t, costed ? ev_l2_access_costed : ev_l2_access, c,
-              access_pack(line, whole ? L2_STORE_LINE : L2_STORE, cls));
+              access_pack(line, 1, whole ? L2_STORE_LINE : L2_STORE, cls));
   }
 }
 

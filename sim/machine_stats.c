@@ -121,7 +121,8 @@ static const struct stats_desc l1_desc[] = {
 const struct stats_descs machine_l1_stats_descs = {"l1", l1_desc, STATS_COUNT(l1_desc), 0, NULL, 0};
 
 static const struct stats_desc engine_desc[] = {
-    STATS_FIELD(MS, events, "events", "count", "events the engine handled"),
+    STATS_FIELD(MS, events, "events", "count",
+                "events the engine handled (a load's lines that miss the L1 together are one)"),
 };
 const struct stats_descs machine_engine_stats_descs = {
     "engine", engine_desc, STATS_COUNT(engine_desc), 0, NULL, 0};
