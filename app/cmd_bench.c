@@ -30,11 +30,14 @@
 static const char HELP[] =
     "usage: rtsim bench [options] SCENE.yaml...\n"
     "\n"
-    "A benchmark, not a test: for each scene, load it, build the k-d tree and render\n"
+    "A benchmark, not a test: for each scene, load it, build its structure (the scene's\n"
+    "accel: the k-d tree by default, or a BVH) and render\n"
     "its primary rays with the recursive policy on one host thread under the native\n"
     "backend (nothing per access), best of --repeat; the options below add other\n"
     "backends or time other parts. CSV on stdout: scene, triangles, kd_nodes,\n"
-    "kd_build_s, width, height, rays, native_s, rays_per_s, and each option's columns.\n"
+    "kd_build_s, width, height, rays, native_s, rays_per_s, and each option's columns;\n"
+    "last, accel (kd, bvh2 or bvh8). On a BVH, kd_nodes and kd_build_s are the BVH's\n"
+    "nodes and build time, kd_refs_per_tri 1 and kd_max_leaf its largest leaf.\n"
     "\n"
     "example (the timed machine's slowdown over the renderer alone):\n"
     "  rtsim bench --width 64 --height 64 --timed configs/tiny.yaml scenes/small/room.yaml\n"
@@ -319,8 +322,16 @@ static int bench_native_scene(const char *scene_path, uint32_t mask, uint64_t wi
       mem_functional_destroy(b);
     }
   }
+  /* The traced structure's figures: the k-d tree's, or the BVH's (each
+   * triangle in one leaf). */
+  const struct bvh *bv = app_world_bvh(&w);
+  const uint32_t nodes = bv ? bv->stats.nodes : w.kd.stats.nodes,
+                 max_leaf = bv ? bv->stats.max_leaf_prims : w.kd.stats.max_leaf_prims;
+  const double refs = bv                  ? 1.0
+                      : w.scene.tri_count ? (double)w.kd.stats.leaf_prim_refs / w.scene.tri_count
+                                          : 0.0;
   printf("%s,%u,%u,%.3f,%u,%u,%llu,%.4f,%.0f", w.scene.name[0] ? w.scene.name : scene_path,
-         w.scene.tri_count, w.kd.stats.nodes, w.build_s, W, H, (unsigned long long)nrays, best,
+         w.scene.tri_count, nodes, w.build_s, W, H, (unsigned long long)nrays, best,
          best > 0 ? (double)nrays / best : 0.0);
   if (functional)
     printf(",%.4f,%.2f,%llu,%.0f,%.4f,%.2f", fbest, best > 0 ? fbest / best : 0.0,
@@ -331,16 +342,15 @@ static int bench_native_scene(const char *scene_path, uint32_t mask, uint64_t wi
     double rps = best > 0 ? (double)nrays / best : 0.0, trps = tbest > 0 ? np / tbest : 0.0,
            erps = ebest > 0 ? np / ebest : 0.0;
     printf(",%s,%.2f,%u,%.4f,%.0f,%.3f,%.4f,%.0f,%.3f,%.3f,%llu",
-           w.scene.kd_clip ? "clipped" : "whole",
-           w.scene.tri_count ? (double)w.kd.stats.leaf_prim_refs / w.scene.tri_count : 0.0,
-           w.kd.stats.max_leaf_prims, tbest, trps, ebuild, ebest, erps, erps > 0 ? rps / erps : 0.0,
-           erps > 0 ? trps / erps : 0.0, (unsigned long long)mismatches);
+           w.scene.kd_clip ? "clipped" : "whole", refs, max_leaf, tbest, trps, ebuild, ebest, erps,
+           erps > 0 ? rps / erps : 0.0, erps > 0 ? trps / erps : 0.0,
+           (unsigned long long)mismatches);
     bench_embree_destroy(be);
     free(prays);
     free(tprim);
     free(eprim);
   }
-  printf("\n");
+  printf(",%s\n", accel_names[w.scene.accel]);
   fflush(stdout);
   app_world_fini(&w);
   return 0;
@@ -420,7 +430,7 @@ static int bench_main(int argc, char **argv, struct app_sets *sets) {
   if (embree && mask != RAY_MASK(RAY_PRIMARY))
     return app_usage_error("bench", "--embree compares primary rays only (--rays primary)");
   printf(
-      "scene,triangles,kd_nodes,kd_build_s,width,height,rays,native_s,rays_per_s%s%s\n",
+      "scene,triangles,kd_nodes,kd_build_s,width,height,rays,native_s,rays_per_s%s%s,accel\n",
       functional ? ",functional_s,slowdown,line_accesses,accesses_per_s,functional_2t_s,slowdown_2t"
                  : "",
       embree

@@ -64,7 +64,35 @@ static int bench_dirs(const char *dir) {
   return n;
 }
 
+/* The renderer's bench names the structure each scene traced, and its node
+ * count is the one rtsim render reports for that structure. */
+static void test_native_accel(void) {
+  char out[4096], ren[4096];
+  const char *bvh = RTSIM_TEST_DATA "/scenes/good_room_tiny_bvh8.yaml";
+  int rc = testing_runf(out, sizeof out,
+                        RTSIM_BINARY " bench --width 8 --height 8 --repeat 1 %s %s 2>&1", SCN, bvh);
+  EXPECTF(rc == 0, "bench: exit %d: %s", rc, out);
+  const char *r1 = strchr(out, '\n'), *r2 = r1 ? strchr(r1 + 1, '\n') : NULL;
+  EXPECTF(r1 && r2 && strncmp(out, "scene,triangles,kd_nodes,", 25) == 0 && r1 - out >= 17 &&
+              strncmp(r1 - 17, ",rays_per_s,accel", 17) == 0,
+          "header: %s", out);
+  if (!r1 || !r2) return;
+  char a[16];
+  field(r1 + 1, 9, a, sizeof a);
+  EXPECTF(strcmp(a, "kd") == 0, "first scene's accel: %s", a);
+  field(r2 + 1, 9, a, sizeof a);
+  EXPECTF(strcmp(a, "bvh8") == 0, "second scene's accel: %s", a);
+  rc = testing_runf(ren, sizeof ren,
+                    RTSIM_BINARY " render %s --width 8 --height 8 -o %s/bench-bvh8.exr", bvh,
+                    RTSIM_TMP);
+  EXPECTF(rc == 0, "render: exit %d: %s", rc, ren);
+  const char *n = strstr(ren, "bvh_nodes: ");
+  EXPECTF(n && atof(n + 11) == field_f(r2 + 1, 2) && atof(n + 11) > 0,
+          "bench's nodes %.0f, render's %s", field_f(r2 + 1, 2), n ? n : "(none)");
+}
+
 int main(void) {
+  test_native_accel();
   char out[16384];
   int rc = testing_runf(out, sizeof out,
                         "TMPDIR=%s " RTSIM_BINARY " bench --timed " CFG
