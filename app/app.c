@@ -42,6 +42,15 @@ bool app_parse_rays(const char *text, void *mask) { return shade_parse_rays(text
 
 bool app_parse_policy(const char *text, void *kind) { return policy_parse(text, kind); }
 
+bool app_parse_accel(const char *text, void *accel) {
+  for (int k = 0; k < ACCEL_COUNT; k++)
+    if (!strcmp(text, accel_names[k])) {
+      *(int *)accel = k;
+      return true;
+    }
+  return false;
+}
+
 void app_policy_expect(char *buf, size_t cap, const char *more) {
   char list[128];
   policy_list(list, sizeof list, ", ");
@@ -73,6 +82,10 @@ double app_now(void) {
 }
 
 bool app_world_load(struct app_world *w, const char *path) {
+  return app_world_load_as(w, path, -1);
+}
+
+bool app_world_load_as(struct app_world *w, const char *path, int accel) {
   memset(w, 0, sizeof *w);
   struct err e;
   memset(&e, 0, sizeof e);
@@ -80,6 +93,11 @@ bool app_world_load(struct app_world *w, const char *path) {
   if (!scene_file_load(&w->scene, path, &e)) {
     app_report(&e);
     return false;
+  }
+  if (accel >= 0) {
+    CHECK_LT(accel, ACCEL_COUNT);
+    w->scene.accel = (uint8_t)accel;
+    w->accel_from_option = true;
   }
   double t1 = app_now();
   if (w->scene.accel != ACCEL_KD) {
@@ -118,12 +136,18 @@ const struct bvh *app_world_bvh(const struct app_world *w) {
 
 int app_accel_check(const struct app_world *w, const char *path, enum policy_kind k) {
   if (policy_accel_supported(k, w->scene.accel)) return 0;
+  char what[256];
+  snprintf(what, sizeof what,
+           "the %s policy traces the k-d tree only (got %s, expected kd, or policy recursive on "
+           "a BVH)",
+           policy_name(k), accel_names[w->scene.accel]);
+  if (w->accel_from_option) {
+    fprintf(stderr, "rtsim: error: --accel: %s\n", what);
+    return APP_EXIT_USAGE;
+  }
   struct err e;
   memset(&e, 0, sizeof e);
-  err_set(&e, path, w->scene.accel_line, w->scene.accel_col,
-          "accel: the %s policy traces the k-d tree only (got %s, expected kd, or policy "
-          "recursive on a BVH)",
-          policy_name(k), accel_names[w->scene.accel]);
+  err_set(&e, path, w->scene.accel_line, w->scene.accel_col, "accel: %s", what);
   return app_report(&e);
 }
 

@@ -53,6 +53,11 @@ int app_usage_error(const char *cmd, const char *fmt, ...) __attribute__((format
 bool app_parse_rays(const char *text, void *mask);
 #define APP_RAYS_EXPECT "a comma-separated list of primary, shadow, specular, diffuse"
 bool app_parse_policy(const char *text, void *kind);
+/* --accel: kd, bvh2 or bvh8 into an int (enum accel_kind). */
+bool app_parse_accel(const char *text, void *accel);
+#define APP_ACCEL_EXPECT "one of kd, bvh2, bvh8"
+/* --accel ACCEL (int *accel, set to -1 beforehand: the scene's own). */
+#define APP_ACCEL_OPT(accel) OPTS_PARSE("accel", 0, accel, app_parse_accel, APP_ACCEL_EXPECT)
 /* What --policy takes, "one of: recursive, ..." and then `more` (", all"). */
 void app_policy_expect(char *buf, size_t cap, const char *more);
 /* A command's help text with every line "{policies}" (after any indent) made
@@ -88,14 +93,18 @@ struct app_world {
   struct kd_tree kd;
   struct bvh bvh;
   double load_s, build_s;
+  bool accel_from_option; /* --accel chose the structure, not the scene */
 };
 
 /* Load path and build the tree; on bad input prints and returns false. */
 bool app_world_load(struct app_world *w, const char *path);
+/* The same with the structure accel (enum accel_kind) in place of the
+ * scene's accel key; accel < 0: the scene's. */
+bool app_world_load_as(struct app_world *w, const char *path, int accel);
 void app_world_fini(struct app_world *w);
 /* 0 if policy k traces w's structure (policy_accel_supported); otherwise
- * prints one message at the scene's accel key (path:line:col) and returns
- * APP_EXIT_USAGE. */
+ * prints one message at the scene's accel key (path:line:col), or naming
+ * --accel when that chose it, and returns APP_EXIT_USAGE. */
 /* The BVH w's scene is traced through, or NULL for the k-d tree (what a
  * tracer's trace_ctx.bvh takes). */
 const struct bvh *app_world_bvh(const struct app_world *w);

@@ -29,6 +29,8 @@ static const char HELP[] =
     "      rtsim hits scenes/small/room.yaml\n"
     "\n"
     "options:\n"
+    "  --accel A           the structure traced: kd, bvh2 or bvh8 (default: the scene's\n"
+    "                      accel key)\n"
     "  -h, --help          this text\n";
 
 static const char HEADER[] = "id,ox,oy,oz,dx,dy,dz,tmin,tmax";
@@ -165,14 +167,15 @@ int app_hits_answer(struct trace_ctx *tr, FILE *in, FILE *out) {
 }
 
 int cmd_hits(int argc, char **argv) {
-  const struct opts_spec spec[] = {OPTS_END};
+  int accel = -1;
+  const struct opts_spec spec[] = {APP_ACCEL_OPT(&accel), OPTS_END};
   struct opts_args args;
   int rc = opts_parse("hits", HELP, spec, argc, argv, &args);
   if (rc != OPTS_GO) return rc;
   const char *scene_path = opts_one_scene(&args);
   if (!scene_path) return APP_EXIT_USAGE;
   struct app_world w;
-  if (!app_world_load(&w, scene_path)) return 2;
+  if (!app_world_load_as(&w, scene_path, accel)) return 2;
   struct trace_ctx tr;
   struct trace_layout layout;
   trace_layout_default(&layout);

@@ -40,6 +40,8 @@ static const char HELP[] =
     "  --policy P          ray scheduling (default recursive; all give the same image):\n"
     "                        {policies}\n"
     "  --seed S            seed of the diffuse sampling streams (default: the scene's seed)\n"
+    "  --accel A           the structure traced: kd, bvh2 or bvh8 (default: the scene's\n"
+    "                      accel key)\n"
     "  --half              store 16-bit floats (smaller file) instead of 32-bit\n"
     "  --preview PNG       also write an sRGB PNG preview (through gnuplot)\n"
     "  -h, --help          this text\n";
@@ -94,13 +96,17 @@ int cmd_render(int argc, char **argv) {
   uint32_t mask = RAY_MASK(RAY_TYPE_COUNT) - 1; /* every ray type */
   uint64_t width = 0, height = 0, seed = 0;
   bool have_seed = false, half = false;
+  int accel = -1;
   enum policy_kind policy = POLICY_RECURSIVE;
   char policy_expect[160];
   app_policy_expect(policy_expect, sizeof policy_expect, "");
   const struct opts_spec spec[] = {
       OPTS_STR("output", 'o', &out),
       APP_RENDER_OPTS(&width, &height, &mask, &seed, &have_seed, &policy, policy_expect),
-      OPTS_FLAG("half", 0, &half), OPTS_STR("preview", 0, &preview), OPTS_END};
+      APP_ACCEL_OPT(&accel),
+      OPTS_FLAG("half", 0, &half),
+      OPTS_STR("preview", 0, &preview),
+      OPTS_END};
   struct opts_args args;
   char help[sizeof HELP + 1024];
   app_help(help, sizeof help, HELP);
@@ -112,7 +118,7 @@ int cmd_render(int argc, char **argv) {
   const char *path = scene_path;
 
   struct app_world w;
-  if (!app_world_load(&w, path)) return 2;
+  if (!app_world_load_as(&w, path, accel)) return 2;
   if ((rc = app_accel_check(&w, path, policy)) != 0) {
     app_world_fini(&w);
     return rc;

@@ -48,6 +48,8 @@ static const char HELP[] =
     "  --rays LIST           ray types from primary,shadow,specular,diffuse (default all)\n"
     "  --width W, --height H image size (default: the scene's)\n"
     "  --seed S              diffuse sampling seed (default: the scene's)\n"
+    "  --accel A             the structure traced: kd, bvh2 or bvh8 (default: the\n"
+    "                        scene's accel key)\n"
     "  --set KEY=VALUE       override a machine config key (repeatable)\n"
     "  --dram-trace FILE     also write every DRAM request (not at fidelity analytic)\n"
     "  --trace-events FILE   also write the run's activity as Chrome trace-event JSON\n"
@@ -143,6 +145,7 @@ struct run_plan {
   struct machine_trace_params tev;
   uint64_t tev_cores, tev_period, tev_max;
   bool help_keys, help_stats, help_stats_md;
+  int accel;            /* --accel (enum accel_kind), -1: the scene's */
   struct app_sets sets; /* sized by the caller for argc entries */
 };
 
@@ -155,6 +158,7 @@ static int run_plan_parse(struct run_plan *pl, int argc, char **argv) {
       OPTS_STR("output", 'o', &pl->out),
       APP_RENDER_OPTS(&pl->width, &pl->height, &pl->mask, &pl->seed, &pl->have_seed, &pl->policy,
                       policy_expect),
+      APP_ACCEL_OPT(&pl->accel),
       OPTS_PARSE("set", 0, &pl->sets, app_sets_add, "KEY=VALUE"),
       OPTS_STR("dram-trace", 0, &pl->trace_path),
       OPTS_STR("trace-events", 0, &pl->events_path),
@@ -406,6 +410,7 @@ int cmd_run(int argc, char **argv) {
   struct run_plan pl = {
       .mask = RAY_MASK(RAY_TYPE_COUNT) - 1, /* every ray type */
       .policy = POLICY_RECURSIVE,
+      .accel = -1,
       .cost_channel = "cost.issue_slots",
       .tev = {.to_cycle = UINT64_MAX},
       .tev_cores = 2,
@@ -429,7 +434,7 @@ int cmd_run(int argc, char **argv) {
   if (!run_plan_fits(&pl, &mc)) goto done;
   /* Everything that can refuse the run is checked before OUTDIR is touched:
    * the config, the scene, then what the host cannot run. */
-  if (!(have_world = app_world_load(&w, pl.scene_path))) goto done;
+  if (!(have_world = app_world_load_as(&w, pl.scene_path, pl.accel))) goto done;
   if (app_accel_check(&w, pl.scene_path, pl.policy) != 0) goto done;
   const uint32_t W = pl.width ? (uint32_t)pl.width : w.scene.width;
   const uint32_t H = pl.height ? (uint32_t)pl.height : w.scene.height;

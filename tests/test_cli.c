@@ -454,6 +454,32 @@ static void test_accel_refusals(void) {
   free(csv);
 }
 
+/* --accel chooses the structure over the scene's key: outputs name it; an
+ * unknown one is one usage line, exit 2, nothing written. */
+static void test_accel_option(void) {
+  char cmd[4096], out[8192];
+  const char *dir = RTSIM_TMP "/cli_accel_option";
+  snprintf(cmd, sizeof cmd,
+           "rm -rf %s && %s run %s/configs/tiny.yaml %sgood_room_tiny.yaml -o %s --width 4 "
+           "--height 4 --rays primary --accel bvh2",
+           dir, RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, dir);
+  EXPECTF(testing_run(cmd, out, sizeof out) == 0, "--accel bvh2: %s", out);
+  char *json = testing_slurp(dir, "stats.json", NULL);
+  EXPECTF(json && strstr(json, "\"accel\": \"bvh2\""), "--accel bvh2 not in stats.json");
+  free(json);
+  snprintf(cmd, sizeof cmd,
+           "rm -rf %s && %s render %sgood_room_tiny.yaml -o %s.exr --width 4 --height 4 "
+           "--accel bvh4",
+           dir, RTSIM_BINARY, SCN, dir);
+  const int rc = testing_run(cmd, out, sizeof out);
+  EXPECTF(rc == 2 && count_lines(out) == 1 &&
+              strstr(out, "--accel: got 'bvh4', expected one of kd, bvh2, bvh8"),
+          "--accel bvh4: exit %d: %s", rc, out);
+  char left[512];
+  snprintf(left, sizeof left, "%s.exr", dir);
+  EXPECTF(access(left, F_OK) != 0, "--accel bvh4 left %s", left);
+}
+
 /* dram-replay --help-stats: the replay's own numbers, one a line, and a value
  * given to the flag is a usage error (exit 2, one line, nothing written). */
 static void test_replay_help_stats(void) {
@@ -554,6 +580,7 @@ int main(void) {
   test_not_regular();
   test_run_refuses_first();
   test_accel_refusals();
+  test_accel_option();
 
   /* Command-line mistakes: exit 2 and a message naming the problem. */
   static const struct {

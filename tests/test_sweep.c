@@ -847,7 +847,34 @@ static void test_bounded(void) {
   unlink(RTSIM_TMP "/sw_panels.svg");
 }
 
+/* accel is a workload key: each point's command passes --accel, so its run
+ * traces that structure; an unknown value, or a structure the point's policy
+ * does not trace, is refused before anything is written, at the value. */
+static void test_accel_axis(void) {
+  const char *scene = RTSIM_SOURCE_DIR "/scenes/small/room.yaml";
+  const char *file = RTSIM_TMP "/sw_accel.yaml", *dir = RTSIM_TMP "/sw_accel";
+  write_sweep(file, scene, "  accel: [kd, bvh8]\n");
+  EXPECT(run("rm -rf %s && (%s sweep %s -o %s --emit-jobs 2>/dev/null)", dir, RTSIM_BINARY, file,
+             dir) == 0);
+  EXPECTF(count_lines(out) == 2 && strstr(out, "--point accel=bvh8\n") &&
+              strstr(out, "--point accel=kd\n"),
+          "accel axis: %s", out);
+  char *sh = read_all(RTSIM_TMP "/sw_accel/accel=bvh8/command.sh");
+  EXPECTF(sh && strstr(sh, " --accel bvh8"), "accel point's command: %s", sh ? sh : "(none)");
+  free(sh);
+  sh = read_all(RTSIM_TMP "/sw_accel/accel=kd/command.sh");
+  EXPECTF(sh && strstr(sh, " --accel kd"), "accel point's command: %s", sh ? sh : "(none)");
+  free(sh);
+  write_sweep(file, scene, "  accel: [kd, bvh4]\n");
+  int rc = run("rm -rf %s && %s sweep %s -o %s --emit-jobs", dir, RTSIM_BINARY, file, dir);
+  EXPECTF(rc == 2 && strstr(out, "sw_accel.yaml:8:15: error: accel: unknown structure (got 'bvh4', "
+                                 "expected one of kd, bvh2, bvh8)"),
+          "bvh4: exit %d: %s", rc, out);
+  EXPECTF(access(dir, F_OK) != 0, "bvh4: %s was written", dir);
+}
+
 int main(void) {
+  test_accel_axis();
   test_bounded();
   test_expansion();
   test_bad_files();
