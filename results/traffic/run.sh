@@ -8,7 +8,8 @@
 #   usage: sh results/traffic/run.sh [OUT [DIV [JOBS]]]   (from the repository top;
 #   RTSIM names the binary (default build/rtsim), SCENES the scene folder
 #   (default scenes; the tests use scenes/small), POLICY the policies (passed to
-#   `rtsim traffic --policy`; default the paper's three))
+#   `rtsim traffic --policy`; default the paper's three), ACCEL the structure
+#   (passed to --accel; default the scenes' own, the k-d tree))
 set -eu
 RTSIM=${RTSIM:-build/rtsim}
 SCENES=${SCENES:-scenes}
@@ -16,6 +17,7 @@ OUT=${1:-results/traffic}
 DIV=${2:-1}
 JOBS=${3:-$(nproc)}
 POLICY=${POLICY:-}
+ACCEL=${ACCEL:-}
 mkdir -p "$OUT"
 # A run per core already keeps every core busy: the analyser's own thread
 # (rtsim traffic --threads 2) would only add host CPU time then.
@@ -28,8 +30,8 @@ for c in diffuse specular shadow primary; do
     [ "$c" = diffuse ] && size=512
     echo "$s $c $((size / DIV))"
   done
-done | RTSIM="$RTSIM" SCENES="$SCENES" POLICY="$POLICY" THREADS="$THREADS" xargs -P "$JOBS" -L 1 sh -c \
-  '"$RTSIM" traffic "$SCENES/$0.yaml" --rays "$1" --width "$2" --height "$2" ${POLICY:+--policy "$POLICY"} --threads "$THREADS" -o "'"$OUT"'/$0-$1.csv" > /dev/null && echo "done: $0 $1 at $2x$2" >&2'
+done | RTSIM="$RTSIM" SCENES="$SCENES" POLICY="$POLICY" ACCEL="$ACCEL" THREADS="$THREADS" xargs -P "$JOBS" -L 1 sh -c \
+  '"$RTSIM" traffic "$SCENES/$0.yaml" --rays "$1" --width "$2" --height "$2" ${POLICY:+--policy "$POLICY"} ${ACCEL:+--accel "$ACCEL"} --threads "$THREADS" -o "'"$OUT"'/$0-$1.csv" > /dev/null && echo "done: $0 $1 at $2x$2" >&2'
 first=1
 for s in room grove sphereflake; do
   for c in primary shadow specular diffuse; do
