@@ -12,7 +12,7 @@ cd "$(dirname "$0")/../.."
 W=${1:-build/speed-accuracy/memory-bound}
 [ "${COLLECT_ONLY:-0}" = 1 ] || build/rtsim sweep configs/sweeps/memory-bound.yaml -o "$W" -j 1
 out=results/speed-accuracy/memory-bound.csv
-echo "scene,policy,width,l2_size,fidelity,cycles,dram_bytes,dram_utilization,core_utilization,energy_j,wall_s" > "$out.tmp"
+echo "scene,policy,width,l2_size,fidelity,cycles,dram_bytes,dram_utilization,core_utilization,energy_j,wall_s,rung_dram_utilization,rung_bandwidth_bound" > "$out.tmp"
 for d in "$W"/*/; do
   [ -f "$d/stats.csv" ] || continue
   wall=$(grep -o '"wall_s": [0-9.e+-]*' "$d/stats.json" | sed 's/.*: //')
@@ -20,9 +20,10 @@ for d in "$W"/*/; do
   awk -F, -v wall="$wall" '
     { gsub(/"[^"]*"/, "q"); $0 = $0 }
     NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
-    { printf "%s,%s,%s,%s,%s,%s,%.0f,%s,%s,%s,%.1f\n", $c["scene"], $c["policy"], $c["width"],
+    function f(k) { return c[k] ? $c[k] : "" }
+    { printf "%s,%s,%s,%s,%s,%s,%.0f,%s,%s,%s,%.1f,%s,%s\n", $c["scene"], $c["policy"], $c["width"],
         $c["l2.size"], $c["fidelity"], $c["cycles"], $c["dram_read_bytes"] + $c["dram_write_bytes"],
-        (c["dram_utilization"] ? $c["dram_utilization"] : ""), $c["core_utilization"],
-        $c["energy_j"], wall }' "$d/stats.csv"
+        f("dram_utilization"), $c["core_utilization"], $c["energy_j"], wall,
+        f("rung_dram_utilization"), f("rung_bandwidth_bound") }' "$d/stats.csv"
 done | sort -t, -k3,3n -k1,1 -k4,4 -k2,2 -k5,5 >> "$out.tmp"
 mv "$out.tmp" "$out"

@@ -10,11 +10,13 @@
 # top, after sh .ci/setup (about 11 min of CPU, one run at a time):
 #   sh results/speed-accuracy/rung-errors.sh [--keep]
 # --keep: keep the runs a stopped earlier call completed (their stats.json
-# exists) instead of starting afresh. RTSIM: the program (default
+# exists) instead of starting afresh. --fold: run nothing, keep the 128x128
+# rows of the committed rung-points.csv and fold memory-bound.csv in again
+# (after memory-bound.sh gained points). RTSIM: the program (default
 # build/rtsim). Then rebuild rtsim to compile the table.
 set -eu
 out=build/rung-errors res=results/speed-accuracy rtsim=${RTSIM:-build/rtsim}
-[ "${1:-}" = --keep ] || rm -rf "$out"
+case ${1:-} in --keep | --fold) ;; *) rm -rf "$out" ;; esac
 mkdir -p "$out"
 
 # The machines: the default (the recursive policy compute-bound), 32 cores
@@ -36,7 +38,7 @@ CORE_EDGES="0 0.5 0.9"
 # One number member of a stats.json (empty when absent).
 num() { sed -n "s/^  \"$2\": \([^,]*\),*\$/\1/p" "$1/stats.json"; }
 
-for regime in compute middle dram; do
+[ "${1:-}" = --fold ] || for regime in compute middle dram; do
   for scene in grove sphereflake; do
     for policy in recursive packet dynamic treelet; do
       for rung in banked channel fixed analytic; do
@@ -57,26 +59,54 @@ for regime in compute middle dram; do
 done
 
 points="$res/rung-points.csv"
-echo "regime,scene,policy,rung,bound,rung_dram_utilization,core_utilization,cycles,dram_bytes,banked_cycles,banked_dram_bytes,banked_dram_utilization,banked_core_utilization,cycles_error,dram_bytes_error" > "$points"
-for regime in compute middle dram; do
-  for scene in grove sphereflake; do
-    for policy in recursive packet dynamic treelet; do
-      b="$out/$regime-$scene-$policy-banked"
-      bc=$(num "$b" cycles) bb=$(num "$b" dram_bytes)
-      bu=$(num "$b" dram_utilization) bk=$(num "$b" core_utilization)
-      for rung in analytic fixed channel; do
-        d="$out/$regime-$scene-$policy-$rung"
-        bound=-
-        case $(num "$d" rung_bandwidth_bound) in 1) bound=bandwidth ;; 0) bound=latency ;; esac
-        c=$(num "$d" cycles) u=$(num "$d" rung_dram_utilization) k=$(num "$d" core_utilization)
-        y=$(($(num "$d" dram_read_bytes) + $(num "$d" dram_write_bytes)))
-        awk -v f="$regime,$scene,$policy,$rung,$bound,$u,$k,$c,$y,$bc,$bb,$bu,$bk" \
-          -v c="$c" -v y="$y" -v bc="$bc" -v bb="$bb" \
-          'BEGIN { printf "%s,%.6f,%.6f\n", f, (c - bc) / bc, (y - bb) / bb }' >> "$points"
+if [ "${1:-}" = --fold ]; then
+  grep -v "^memory-bound-" "$points" > "$points.tmp" && mv "$points.tmp" "$points"
+else
+  echo "regime,scene,policy,rung,bound,rung_dram_utilization,core_utilization,cycles,dram_bytes,banked_cycles,banked_dram_bytes,banked_dram_utilization,banked_core_utilization,cycles_error,dram_bytes_error" > "$points"
+  for regime in compute middle dram; do
+    for scene in grove sphereflake; do
+      for policy in recursive packet dynamic treelet; do
+        b="$out/$regime-$scene-$policy-banked"
+        bc=$(num "$b" cycles) bb=$(num "$b" dram_bytes)
+        bu=$(num "$b" dram_utilization) bk=$(num "$b" core_utilization)
+        for rung in analytic fixed channel; do
+          d="$out/$regime-$scene-$policy-$rung"
+          bound=-
+          case $(num "$d" rung_bandwidth_bound) in 1) bound=bandwidth ;; 0) bound=latency ;; esac
+          c=$(num "$d" cycles) u=$(num "$d" rung_dram_utilization) k=$(num "$d" core_utilization)
+          y=$(($(num "$d" dram_read_bytes) + $(num "$d" dram_write_bytes)))
+          awk -v f="$regime,$scene,$policy,$rung,$bound,$u,$k,$c,$y,$bc,$bb,$bu,$bk" \
+            -v c="$c" -v y="$y" -v bc="$bc" -v bb="$bb" \
+            'BEGIN { printf "%s,%.6f,%.6f\n", f, (c - bc) / bc, (y - bb) / bb }' >> "$points"
+        done
       done
     done
   done
-done
+fi
+
+# The memory-bound grid's points (memory-bound.csv: 64 cores, a 512 KiB or a
+# 4 MiB L2, 512x512 and up) join them, each cheaper run against the banked run
+# of its point, so a run near the DRAM's peak quotes what was measured there.
+awk -F, '
+NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+{ k = $c["scene"] SUBSEP $c["policy"] SUBSEP $c["width"] SUBSEP $c["l2_size"] }
+$c["fidelity"] == "banked" { bc[k] = $c["cycles"]; bb[k] = $c["dram_bytes"]
+  bu[k] = $c["dram_utilization"]; bk[k] = $c["core_utilization"]; next }
+{ row[++n] = $0; key[n] = k }
+END {
+  for (i = 1; i <= n; i++) {
+    if (!(key[i] in bc)) continue
+    split(row[i], f, ",")
+    bound = f[c["rung_bandwidth_bound"]] == 1 ? "bandwidth" : \
+      f[c["rung_bandwidth_bound"]] == "0" ? "latency" : "-"
+    k = key[i]
+    printf "memory-bound-%s-%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%.6f,%.6f\n",
+      f[c["width"]], f[c["l2_size"]], f[c["scene"]], f[c["policy"]], f[c["fidelity"]], bound,
+      f[c["rung_dram_utilization"]], f[c["core_utilization"]], f[c["cycles"]],
+      f[c["dram_bytes"]], bc[k], bb[k], bu[k], bk[k], (f[c["cycles"]] - bc[k]) / bc[k],
+      (f[c["dram_bytes"]] - bb[k]) / bb[k]
+  }
+}' "$res/memory-bound.csv" >> "$points"
 
 # One row a regime: rung x policy x bound x DRAM band x core band, in the
 # order of the loops above; errors' smallest and largest.
