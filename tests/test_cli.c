@@ -362,16 +362,23 @@ static void test_not_regular(void) {
   unlink(RTSIM_TMP "/cli_mesh_obj.yaml");
 }
 
+/* rtsim run of the tiny room on the tiny machine (4x4, primary rays, then
+ * extra) into a fresh dir; its exit code, its output in out. */
+static int tiny_room_run(const char *dir, const char *extra, char *out, size_t cap) {
+  char cmd[4096];
+  snprintf(cmd, sizeof cmd,
+           "rm -rf %s && %s run %s/configs/tiny.yaml %sgood_room_tiny.yaml -o %s --width 4 "
+           "--height 4 --rays primary%s",
+           dir, RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, dir, extra);
+  return testing_run(cmd, out, cap);
+}
+
 /* rtsim run's refusals come before -o DIR is touched: a complete directory
  * keeps its stats.json (the same file), a new one is not made. */
 static void test_run_refuses_first(void) {
   char cmd[4096], out[8192];
   const char *dir = RTSIM_TMP "/cli_refuse";
-  snprintf(cmd, sizeof cmd,
-           "rm -rf %s && %s run %s/configs/tiny.yaml %sgood_room_tiny.yaml -o %s "
-           "--width 4 --height 4 --rays primary",
-           dir, RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, dir);
-  EXPECTF(testing_run(cmd, out, sizeof out) == 0, "the first run: %s", out);
+  EXPECTF(tiny_room_run(dir, "", out, sizeof out) == 0, "the first run: %s", out);
   struct stat before, after;
   EXPECT(stat(RTSIM_TMP "/cli_refuse/stats.json", &before) == 0);
   static const char *const refused[] = {
@@ -459,11 +466,7 @@ static void test_accel_refusals(void) {
 static void test_accel_option(void) {
   char cmd[4096], out[8192];
   const char *dir = RTSIM_TMP "/cli_accel_option";
-  snprintf(cmd, sizeof cmd,
-           "rm -rf %s && %s run %s/configs/tiny.yaml %sgood_room_tiny.yaml -o %s --width 4 "
-           "--height 4 --rays primary --accel bvh2",
-           dir, RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, dir);
-  EXPECTF(testing_run(cmd, out, sizeof out) == 0, "--accel bvh2: %s", out);
+  EXPECTF(tiny_room_run(dir, " --accel bvh2", out, sizeof out) == 0, "--accel bvh2: %s", out);
   char *json = testing_slurp(dir, "stats.json", NULL);
   EXPECTF(json && strstr(json, "\"accel\": \"bvh2\""), "--accel bvh2 not in stats.json");
   free(json);
