@@ -402,13 +402,14 @@ static void test_run_refuses_first(void) {
 }
 
 /* A BVH scene under a policy that traces the k-d tree only: one message at
- * the scene's accel key, exit 2, nothing written; the recursive policy runs. */
+ * the scene's accel key, exit 2, nothing written; the recursive and packet
+ * policies run. */
 static void test_accel_refusals(void) {
   char cmd[4096], out[8192];
   const char *dir = RTSIM_TMP "/cli_accel";
   char refused[4][1024];
   snprintf(refused[0], sizeof refused[0],
-           "render %sgood_room_tiny_bvh8.yaml -o %s.exr --width 4 --height 4 --policy packet", SCN,
+           "render %sgood_room_tiny_bvh8.yaml -o %s.exr --width 4 --height 4 --policy dynamic", SCN,
            dir);
   snprintf(refused[1], sizeof refused[1],
            "run %s/configs/tiny.yaml %sgood_room_tiny_bvh8.yaml -o %s --width 4 --height 4 "
@@ -421,7 +422,7 @@ static void test_accel_refusals(void) {
            "trace %sgood_room_tiny_bvh8.yaml --din %s.din --width 4 --height 4 --rays primary "
            "--policy treelet",
            SCN, dir);
-  static const char *const policy[] = {"packet", "dynamic", "packet", "treelet"};
+  static const char *const policy[] = {"dynamic", "dynamic", "dynamic", "treelet"};
   for (size_t i = 0; i < sizeof refused / sizeof refused[0]; i++) {
     const char *args = refused[i];
     char want[256];
@@ -430,7 +431,7 @@ static void test_accel_refusals(void) {
     const int rc = testing_run(cmd, out, sizeof out);
     snprintf(want, sizeof want,
              "good_room_tiny_bvh8.yaml:3:8: error: accel: the %s policy traces the k-d tree only "
-             "(got bvh8, expected kd, or policy recursive on a BVH)",
+             "(got bvh8, expected kd, or policy recursive or packet on a BVH)",
              policy[i]);
     EXPECTF(rc == 2 && count_lines(out) == 1 && strstr(out, want), "'%s': exit %d: %s", args, rc,
             out);
@@ -452,6 +453,11 @@ static void test_accel_refusals(void) {
   EXPECT(csv && strstr(csv, "scene_hash,accel,") && strstr(csv, ",bvh8,"));
   free(json);
   free(csv);
+  snprintf(cmd, sizeof cmd,
+           "%s run %s/configs/tiny.yaml %sgood_room_tiny_bvh8.yaml -o %s --width 4 --height 4 "
+           "--rays primary --policy packet",
+           RTSIM_BINARY, RTSIM_SOURCE_DIR, SCN, dir);
+  EXPECTF(testing_run(cmd, out, sizeof out) == 0, "a BVH run of packets: %s", out);
 }
 
 /* dram-replay --help-stats: the replay's own numbers, one a line, and a value

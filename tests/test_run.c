@@ -789,13 +789,13 @@ int main(int argc, char **argv) {
   if (!load_small(&w, "room")) return testing_done("test_run");
   if (all || !strcmp(part, "cross-a")) {
     test_cross_check(&w, 0, 2);
-    /* The recursive policy on each BVH: the same cross-check, and their
-     * traversal stacks within the coroutines' margin. */
+    /* The recursive and packet policies on each BVH: the same cross-check,
+     * and their traversal stacks within the coroutines' margin. */
     for (int k = ACCEL_BVH2; k <= ACCEL_BVH8; k++) {
       struct bvh b;
       bvh_build(&b, &w.s, (enum accel_kind)k);
       w.bvh = &b;
-      test_cross_check(&w, 0, 1);
+      test_cross_check(&w, 0, 2);
       w.bvh = NULL;
       bvh_fini(&b);
     }

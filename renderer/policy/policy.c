@@ -134,7 +134,7 @@ bool policy_workers_supported(enum policy_kind k, uint32_t workers) {
 }
 
 bool policy_accel_supported(enum policy_kind k, int a) {
-  return a == ACCEL_KD || k == POLICY_RECURSIVE;
+  return a == ACCEL_KD || k == POLICY_RECURSIVE || k == POLICY_PACKET;
 }
 
 struct policy_job *policy_job_create(enum policy_kind k, const struct policy_setup *s,

@@ -208,8 +208,8 @@ struct policy_job *policy_job_create(enum policy_kind k, const struct policy_set
 bool policy_workers_supported(enum policy_kind k, uint32_t workers);
 
 /* Whether policy k traces acceleration structure a (enum accel_kind):
- * recursive every structure; packet, dynamic and treelet the k-d tree only
- * (their packet, queue-point and treelet kernels walk k-d nodes). */
+ * recursive and packet every structure; dynamic and treelet the k-d tree
+ * only (their queue-point and treelet kernels walk k-d nodes). */
 bool policy_accel_supported(enum policy_kind k, int a);
 
 /* Bytes of the memory image one worker's rays occupy (its ray stack or packet
