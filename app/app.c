@@ -116,28 +116,6 @@ const struct bvh *app_world_bvh(const struct app_world *w) {
   return w->scene.accel != ACCEL_KD ? &w->bvh : NULL;
 }
 
-int app_accel_check(const struct app_world *w, const char *path, enum policy_kind k) {
-  if (policy_accel_supported(k, w->scene.accel)) return 0;
-  /* The policies that do trace it, "a, b or c". */
-  char ok[128] = "";
-  uint32_t n = 0, m = 0;
-  for (int p = 0; p < POLICY_COUNT; p++) m += policy_accel_supported(p, w->scene.accel);
-  for (int p = 0; p < POLICY_COUNT; p++) {
-    if (!policy_accel_supported(p, w->scene.accel)) continue;
-    const size_t used = strlen(ok);
-    snprintf(ok + used, sizeof ok - used, "%s%s", n == 0 ? "" : (n + 1 < m ? ", " : " or "),
-             policy_name(p));
-    n++;
-  }
-  struct err e;
-  memset(&e, 0, sizeof e);
-  err_set(&e, path, w->scene.accel_line, w->scene.accel_col,
-          "accel: the %s policy traces the k-d tree only (got %s, expected kd, or policy "
-          "%s on a BVH)",
-          policy_name(k), accel_names[w->scene.accel], ok);
-  return app_report(&e);
-}
-
 /* ---- the one render setup (struct app_render) --------------------------------- */
 
 void app_render_init(struct app_render *r, const struct app_world *w, uint32_t mask, uint64_t seed,

@@ -93,13 +93,9 @@ struct app_world {
 /* Load path and build the tree; on bad input prints and returns false. */
 bool app_world_load(struct app_world *w, const char *path);
 void app_world_fini(struct app_world *w);
-/* 0 if policy k traces w's structure (policy_accel_supported); otherwise
- * prints one message at the scene's accel key (path:line:col) and returns
- * APP_EXIT_USAGE. */
 /* The BVH w's scene is traced through, or NULL for the k-d tree (what a
  * tracer's trace_ctx.bvh takes). */
 const struct bvh *app_world_bvh(const struct app_world *w);
-int app_accel_check(const struct app_world *w, const char *path, enum policy_kind k);
 
 struct trace_ctx;
 /* rtsim hits after its set-up: the rays CSV read from in (named <stdin> in

@@ -47,7 +47,9 @@ struct bvh_packet {
   float pool[BP_STACK * BP_MAX];
 };
 
-struct bvh_packet *bvh_packet_create(void) { return xcalloc(1, sizeof(struct bvh_packet)); }
+struct bvh_packet *bvh_packet_create(void) {
+  return xcalloc(1, sizeof(struct bvh_packet));
+}
 
 void bvh_packet_destroy(struct bvh_packet *bp) { free(bp); }
 
@@ -121,9 +123,8 @@ static uint32_t bp_node(const struct bvh *b, struct bvh_packet *bp, uint32_t ni,
     struct bt_entry kids[8];
     const float t1 = (found >> i) & 1u ? bp->best_t[i] : tv->t1;
     tested = 0;
-    const uint32_t nk = b->kind == ACCEL_BVH8
-                            ? bt_children8(b, ni, tv, tv->t0, t1, kids, &tested)
-                            : bt_children2(b, ni, tv, tv->t0, t1, kids, &tested);
+    const uint32_t nk = b->kind == ACCEL_BVH8 ? bt_children8(b, ni, tv, tv->t0, t1, kids, &tested)
+                                              : bt_children2(b, ni, tv, tv->t0, t1, kids, &tested);
     bp->nodes[i]++;
     /* A child is one slot: its (ref, count) is the slot's alone. */
     for (uint32_t j = 0, k = 0; j < nk; j++) {
