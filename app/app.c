@@ -97,7 +97,6 @@ bool app_world_load_as(struct app_world *w, const char *path, int accel) {
   if (accel >= 0) {
     CHECK_LT(accel, ACCEL_COUNT);
     w->scene.accel = (uint8_t)accel;
-    w->accel_from_option = true;
   }
   double t1 = app_now();
   if (w->scene.accel != ACCEL_KD) {
@@ -132,23 +131,6 @@ void app_world_fini(struct app_world *w) {
 
 const struct bvh *app_world_bvh(const struct app_world *w) {
   return w->scene.accel != ACCEL_KD ? &w->bvh : NULL;
-}
-
-int app_accel_check(const struct app_world *w, const char *path, enum policy_kind k) {
-  if (policy_accel_supported(k, w->scene.accel)) return 0;
-  char what[256];
-  snprintf(what, sizeof what,
-           "the %s policy traces the k-d tree only (got %s, expected kd, or policy recursive on "
-           "a BVH)",
-           policy_name(k), accel_names[w->scene.accel]);
-  if (w->accel_from_option) {
-    fprintf(stderr, "rtsim: error: --accel: %s\n", what);
-    return APP_EXIT_USAGE;
-  }
-  struct err e;
-  memset(&e, 0, sizeof e);
-  err_set(&e, path, w->scene.accel_line, w->scene.accel_col, "accel: %s", what);
-  return app_report(&e);
 }
 
 /* ---- the one render setup (struct app_render) --------------------------------- */

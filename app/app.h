@@ -93,7 +93,6 @@ struct app_world {
   struct kd_tree kd;
   struct bvh bvh;
   double load_s, build_s;
-  bool accel_from_option; /* --accel chose the structure, not the scene */
 };
 
 /* Load path and build the tree; on bad input prints and returns false. */
@@ -102,13 +101,9 @@ bool app_world_load(struct app_world *w, const char *path);
  * scene's accel key; accel < 0: the scene's. */
 bool app_world_load_as(struct app_world *w, const char *path, int accel);
 void app_world_fini(struct app_world *w);
-/* 0 if policy k traces w's structure (policy_accel_supported); otherwise
- * prints one message at the scene's accel key (path:line:col), or naming
- * --accel when that chose it, and returns APP_EXIT_USAGE. */
 /* The BVH w's scene is traced through, or NULL for the k-d tree (what a
  * tracer's trace_ctx.bvh takes). */
 const struct bvh *app_world_bvh(const struct app_world *w);
-int app_accel_check(const struct app_world *w, const char *path, enum policy_kind k);
 
 struct trace_ctx;
 /* rtsim hits after its set-up: the rays CSV read from in (named <stdin> in

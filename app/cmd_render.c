@@ -119,10 +119,6 @@ int cmd_render(int argc, char **argv) {
 
   struct app_world w;
   if (!app_world_load_as(&w, path, accel)) return 2;
-  if ((rc = app_accel_check(&w, path, policy)) != 0) {
-    app_world_fini(&w);
-    return rc;
-  }
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   struct app_render ar;

@@ -435,7 +435,6 @@ int cmd_run(int argc, char **argv) {
   /* Everything that can refuse the run is checked before OUTDIR is touched:
    * the config, the scene, then what the host cannot run. */
   if (!(have_world = app_world_load_as(&w, pl.scene_path, pl.accel))) goto done;
-  if (app_accel_check(&w, pl.scene_path, pl.policy) != 0) goto done;
   const uint32_t W = pl.width ? (uint32_t)pl.width : w.scene.width;
   const uint32_t H = pl.height ? (uint32_t)pl.height : w.scene.height;
   if (!run_plan_runs_here(&pl, &mc, W, H, &e)) goto done;

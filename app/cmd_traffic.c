@@ -10,6 +10,7 @@
 
 #include "app/opts.h"
 #include "app/outguard.h"
+#include "renderer/bvh.h"
 #include "renderer/framebuffer.h"
 #include "renderer/policy/policy.h"
 #include "renderer/policy/qpoint.h"
@@ -236,11 +237,6 @@ int cmd_traffic(int argc, char **argv) {
 
   struct app_world w;
   if (!app_world_load_as(&w, scene_path, accel)) return 2;
-  for (int p = 0; p < POLICY_COUNT; p++)
-    if (want[p] && (rc = app_accel_check(&w, scene_path, (enum policy_kind)p)) != 0) {
-      app_world_fini(&w);
-      return rc;
-    }
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   struct lru_stack_params lp = lru_stack_params_default();
@@ -255,8 +251,11 @@ int cmd_traffic(int argc, char **argv) {
    * for the runs of every cache size. */
   uint32_t *subtree_tris = NULL;
   if (want[POLICY_DYNAMIC] || want[POLICY_TREELET]) {
-    subtree_tris = xmalloc((uint64_t)w.kd.node_count * sizeof *subtree_tris + 1);
-    qpoint_subtree_tris(&w.kd, subtree_tris);
+    const struct bvh *bvh = app_world_bvh(&w);
+    subtree_tris = xmalloc(
+        (uint64_t)(bvh ? qpoint_bvh_places(bvh) : w.kd.node_count) * sizeof *subtree_tris + 1);
+    if (bvh) qpoint_bvh_subtree_tris(bvh, subtree_tris);
+    else qpoint_subtree_tris(&w.kd, subtree_tris);
   }
   for (int p = 0; p < POLICY_COUNT; p++) {
     if (!want[p]) continue;
@@ -426,10 +425,6 @@ int cmd_trace(int argc, char **argv) {
     return app_usage_error("trace", "missing --rays (primary, shadow, specular or diffuse)");
   struct app_world w;
   if (!app_world_load_as(&w, scene_path, accel)) return 2;
-  if ((rc = app_accel_check(&w, scene_path, pk)) != 0) {
-    app_world_fini(&w);
-    return rc;
-  }
   uint32_t W = width ? (uint32_t)width : w.scene.width;
   uint32_t H = height ? (uint32_t)height : w.scene.height;
   struct lru_stack_params lp = lru_stack_params_default();

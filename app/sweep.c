@@ -54,8 +54,6 @@ struct dim {
 struct scene_info {
   char *path; /* absolute (owned) */
   uint32_t width, height, tris, lights;
-  int accel; /* the scene's accel key (enum accel_kind) */
-  int accel_line, accel_col;
 };
 
 struct priv {
@@ -139,7 +137,7 @@ static bool check_workload(const struct priv *pv, enum wl k, const struct cfg_no
     return cfg_u64(d, n, key, 0, UINT64_MAX, &v, e);
   }
   case WL_ACCEL: {
-    int a;
+    int a; /* every policy traces every structure: only the name is checked */
     if (!app_parse_accel(text, &a))
       return cfg_fail(d, n, key, e, "unknown structure (got '%s', expected %s)", text,
                       APP_ACCEL_EXPECT);
@@ -587,8 +585,7 @@ static bool load_scenes(struct priv *pv, struct err *e) {
     struct scene sc;
     if (!scene_file_load(&sc, path, e)) return false;
     pv->scenes[pv->nscenes++] =
-        (struct scene_info){dup_str(path),  sc.width, sc.height,     sc.tri_count,
-                            sc.light_count, sc.accel, sc.accel_line, sc.accel_col};
+        (struct scene_info){dup_str(path), sc.width, sc.height, sc.tri_count, sc.light_count};
     scene_fini(&sc);
   }
   return true;
@@ -625,33 +622,6 @@ static const char *workload_value(const struct priv *pv, const unsigned *choice,
     }
   *axis = UINT_MAX;
   return pv->wl[k] ? pv->wl[k]->text : NULL;
-}
-
-/* The point's structure (accel: its workload value, else its scene's key)
- * must be one policy pk traces: refused before anything runs, at the value
- * that chose it (axis ax, or UINT_MAX: workload.accel or the scene). */
-static bool check_accel(const struct priv *pv, const struct scene_info *si, const char *accel,
-                        unsigned ax, enum policy_kind pk, const char *point, struct err *e) {
-  int a = si->accel;
-  if (accel) CHECK(app_parse_accel(accel, &a));
-  if (policy_accel_supported(pk, a)) return true;
-  const char *file = pv->doc.file;
-  int line = 0, col = 0;
-  if (!accel) {
-    file = si->path;
-    line = si->accel_line;
-    col = si->accel_col;
-  } else {
-    const struct cfg_node *n = pv->wl[WL_ACCEL];
-    for (unsigned i = 0; ax != UINT_MAX && i < pv->axes[ax].node->count; i++)
-      if (!strcmp(pv->axes[ax].node->items[i].text, accel)) n = &pv->axes[ax].node->items[i];
-    line = n ? n->line : 0;
-    col = n ? n->col : 0;
-  }
-  return err_set(e, file, line, col,
-                 "accel: the %s policy traces the k-d tree only (got %s, expected kd, or policy "
-                 "recursive on a BVH) [point %s]",
-                 policy_name(pk), accel_names[a], point);
 }
 
 /* Point p's machine config check, its `rtsim run` arguments and its cost. */
@@ -694,7 +664,6 @@ static bool build_point(struct priv *pv, struct sweep_point *p, const unsigned *
   /* Sampling's own limits need the point's policy and image size. */
   enum policy_kind pk;
   CHECK(policy_parse(policy ? policy : "recursive", &pk));
-  if (!check_accel(pv, si, accel, ax, pk, p->name, e)) return false;
   char whybuf[512];
   const char *why =
       sample_problem(&c.sample, c.p.fidelity, pk, app_work_items(pk, (uint32_t)w, (uint32_t)h),

@@ -271,7 +271,8 @@ struct trace_packet {
    * triangles tested, direct mapped, each with the rays it was tested against. */
   uint32_t mb_prim[TRAV_MBOX * 2];
   uint64_t mb_rays[TRAV_MBOX * 2];
-  void *alloc; /* what to free */
+  struct bvh_packet *bvh; /* a BVH's packet scratch, made at its first use */
+  void *alloc;            /* what to free */
 };
 
 struct trace_packet *trace_packet_create(void) {
@@ -282,7 +283,9 @@ struct trace_packet *trace_packet_create(void) {
 }
 
 void trace_packet_destroy(struct trace_packet *pk) {
-  if (pk) free(pk->alloc);
+  if (!pk) return;
+  bvh_packet_destroy(pk->bvh);
+  free(pk->alloc);
 }
 
 static inline int pk_first(uint64_t m) { return __builtin_ctzll(m); }
@@ -437,7 +440,11 @@ static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk
                                    struct trace_hit *hits, bool *occ,
                                    struct trace_packet_cost *cost) {
   CHECK_LE(n, TRACE_PACKET_MAX);
-  CHECK(tr->bvh == NULL); /* packets trace the k-d tree only (policy_accel_supported) */
+  if (tr->bvh) {
+    if (!pk->bvh) pk->bvh = bvh_packet_create();
+    bvh_packet_traverse(tr, pk->bvh, rays, n, any_hit, hits, occ, cost);
+    return;
+  }
   const struct kd_tree *kd = tr->kd;
   uint64_t ign, found = 0;
   uint64_t live = pk_setup(tr, pk, rays, n, any_hit, hits, occ, &ign);

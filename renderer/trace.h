@@ -84,8 +84,8 @@ struct bvh;
 struct trace_ctx {
   const struct scene *scene;
   const struct kd_tree *kd;
-  /* The BVH to trace instead of kd (NULL: the k-d tree). trace_closest and
-   * trace_any take either; the packet queries the k-d tree only. */
+  /* The BVH to trace instead of kd (NULL: the k-d tree). Every query takes
+   * either. */
   const struct bvh *bvh;
   struct mem_port mem;
   struct trace_layout layout;
@@ -116,17 +116,19 @@ bool trace_closest(struct trace_ctx *tr, const struct ray *r, struct trace_hit *
 bool trace_any(struct trace_ctx *tr, const struct ray *r);
 
 /* Packet queries: up to TRACE_PACKET_MAX rays descend the tree together (the
- * classic packet k-d traversal). Each ray keeps its own interval, widened exactly
- * as in the single-ray queries, and a node is visited when any ray still needs
- * it; each ray's result is bit-identical to trace_closest / trace_any of that
- * ray alone. Memory: a node, a leaf index entry and a triangle record are loaded
- * once per packet visit; compute is announced once per step for all the rays it
- * covers (node_cycles or tri_cycles times the rays). tr->stats.node_visits
- * counts packet node visits, tr->stats.tri_tests ray/triangle tests. */
+ * classic packet k-d traversal; on a BVH, tr->bvh, its packet form). Each ray
+ * keeps its own interval, widened exactly as in the single-ray queries, and a
+ * node is visited when any ray still needs it; each ray's result is
+ * bit-identical to trace_closest / trace_any of that ray alone. Memory: a node,
+ * a leaf index entry and a triangle record are loaded once per packet visit;
+ * compute is announced once per step for all the rays it covers (node_cycles or
+ * tri_cycles times the rays). tr->stats.node_visits counts packet node visits,
+ * tr->stats.tri_tests ray/triangle tests. */
 #define TRACE_PACKET_MAX 64
 
-/* Scratch of packet queries (about 41 KB; on the heap so that kernels fit small
- * coroutine stacks). One per concurrent caller. */
+/* Scratch of packet queries (about 41 KB, and 120 KB more at the first BVH
+ * query; on the heap so that kernels fit small coroutine stacks). One per
+ * concurrent caller. */
 struct trace_packet;
 struct trace_packet *trace_packet_create(void);     /* fatal on allocation failure */
 void trace_packet_destroy(struct trace_packet *pk); /* NULL ok */

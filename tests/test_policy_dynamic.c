@@ -1,15 +1,15 @@
-/* The dynamic policy against the recursive one (the oracle): bit-identical
- * framebuffers and equal per-type ray counts on the small scenes, every ray
- * type, caches from 1 KB (leaf queue points, oversized leaves in blocks) to
- * 64 MB (the root alone: Whitted). Without shadow rays the closest-hit
- * traversals are the same ones cut at queue points, so the triangle tests and
- * the set of tested triangles are equal too. A counting memory port checks the
- * queue discipline: every ray stored into a queue slot is loaded back exactly
- * once before the slot is reused, table entries stay in the table, and the
- * generation buffers balance. */
+/* The dynamic policy against the recursive one (the oracle), on the k-d tree
+ * and on each BVH: bit-identical framebuffers and equal per-type ray counts on the small scenes,
+ * every ray type, caches from 1 KB (leaf queue points, oversized leaves in blocks) to 64 MB (the
+ * root alone: Whitted). Without shadow rays the closest-hit traversals are the same ones cut at
+ * queue points, so the triangle tests and the set of tested triangles are equal too. A counting
+ * memory port checks the queue discipline: every ray stored into a queue slot is loaded back
+ * exactly once before the slot is reused, table entries stay in the table, and the generation
+ * buffers balance. */
 #include <stdlib.h>
 #include <string.h>
 
+#include "renderer/bvh.h"
 #include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
 #include "renderer/policy/policy.h"
@@ -24,6 +24,7 @@
 struct world {
   struct scene s;
   struct kd_tree kd;
+  const struct bvh *bvh; /* traced instead of kd when not NULL */
 };
 
 static int load(struct world *w, const char *path) {
@@ -85,6 +86,7 @@ static void render_batch(struct world *w, enum policy_kind k, uint32_t mask, uin
   struct shade_ctx sc = {&w->s, mask, 7, 0};
   struct policy_setup ps;
   testing_policy_setup(&ps, &w->s, &w->kd, &sc, &res->fb);
+  ps.bvh = w->bvh;
   const struct trace_layout l = ps.layout;
   struct mem_port port = mem_port_native();
   if (cnt) {
@@ -118,23 +120,70 @@ static void result_fini(struct result *r) {
 /* The schedule's shape at a cache size (what the policy computes). */
 static void plan(const struct world *w, uint64_t cache, struct qpoint_set *qs,
                  struct qpoint_budget *b) {
-  uint32_t *tris = malloc(w->kd.node_count * sizeof *tris);
-  qpoint_subtree_tris(&w->kd, tris);
+  const uint32_t n = w->bvh ? qpoint_bvh_places(w->bvh) : w->kd.node_count;
+  uint32_t *tris = malloc(n * sizeof *tris);
+  if (w->bvh) qpoint_bvh_subtree_tris(w->bvh, tris);
+  else qpoint_subtree_tris(&w->kd, tris);
   struct policy_params pp;
   policy_params_default(&pp);
   struct qpoint_reserve r = {
       cache, pp.dyn_node_share, pp.dyn_table_share, pp.dyn_ray_share, pp.dyn_ray_buffer_bytes, 1};
-  qpoint_plan(qs, b, &w->kd, tris, 128, &r);
+  if (w->bvh) qpoint_bvh_plan(qs, b, w->bvh, tris, 128, &r);
+  else qpoint_plan(qs, b, &w->kd, tris, 128, &r);
   free(tris);
 }
 
-static void check_scene(const char *name) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, name);
+/* The treelet policy at a cache size against the recursive renders ref (all
+ * rays) and ref_ns (no shadow rays). */
+static void check_treelet(struct world *w, const char *name, uint32_t all, uint32_t noshadow,
+                          uint32_t size, uint64_t cache, const struct result *ref,
+                          const struct result *ref_ns) {
+  const unsigned kb = (unsigned)(cache / 1024);
+  const size_t fb_bytes = 3 * sizeof(int64_t) * size * size;
+  struct counter tc;
+  struct result tl;
+  memset(&tc, 0, sizeof tc);
+  render(w, POLICY_TREELET, all, size, cache, &tc, &tl);
+  EXPECTF(memcmp(tl.fb.acc, ref->fb.acc, fb_bytes) == 0,
+          "%s %u KB: treelet image differs from recursive", name, kb);
+  EXPECT(memcmp(tl.st.rays, ref->st.rays, sizeof ref->st.rays) == 0);
+  EXPECT(tl.st.spawned == ref->st.spawned && tl.st.terminated == ref->st.terminated);
+  EXPECTF(testing_slots_left(&tc.slots) == 0 && tc.slots.bad == 0 &&
+              tc.slots.loads == tc.slots.stores && tc.slots.stores >= ref->st.rays[RAY_PRIMARY],
+          "%s %u KB treelet: queue slots: %llu stores, %llu loads, %llu bad", name, kb,
+          (unsigned long long)tc.slots.stores, (unsigned long long)tc.slots.loads,
+          (unsigned long long)tc.slots.bad);
+  bool tonce = true;
+  for (uint64_t k = 0; k < tc.npix; k++) tonce &= tc.cam[k] == 1;
+  EXPECT(tonce && tc.other_ray == 0 && tc.table_bad == 0 && tc.class_bad == 0);
+  testing_slots_fini(&tc.slots);
+  free(tc.cam);
+  result_fini(&tl);
+  struct result tn;
+  render(w, POLICY_TREELET, noshadow, size, cache, NULL, &tn);
+  EXPECTF(memcmp(tn.fb.acc, ref_ns->fb.acc, fb_bytes) == 0 &&
+              tn.ts.tri_tests == ref_ns->ts.tri_tests &&
+              memcmp(tn.fb.cost_tris, ref_ns->fb.cost_tris, sizeof(uint32_t) * size * size) == 0,
+          "%s %u KB treelet (no shadows): %llu triangle tests, recursive %llu", name, kb,
+          (unsigned long long)tn.ts.tri_tests, (unsigned long long)ref_ns->ts.tri_tests);
+  result_fini(&tn);
+}
+
+/* The checks on scene `scene` traced through structure accel (enum accel_kind). */
+static void check_scene(const char *scene, int accel) {
+  char path[1024], name[64];
+  snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, scene);
+  snprintf(name, sizeof name, "%s %s", scene, accel_names[accel]);
   struct world w;
   if (!load(&w, path)) {
     EXPECTF(0, "cannot load %s", path);
     return;
+  }
+  struct bvh bvh;
+  w.bvh = NULL;
+  if (accel != ACCEL_KD) {
+    bvh_build(&bvh, &w.s, (enum accel_kind)accel);
+    w.bvh = &bvh;
   }
   const uint32_t all =
       RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) | RAY_MASK(RAY_DIFFUSE);
@@ -153,16 +202,18 @@ static void check_scene(const char *name) {
     struct qpoint_budget b;
     plan(&w, caches[c], &qs, &b);
     if (caches[c] == 1024) {
-      /* Queue points down at the leaves, some leaves over g_max (blocked). */
+      /* Queue points down at the leaves, some k-d leaves over g_max
+       * (blocked; a BVH leaf holds 3 triangles at most: none). */
       uint32_t leaves = 0, oversized = 0;
       for (uint32_t k = 0; k < qs.count; k++) {
-        struct kd_node nd = qs.nodes[qs.qnode[k]];
-        if (!kd_is_leaf(nd)) continue;
+        uint32_t first, cnt;
+        if (!qpoint_leaf(&qs, qs.qnode[k], &first, &cnt)) continue;
         leaves++;
-        oversized += (uint64_t)kd_leaf_count(nd) * 128 > b.gmax_bytes;
+        oversized += (uint64_t)cnt * 128 > b.gmax_bytes;
       }
-      EXPECTF(leaves > 0 && oversized > 0, "%s 1 KB: %u queue points, %u leaves, %u oversized",
-              name, qs.count, leaves, oversized);
+      EXPECTF(leaves > 0 && (oversized > 0) == (accel == ACCEL_KD),
+              "%s 1 KB: %u queue points, %u leaves, %u oversized", name, qs.count, leaves,
+              oversized);
     }
     if (caches[c] == 64u << 20)
       EXPECTF(qs.count == 1 && qs.qnode[0] == 0, "%s 64 MB: %u queue points", name, qs.count);
@@ -228,33 +279,7 @@ static void check_scene(const char *name) {
     /* Treelet queues (the same machinery, a ray queued again at every treelet
      * it enters): the same picture, rays and triangle tests as recursive, the
      * same queue discipline, each camera ray read once. */
-    struct counter tc;
-    struct result tl;
-    memset(&tc, 0, sizeof tc);
-    render(&w, POLICY_TREELET, all, size, caches[c], &tc, &tl);
-    EXPECTF(memcmp(tl.fb.acc, ref.fb.acc, fb_bytes) == 0,
-            "%s %u KB: treelet image differs from recursive", name, kb);
-    EXPECT(memcmp(tl.st.rays, ref.st.rays, sizeof ref.st.rays) == 0);
-    EXPECT(tl.st.spawned == ref.st.spawned && tl.st.terminated == ref.st.terminated);
-    EXPECTF(testing_slots_left(&tc.slots) == 0 && tc.slots.bad == 0 &&
-                tc.slots.loads == tc.slots.stores && tc.slots.stores >= ref.st.rays[RAY_PRIMARY],
-            "%s %u KB treelet: queue slots: %llu stores, %llu loads, %llu bad", name, kb,
-            (unsigned long long)tc.slots.stores, (unsigned long long)tc.slots.loads,
-            (unsigned long long)tc.slots.bad);
-    bool tonce = true;
-    for (uint64_t k = 0; k < tc.npix; k++) tonce &= tc.cam[k] == 1;
-    EXPECT(tonce && tc.other_ray == 0 && tc.table_bad == 0 && tc.class_bad == 0);
-    testing_slots_fini(&tc.slots);
-    free(tc.cam);
-    result_fini(&tl);
-    struct result tn;
-    render(&w, POLICY_TREELET, noshadow, size, caches[c], NULL, &tn);
-    EXPECTF(memcmp(tn.fb.acc, ref_ns.fb.acc, fb_bytes) == 0 &&
-                tn.ts.tri_tests == ref_ns.ts.tri_tests &&
-                memcmp(tn.fb.cost_tris, ref_ns.fb.cost_tris, sizeof(uint32_t) * size * size) == 0,
-            "%s %u KB treelet (no shadows): %llu triangle tests, recursive %llu", name, kb,
-            (unsigned long long)tn.ts.tri_tests, (unsigned long long)ref_ns.ts.tri_tests);
-    result_fini(&tn);
+    check_treelet(&w, name, all, noshadow, size, caches[c], &ref, &ref_ns);
 
     /* No shadow rays: the very same closest-hit work as recursive. */
     struct result dn;
@@ -281,13 +306,14 @@ static void check_scene(const char *name) {
   EXPECT(a.ts.node_visits == b2.ts.node_visits && a.ts.tri_tests == b2.ts.tri_tests);
   result_fini(&a);
   result_fini(&b2);
+  if (w.bvh) bvh_fini(&bvh);
   kd_fini(&w.kd);
   scene_fini(&w.s);
 }
 
 int main(void) {
-  check_scene("sphereflake");
-  check_scene("grove");
-  check_scene("room");
+  static const char *const scenes[] = {"sphereflake", "grove", "room"};
+  for (int a = ACCEL_KD; a < ACCEL_COUNT; a++)
+    for (int k = 0; k < 3; k++) check_scene(scenes[k], a);
   return testing_done("test_policy_dynamic");
 }

@@ -1,13 +1,15 @@
-/* The packet policy and packet traversal. Oracles: single-ray traversal (each
- * ray of a packet must get bit for bit the hit trace_closest / trace_any gives
- * it alone), the recursive policy (same framebuffer, same ray counts), and a
- * counting memory port (coherent primary packets load fewer triangle records;
- * every ray written to a packet buffer is read back once). */
+/* The packet policy and packet traversal, on the k-d tree and on each BVH.
+ * Oracles: single-ray traversal (each ray of a packet must get bit for bit
+ * the hit trace_closest / trace_any gives it alone), the recursive policy
+ * (same framebuffer, same ray counts), and a counting memory port (coherent
+ * primary packets load fewer triangle records; every ray written to a packet
+ * buffer is read back once). */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "renderer/bvh.h"
 #include "renderer/camera.h"
 #include "renderer/framebuffer.h"
 #include "renderer/kdtree.h"
@@ -25,15 +27,17 @@
   (RAY_MASK(RAY_PRIMARY) | RAY_MASK(RAY_SHADOW) | RAY_MASK(RAY_SPECULAR) | RAY_MASK(RAY_DIFFUSE))
 
 struct world {
-  const char *name;
+  const char *name; /* the scene and the structure traced */
   struct scene s;
   struct kd_tree kd;
+  const struct bvh *bvh; /* traced instead of kd when not NULL */
 };
 
 static int load(struct world *w, const char *name) {
   char path[1024];
   snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, name);
   w->name = name;
+  w->bvh = NULL;
   return testing_load_world(&w->s, &w->kd, path);
 }
 
@@ -155,6 +159,7 @@ static void test_traversal(struct world *w) {
   struct mem_port port = {&COUNT_OPS, &cnt};
   struct trace_ctx tr;
   trace_init(&tr, &w->s, &w->kd, port, NULL);
+  tr.bvh = w->bvh;
   struct trace_packet *pk = trace_packet_create();
   struct ray *set = xmalloc(SET_MAX * sizeof *set);
   struct cmp_stats cs;
@@ -312,6 +317,7 @@ static void render(struct world *w, enum policy_kind k, uint32_t mask, uint32_t 
   fb_init(&out->fb, width, height, l.fb_base);
   struct policy_setup ps;
   testing_policy_setup(&ps, &w->s, &w->kd, &sc, &out->fb);
+  ps.bvh = w->bvh;
   struct policy_params pp;
   policy_params_default(&pp);
   policy_run(k, &ps, &pp, port, &out->st, &out->ts);
@@ -396,6 +402,23 @@ int main(void) {
     test_policy(&w, 48, 48);
     test_policy(&w, 37, 21);
     test_coherence(&w);
+    /* The same on each BVH. */
+    const char *scene = w.name;
+    for (int a = ACCEL_BVH2; a <= ACCEL_BVH8; a++) {
+      struct bvh b;
+      bvh_build(&b, &w.s, (enum accel_kind)a);
+      char name[64];
+      snprintf(name, sizeof name, "%s %s", scene, accel_names[a]);
+      w.name = name;
+      w.bvh = &b;
+      test_traversal(&w);
+      test_policy(&w, 48, 48);
+      test_policy(&w, 37, 21);
+      test_coherence(&w);
+      w.bvh = NULL;
+      w.name = scene;
+      bvh_fini(&b);
+    }
     kd_fini(&w.kd);
     scene_fini(&w.s);
   }

@@ -134,6 +134,39 @@ static void test_packet(void) {
           "packet: the full run's cycles %g outside the sampled interval", c);
 }
 
+/* Sampling on each BVH, single rays and packets (256 x 256 of the tiny
+ * room: enough tiles for packet's units): every item traced, so the image,
+ * the rays and the issue slots are the full run's exactly. */
+static void test_bvh(void) {
+  char out[8192], cmd[4096], dir[2][512];
+  static const char *const accel[] = {"bvh2", "bvh8"}, *const policy[] = {"recursive", "packet"};
+  for (int a = 0; a < 2; a++)
+    for (int p = 0; p < 2; p++) {
+      for (int s = 0; s < 2; s++) {
+        snprintf(dir[s], sizeof dir[s], "%s/smp_%s_%s_%d", RTSIM_TMP, accel[a], policy[p], s);
+        snprintf(cmd, sizeof cmd,
+                 "%s run %s/configs/tiny.yaml %s/scenes/good_room_tiny_%s.yaml --width 256 "
+                 "--height 256 --policy %s --rays primary,shadow,diffuse %s -o %s",
+                 RTSIM_BINARY, RTSIM_SOURCE_DIR, RTSIM_TEST_DATA, accel[a], policy[p],
+                 s ? "--set sample.fraction=0.5" : "", dir[s]);
+        const int rc = testing_run(cmd, out, sizeof out);
+        EXPECTF(rc == 0, "%s %s %s: exit %d: %s", accel[a], policy[p], s ? "sampled" : "full", rc,
+                out);
+      }
+      char x[600], y[600];
+      snprintf(x, sizeof x, "%s/image.exr", dir[0]);
+      snprintf(y, sizeof y, "%s/image.exr", dir[1]);
+      EXPECTF(testing_same_rgb(x, y), "%s %s: the sampled run's image differs", accel[a],
+              policy[p]);
+      const char *exact[] = {"rays_traced", "issue_slots"};
+      for (size_t k = 0; k < 2; k++)
+        EXPECTF(testing_json_num(dir[0], exact[k]) == testing_json_num(dir[1], exact[k]),
+                "%s %s: %s %g sampled, %g full", accel[a], policy[p], exact[k],
+                testing_json_num(dir[1], exact[k]), testing_json_num(dir[0], exact[k]));
+      EXPECT(testing_json_num(dir[1], "sample_units_measured") >= 8);
+    }
+}
+
 /* An issue-bound run (every core busy every cycle): the raw estimate of the
  * cycles falls below the issue slots over the cores and its interval's top
  * of the core utilization above 1 (measured: the unclamped estimate 0.3%
@@ -321,6 +354,7 @@ int main(void) {
   test_against_full();
   test_seeds();
   test_packet();
+  test_bvh();
   test_clamped();
   test_sampled_image();
   test_refusals();

@@ -133,15 +133,10 @@ bool policy_workers_supported(enum policy_kind k, uint32_t workers) {
   return (uint64_t)workers * m->region_bytes <= 1ull << TRACE_REGION_SHIFT;
 }
 
-bool policy_accel_supported(enum policy_kind k, int a) {
-  return a == ACCEL_KD || k == POLICY_RECURSIVE;
-}
-
 struct policy_job *policy_job_create(enum policy_kind k, const struct policy_setup *s,
                                      const struct policy_params *p, uint32_t workers,
                                      uint32_t cores) {
   CHECK(policy_workers_supported(k, workers));
-  CHECK(policy_accel_supported(k, s->bvh ? (int)s->bvh->kind : ACCEL_KD));
   CHECK_GE(cores, 1);
   CHECK_EQ(s->sc->scene, s->scene);
   CHECK(!s->item || !policy_queues(k));

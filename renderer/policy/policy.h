@@ -114,13 +114,14 @@ struct qpoint_set;
 struct qpoint_budget;
 
 /* The dynamic policy's queue points for a job of `workers` workers on `cores`
- * cores (the rules above): qpoint_plan's selection (qs, caller finishes it
- * with qpoint_fini) and budget (b), the triangles of an oversized leaf's block
- * (*block_tris, at least 1) and the rays a worker streams against a block at
- * once (*group, at least 1). */
+ * cores (the rules above) on bvh if not NULL, else on kd: qpoint_plan's
+ * selection (qs, caller finishes it with qpoint_fini) and budget (b), the
+ * triangles of an oversized leaf's block (*block_tris, at least 1) and the
+ * rays a worker streams against a block at once (*group, at least 1). */
 void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32_t cores,
-                         const struct kd_tree *kd, uint32_t tri_bytes, struct qpoint_set *qs,
-                         struct qpoint_budget *b, uint32_t *block_tris, uint32_t *group);
+                         const struct kd_tree *kd, const struct bvh *bvh, uint32_t tri_bytes,
+                         struct qpoint_set *qs, struct qpoint_budget *b, uint32_t *block_tris,
+                         uint32_t *group);
 
 /* What every worker of one render shares, read-only during the render except
  * for the framebuffer (contributions are sums, so their order does not
@@ -129,8 +130,8 @@ void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32
 struct policy_setup {
   const struct scene *scene;
   const struct kd_tree *kd;
-  /* The BVH traced instead of kd (NULL: the k-d tree); policy k must pass
-   * policy_accel_supported (policy_job_create CHECKs). */
+  /* The BVH traced instead of kd (NULL: the k-d tree); every policy traces
+   * either. */
   const struct bvh *bvh;
   struct trace_layout layout; /* simulated addresses of every region */
   const struct shade_ctx *sc;
@@ -167,8 +168,9 @@ struct policy_setup {
   void (*attribute)(void *ctx, uint32_t worker, const uint32_t *pixels, uint32_t n);
   void *attribute_ctx;
   /* Optional (NULL: the dynamic policy counts them itself): qpoint_subtree_tris
-   * of kd, for a caller that runs the dynamic policy many times over one tree
-   * (rtsim traffic, once per cache size) to count once. */
+   * of kd (with a BVH, qpoint_bvh_subtree_tris of it), for a caller that runs
+   * the dynamic policy many times over one tree (rtsim traffic, once per cache
+   * size) to count once. */
   const uint32_t *subtree_tris;
 };
 
@@ -196,8 +198,7 @@ struct policy_worker {
 
 /* Create a render of policy k for up to `workers` workers on `cores` cores.
  * s and p are copied (what s points to is borrowed). CHECKs
- * policy_workers_supported(k, workers), policy_accel_supported(k, the
- * setup's structure) and cores >= 1. Caller destroys. */
+ * policy_workers_supported(k, workers) and cores >= 1. Caller destroys. */
 struct policy_job *policy_job_create(enum policy_kind k, const struct policy_setup *s,
                                      const struct policy_params *p, uint32_t workers,
                                      uint32_t cores);
@@ -206,11 +207,6 @@ struct policy_job *policy_job_create(enum policy_kind k, const struct policy_set
  * with any number whose ray regions fit the ray region of the layout; dynamic
  * with any (its rays wait in the shared queues). */
 bool policy_workers_supported(enum policy_kind k, uint32_t workers);
-
-/* Whether policy k traces acceleration structure a (enum accel_kind):
- * recursive every structure; packet, dynamic and treelet the k-d tree only
- * (their packet, queue-point and treelet kernels walk k-d nodes). */
-bool policy_accel_supported(enum policy_kind k, int a);
 
 /* Bytes of the memory image one worker's rays occupy (its ray stack or packet
  * buffers at their bound): worker i's region starts at ray_base + i x this.

@@ -62,9 +62,10 @@ static enum qwalk_end dyn_leave(const void *ctx, const struct qwalk_tree *t, str
 static const struct qsched_route dyn_route = {dyn_queue, dyn_start, dyn_run, dyn_leave};
 
 void policy_dynamic_plan(const struct policy_params *p, uint32_t workers, uint32_t cores,
-                         const struct kd_tree *kd, uint32_t tri_bytes, struct qpoint_set *qs,
-                         struct qpoint_budget *b, uint32_t *block_tris, uint32_t *group) {
-  qplan_make(p, workers, cores, kd, NULL, tri_bytes, qs, b, block_tris, group);
+                         const struct kd_tree *kd, const struct bvh *bvh, uint32_t tri_bytes,
+                         struct qpoint_set *qs, struct qpoint_budget *b, uint32_t *block_tris,
+                         uint32_t *group) {
+  qplan_make(p, workers, cores, kd, bvh, NULL, tri_bytes, qs, b, block_tris, group);
 }
 
 static void dyn_create(struct policy_job *job) {

@@ -8,6 +8,7 @@
 
 #include <stdlib.h>
 
+#include "renderer/bvh.h"
 #include "renderer/kdtree.h"
 #include "renderer/policy/policy.h"
 #include "renderer/policy/qplan.h"
@@ -49,9 +50,8 @@ static enum qwalk_end tl_run(const void *ctx, const struct qwalk_tree *t, struct
 static enum qwalk_end tl_leave(const void *ctx, const struct qwalk_tree *t, struct trace_ctx *tr,
                                struct qwalk *w) {
   (void)ctx;
-  (void)t;
   (void)tr;
-  return qwalk_leave_treelet(w);
+  return qwalk_leave_treelet(t, w);
 }
 
 static const struct qsched_route tl_route = {tl_queue, tl_start, tl_run, tl_leave};
@@ -61,19 +61,24 @@ static const struct qsched_route tl_route = {tl_queue, tl_start, tl_run, tl_leav
  * once), nodes and triangles counted (treelet.h), and each treelet's root a
  * queue point. Queue i is the treelet of the i-th root in node order, so the
  * drains see an ordinary selection. */
-static void tl_select(struct tl *p, const struct kd_tree *kd, uint32_t tri_bytes,
-                      uint64_t gmax_bytes) {
+static void tl_select(struct tl *p, const struct kd_tree *kd, const struct bvh *bvh,
+                      uint32_t tri_bytes, uint64_t gmax_bytes) {
   struct treelet_set ts;
-  treelet_build(&ts, kd, tri_bytes, gmax_bytes);
-  const uint32_t n = kd->node_count;
+  if (bvh) {
+    qpoint_bvh_tree(&p->qs, bvh);
+    treelet_bvh_build(&ts, bvh, p->qs.leaf_count, tri_bytes, gmax_bytes);
+  } else {
+    treelet_build(&ts, kd, tri_bytes, gmax_bytes);
+    p->qs.nodes = kd->nodes;
+  }
+  const uint32_t n = ts.node_count;
   p->qs.node_count = n;
   p->qs.gmax_bytes = gmax_bytes;
-  p->qs.nodes = kd->nodes;
   p->qs.mark = qpoint_mark_new(n);
   p->qs.qnode = xmalloc((uint64_t)ts.count * sizeof *p->qs.qnode + 1);
   uint32_t *qi_of_treelet = xmalloc((uint64_t)ts.count * sizeof *qi_of_treelet + 1);
   for (uint32_t i = 0; i < n; i++) {
-    if (ts.root[ts.of[i]] == i) {
+    if (ts.of[i] != TREELET_NONE && ts.root[ts.of[i]] == i) {
       qpoint_mark(p->qs.mark, i);
       qi_of_treelet[ts.of[i]] = p->qs.count;
       p->qs.qnode[p->qs.count++] = i;
@@ -82,7 +87,8 @@ static void tl_select(struct tl *p, const struct kd_tree *kd, uint32_t tri_bytes
   CHECK_EQ(p->qs.count, ts.count);
   /* The treelet of every node becomes its queue, in place: a second array
    * of a word a node would be the run's peak on a large tree. */
-  for (uint32_t i = 0; i < n; i++) ts.of[i] = qi_of_treelet[ts.of[i]];
+  for (uint32_t i = 0; i < n; i++)
+    if (ts.of[i] != TREELET_NONE) ts.of[i] = qi_of_treelet[ts.of[i]];
   p->of = ts.of;
   ts.of = NULL;
   free(qi_of_treelet);
@@ -96,7 +102,7 @@ static void tl_create(struct policy_job *job) {
   uint32_t block_tris, group;
   qplan_job(job, &p->qs, &bud, &block_tris, &group);
   qpoint_fini(&p->qs);
-  tl_select(p, job->setup.kd, job->setup.layout.tri_bytes, bud.gmax_bytes);
+  tl_select(p, job->setup.kd, job->setup.bvh, job->setup.layout.tri_bytes, bud.gmax_bytes);
   p->q = qsched_create(job, &p->qs, block_tris, group, &tl_route, p);
   job->shared = p;
 }

@@ -4,6 +4,7 @@
 
 #include <stdlib.h>
 
+#include "renderer/bvh.h"
 #include "renderer/kdtree.h"
 #include "renderer/policy/qpoint.h"
 #include "renderer/trace.h"
@@ -79,21 +80,23 @@ static void attribute_begin(const struct qdrain_set *ds, const struct qdrain *dr
 /* The shared work is done: its cost is split now (the worker may park next). */
 static void attribute_end(struct trace_ctx *tr) { trace_attribute(tr, NULL, 0); }
 
-/* Load (announce) entries [j0, j1) of a leaf's geometry, as the paper does on
- * opening a queue at a leaf: it will all be tested. */
-static void preload_leaf(struct trace_ctx *tr, struct kd_node nd, uint32_t j0, uint32_t j1) {
-  uint32_t off = kd_leaf_offset(nd);
+/* Load (announce) entries [j0, j1) of a leaf's geometry (its entries from
+ * off), as the paper does on opening a queue at a leaf: it will all be
+ * tested. */
+static void preload_leaf(struct trace_ctx *tr, uint32_t off, uint32_t j0, uint32_t j1) {
+  const uint32_t *prims = tr->bvh ? tr->bvh->prims : tr->kd->prims;
   for (uint32_t j = j0; j < j1; j++) {
-    uint32_t p = trav_leaf_prim(tr, off + j);
+    mem_load(&tr->mem, tr->layout.prim_idx_base + 4ull * (off + j), 4, TRACE_CLASS_NODE);
+    const uint32_t p = prims[off + j];
     mem_load(&tr->mem, tr->layout.tri_base + (uint64_t)tr->layout.tri_bytes * p,
              tr->layout.tri_bytes, TRACE_CLASS_GEOMETRY);
   }
 }
 
-/* Entries [*j0, *j1) of leaf nd that pass `block` tests. */
-static void block_range(const struct qdrain_set *ds, struct kd_node nd, uint32_t block,
-                        uint32_t *j0, uint32_t *j1) {
-  const uint32_t cnt = kd_leaf_count(nd), bt = ds->block_tris;
+/* Entries [*j0, *j1) of a leaf of cnt triangles that pass `block` tests. */
+static void block_range(const struct qdrain_set *ds, uint32_t cnt, uint32_t block, uint32_t *j0,
+                        uint32_t *j1) {
+  const uint32_t bt = ds->block_tris;
   *j0 = block * bt;
   *j1 = cnt - *j0 > bt ? *j0 + bt : cnt;
 }
@@ -174,18 +177,18 @@ static void take(struct qdrain_set *ds, uint32_t core, struct trace_ctx *tr,
   dr->qi = qi;
   dr->node = ds->qs->qnode[qi];
   dr->take_seq++;
-  const struct kd_node nd = ds->qs->nodes[dr->node];
-  const uint32_t cnt = kd_is_leaf(nd) ? kd_leaf_count(nd) : 0;
+  uint32_t off = 0, cnt = 0;
+  const bool leaf = qpoint_leaf(ds->qs, dr->node, &off, &cnt);
   dr->blocks = cnt == 0 ? 1 : (cnt + ds->block_tris - 1) / ds->block_tris;
   pass_begin(ds, dr, 0);
   ds->open++;
   core_join(ds, core, core);
   attribute_begin(ds, dr, tr, cl);
   qstore_touch(ds->st, &tr->mem, qi);
-  if (kd_is_leaf(nd)) {
+  if (leaf) {
     uint32_t j0, j1;
-    block_range(ds, nd, 0, &j0, &j1);
-    preload_leaf(tr, nd, j0, j1);
+    block_range(ds, cnt, 0, &j0, &j1);
+    preload_leaf(tr, off, j0, j1);
   }
   attribute_end(tr);
 }
@@ -195,11 +198,11 @@ static void take(struct qdrain_set *ds, uint32_t core, struct trace_ctx *tr,
 static void next_pass(struct qdrain_set *ds, struct qdrain *dr, struct trace_ctx *tr,
                       struct qdrain_claim *cl) {
   pass_begin(ds, dr, dr->block + 1);
-  const struct kd_node nd = ds->qs->nodes[dr->node];
-  uint32_t j0, j1;
-  block_range(ds, nd, dr->block, &j0, &j1);
+  uint32_t off, cnt, j0, j1;
+  CHECK(qpoint_leaf(ds->qs, dr->node, &off, &cnt));
+  block_range(ds, cnt, dr->block, &j0, &j1);
   attribute_begin(ds, dr, tr, cl);
-  preload_leaf(tr, nd, j0, j1);
+  preload_leaf(tr, off, j0, j1);
   attribute_end(tr);
 }
 
@@ -215,14 +218,14 @@ static void release(struct qdrain_set *ds, struct qdrain *dr) {
 /* Hand the next rays of drain dr's pass to cl: a group at a leaf (loaded,
  * tested and stored back together), one ray at an interior queue point. */
 static void claim(struct qdrain_set *ds, struct qdrain *dr, struct qdrain_claim *cl) {
-  const struct kd_node nd = ds->qs->nodes[dr->node];
+  uint32_t off, cnt;
   cl->drain = (uint32_t)(dr - ds->drain);
   cl->seq = dr->seq;
   cl->node = dr->node;
-  cl->leaf = kd_is_leaf(nd);
+  cl->leaf = qpoint_leaf(ds->qs, dr->node, &off, &cnt);
   cl->last = pass_last(dr);
   cl->j0 = cl->j1 = 0;
-  if (cl->leaf) block_range(ds, nd, dr->block, &cl->j0, &cl->j1);
+  if (cl->leaf) block_range(ds, cnt, dr->block, &cl->j0, &cl->j1);
   const uint32_t n = cl->leaf ? ds->group : 1;
   for (cl->n = 0; cl->n < n && dr->k.left > 0; qstore_cur_next(ds->st, &dr->k, cl->last)) {
     if (cl->last) qstore_chunk_hold(ds->st, dr->k.c);
@@ -282,7 +285,8 @@ bool qdrain_claim_done(struct qdrain_set *ds, const struct qdrain_claim *cl) {
 uint64_t qdrain_claims_left(struct qdrain_set *ds, uint32_t core) {
   const struct qdrain *dr = core_drain(ds, core);
   if (!dr) return 0;
-  if (!kd_is_leaf(ds->qs->nodes[dr->node])) return dr->k.left;
+  uint32_t off, cnt;
+  if (!qpoint_leaf(ds->qs, dr->node, &off, &cnt)) return dr->k.left;
   return (dr->k.left + ds->group - 1) / ds->group;
 }
 

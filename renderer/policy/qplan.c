@@ -17,17 +17,19 @@ static uint32_t clamp_u32(uint64_t v) {
 }
 
 void qplan_make(const struct policy_params *p, uint32_t workers, uint32_t cores,
-                const struct kd_tree *kd, const uint32_t *tris, uint32_t tri_bytes,
-                struct qpoint_set *qs, struct qpoint_budget *b, uint32_t *block_tris,
-                uint32_t *group) {
+                const struct kd_tree *kd, const struct bvh *bvh, const uint32_t *tris,
+                uint32_t tri_bytes, struct qpoint_set *qs, struct qpoint_budget *b,
+                uint32_t *block_tris, uint32_t *group) {
   CHECK_GE(workers, 1);
   CHECK_GE(cores, 1);
   CHECK_LE(cores, workers);
   CHECK_GT(tri_bytes, 0);
   uint32_t *counted = NULL;
   if (!tris) {
-    counted = xmalloc((uint64_t)kd->node_count * sizeof *counted + 1);
-    qpoint_subtree_tris(kd, counted);
+    const uint32_t n = bvh ? qpoint_bvh_places(bvh) : kd->node_count;
+    counted = xmalloc((uint64_t)n * sizeof *counted + 1);
+    if (bvh) qpoint_bvh_subtree_tris(bvh, counted);
+    else qpoint_subtree_tris(kd, counted);
     tris = counted;
   }
   const uint64_t rays =
@@ -36,7 +38,8 @@ void qplan_make(const struct policy_params *p, uint32_t workers, uint32_t cores,
   const uint32_t holders = p->dyn_sharing == POLICY_DYN_CHIP ? 1 : cores;
   struct qpoint_reserve res = {
       p->cache_bytes, p->dyn_node_share, p->dyn_table_share, p->dyn_ray_share, rays, holders};
-  qpoint_plan(qs, b, kd, tris, tri_bytes, &res);
+  if (bvh) qpoint_bvh_plan(qs, b, bvh, tris, tri_bytes, &res);
+  else qpoint_plan(qs, b, kd, tris, tri_bytes, &res);
   *block_tris = clamp_u32(b->gmax_bytes / tri_bytes);
   *group = clamp_u32(b->ray_bytes / sizeof(struct ray) / workers);
   free(counted);
@@ -45,6 +48,6 @@ void qplan_make(const struct policy_params *p, uint32_t workers, uint32_t cores,
 void qplan_job(const struct policy_job *job, struct qpoint_set *qs, struct qpoint_budget *b,
                uint32_t *block_tris, uint32_t *group) {
   const struct policy_setup *s = &job->setup;
-  qplan_make(&job->params, job->workers, job->cores, s->kd, s->subtree_tris, s->layout.tri_bytes,
-             qs, b, block_tris, group);
+  qplan_make(&job->params, job->workers, job->cores, s->kd, s->bvh, s->subtree_tris,
+             s->layout.tri_bytes, qs, b, block_tris, group);
 }

@@ -9,6 +9,7 @@
 
 #include <stdint.h>
 
+struct bvh;
 struct kd_tree;
 struct policy_job;
 struct policy_params;
@@ -16,12 +17,13 @@ struct qpoint_budget;
 struct qpoint_set;
 
 /* policy_dynamic_plan: the queue points and budget for the cache and the
- * machine, with the subtree triangle counts given (tris, qpoint_subtree_tris
- * of kd) or counted here (tris NULL). */
+ * machine, on bvh if not NULL (its places, qpoint.h) or else on kd, with the
+ * subtree triangle counts given (tris, qpoint_subtree_tris of kd or
+ * qpoint_bvh_subtree_tris of bvh) or counted here (tris NULL). */
 void qplan_make(const struct policy_params *p, uint32_t workers, uint32_t cores,
-                const struct kd_tree *kd, const uint32_t *tris, uint32_t tri_bytes,
-                struct qpoint_set *qs, struct qpoint_budget *b, uint32_t *block_tris,
-                uint32_t *group);
+                const struct kd_tree *kd, const struct bvh *bvh, const uint32_t *tris,
+                uint32_t tri_bytes, struct qpoint_set *qs, struct qpoint_budget *b,
+                uint32_t *block_tris, uint32_t *group);
 
 /* qplan_make for a job: its parameters, machine and setup. */
 void qplan_job(const struct policy_job *job, struct qpoint_set *qs, struct qpoint_budget *b,

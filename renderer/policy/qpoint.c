@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "renderer/bvh.h"
 #include "renderer/kdtree.h"
 #include "sim/err.h"
 
@@ -119,22 +120,55 @@ static uint64_t gmax_of(const struct qpoint_reserve *r, struct qpoint_budget *b)
   return b->gmax_bytes;
 }
 
-void qpoint_plan(struct qpoint_set *qs, struct qpoint_budget *b, const struct kd_tree *kd,
-                 const uint32_t *tris, uint32_t tri_bytes, const struct qpoint_reserve *r) {
-  b->node_bytes = min_u64(8ull * kd->node_count, share(r->cache_bytes, r->node_share));
+/* The plan's shape, the structure's selection given: select(ctx, qs, gmax)
+ * makes a selection for a bound, node_bytes is the structure's. */
+typedef void (*select_fn)(const void *ctx, struct qpoint_set *qs, uint64_t gmax_bytes);
+
+static void plan(struct qpoint_set *qs, struct qpoint_budget *b, uint64_t node_bytes,
+                 const struct qpoint_reserve *r, select_fn select, const void *ctx) {
+  b->node_bytes = min_u64(node_bytes, share(r->cache_bytes, r->node_share));
   b->ray_bytes = min_u64(r->ray_buffer_bytes, share(r->cache_bytes, r->ray_share));
   b->table_bytes = share(r->cache_bytes, r->table_share);
-  qpoint_select(qs, kd, tris, tri_bytes, gmax_of(r, b));
+  select(ctx, qs, gmax_of(r, b));
   if (8ull * qs->count < b->table_bytes) {
     b->table_bytes = 8ull * qs->count;
     uint64_t old = qs->gmax_bytes;
     if (gmax_of(r, b) != old) {
       uint32_t before = qs->count;
       qpoint_fini(qs);
-      qpoint_select(qs, kd, tris, tri_bytes, b->gmax_bytes);
+      select(ctx, qs, b->gmax_bytes);
       CHECK_LE(qs->count, before);
     }
   }
+}
+
+struct select_args {
+  const struct kd_tree *kd;
+  const struct bvh *bvh;
+  const uint32_t *tris;
+  uint32_t tri_bytes;
+};
+
+static void select_kd(const void *ctx, struct qpoint_set *qs, uint64_t gmax_bytes) {
+  const struct select_args *a = ctx;
+  qpoint_select(qs, a->kd, a->tris, a->tri_bytes, gmax_bytes);
+}
+
+static void select_bvh(const void *ctx, struct qpoint_set *qs, uint64_t gmax_bytes) {
+  const struct select_args *a = ctx;
+  qpoint_bvh_select(qs, a->bvh, a->tris, a->tri_bytes, gmax_bytes);
+}
+
+void qpoint_plan(struct qpoint_set *qs, struct qpoint_budget *b, const struct kd_tree *kd,
+                 const uint32_t *tris, uint32_t tri_bytes, const struct qpoint_reserve *r) {
+  const struct select_args a = {kd, NULL, tris, tri_bytes};
+  plan(qs, b, 8ull * kd->node_count, r, select_kd, &a);
+}
+
+void qpoint_bvh_plan(struct qpoint_set *qs, struct qpoint_budget *b, const struct bvh *bvh,
+                     const uint32_t *tris, uint32_t tri_bytes, const struct qpoint_reserve *r) {
+  const struct select_args a = {NULL, bvh, tris, tri_bytes};
+  plan(qs, b, bvh->stats.node_bytes, r, select_bvh, &a);
 }
 
 int64_t qpoint_index(const struct qpoint_set *qs, uint32_t n) {
@@ -147,9 +181,27 @@ int64_t qpoint_index(const struct qpoint_set *qs, uint32_t n) {
   return lo < qs->count && qs->qnode[lo] == n ? (int64_t)lo : -1;
 }
 
+bool qpoint_leaf(const struct qpoint_set *qs, uint32_t n, uint32_t *first, uint32_t *count) {
+  CHECK_LT(n, qs->node_count);
+  if (qs->bvh) {
+    const uint32_t nodes = qs->node_count - qs->bvh->prim_count;
+    if (n < nodes) return false;
+    *first = n - nodes;
+    *count = qs->leaf_count[*first];
+    return true;
+  }
+  const struct kd_node nd = qs->nodes[n];
+  if (!kd_is_leaf(nd)) return false;
+  *first = kd_leaf_offset(nd);
+  *count = kd_leaf_count(nd);
+  return true;
+}
+
 void qpoint_fini(struct qpoint_set *qs) {
   if (!qs) return;
   free(qs->mark);
   free(qs->qnode);
+  free(qs->parent);
+  free(qs->leaf_count);
   memset(qs, 0, sizeof *qs);
 }

@@ -11,6 +11,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+struct bvh;
 struct kd_tree;
 struct kd_node;
 
@@ -45,8 +46,14 @@ struct qpoint_budget {
 
 /* The selection: the queue points as a bitmap over the tree's nodes
  * (qpoint_marked) and in node order. The index of a queue point in qnode[] is
- * its queue-table index. Owns mark and qnode (qpoint_fini); nodes are the
- * tree's, borrowed. */
+ * its queue-table index. Owns mark, qnode, parent and leaf_count
+ * (qpoint_fini); nodes and bvh are the structure's, borrowed.
+ *
+ * On a BVH (bvh set, nodes NULL) a leaf is no node of its own but a slot of
+ * its parent, so places are numbered apart from nodes: node i is place i, the
+ * leaf whose entries start at prims[j] is place bvh->node_count + j
+ * (qpoint_bvh_place). node_count counts places, and mark, qnode and every
+ * array over nodes here are over places. */
 struct qpoint_set {
   const struct kd_node *nodes; /* the tree's nodes, node_count of them */
   uint64_t *mark;              /* bit n set: node n is a queue point */
@@ -54,7 +61,22 @@ struct qpoint_set {
   uint32_t *qnode;     /* node index of queue point q, increasing */
   uint32_t count;      /* number of queue points */
   uint64_t gmax_bytes; /* the bound it was made for */
+  /* A BVH's (NULL on the k-d tree): its places' parents (the root's
+   * UINT32_MAX) and each leaf's triangles (leaf_count[j] for the leaf at
+   * prims[j], 0 at the other entries). */
+  const struct bvh *bvh;
+  uint32_t *parent;
+  uint8_t *leaf_count;
 };
+
+/* The place of BVH b's child (ref, count): a node (count 0) or a leaf. */
+static inline uint32_t qpoint_bvh_place(uint32_t node_count, uint32_t ref, uint32_t count) {
+  return count == 0 ? ref : node_count + ref;
+}
+
+/* Whether node (place) n of qs is a leaf; if so its entries in the leaf
+ * index lists are [*first, *first + *count). */
+bool qpoint_leaf(const struct qpoint_set *qs, uint32_t n, uint32_t *first, uint32_t *count);
 
 /* A bitmap of n nodes, all clear (free it). */
 uint64_t *qpoint_mark_new(uint32_t n);
@@ -78,6 +100,23 @@ void qpoint_select(struct qpoint_set *qs, const struct kd_tree *kd, const uint32
  * only the share is reserved, as the paper reserves 256 KB for 32K entries. */
 void qpoint_plan(struct qpoint_set *qs, struct qpoint_budget *b, const struct kd_tree *kd,
                  const uint32_t *tris, uint32_t tri_bytes, const struct qpoint_reserve *r);
+
+/* The same on BVH b (places, above): tris over the places
+ * (qpoint_bvh_subtree_tris), node bytes at b's node size. */
+void qpoint_bvh_select(struct qpoint_set *qs, const struct bvh *b, const uint32_t *tris,
+                       uint32_t tri_bytes, uint64_t gmax_bytes);
+void qpoint_bvh_plan(struct qpoint_set *qs, struct qpoint_budget *b, const struct bvh *bvh,
+                     const uint32_t *tris, uint32_t tri_bytes, const struct qpoint_reserve *r);
+
+/* Set qs's BVH b, and its places' parents and leaves' counts (allocated). */
+void qpoint_bvh_tree(struct qpoint_set *qs, const struct bvh *b);
+
+/* Places of BVH b (its nodes and leaves). */
+uint32_t qpoint_bvh_places(const struct bvh *b);
+
+/* Triangles below each place of BVH b: out[n] for n < qpoint_bvh_places(b)
+ * (each triangle is in one leaf, so a sum). out is caller-owned. */
+void qpoint_bvh_subtree_tris(const struct bvh *b, uint32_t *out);
 
 /* Queue index of node n, or -1 when n is not a queue point (binary search). */
 int64_t qpoint_index(const struct qpoint_set *qs, uint32_t n);

@@ -309,7 +309,6 @@ static void trace_leaf_claim(struct qsched_worker *x) {
   struct trace_ctx *tr = x->tr;
   const struct mem_port *mem = &tr->mem;
   const struct qdrain_claim *cl = &x->cl;
-  const struct kd_node nd = q->qs->nodes[cl->node];
   for (uint32_t t = 0; t < cl->n; t++) {
     const uint64_t slot = cl->slot[t];
     if (qstore_ray(&q->st, slot)->flags & QS_FLAG_DEAD) {
@@ -323,7 +322,7 @@ static void trace_leaf_claim(struct qsched_worker *x) {
     struct qwalk w;
     CHECK(qwalk_init(&q->wt, &w, &r));
     bool over = true;
-    if (qwalk_leaf(tr, &w, nd, cl->j0, cl->j1)) {
+    if (qwalk_leaf(&q->wt, tr, &w, cl->node, cl->j0, cl->j1)) {
       terminate(x, &r, &w, QWALK_HIT);
       if (!cl->last) qstore_ray(&q->st, slot)->flags |= QS_FLAG_DEAD; /* later passes skip it */
     } else if (!cl->last) {
@@ -465,7 +464,9 @@ struct qsched *qsched_create(struct policy_job *job, const struct qpoint_set *qs
   q->qs = qs;
   q->route = route;
   q->ctx = ctx;
-  q->wt = (struct qwalk_tree){job->setup.kd, job->setup.scene, qs->nodes, qs->mark};
+  q->wt = (struct qwalk_tree){job->setup.kd, job->setup.scene, qs->nodes,     qs->mark,
+                              qs->bvh,       qs->parent,       qs->leaf_count};
+  CHECK(qs->bvh == job->setup.bvh);
   qpark_init(&q->pk, job->cores, job->workers);
   qstore_init(&q->st, qs->count, QS_SETS, l->qtable_base, l->queue_base);
   qdrain_init(&q->ds, &q->st, qs, job->cores, block_tris, group);

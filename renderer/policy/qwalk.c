@@ -5,6 +5,7 @@
 #include <math.h>
 
 #include "renderer/policy/qpoint.h"
+#include "renderer/policy/qwalk_bvh.h"
 #include "renderer/ray.h"
 #include "renderer/scene.h"
 #include "sim/err.h"
@@ -40,17 +41,19 @@ static void restore_hit(const struct qwalk_tree *t, const struct trace_isect_ray
 }
 
 bool qwalk_init(const struct qwalk_tree *t, struct qwalk *w, const struct ray *r) {
-  const struct kd_tree *kd = t->kd;
+  /* The structure's root box: the k-d tree's or the BVH's. */
+  const uint32_t nodes = t->bvh ? t->bvh->node_count : t->kd->node_count;
+  const vec3 lo = t->bvh ? t->bvh->lo : t->kd->lo, hi = t->bvh ? t->bvh->hi : t->kd->hi;
   w->any = r->type == RAY_SHADOW;
   trav_best_init(&w->best, r->tmax);
   w->tmin = r->tmin;
   w->ignore = r->ignore_prim;
-  if (!trav_ray_valid(r) || kd->node_count == 0) return false;
-  if (!trav_setup(&w->tv, kd, r)) return false;
+  if (!trav_ray_valid(r) || nodes == 0) return false;
+  if (!trav_setup_box(&w->tv, lo, hi, r)) return false;
   trace_isect_prepare(&w->ir, r->o, r->d);
   if (w->any) {
     struct ray rv;
-    if (reversed(r, &rv) && !trav_setup(&w->tv, kd, &rv)) return false;
+    if (reversed(r, &rv) && !trav_setup_box(&w->tv, lo, hi, &rv)) return false;
   } else if (r->hit_prim >= 0) {
     struct trace_hit h;
     restore_hit(t, &w->ir, r, &h);
@@ -63,9 +66,10 @@ bool qwalk_init(const struct qwalk_tree *t, struct qwalk *w, const struct ray *r
   return true;
 }
 
-bool qwalk_leaf(struct trace_ctx *tr, struct qwalk *w, struct kd_node nd, uint32_t j0,
-                uint32_t j1) {
-  return trav_leaf(tr, &w->ir, w->tmin, w->ignore, w->any, nd, j0, j1, &w->best);
+bool qwalk_leaf(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w, uint32_t n,
+                uint32_t j0, uint32_t j1) {
+  if (t->bvh) return qwalk_bvh_leaf(t, tr, w, n, j0, j1);
+  return trav_leaf(tr, &w->ir, w->tmin, w->ignore, w->any, t->nodes[n], j0, j1, &w->best);
 }
 
 /* Pop the next pending node above stack depth floor, skipping those entirely
@@ -76,6 +80,7 @@ static bool walk_pop(struct qwalk *w, int floor) {
 
 enum qwalk_end qwalk_run(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w,
                          int floor, bool to_queue) {
+  if (t->bvh) return qwalk_bvh_run(t, tr, w, floor, to_queue);
   for (;;) {
     trav_announce_node(tr, w->ni, 1);
     struct kd_node nd = t->nodes[w->ni];
@@ -84,7 +89,7 @@ enum qwalk_end qwalk_run(const struct qwalk_tree *t, struct trace_ctx *tr, struc
       if (trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &w->ni, w->stack, &w->sp)) continue;
     } else {
       CHECK(!to_queue || kd_leaf_count(nd) == 0); /* geometry is below queue points */
-      if (qwalk_leaf(tr, w, nd, 0, kd_leaf_count(nd))) return QWALK_HIT;
+      if (qwalk_leaf(t, tr, w, w->ni, 0, kd_leaf_count(nd))) return QWALK_HIT;
     }
     if (!walk_pop(w, floor)) return QWALK_DONE;
   }
@@ -93,6 +98,10 @@ enum qwalk_end qwalk_run(const struct qwalk_tree *t, struct trace_ctx *tr, struc
 /* Where the path goes to the far child, the uncut traversal had pushed it,
  * finished the near side, and popped it: so pop it here. */
 void qwalk_to(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w, uint32_t q) {
+  if (t->bvh) {
+    qwalk_bvh_to(t, tr, w, q);
+    return;
+  }
   while (w->ni != q) {
     trav_announce_node(tr, w->ni, 1);
     struct kd_node nd = t->nodes[w->ni];
@@ -113,6 +122,7 @@ void qwalk_to(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w,
 
 enum qwalk_end qwalk_run_treelet(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w,
                                  const uint32_t *of) {
+  if (t->bvh) return qwalk_bvh_run_treelet(t, tr, w, of);
   const uint32_t cur = of[w->ni];
   for (;;) {
     if (of[w->ni] != cur) return QWALK_QUEUED;
@@ -120,18 +130,18 @@ enum qwalk_end qwalk_run_treelet(const struct qwalk_tree *t, struct trace_ctx *t
     struct kd_node nd = t->nodes[w->ni];
     if (!kd_is_leaf(nd)) {
       if (trav_interior(&w->tv, nd, w->ni, &w->t0, &w->t1, &w->ni, w->stack, &w->sp)) continue;
-    } else if (qwalk_leaf(tr, w, nd, 0, kd_leaf_count(nd))) {
+    } else if (qwalk_leaf(t, tr, w, w->ni, 0, kd_leaf_count(nd))) {
       return QWALK_HIT;
     }
     if (!walk_pop(w, 0)) return QWALK_DONE;
   }
 }
 
-enum qwalk_end qwalk_leave_treelet(struct qwalk *w) {
-  return walk_pop(w, 0) ? QWALK_QUEUED : QWALK_DONE;
+enum qwalk_end qwalk_leave_treelet(const struct qwalk_tree *t, struct qwalk *w) {
+  return (t->bvh ? qwalk_bvh_pop(w, 0) : walk_pop(w, 0)) ? QWALK_QUEUED : QWALK_DONE;
 }
 
 enum qwalk_end qwalk_leave(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w) {
-  if (!walk_pop(w, 0)) return QWALK_DONE;
+  if (!(t->bvh ? qwalk_bvh_pop(w, 0) : walk_pop(w, 0))) return QWALK_DONE;
   return qwalk_run(t, tr, w, 0, true);
 }

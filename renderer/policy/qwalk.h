@@ -26,6 +26,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "renderer/bvh.h"
 #include "renderer/kdtree.h"
 #include "renderer/trace.h"
 #include "renderer/trav.h"
@@ -34,13 +35,27 @@ struct ray;
 struct scene;
 
 /* What a walk reads: the tree, the scene (to recompute a carried hit) and the
- * nodes, and the queue points' bitmap (qpoint.h). Borrowed. */
+ * nodes, and the queue points' bitmap (qpoint.h). Borrowed. On a BVH (bvh
+ * set; qwalk_bvh.c walks it) nodes are NULL, the walk is at a place
+ * (qpoint.h: a node or a leaf), and parent and leaf_count are the selection's
+ * (qpoint_set). */
 struct qwalk_tree {
   const struct kd_tree *kd;
   const struct scene *s;
   const struct kd_node *nodes;
   const uint64_t *mark;
+  const struct bvh *bvh;
+  const uint32_t *parent;
+  const uint8_t *leaf_count;
 };
+
+/* A pending BVH child: its place and the ray's entry into its box. */
+struct qwalk_bentry {
+  uint32_t place;
+  float t;
+};
+/* Pending BVH children: (width - 1) a level, as bvh_trav.c's stack. */
+#define QWALK_BSTACK (BVH_DEPTH_LIMIT * 7 + 8)
 
 /* One ray's walk: the scheduling traversal (for a shadow ray the reversed
  * segment), the canonical ray's test, the best hit so far, the current node
@@ -52,10 +67,13 @@ struct qwalk {
   int32_t ignore;
   bool any;
   struct trav_best best;
-  uint32_t ni;
+  uint32_t ni; /* the node (on a BVH the place) the walk is at */
   float t0, t1;
   int sp;
-  struct trav_entry stack[KD_DEPTH_LIMIT];
+  union { /* the pending nodes: the k-d tree's, or a BVH's */
+    struct trav_entry stack[KD_DEPTH_LIMIT];
+    struct qwalk_bentry bstack[QWALK_BSTACK];
+  };
 };
 
 /* Where a walk stopped: it left the tree (or its subtree's pending nodes are
@@ -68,9 +86,10 @@ enum qwalk_end { QWALK_DONE, QWALK_QUEUED, QWALK_HIT };
  * empty tree, root box missed). */
 bool qwalk_init(const struct qwalk_tree *t, struct qwalk *w, const struct ray *r);
 
-/* Test entries [j0, j1) of leaf nd as trace.c does (announced through tr).
- * True: a shadow ray is occluded. */
-bool qwalk_leaf(struct trace_ctx *tr, struct qwalk *w, struct kd_node nd, uint32_t j0, uint32_t j1);
+/* Test entries [j0, j1) of leaf (place) n as trace.c does (announced through
+ * tr). True: a shadow ray is occluded. */
+bool qwalk_leaf(const struct qwalk_tree *t, struct trace_ctx *tr, struct qwalk *w, uint32_t n,
+                uint32_t j0, uint32_t j1);
 
 /* Walk on from the current node. In a queue point's subtree (to_queue false)
  * run until its pending nodes (those above stack depth floor) are done; above
@@ -94,7 +113,7 @@ enum qwalk_end qwalk_run_treelet(const struct qwalk_tree *t, struct trace_ctx *t
 
 /* After a leaf treelet (its leaf tested): the next pending node, where the
  * ray queues (QWALK_QUEUED, w->ni), or the end. */
-enum qwalk_end qwalk_leave_treelet(struct qwalk *w);
+enum qwalk_end qwalk_leave_treelet(const struct qwalk_tree *t, struct qwalk *w);
 
 /* The best hit so far as a record carries it (hit_prim): -1 when none. */
 static inline int32_t qwalk_best_prim(const struct qwalk *w) {

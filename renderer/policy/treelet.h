@@ -19,16 +19,21 @@
  * find nothing to load. Ties of area go to the lower node index, so the
  * partition is deterministic. The tree's memory layout is not changed (Aila and
  * Karras also lay each treelet out contiguously; here the nodes stay in
- * depth-first order). */
+ * depth-first order). On a BVH (treelet_bvh_build) the same rule runs over
+ * its places (qpoint.h). */
 #ifndef RTSIM_RENDERER_POLICY_TREELET_H
 #define RTSIM_RENDERER_POLICY_TREELET_H
 
 #include <stdint.h>
 
+struct bvh;
 struct kd_tree;
 
+#define TREELET_NONE UINT32_MAX
+
 struct treelet_set {
-  uint32_t *of;    /* of[n]: the treelet of node n, n < node_count */
+  uint32_t *of;    /* of[n]: the treelet of node n, n < node_count (a BVH's
+                      places that are no leaf's first entry: TREELET_NONE) */
   uint32_t *root;  /* root[t]: the node treelet t starts at; root[0] = 0 */
   uint64_t *bytes; /* bytes[t]: 8 a node + tri_bytes a distinct triangle */
   uint32_t count;  /* treelets (0 for an empty tree) */
@@ -42,6 +47,13 @@ struct treelet_set {
  * the order they are started: breadth-first over treelets, from the root. */
 void treelet_build(struct treelet_set *ts, const struct kd_tree *kd, uint32_t tri_bytes,
                    uint64_t budget);
+
+/* The same on BVH b (Aila and Karras's own structure): over its places
+ * (qpoint.h; node_count counts them), each leaf's triangles in leaf_count
+ * (qpoint_set's), a node charged its bytes (64 or 80), a leaf its 4-byte
+ * index entries and its triangles (each triangle is in one leaf). */
+void treelet_bvh_build(struct treelet_set *ts, const struct bvh *b, const uint8_t *leaf_count,
+                       uint32_t tri_bytes, uint64_t budget);
 
 void treelet_fini(struct treelet_set *ts);
 
