@@ -411,7 +411,7 @@ static void test_run_refuses_first(void) {
 /* A BVH scene under every policy and command: each runs (no refusal is
  * left), and a run's outputs name the structure traced. */
 static void test_accel_runs(void) {
-  char cmd[4096], out[8192];
+  char cmd[6144], out[8192];
   const char *dir = RTSIM_TMP "/cli_accel";
   char runs[4][1024];
   snprintf(runs[0], sizeof runs[0],

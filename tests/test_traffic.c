@@ -90,11 +90,13 @@ int main(void) {
   const char *din = RTSIM_TMP "/traffic_test.din";
   /* Dynamic's schedule is made for 8 KB; its queues store whole lines. The
    * third run is on a tree built with clipped (perfect) splits; the fourth is
-   * the treelet policy, its treelets made for 8 KB; the last six trace the
-   * binary and the 8-wide BVH, single rays, packets and queues. */
-  static const char *const policies[] = {"recursive", "dynamic", "dynamic", "treelet", "recursive",
-                                         "recursive", "packet",  "packet",  "dynamic", "dynamic"};
-  char scenes[10][1024];
+   * the treelet policy, its treelets made for 8 KB; the last seven trace the
+   * binary and the 8-wide BVH, single rays, packets, queue points and
+   * treelets. */
+  static const char *const policies[] = {"recursive", "dynamic",   "dynamic", "treelet",
+                                         "recursive", "recursive", "packet",  "packet",
+                                         "dynamic",   "dynamic",   "treelet"};
+  char scenes[11][1024];
   snprintf(scenes[0], sizeof scenes[0], "%s/scenes/small/room.yaml", RTSIM_SOURCE_DIR);
   snprintf(scenes[1], sizeof scenes[1], "%s/scenes/small/room.yaml", RTSIM_SOURCE_DIR);
   snprintf(scenes[2], sizeof scenes[2], "%s/scenes/good_room_tiny_clipped.yaml", RTSIM_TEST_DATA);
@@ -105,6 +107,7 @@ int main(void) {
   snprintf(scenes[7], sizeof scenes[7], "%s/scenes/good_room_tiny_bvh8.yaml", RTSIM_TEST_DATA);
   snprintf(scenes[8], sizeof scenes[8], "%s/scenes/good_room_tiny_bvh2.yaml", RTSIM_TEST_DATA);
   snprintf(scenes[9], sizeof scenes[9], "%s/scenes/good_room_tiny_bvh8.yaml", RTSIM_TEST_DATA);
+  snprintf(scenes[10], sizeof scenes[10], "%s/scenes/good_room_tiny_bvh8.yaml", RTSIM_TEST_DATA);
   unsigned long long dyn_misses_8k = 0, tl_misses_8k = 0;
   for (size_t p = 0; p < sizeof policies / sizeof policies[0]; p++) {
     unlink(din);
