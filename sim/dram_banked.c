@@ -331,6 +331,8 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
     for (uint32_t j = 0; j < p->ranks * p->bank_groups; j++)
       c->groups[j].act = c->groups[j].rd = c->groups[j].wr = DRAM_BANKED_NEVER;
     c->ranks = xcalloc(p->ranks, sizeof *c->ranks);
+    c->floors = xcalloc((size_t)p->ranks * 2, sizeof *c->floors);
+    c->col_gen = 1; /* (a floor of generation 0 was never fitted) */
     if (d->cq_mode) {
       c->ncq = p->queue_structure == DRAM_BANKED_PER_RANK ? p->ranks : d->banks_per_channel;
       c->cq = xcalloc(c->ncq, sizeof *c->cq);
@@ -371,6 +373,7 @@ void dram_banked_destroy(struct dram_banked *d) {
     free(c->banks);
     free(c->groups);
     free(c->ranks);
+    free(c->floors);
     for (uint32_t j = 0; j < c->ncq; j++) free(c->cq[j].r);
     free(c->cq);
     free(c->cq_busy);
