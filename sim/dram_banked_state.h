@@ -194,6 +194,8 @@ struct dram_banked_channel {
   uint64_t *col_stale; /* per_bank: only its column candidates' times may have moved */
   uint64_t *blocked;   /* bitmap: the command queue's rank has a refresh due */
   uint64_t *full;      /* bitmap: the command queue is full */
+  uint32_t *rd_for;    /* by command queue: read transactions in the read queue bound for it */
+  uint64_t *rd_any;    /* bitmap: rd_for is not 0 */
   /* The last scan's first least candidate (memo, at cycle memo_t), made at
    * cycle memo_at, kept while no command issued and no entry or refresh came
    * since (memo_ok; see dram_banked_ctrl_cycle). */
