@@ -331,6 +331,8 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
     for (uint32_t j = 0; j < p->ranks * p->bank_groups; j++)
       c->groups[j].act = c->groups[j].rd = c->groups[j].wr = DRAM_BANKED_NEVER;
     c->ranks = xcalloc(p->ranks, sizeof *c->ranks);
+    c->floors = xcalloc((size_t)p->ranks * 2, sizeof *c->floors);
+    c->col_gen = 1; /* (a floor of generation 0 was never fitted) */
     if (d->cq_mode) {
       c->ncq = p->queue_structure == DRAM_BANKED_PER_RANK ? p->ranks : d->banks_per_channel;
       c->cq = xcalloc(c->ncq, sizeof *c->cq);
@@ -341,6 +343,8 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
       c->has_col = xcalloc((c->ncq + 63) / 64, sizeof *c->has_col);
       c->blocked = xcalloc((c->ncq + 63) / 64, sizeof *c->blocked);
       c->full = xcalloc((c->ncq + 63) / 64, sizeof *c->full);
+      c->rd_for = xcalloc(c->ncq, sizeof *c->rd_for);
+      c->rd_any = xcalloc((c->ncq + 63) / 64, sizeof *c->rd_any);
       if (p->queue_structure == DRAM_BANKED_PER_BANK)
         c->col_stale = xcalloc((c->ncq + 63) / 64, sizeof *c->col_stale);
       for (uint32_t j = 0; j < c->ncq; j++) {
@@ -371,6 +375,7 @@ void dram_banked_destroy(struct dram_banked *d) {
     free(c->banks);
     free(c->groups);
     free(c->ranks);
+    free(c->floors);
     for (uint32_t j = 0; j < c->ncq; j++) free(c->cq[j].r);
     free(c->cq);
     free(c->cq_busy);
@@ -380,6 +385,8 @@ void dram_banked_destroy(struct dram_banked *d) {
     free(c->has_col);
     free(c->blocked);
     free(c->full);
+    free(c->rd_for);
+    free(c->rd_any);
     free(c->col_stale);
     free(c->fol);
   }

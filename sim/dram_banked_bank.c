@@ -42,6 +42,27 @@ int64_t dram_banked_col_earliest(const struct dram_banked *d, const struct dram_
   return dram_banked_bus_fit(d, c, t + lat, r->rank, write) - lat;
 }
 
+/* A floor kept from cycle `at` holds at any later cycle of its generation:
+ * the fit is monotone, and the spacing and the bus change only with a
+ * column command (dram_banked_column_state bumps col_gen). Asked past its
+ * floor, it is fitted again (a higher floor). */
+int64_t dram_banked_col_floor_fit(const struct dram_banked *d, struct dram_banked_channel *c,
+                                  uint32_t rank, bool write, int64_t now) {
+  struct dram_banked_floor *f = &c->floors[rank * 2 + write];
+  const struct dram_banked_rank *rk = &c->ranks[rank];
+  int64_t t;
+  if (write) {
+    t = max64(rk->wr + d->p.tCCD_S, c->rd + d->p.tRTW);
+  } else {
+    t = max64(rk->rd + d->p.tCCD_S, rk->wr + d->p.tCWL + d->burst_cycles + d->p.tWTR_S);
+  }
+  const int64_t lat = write ? d->p.tCWL : d->p.tCL;
+  f->at = now;
+  f->t = dram_banked_bus_fit(d, c, max64(now, t) + lat, rank, write) - lat;
+  f->gen = c->col_gen;
+  return f->t;
+}
+
 int64_t dram_banked_req_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
                                  const struct dram_banked_req *r, enum dram_banked_cmd_type type,
                                  int64_t now) {
@@ -98,6 +119,7 @@ int64_t dram_banked_column_state(struct dram_banked *d, struct dram_banked_chann
   const int64_t b = d->burst_cycles;
   int64_t end, pre;
   bk->hits++;
+  c->col_gen++; /* (the spacing and the bus change below) */
   dram_banked_stale_bank(d, c, r.bank);
   dram_banked_stale_columns(d, c, write, now);
   if (write) {

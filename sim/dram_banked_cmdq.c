@@ -270,6 +270,46 @@ cq_sum(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi, 
   return s;
 }
 
+/* per_bank: a floor at now under the least time of command queue qi, whose
+ * column candidates' times alone may have grown since its summary: its ACT
+ * or PRE candidate's time holds (their state is unchanged, and both are at
+ * least now), and a column candidate's time only grows with the spacing and
+ * the bus, and is at or past its rank's floor (dram_banked_col_floor). */
+static int64_t least_floor(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi,
+                           int64_t now) {
+  const struct dram_banked_qsum *s = &c->sum[qi];
+  const uint32_t rank = qi / d->banks_per_rank;
+  int64_t t = s->o_t;
+  if (s->rd_t < t) {
+    const int64_t rd = max64(s->rd_t, dram_banked_col_floor(d, c, rank, false, now));
+    if (rd < t) t = rd;
+  }
+  if (s->wr_t < t) {
+    const int64_t wr = max64(s->wr_t, dram_banked_col_floor(d, c, rank, true, now));
+    if (wr < t) t = wr;
+  }
+  return max64(t, now);
+}
+
+/* Test only (check_summaries): command queue qi's summary s at now against
+ * its candidates asked from scratch; s->t exact, or with floor above
+ * DRAM_BANKED_NEVER, only a floor under the least time. */
+static void check_summary(const struct dram_banked *d, const struct dram_banked_channel *c,
+                          uint32_t qi, int64_t now, const struct dram_banked_qsum *s,
+                          int64_t floor) {
+  struct dram_banked_qsum full;
+  bool act, col;
+  CHECK_GE(now, s->at);
+  cq_candidates(d, c, qi, now, &full, &act, &col);
+  if (floor > DRAM_BANKED_NEVER) {
+    CHECK_GE(full.t, floor);
+    return;
+  }
+  CHECK_EQ(full.t, s->t);
+  CHECK(full.t == DRAM_BANKED_FAR || (full.k.type == s->k.type && full.k.bank == s->k.bank &&
+                                      full.k.qi == s->k.qi && full.k.for_req == s->k.for_req));
+}
+
 /* Test only (check_summaries): the scan's answer pk at now against every
  * queue's candidates asked from scratch, in round-robin order, none skipped. */
 static void check_scan(const struct dram_banked *d, const struct dram_banked_channel *c,
@@ -324,23 +364,26 @@ void dram_banked_cmdq_scan(struct dram_banked *d, struct dram_banked_channel *c,
     const uint64_t from_start = ~0ull << (start % 64);
     if (step == 0) bits &= from_start;
     else if (step == nw) bits &= ~from_start;
-    const uint64_t stale = ~c->fresh[w] | (c->col_stale ? c->col_stale[w] : 0);
+    const uint64_t fresh = c->fresh[w], cols = c->col_stale ? c->col_stale[w] : 0;
     while (bits && best_t > now) {
       const uint32_t b = (uint32_t)__builtin_ctzll(bits);
       const uint32_t qi = w * 64 + b;
       bits &= bits - 1;
       const struct dram_banked_qsum *s = &c->sum[qi];
-      if ((stale >> b & 1) || s->t < now) s = cq_sum(d, c, qi, now);
-      if (d->p.check_summaries) {
-        struct dram_banked_qsum full;
-        bool act, col;
-        CHECK_GE(now, s->at);
-        cq_candidates(d, c, qi, now, &full, &act, &col);
-        CHECK_EQ(full.t, s->t);
-        CHECK(full.t == DRAM_BANKED_FAR ||
-              (full.k.type == s->k.type && full.k.bank == s->k.bank && full.k.qi == s->k.qi &&
-               full.k.for_req == s->k.for_req));
+      if (!(fresh >> b & 1)) {
+        s = cq_sum(d, c, qi, now);
+      } else if (cols >> b & 1) {
+        /* At or past the best so far the queue cannot come first (ties
+         * go to the earlier queue): it is left to be asked when it can. */
+        if (s->t >= best_t || least_floor(d, c, qi, now) >= best_t) {
+          if (d->p.check_summaries) check_summary(d, c, qi, now, s, best_t);
+          continue;
+        }
+        s = cq_sum(d, c, qi, now);
+      } else if (s->t < now) {
+        s = cq_sum(d, c, qi, now);
       }
+      if (d->p.check_summaries) check_summary(d, c, qi, now, s, DRAM_BANKED_NEVER);
       if (s->t < best_t) {
         best_t = s->t;
         best = qi;

@@ -23,6 +23,34 @@ static void cq_mark(struct dram_banked_channel *c, uint32_t qi, bool busy) {
   else c->cq_busy[qi / 64] &= ~bit;
 }
 
+/* Does a read transaction wait for a command queue that is not full? (If
+ * not, none of the read queue can move.) */
+static bool reads_movable(const struct dram_banked_channel *c) {
+  for (uint32_t w = 0; w * 64 < c->ncq; w++)
+    if (c->rd_any[w] & ~c->full[w]) return true;
+  return false;
+}
+
+/* Test only (check_summaries): rd_for and rd_any against the read queue
+ * counted from scratch. */
+static void check_rd_for(const struct dram_banked_channel *c) {
+  for (uint32_t qi = 0; qi < c->ncq; qi++) {
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < c->q[DRAM_BANKED_RD_Q].n; i++)
+      n += c->q[DRAM_BANKED_RD_Q].r[i].cq == qi;
+    CHECK_EQ(n, c->rd_for[qi]);
+    CHECK_EQ(n > 0, c->rd_any[qi / 64] >> (qi % 64) & 1);
+  }
+}
+
+/* Count a read transaction bound for command queue qi in (delta 1) or out
+ * (-1) of the read queue. */
+static void rd_count(struct dram_banked_channel *c, uint32_t qi, int delta) {
+  c->rd_for[qi] += (uint32_t)delta;
+  const uint64_t bit = 1ull << (qi % 64);
+  c->rd_any[qi / 64] = c->rd_for[qi] ? c->rd_any[qi / 64] | bit : c->rd_any[qi / 64] & ~bit;
+}
+
 /* Entries of transaction queue q that may take part in cycle t (a prefix:
  * ready grows with arrival). */
 static uint32_t visible(const struct dram_banked_queue *q, int64_t t) {
@@ -86,7 +114,10 @@ static bool schedule_cq(struct dram_banked *d, struct dram_banked_channel *c, in
     draining = nw;
   int k = draining ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q;
   uint32_t mi = UINT32_MAX; /* the transaction to move */
-  for (uint32_t i = 0; i < (k == DRAM_BANKED_WR_Q ? nw : nr); i++) {
+  if (d->p.check_summaries) check_rd_for(c);
+  /* (Reads bound only for full command queues: none moves, none asked.) */
+  const uint32_t nr_asked = reads_movable(c) ? nr : 0;
+  for (uint32_t i = 0; i < (k == DRAM_BANKED_WR_Q ? nw : nr_asked); i++) {
     const uint32_t qi = c->q[k].r[i].cq;
     if (c->full[qi / 64] >> (qi % 64) & 1) continue;
     const struct dram_banked_queue *cq = &c->cq[qi];
@@ -119,6 +150,7 @@ static bool schedule_cq(struct dram_banked *d, struct dram_banked_channel *c, in
     struct dram_banked_queue *cq = &c->cq[dram_banked_cq_of(d, &m)];
     memmove(&q->r[mi], &q->r[mi + 1], (q->n - mi - 1) * sizeof *q->r);
     q->n--;
+    if (k == DRAM_BANKED_RD_Q) rd_count(c, m.cq, -1);
     m.ready = t + 1;
     cq->r[cq->n++] = m;
     if (cq->n == cq->cap) c->full[m.cq / 64] |= 1ull << (m.cq % 64);
@@ -253,7 +285,9 @@ void dram_banked_ctrl_take(struct dram_banked *d, struct dram_banked_channel *c,
     d->st.read_merges++;
     return;
   }
-  dram_banked_enqueue(d, c, write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q, co, addr, tag, ready);
+  const struct dram_banked_req *r =
+      dram_banked_enqueue(d, c, write ? DRAM_BANKED_WR_Q : DRAM_BANKED_RD_Q, co, addr, tag, ready);
+  if (!write) rd_count(c, r->cq, 1);
   if (write) serve_at(d, ready, tag); /* posted */
   if (arr > c->last_busy) c->last_busy = arr;
   /* It may move at the end of cycle ready - 1 (never before the cursor). */

@@ -119,6 +119,14 @@ struct dram_banked_burst {
   bool write;
 };
 
+/* A floor under the earliest time of every column command of one rank and
+ * direction, as of cycle `at` and the channel's column generation gen
+ * (dram_banked_col_floor). */
+struct dram_banked_floor {
+  int64_t at, t;
+  uint64_t gen;
+};
+
 /* A command: its type, where it goes, and for which request. */
 struct dram_banked_cmd {
   enum dram_banked_cmd_type type;
@@ -163,6 +171,10 @@ struct dram_banked_channel {
   struct dram_banked_rank *ranks;
   int64_t next; /* earliest cycle a command may issue or a refresh fall due */
   uint64_t scan_no;
+  /* Floors under column commands' times by rank x 2 + write
+   * (dram_banked_col_floor); col_gen counts column commands, from 1. */
+  struct dram_banked_floor *floors;
+  uint64_t col_gen;
   /* per_bank / per_rank: */
   struct dram_banked_queue *cq; /* command queues, by bank within the channel or by rank */
   uint32_t ncq, cq_n;           /* command queues; commands in them all */
@@ -182,6 +194,8 @@ struct dram_banked_channel {
   uint64_t *col_stale; /* per_bank: only its column candidates' times may have moved */
   uint64_t *blocked;   /* bitmap: the command queue's rank has a refresh due */
   uint64_t *full;      /* bitmap: the command queue is full */
+  uint32_t *rd_for;    /* by command queue: read transactions in the read queue bound for it */
+  uint64_t *rd_any;    /* bitmap: rd_for is not 0 */
   /* The last scan's first least candidate (memo, at cycle memo_t), made at
    * cycle memo_at, kept while no command issued and no entry or refresh came
    * since (memo_ok; see dram_banked_ctrl_cycle). */
@@ -334,6 +348,19 @@ int64_t dram_banked_col_earliest(const struct dram_banked *d, const struct dram_
 int64_t dram_banked_req_earliest(const struct dram_banked *d, const struct dram_banked_channel *c,
                                  const struct dram_banked_req *r, enum dram_banked_cmd_type type,
                                  int64_t now);
+/* A cycle no column command of `rank` (a WR: write) asked at any cycle from
+ * now on comes before, until the next column command: the data bus's first
+ * fit from the rank's and the channel's spacing (its groups' spacing
+ * ignored). Kept in c->floors. */
+int64_t dram_banked_col_floor_fit(const struct dram_banked *d, struct dram_banked_channel *c,
+                                  uint32_t rank, bool write, int64_t now);
+static inline int64_t dram_banked_col_floor(const struct dram_banked *d,
+                                            struct dram_banked_channel *c, uint32_t rank,
+                                            bool write, int64_t now) {
+  const struct dram_banked_floor *f = &c->floors[rank * 2 + write];
+  if (f->gen == c->col_gen && now >= f->at && now <= f->t) return f->t;
+  return dram_banked_col_floor_fit(d, c, rank, write, now);
+}
 /* The state an ACT of r's row in bank k->bank leaves at now. */
 void dram_banked_activate(struct dram_banked *d, struct dram_banked_channel *c,
                           const struct dram_banked_cmd *k, const struct dram_banked_req *r,
