@@ -6,7 +6,8 @@
  * most 1024 lines, or a shared one of at most 2^17, and at most 16 ways is
  * one block of 16 bytes a line from its first line on, its pages taken by the
  * host as they are written, 2 MiB at most, plus 8 bytes a line once the owner
- * keeps a word or a byte). A line may be pending
+ * keeps a word or a byte; of exactly 16 ways and a power-of-two count of
+ * sets, 5 bytes a line, sim/cache_packed.h). A line may be pending
  * (allocated, its fill not yet back): it is never chosen as a victim. The
  * caller decides what a hit, a miss or an eviction costs; this module only
  * keeps the contents. Used for the L1s and the L2. */
