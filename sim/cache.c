@@ -623,6 +623,10 @@ uint32_t cache_use(struct cache *c, uint64_t line) {
   return slot_no(c, s, k);
 }
 
+void cache_prefetch(const struct cache *c, uint64_t line) {
+  if (c->packed && c->pk.tag) __builtin_prefetch(c->pk.tag + CPK_WAYS * (line & c->pk.set_mask));
+}
+
 /* The oldest stamp not pending among n slots from v (stamps are distinct
  * but for the never-used slots' zeros, the first of which is the set's
  * lowest-ranked never-used one): its index in v, or -1. */

@@ -60,6 +60,11 @@ void cache_touch(struct cache *c, uint32_t slot);
  * (now the most recently used), or CACHE_NONE (nothing changed). */
 uint32_t cache_use(struct cache *c, uint64_t line);
 
+/* Ask the host to bring line's set into its caches, for a find or a use
+ * soon after (the L2's, when a load misses the L1): a packed cache's
+ * tags; other layouts ignore it. Changes nothing. */
+void cache_prefetch(const struct cache *c, uint64_t line);
+
 /* The slot line would replace: the least recently used slot of its set that is
  * not pending (an invalid slot first), or CACHE_NONE if every slot is pending. */
 uint32_t cache_victim(const struct cache *c, uint64_t line);
