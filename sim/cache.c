@@ -6,9 +6,11 @@
 #include "sim/cache.h"
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "sim/cache_packed.h"
 #include "sim/err.h"
 
 #if defined(__SSE2__)
@@ -66,18 +68,23 @@ struct cache {
    * count of sets: the ways, whose use and fill take a path with the
    * geometry as constants (FAST_USE); else 0. */
   uint8_t fast_ways;
+  /* Flat, 16 ways and a power-of-two count of sets (the configured L2):
+   * the sets packed (pk, sim/cache_packed.h) while every line held has a
+   * tag of 32 bits; fast_ways is 0 meanwhile. */
+  bool packed;
   unsigned lg2_ways; /* ways a power of two: its log2, else 64 (divide) */
-  uint64_t ways;
   uint64_t set_mask; /* sets - 1 when a power of two, else 0 (use %) */
   uint64_t uses;     /* scanned: the last stamp given */
   /* Then each set's tags (line + 1; 0: never held one, so invalid) and
    * after them its stamps (with FLAT_PENDING and FLAT_DIRTY), slot i's at
    * index k of its set s (k: ways - 1 - way): a 4-way set is one host line,
    * which a find, a use, a victim and an install all stay in. */
-  uint64_t *ftag;      /* host-line aligned */
+  uint64_t *ftag; /* host-line aligned */
+  struct cache_packed pk;
+  /* The rest. */
+  uint64_t ways;
   struct fmeta *fmeta; /* the owner's word and byte, made at the first set */
   uint64_t sets;
-  /* The rest. */
   struct set **set_pages;
   uint64_t set_page_count;
   uint64_t lines;
@@ -86,6 +93,9 @@ struct cache {
   unsigned table_shift;
   uint64_t vec_bytes; /* slots allocated: in vectors, or a flat cache's blocks */
 };
+
+_Static_assert(offsetof(struct cache, pk) + sizeof(struct cache_packed) <= 64,
+               "a find's fields fit the header's first host line");
 
 /* A flat slot's word and byte (cache_word, cache_byte): only an owner that
  * keeps them (the L2) pays for them. */
@@ -196,6 +206,63 @@ static inline struct fmeta *fmeta_get(struct cache *c, uint64_t i) {
 static const struct fmeta ZERO_FMETA;
 static inline const struct fmeta *fmeta_peek(const struct cache *c, uint64_t i) {
   return c->fmeta ? &c->fmeta[flat_index(c, i)] : &ZERO_FMETA;
+}
+
+/* A packed cache's slots: slot numbers as the wide layout's (s * 16 + 15 -
+ * k for way index k of set s), so that a cache that widens keeps them. */
+static inline uint64_t pk_set(uint32_t slot) { return slot / CPK_WAYS; }
+static inline unsigned pk_k(uint32_t slot) { return CPK_WAYS - 1 - slot % CPK_WAYS; }
+static inline uint32_t pk_slot(uint64_t s, int k) {
+  return k < 0 ? CACHE_NONE : (uint32_t)(s * CPK_WAYS + CPK_WAYS - 1 - (unsigned)k);
+}
+/* A packed cache's blocks, made at the first write. */
+static inline void pk_ready(struct cache *c) {
+  if (!c->pk.tag) c->vec_bytes += cpk_make(&c->pk);
+}
+/* The way index holding line in its set, or -1. */
+static inline int pk_find(const struct cache *c, uint64_t line) {
+  if (!c->pk.tag || !cpk_fits(&c->pk, line)) return -1;
+  return cpk_find(&c->pk, line & c->pk.set_mask, cpk_key(&c->pk, line));
+}
+/* A packed slot's state bit (dirty or pending word of its set) as read:
+ * clear before the blocks are made. */
+static inline bool pk_bit(const struct cache *c, uint32_t slot, bool pending) {
+  if (!c->pk.tag) return false;
+  const struct cpk_set *st = &c->pk.set[pk_set(slot)];
+  return ((pending ? st->pending : st->dirty) >> pk_k(slot)) & 1;
+}
+static inline void pk_set_bit(struct cache *c, uint32_t slot, bool pending, bool on) {
+  pk_ready(c);
+  struct cpk_set *st = &c->pk.set[pk_set(slot)];
+  uint16_t *w = pending ? &st->pending : &st->dirty;
+  const uint16_t bit = (uint16_t)(1u << pk_k(slot));
+  *w = (uint16_t)(on ? *w | bit : *w & ~bit);
+}
+
+/* A line whose tag does not fit 32 bits is to arrive: move a packed cache
+ * to the wide flat layout. Each set's order becomes the stamps 1..16 from
+ * its least recently used up (the tags and states as they were), and the
+ * next use stamps 17: the stamps order the ways as the order did, so every
+ * victim and use answers as before. */
+static void pk_widen(struct cache *c) {
+  c->packed = false;
+  c->fast_ways = CPK_WAYS;
+  if (c->pk.tag) {
+    flat_make(c);
+    for (uint64_t s = 0; s < c->sets; s++) {
+      const struct cpk_set *st = &c->pk.set[s];
+      uint64_t *tg = ftags(c, s), *sp = fstamps(c, s);
+      for (unsigned i = 0; i < CPK_WAYS; i++) {
+        const unsigned k = (unsigned)(st->order >> (4 * i)) & 15;
+        tg[k] = c->pk.tag[CPK_WAYS * s + k] ? cpk_line(&c->pk, s, k) + 1 : 0;
+        sp[k] = (i + 1) | ((st->dirty >> k & 1) ? FLAT_DIRTY : 0) |
+                ((st->pending >> k & 1) ? FLAT_PENDING : 0);
+      }
+    }
+    c->uses = CPK_WAYS;
+    c->vec_bytes -= c->sets * (CPK_WAYS * sizeof *c->pk.tag + sizeof *c->pk.set);
+  }
+  cpk_fini(&c->pk);
 }
 
 /* Sets in page i: SET_PAGE, fewer in a small cache's only page. */
@@ -324,6 +391,11 @@ struct cache *cache_create(const struct cache_params *p) {
   c->flat_ok = c->scan && c->lines <= (p->shared ? FLAT_LINES_SHARED : FLAT_LINES);
   const bool sets_pow2 = (c->sets & (c->sets - 1)) == 0; /* set_of_line masks */
   if (c->flat_ok && sets_pow2 && (c->ways == 4 || c->ways == 16)) c->fast_ways = (uint8_t)c->ways;
+  if (c->fast_ways == CPK_WAYS) {
+    c->packed = true;
+    c->fast_ways = 0;
+    cpk_init(&c->pk, c->sets);
+  }
   c->set_page_count = c->flat_ok ? 0 : (c->sets + SET_PAGE - 1) / SET_PAGE;
   c->set_pages = xcalloc(c->set_page_count ? c->set_page_count : 1, sizeof *c->set_pages);
   if (!c->scan) table_resize(c, 4);
@@ -333,6 +405,7 @@ struct cache *cache_create(const struct cache_params *p) {
 void cache_destroy(struct cache *c) {
   if (!c) return;
   free(c->ftag);
+  cpk_fini(&c->pk);
   free(c->fmeta);
   for (uint64_t i = 0; i < c->set_page_count; i++) {
     if (!c->set_pages[i]) continue;
@@ -427,6 +500,7 @@ static inline int64_t flat_scan(const struct cache *c, uint64_t s, uint64_t line
 }
 
 uint32_t cache_find(const struct cache *c, uint64_t line) {
+  if (c->packed) return pk_slot(line & c->pk.set_mask, pk_find(c, line));
   if (c->flat_ok) {
     if (!c->ftag) return CACHE_NONE;
     const uint64_t s = set_of_line(c, line);
@@ -490,6 +564,11 @@ static inline void flat_put(struct cache *c, uint64_t *tg, uint64_t *st, uint64_
 }
 
 void cache_touch(struct cache *c, uint32_t slot) {
+  if (c->packed) {
+    pk_ready(c);
+    cpk_touch(&c->pk, pk_set(slot), pk_k(slot));
+    return;
+  }
   if (c->flat_ok) {
     flat_touch(c, fstamp_get(c, slot));
     return;
@@ -508,8 +587,18 @@ static inline uint32_t fast_use(struct cache *c, uint64_t line, const uint64_t W
   return (uint32_t)(s * W + W - 1 - (uint64_t)k);
 }
 
+/* cache_use of a packed cache. */
+static inline uint32_t packed_use(struct cache *c, uint64_t line) {
+  const int k = pk_find(c, line);
+  if (k < 0) return CACHE_NONE;
+  const uint64_t s = line & c->pk.set_mask;
+  cpk_touch(&c->pk, s, (unsigned)k);
+  return pk_slot(s, k);
+}
+
 uint32_t cache_use(struct cache *c, uint64_t line) {
   if (c->fast_ways == 4) return fast_use(c, line, 4);
+  if (c->packed) return packed_use(c, line);
   if (c->fast_ways == 16) return fast_use(c, line, 16);
   if (!c->scan) {
     const uint32_t slot = cache_find(c, line);
@@ -532,6 +621,10 @@ uint32_t cache_use(struct cache *c, uint64_t line) {
   if (k < 0) return CACHE_NONE;
   st->vec[k].stamp = ++c->uses;
   return slot_no(c, s, k);
+}
+
+void cache_prefetch(const struct cache *c, uint64_t line) {
+  if (c->packed && c->pk.tag) __builtin_prefetch(c->pk.tag + CPK_WAYS * (line & c->pk.set_mask));
 }
 
 /* The oldest stamp not pending among n slots from v (stamps are distinct
@@ -572,6 +665,7 @@ static inline int64_t flat_victim(const struct cache *c, const uint64_t *v) {
 
 uint32_t cache_victim(const struct cache *c, uint64_t line) {
   uint64_t s = set_of_line(c, line);
+  if (c->packed) return pk_slot(s, c->pk.tag ? cpk_victim(&c->pk, s) : 0);
   if (c->flat_ok) {
     /* Never-used slots are zeros: the first of them is the paged path's
      * choice too (a never-used slot first, the highest-ranked way). */
@@ -598,10 +692,12 @@ uint32_t cache_victim(const struct cache *c, uint64_t line) {
 
 /* A flat slot is valid when it holds a tag (nothing invalidates a line). */
 bool cache_valid(const struct cache *c, uint32_t slot) {
+  if (c->packed) return c->pk.tag && c->pk.tag[CPK_WAYS * pk_set(slot) + pk_k(slot)];
   if (c->flat_ok) return c->ftag && *ftag_of(c, slot);
   return slot_peek(c, slot)->flags & F_VALID;
 }
 uint64_t cache_line(const struct cache *c, uint32_t slot) {
+  if (c->packed) return cache_valid(c, slot) ? cpk_line(&c->pk, pk_set(slot), pk_k(slot)) : 0;
   if (c->flat_ok) {
     const uint64_t t = c->ftag ? *ftag_of(c, slot) : 0;
     return t ? t - 1 : 0;
@@ -609,19 +705,26 @@ uint64_t cache_line(const struct cache *c, uint32_t slot) {
   return slot_peek(c, slot)->line;
 }
 bool cache_dirty(const struct cache *c, uint32_t slot) {
+  if (c->packed) return pk_bit(c, slot, false);
   if (c->flat_ok) return fstamp_peek(c, slot) & FLAT_DIRTY;
   return slot_peek(c, slot)->flags & F_DIRTY;
 }
 bool cache_pending(const struct cache *c, uint32_t slot) {
+  if (c->packed) return pk_bit(c, slot, true);
   if (c->flat_ok) return fstamp_peek(c, slot) & FLAT_PENDING;
   return slot_peek(c, slot)->flags & F_PENDING;
 }
 void cache_set_dirty(struct cache *c, uint32_t slot) {
-  if (c->flat_ok) *fstamp_get(c, slot) |= FLAT_DIRTY;
+  if (c->packed) pk_set_bit(c, slot, false, true);
+  else if (c->flat_ok) *fstamp_get(c, slot) |= FLAT_DIRTY;
   else slot_get(c, slot)->flags |= F_DIRTY;
 }
 
 void cache_set_pending(struct cache *c, uint32_t slot, bool pending) {
+  if (c->packed) {
+    pk_set_bit(c, slot, true, pending);
+    return;
+  }
   if (c->flat_ok) {
     uint64_t *st = fstamp_get(c, slot);
     *st = pending ? *st | FLAT_PENDING : *st & ~FLAT_PENDING;
@@ -661,8 +764,26 @@ static inline bool fast_fill(struct cache *c, uint64_t line, bool dirty, const u
   return false;
 }
 
+/* cache_fill of a packed cache that can hold line. */
+static inline bool packed_fill(struct cache *c, uint64_t line, bool dirty) {
+  pk_ready(c);
+  const uint64_t s = line & c->pk.set_mask;
+  int k = cpk_find(&c->pk, s, cpk_key(&c->pk, line));
+  if (k >= 0) {
+    cpk_touch(&c->pk, s, (unsigned)k);
+    return true;
+  }
+  k = cpk_victim(&c->pk, s);
+  if (k >= 0) cpk_put(&c->pk, s, (unsigned)k, line, dirty, false);
+  return false;
+}
+
 bool cache_fill(struct cache *c, uint64_t line, bool dirty) {
   if (c->fast_ways == 4) return fast_fill(c, line, dirty, 4);
+  if (c->packed) {
+    if (cpk_fits(&c->pk, line)) return packed_fill(c, line, dirty);
+    pk_widen(c);
+  }
   if (c->fast_ways == 16) return fast_fill(c, line, dirty, 16);
   if (c->flat_ok) {
     /* cache_use, cache_victim and cache_install in one look at the set. */
@@ -687,6 +808,13 @@ bool cache_fill(struct cache *c, uint64_t line, bool dirty) {
 void cache_install(struct cache *c, uint32_t slot, uint64_t line, bool dirty, bool pending) {
   const uint64_t s = set_of_slot(c, slot);
   CHECK_EQ(s, set_of_line(c, line));
+  if (c->packed && !cpk_fits(&c->pk, line)) pk_widen(c);
+  if (c->packed) {
+    pk_ready(c);
+    CHECK(!(c->pk.set[s].pending >> pk_k(slot) & 1));
+    cpk_put(&c->pk, s, pk_k(slot), line, dirty, pending);
+    return;
+  }
   if (c->flat_ok) {
     /* A slot keeps its word and byte. */
     uint64_t *st = fstamp_get(c, slot);

@@ -6,7 +6,8 @@
  * most 1024 lines, or a shared one of at most 2^17, and at most 16 ways is
  * one block of 16 bytes a line from its first line on, its pages taken by the
  * host as they are written, 2 MiB at most, plus 8 bytes a line once the owner
- * keeps a word or a byte). A line may be pending
+ * keeps a word or a byte; of exactly 16 ways and a power-of-two count of
+ * sets, 5 bytes a line, sim/cache_packed.h). A line may be pending
  * (allocated, its fill not yet back): it is never chosen as a victim. The
  * caller decides what a hit, a miss or an eviction costs; this module only
  * keeps the contents. Used for the L1s and the L2. */
@@ -58,6 +59,11 @@ void cache_touch(struct cache *c, uint32_t slot);
 /* cache_find then, on a hit, cache_touch, in one look at the set: the slot
  * (now the most recently used), or CACHE_NONE (nothing changed). */
 uint32_t cache_use(struct cache *c, uint64_t line);
+
+/* Ask the host to bring line's set into its caches, for a find or a use
+ * soon after (the L2's, when a load misses the L1): a packed cache's
+ * tags; other layouts ignore it. Changes nothing. */
+void cache_prefetch(const struct cache *c, uint64_t line);
 
 /* The slot line would replace: the least recently used slot of its set that is
  * not pending (an invalid slot first), or CACHE_NONE if every slot is pending. */

@@ -188,6 +188,8 @@ static bool l2_try(struct l2 *l2, const struct req *r, uint64_t t) {
   return true;
 }
 
+void l2_prefetch(const struct l2 *l2, uint64_t line) { cache_prefetch(l2->tags, line); }
+
 void l2_warm(struct l2 *l2, uint64_t line, bool write) {
   uint32_t slot = cache_use(l2->tags, line);
   if (slot != CACHE_NONE) {

@@ -108,6 +108,10 @@ void l2_set_client(struct l2 *l2, const struct l2_client *client);
 void l2_access(struct l2 *l2, uint64_t line, enum l2_op op, unsigned cls, void *waiter,
                uint32_t tag);
 
+/* Ask the host to fetch the tags an access of line will read (a load that
+ * missed the L1 reaches the L2 an event later). Changes nothing. */
+void l2_prefetch(const struct l2 *l2, uint64_t line);
+
 /* Warm the L2 with one access of a line, no time (sampling's fast-forward):
  * a line it holds (or is fetching) becomes the most recently used, dirty on a
  * write; else it is installed in its set's victim slot, valid and not pending

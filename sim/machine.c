@@ -375,6 +375,7 @@ static inline void door_load(struct mctx *c, uint64_t addr, uint32_t size, unsig
     if (!hit) {
       pending++;
       run++;
+      l2_prefetch(m->l2, line);
     }
     /* Send the run when a hit, the end or the run's limit closes it. */
     if (run && (hit || line == end || run == ACCESS_RUN_MAX)) {
@@ -412,6 +413,7 @@ static inline void door_store(struct mctx *c, uint64_t addr, uint32_t size, unsi
       cache_use(l1, line);
     }
     bool whole = line >= first_whole && (line < end || last_whole);
+    l2_prefetch(m->l2, line);
     if (costed) cost_store_push(c, cost_tag(c));
     engine_at(m->eng, c->t, costed ? ev_l2_access_costed : ev_l2_access, c,
               access_pack(line, 1, whole ? L2_STORE_LINE : L2_STORE, cls));
