@@ -251,9 +251,10 @@ void app_timed_run(struct app_timed *t, const struct app_world *w, uint32_t mask
   if (events) machine_trace_enable(t->m, events);
   r.t0 = app_now();
   /* The pre-pass is part of what a sampled run costs: inside wall_s. */
-  if (t->sampled && !sample->whole_image && sample->prepass)
-    sample_aux_run(&t->sample, sample->prepass, sample->seed, w, mask, seed, width, height, k, &pp,
-                   work);
+  if (t->sampled && !sample->whole_image && sample->prepass) {
+    const struct sample_aux_plan sp = sample_aux_plan_of(sample, n);
+    sample_aux_run(&t->sample, &sp, sample->seed, mp, w, mask, seed, width, height, k, &pp, work);
+  }
   machine_run(t->m, run_worker, &r, progress ? cycle_progress : NULL, &r);
   t->wall_s = app_now() - r.t0;
   if (progress) fputc('\n', stderr);

@@ -151,6 +151,7 @@ enum policy_item sample_item(void *ctx, uint64_t k, uint32_t core, struct mem_po
   struct sample_unit *u = &s->u[s->cur];
   CHECK_LT(k, u->end);
   if (k >= u->start) {
+    if (k == u->start) probe(s, u->at_start);
     if (k == u->measure) {
       probe(s, u->at0);
       u->have0 = true;
@@ -242,6 +243,7 @@ struct parts {
   double slots_mid;      /* issue slots the middle stands for (the whole image) */
   double A[SA_COUNT];    /* sum over middle units of W_h x a_h / M_h (pre-pass) */
   double X[SA_COUNT];    /* the middle's auxiliary totals (pre-pass) */
+  double D; /* sum over middle units of W_h x (DRAM bytes of its detailed items) / d_h */
 };
 
 enum sample_fig {
@@ -267,7 +269,7 @@ static unsigned aux_of(const struct sampler *s, enum sample_q q) {
   case SQ_LAT_N: return SA_SLOTS;
   case SQ_RAYS: return SA_RAYS;
   case SQ_DRAM_BYTES:
-  case SQ_LAT_SUM: return SA_LINES;
+  case SQ_LAT_SUM: return SA_DRAM;
   default: return s->cyc_aux;
   }
 }
@@ -281,6 +283,14 @@ static unsigned aux_of(const struct sampler *s, enum sample_q q) {
 static double mid(const struct sampler *s, const struct parts *p, enum sample_q q) {
   if (s->aux) {
     const unsigned a = aux_of(s, q);
+    /* In ratio to the model's DRAM bytes: the units' measured bytes per
+     * modelled byte over their detailed items (the same items in both: the
+     * model's calibration) times the middle's modelled bytes, then q per
+     * DRAM byte over the units' windows. */
+    if (a == SA_DRAM)
+      return p->A[a] > 0 && p->S[SQ_DRAM_BYTES] > 0
+                 ? p->S[q] / p->S[SQ_DRAM_BYTES] * p->D / p->A[a] * p->X[a]
+                 : 0;
     return p->A[a] > 0 ? p->S[q] / p->A[a] * p->X[a] : 0;
   }
   if (!s->whole) return p->S[q];
@@ -328,6 +338,22 @@ static double aux_unit(const struct sampler *s, uint32_t h, unsigned a) {
   return x[SA_SLOTS] > 0 ? slots * x[a] / x[SA_SLOTS] : 0;
 }
 
+/* Middle unit h's detailed items: their count, the DRAM bytes the machine
+ * moved for them (from the claim of its first to that of the next unit's
+ * first: the drain between lets every item of h finish, and the warming and
+ * skipped items move none), and the model's bytes for them. */
+static double detailed(const struct sample_unit *u) { return (double)(u->end - u->start); }
+static double unit_dram(const struct sampler *s, uint32_t h) {
+  return (double)(s->u[h + 1].at_start[SQ_DRAM_BYTES] - s->u[h].at_start[SQ_DRAM_BYTES]);
+}
+
+/* Middle unit h's value of auxiliary a per item: the DRAM model's over its
+ * detailed items, the others' over its window (aux_unit). */
+static double aux_val(const struct sampler *s, uint32_t h, unsigned a) {
+  if (a == SA_DRAM) return s->aux->unit[h * SA_COUNT + a] / detailed(&s->u[h]);
+  return aux_unit(s, h, a) / items(&s->u[h]);
+}
+
 static void parts_of(const struct sampler *s, struct parts *p) {
   memset(p, 0, sizeof *p);
   const struct sample_unit *f = &s->u[0], *l = &s->u[s->n - 1];
@@ -339,10 +365,11 @@ static void parts_of(const struct sampler *s, struct parts *p) {
   p->slots_mid = (double)s->slots_total - p->edge[SQ_SLOTS];
   if (!s->aux) return;
   for (unsigned a = 0; a < SA_COUNT; a++) {
-    for (uint32_t h = 1; h + 1 < s->n; h++)
-      p->A[a] += weight(s, h) * aux_unit(s, h, a) / items(&s->u[h]);
+    for (uint32_t h = 1; h + 1 < s->n; h++) p->A[a] += weight(s, h) * aux_val(s, h, a);
     p->X[a] = sample_aux_total(s->aux, a);
   }
+  for (uint32_t h = 1; h + 1 < s->n; h++)
+    p->D += weight(s, h) * unit_dram(s, h) / detailed(&s->u[h]);
 }
 
 struct est {
@@ -355,7 +382,11 @@ struct est {
 /* f's gradient in the middle units' auxiliary sums (ga) and in the middle's
  * auxiliary totals (gx), numerically, at the estimate v. */
 static void aux_grad(const struct sampler *s, const struct parts *p, enum sample_fig f, double v,
-                     double ga[SA_COUNT], double gx[SA_COUNT]) {
+                     double ga[SA_COUNT], double gx[SA_COUNT], double *gd) {
+  struct parts dd = *p;
+  const double eps_d = fabs(p->D) * 1e-7 + 1e-9;
+  dd.D += eps_d;
+  *gd = (figure(s, &dd, f) - v) / eps_d;
   for (unsigned a = 0; a < SA_COUNT; a++) {
     struct parts d = *p;
     double eps = fabs(p->A[a]) * 1e-7 + 1e-9;
@@ -386,15 +417,17 @@ static struct est estimate(const struct sampler *s, enum sample_fig f) {
     d.S[q] += eps;
     grad[q] = (figure(s, &d, f) - v) / eps;
   }
-  double ga[SA_COUNT] = {0}, gx[SA_COUNT] = {0};
-  if (s->aux) aux_grad(s, &p, f, v, ga, gx);
+  double ga[SA_COUNT] = {0}, gx[SA_COUNT] = {0}, gd = 0;
+  if (s->aux) aux_grad(s, &p, f, v, ga, gx, &gd);
   const uint32_t r = s->n - 2; /* middle units */
   double prev = 0, ss = 0, w2 = 0;
   for (uint32_t h = 1; h + 1 < s->n; h++) {
     double l = 0;
     for (unsigned q = 0; q < SQ_COUNT; q++) l += grad[q] * delta(&s->u[h], q) / items(&s->u[h]);
-    if (s->aux)
-      for (unsigned a = 0; a < SA_COUNT; a++) l += ga[a] * aux_unit(s, h, a) / items(&s->u[h]);
+    if (s->aux) {
+      for (unsigned a = 0; a < SA_COUNT; a++) l += ga[a] * aux_val(s, h, a);
+      l += gd * unit_dram(s, h) / detailed(&s->u[h]);
+    }
     if (h > 1) ss += (l - prev) * (l - prev);
     prev = l;
     w2 += weight(s, h) * weight(s, h);
@@ -424,7 +457,7 @@ static struct est estimate(const struct sampler *s, enum sample_fig f) {
 static void choose_cyc_aux(struct sampler *s) {
   double best = INFINITY;
   unsigned pick = SA_SLOTS;
-  const unsigned cand[] = {SA_SLOTS, SA_LINES};
+  const unsigned cand[] = {SA_SLOTS, SA_DRAM};
   for (unsigned i = 0; i < 2; i++) {
     s->cyc_aux = cand[i];
     const struct est e = estimate(s, SF_CYCLES);

@@ -54,14 +54,15 @@ enum sample_q {
 };
 
 /* The pre-pass's auxiliary figures of an item (sample_aux.h): issue slots,
- * rays, footprint (distinct lines touched). */
-enum sample_a { SA_SLOTS, SA_RAYS, SA_LINES, SA_COUNT };
+ * rays, the DRAM bytes the functional L2 model charged it. */
+enum sample_a { SA_SLOTS, SA_RAYS, SA_DRAM, SA_COUNT };
 
 struct sample_unit {
   uint64_t stratum_lo, stratum_hi; /* the stratum's items [lo, hi) */
   uint64_t warm_from, start, measure,
       end; /* warmed [warm_from, start), detailed [start, end), measured [measure, end) */
   uint64_t at0[SQ_COUNT], at1[SQ_COUNT];
+  uint64_t at_start[SQ_COUNT]; /* a probe at the claim of its first detailed item */
   bool have0, have1;
 };
 
@@ -87,7 +88,7 @@ struct sampler {
   /* With a sampled image and a pre-pass (sample.prepass > 0): the auxiliary
    * figures (sample_aux.h; NULL: none, the expansion estimator), and the one
    * the cycles and the energy are taken in ratio to (enum sample_a: slots or
-   * lines, whichever gives the narrower interval; sample_finish chooses). */
+   * modelled DRAM bytes, whichever gives the narrower interval; sample_finish chooses). */
   struct sample_aux *aux;
   unsigned cyc_aux;
 };

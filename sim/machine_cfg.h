@@ -46,8 +46,10 @@ struct machine_cfg_sample {
   double fraction;
   uint32_t units;
   double warming;
-  uint32_t whole_image; /* 1: every item traced (sample.image: whole) */
-  uint32_t prepass;     /* sampled image: the pre-pass traces one item in this many (0: none) */
+  uint32_t whole_image;   /* 1: every item traced (sample.image: whole) */
+  uint32_t prepass;       /* sampled image: the pre-pass counts one item in this many (0: none) */
+  uint32_t stretch;       /* the pre-pass's stretches, items (0: the ray contexts) */
+  double stretch_warming; /* items warmed before a stretch or unit window, x the ray contexts */
   uint64_t seed;
 };
 
