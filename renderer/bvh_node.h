@@ -124,6 +124,17 @@ BT_INLINE uint32_t bt_children8(const struct bvh *b, uint32_t ni, const struct t
   return m;
 }
 
+/* kids[0..m) nearest first by entry distance, ties in their order (an
+ * insertion sort: m is at most 8). */
+BT_INLINE void bt_sort_nearest(struct bt_entry *kids, uint32_t m) {
+  for (uint32_t i = 1; i < m; i++)
+    for (uint32_t j = i; j > 0 && kids[j].t < kids[j - 1].t; j--) {
+      const struct bt_entry x = kids[j];
+      kids[j] = kids[j - 1];
+      kids[j - 1] = x;
+    }
+}
+
 /* Bytes of a node of b as the memory image holds it (64 or 80). */
 static inline uint32_t bt_node_bytes(const struct bvh *b) {
   return b->kind == ACCEL_BVH8 ? (uint32_t)sizeof(struct bvh8_node) : 64u;

@@ -69,13 +69,7 @@ static uint64_t bp_setup(const struct bvh *b, struct bvh_packet *bp, const struc
   uint64_t live = 0;
   for (uint32_t i = 0; i < n; i++) {
     const struct ray *r = &rays[i];
-    if (any_hit) {
-      occ[i] = false;
-    } else {
-      hits[i].t = r->tmax;
-      hits[i].prim = -1;
-      hits[i].b1 = hits[i].b2 = 0.0f;
-    }
+    trav_clear_result(r, any_hit, &hits[i], &occ[i]);
     bp->nodes[i] = bp->tris[i] = 0;
     if (!trav_ray_valid(r) || b->node_count == 0 || !trav_setup_box(&bp->tv[i], b->lo, b->hi, r))
       continue;

@@ -66,12 +66,7 @@ BT_INLINE bool bt_traverse(struct trace_ctx *tr, const struct ray *r, bool any, 
       }
       tr->stats.node_visits++;
       /* Nearest first: sort by entry (stable), push the rest farthest first. */
-      for (uint32_t i = 1; i < m; i++)
-        for (uint32_t j = i; j > 0 && kids[j].t < kids[j - 1].t; j--) {
-          const struct bt_entry x = kids[j];
-          kids[j] = kids[j - 1];
-          kids[j - 1] = x;
-        }
+      bt_sort_nearest(kids, m);
       if (m > 0) {
         CHECK_LE(sp + (int)m - 1, BT_STACK);
         for (uint32_t i = m; i-- > 1;) stack[sp++] = kids[i];

@@ -312,13 +312,7 @@ PK_INLINE uint64_t pk_setup(struct trace_ctx *tr, struct trace_packet *pk, const
   memset(pk->mb_prim, 0xff, sizeof pk->mb_prim);
   for (uint32_t i = 0; i < n; i++) {
     const struct ray *r = &rays[i];
-    if (any_hit) {
-      occ[i] = false;
-    } else {
-      hits[i].t = r->tmax;
-      hits[i].prim = -1;
-      hits[i].b1 = hits[i].b2 = 0.0f;
-    }
+    trav_clear_result(r, any_hit, &hits[i], &occ[i]);
     struct pk_ray *q = &pk->ray[i];
     q->nodes = 0;
     pk->tris[i] = 0;

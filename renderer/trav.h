@@ -49,6 +49,19 @@ static inline bool trav_ray_valid(const struct ray *r) {
   return m >= TRAV_MIN_DIR;
 }
 
+/* A packet's ray i before its traversal: no occlusion found yet (any_hit),
+ * else no hit up to its tmax. */
+static inline void trav_clear_result(const struct ray *r, bool any_hit, struct trace_hit *hit,
+                                     bool *occ) {
+  if (any_hit) {
+    *occ = false;
+  } else {
+    hit->t = r->tmax;
+    hit->prim = -1;
+    hit->b1 = hit->b2 = 0.0f;
+  }
+}
+
 /* Set up tr and clip the ray to the thickened root box [blo, bhi] (the k-d
  * tree's or a BVH's); false if it misses.
  * NOTE: inline keeps it inlined in traverse() now that packets call it too. */

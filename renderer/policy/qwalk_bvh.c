@@ -42,12 +42,7 @@ static uint32_t visit(const struct qwalk_tree *t, struct trace_ctx *tr, struct q
            TRACE_CLASS_NODE);
   mem_compute(&tr->mem, 3ull * tr->layout.node_cycles * tested);
   tr->stats.node_visits++;
-  for (uint32_t i = 1; i < m; i++)
-    for (uint32_t j = i; j > 0 && kids[j].t < kids[j - 1].t; j--) {
-      const struct bt_entry x = kids[j];
-      kids[j] = kids[j - 1];
-      kids[j - 1] = x;
-    }
+  bt_sort_nearest(kids, m);
   for (uint32_t i = 0; i < m; i++) {
     out[i] = qpoint_bvh_place(b->node_count, kids[i].ref, kids[i].count);
     te[i] = kids[i].t;
