@@ -90,13 +90,13 @@ int main(void) {
   const char *din = RTSIM_TMP "/traffic_test.din";
   /* Dynamic's schedule is made for 8 KB; its queues store whole lines. The
    * third run is on a tree built with clipped (perfect) splits; the fourth is
-   * the treelet policy, its treelets made for 8 KB; the last seven trace the
+   * the treelet policy, its treelets made for 8 KB; the last eight trace the
    * binary and the 8-wide BVH, single rays, packets, queue points and
    * treelets. */
   static const char *const policies[] = {"recursive", "dynamic",   "dynamic", "treelet",
                                          "recursive", "recursive", "packet",  "packet",
-                                         "dynamic",   "dynamic",   "treelet"};
-  char scenes[11][1024];
+                                         "dynamic",   "dynamic",   "treelet", "treelet"};
+  char scenes[12][1024];
   snprintf(scenes[0], sizeof scenes[0], "%s/scenes/small/room.yaml", RTSIM_SOURCE_DIR);
   snprintf(scenes[1], sizeof scenes[1], "%s/scenes/small/room.yaml", RTSIM_SOURCE_DIR);
   snprintf(scenes[2], sizeof scenes[2], "%s/scenes/good_room_tiny_clipped.yaml", RTSIM_TEST_DATA);
@@ -108,6 +108,7 @@ int main(void) {
   snprintf(scenes[8], sizeof scenes[8], "%s/scenes/good_room_tiny_bvh2.yaml", RTSIM_TEST_DATA);
   snprintf(scenes[9], sizeof scenes[9], "%s/scenes/good_room_tiny_bvh8.yaml", RTSIM_TEST_DATA);
   snprintf(scenes[10], sizeof scenes[10], "%s/scenes/good_room_tiny_bvh8.yaml", RTSIM_TEST_DATA);
+  snprintf(scenes[11], sizeof scenes[11], "%s/scenes/good_room_tiny_bvh2.yaml", RTSIM_TEST_DATA);
   unsigned long long dyn_misses_8k = 0, tl_misses_8k = 0;
   for (size_t p = 0; p < sizeof policies / sizeof policies[0]; p++) {
     unlink(din);
