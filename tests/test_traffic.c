@@ -96,19 +96,18 @@ int main(void) {
   static const char *const policies[] = {"recursive", "dynamic",   "dynamic", "treelet",
                                          "recursive", "recursive", "packet",  "packet",
                                          "dynamic",   "dynamic",   "treelet", "treelet"};
+  /* Each run's scene: under the source's scenes/ (small/room) or the test
+   * data's (the tiny room on a clipped tree or a BVH). */
+  static const char *const scene_files[] = {
+      "small/room",          "small/room",          "good_room_tiny_clipped",
+      "small/room",          "good_room_tiny_bvh2", "good_room_tiny_bvh8",
+      "good_room_tiny_bvh2", "good_room_tiny_bvh8", "good_room_tiny_bvh2",
+      "good_room_tiny_bvh8", "good_room_tiny_bvh8", "good_room_tiny_bvh2"};
   char scenes[12][1024];
-  snprintf(scenes[0], sizeof scenes[0], "%s/scenes/small/room.yaml", RTSIM_SOURCE_DIR);
-  snprintf(scenes[1], sizeof scenes[1], "%s/scenes/small/room.yaml", RTSIM_SOURCE_DIR);
-  snprintf(scenes[2], sizeof scenes[2], "%s/scenes/good_room_tiny_clipped.yaml", RTSIM_TEST_DATA);
-  snprintf(scenes[3], sizeof scenes[3], "%s/scenes/small/room.yaml", RTSIM_SOURCE_DIR);
-  snprintf(scenes[4], sizeof scenes[4], "%s/scenes/good_room_tiny_bvh2.yaml", RTSIM_TEST_DATA);
-  snprintf(scenes[5], sizeof scenes[5], "%s/scenes/good_room_tiny_bvh8.yaml", RTSIM_TEST_DATA);
-  snprintf(scenes[6], sizeof scenes[6], "%s/scenes/good_room_tiny_bvh2.yaml", RTSIM_TEST_DATA);
-  snprintf(scenes[7], sizeof scenes[7], "%s/scenes/good_room_tiny_bvh8.yaml", RTSIM_TEST_DATA);
-  snprintf(scenes[8], sizeof scenes[8], "%s/scenes/good_room_tiny_bvh2.yaml", RTSIM_TEST_DATA);
-  snprintf(scenes[9], sizeof scenes[9], "%s/scenes/good_room_tiny_bvh8.yaml", RTSIM_TEST_DATA);
-  snprintf(scenes[10], sizeof scenes[10], "%s/scenes/good_room_tiny_bvh8.yaml", RTSIM_TEST_DATA);
-  snprintf(scenes[11], sizeof scenes[11], "%s/scenes/good_room_tiny_bvh2.yaml", RTSIM_TEST_DATA);
+  for (size_t k = 0; k < 12; k++)
+    snprintf(scenes[k], sizeof scenes[k], "%s/scenes/%s.yaml",
+             strncmp(scene_files[k], "small/", 6) ? RTSIM_TEST_DATA : RTSIM_SOURCE_DIR,
+             scene_files[k]);
   unsigned long long dyn_misses_8k = 0, tl_misses_8k = 0;
   for (size_t p = 0; p < sizeof policies / sizeof policies[0]; p++) {
     unlink(din);
