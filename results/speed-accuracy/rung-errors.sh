@@ -133,3 +133,12 @@ END {
           C[j], hi(C, nc, j), n[k], c0[k], c1[k], y0[k], y1[k]
     }
 }' "$points" > "$res/rung-errors.csv"
+
+# The figure a reader picks a rung by: each cheaper run's cycles error
+# against the banked run of its point, over that banked run's DRAM
+# utilization, one panel a policy, one marker a rung.
+awk -F, 'NR == 1 { print "rung,policy,DRAM utilization (banked run),cycles error against banked (%)"; next }
+{ printf "%s,%s,%s,%.4g\n", $4, $3, $12, $14 * 100 }' "$points" > "$out/rung-plot.csv"
+"$rtsim" plot "$out/rung-plot.csv" --x "DRAM utilization (banked run)" \
+  --y "cycles error against banked (%)" --lines rung --panels policy --points \
+  --order channel,fixed,analytic -o "$res/rung-errors.png"
