@@ -353,14 +353,13 @@ struct dram_banked *dram_banked_create(const struct dram_banked_params *p, uint6
       }
       c->last_busy = c->took_at = DRAM_BANKED_NEVER;
     }
-    c->next = DRAM_BANKED_FAR;
     for (uint32_t k = 0; k < p->ranks; k++) {
       struct dram_banked_rank *rk = &c->ranks[k];
       rk->act = rk->rd = rk->wr = rk->ref_end = DRAM_BANKED_NEVER;
       for (int j = 0; j < 4; j++) rk->faw[j] = DRAM_BANKED_NEVER;
-      rk->next_due = dram_banked_refresh_due(d, k, 0);
-      if (rk->next_due < c->next) c->next = rk->next_due;
     }
+    dram_banked_refresh_init(d, c);
+    c->next = c->due_min;
   }
   return d;
 }

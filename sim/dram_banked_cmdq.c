@@ -239,6 +239,69 @@ static void col_refresh(const struct dram_banked *d, const struct dram_banked_ch
   s->k = k;
 }
 
+/* per_bank: command queue qi's candidates as cq_candidates finds them, from
+ * what a queue of one bank can offer (see col_refresh): a closed bank, its
+ * oldest entry's ACT; an open one, the oldest read and the oldest write of
+ * the open row (a write behind an older read of its place skipped), and a
+ * PRE for the oldest entry when it conflicts and no entry hits the row (or
+ * the row has served the cap). Holds because `ready` never falls along a
+ * command queue (entries move to it in cycle order). */
+static void bank_candidates(const struct dram_banked *d, const struct dram_banked_channel *c,
+                            uint32_t qi, int64_t now, struct dram_banked_qsum *s, bool *has_act,
+                            bool *has_col) {
+  const struct dram_banked_queue *q = &c->cq[qi];
+  const struct dram_banked_bank *bk = &c->banks[qi];
+  const struct dram_banked_req *r0 = &q->r[0];
+  s->act_t = s->rd_t = s->wr_t = s->o_t = DRAM_BANKED_FAR;
+  s->o = (struct dram_banked_cmd){DRAM_BANKED_CMD_NONE, 0, 0, 0, 0, false};
+  *has_act = !bk->open;
+  if (!bk->open) {
+    s->act_t = s->o_t = dram_banked_act_earliest(d, c, r0, now);
+    s->o = (struct dram_banked_cmd){DRAM_BANKED_CMD_ACT, r0->rank, r0->bank, 0, qi, true};
+  } else {
+    bool hit = false;
+    for (uint32_t j = 0; j < q->n && (s->rd_t == DRAM_BANKED_FAR || s->wr_t == DRAM_BANKED_FAR);
+         j++) {
+      const struct dram_banked_req *r = &q->r[j];
+      if (r->row != bk->row) continue;
+      hit = true;
+      if (!r->write) {
+        if (s->rd_t == DRAM_BANKED_FAR) s->rd_t = now, s->rd_j = j;
+      } else if (s->wr_t == DRAM_BANKED_FAR && !write_behind_read(q, j)) {
+        s->wr_t = now, s->wr_j = j;
+      }
+    }
+    if (r0->row != bk->row && (bk->hits >= DRAM_BANKED_ROW_HIT_CAP || !hit)) {
+      s->o_t = max64(max64(now, r0->ready), bk->pre_ok);
+      s->o = (struct dram_banked_cmd){DRAM_BANKED_CMD_PRE, r0->rank, r0->bank, 0, qi, true};
+    }
+  }
+  *has_col = s->rd_t < DRAM_BANKED_FAR || s->wr_t < DRAM_BANKED_FAR;
+  col_refresh(d, c, qi, now, s); /* (the column times, and the first least) */
+}
+
+/* Test only (check_summaries): bank_candidates' summary s of command queue
+ * qi at now, and its kinds, against cq_candidates' from scratch. */
+static void check_bank_candidates(const struct dram_banked *d, const struct dram_banked_channel *c,
+                                  uint32_t qi, int64_t now, const struct dram_banked_qsum *s,
+                                  bool act, bool col) {
+  struct dram_banked_qsum full;
+  bool full_act, full_col;
+  cq_candidates(d, c, qi, now, &full, &full_act, &full_col);
+  CHECK_EQ(full_act, act);
+  CHECK_EQ(full_col, col);
+  CHECK_EQ(full.t, s->t);
+  CHECK_EQ(full.act_t, s->act_t);
+  CHECK_EQ(full.rd_t, s->rd_t);
+  CHECK_EQ(full.wr_t, s->wr_t);
+  CHECK_EQ(full.o_t, s->o_t);
+  CHECK(full.rd_t == DRAM_BANKED_FAR || full.rd_j == s->rd_j);
+  CHECK(full.wr_t == DRAM_BANKED_FAR || full.wr_j == s->wr_j);
+  CHECK(full.o_t == DRAM_BANKED_FAR || (full.o.type == s->o.type && full.o.qi == s->o.qi));
+  CHECK(full.t == DRAM_BANKED_FAR ||
+        (full.k.type == s->k.type && full.k.qi == s->k.qi && full.k.bank == s->k.bank));
+}
+
 static const struct dram_banked_qsum *
 cq_sum(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi, int64_t now) {
   struct dram_banked_qsum *s = &c->sum[qi];
@@ -262,7 +325,12 @@ cq_sum(const struct dram_banked *d, struct dram_banked_channel *c, uint32_t qi, 
     return s;
   }
   bool act, col;
-  cq_candidates(d, c, qi, now, s, &act, &col);
+  if (c->col_stale) {
+    bank_candidates(d, c, qi, now, s, &act, &col);
+    if (d->p.check_summaries) check_bank_candidates(d, c, qi, now, s, act, col);
+  } else {
+    cq_candidates(d, c, qi, now, s, &act, &col);
+  }
   if (c->col_stale) c->col_stale[w] &= ~bit;
   c->fresh[w] |= bit;
   c->has_act[w] = act ? c->has_act[w] | bit : c->has_act[w] & ~bit;

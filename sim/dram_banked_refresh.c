@@ -11,17 +11,35 @@ int64_t dram_banked_refresh_due(const struct dram_banked *d, uint32_t rank, uint
   return ((int64_t)k * (int64_t)d->p.ranks + rank + 1) * d->refresh_step;
 }
 
+/* c->due_min after a rank's next_due moved. */
+static void due_min_update(const struct dram_banked *d, struct dram_banked_channel *c) {
+  c->due_min = DRAM_BANKED_FAR;
+  for (uint32_t k = 0; k < d->p.ranks; k++)
+    if (c->ranks[k].next_due < c->due_min) c->due_min = c->ranks[k].next_due;
+}
+
+void dram_banked_refresh_init(const struct dram_banked *d, struct dram_banked_channel *c) {
+  for (uint32_t k = 0; k < d->p.ranks; k++) c->ranks[k].next_due = dram_banked_refresh_due(d, k, 0);
+  due_min_update(d, c);
+  c->ref_ranks = 0;
+}
+
 void dram_banked_refresh_fall_due(struct dram_banked *d, struct dram_banked_channel *c,
                                   int64_t now) {
+  if (now < c->due_min) return;
   const int64_t period = d->refresh_step * (int64_t)d->p.ranks;
   for (uint32_t k = 0; k < d->p.ranks; k++) {
     struct dram_banked_rank *rk = &c->ranks[k];
     while (rk->next_due <= now) {
-      if (!rk->pending++) dram_banked_block_rank(d, c, k, true);
+      if (!rk->pending++) {
+        dram_banked_block_rank(d, c, k, true);
+        c->ref_ranks++;
+      }
       rk->next_due += period;
       c->memo_ok = false;
     }
   }
+  due_min_update(d, c);
 }
 
 /* The earliest cycle >= now rank `rank`'s REF could issue (its banks all
@@ -39,10 +57,12 @@ static int64_t ref_earliest(const struct dram_banked *d, const struct dram_banke
  * fall due bounds the scan's next. */
 void dram_banked_scan_refresh(struct dram_banked *d, struct dram_banked_channel *c, int64_t now,
                               struct dram_banked_pick *pk) {
+  /* (No refresh pending: only the next to fall due bounds next.) */
+  if (c->due_min < pk->next) pk->next = max64(c->due_min, now);
+  if (!c->ref_ranks) return;
   const uint32_t bpr = d->banks_per_rank;
   for (uint32_t k = 0; k < d->p.ranks; k++) {
     struct dram_banked_rank *rk = &c->ranks[k];
-    if (rk->next_due < pk->next) pk->next = max64(rk->next_due, now);
     if (!rk->pending) continue;
     if (rk->open) {
       for (uint32_t i = 0; i < bpr; i++) {
@@ -60,7 +80,10 @@ void dram_banked_scan_refresh(struct dram_banked *d, struct dram_banked_channel 
 void dram_banked_refresh_issue(struct dram_banked *d, struct dram_banked_channel *c, uint32_t rank,
                                int64_t now) {
   struct dram_banked_rank *rk = &c->ranks[rank];
-  if (!--rk->pending) dram_banked_block_rank(d, c, rank, false);
+  if (!--rk->pending) {
+    dram_banked_block_rank(d, c, rank, false);
+    c->ref_ranks--;
+  }
   rk->ref_end = now + d->p.tRFC;
   for (uint32_t i = 0; i < d->banks_per_rank; i++) {
     struct dram_banked_bank *bk = &c->banks[rank * d->banks_per_rank + i];

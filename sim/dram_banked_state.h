@@ -170,6 +170,10 @@ struct dram_banked_channel {
   struct dram_banked_group *groups; /* ranks x groups */
   struct dram_banked_rank *ranks;
   int64_t next; /* earliest cycle a command may issue or a refresh fall due */
+  /* Refresh at a glance (dram_banked_refresh.c): the least of the ranks'
+   * next_due, and how many ranks have a refresh pending. */
+  int64_t due_min;
+  uint32_t ref_ranks;
   uint64_t scan_no;
   /* Floors under column commands' times by rank x 2 + write
    * (dram_banked_col_floor); col_gen counts column commands, from 1. */
@@ -393,6 +397,8 @@ void dram_banked_bus_add(struct dram_banked *d, struct dram_banked_channel *c, i
 /* The cycle rank `rank`'s k-th refresh (k >= 0) falls due
  * (DRAM_BANKED_FAR: refresh off). */
 int64_t dram_banked_refresh_due(const struct dram_banked *d, uint32_t rank, uint64_t k);
+/* Channel c's refresh state at creation: each rank's first due time. */
+void dram_banked_refresh_init(const struct dram_banked *d, struct dram_banked_channel *c);
 /* Refreshes falling due by cycle now on channel c. */
 void dram_banked_refresh_fall_due(struct dram_banked *d, struct dram_banked_channel *c,
                                   int64_t now);

@@ -62,15 +62,35 @@ static void test_falling_due(void) {
   EXPECT(c->ranks[0].next_due == 4682 && c->ranks[1].next_due == 9364 && c->next == 4682);
   dram_banked_refresh_fall_due(d, c, 4681);
   EXPECT(c->ranks[0].pending == 0 && c->ranks[1].pending == 0 && c->blocked[0] == 0);
+  EXPECT(c->due_min == 4682 && c->ref_ranks == 0);
   dram_banked_refresh_fall_due(d, c, 4682);
   EXPECT(c->ranks[0].pending == 1 && c->ranks[0].next_due == 14046);
   EXPECT(c->ranks[1].pending == 0 && c->ranks[1].next_due == 9364);
   EXPECT(c->blocked[0] == 0xFFFFull); /* rank 0's queues */
+  EXPECT(c->due_min == 9364 && c->ref_ranks == 1);
   /* A late look counts each refresh that fell due meanwhile. */
   dram_banked_refresh_fall_due(d, c, 20000);
   EXPECT(c->ranks[0].pending == 2 && c->ranks[0].next_due == 23410);
   EXPECT(c->ranks[1].pending == 2 && c->ranks[1].next_due == 28092);
   EXPECT(c->blocked[0] == 0xFFFFFFFFull);
+  EXPECT(c->due_min == 23410 && c->ref_ranks == 2);
+  /* A scan: refresh work first (rank 0's REF: its banks are closed), and
+   * once none is pending, next is the next refresh to fall due. */
+  struct dram_banked_pick pk = {
+      .cmd.type = DRAM_BANKED_CMD_NONE, .next = DRAM_BANKED_FAR, .first_t = DRAM_BANKED_FAR};
+  dram_banked_scan_refresh(d, c, 20000, &pk);
+  EXPECT(pk.first.type == DRAM_BANKED_CMD_REF && pk.first.rank == 0 && pk.first_t == 20000);
+  EXPECT(pk.next == 20000);
+  dram_banked_refresh_issue(d, c, 0, 20000);
+  dram_banked_refresh_issue(d, c, 0, 20001);
+  EXPECT(c->ref_ranks == 1 && c->blocked[0] == 0xFFFF0000ull);
+  dram_banked_refresh_issue(d, c, 1, 20002);
+  dram_banked_refresh_issue(d, c, 1, 20003);
+  EXPECT(c->ref_ranks == 0 && c->blocked[0] == 0);
+  pk = (struct dram_banked_pick){
+      .cmd.type = DRAM_BANKED_CMD_NONE, .next = DRAM_BANKED_FAR, .first_t = DRAM_BANKED_FAR};
+  dram_banked_scan_refresh(d, c, 20004, &pk);
+  EXPECT(pk.first_t == DRAM_BANKED_FAR && pk.next == 23410);
   for (uint32_t r = 0; r < 2; r++) EXPECT(c->ranks[r].next_due == dram_banked_refresh_due(d, r, 2));
   dram_banked_destroy(d);
   engine_destroy(e);
