@@ -1,11 +1,12 @@
 /* The compressed 8-wide BVH, collapsed from the binary one: which subtrees
  * become its nodes and leaves is a chooser's (bvh8_plan.h: Ylitie et al.'s
  * SAH collapse by default); this lays them out and quantizes them. Leaves
- * hold at most BVH_LEAF_MAX triangles. Nodes are laid out breadth first, so each node's interior
- * children are consecutive and its leaves' lists too, as the 80-byte node's two base indices need
- * (bvh.h). Child boxes are quantized to 8 bits per plane relative to the node's box: lo rounded
- * down and hi rounded up, then checked in bvh8_plane's arithmetic so the quantized box contains the
- * exact one as traversal computes it. */
+ * hold at most BVH_LEAF_MAX triangles. Nodes are laid out breadth first, so
+ * each node's interior children are consecutive and its leaves' lists too,
+ * as the 80-byte node's two base indices need (bvh.h). Child boxes are
+ * quantized to 8 bits per plane relative to the node's box: lo rounded down
+ * and hi rounded up, then checked in bvh8_plane's arithmetic so the quantized
+ * box contains the exact one as traversal computes it. */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>

@@ -1,10 +1,11 @@
 /* Which subtrees of the binary BVH become the 8-wide BVH's nodes and leaves:
  * the collapse's choice, apart from its layout and quantization (bvh8.c).
  * Two choosers: Ylitie, Karras and Laine's SAH collapse (HPG 2017, section
- * 3.1; bvh8_plan.c) with bvh.h's BVH_SAH_NODE and BVH_SAH_PRIM, the default, and the greedy one
- * that opens the largest interior child until a node has eight (bvh8_greedy_children), kept for the
- * comparison tests/test_bvh8_plan.c makes (the SAH collapse's tree costs no
- * more than the greedy one's). Private to renderer/. */
+ * 3.1; bvh8_plan.c) with bvh.h's BVH_SAH_NODE and BVH_SAH_PRIM, the default,
+ * and the greedy one that opens the largest interior child until a node has
+ * eight (bvh8_greedy_children), kept for the comparison tests/test_bvh8_plan.c
+ * makes (the SAH collapse's tree costs no more than the greedy one's).
+ * Private to renderer/. */
 #ifndef RTSIM_RENDERER_BVH8_PLAN_H
 #define RTSIM_RENDERER_BVH8_PLAN_H
 
