@@ -3,16 +3,47 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <unistd.h>
 
 #include "app/app.h"
+#include "renderer/scene.h"
+#include "renderer/scene/meshio.h"
+#include "sim/err.h"
+
+struct bench_embree *bench_embree_from_ply(const struct scene *s, bool ignore, double *build_s) {
+  const char *td = getenv("TMPDIR");
+  char dir[4096];
+  snprintf(dir, sizeof dir, "%s/rtsim-bench-XXXXXX", td && *td ? td : "/tmp");
+  if (!mkdtemp(dir)) {
+    perror("rtsim bench: cannot make a temporary directory");
+    return NULL;
+  }
+  char ply[4200];
+  snprintf(ply, sizeof ply, "%s/scene.ply", dir);
+  struct err e = {0};
+  struct scene back;
+  scene_init(&back);
+  struct meshio_xform xf = {1.0f, v3(0, 0, 0)};
+  struct bench_embree *be = NULL;
+  if (meshio_export_ply(s, ply, &e) && meshio_import(&back, ply, &xf, 0, UINT32_MAX, &e)) {
+    if (back.tri_count != s->tri_count)
+      fprintf(stderr, "rtsim bench: %s: read back %u triangles, wrote %u\n", ply, back.tri_count,
+              s->tri_count);
+    else be = bench_embree_create(&back, ignore, build_s);
+  } else {
+    app_report(&e);
+  }
+  scene_fini(&back);
+  unlink(ply);
+  rmdir(dir);
+  return be;
+}
 
 #ifdef RTSIM_HAVE_EMBREE
 
 #include <embree3/rtcore.h>
 
 #include "renderer/ray.h"
-#include "renderer/scene.h"
-#include "sim/err.h"
 
 struct bench_embree {
   RTCDevice dev;
@@ -26,7 +57,23 @@ static void on_error(void *user, enum RTCError code, const char *msg) {
   fprintf(stderr, "rtsim bench: embree error %d: %s\n", (int)code, msg ? msg : "");
 }
 
-struct bench_embree *bench_embree_create(const struct scene *s, double *build_s) {
+/* An intersect context that carries the ray's ignored primitive to the
+ * filter (Embree hands the filter the context it was given). */
+struct ignore_ctx {
+  struct RTCIntersectContext ctx;
+  int32_t ignore;
+};
+
+static void ignore_filter(const struct RTCFilterFunctionNArguments *args) {
+  const struct ignore_ctx *ic = (const struct ignore_ctx *)args->context;
+  /* RTCHitN is N lanes of each field, primID the sixth (rtcore_ray.h's
+   * RTCHitN_primID, which is C++ only). */
+  const unsigned *prim = (const unsigned *)(const void *)args->hit + 5u * args->N;
+  for (unsigned i = 0; i < args->N; i++)
+    if (args->valid[i] && (int32_t)prim[i] == ic->ignore) args->valid[i] = 0;
+}
+
+struct bench_embree *bench_embree_create(const struct scene *s, bool ignore, double *build_s) {
   struct bench_embree *be = xcalloc(1, sizeof *be);
   be->dev = rtcNewDevice("threads=1");
   if (!be->dev) {
@@ -37,7 +84,8 @@ struct bench_embree *bench_embree_create(const struct scene *s, double *build_s)
   rtcSetDeviceErrorFunction(be->dev, on_error, NULL);
   double t0 = app_now();
   be->scn = rtcNewScene(be->dev);
-  rtcSetSceneFlags(be->scn, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneFlags(be->scn, ignore ? RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION
+                                   : RTC_SCENE_FLAG_ROBUST);
   RTCGeometry g = rtcNewGeometry(be->dev, RTC_GEOMETRY_TYPE_TRIANGLE);
   uint32_t n = s->tri_count;
   float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -77,12 +125,14 @@ void bench_embree_destroy(struct bench_embree *be) {
 }
 
 double bench_embree_trace(struct bench_embree *be, const struct ray *rays, uint32_t n,
-                          int32_t *prim) {
-  struct RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
+                          int32_t *prim, float *t) {
+  struct ignore_ctx ic;
+  rtcInitIntersectContext(&ic.ctx);
   double t0 = app_now();
   for (uint32_t i = 0; i < n; i++) {
     const struct ray *r = &rays[i];
+    ic.ignore = r->ignore_prim;
+    ic.ctx.filter = r->ignore_prim >= 0 ? ignore_filter : NULL;
     struct RTCRayHit rh;
     rh.ray.org_x = r->o.x;
     rh.ray.org_y = r->o.y;
@@ -98,8 +148,9 @@ double bench_embree_trace(struct bench_embree *be, const struct ray *rays, uint3
     rh.ray.flags = 0;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(be->scn, &ctx, &rh);
+    rtcIntersect1(be->scn, &ic.ctx, &rh);
     prim[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : (int32_t)rh.hit.primID;
+    if (t) t[i] = rh.ray.tfar;
   }
   return app_now() - t0;
 }
@@ -108,8 +159,9 @@ double bench_embree_trace(struct bench_embree *be, const struct ray *rays, uint3
 
 bool bench_embree_available(void) { return false; }
 
-struct bench_embree *bench_embree_create(const struct scene *s, double *build_s) {
+struct bench_embree *bench_embree_create(const struct scene *s, bool ignore, double *build_s) {
   (void)s;
+  (void)ignore;
   *build_s = 0;
   return NULL;
 }
@@ -117,10 +169,12 @@ struct bench_embree *bench_embree_create(const struct scene *s, double *build_s)
 void bench_embree_destroy(struct bench_embree *be) { (void)be; }
 
 double bench_embree_trace(struct bench_embree *be, const struct ray *rays, uint32_t n,
-                          int32_t *prim) {
+                          int32_t *prim, float *t) {
   (void)be;
   (void)rays;
   for (uint32_t i = 0; i < n; i++) prim[i] = -1;
+  if (t)
+    for (uint32_t i = 0; i < n; i++) t[i] = 0;
   return 0;
 }
 

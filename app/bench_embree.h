@@ -17,13 +17,20 @@ struct bench_embree;
 bool bench_embree_available(void);
 
 /* Build Embree's BVH over s's triangles (single thread, robust); *build_s is
- * its wall time. NULL (with a message on stderr) if Embree fails. */
-struct bench_embree *bench_embree_create(const struct scene *s, double *build_s);
+ * its wall time. With ignore, a ray's ignore_prim never hits (a context
+ * filter, as rtsim's secondary rays ignore the triangle they leave);
+ * without, the scene has no filter and ignore_prim is not looked at. NULL
+ * (with a message on stderr) if Embree fails. */
+struct bench_embree *bench_embree_create(const struct scene *s, bool ignore, double *build_s);
+
+/* The same over s's triangles as a PLY file holds them: exported, read back
+ * through the importer, the file removed. NULL on failure (reported). */
+struct bench_embree *bench_embree_from_ply(const struct scene *s, bool ignore, double *build_s);
 void bench_embree_destroy(struct bench_embree *be);
 
-/* Trace rays[0..n) one at a time; prim[i] = the primitive hit, or -1. Returns
- * the wall time of the loop. */
+/* Trace rays[0..n) one at a time; prim[i] = the primitive hit, or -1, and
+ * (t not NULL) t[i] its distance. Returns the wall time of the loop. */
 double bench_embree_trace(struct bench_embree *be, const struct ray *rays, uint32_t n,
-                          int32_t *prim);
+                          int32_t *prim, float *t);
 
 #endif

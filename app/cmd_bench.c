@@ -6,16 +6,15 @@
 #include <getopt.h> /* optind: the scenes are argv[optind..argc) */
 #include <stdio.h>
 #include <stdlib.h>
-#include <unistd.h>
 
 #include "app/bench_embree.h"
+#include "app/bench_hits.h"
 #include "app/bench_policies.h"
+#include "app/bench_rays.h"
 #include "app/opts.h"
-#include "renderer/camera.h"
 #include "renderer/policy/policy.h"
 #include "renderer/ray.h"
 #include "renderer/scene.h"
-#include "renderer/scene/meshio.h"
 #include "renderer/shade.h"
 #include "renderer/trace.h"
 #include "sim/coro.h"
@@ -51,6 +50,8 @@ static const char HELP[] =
     "  --engine               only time the event engine and the coroutine switch\n"
     "  --embree               also trace the primary rays with Embree 3 (a build with\n"
     "                         -DRTSIM_EMBREE=ON) beside rtsim's tracer alone\n"
+    "  --hits                 only compare nearest hits: k-d tree, BVH2, BVH8 (and with\n"
+    "                         --embree, Embree) on four ray sets\n"
     "  --timed MACHINE.yaml   time the timed machine on the same image instead\n"
     "  --sample F             with --timed: also sampled at sample.fraction F\n"
     "  --policies LIST        with --timed: whole 'rtsim run' processes of each policy\n"
@@ -85,6 +86,18 @@ static const char HELP[] =
     "trace_rays_per_s, embree_build_s, embree_s, embree_rays_per_s, vs_embree\n"
     "(rays_per_s over embree_rays_per_s), trace_vs_embree and prim_mismatches (rays\n"
     "whose hit primitive differs).\n"
+    "\n"
+    "--hits: no timing; for each scene, its primary rays (W x H), the shadow and\n"
+    "diffuse rays their hits spawn and W x H random rays through its box, each\n"
+    "traced to its nearest hit through the k-d tree, the BVH2 and the BVH8; a row a\n"
+    "scene, set and structure: scene, set, rays, accel, hits, ties (rays whose hit\n"
+    "has another triangle at exactly its distance, which the hit rule gives to the\n"
+    "smaller id), differ_from_kd (rays whose triangle differs from the k-d tree's),\n"
+    "differ_at_tie and differ_other (at the same t or not). With --embree also\n"
+    "embree_differ (rays whose triangle differs from Embree's, the triangle a\n"
+    "secondary ray leaves ignored by both) and how each is decided in double\n"
+    "precision: embree_tie (both hit within 1e-9 of the same t), embree_edge (a hit\n"
+    "within 1e-5 of its triangle's edge, barycentric), rtsim_nearer, embree_nearer.\n"
     "\n"
     "--timed MACHINE.yaml: instead of the functional backend, rtsim run's timed\n"
     "machine on the same image, once as configured and once with 1 core x 1 thread\n"
@@ -124,20 +137,6 @@ static double render_once(const struct app_world *w, uint32_t mask, uint32_t W, 
   return s;
 }
 
-/* The image's primary rays in the order the recursive policy casts them. */
-static struct ray *primary_rays(const struct scene *s, uint32_t W, uint32_t H) {
-  uint32_t n = W * H;
-  uint32_t *order = xmalloc((unsigned long long)n * sizeof *order);
-  struct ray *rays = xmalloc((unsigned long long)n * sizeof *rays);
-  struct camera_frame cf;
-  camera_frame_init(&cf, &s->camera, W, H);
-  camera_hilbert_order(W, H, order);
-  for (uint32_t i = 0; i < n; i++)
-    camera_primary(&cf, order[i] % W, order[i] / W, s->seed, &rays[i]);
-  free(order);
-  return rays;
-}
-
 /* rtsim's tracer alone on the same rays (native backend); prim[i] its hits. */
 static double trace_only(const struct app_world *w, const struct ray *rays, uint32_t n,
                          int32_t *prim) {
@@ -153,37 +152,6 @@ static double trace_only(const struct app_world *w, const struct ray *rays, uint
     prim[i] = h.prim;
   }
   return app_now() - t0;
-}
-
-/* The Embree peer over w's triangles as a PLY file holds them: export, read
- * back through the importer, remove the file. NULL on failure (reported). */
-static struct bench_embree *embree_from_ply(const struct app_world *w, double *build_s) {
-  const char *td = getenv("TMPDIR");
-  char dir[4096];
-  snprintf(dir, sizeof dir, "%s/rtsim-bench-XXXXXX", td && *td ? td : "/tmp");
-  if (!mkdtemp(dir)) {
-    perror("rtsim bench: cannot make a temporary directory");
-    return NULL;
-  }
-  char ply[4200];
-  snprintf(ply, sizeof ply, "%s/scene.ply", dir);
-  struct err e = {0};
-  struct scene back;
-  scene_init(&back);
-  struct meshio_xform xf = {1.0f, v3(0, 0, 0)};
-  struct bench_embree *be = NULL;
-  if (meshio_export_ply(&w->scene, ply, &e) && meshio_import(&back, ply, &xf, 0, UINT32_MAX, &e)) {
-    if (back.tri_count != w->scene.tri_count)
-      fprintf(stderr, "rtsim bench: %s: read back %u triangles, wrote %u\n", ply, back.tri_count,
-              w->scene.tri_count);
-    else be = bench_embree_create(&back, build_s);
-  } else {
-    app_report(&e);
-  }
-  scene_fini(&back);
-  unlink(ply);
-  rmdir(dir);
-  return be;
 }
 
 /* The timed machine against the native render of the same image; with
@@ -287,12 +255,12 @@ static int bench_native_scene(const char *scene_path, uint32_t mask, uint64_t wi
   int32_t *tprim = NULL, *eprim = NULL;
   uint32_t np = W * H;
   if (embree) {
-    be = embree_from_ply(&w, &ebuild);
+    be = bench_embree_from_ply(&w.scene, false, &ebuild);
     if (!be) {
       app_world_fini(&w);
       return 1;
     }
-    prays = primary_rays(&w.scene, W, H);
+    prays = bench_rays_primary(&w.scene, W, H);
     tprim = xmalloc((unsigned long long)np * sizeof *tprim);
     eprim = xmalloc((unsigned long long)np * sizeof *eprim);
   }
@@ -300,7 +268,8 @@ static int bench_native_scene(const char *scene_path, uint32_t mask, uint64_t wi
     double s = render_once(&w, mask, W, H, mem_port_native(), &nrays);
     if (k == 0 || s < best) best = s;
     if (embree) {
-      double ts = trace_only(&w, prays, np, tprim), es = bench_embree_trace(be, prays, np, eprim);
+      double ts = trace_only(&w, prays, np, tprim),
+             es = bench_embree_trace(be, prays, np, eprim, NULL);
       if (k == 0 || ts < tbest) tbest = ts;
       if (k == 0 || es < ebest) ebest = es;
     }
@@ -361,7 +330,7 @@ static int bench_main(int argc, char **argv, struct app_sets *sets) {
   uint64_t width = 0, height = 0, repeat = 3, analyser = 0;
   double sample = 1;
   uint32_t mask = RAY_MASK(RAY_PRIMARY);
-  bool functional = false, engine = false, embree = false;
+  bool functional = false, engine = false, embree = false, hits = false;
   const char *timed = NULL;
   struct bench_policy_list policies = {0};
   struct bench_level_list levels = {0};
@@ -380,6 +349,7 @@ static int bench_main(int argc, char **argv, struct app_sets *sets) {
       OPTS_STR("timed", 0, &timed),
       OPTS_PARSE("sample", 0, &sample, parse_fraction, "a fraction above 0 and at most 1"),
       OPTS_FLAG("embree", 0, &embree),
+      OPTS_FLAG("hits", 0, &hits),
       OPTS_PARSE_GIVEN("policies", 0, &policies, bench_parse_policies, BENCH_POLICIES_EXPECT,
                        &have_policies),
       OPTS_PARSE_GIVEN("levels", 0, &levels, bench_parse_levels, BENCH_LEVELS_EXPECT, &have_levels),
@@ -427,6 +397,17 @@ static int bench_main(int argc, char **argv, struct app_sets *sets) {
   if (embree && !bench_embree_available())
     return app_usage_error("bench", "--embree: this rtsim was built without Embree (install "
                                     "libembree-dev and configure with -DRTSIM_EMBREE=ON)");
+  if (hits) {
+    if (functional || mask != RAY_MASK(RAY_PRIMARY))
+      return app_usage_error("bench", "--hits: not with --functional or --rays (it makes its "
+                                      "own ray sets)");
+    bench_hits_header(embree);
+    for (int i = optind; i < argc; i++) {
+      rc = bench_hits_scene(argv[i], width, height, embree);
+      if (rc) return rc;
+    }
+    return 0;
+  }
   if (embree && mask != RAY_MASK(RAY_PRIMARY))
     return app_usage_error("bench", "--embree compares primary rays only (--rays primary)");
   printf(

@@ -64,6 +64,7 @@ static void print_bvh(const struct app_world *w) {
   printf("bvh_leaf_prims_max: %u\n", b->max_leaf_prims);
   printf("bvh_leaf_prims_mean: %.2f\n",
          b->leaves ? (double)w->bvh.prim_count / (double)b->leaves : 0.0);
+  printf("bvh_sah_cost: %.4f\n", b->sah_cost);
 }
 
 /* Print the scene and acceleration structure summary lines ("key: value")

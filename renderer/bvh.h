@@ -76,9 +76,27 @@ static inline float bvh8_scale(uint8_t e) {
  * check and the traversal, so the check holds for what traversal sees. */
 static inline float bvh8_plane(float p, uint8_t q, float s) { return p + (float)q * s; }
 
+/* Half the surface area of box [lo, hi], in double so that sums of many are
+ * ordered alike (an axis with hi <= lo adds nothing). */
+static inline double bvh_box_area(const float lo[3], const float hi[3]) {
+  double d[3];
+  for (int a = 0; a < 3; a++) d[a] = hi[a] > lo[a] ? (double)hi[a] - lo[a] : 0.0;
+  return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+}
+
+/* The SAH costs a tree's sah_cost is priced with: a node visit 1, a triangle
+ * test 0.3 (Ylitie et al.'s constants, which their collapse minimizes; for
+ * either BVH, so that the two compare). */
+#define BVH_SAH_NODE 1.0
+#define BVH_SAH_PRIM 0.3
+
 struct bvh_stats {
   uint32_t nodes, leaves, max_depth, max_leaf_prims;
   uint64_t node_bytes; /* simulated: nodes x 64 or 80 */
+  /* The tree's SAH cost relative to its root box's area, on the exact child
+   * boxes: BVH_SAH_NODE x the area of every node (the root included) plus
+   * BVH_SAH_PRIM x triangles x the area of every leaf. */
+  double sah_cost;
 };
 
 struct bvh {
@@ -97,7 +115,8 @@ struct bvh {
 void bvh_build(struct bvh *b, const struct scene *s, enum accel_kind kind);
 void bvh_fini(struct bvh *b);
 
-/* For bvh8.c: collapse the binary BVH b2 into b (kind BVH8); b2 unchanged. */
+/* For bvh_build.c: collapse the binary BVH b2 into b (kind BVH8) by Ylitie
+ * et al.'s SAH collapse (bvh8_plan.h); b2 unchanged. */
 void bvh8_collapse(struct bvh *b, const struct bvh *b2);
 
 /* Child k of a BVH8 node: true if it exists; *interior, and *ref (its node)

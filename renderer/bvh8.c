@@ -1,66 +1,25 @@
-/* The compressed 8-wide BVH, collapsed from the binary one: each node takes
- * its binary node's two children and opens the interior child of largest
- * surface area until it has eight or only leaves are left (the greedy
- * collapse of Wald et al.'s and Embree's wide BVHs; Ylitie et al. choose
- * with a second SAH pass instead, which this does not do). Leaves keep their
- * binary leaves' triangles (at most BVH_LEAF_MAX). Nodes are laid out
- * breadth first, so each node's interior children are consecutive and its
- * leaves' lists too, as the 80-byte node's two base indices need (bvh.h).
- * Child boxes are quantized to 8 bits per plane relative to the node's box:
- * lo rounded down and hi rounded up, then checked in bvh8_plane's arithmetic
- * so the quantized box contains the exact one as traversal computes it. */
+/* The compressed 8-wide BVH, collapsed from the binary one: which subtrees
+ * become its nodes and leaves is a chooser's (bvh8_plan.h: Ylitie et al.'s
+ * SAH collapse by default); this lays them out and quantizes them. Leaves
+ * hold at most BVH_LEAF_MAX triangles. Nodes are laid out breadth first, so
+ * each node's interior children are consecutive and its leaves' lists too,
+ * as the 80-byte node's two base indices need (bvh.h). Child boxes are
+ * quantized to 8 bits per plane relative to the node's box: lo rounded down
+ * and hi rounded up, then checked in bvh8_plane's arithmetic so the quantized
+ * box contains the exact one as traversal computes it. */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "renderer/bvh.h"
+#include "renderer/bvh8_plan.h"
 #include "sim/err.h"
-
-struct child {
-  float lo[3], hi[3];
-  uint32_t ref, count; /* as bvh2_node's */
-};
-
-static double area(const struct child *c) {
-  double d[3];
-  for (int a = 0; a < 3; a++) d[a] = (double)c->hi[a] - c->lo[a];
-  return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
-}
-
-static uint32_t take_children(const struct bvh *b2, uint32_t ni, struct child *out, uint32_t n) {
-  const struct bvh2_node *nd = &b2->n2[ni];
-  for (int k = 0; k < 2; k++) {
-    if (nd->count[k] == BVH_EMPTY) continue;
-    memcpy(out[n].lo, nd->lo[k], sizeof out[n].lo);
-    memcpy(out[n].hi, nd->hi[k], sizeof out[n].hi);
-    out[n].ref = nd->ref[k];
-    out[n].count = nd->count[k];
-    n++;
-  }
-  return n;
-}
-
-/* The up to eight children of binary node ni's collapsed node, in out. */
-static uint32_t gather(const struct bvh *b2, uint32_t ni, struct child out[8]) {
-  uint32_t n = take_children(b2, ni, out, 0);
-  for (;;) {
-    int best = -1;
-    for (uint32_t k = 0; k < n; k++)
-      if (out[k].count == 0 && (best < 0 || area(&out[k]) > area(&out[best]))) best = (int)k;
-    if (best < 0) return n;
-    const uint32_t open = out[best].ref;
-    const uint32_t kids = b2->n2[open].count[1] == BVH_EMPTY ? 1u : 2u;
-    if (n - 1 + kids > 8) return n;
-    out[best] = out[n - 1];
-    n = take_children(b2, open, out, n - 1);
-  }
-}
 
 /* Axis a of node nd quantized for node box [lo, hi]: origin, exponent, and
  * each child's planes. */
-static void quantize_axis(struct bvh8_node *nd, int a, float lo, float hi, const struct child *c,
-                          uint32_t n) {
+static void quantize_axis(struct bvh8_node *nd, int a, float lo, float hi,
+                          const struct bvh8_child *c, uint32_t n) {
   nd->p[a] = lo;
   int e = 1;
   const double ext = (double)hi - lo;
@@ -88,6 +47,9 @@ static void quantize_axis(struct bvh8_node *nd, int a, float lo, float hi, const
 struct collapse {
   struct bvh *b;
   const struct bvh *b2;
+  bvh8_chooser choose;
+  const void *ctx;
+  double sah;            /* the tree's SAH cost so far, areas not yet divided */
   uint32_t *src, *depth; /* per BVH8 node: its binary node, its level */
   uint32_t cap;
 };
@@ -109,8 +71,8 @@ static uint32_t new_node(struct collapse *c, uint32_t src, uint32_t depth) {
 /* Fill BVH8 node i: its children placed (interior ones allocated, leaf
  * lists appended), its meta bytes and its quantized boxes. */
 static void fill(struct collapse *c, uint32_t i) {
-  struct child ch[8];
-  const uint32_t n = gather(c->b2, c->src[i], ch);
+  struct bvh8_child ch[8];
+  const uint32_t n = c->choose(c->ctx, c->b2, c->src[i], ch);
   struct bvh *b = c->b;
   const uint32_t depth = c->depth[i];
   float lo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, hi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
@@ -122,6 +84,8 @@ static void fill(struct collapse *c, uint32_t i) {
   uint32_t child_base = b->node_count, prim_base = b->prim_count, interior = 0, entries = 0;
   uint8_t meta[8] = {0}, imask = 0;
   for (uint32_t k = 0; k < n; k++) {
+    const double area = bvh_box_area(ch[k].lo, ch[k].hi);
+    c->sah += ch[k].count == 0 ? area * BVH_SAH_NODE : area * BVH_SAH_PRIM * ch[k].count;
     if (ch[k].count == 0) {
       new_node(c, ch[k].ref, depth + 1);
       meta[k] = (uint8_t)(0x20u | (24u + interior++));
@@ -147,20 +111,30 @@ static void fill(struct collapse *c, uint32_t i) {
   for (int a = 0; a < 3; a++) quantize_axis(nd, a, lo[a], hi[a], ch, n);
 }
 
-void bvh8_collapse(struct bvh *b, const struct bvh *b2) {
+void bvh8_collapse_with(struct bvh *b, const struct bvh *b2, bvh8_chooser choose, const void *ctx) {
   CHECK(b2->kind == ACCEL_BVH2);
   memset(b, 0, sizeof *b);
   b->kind = ACCEL_BVH8;
   b->lo = b2->lo;
   b->hi = b2->hi;
   if (b2->node_count == 0) return;
-  struct collapse c = {b, b2, NULL, NULL, 0};
+  struct collapse c = {b, b2, choose, ctx, 0.0, NULL, NULL, 0};
   b->prims = xmalloc((unsigned long long)b2->prim_count * sizeof *b->prims);
+  const float lo[3] = {b->lo.x, b->lo.y, b->lo.z}, hi[3] = {b->hi.x, b->hi.y, b->hi.z};
+  const double root = bvh_box_area(lo, hi);
+  c.sah = root * BVH_SAH_NODE;
   new_node(&c, 0, 0);
   for (uint32_t i = 0; i < b->node_count; i++) fill(&c, i);
   CHECK_EQ(b->prim_count, b2->prim_count);
   b->stats.nodes = b->node_count;
   b->stats.node_bytes = 80ull * b->node_count;
+  b->stats.sah_cost = root > 0 ? c.sah / root : c.sah;
   free(c.src);
   free(c.depth);
+}
+
+void bvh8_collapse(struct bvh *b, const struct bvh *b2) {
+  struct bvh8_plan *p = bvh8_plan_create(b2);
+  bvh8_collapse_with(b, b2, bvh8_plan_children, p);
+  bvh8_plan_destroy(p);
 }

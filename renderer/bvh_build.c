@@ -40,12 +40,7 @@ static void box_grow(struct box *b, const struct box *o) {
   }
 }
 
-/* Half the surface area, in double so that sums of many are ordered alike. */
-static double box_area(const struct box *b) {
-  double d[3];
-  for (int a = 0; a < 3; a++) d[a] = b->hi[a] > b->lo[a] ? (double)b->hi[a] - b->lo[a] : 0.0;
-  return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
-}
+static double box_area(const struct box *b) { return bvh_box_area(b->lo, b->hi); }
 
 struct task {
   uint32_t begin, end, depth, parent, slot; /* parent BVH_EMPTY: the root */
@@ -58,6 +53,7 @@ struct builder {
   struct task *todo;
   uint32_t ntodo, cap_todo, cap_nodes;
   int sort_axis; /* the median split's axis, for cmp_centroid */
+  double sah;    /* the tree's SAH cost so far (bvh_stats.sah_cost, not yet divided) */
 };
 
 static uint32_t new_node(struct builder *bd) {
@@ -241,6 +237,8 @@ static void process(struct builder *bd, struct task t) {
     box_grow(&cb, &c);
   }
   const uint32_t mid = split_range(bd, &t, &node, &cb);
+  const double area = box_area(&node);
+  bd->sah += mid == t.end ? area * BVH_SAH_PRIM * (t.end - t.begin) : area * BVH_SAH_NODE;
   uint32_t parent = t.parent, slot = t.slot;
   if (parent == BVH_EMPTY) {
     b->lo = v3(node.lo[0], node.lo[1], node.lo[2]);
@@ -252,6 +250,7 @@ static void process(struct builder *bd, struct task t) {
       return;
     }
     parent = new_node(bd); /* a root leaf: a node of one leaf child */
+    bd->sah += area * BVH_SAH_NODE;
     slot = 0;
   }
   struct bvh2_node *pn = &b->n2[parent];
@@ -301,6 +300,9 @@ static void build2(struct bvh *b, const struct scene *s) {
   CHECK_LE(b->stats.max_depth, BVH_DEPTH_LIMIT);
   b->stats.nodes = b->node_count;
   b->stats.node_bytes = 64ull * b->node_count;
+  const float lo[3] = {b->lo.x, b->lo.y, b->lo.z}, hi[3] = {b->hi.x, b->hi.y, b->hi.z};
+  const double root = bvh_box_area(lo, hi);
+  b->stats.sah_cost = root > 0 ? bd.sah / root : bd.sah;
   free(bd.tb);
   free(bd.cen);
   free(bd.todo);

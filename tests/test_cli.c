@@ -628,6 +628,8 @@ int main(void) {
        "--embree: this rtsim was built without Embree"},
 #endif
       {"bench --embree --rays primary,shadow " SCN "good_room_tiny.yaml", "--embree"},
+      {"bench --hits --rays primary,shadow " SCN "good_room_tiny.yaml",
+       "--hits: not with --functional or --rays"},
       {"render " SCN "good_room_tiny.yaml -o x.exr --policy fifo",
        "--policy: got 'fifo', expected one of: recursive, packet, dynamic"},
       {"traffic " SCN "good_room_tiny.yaml -o x.csv", "missing --rays"},
