@@ -115,15 +115,12 @@ static uint64_t stretch_of(const struct sample_aux *x, uint64_t k) {
 }
 
 /* True when item k warms: within `warm` items before a stretch or a middle
- * unit's window, or after a stretch (its tail: the stretch's last items
- * share the L2 with as many others as in the full run, to their end). A
- * unit's window gets no tail: the timed unit drains at its end, its last
- * items running with ever fewer others, and the model of its items, which
- * calibrates the model against the machine, must see the same. */
+ * unit's window. No item after a stretch warms: the L2 model keeps every
+ * context busy with fillers until the stretch's last counted item ends
+ * (SFL2_REFILL), however long it runs, at no tracing cost. */
 static bool warms(const struct sampler *s, const struct sample_aux *x, uint64_t k) {
-  const uint64_t off = k - x->lo + x->period - x->phase, tail = x->warm;
+  const uint64_t off = k - x->lo + x->period - x->phase;
   if (x->period - off % x->period <= x->warm) return true;
-  if (off % x->period >= x->len && off % x->period < x->len + tail) return true;
   const uint32_t h = unit_after(s, k);
   return h + 1 < s->n && s->u[h].start - k <= x->warm;
 }
@@ -154,11 +151,15 @@ static enum policy_item pp_item(void *ctx, uint64_t k, uint32_t core, struct mem
   if (!h && i != UINT64_MAX) x->sparse_n[i]++;
   pp->dense = dense;
   /* A gap ends the L2 model's batch (the next starts from empty caches),
-   * and so does a unit's end (it drains, as the timed unit does). */
-  if (pp->last != k || (k > 0 && window_of(pp->s, k - 1) && window_of(pp->s, k - 1) != h))
-    sfl2_pump(pp->l2, true);
+   * and so does a unit's end. A unit's batch drains (its last items run
+   * with ever fewer others, as in the timed unit, whose bytes calibrate the
+   * model over the same items); a stretch's is refilled (its last items
+   * share the L2 as in the full run). */
+  const uint32_t before = pp->last ? window_of(pp->s, pp->last - 1) : 0;
+  if (pp->last != k || (before && before != h))
+    sfl2_pump(pp->l2, before ? SFL2_DRAIN : SFL2_REFILL);
   else if (++pp->since_pump >= pp->contexts) {
-    sfl2_pump(pp->l2, false);
+    sfl2_pump(pp->l2, SFL2_MORE);
     pp->since_pump = 0;
   }
   pp->last = k + 1;
@@ -238,7 +239,7 @@ void sample_aux_run(struct sampler *s, const struct sample_aux_plan *sp, uint64_
   policy_worker_init(&wk, job, 0, 0, 0, port);
   CHECK(!policy_job_work(job, &wk)); /* one worker never parks */
   close_item(&pp);
-  sfl2_pump(pp.l2, true);
+  sfl2_pump(pp.l2, pp.last && window_of(s, pp.last - 1) ? SFL2_DRAIN : SFL2_REFILL);
   x->replayed = sfl2_replayed(pp.l2);
   sfl2_destroy(pp.l2);
   squeeze(x);

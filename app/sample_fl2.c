@@ -36,6 +36,7 @@ struct sfl2 {
   uint32_t rr;        /* the context whose turn it is */
   uint32_t counting;  /* contexts holding an item that counts */
   uint64_t replayed;
+  uint64_t refill;              /* the next recorded item a filler repeats (SFL2_REFILL) */
   uint64_t sets_every, residue; /* the sets modelled: lines with line % sets_every == residue */
 };
 
@@ -184,6 +185,19 @@ static bool take(struct sfl2 *x, uint32_t c) {
   return false;
 }
 
+/* Give context c a filler: the recorded items again, in turn (the batch's
+ * own accesses stand for the items the full run would take next). */
+static bool refill(struct sfl2 *x, uint32_t c) {
+  for (uint64_t tries = 0; tries < x->nit; tries++) {
+    if (x->refill < x->ibase || x->refill >= x->ibase + x->nit) x->refill = x->ibase;
+    const uint64_t i = x->refill++;
+    if (x->it[i - x->ibase].end == x->it[i - x->ibase].begin) continue;
+    give(x, c, i, true);
+    return true;
+  }
+  return false;
+}
+
 /* Drop the items every context is done with, and their accesses. */
 static void compact(struct sfl2 *x) {
   uint64_t lo = x->next;
@@ -225,14 +239,17 @@ static void batch_end(struct sfl2 *x) {
   caches_make(x);
 }
 
-void sfl2_pump(struct sfl2 *x, bool final) {
+void sfl2_pump(struct sfl2 *x, enum sfl2_end end) {
+  const bool final = end != SFL2_MORE;
   for (;;) {
     const uint32_t c = x->rr;
     if (x->ctx_item[c] == NO_ITEM && !take(x, c)) {
       if (!final) break;
-      /* The recorded items are all taken (the last ones, the tail, only
-       * keep the pipeline full): stop when no counted item runs. */
+      /* The recorded items are all taken: the batch runs on until no
+       * counted item runs, its contexts kept busy by fillers (SFL2_REFILL)
+       * or left idle (SFL2_DRAIN). */
       if (x->counting == 0) break;
+      if (end == SFL2_REFILL) refill(x, c);
     }
     if (x->ctx_item[c] != NO_ITEM && turn(x, c)) ended(x, c);
     x->rr = c + 1 == x->nctx ? 0 : c + 1;

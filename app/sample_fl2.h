@@ -37,10 +37,16 @@ void sfl2_item(struct sfl2 *x, double *out);
 /* Record one access of the current item (bytes at addr; a store marks lines
  * dirty; a store covering a whole line allocates it without a fetch). */
 void sfl2_access(struct sfl2 *x, uint64_t addr, uint32_t size, bool store);
-/* Replay what is recorded and can run now (every context that needs an item
- * has one); with final, run the batch to its end and empty the caches for
- * the next one. */
-void sfl2_pump(struct sfl2 *x, bool final);
+/* How sfl2_pump ends. SFL2_MORE: replay what can run now (every context
+ * that needs an item has one), the rest later. SFL2_DRAIN: run the batch to
+ * its end, contexts going idle as the recorded items run out (as a timed
+ * unit drains), then empty the caches for the next batch. SFL2_REFILL: the
+ * same, but a context that finds no item takes a filler (the batch's
+ * recorded items again, counted nowhere) while a counted item runs: its
+ * last counted items share the L2 with as many others as in a full run,
+ * however long they run. */
+enum sfl2_end { SFL2_MORE, SFL2_DRAIN, SFL2_REFILL };
+void sfl2_pump(struct sfl2 *x, enum sfl2_end end);
 
 /* Accesses replayed so far (lines), for the cost. */
 uint64_t sfl2_replayed(const struct sfl2 *x);

@@ -206,9 +206,9 @@ static const struct key KEYS[] = {
      "auxiliary totals (0: none, an expansion by items)"},
     {"sample.stretch", K_U32, 0, 1u << 24, "0", "items", R_ALL, S(stretch),
      "the pre-pass's stretches of consecutive items (0: as many as the ray contexts)"},
-    {"sample.stretch_warming", K_F64, 0, 1e3, "1", "", R_ALL, S(stretch_warming),
-     "items the pre-pass's L2 model runs before each stretch and unit window, and as many after "
-     "(they keep every ray context busy to the end), a multiple of the ray contexts"},
+    {"sample.stretch_warming", K_F64, 0, 1e3, "2", "", R_ALL, S(stretch_warming),
+     "items the pre-pass's L2 model runs before each stretch and unit window, a multiple of the "
+     "ray contexts"},
     {"sample.seed", K_U64, 0, 1e15, "1", "", R_ALL, S(seed),
      "where each middle unit falls in its stratum"},
     {"energy.l1_read", K_F64, -1, 1e6, "-1", "nJ", R_T, EN(l1.read_nj),

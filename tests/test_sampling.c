@@ -345,7 +345,7 @@ static void test_model_lru(void) {
         want[it] += ref_access(&r, line, kind != 0, kind == 2);
       }
     }
-    sfl2_pump(x, true);
+    sfl2_pump(x, SFL2_DRAIN);
     for (unsigned it = 0; it < 8; it++)
       EXPECTF(got[it] == want[it], "%u ways, item %u: %g bytes, the LRU's %g", ways, it, got[it],
               want[it]);
@@ -372,7 +372,7 @@ static void test_model_turns(void) {
     sfl2_item(x, it < 2 ? &got[it] : NULL);
     for (unsigned a = 0; a < n[it]; a++) sfl2_access(x, lines[it][a] * 64, 8, false);
   }
-  sfl2_pump(x, true);
+  sfl2_pump(x, SFL2_DRAIN);
   EXPECTF(got[0] == 128 && got[1] == 128, "A %g, B %g bytes (expected 128, 128)", got[0], got[1]);
   sfl2_destroy(x);
   double half[2] = {0};
@@ -381,11 +381,45 @@ static void test_model_turns(void) {
     sfl2_item(x, it < 2 ? &half[it] : NULL);
     for (unsigned a = 0; a < n[it]; a++) sfl2_access(x, lines[it][a] * 64, 8, false);
   }
-  sfl2_pump(x, false); /* (a pump that is not final leaves the rest for later) */
-  sfl2_pump(x, true);
+  sfl2_pump(x, SFL2_MORE); /* (a pump that is not final leaves the rest for later) */
+  sfl2_pump(x, SFL2_DRAIN);
   EXPECTF(half[0] == 128 && half[1] == 0, "even lines: A %g, B %g (expected 128, 0)", half[0],
           half[1]);
   sfl2_destroy(x);
+}
+
+/* How a batch ends, by hand: one core, two contexts, no L1 (every load ends
+ * a turn), an L2 of 2 lines (fully associative). Item A (counted) loads 1,
+ * 2, 1; B (warming) loads 4. Turns: A 1 (miss: A 64; L2 1); B 4 (miss; L2
+ * 1, 4; B ends); A 2 (miss, 1 leaves: A 128; L2 4, 2). Drained: the second
+ * context idles, A 1 misses again (4 leaves): A 192. Refilled: the second
+ * context takes a filler, the batch's first item again (A, counted
+ * nowhere): it loads 1 (miss, 4 leaves; L2 2, 1), so A's 1 hits: A 128;
+ * the batch ends when A does, the filler unfinished. */
+static void test_model_refill(void) {
+  struct machine_params p = model_machine(1, 2, 0, 2, 0);
+  const uint64_t lines[2][3] = {{1, 2, 1}, {4, 0, 0}};
+  const unsigned n[2] = {3, 1};
+  const enum sfl2_end ends[2] = {SFL2_DRAIN, SFL2_REFILL};
+  const double want[2] = {192, 128};
+  for (unsigned e = 0; e < 2; e++) {
+    double got = 0;
+    struct sfl2 *x = sfl2_create(&p, 1, 0);
+    for (unsigned it = 0; it < 2; it++) {
+      sfl2_item(x, it == 0 ? &got : NULL);
+      for (unsigned a = 0; a < n[it]; a++) sfl2_access(x, lines[it][a] * 64, 8, false);
+    }
+    sfl2_pump(x, ends[e]);
+    EXPECTF(got == want[e], "%s: A %g bytes (expected %g)", e ? "refilled" : "drained", got,
+            want[e]);
+    /* The batch ended: the next starts from empty caches (A's lines miss). */
+    double again = 0;
+    sfl2_item(x, &again);
+    sfl2_access(x, 2 * 64, 8, false);
+    sfl2_pump(x, ends[e]);
+    EXPECTF(again == 64, "after the batch: %g bytes (expected 64)", again);
+    sfl2_destroy(x);
+  }
 }
 
 /* Stretches as clusters, by hand: two stretches of 2 and 1 counted items
@@ -508,6 +542,7 @@ static void test_ratio_exact(void) {
 int main(void) {
   test_model_lru();
   test_model_turns();
+  test_model_refill();
   test_aux_clusters();
   test_aux_dense();
   test_aux_total();
