@@ -13,7 +13,15 @@
  * (the build partitions them in place). Ties keep the smaller choice: a leaf
  * before a node, fewer roots before more, the smallest k. Top down, a node's
  * children are split(n, 8)'s roots in the order of the binary tree (left
- * subtree's first), which is also the order of its slots. */
+ * subtree's first), which is also the order of its slots.
+ *
+ * The binary build numbers its nodes in preorder (a node, its left subtree,
+ * its right subtree), so going down the indices finishes the right subtree,
+ * then the left, then the node: the cost rows still wanted (those of
+ * finished nodes whose parent is not) form a stack no deeper than the tree,
+ * the left child's row on top, the right child's under it. Only that stack
+ * holds cost rows, not one row a node (64 bytes a binary node: 26 MB of
+ * sphereflake's 409K); each pop checks it is the child it should be. */
 #include "renderer/bvh8_plan.h"
 
 #include <math.h>
@@ -26,9 +34,16 @@
 #define PLAN_LEAF (-1)
 #define PLAN_NODE 0
 
+/* cost(n, i) for i = 1..8 of a finished binary node n. */
+struct plan_row {
+  uint32_t node;
+  double cost[8]; /* cost[i - 1] */
+};
+
 struct bvh8_plan {
-  double (*cost)[8];      /* cost[n][i - 1] */
-  int8_t (*dec)[8];       /* the decision cost[n][i - 1] took */
+  struct plan_row *rows;  /* the stack of rows still wanted */
+  uint32_t nrows, cap;
+  int8_t (*dec)[8];       /* the decision cost(n, i) took */
   uint8_t *split8;        /* k of split(n, 8): a node's children */
   uint32_t *first, *tris; /* n's subtree: its entries [first, first + tris) */
   double root;            /* node(root) / A(root) */
@@ -45,18 +60,24 @@ static struct bvh8_child slot(const struct bvh *b2, uint32_t ni, int k) {
   return c;
 }
 
-/* cost(c, i) of a child: its node's table, or a binary leaf's own price. */
-static double child_cost(const struct bvh8_plan *p, const struct bvh8_child *c, int i) {
-  if (c->count == 0) return p->cost[c->ref][i - 1];
-  return bvh_box_area(c->lo, c->hi) * BVH_SAH_PRIM * c->count;
+/* A child's costs: its node's row, or a binary leaf's own price for every i. */
+static void child_costs(struct bvh8_plan *p, const struct bvh8_child *c, double out[8]) {
+  if (c->count == 0) {
+    CHECK(p->nrows > 0);
+    const struct plan_row *r = &p->rows[--p->nrows];
+    CHECK_EQ(r->node, c->ref);
+    memcpy(out, r->cost, sizeof r->cost);
+    return;
+  }
+  const double leaf = bvh_box_area(c->lo, c->hi) * BVH_SAH_PRIM * c->count;
+  for (int i = 0; i < 8; i++) out[i] = leaf;
 }
 
-/* split(n, j) of n's children l and r: its cost and k. */
-static double split(const struct bvh8_plan *p, const struct bvh8_child *l,
-                    const struct bvh8_child *r, int j, int *k_best) {
+/* split(n, j) of n's children's costs l and r: its cost and k. */
+static double split(const double l[8], const double r[8], int j, int *k_best) {
   double best = INFINITY;
   for (int k = 1; k < j; k++) {
-    const double c = child_cost(p, l, k) + child_cost(p, r, j - k);
+    const double c = l[k - 1] + r[j - k - 1];
     if (c < best) {
       best = c;
       *k_best = k;
@@ -65,25 +86,36 @@ static double split(const struct bvh8_plan *p, const struct bvh8_child *l,
   return best;
 }
 
-/* Binary node ni's row, its children's rows done; a is its box's area. */
-static void plan_node(struct bvh8_plan *p, const struct bvh *b2, uint32_t ni, double a) {
+/* Binary node ni's row, its children's rows on the stack; a is its box's
+ * area. Returns node(ni). */
+static double plan_node(struct bvh8_plan *p, const struct bvh *b2, uint32_t ni, double a) {
   const struct bvh8_child l = slot(b2, ni, 0), r = slot(b2, ni, 1);
   CHECK(l.count != BVH_EMPTY && r.count != BVH_EMPTY);
   p->first[ni] = l.count ? l.ref : p->first[l.ref];
   p->tris[ni] = (l.count ? l.count : p->tris[l.ref]) + (r.count ? r.count : p->tris[r.ref]);
+  double lc[8], rc[8];
+  child_costs(p, &l, lc); /* the left child's row is on top */
+  child_costs(p, &r, rc);
   int k8 = 1;
-  const double node = a * BVH_SAH_NODE + split(p, &l, &r, 8, &k8);
+  const double node = a * BVH_SAH_NODE + split(lc, rc, 8, &k8);
   p->split8[ni] = (uint8_t)k8;
   const double leaf = p->tris[ni] <= BVH_LEAF_MAX ? a * BVH_SAH_PRIM * p->tris[ni] : INFINITY;
-  p->cost[ni][0] = leaf <= node ? leaf : node;
+  if (p->nrows == p->cap) {
+    p->cap = p->cap ? 2 * p->cap : 64;
+    p->rows = xrealloc(p->rows, (unsigned long long)p->cap * sizeof *p->rows);
+  }
+  struct plan_row *row = &p->rows[p->nrows++];
+  row->node = ni;
+  row->cost[0] = leaf <= node ? leaf : node;
   p->dec[ni][0] = leaf <= node ? PLAN_LEAF : PLAN_NODE;
   for (int i = 2; i <= 8; i++) {
     int k = 1;
-    const double s = split(p, &l, &r, i, &k);
-    const bool take = s < p->cost[ni][i - 2];
-    p->cost[ni][i - 1] = take ? s : p->cost[ni][i - 2];
+    const double s = split(lc, rc, i, &k);
+    const bool take = s < row->cost[i - 2];
+    row->cost[i - 1] = take ? s : row->cost[i - 2];
     p->dec[ni][i - 1] = take ? (int8_t)k : p->dec[ni][i - 2];
   }
+  return node;
 }
 
 struct bvh8_plan *bvh8_plan_create(const struct bvh *b2) {
@@ -91,7 +123,6 @@ struct bvh8_plan *bvh8_plan_create(const struct bvh *b2) {
   struct bvh8_plan *p = xcalloc(1, sizeof *p);
   const uint32_t n = b2->node_count;
   if (n == 0) return p;
-  p->cost = xmalloc((unsigned long long)n * sizeof *p->cost);
   p->dec = xmalloc((unsigned long long)n * sizeof *p->dec);
   p->split8 = xmalloc(n);
   p->first = xmalloc((unsigned long long)n * sizeof *p->first);
@@ -109,17 +140,22 @@ struct bvh8_plan *bvh8_plan_create(const struct bvh *b2) {
       }
   /* A root of one leaf child (a scene of one leaf) needs no table. */
   const bool lone = b2->n2[0].count[1] == BVH_EMPTY;
-  for (uint32_t i = n; i-- > (lone ? 1u : 0u);) plan_node(p, b2, i, area[i]);
-  /* The root is an 8-wide node whatever its table chose. */
-  const struct bvh8_child l = slot(b2, 0, 0);
-  double c = area[0] * BVH_SAH_NODE;
-  if (lone) {
-    c += child_cost(p, &l, 1);
-  } else {
-    int k = 1;
-    const struct bvh8_child r = slot(b2, 0, 1);
-    c += split(p, &l, &r, 8, &k);
+  /* The root is an 8-wide node whatever its table chose: node(root). */
+  double c = 0;
+  for (uint32_t i = n; i-- > 0;) {
+    if (i == 0 && lone) {
+      const struct bvh8_child l = slot(b2, 0, 0);
+      double lc[8];
+      child_costs(p, &l, lc);
+      c = area[0] * BVH_SAH_NODE + lc[0];
+    } else {
+      c = plan_node(p, b2, i, area[i]);
+    }
   }
+  CHECK(p->nrows <= 1); /* the root's own row, unless a lone leaf */
+  free(p->rows);
+  p->rows = NULL;
+  p->nrows = p->cap = 0;
   p->root = area[0] > 0 ? c / area[0] : c;
   free(area);
   return p;
@@ -127,7 +163,7 @@ struct bvh8_plan *bvh8_plan_create(const struct bvh *b2) {
 
 void bvh8_plan_destroy(struct bvh8_plan *p) {
   if (!p) return;
-  free(p->cost);
+  free(p->rows);
   free(p->dec);
   free(p->split8);
   free(p->first);
