@@ -41,7 +41,7 @@ struct plan_row {
 };
 
 struct bvh8_plan {
-  struct plan_row *rows;  /* the stack of rows still wanted */
+  struct plan_row *rows; /* the stack of rows still wanted */
   uint32_t nrows, cap;
   int8_t (*dec)[8];       /* the decision cost(n, i) took */
   uint8_t *split8;        /* k of split(n, 8): a node's children */
