@@ -74,14 +74,9 @@ static uint32_t fbits(float f) {
 }
 
 static void check_scene(const char *name, uint32_t W, uint32_t H) {
-  char path[512];
-  snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, name);
   struct scene s;
   struct kd_tree kd;
-  if (!testing_load_world(&s, &kd, path)) {
-    EXPECT(!"scene loads");
-    return;
-  }
+  if (!testing_load_small(&s, &kd, name)) return;
   struct bvh b[ACCEL_COUNT];
   struct trace_ctx tr[ACCEL_COUNT];
   for (int k = 0; k < ACCEL_COUNT; k++) {

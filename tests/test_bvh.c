@@ -289,14 +289,9 @@ static void render(const struct scene *s, const struct kd_tree *kd, const struct
 }
 
 static void check_scene(const char *name) {
-  char path[512];
-  snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, name);
   struct scene s;
   struct kd_tree kd;
-  if (!testing_load_world(&s, &kd, path)) {
-    EXPECT(!"scene loads");
-    return;
-  }
+  if (!testing_load_small(&s, &kd, name)) return;
   struct framebuffer ref;
   struct trace_stats tk;
   render(&s, &kd, NULL, mem_port_native(), &ref, &tk);

@@ -185,14 +185,9 @@ int main(void) {
   }
   static const char *const names[] = {"room", "grove", "sphereflake"};
   for (int i = 0; i < 3; i++) {
-    char path[512];
-    snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, names[i]);
     struct scene s;
     struct kd_tree kd;
-    if (!testing_load_world(&s, &kd, path)) {
-      EXPECT(!"scene loads");
-      continue;
-    }
+    if (!testing_load_small(&s, &kd, names[i])) continue;
     check_plan(&s, names[i], false);
     kd_fini(&kd);
     scene_fini(&s);

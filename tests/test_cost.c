@@ -181,14 +181,10 @@ static bool same_machine(const struct machine_stats *a, const struct machine_sta
 }
 
 static void test_policies(const char *scene, const char *config, uint32_t l2_size) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, scene);
   struct scene s;
   struct kd_tree kd;
-  if (!testing_load_world(&s, &kd, path)) {
-    EXPECTF(false, "cannot load %s", path);
-    return;
-  }
+  if (!testing_load_small(&s, &kd, scene)) return;
+  char path[1024];
   snprintf(path, sizeof path, "%s/configs/%s.yaml", RTSIM_SOURCE_DIR, config);
   struct machine_cfg mc;
   machine_cfg_defaults(&mc);

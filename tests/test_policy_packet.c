@@ -34,11 +34,9 @@ struct world {
 };
 
 static int load(struct world *w, const char *name) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, name);
   w->name = name;
   w->bvh = NULL;
-  return testing_load_world(&w->s, &w->kd, path);
+  return testing_load_small(&w->s, &w->kd, name);
 }
 
 /* A memory port that counts loads and stores by class, and checks that ray

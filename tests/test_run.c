@@ -41,12 +41,8 @@ struct world {
 
 /* scenes/small/NAME.yaml and its tree; false (a failed check) if it does not load. */
 static bool load_small(struct world *w, const char *name) {
-  char path[1024];
-  snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, name);
   w->bvh = NULL;
-  bool ok = testing_load_world(&w->s, &w->kd, path);
-  EXPECTF(ok, "cannot load %s", path);
-  return ok;
+  return testing_load_small(&w->s, &w->kd, name);
 }
 
 static void world_fini(struct world *w) {

@@ -103,6 +103,14 @@ int testing_load_world(struct scene *s, struct kd_tree *kd, const char *path) {
   return 1;
 }
 
+int testing_load_small(struct scene *s, struct kd_tree *kd, const char *name) {
+  char path[1024];
+  snprintf(path, sizeof path, "%s/scenes/small/%s.yaml", RTSIM_SOURCE_DIR, name);
+  const int ok = testing_load_world(s, kd, path);
+  EXPECTF(ok, "cannot load %s", path);
+  return ok;
+}
+
 void testing_policy_setup(struct policy_setup *ps, const struct scene *s, const struct kd_tree *kd,
                           const struct shade_ctx *sc, struct framebuffer *fb) {
   memset(ps, 0, sizeof *ps);

@@ -37,6 +37,9 @@ struct kd_tree;
 /* Load a scene file and build its k-d tree with default parameters; on
  * failure print the error and return 0. */
 int testing_load_world(struct scene *s, struct kd_tree *kd, const char *path);
+/* scenes/small/NAME.yaml and its k-d tree; 0, with a failed check, when it
+ * does not load. */
+int testing_load_small(struct scene *s, struct kd_tree *kd, const char *name);
 
 struct policy_setup;
 struct shade_ctx;
