@@ -5,8 +5,9 @@
 #      configurations x 13 cache sizes x 4 policies) for each structure, at
 #      the paper's resolutions divided by DIV (default 4: 256x256, diffuse
 #      128x128), into traffic-STRUCTURE.csv;
-#   2. the memory-bound point (configs/sweeps/accel-contention.yaml, 24
-#      timed runs) into contention.csv;
+#   2. the contention study's memory-bound points
+#      (configs/sweeps/accel-contention.yaml, 72 timed runs) into
+#      contention.csv;
 #   3. latency hiding (configs/sweeps/accel-latency.yaml, 36 timed runs) into
 #      latency.csv;
 # then tables.md. From the repository top, after sh .ci/setup:

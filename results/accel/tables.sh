@@ -13,32 +13,39 @@ cols() {
     { s = ""; for (i = 1; i <= n; i++) s = s (i > 1 ? "," : "") $c[w[i]]; print s }' "$1"
 }
 
-echo "## The memory-bound point (64 cores, 512 KiB L2, 128x128, primary + shadow + diffuse)"
-echo
-echo "Each policy against recursive on the same structure (x recursive's), and each"
-echo "structure's figures. DRAM MB: read and written; geometry: triangles and nodes."
-echo
-echo "| scene | policy | structure | Mcycles | x recursive | DRAM MB | geometry MB | x recursive | core util. | DRAM util. | Mrays/s | mJ a frame |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
-cols "$R/contention.csv" "scene policy accel cycles dram_bytes fetch_geometry_bytes fetch_node_bytes core_utilization dram_utilization rays_per_second energy_mj_per_frame" |
-  awk -F, '
-    { k = $1 SUBSEP $3; if ($2 == "recursive") { rc[k] = $4; rg[k] = $6 + $7 }
-      row[NR] = $0 }
-    END {
-      n = split("grove sphereflake", S, " "); m = split("recursive packet dynamic treelet", P, " ")
-      split("kd bvh2 bvh8", A, " ")
-      for (s = 1; s <= n; s++) for (p = 1; p <= m; p++) for (a = 1; a <= 3; a++)
-        for (i = 1; i <= NR; i++) {
-          split(row[i], f, ",")
-          if (f[1] != S[s] || f[2] != P[p] || f[3] != A[a]) continue
-          k = f[1] SUBSEP f[3]; g = f[6] + f[7]
-          printf "| %s | %s | %s | %.1f | %.2f | %.0f | %.0f | %.2f | %.2f | %.2f | %.1f | %.2f |\n",
-            f[1], f[2], f[3], f[4] / 1e6, f[4] / rc[k], f[5] / 1e6, g / 1e6, g / rg[k], f[8],
-            f[9], f[10] / 1e6, f[11]
-        }
-    }'
+# One table a machine of the sweep (cores, L2 bytes), in the sweep's order.
+contention_table() {
+  echo "## The memory-bound point: $1 cores, $(($2 / 1024)) KiB L2 (128x128, primary + shadow + diffuse)"
+  echo
+  echo "Each policy against recursive on the same structure (x recursive's), and each"
+  echo "structure's figures. DRAM MB: read and written; geometry: triangles and nodes."
+  echo
+  echo "| scene | policy | structure | Mcycles | x recursive | DRAM MB | geometry MB | x recursive | core util. | DRAM util. | Mrays/s | mJ a frame |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+  cols "$R/contention.csv" "scene policy accel cycles dram_bytes fetch_geometry_bytes fetch_node_bytes core_utilization dram_utilization rays_per_second energy_mj_per_frame cores l2.size" |
+    awk -F, -v cores="$1" -v l2="$2" '
+      $12 != cores || $13 != l2 { next }
+      { k = $1 SUBSEP $3; if ($2 == "recursive") { rc[k] = $4; rg[k] = $6 + $7 }
+        row[++nr] = $0 }
+      END {
+        n = split("grove sphereflake", S, " "); m = split("recursive packet dynamic treelet", P, " ")
+        split("kd bvh2 bvh8", A, " ")
+        for (s = 1; s <= n; s++) for (p = 1; p <= m; p++) for (a = 1; a <= 3; a++)
+          for (i = 1; i <= nr; i++) {
+            split(row[i], f, ",")
+            if (f[1] != S[s] || f[2] != P[p] || f[3] != A[a]) continue
+            k = f[1] SUBSEP f[3]; g = f[6] + f[7]
+            printf "| %s | %s | %s | %.1f | %.2f | %.0f | %.0f | %.2f | %.2f | %.2f | %.1f | %.2f |\n",
+              f[1], f[2], f[3], f[4] / 1e6, f[4] / rc[k], f[5] / 1e6, g / 1e6, g / rg[k], f[8],
+              f[9], f[10] / 1e6, f[11]
+          }
+      }'
+  echo
+}
+contention_table 64 524288
+contention_table 16 524288
+contention_table 64 4194304
 
-echo
 echo "## Latency hiding (grove 128x128, primary + shadow, recursive, 2 cores)"
 echo
 echo "Core utilization by rays a thread (1, 2, 4)."
