@@ -150,7 +150,8 @@ static enum policy_item pp_item(void *ctx, uint64_t k, uint32_t core, struct mem
   }
   if (!h && i != UINT64_MAX) x->sparse_n[i]++;
   pp->dense = dense;
-  /* A gap ends the L2 model's batch (the next starts from empty caches),
+  /* A gap ends the L2 model's batch (the next starts from the caches it
+   * left, then warms),
    * and so does a unit's end. A unit's batch drains (its last items run
    * with ever fewer others, as in the timed unit, whose bytes calibrate the
    * model over the same items); a stretch's is refilled (its last items

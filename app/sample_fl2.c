@@ -225,7 +225,8 @@ static void ended(struct sfl2 *x, uint32_t c) {
   x->ctx_item[c] = NO_ITEM;
 }
 
-/* Empty the batch: every context idle, the items dropped, the caches new. */
+/* Empty the batch: every context idle, the items dropped, the caches kept
+ * (sample_fl2.h says why). */
 static void batch_end(struct sfl2 *x) {
   for (uint32_t c = 0; c < x->nctx; c++) x->ctx_item[c] = NO_ITEM;
   x->counting = 0;
@@ -235,8 +236,6 @@ static void batch_end(struct sfl2 *x) {
   x->nit = 0;
   x->abase += x->nacc;
   x->nacc = 0;
-  caches_drop(x);
-  caches_make(x);
 }
 
 void sfl2_pump(struct sfl2 *x, enum sfl2_end end) {

@@ -412,10 +412,13 @@ static void test_model_refill(void) {
     sfl2_pump(x, ends[e]);
     EXPECTF(got == want[e], "%s: A %g bytes (expected %g)", e ? "refilled" : "drained", got,
             want[e]);
-    /* The batch ended: the next starts from empty caches (A's lines miss). */
+    /* The batch ended: the next starts from the caches it left (L2 2, 1
+     * either way: 2 hits, 3 misses and 1 leaves; from empty caches both
+     * would miss, 128). */
     double again = 0;
     sfl2_item(x, &again);
     sfl2_access(x, 2 * 64, 8, false);
+    sfl2_access(x, 3 * 64, 8, false);
     sfl2_pump(x, ends[e]);
     EXPECTF(again == 64, "after the batch: %g bytes (expected 64)", again);
     sfl2_destroy(x);

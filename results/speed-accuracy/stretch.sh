@@ -13,11 +13,10 @@
 # after sh .ci/setup:
 #   sh results/speed-accuracy/stretch.sh WORKDIR FULLDIR SCENE SIZE FRACTION SEEDS L2 [--set ...]
 # The committed table (two at a time by hand: one scene each):
-#   stretch.sh build/st build/st/grove-512-full grove 512 0.05 10 512KiB
-#   stretch.sh build/st build/st/sphereflake-512-full sphereflake 512 0.05 10 512KiB
+#   stretch.sh build/st build/st/grove-512-full grove 512 0.05 5 512KiB
+#   stretch.sh build/st build/st/sphereflake-512-full sphereflake 512 0.05 5 512KiB
 #   stretch.sh build/st build/st/grove-512-4m-full grove 512 0.05 5 4MiB
 #   stretch.sh build/st build/st/sphereflake-512-4m-full sphereflake 512 0.05 5 4MiB
-#   stretch.sh build/st build/st/sphereflake-1024-full sphereflake 1024 0.02 1 512KiB
 # (the 512x512 references are the memory-bound grid's banked runs: copy them to
 # FULLDIR to reuse them).
 set -eu
