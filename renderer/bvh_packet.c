@@ -20,6 +20,7 @@
 #include "renderer/bvh.h"
 #include "renderer/bvh_node.h"
 #include "renderer/bvh_trav.h"
+#include "renderer/packet_mask.h"
 #include "renderer/trace.h"
 #include "renderer/trav.h"
 #include "sim/err.h"
@@ -52,15 +53,6 @@ struct bvh_packet *bvh_packet_create(void) {
 }
 
 void bvh_packet_destroy(struct bvh_packet *bp) { free(bp); }
-
-static inline int bp_first(uint64_t m) { return __builtin_ctzll(m); }
-/* NOTE: written out; __builtin_popcountll is a libgcc call without -mpopcnt. */
-static inline uint32_t bp_count(uint64_t m) {
-  m = m - ((m >> 1) & 0x5555555555555555ull);
-  m = (m & 0x3333333333333333ull) + ((m >> 2) & 0x3333333333333333ull);
-  m = (m + (m >> 4)) & 0x0f0f0f0f0f0f0f0full;
-  return (uint32_t)((m * 0x0101010101010101ull) >> 56);
-}
 
 /* Results cleared and the valid rays set up (trav_setup_box on the root box,
  * as bvh_traverse); returns the mask of live rays. */
@@ -112,7 +104,7 @@ static uint32_t bp_node(const struct bvh *b, struct bvh_packet *bp, uint32_t ni,
   for (uint32_t k = 0; k < width; k++) bp->kmask[k] = 0;
   uint32_t tested = 0;
   for (uint64_t m = act; m; m &= m - 1) {
-    const int i = bp_first(m);
+    const int i = packet_mask_first(m);
     const struct trav_ray *tv = &bp->tv[i];
     struct bt_entry kids[8];
     const float t1 = (found >> i) & 1u ? bp->best_t[i] : tv->t1;
@@ -141,14 +133,14 @@ static void bp_leaf(struct trace_ctx *tr, struct bvh_packet *bp, uint32_t first,
     const uint32_t p = tr->bvh->prims[j];
     uint64_t tm = 0;
     for (uint64_t m = act; m; m &= m - 1) {
-      const int i = bp_first(m);
+      const int i = packet_mask_first(m);
       if ((int64_t)p != (int64_t)bp->ignore[i]) tm |= 1ull << i;
     }
     if (!tm) continue;
-    trav_announce_tri(tr, p, bp_count(tm));
+    trav_announce_tri(tr, p, packet_mask_count(tm));
     const struct scene_tri *tri = &tr->scene->tris[p];
     for (uint64_t m = tm; m; m &= m - 1) {
-      const int i = bp_first(m);
+      const int i = packet_mask_first(m);
       const uint64_t bit = 1ull << i;
       bp->tris[i]++;
       float t, b1, b2;
@@ -175,7 +167,7 @@ static void bp_leaf(struct trace_ctx *tr, struct bvh_packet *bp, uint32_t first,
 static float bp_near(const struct bvh_packet *bp, uint32_t k) {
   float t = INFINITY;
   for (uint64_t m = bp->kmask[k]; m; m &= m - 1) {
-    const float x = bp->kt[k][bp_first(m)];
+    const float x = bp->kt[k][packet_mask_first(m)];
     if (x < t) t = x;
   }
   return t;
@@ -206,7 +198,7 @@ static bool bp_push(struct bvh_packet *bp, uint32_t width, const uint32_t ref[8]
     const uint32_t k = order[j];
     struct bp_entry *e = &bp->stack[(*sp)++];
     *e = (struct bp_entry){ref[k], count[k], *ptop, bp->kmask[k]};
-    for (uint64_t x = e->mask; x; x &= x - 1) bp->pool[(*ptop)++] = bp->kt[k][bp_first(x)];
+    for (uint64_t x = e->mask; x; x &= x - 1) bp->pool[(*ptop)++] = bp->kt[k][packet_mask_first(x)];
   }
   const uint32_t k = order[0];
   *cur = (struct bp_entry){ref[k], count[k], 0, bp->kmask[k]};
@@ -223,7 +215,7 @@ static bool bp_pop(struct bvh_packet *bp, int *sp, uint32_t *ptop, uint64_t live
     uint64_t act = 0;
     uint32_t k = e->base;
     for (uint64_t x = e->mask; x; x &= x - 1, k++) {
-      const int i = bp_first(x);
+      const int i = packet_mask_first(x);
       if (!((live >> i) & 1u)) continue;
       if ((found >> i) & 1u && bp->best_t[i] < bp->pool[k]) continue;
       act |= 1ull << i;
@@ -254,7 +246,7 @@ void bvh_packet_traverse(struct trace_ctx *tr, struct bvh_packet *bp, const stru
       CHECK_EQ(tested, slots);
       mem_load(&tr->mem, tr->layout.node_base + (uint64_t)node_bytes * cur.ref, node_bytes,
                TRACE_CLASS_NODE);
-      mem_compute(&tr->mem, 3ull * tr->layout.node_cycles * tested * bp_count(cur.mask));
+      mem_compute(&tr->mem, 3ull * tr->layout.node_cycles * tested * packet_mask_count(cur.mask));
       tr->stats.node_visits++;
       if (bp_push(bp, width, ref, count, &sp, &ptop, &cur)) continue;
     } else {

@@ -14,6 +14,7 @@
 
 #include "renderer/bvh_trav.h"
 #include "renderer/kdtree.h"
+#include "renderer/packet_mask.h"
 #include "renderer/ray.h"
 #include "renderer/scene.h"
 #include "renderer/trav.h"
@@ -288,15 +289,6 @@ void trace_packet_destroy(struct trace_packet *pk) {
   free(pk->alloc);
 }
 
-static inline int pk_first(uint64_t m) { return __builtin_ctzll(m); }
-/* NOTE: written out; __builtin_popcountll is a libgcc call without -mpopcnt. */
-static inline uint32_t pk_count(uint64_t m) {
-  m = m - ((m >> 1) & 0x5555555555555555ull);
-  m = (m & 0x3333333333333333ull) + ((m >> 2) & 0x3333333333333333ull);
-  m = (m + (m >> 4)) & 0x0f0f0f0f0f0f0f0full;
-  return (uint32_t)((m * 0x0101010101010101ull) >> 56);
-}
-
 #define PK_INLINE static inline __attribute__((always_inline))
 
 /* The packet's rays set up for traversal: results cleared, the valid rays'
@@ -351,16 +343,16 @@ PK_INLINE void pk_leaf(struct trace_ctx *tr, struct trace_packet *pk, struct kd_
   const struct scene *s = tr->scene;
   uint32_t off = kd_leaf_offset(nd), cnt = kd_leaf_count(nd);
   uint64_t m_leaf = act;
-  for (uint64_t m = act; m; m &= m - 1) pk->ray[pk_first(m)].nodes++;
+  for (uint64_t m = act; m; m &= m - 1) pk->ray[packet_mask_first(m)].nodes++;
   for (uint32_t j = 0; j < cnt && m_leaf; j++) {
     const uint32_t p = trav_leaf_prim(tr, off + j);
     uint64_t tm = m_leaf;
     for (uint64_t m = tm & ign; m; m &= m - 1) {
-      int i = pk_first(m);
+      int i = packet_mask_first(m);
       if ((int64_t)p == (int64_t)pk->ignore[i]) tm &= ~(1ull << i);
     }
     if (!tm) continue;
-    const uint32_t k = pk_count(tm);
+    const uint32_t k = packet_mask_count(tm);
     trav_announce_tri(tr, p, k);
     const struct scene_tri *tri = &s->tris[p];
     const vec3 v0 = tri->v[0], v1 = tri->v[1], v2 = tri->v[2];
@@ -373,7 +365,7 @@ PK_INLINE void pk_leaf(struct trace_ctx *tr, struct trace_packet *pk, struct kd_
     const uint64_t seen = pk->mb_rays[slot];
     pk->mb_rays[slot] |= tm;
     for (uint64_t m = tm; m; m &= m - 1) {
-      const int i = pk_first(m);
+      const int i = packet_mask_first(m);
       const uint64_t bit = 1ull << i;
       struct pk_ray *q = &pk->ray[i];
       pk->tris[i]++;
@@ -413,7 +405,7 @@ PK_INLINE uint64_t pk_pop(struct trace_packet *pk, int *sp, uint32_t *ptop, uint
     *ptop = e->base;
     uint32_t k = 0;
     for (uint64_t m = e->mask; m; m &= m - 1, k += 2) {
-      const int i = pk_first(m);
+      const int i = packet_mask_first(m);
       const uint64_t bit = 1ull << i;
       struct pk_ray *q = &pk->ray[i];
       if (!(live & bit) || q->best_t < pool[k]) continue;
@@ -448,14 +440,14 @@ static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk
   uint64_t act = live;
   while (live) {
     /* One fetch of the node for the packet; the work of every ray needing it. */
-    trav_announce_node(tr, ni, pk_count(act));
+    trav_announce_node(tr, ni, packet_mask_count(act));
     struct kd_node nd = kd->nodes[ni];
     if (!kd_is_leaf(nd)) {
       const uint32_t below = ni + 1, above = kd_above(nd);
       /* Near side of the majority of the rays here (fewest out-of-order rays). */
       const int a = kd_axis(nd);
       const uint64_t up = act & pk->pos[a], down = act & pk->neg[a];
-      const bool bf = !down || (up && pk_count(up) >= pk_count(down));
+      const bool bf = !down || (up && packet_mask_count(up) >= packet_mask_count(down));
       CHECK_LT(sp, KD_DEPTH_LIMIT);
       float *restrict pool = pk->pool + ptop; /* the second child's intervals */
       const float split = kd_split(nd);
@@ -463,7 +455,7 @@ static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk
       uint32_t k = 0;
       uint64_t mf = 0, ms = 0;
       for (uint64_t m = act; m; m &= m - 1) {
-        const int i = pk_first(m);
+        const int i = packet_mask_first(m);
         struct pk_ray *restrict q = &pk->ray[i];
         q->nodes++;
         const float r0 = q->t0, r1 = q->t1;
@@ -524,7 +516,7 @@ static inline void packet_traverse(struct trace_ctx *tr, struct trace_packet *pk
       if (ms) {
         k = 0;
         for (uint64_t m = ms; m; m &= m - 1, k += 2) {
-          struct pk_ray *q = &pk->ray[pk_first(m)];
+          struct pk_ray *q = &pk->ray[packet_mask_first(m)];
           q->t0 = pool[k];
           q->t1 = pool[k + 1];
         }

@@ -776,6 +776,18 @@ static void test_command_extremes(void) {
  * "cross-b" that of dynamic and treelet, "rest" everything else (ctest runs
  * the three as tests of their own, side by side: together they ran past the
  * per-test limit under the sanitizers on a loaded machine); none, all. */
+/* test_cross_check's policies first..last-1 on the BVH2 and the BVH8. */
+static void cross_check_bvhs(struct world *w, unsigned first, unsigned last) {
+  for (int k = ACCEL_BVH2; k <= ACCEL_BVH8; k++) {
+    struct bvh b;
+    bvh_build(&b, &w->s, (enum accel_kind)k);
+    w->bvh = &b;
+    test_cross_check(w, first, last);
+    w->bvh = NULL;
+    bvh_fini(&b);
+  }
+}
+
 int main(int argc, char **argv) {
   const char *part = argc < 2 ? "all" : argv[1];
   const bool all = !strcmp(part, "all"), rest = all || !strcmp(part, "rest");
@@ -787,27 +799,13 @@ int main(int argc, char **argv) {
     test_cross_check(&w, 0, 2);
     /* The recursive and packet policies on each BVH: the same cross-check,
      * and their traversal stacks within the coroutines' margin. */
-    for (int k = ACCEL_BVH2; k <= ACCEL_BVH8; k++) {
-      struct bvh b;
-      bvh_build(&b, &w.s, (enum accel_kind)k);
-      w.bvh = &b;
-      test_cross_check(&w, 0, 2);
-      w.bvh = NULL;
-      bvh_fini(&b);
-    }
+    cross_check_bvhs(&w, 0, 2);
     EXPECT(stack_used_max > 0 && 4 * stack_used_max <= coro_default_stack_bytes());
   }
   if (all || !strcmp(part, "cross-b")) {
     test_cross_check(&w, 2, 4);
     /* The queue policies on each BVH. */
-    for (int k = ACCEL_BVH2; k <= ACCEL_BVH8; k++) {
-      struct bvh b;
-      bvh_build(&b, &w.s, (enum accel_kind)k);
-      w.bvh = &b;
-      test_cross_check(&w, 2, 4);
-      w.bvh = NULL;
-      bvh_fini(&b);
-    }
+    cross_check_bvhs(&w, 2, 4);
   }
   if (!rest) {
     world_fini(&w);

@@ -238,6 +238,18 @@ static void former_free(struct former *f) {
   free(f->stamp);
 }
 
+/* Forms the treelets of the whole structure (its box lo..hi), then frees
+ * the former's own arrays. */
+static void form_whole(struct treelet_set *ts, struct former *f, vec3 lo, vec3 hi) {
+  struct box root_box;
+  for (int a = 0; a < 3; a++) {
+    root_box.lo[a] = v3_get(lo, a);
+    root_box.hi[a] = v3_get(hi, a);
+  }
+  form(ts, f, &root_box);
+  former_free(f);
+}
+
 void treelet_build(struct treelet_set *ts, const struct kd_tree *kd, uint32_t tri_bytes,
                    uint64_t budget) {
   const uint32_t n = kd->node_count;
@@ -260,13 +272,7 @@ void treelet_build(struct treelet_set *ts, const struct kd_tree *kd, uint32_t tr
       .stack = xmalloc((uint64_t)n * sizeof *f.stack),
       .tri_bytes = tri_bytes,
   };
-  struct box root_box;
-  for (int a = 0; a < 3; a++) {
-    root_box.lo[a] = v3_get(kd->lo, a);
-    root_box.hi[a] = v3_get(kd->hi, a);
-  }
-  form(ts, &f, &root_box);
-  former_free(&f);
+  form_whole(ts, &f, kd->lo, kd->hi);
   free(tris);
 }
 
@@ -286,13 +292,7 @@ void treelet_bvh_build(struct treelet_set *ts, const struct bvh *b, const uint8_
       .stack = xmalloc((uint64_t)n * sizeof *f.stack),
       .tri_bytes = tri_bytes,
   };
-  struct box root_box;
-  for (int a = 0; a < 3; a++) {
-    root_box.lo[a] = v3_get(b->lo, a);
-    root_box.hi[a] = v3_get(b->hi, a);
-  }
-  form(ts, &f, &root_box);
-  former_free(&f);
+  form_whole(ts, &f, b->lo, b->hi);
   free(tris);
 }
 
